@@ -1,0 +1,109 @@
+//! The one error type of the core library.
+//!
+//! Every variant carries enough context (term names, counts, the offending
+//! value) for the command-line tool to print one line that says what is
+//! wrong and where. The core never panics on input and never prints.
+
+use thiserror::Error;
+
+/// A linear combination of model terms that a plan cannot observe.
+///
+/// `coefficients[k]` multiplies the regressor (design-matrix column) of
+/// `terms[k]`; the weighted sum of those columns is (numerically) zero, so
+/// any amount of this combination can be added to the estimates without
+/// changing the fit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Alias {
+    /// Names of the terms whose regressors are linearly dependent.
+    pub terms: Vec<String>,
+    /// Coefficients of the dependency, largest magnitude scaled to 1.
+    pub coefficients: Vec<f64>,
+}
+
+impl std::fmt::Display for Alias {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.terms.len() == 1 {
+            return write!(
+                f,
+                "{} (its regressor is zero at every position)",
+                self.terms[0]
+            );
+        }
+        let mut first = true;
+        for (name, c) in self.terms.iter().zip(&self.coefficients) {
+            let sign = if *c < 0.0 { "-" } else { "+" };
+            let mag = c.abs();
+            if first {
+                if *c < 0.0 {
+                    write!(f, "-")?;
+                }
+                first = false;
+            } else {
+                write!(f, " {sign} ")?;
+            }
+            if (mag - 1.0).abs() < 5e-4 {
+                write!(f, "{name}")?;
+            } else {
+                write!(f, "{mag:.3}*{name}")?;
+            }
+        }
+        write!(f, " (regressors linearly dependent)")
+    }
+}
+
+/// Errors of the incal core.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum Error {
+    /// The plan cannot separate some terms: the design matrix is rank deficient.
+    #[error("plan cannot separate {}", aliases.iter().map(|a| a.to_string()).collect::<Vec<_>>().join("; "))]
+    Unseparable {
+        /// Every independent unobservable combination.
+        aliases: Vec<Alias>,
+    },
+    /// The design is so ill-conditioned that the solution is numerically meaningless.
+    #[error("plan is numerically unable to separate {terms}: condition number {condition:.3e} exceeds {limit:.1e}")]
+    IllConditioned {
+        /// Terms dominating the weakest direction of the design.
+        terms: String,
+        /// Condition number of the column-equilibrated design.
+        condition: f64,
+        /// Limit that was exceeded.
+        limit: f64,
+    },
+    /// Fewer observations (or distinct positions) than terms.
+    #[error("{what}: need at least {needed}, got {got}")]
+    TooFew {
+        /// What is counted (e.g. "distinct angles for 6 terms").
+        what: String,
+        /// Minimum required.
+        needed: usize,
+        /// Number available.
+        got: usize,
+    },
+    /// A value is not finite or out of its domain.
+    #[error("invalid {what}: {value}")]
+    InvalidValue {
+        /// Which quantity.
+        what: String,
+        /// Its offending value, as text.
+        value: String,
+    },
+    /// A requested term or option does not exist or does not apply.
+    #[error("{0}")]
+    Unsupported(String),
+}
+
+/// Result alias of the core library.
+pub type Result<T> = std::result::Result<T, Error>;
+
+/// Return `Err(InvalidValue)` unless `x` is finite.
+pub fn finite(what: &str, x: f64) -> Result<f64> {
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(Error::InvalidValue {
+            what: what.to_string(),
+            value: format!("{x}"),
+        })
+    }
+}

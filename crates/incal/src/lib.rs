@@ -1,0 +1,30 @@
+//! # incal — inertial-instrument calibration core
+//!
+//! Pure library: instrument error models, rig kinematics, one least-squares
+//! estimation core, calibration procedures, test-plan prediction and rig
+//! simulators. It reads no files and prints nothing; the `incal` binary
+//! (crate `incal-cli`) does that.
+//!
+//! Every procedure follows methods.md §0: a test plan and the rig's
+//! kinematics give the inputs of each observation, the error model is linear
+//! in a parameter vector (design matrix), [`estimation::fit`] solves it with
+//! covariance and rank/condition diagnostics, and a map with its Jacobian
+//! gives the physical coefficients ([`estimation::Estimates::map`]).
+//!
+//! # Conventions
+//! * Angles are radians inside; degrees and arcseconds only in plans and at
+//!   the command-line edge ([`units`]).
+//! * Accelerations are in units of local gravity `g` unless a name says
+//!   otherwise; accelerometer coefficients are in g units (K0 in g, K2 in
+//!   g/g², …), the scale factor K1 in output units per g.
+//! * Every random thing takes an explicit `u64` seed ([`sim::rng`]).
+
+pub mod error;
+pub mod estimation;
+pub mod units;
+
+pub use error::{Alias, Error, Result};
+pub mod models;
+pub mod procedures;
+pub mod rigs;
+pub mod sim;

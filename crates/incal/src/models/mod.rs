@@ -1,0 +1,5 @@
+//! Instrument error models.
+
+pub mod accelerometer;
+
+pub use accelerometer::{AccelerometerModel, SpecificForce, Term};

@@ -1,0 +1,4 @@
+//! Calibration procedures: test plan + rig kinematics + linear(ised) model +
+//! map to physical coefficients, all on [`crate::estimation`].
+
+pub mod tumble;

@@ -1,0 +1,195 @@
+//! Tumble test plans and their predicted uncertainties (methods.md §1;
+//! seed 000 §2.2 and Table 3).
+//!
+//! * GJB 1037A 12-point plan: θ = 0°, 30°, …, 330°.
+//! * Small-angle 12-point plan with step a (seed 000 §2.2):
+//!   0, a, 2a, 3a, 4a, 5a, 180°, 360°−5a, …, 360°−a. Largest input `sin 5a`
+//!   for a ≤ 18°.
+//! * N-point plan: N equally spaced angles.
+//!
+//! The step for an instrument of range r (g) is the largest whole multiple
+//! of the head's step resolution (default 1°) with `sin 5a ≤ r`; an
+//! instrument whose range reaches 1 g uses the GJB plan.
+
+use nalgebra::DVector;
+
+use super::{design, to_physical};
+use crate::error::{Error, Result};
+use crate::estimation::Estimates;
+use crate::models::Term;
+use crate::rigs::Mount;
+
+/// Largest small-angle step: `5a` must not pass 90°.
+pub const MAX_SMALL_STEP_DEG: f64 = 18.0;
+
+/// Which kind of plan.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PlanKind {
+    /// GJB 1037A 12-point plan (30° steps).
+    Gjb12,
+    /// Small-angle 12-point plan with this step (deg).
+    SmallAngle {
+        /// Step a (deg).
+        step_deg: f64,
+    },
+    /// N equally spaced angles.
+    NPoint {
+        /// Number of angles.
+        n: usize,
+    },
+}
+
+/// A test plan: its kind and angles.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TumblePlan {
+    /// Kind of plan.
+    pub kind: PlanKind,
+    /// Step between neighbouring angles (deg).
+    pub step_deg: f64,
+    /// Head angles (deg), in test order.
+    pub angles_deg: Vec<f64>,
+}
+
+impl TumblePlan {
+    /// The GJB 1037A 12-point plan.
+    pub fn gjb12() -> Self {
+        Self {
+            kind: PlanKind::Gjb12,
+            step_deg: 30.0,
+            angles_deg: (0..12).map(|k| 30.0 * k as f64).collect(),
+        }
+    }
+
+    /// Small-angle 12-point plan with step `step_deg` (0 < a ≤ 18°).
+    pub fn small_angle(step_deg: f64) -> Result<Self> {
+        if !(step_deg > 0.0 && step_deg <= MAX_SMALL_STEP_DEG) {
+            return Err(Error::InvalidValue {
+                what: format!("small-angle step (deg; 0 < a <= {MAX_SMALL_STEP_DEG})"),
+                value: step_deg.to_string(),
+            });
+        }
+        let mut angles: Vec<f64> = (0..6).map(|k| k as f64 * step_deg).collect();
+        angles.push(180.0);
+        angles.extend((1..6).rev().map(|k| 360.0 - k as f64 * step_deg));
+        Ok(Self {
+            kind: PlanKind::SmallAngle { step_deg },
+            step_deg,
+            angles_deg: angles,
+        })
+    }
+
+    /// `n` equally spaced angles from 0°.
+    pub fn n_point(n: usize) -> Result<Self> {
+        if n < 2 {
+            return Err(Error::TooFew {
+                what: "angles in an N-point plan".into(),
+                needed: 2,
+                got: n,
+            });
+        }
+        let step = 360.0 / n as f64;
+        Ok(Self {
+            kind: PlanKind::NPoint { n },
+            step_deg: step,
+            angles_deg: (0..n).map(|k| k as f64 * step).collect(),
+        })
+    }
+
+    /// The plan for an instrument of range `range_g` (see module docs).
+    pub fn for_range(range_g: f64, resolution_deg: f64) -> Result<Self> {
+        if !(range_g.is_finite() && range_g > 0.0) {
+            return Err(Error::InvalidValue {
+                what: "range (g)".into(),
+                value: range_g.to_string(),
+            });
+        }
+        if !(resolution_deg.is_finite() && resolution_deg > 0.0) {
+            return Err(Error::InvalidValue {
+                what: "step resolution (deg)".into(),
+                value: resolution_deg.to_string(),
+            });
+        }
+        if range_g >= 1.0 {
+            return Ok(Self::gjb12());
+        }
+        let max_k = (MAX_SMALL_STEP_DEG / resolution_deg + 1e-9).floor() as usize;
+        let best = (1..=max_k)
+            .map(|k| k as f64 * resolution_deg)
+            .filter(|a| (5.0 * a).to_radians().sin() <= range_g + 1e-12)
+            .last();
+        match best {
+            Some(a) => Self::small_angle(a),
+            None => Err(Error::Unsupported(format!(
+                "range {range_g} g is below sin(5 x {resolution_deg} deg) = {:.4} g: use a finer step resolution",
+                (5.0 * resolution_deg).to_radians().sin()
+            ))),
+        }
+    }
+
+    /// Largest input on IA over the plan, `max |sin θ|` (g).
+    pub fn max_input_g(&self) -> f64 {
+        self.angles_deg
+            .iter()
+            .map(|a| a.to_radians().sin().abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// Angles in radians.
+    pub fn angles_rad(&self) -> Vec<f64> {
+        self.angles_deg.iter().map(|a| a.to_radians()).collect()
+    }
+}
+
+/// Predicted standard uncertainty of every coefficient before the test
+/// (methods.md §0 step 5): a nominal instrument (scale factor `k1`, every
+/// other coefficient 0) on `mount`, with `noise` the standard deviation of
+/// one position's averaged output and `index_error_rad` the standard
+/// deviation of the head's angle error, which acts as extra output noise
+/// `∂E/∂θ · ε ≈ K1 cos θ · ε` (methods.md §1).
+pub fn predict(
+    mount: Mount,
+    terms: &[Term],
+    angles_rad: &[f64],
+    k1: f64,
+    noise: f64,
+    index_error_rad: f64,
+) -> Result<Estimates> {
+    if !(k1.is_finite() && k1 != 0.0) {
+        return Err(Error::InvalidValue {
+            what: "scale factor K1".into(),
+            value: k1.to_string(),
+        });
+    }
+    if !(noise.is_finite() && noise > 0.0) {
+        return Err(Error::InvalidValue {
+            what: "noise (output units)".into(),
+            value: noise.to_string(),
+        });
+    }
+    if !(index_error_rad.is_finite() && index_error_rad >= 0.0) {
+        return Err(Error::InvalidValue {
+            what: "index-angle error".into(),
+            value: index_error_rad.to_string(),
+        });
+    }
+    let d = design(mount, terms, angles_rad)?;
+    let sigma = DVector::from_iterator(
+        angles_rad.len(),
+        angles_rad.iter().map(|t| {
+            let e = k1 * t.cos() * index_error_rad;
+            (noise * noise + e * e).sqrt()
+        }),
+    );
+    let cov = d.predict(&sigma)?;
+    let nominal = DVector::from_iterator(
+        terms.len(),
+        terms.iter().map(|t| if *t == Term::K1 { k1 } else { 0.0 }),
+    );
+    let linear = Estimates::new(
+        cov.names().to_vec(),
+        nominal,
+        cov.covariance().clone(),
+        f64::INFINITY,
+    )?;
+    to_physical(&linear, terms)
+}

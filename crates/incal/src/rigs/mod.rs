@@ -1,0 +1,6 @@
+//! Rig kinematics: what specific force each test position puts on the
+//! instrument's axes.
+
+pub mod dividing_head;
+
+pub use dividing_head::Mount;
