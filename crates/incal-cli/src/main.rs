@@ -1,1 +1,93 @@
-fn main() {}
+//! `incal`: the command-line tool of the incal calibration library.
+//!
+//! Thin by design: parse options, read files, call the core, print. Exit
+//! codes: 0 ok, 1 failure, 2 bad usage or bad input (one line on stderr
+//! naming the file, the line and the problem).
+
+mod commands;
+mod error;
+mod input;
+mod output;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use crate::error::CliResult;
+
+/// Data reduction for inertial-instrument calibration.
+#[derive(Parser, Debug)]
+#[command(name = "incal", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Simulate virtual instruments on every rig, calibrate, and print estimate, truth and uncertainty.
+    Demo(commands::demo::Args),
+    /// Calibrate an accelerometer from a dividing-head tumble test (seed 000, GJB 1037A).
+    Tumble(commands::tumble::Args),
+    /// Design a test plan and predict the uncertainty of every coefficient before the test.
+    #[command(subcommand)]
+    Plan(PlanCommand),
+    /// Simulate a rig from a known truth and write the input CSV of the matching procedure.
+    #[command(subcommand)]
+    Simulate(SimulateCommand),
+    /// Compare the coefficients of two result files: difference, per mille and En.
+    Compare(commands::compare::Args),
+}
+
+#[derive(Subcommand, Debug)]
+enum PlanCommand {
+    /// Tumble plan: GJB 12-point, small-angle 12-point for a range, or N-point.
+    Tumble(commands::tumble::PlanArgs),
+}
+
+#[derive(Subcommand, Debug)]
+enum SimulateCommand {
+    /// Dividing-head tumble test.
+    Tumble(commands::tumble::SimArgs),
+}
+
+fn run(cli: Cli) -> CliResult<()> {
+    match cli.command {
+        Command::Demo(a) => commands::demo::run(&a),
+        Command::Tumble(a) => commands::tumble::run(&a),
+        Command::Plan(PlanCommand::Tumble(a)) => commands::tumble::plan(&a),
+        Command::Simulate(SimulateCommand::Tumble(a)) => commands::tumble::simulate(&a),
+        Command::Compare(a) => commands::compare::run(&a),
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(
+                e.kind(),
+                ErrorKind::DisplayHelp
+                    | ErrorKind::DisplayVersion
+                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            ) {
+                let _ = e.print();
+                return ExitCode::SUCCESS;
+            }
+            // One line: clap's first line, without its "error: " prefix.
+            let text = e.to_string();
+            let first = text.lines().next().unwrap_or("bad usage");
+            let first = first.strip_prefix("error: ").unwrap_or(first);
+            eprintln!("incal: {first} (see 'incal --help')");
+            return ExitCode::from(2);
+        }
+    };
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("incal: {e}");
+            ExitCode::from(e.exit_code())
+        }
+    }
+}

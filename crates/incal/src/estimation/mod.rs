@@ -17,4 +17,4 @@ pub use linear::{
     fit, Design, Diagnostics, Fit, FitOptions, Variance, VarianceSource, DEFAULT_COND_LIMIT,
     WARN_COND,
 };
-pub use repeated::{fit_means, pooled_variance, Noise, PositionStats};
+pub use repeated::{fit_means, fit_means_excess, pooled_variance, ExcessFit, Noise, PositionStats};

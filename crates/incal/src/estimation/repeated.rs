@@ -10,6 +10,17 @@
 //! positions can only raise the uncertainty, never hide behind the sample
 //! scatter. With a single sample per position the residual scatter alone is
 //! used (ν = n − p).
+//!
+//! # Excess variance with a known shape
+//! Some position-level errors have a known shape: a dividing-head index
+//! error ε shifts the output by `∂E/∂θ · ε`, so it adds `τ² g_i²` with
+//! `g_i = ∂E/∂θ(θ_i)` to the variance of position i. [`fit_means_excess`]
+//! estimates `τ²` by the Paule–Mandel moment equation
+//! `Σ r_i² / (b_i + τ² g_i²) = n − p` (Paule & Mandel, J. Res. NBS 87
+//! (1982) 377; the estimator of interlaboratory key comparisons), where
+//! `b_i` is the sample-scatter variance of mean i and the residuals `r_i`
+//! come from the weighted fit at that `τ²`. Without excess (`χ²(0) ≤ n−p`)
+//! `τ² = 0` and the fit is that of [`fit_means`].
 
 use nalgebra::DVector;
 
@@ -114,4 +125,105 @@ pub fn fit_means(
         ..FitOptions::default()
     };
     Ok((fit(design, &y, &opts)?, weights))
+}
+
+/// A fit of position means with an estimated excess variance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExcessFit {
+    /// The final weighted fit.
+    pub fit: Fit,
+    /// Weights `1/(b_i + τ² g_i²)` used.
+    pub weights: DVector<f64>,
+    /// Estimated `τ²` (0 when the residuals show no excess; `None` when it
+    /// could not be estimated: a single sample per position and no known
+    /// noise, where the residual scatter alone is used).
+    pub excess_variance: Option<f64>,
+}
+
+/// Fit position means with variances `b_i + τ² g_i²`, `τ²` estimated by
+/// Paule–Mandel (module docs). `shape` holds `g_i`.
+pub fn fit_means_excess(
+    design: &Design,
+    positions: &[PositionStats],
+    noise: Noise,
+    shape: &DVector<f64>,
+) -> Result<ExcessFit> {
+    let n = positions.len();
+    if shape.len() != n || shape.iter().any(|g| !g.is_finite()) {
+        return Err(Error::Unsupported(
+            "excess-variance shape must have one finite entry per position".into(),
+        ));
+    }
+    let counts = DVector::from_iterator(n, positions.iter().map(|p| p.n as f64));
+    let (base, base_dof) = match noise {
+        Noise::Known { sigma } => {
+            if !(sigma.is_finite() && sigma > 0.0) {
+                return Err(Error::InvalidValue {
+                    what: "noise sigma".into(),
+                    value: sigma.to_string(),
+                });
+            }
+            (counts.map(|c| sigma * sigma / c), f64::INFINITY)
+        }
+        Noise::Auto => {
+            let (s2, dof) = pooled_variance(positions);
+            if !(dof > 0 && s2 > 0.0) {
+                let (fit, weights) = fit_means(design, positions, noise)?;
+                return Ok(ExcessFit {
+                    fit,
+                    weights,
+                    excess_variance: None,
+                });
+            }
+            (counts.map(|c| s2 / c), dof as f64)
+        }
+    };
+    let y = DVector::from_iterator(n, positions.iter().map(|p| p.mean));
+    let g2 = shape.map(|g| g * g);
+    let p = design.ncols();
+    let dof = n.saturating_sub(p) as f64;
+    let run = |tau2: f64, variance: Variance| -> Result<(Fit, DVector<f64>)> {
+        let w = DVector::from_fn(n, |i, _| 1.0 / (base[i] + tau2 * g2[i]));
+        let opts = FitOptions {
+            weights: Some(w.clone()),
+            variance,
+            ..FitOptions::default()
+        };
+        Ok((fit(design, &y, &opts)?, w))
+    };
+    let known = Variance::Known { dof: base_dof };
+    let (f0, _) = run(0.0, known)?;
+    let g2_max = g2.max();
+    let mut tau2 = 0.0;
+    if dof > 0.0 && f0.weighted_rss > dof && g2_max > 0.0 {
+        // χ²(τ²) decreases with τ²: bracket, then bisect on log scale.
+        let b_max = base.max();
+        let cap = 1e8 * b_max / g2_max;
+        let mut hi = b_max / g2_max;
+        while hi < cap && run(hi, known)?.0.weighted_rss > dof {
+            hi *= 4.0;
+        }
+        let mut lo = 0.0;
+        for _ in 0..200 {
+            let mid = if lo > 0.0 { (lo * hi).sqrt() } else { hi / 1e6 };
+            if run(mid, known)?.0.weighted_rss > dof {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+            if hi - lo <= 1e-10 * hi {
+                break;
+            }
+        }
+        tau2 = hi;
+    }
+    // τ² estimated from the between-position residuals: n − p degrees of
+    // freedom; AtLeast keeps any excess the shape does not explain.
+    let final_dof = if tau2 > 0.0 { dof } else { base_dof };
+    let (fit, weights) = run(tau2, Variance::AtLeast { dof: final_dof })?;
+    Ok(ExcessFit {
+        fit,
+        weights,
+        excess_variance: Some(tau2),
+    })
 }

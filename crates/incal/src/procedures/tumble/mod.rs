@@ -15,6 +15,15 @@
 //! `K1 = p_K1`, `K_t = p_t / p_K1`, Jacobian
 //! `∂K_t/∂p_t = 1/p_K1`, `∂K_t/∂p_K1 = −p_t/p_K1²` (GUM propagation).
 //!
+//! # Uncertainty
+//! Position means are weighted by their sample scatter; an index-angle error
+//! ε of the head adds `(∂E/∂θ)² σ_ε²` to the variance of each position,
+//! largest where the output changes fastest with θ (θ ≈ 0°, 180° for
+//! IA-horizontal positions). `σ_ε` is estimated from the residuals by
+//! [`crate::estimation::fit_means_excess`] (Paule–Mandel) and reported, so
+//! the uncertainty is honest when the head is worse than assumed, and the
+//! lab learns the head's index error (seed 000 §3 leaves it unsolved).
+//!
 //! # Aliasing
 //! In a 1 g field `a_i² + a_p² = 1` (pendulum) and `a_i² + a_o² = 1`
 //! (gate), so `K0, K2, Kpp` (resp. `Koo`) cannot all be fitted; a plan at
@@ -33,7 +42,8 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::error::{Error, Result};
 use crate::estimation::{
-    fit, fit_means, Design, Estimates, Fit, FitOptions, Noise, PositionStats, Variance, WARN_COND,
+    fit, fit_means, fit_means_excess, Design, Estimates, Fit, FitOptions, Noise, PositionStats,
+    Variance, WARN_COND,
 };
 use crate::models::{AccelerometerModel, Term};
 use crate::rigs::Mount;
@@ -171,6 +181,10 @@ pub struct TumbleResult {
     pub positions: Vec<PositionResult>,
     /// Unmodelled terms absorbed by the fitted ones.
     pub absorbed: Vec<Absorption>,
+    /// Index-angle error of the head estimated from the residuals,
+    /// standard deviation (rad); `None` when it cannot be estimated (one
+    /// sample per position and no known noise).
+    pub index_error_rad: Option<f64>,
     /// Pass-to-pass comparisons (empty without pass labels).
     pub passes: Vec<PassComparison>,
     /// Passes that could not be fitted on their own, with the reason.
@@ -298,11 +312,32 @@ fn absorbed(mount: Mount, terms: &[Term], angles_rad: &[f64]) -> Result<Vec<Abso
     Ok(out)
 }
 
+/// `∂E/∂θ` at each angle for linear parameters `p` (central difference of
+/// the design rows; output units per rad).
+fn output_slope(
+    mount: Mount,
+    terms: &[Term],
+    angles_rad: &[f64],
+    p: &DVector<f64>,
+) -> Result<DVector<f64>> {
+    let h = 1e-6;
+    let plus: Vec<f64> = angles_rad.iter().map(|a| a + h).collect();
+    let minus: Vec<f64> = angles_rad.iter().map(|a| a - h).collect();
+    let d = (design(mount, terms, &plus)?.matrix() - design(mount, terms, &minus)?.matrix())
+        / (2.0 * h);
+    Ok(d * p)
+}
+
+struct SingleFit {
+    coefficients: Estimates,
+    fit: Fit,
+    positions: Vec<PositionResult>,
+    angles: Vec<f64>,
+    index_error_rad: Option<f64>,
+}
+
 /// Fit the model to one set of observations (no pass comparison).
-fn fit_observations(
-    obs: &[Observation],
-    opts: &TumbleOptions,
-) -> Result<(Estimates, Fit, Vec<PositionResult>, Vec<f64>)> {
+fn fit_observations(obs: &[Observation], opts: &TumbleOptions) -> Result<SingleFit> {
     check_terms(&opts.terms)?;
     if obs.is_empty() {
         return Err(Error::TooFew {
@@ -328,7 +363,10 @@ fn fit_observations(
         .map(|g| PositionStats::of(&g.2))
         .collect::<Result<_>>()?;
     let d = design(opts.mount, &opts.terms, &angles)?;
-    let (f, weights) = fit_means(&d, &stats, opts.noise)?;
+    let (first, _) = fit_means(&d, &stats, opts.noise)?;
+    let slope = output_slope(opts.mount, &opts.terms, &angles, first.estimates.values())?;
+    let ex = fit_means_excess(&d, &stats, opts.noise, &slope)?;
+    let (f, weights) = (ex.fit, ex.weights);
     let coefficients = to_physical(&f.estimates, &opts.terms)?;
     let std_res = f.standardized_residuals(Some(&weights));
     let positions = groups
@@ -343,7 +381,13 @@ fn fit_observations(
             standardized_residual: std_res[i],
         })
         .collect();
-    Ok((coefficients, f, positions, angles))
+    Ok(SingleFit {
+        coefficients,
+        fit: f,
+        positions,
+        angles,
+        index_error_rad: ex.excess_variance.map(f64::sqrt),
+    })
 }
 
 /// Calibrate from tumble observations (see module docs).
@@ -352,7 +396,13 @@ fn fit_observations(
 /// is fitted and their scatter enters the uncertainty. With two or more pass
 /// labels each pass is also fitted alone and the differences are reported.
 pub fn calibrate(obs: &[Observation], opts: &TumbleOptions) -> Result<TumbleResult> {
-    let (coefficients, fit, positions, angles) = fit_observations(obs, opts)?;
+    let SingleFit {
+        coefficients,
+        fit,
+        positions,
+        angles,
+        index_error_rad,
+    } = fit_observations(obs, opts)?;
     let absorbed = absorbed(opts.mount, &opts.terms, &angles)?;
     let mut warnings = Vec::new();
     if fit.diagnostics.condition > WARN_COND {
@@ -364,7 +414,7 @@ pub fn calibrate(obs: &[Observation], opts: &TumbleOptions) -> Result<TumbleResu
     if let Some(p) = fit.chi2_p_value {
         if p < 0.01 {
             warnings.push(format!(
-                "residuals between positions exceed the sample scatter (chi-square p = {p:.2e}): position-level errors such as index-angle error or drift are present; uncertainties are scaled up by the residual scatter"
+                "residuals between positions exceed what the sample scatter and the index-error model explain (chi-square p = {p:.2e}): drift or an unmodelled term; uncertainties are scaled up by the residual scatter"
             ));
         }
     }
@@ -387,7 +437,7 @@ pub fn calibrate(obs: &[Observation], opts: &TumbleOptions) -> Result<TumbleResu
                 .cloned()
                 .collect();
             match fit_observations(&sub, opts) {
-                Ok((c, ..)) => per_pass.push((label.clone(), c)),
+                Ok(single) => per_pass.push((label.clone(), single.coefficients)),
                 Err(e) => pass_errors.push((label.clone(), e.to_string())),
             }
         }
@@ -416,6 +466,7 @@ pub fn calibrate(obs: &[Observation], opts: &TumbleOptions) -> Result<TumbleResu
         fit,
         positions,
         absorbed,
+        index_error_rad,
         passes,
         pass_errors,
         warnings,

@@ -114,9 +114,9 @@ impl TumblePlan {
         }
         let max_k = (MAX_SMALL_STEP_DEG / resolution_deg + 1e-9).floor() as usize;
         let best = (1..=max_k)
+            .rev()
             .map(|k| k as f64 * resolution_deg)
-            .filter(|a| (5.0 * a).to_radians().sin() <= range_g + 1e-12)
-            .last();
+            .find(|a| (5.0 * a).to_radians().sin() <= range_g + 1e-12);
         match best {
             Some(a) => Self::small_angle(a),
             None => Err(Error::Unsupported(format!(

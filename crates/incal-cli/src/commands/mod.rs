@@ -1,0 +1,5 @@
+//! One module per subcommand family.
+
+pub mod compare;
+pub mod demo;
+pub mod tumble;

@@ -1,0 +1,217 @@
+//! CSV input: a header row, then data rows; lines starting with `#` are
+//! comments; every problem names the file and the line.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use crate::error::{CliError, CliResult};
+
+/// A CSV file read into memory, with the line number of every row.
+#[derive(Debug, Clone)]
+pub struct Table {
+    /// Path as given by the user (for messages).
+    pub path: String,
+    headers: Vec<String>,
+    index: HashMap<String, usize>,
+    rows: Vec<(usize, Vec<String>)>,
+}
+
+impl Table {
+    /// Read `path`. Fails (exit 2) when it cannot be read, is empty, has no
+    /// data rows, repeats a column name or has a row of the wrong width.
+    pub fn read(path: &Path) -> CliResult<Table> {
+        let name = path.display().to_string();
+        let text = std::fs::read(path)
+            .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?;
+        Self::parse(&name, &text)
+    }
+
+    /// Parse CSV text (see [`Table::read`]).
+    pub fn parse(name: &str, text: &[u8]) -> CliResult<Table> {
+        let err = |line: Option<usize>, msg: String| {
+            CliError::Input(match line {
+                Some(l) => format!("{name}:{l}: {msg}"),
+                None => format!("{name}: {msg}"),
+            })
+        };
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .comment(Some(b'#'))
+            .flexible(true)
+            .trim(csv::Trim::All)
+            .from_reader(text);
+        let mut records = reader.records();
+        let header = loop {
+            match records.next() {
+                None => return Err(err(None, "empty file (expected a header row)".into())),
+                Some(Err(e)) => {
+                    let line = e.position().map(|p| p.line() as usize);
+                    return Err(err(line, format!("not valid CSV: {}", short_csv_error(&e))));
+                }
+                Some(Ok(r)) if r.iter().all(|f| f.is_empty()) => continue,
+                Some(Ok(r)) => break r,
+            }
+        };
+        let header_line = header.position().map_or(1, |p| p.line() as usize);
+        let headers: Vec<String> = header.iter().map(|h| h.to_string()).collect();
+        let mut index = HashMap::new();
+        for (k, h) in headers.iter().enumerate() {
+            if h.is_empty() {
+                return Err(err(
+                    Some(header_line),
+                    format!("empty column name in column {}", k + 1),
+                ));
+            }
+            if index.insert(h.clone(), k).is_some() {
+                return Err(err(
+                    Some(header_line),
+                    format!("column '{h}' appears twice"),
+                ));
+            }
+        }
+        let mut rows = Vec::new();
+        for rec in records {
+            let rec = rec.map_err(|e| {
+                let line = e.position().map(|p| p.line() as usize);
+                err(line, format!("not valid CSV: {}", short_csv_error(&e)))
+            })?;
+            let line = rec.position().map_or(0, |p| p.line() as usize);
+            if rec.iter().all(|f| f.is_empty()) {
+                continue;
+            }
+            if rec.len() != headers.len() {
+                return Err(err(
+                    Some(line),
+                    format!("{} fields, but the header has {}", rec.len(), headers.len()),
+                ));
+            }
+            rows.push((line, rec.iter().map(|f| f.to_string()).collect()));
+        }
+        if rows.is_empty() {
+            return Err(err(None, "no data rows after the header".into()));
+        }
+        Ok(Table {
+            path: name.to_string(),
+            headers,
+            index,
+            rows,
+        })
+    }
+
+    /// Number of data rows (at least 1 after a successful read).
+    pub fn row_count(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Index of a required column.
+    pub fn column(&self, name: &str) -> CliResult<usize> {
+        self.index.get(name).copied().ok_or_else(|| {
+            CliError::Input(format!(
+                "{}: missing column '{name}' (columns: {})",
+                self.path,
+                self.headers.join(", ")
+            ))
+        })
+    }
+
+    /// Index of an optional column.
+    pub fn opt_column(&self, name: &str) -> Option<usize> {
+        self.index.get(name).copied()
+    }
+
+    /// File line of data row `row`.
+    pub fn line(&self, row: usize) -> usize {
+        self.rows[row].0
+    }
+
+    /// Raw text of a cell.
+    pub fn text(&self, row: usize, col: usize) -> &str {
+        &self.rows[row].1[col]
+    }
+
+    /// A finite number from a cell, or an error naming file, line, column.
+    pub fn f64(&self, row: usize, col: usize) -> CliResult<f64> {
+        let text = self.text(row, col);
+        let v: f64 = text.parse().map_err(|_| {
+            self.error_at(
+                row,
+                format!("column '{}': '{text}' is not a number", self.headers[col]),
+            )
+        })?;
+        if !v.is_finite() {
+            return Err(self.error_at(
+                row,
+                format!(
+                    "column '{}': '{text}' is not a finite number",
+                    self.headers[col]
+                ),
+            ));
+        }
+        Ok(v)
+    }
+
+    /// An error at data row `row`.
+    pub fn error_at(&self, row: usize, msg: String) -> CliError {
+        CliError::Input(format!("{}:{}: {msg}", self.path, self.line(row)))
+    }
+}
+
+fn short_csv_error(e: &csv::Error) -> String {
+    match e.kind() {
+        csv::ErrorKind::Utf8 { .. } => "invalid UTF-8".into(),
+        _ => e
+            .to_string()
+            .lines()
+            .next()
+            .unwrap_or("parse error")
+            .to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reports_line_of_bad_number() {
+        let t = Table::parse("f.csv", b"# note\nangle_deg,output\n0,1\n30,abc\n").unwrap();
+        let c = t.column("output").unwrap();
+        assert!(t.f64(0, c).is_ok());
+        let e = t.f64(1, c).unwrap_err().to_string();
+        assert_eq!(e, "f.csv:4: column 'output': 'abc' is not a number");
+    }
+
+    #[test]
+    fn nan_and_inf_are_refused() {
+        let t = Table::parse("f.csv", b"a\nNaN\ninf\n").unwrap();
+        assert!(t.f64(0, 0).unwrap_err().to_string().contains("f.csv:2"));
+        assert!(t
+            .f64(1, 0)
+            .unwrap_err()
+            .to_string()
+            .contains("not a finite"));
+    }
+
+    #[test]
+    fn empty_and_header_only_are_refused() {
+        assert!(Table::parse("f.csv", b"")
+            .unwrap_err()
+            .to_string()
+            .contains("empty file"));
+        assert!(Table::parse("f.csv", b"a,b\n")
+            .unwrap_err()
+            .to_string()
+            .contains("no data rows"));
+        let e = Table::parse("f.csv", b"a,b\n1,2\n3\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("f.csv:3:"), "{e}");
+    }
+
+    #[test]
+    fn missing_column_is_named() {
+        let t = Table::parse("f.csv", b"angle_deg\n1\n").unwrap();
+        let e = t.column("output").unwrap_err().to_string();
+        assert!(e.contains("missing column 'output'"));
+    }
+}
