@@ -422,7 +422,7 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
     println!(
         "Tumble plan: {} (step {} deg), {} positions, largest input {:.3} g",
         plan_name(&plan),
-        sig(plan.step_deg, 4),
+        plan.step_deg,
         plan.angles_deg.len(),
         plan.max_input_g()
     );
@@ -430,16 +430,16 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
         "angles (deg): {}",
         plan.angles_deg
             .iter()
-            .map(|x| sig(*x, 6))
+            .map(|x| format!("{x}"))
             .collect::<Vec<_>>()
             .join(", ")
     );
     if let Some(p) = prediction {
         println!(
-            "\nPredicted standard uncertainty ({} mount, K1 = {}, noise {} per position, index error {} arcsec):",
+            "\nPredicted standard uncertainty ({} mount, K1 = {}, noise {:e} per position, index error {} arcsec):",
             mount.name(),
-            sig(a.k1.unwrap_or(f64::NAN), 6),
-            sig(a.noise.unwrap_or(f64::NAN), 3),
+            a.k1.unwrap_or(f64::NAN),
+            a.noise.unwrap_or(f64::NAN),
             a.index_error_arcsec
         );
         let rows: Vec<Vec<String>> = p

@@ -1,0 +1,281 @@
+//! The real `incal` binary on good and bad tumble input.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn incal(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_incal"))
+        .args(args)
+        .output()
+        .expect("runs incal")
+}
+
+/// A unique temp file with `content`.
+fn temp(name: &str, content: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("incal-tumble-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, content).unwrap();
+    p
+}
+
+fn stderr_line(o: &Output) -> String {
+    let s = String::from_utf8_lossy(&o.stderr).to_string();
+    assert_eq!(s.trim_end().lines().count(), 1, "one stderr line, got: {s}");
+    s.trim_end().to_string()
+}
+
+fn simulate(args: &[&str]) -> String {
+    let mut all = vec!["simulate", "tumble"];
+    all.extend_from_slice(args);
+    let o = incal(&all);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8(o.stdout).unwrap()
+}
+
+#[test]
+fn simulate_is_reproducible_and_calibrates_to_contract_json() {
+    let a = simulate(&["--mount", "pendulum", "--seed", "5"]);
+    let b = simulate(&["--mount", "pendulum", "--seed", "5"]);
+    let c = simulate(&["--mount", "pendulum", "--seed", "6"]);
+    assert_eq!(a, b, "same seed, same file");
+    assert_ne!(a, c);
+    assert!(a.starts_with("angle_deg,output\n"));
+    let f = temp("pendulum.csv", &a);
+    let o = incal(&[
+        "tumble",
+        "--mount",
+        "pendulum",
+        "--input",
+        f.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let coefs = v["coefficients"].as_object().unwrap();
+    let names: Vec<&str> = coefs.keys().map(String::as_str).collect();
+    for (name, unit) in [
+        ("K0", "g"),
+        ("K1", "output/g"),
+        ("K2", "g/g^2"),
+        ("K3", "g/g^3"),
+        ("delta_o", "rad"),
+        ("K_ip", "g/g^2"),
+    ] {
+        let c = &coefs[name];
+        assert!(c["value"].is_f64() && c["u"].is_f64(), "{name}: {c}");
+        assert_eq!(c["unit"], unit, "{name}");
+    }
+    assert_eq!(names.len(), 6, "{names:?}");
+    // Default truth of simulate: K1 = 10, K0 = 8e-3 g.
+    let k1 = coefs["K1"]["value"].as_f64().unwrap();
+    assert!((k1 - 10.0).abs() < 1e-4);
+    let k0 = coefs["K0"]["value"].as_f64().unwrap();
+    assert!((k0 - 8e-3).abs() < 1e-5);
+}
+
+#[test]
+fn gate_mount_reports_delta_p_and_k_io() {
+    let a = simulate(&["--mount", "gate", "--seed", "3", "--passes", "2"]);
+    assert!(a.starts_with("angle_deg,output,pass\n"));
+    let f = temp("gate.csv", &a);
+    let o = incal(&[
+        "tumble",
+        "--mount",
+        "gate",
+        "--input",
+        f.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["coefficients"]["delta_p"]["u"].as_f64().unwrap() > 0.0);
+    assert!(v["coefficients"]["K_io"]["u"].as_f64().unwrap() > 0.0);
+    assert!(v["coefficients"].get("delta_o").is_none());
+    assert_eq!(v["passes"].as_array().unwrap().len(), 1);
+    // Readable report shows arcseconds and the pass difference.
+    let o = incal(&["tumble", "--mount", "gate", "--input", f.to_str().unwrap()]);
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(
+        text.contains("arcsec") && text.contains("Pass difference: ccw minus cw"),
+        "{text}"
+    );
+}
+
+#[test]
+fn plan_tumble_json_contract() {
+    let o = incal(&[
+        "plan",
+        "tumble",
+        "--range-g",
+        "0.5",
+        "--k1",
+        "10",
+        "--noise",
+        "1e-7",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["step_deg"], 6.0);
+    let angles: Vec<f64> = v["angles_deg"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(
+        angles,
+        vec![0.0, 6.0, 12.0, 18.0, 24.0, 30.0, 180.0, 330.0, 336.0, 342.0, 348.0, 354.0]
+    );
+    let u = v["predicted_u"].as_object().unwrap();
+    // methods.md §1: σ(K3) ≈ 6.8e-6 at a = 6°.
+    let k3 = u["K3"].as_f64().unwrap();
+    assert!((k3 - 6.8e-6).abs() < 0.05e-6, "{k3}");
+    assert_eq!(u.len(), 6);
+}
+
+#[test]
+fn compare_reports_difference_per_mille_and_en() {
+    let mut files = Vec::new();
+    for seed in ["1", "2"] {
+        let csv = simulate(&["--seed", seed]);
+        let f = temp(&format!("cmp{seed}.csv"), &csv);
+        let o = incal(&[
+            "tumble",
+            "--mount",
+            "pendulum",
+            "--input",
+            f.to_str().unwrap(),
+            "--json",
+        ]);
+        assert!(o.status.success());
+        files.push(temp(
+            &format!("cmp{seed}.json"),
+            &String::from_utf8(o.stdout).unwrap(),
+        ));
+    }
+    let o = incal(&[
+        "compare",
+        files[0].to_str().unwrap(),
+        files[1].to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let k1 = &v["comparisons"]["K1"];
+    let (a, b) = (k1["a"].as_f64().unwrap(), k1["b"].as_f64().unwrap());
+    let d = k1["difference"].as_f64().unwrap();
+    assert!((d - (a - b)).abs() <= 1e-15 * a.abs());
+    assert!((k1["relative_per_mille"].as_f64().unwrap() - 1e3 * d / b.abs()).abs() < 1e-12);
+    let (ua, ub) = (k1["u_a"].as_f64().unwrap(), k1["u_b"].as_f64().unwrap());
+    let en = d / (2.0 * (ua * ua + ub * ub).sqrt());
+    assert!((k1["En"].as_f64().unwrap() - en).abs() < 1e-12);
+}
+
+#[test]
+fn demo_runs_without_input() {
+    let o = incal(&["demo"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(
+        text.contains("pendulum mount")
+            && text.contains("gate mount")
+            && text.contains("small-angle")
+    );
+    assert_eq!(
+        text,
+        String::from_utf8(incal(&["demo"]).stdout).unwrap(),
+        "deterministic"
+    );
+}
+
+/// Bad input: exit 2 and one line naming the file, the line and the problem.
+#[test]
+fn bad_input_exits_2_with_one_line() {
+    let cases: Vec<(&str, &str, Vec<&str>, &str)> = vec![
+        (
+            "missing.csv",
+            "angle_deg,volts\n0,1\n",
+            vec![],
+            "missing column 'output'",
+        ),
+        (
+            "nan.csv",
+            "angle_deg,output\n0,1\n30,NaN\n",
+            vec![],
+            ":3: column 'output'",
+        ),
+        (
+            "text.csv",
+            "angle_deg,output\n0,1\nthirty,2\n",
+            vec![],
+            ":3: column 'angle_deg': 'thirty' is not a number",
+        ),
+        ("empty.csv", "", vec![], "empty file"),
+        (
+            "few.csv",
+            "angle_deg,output\n0,1\n90,2\n180,3\n",
+            vec![],
+            "distinct angles for 6 terms",
+        ),
+        (
+            "alias.csv",
+            "angle_deg,output\n0,1\n30,2\n60,3\n90,4\n120,5\n150,6\n180,7\n210,8\n",
+            vec!["--terms", "K0,K1,K2,K_pp"],
+            "plan cannot separate",
+        ),
+        (
+            "kip.csv",
+            "angle_deg,output\n0,1\n90,2\n180,3\n270,4\n0,1.1\n90,2.1\n180,3.1\n270,4.1\n",
+            vec!["--terms", "K0,K1,K_ip"],
+            "K_ip",
+        ),
+    ];
+    for (name, content, extra, expect) in cases {
+        let f = temp(name, content);
+        let mut args = vec![
+            "tumble",
+            "--mount",
+            "pendulum",
+            "--input",
+            f.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        let o = incal(&args);
+        assert_eq!(o.status.code(), Some(2), "{name}");
+        let line = stderr_line(&o);
+        assert!(line.contains(name), "{name}: {line}");
+        assert!(line.contains(expect), "{name}: {line}");
+    }
+    // Unknown mount and unknown option: usage errors, exit 2, one line.
+    let f = temp("ok.csv", "angle_deg,output\n0,1\n");
+    for args in [
+        vec![
+            "tumble",
+            "--mount",
+            "sideways",
+            "--input",
+            f.to_str().unwrap(),
+        ],
+        vec![
+            "tumble",
+            "--mount",
+            "gate",
+            "--input",
+            f.to_str().unwrap(),
+            "--frobnicate",
+        ],
+        vec!["plan", "tumble", "--step-deg", "25"],
+    ] {
+        let o = incal(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        stderr_line(&o);
+    }
+    // A file that does not exist.
+    let o = incal(&["tumble", "--mount", "gate", "--input", "/nonexistent/x.csv"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr_line(&o).contains("/nonexistent/x.csv"));
+}
