@@ -12,7 +12,7 @@ use incal::procedures::tumble::{
 };
 use incal::rigs::Mount;
 use incal::sim::tumble::{simulate as sim_tumble, TumbleSim};
-use incal::units::{arcsec_to_rad, rad_to_deg};
+use incal::units::{arcsec_to_rad, rad_to_arcsec, rad_to_deg};
 use serde_json::{json, Map, Value};
 
 use crate::error::{core, in_file, usage, CliError, CliResult};
@@ -170,6 +170,7 @@ pub fn result_json(file: &str, r: &TumbleResult) -> Value {
             "condition_number": num(f.diagnostics.condition),
             "weakest_combination": f.diagnostics.weakest.to_string(),
         },
+        "index_error_arcsec": r.index_error_rad.map(|e| num(rad_to_arcsec(e))),
         "positions": positions,
         "absorbed": r.absorbed.iter().map(|a| a.to_string()).collect::<Vec<_>>(),
         "passes": passes,
@@ -241,6 +242,12 @@ pub fn report(file: &str, r: &TumbleResult) -> String {
         s.push_str(&format!(", chi-square p {}", sig(p, 2)));
     }
     s.push('\n');
+    if let Some(e) = r.index_error_rad {
+        s.push_str(&format!(
+            "index-angle error of the head estimated from the residuals: {} arcsec rms\n",
+            sig(rad_to_arcsec(e), 3)
+        ));
+    }
     for a in &r.absorbed {
         s.push_str(&format!("note: {a}\n"));
     }
