@@ -19,6 +19,8 @@
 //!   g/g², …), the scale factor K1 in output units per g.
 //! * Every random thing takes an explicit `u64` seed ([`sim::rng`]).
 
+#![warn(missing_docs)]
+
 pub mod error;
 pub mod estimation;
 pub mod units;

@@ -118,6 +118,13 @@ impl Design {
                 value: s.to_string(),
             });
         }
+        if self.ncols() == 0 {
+            return Err(Error::TooFew {
+                what: "terms in the model".into(),
+                needed: 1,
+                got: 0,
+            });
+        }
         let w = sigma.map(|s| 1.0 / (s * s));
         let dec = Decomposition::new(self, Some(&w), DEFAULT_COND_LIMIT);
         dec.require_separable(self)?;
@@ -287,6 +294,13 @@ pub fn fit(design: &Design, y: &DVector<f64>, opts: &FitOptions) -> Result<Fit> 
             });
         }
     }
+    if p == 0 {
+        return Err(Error::TooFew {
+            what: "terms in the model".into(),
+            needed: 1,
+            got: 0,
+        });
+    }
     if n < p {
         return Err(Error::TooFew {
             what: format!("observations for {p} terms"),
@@ -415,14 +429,24 @@ impl Decomposition {
         } else {
             a
         };
-        let svd = padded.svd(true, true);
-        let s = svd.singular_values.clone();
-        let u_full = svd.u.unwrap_or_else(|| DMatrix::zeros(n.max(p), p));
-        let u = u_full.rows(0, n).into_owned();
-        let v = svd
-            .v_t
-            .map(|vt| vt.transpose())
-            .unwrap_or_else(|| DMatrix::identity(p, p));
+        let (u, s, v) = if p == 0 || n == 0 {
+            // Nothing to decompose; every quantity below degenerates cleanly.
+            (
+                DMatrix::zeros(n, p),
+                DVector::zeros(p),
+                DMatrix::identity(p, p),
+            )
+        } else {
+            let svd = padded.svd(true, true);
+            let s = svd.singular_values.clone();
+            let u_full = svd.u.unwrap_or_else(|| DMatrix::zeros(n.max(p), p));
+            let u = u_full.rows(0, n).into_owned();
+            let v = svd
+                .v_t
+                .map(|vt| vt.transpose())
+                .unwrap_or_else(|| DMatrix::identity(p, p));
+            (u, s, v)
+        };
         let s_max = s.iter().cloned().fold(0.0, f64::max);
         let tol = s_max / cond_limit;
         let rank = s.iter().filter(|&&x| x > tol && x > 0.0).count();
@@ -688,6 +712,16 @@ mod tests {
         assert!(f.variance_factor > 1.0);
         assert_eq!(f.estimates.dof(), 6.0);
         assert!(f.chi2_p_value.unwrap() < 1e-6);
+    }
+
+    #[test]
+    fn empty_designs_are_refused_not_panicking() {
+        let d = Design::new(Vec::new(), DMatrix::zeros(3, 0)).unwrap();
+        assert!(fit(&d, &DVector::zeros(3), &FitOptions::default()).is_err());
+        assert!(d.predict(&DVector::from_element(3, 1.0)).is_err());
+        let e = Design::new(names(&["a"]), DMatrix::zeros(0, 1)).unwrap();
+        assert_eq!(e.diagnose(None, DEFAULT_COND_LIMIT).rank, 0);
+        assert!(fit(&e, &DVector::zeros(0), &FitOptions::default()).is_err());
     }
 
     #[test]
