@@ -175,4 +175,13 @@ fn two_passes_compare() {
         let expect = p.other_coefficients.values()[k] - p.reference_coefficients.values()[k];
         assert_eq!(d, expect);
     }
+    assert_eq!(p.position_differences.len(), 12);
+    for (theta, d, u) in &p.position_differences {
+        // Index error 0.2″ × K1 = 10 adds ≈1e-5·cosθ per visit beyond u.
+        let index = 2f64.sqrt() * 10.0 * arcsec_to_rad(0.2) * theta.cos().abs();
+        assert!(
+            d.abs() <= 4.0 * (u * u + index * index).sqrt(),
+            "θ {theta}: {d} ± {u}"
+        );
+    }
 }

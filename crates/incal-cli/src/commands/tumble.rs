@@ -143,6 +143,9 @@ pub fn result_json(file: &str, r: &TumbleResult) -> Value {
                 "reference_coefficients": coefficients_json(&p.reference_coefficients, term_unit),
                 "other_coefficients": coefficients_json(&p.other_coefficients, term_unit),
                 "difference": coefficients_json(&p.difference, term_unit),
+                "position_differences": p.position_differences.iter().map(|(t, d, u)| json!({
+                    "angle_deg": rad_to_deg(*t), "difference_output": d, "u_output": num(*u),
+                })).collect::<Vec<_>>(),
             })
         })
         .collect();
@@ -292,6 +295,16 @@ pub fn report(file: &str, r: &TumbleResult) -> String {
             &["term", "difference", "u", "U95", "unit"],
             &coefficient_rows(&p.difference, k),
         ));
+        let rows: Vec<Vec<String>> = p
+            .position_differences
+            .iter()
+            .map(|(t, d, u)| vec![format!("{:.4}", rad_to_deg(*t)), sig(*d, 3), sig(*u, 3)])
+            .collect();
+        s.push_str(&format!(
+            "\nPer-angle mean output, {} minus {} (hysteresis, drift)\n",
+            p.other, p.reference
+        ));
+        s.push_str(&table(&["angle_deg", "difference", "u"], &rows));
     }
     for (l, e) in &r.pass_errors {
         s.push_str(&format!("pass {l} alone: {e}\n"));

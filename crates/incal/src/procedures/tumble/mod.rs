@@ -164,6 +164,10 @@ pub struct PassComparison {
     pub other_coefficients: Estimates,
     /// `other − reference` with `u = sqrt(u_ref² + u_other²)` (independent data).
     pub difference: Estimates,
+    /// Per angle visited in both passes: `(θ, ȳ_other − ȳ_ref, u)` with
+    /// `u² = s_ref²/n_ref + s_other²/n_other` (NaN with single samples).
+    /// A pattern here is hysteresis or drift between the passes.
+    pub position_differences: Vec<(f64, f64, f64)>,
 }
 
 /// Everything a tumble calibration produces.
@@ -390,6 +394,33 @@ fn fit_observations(obs: &[Observation], opts: &TumbleOptions) -> Result<SingleF
     })
 }
 
+/// Per angle visited by both passes: mean of `other` minus mean of
+/// `reference`, with the standard uncertainty from the sample scatter.
+fn position_differences(
+    positions: &[PositionResult],
+    reference: &str,
+    other: &str,
+) -> Vec<(f64, f64, f64)> {
+    let var = |p: &PositionResult| p.stats.std.powi(2) / p.stats.n as f64;
+    positions
+        .iter()
+        .filter(|a| a.pass.as_deref() == Some(reference))
+        .filter_map(|a| {
+            positions
+                .iter()
+                .filter(|b| b.pass.as_deref() == Some(other))
+                .find(|b| angle_key(b.angle_rad).0 == angle_key(a.angle_rad).0)
+                .map(|b| {
+                    (
+                        a.angle_rad,
+                        b.stats.mean - a.stats.mean,
+                        (var(a) + var(b)).sqrt(),
+                    )
+                })
+        })
+        .collect()
+}
+
 /// Calibrate from tumble observations (see module docs).
 ///
 /// Samples with the same pass label and angle form one position; their mean
@@ -450,6 +481,7 @@ pub fn calibrate(obs: &[Observation], opts: &TumbleOptions) -> Result<TumbleResu
                     c.dof().min(ref_c.dof()),
                 )?;
                 passes.push(PassComparison {
+                    position_differences: position_differences(&positions, &ref_label, label),
                     reference: ref_label.clone(),
                     other: label.clone(),
                     reference_coefficients: ref_c.clone(),
