@@ -27,6 +27,21 @@ fn stderr_line(o: &Output) -> String {
     s.trim_end().to_string()
 }
 
+/// `incal tumble --mount MOUNT --input <csv written to NAME> --json`, parsed.
+fn calibrate_json(name: &str, csv: &str, mount: &str) -> Value {
+    let f = temp(name, csv);
+    let o = incal(&[
+        "tumble",
+        "--mount",
+        mount,
+        "--input",
+        f.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
 fn simulate(args: &[&str]) -> String {
     let mut all = vec!["simulate", "tumble"];
     all.extend_from_slice(args);
@@ -43,17 +58,7 @@ fn simulate_is_reproducible_and_calibrates_to_contract_json() {
     assert_eq!(a, b, "same seed, same file");
     assert_ne!(a, c);
     assert!(a.starts_with("angle_deg,output\n"));
-    let f = temp("pendulum.csv", &a);
-    let o = incal(&[
-        "tumble",
-        "--mount",
-        "pendulum",
-        "--input",
-        f.to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let v = calibrate_json("pendulum.csv", &a, "pendulum");
     let coefs = v["coefficients"].as_object().unwrap();
     let names: Vec<&str> = coefs.keys().map(String::as_str).collect();
     for (name, unit) in [
@@ -80,22 +85,13 @@ fn simulate_is_reproducible_and_calibrates_to_contract_json() {
 fn gate_mount_reports_delta_p_and_k_io() {
     let a = simulate(&["--mount", "gate", "--seed", "3", "--passes", "2"]);
     assert!(a.starts_with("angle_deg,output,pass\n"));
-    let f = temp("gate.csv", &a);
-    let o = incal(&[
-        "tumble",
-        "--mount",
-        "gate",
-        "--input",
-        f.to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let v = calibrate_json("gate.csv", &a, "gate");
     assert!(v["coefficients"]["delta_p"]["u"].as_f64().unwrap() > 0.0);
     assert!(v["coefficients"]["K_io"]["u"].as_f64().unwrap() > 0.0);
     assert!(v["coefficients"].get("delta_o").is_none());
     assert_eq!(v["passes"].as_array().unwrap().len(), 1);
     // Readable report shows arcseconds and the pass difference.
+    let f = temp("gate.csv", &a);
     let o = incal(&["tumble", "--mount", "gate", "--input", f.to_str().unwrap()]);
     let text = String::from_utf8(o.stdout).unwrap();
     assert!(
@@ -142,20 +138,8 @@ fn compare_reports_difference_per_mille_and_en() {
     let mut files = Vec::new();
     for seed in ["1", "2"] {
         let csv = simulate(&["--seed", seed]);
-        let f = temp(&format!("cmp{seed}.csv"), &csv);
-        let o = incal(&[
-            "tumble",
-            "--mount",
-            "pendulum",
-            "--input",
-            f.to_str().unwrap(),
-            "--json",
-        ]);
-        assert!(o.status.success());
-        files.push(temp(
-            &format!("cmp{seed}.json"),
-            &String::from_utf8(o.stdout).unwrap(),
-        ));
+        let v = calibrate_json(&format!("cmp{seed}.csv"), &csv, "pendulum");
+        files.push(temp(&format!("cmp{seed}.json"), &v.to_string()));
     }
     let o = incal(&[
         "compare",

@@ -5,19 +5,15 @@
 use incal::estimation::{fit, numeric_jacobian, Design, Estimates, FitOptions, Variance};
 use incal::models::Term;
 use incal::procedures::tumble::plan::TumblePlan;
-use incal::procedures::tumble::{design, to_physical};
+use incal::procedures::tumble::{default_terms, design, to_physical};
 use incal::rigs::Mount;
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 
-const TERMS: [Term; 6] = [
-    Term::K0,
-    Term::K1,
-    Term::K2,
-    Term::K3,
-    Term::DeltaO,
-    Term::Kip,
-];
+/// The pendulum mount's default terms: K0, K1, K2, K3, δo, Kip.
+fn terms() -> Vec<Term> {
+    default_terms(Mount::Pendulum)
+}
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
@@ -30,10 +26,10 @@ proptest! {
         others in proptest::collection::vec(-1e-2f64..1e-2, 5),
     ) {
         let p = DVector::from_vec(vec![k1 * others[0], k1, k1 * others[1], k1 * others[2], k1 * others[3], k1 * others[4]]);
-        let names: Vec<String> = TERMS.iter().map(|t| t.name().to_string()).collect();
+        let names: Vec<String> = terms().iter().map(|t| t.name().to_string()).collect();
         let cov = DMatrix::from_fn(6, 6, |i, j| if i == j { 1e-8 * (1.0 + i as f64) } else { 1e-10 });
         let lin = Estimates::new(names, p.clone(), cov.clone(), f64::INFINITY).unwrap();
-        let phys = to_physical(&lin, &TERMS).unwrap();
+        let phys = to_physical(&lin, &terms()).unwrap();
         let f = |x: &DVector<f64>| DVector::from_fn(6, |j, _| if j == 1 { x[1] } else { x[j] / x[1] });
         let steps: Vec<f64> = p.iter().map(|v| 1e-6 * v.abs().max(1e-6)).collect();
         let j = numeric_jacobian(&f, &p, &steps);
@@ -54,7 +50,7 @@ proptest! {
         p in proptest::collection::vec(-1.0f64..1.0, 6),
     ) {
         let plan = TumblePlan::small_angle(step).unwrap();
-        let d = design(Mount::Pendulum, &TERMS, &plan.angles_rad()).unwrap();
+        let d = design(Mount::Pendulum, &terms(), &plan.angles_rad()).unwrap();
         let x = DVector::from_vec(p);
         let y = d.matrix() * &x;
         let opts = FitOptions { variance: Variance::Known { dof: f64::INFINITY }, ..FitOptions::default() };
@@ -75,7 +71,7 @@ proptest! {
         col in 0usize..6,
         noise in proptest::collection::vec(-1e-3f64..1e-3, 12),
     ) {
-        let d = design(Mount::Pendulum, &TERMS, &TumblePlan::gjb12().angles_rad()).unwrap();
+        let d = design(Mount::Pendulum, &terms(), &TumblePlan::gjb12().angles_rad()).unwrap();
         let y = d.matrix() * DVector::from_vec(vec![0.1, 10.0, 0.01, 0.02, 0.03, 0.04]) + DVector::from_vec(noise);
         let mut m = d.matrix().clone();
         m.column_mut(col).scale_mut(scale);

@@ -74,6 +74,18 @@ pub enum Noise {
     },
 }
 
+/// `σ²` of a known noise level, refusing a non-positive or non-finite σ.
+fn known_variance(sigma: f64) -> Result<f64> {
+    if sigma.is_finite() && sigma > 0.0 {
+        Ok(sigma * sigma)
+    } else {
+        Err(Error::InvalidValue {
+            what: "noise sigma".into(),
+            value: sigma.to_string(),
+        })
+    }
+}
+
 /// Pooled within-position variance and its degrees of freedom.
 pub fn pooled_variance(positions: &[PositionStats]) -> (f64, usize) {
     let dof: usize = positions.iter().map(|p| p.n.saturating_sub(1)).sum();
@@ -98,18 +110,10 @@ pub fn fit_means(
     let y = DVector::from_iterator(positions.len(), positions.iter().map(|p| p.mean));
     let counts = DVector::from_iterator(positions.len(), positions.iter().map(|p| p.n as f64));
     let (weights, variance) = match noise {
-        Noise::Known { sigma } => {
-            if !(sigma.is_finite() && sigma > 0.0) {
-                return Err(Error::InvalidValue {
-                    what: "noise sigma".into(),
-                    value: sigma.to_string(),
-                });
-            }
-            (
-                counts / (sigma * sigma),
-                Variance::AtLeast { dof: f64::INFINITY },
-            )
-        }
+        Noise::Known { sigma } => (
+            counts / known_variance(sigma)?,
+            Variance::AtLeast { dof: f64::INFINITY },
+        ),
         Noise::Auto => {
             let (s2, dof) = pooled_variance(positions);
             if dof > 0 && s2 > 0.0 {
@@ -157,13 +161,8 @@ pub fn fit_means_excess(
     let counts = DVector::from_iterator(n, positions.iter().map(|p| p.n as f64));
     let (base, base_dof) = match noise {
         Noise::Known { sigma } => {
-            if !(sigma.is_finite() && sigma > 0.0) {
-                return Err(Error::InvalidValue {
-                    what: "noise sigma".into(),
-                    value: sigma.to_string(),
-                });
-            }
-            (counts.map(|c| sigma * sigma / c), f64::INFINITY)
+            let s2 = known_variance(sigma)?;
+            (counts.map(|c| s2 / c), f64::INFINITY)
         }
         Noise::Auto => {
             let (s2, dof) = pooled_variance(positions);
