@@ -500,7 +500,10 @@ fn read_calibration(
     Ok((name, out))
 }
 
-fn read_series(path: &Path, g: &Geometry) -> CliResult<(String, Vec<(f64, Vec<f64>)>)> {
+/// A time series: `(time_s, outputs in geometry order)` per sample.
+type Series = Vec<(f64, Vec<f64>)>;
+
+fn read_series(path: &Path, g: &Geometry) -> CliResult<(String, Series)> {
     let t = Table::read(path)?;
     let ct = t.column("time_s")?;
     let cols: Vec<usize> = g
