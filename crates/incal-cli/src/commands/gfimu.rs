@@ -17,7 +17,7 @@ use incal::units::{rad_to_arcsec, STANDARD_GRAVITY_M_S2};
 use nalgebra::Vector3;
 use serde_json::{json, Map, Value};
 
-use crate::commands::demo::{truth_rows, TRUTH_HEADER};
+use crate::commands::demo::TRUTH_HEADER;
 use crate::commands::tumble::write_output;
 use crate::error::{core, in_file, usage, CliError, CliResult};
 use crate::input::Table;
@@ -705,12 +705,26 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
     write_output(a.output.as_ref(), &text)
 }
 
+/// Rows `term, estimate, truth, u, (est − truth)/u, unit` in [`TRUTH_HEADER`]
+/// layout. Not [`truth_rows`]: K0 here is in output units, not the g of an
+/// accelerometer-model K0, so no µg scaling applies.
 fn vector_rows(e: &Estimates, truth: &[f64]) -> Vec<Vec<String>> {
-    truth_rows(e, |n| {
-        e.index(n)
-            .and_then(|k| truth.get(k).copied())
-            .unwrap_or(f64::NAN)
-    })
+    e.names()
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            let (v, u) = (e.values()[k], e.u_at(k));
+            let t = truth.get(k).copied().unwrap_or(f64::NAN);
+            vec![
+                name.clone(),
+                sig(v, 7),
+                sig(t, 7),
+                sig(u, 3),
+                sig((v - t) / u, 2),
+                if k == 0 { "output" } else { "output/g" }.to_string(),
+            ]
+        })
+        .collect()
 }
 
 /// The gyro-free section of `incal demo`: calibrate a simulated unit by the
@@ -727,7 +741,7 @@ pub fn demo_section(seed: u64) -> CliResult<()> {
     let cal = calibrate(&g, &data, &CalibrateOptions::default()).map_err(core)?;
     for (j, a) in cal.accelerometers.iter().enumerate() {
         let t = [truth.k0[j], truth.ks[j].x, truth.ks[j].y, truth.ks[j].z];
-        println!("-- accelerometer {} (K0 in output, Ks in output/g)", a.name);
+        println!("-- accelerometer {}", a.name);
         print!("{}", table(&TRUTH_HEADER, &vector_rows(&a.linear, &t)));
     }
     for w in &cal.warnings {
@@ -793,6 +807,7 @@ pub fn demo_section(seed: u64) -> CliResult<()> {
             &rows
         )
     );
-    println!("omega is integrated from the solved angular acceleration: its error is a random walk that grows with time (no gyro to reset it).\n");
+    println!("omega is integrated from the solved angular acceleration (no gyro to reset it): the noise alone gives a random walk,");
+    println!("calibration errors bias omega_dot into a linear drift, and the centripetal term feeds omega errors back, so the drift grows faster than sqrt(t).\n");
     Ok(())
 }
