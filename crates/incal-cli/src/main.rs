@@ -37,6 +37,17 @@ enum Command {
     Simulate(SimulateCommand),
     /// Compare the coefficients of two result files: difference, per mille and En.
     Compare(commands::compare::Args),
+    /// Gyro-free inertial unit of six (or more) accelerometers: calibrate K0 and Ks, solve motion (seed 004).
+    #[command(subcommand)]
+    Gfimu(GfimuCommand),
+}
+
+#[derive(Subcommand, Debug)]
+enum GfimuCommand {
+    /// Calibrate every accelerometer's K0 and Ks from static positions (six-position test or any >= 6 orientations).
+    Calibrate(commands::gfimu::CalibrateArgs),
+    /// Solve a time series of outputs for f0, angular acceleration and angular rate.
+    Solve(commands::gfimu::SolveArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -49,6 +60,8 @@ enum PlanCommand {
 enum SimulateCommand {
     /// Dividing-head tumble test.
     Tumble(commands::tumble::SimArgs),
+    /// Gyro-free unit: six-position static test or rate-table motion.
+    Gfimu(commands::gfimu::SimArgs),
 }
 
 fn run(cli: Cli) -> CliResult<()> {
@@ -58,6 +71,9 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Plan(PlanCommand::Tumble(a)) => commands::tumble::plan(&a),
         Command::Simulate(SimulateCommand::Tumble(a)) => commands::tumble::simulate(&a),
         Command::Compare(a) => commands::compare::run(&a),
+        Command::Gfimu(GfimuCommand::Calibrate(a)) => commands::gfimu::run_calibrate(&a),
+        Command::Gfimu(GfimuCommand::Solve(a)) => commands::gfimu::run_solve(&a),
+        Command::Simulate(SimulateCommand::Gfimu(a)) => commands::gfimu::simulate(&a),
     }
 }
 

@@ -1,5 +1,6 @@
 //! Instrument error models.
 
 pub mod accelerometer;
+pub mod gfimu;
 
 pub use accelerometer::{AccelerometerModel, SpecificForce, Term};

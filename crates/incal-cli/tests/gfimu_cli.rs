@@ -1,0 +1,364 @@
+//! Integration tests of `incal gfimu ...` and `incal simulate gfimu`,
+//! running the real binary on temporary files.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use serde_json::Value;
+
+static COUNTER: AtomicUsize = AtomicUsize::new(0);
+
+fn temp(name: &str, content: &str) -> PathBuf {
+    let k = COUNTER.fetch_add(1, Ordering::SeqCst);
+    let p = std::env::temp_dir().join(format!("incal_gfimu_{}_{k}_{name}", std::process::id()));
+    std::fs::write(&p, content).unwrap();
+    p
+}
+
+fn incal(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_incal"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn simulate(extra: &[&str]) -> String {
+    let mut args = vec!["simulate", "gfimu"];
+    args.extend_from_slice(extra);
+    let o = incal(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    stdout(&o)
+}
+
+/// Bad input: exit code 2 and exactly one stderr line containing `parts`.
+fn refused(args: &[&str], parts: &[&str]) {
+    let o = incal(args);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    for p in parts {
+        assert!(err.contains(p), "'{p}' not in: {err}");
+    }
+}
+
+fn calibrate_json(path: &str) -> Value {
+    let o = incal(&["gfimu", "calibrate", "--input", path, "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    serde_json::from_str(&stdout(&o)).unwrap()
+}
+
+#[test]
+fn calibrate_gives_contract_json() {
+    let csv = temp("static.csv", &simulate(&["--seed", "5"]));
+    let doc = calibrate_json(csv.to_str().unwrap());
+    let accs = doc["accelerometers"].as_object().unwrap();
+    let mut names: Vec<&String> = accs.keys().collect();
+    names.sort();
+    assert_eq!(names, ["a", "b", "c", "d", "e", "f"]);
+    for (n, a) in accs {
+        let k0 = &a["K0"];
+        assert!(
+            k0["value"].is_f64() && k0["u"].as_f64().unwrap() > 0.0,
+            "{n}"
+        );
+        let ks = &a["Ks"];
+        assert_eq!(ks["value"].as_array().unwrap().len(), 3, "{n}");
+        assert_eq!(ks["u"].as_array().unwrap().len(), 3, "{n}");
+        assert!(ks["u"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|u| u.as_f64().unwrap() > 0.0));
+    }
+    // Accelerometer a senses z with K1 ≈ 1 output/g (default truth).
+    let ksz = doc["accelerometers"]["a"]["Ks"]["value"][2]
+        .as_f64()
+        .unwrap();
+    assert!((ksz - 0.997).abs() < 1e-3, "{ksz}");
+}
+
+#[test]
+fn arbitrary_orientations_by_force_columns() {
+    // fx_g, fy_g, fz_g instead of position: the six axes and two diagonals.
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let forces = [
+        [1.0, 0.0, 0.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, -1.0],
+        [h, 0.0, h],
+        [0.0, h, -h],
+    ];
+    let mut text = String::from("fx_g,fy_g,fz_g,a,b,c,d,e,f\n");
+    for (i, f) in forces.iter().enumerate() {
+        // Accelerometer j: K0 = 0.01 j, Ks = (1 + 0.01 j) l_j, tiny ripple.
+        let l = [
+            [0, 0, 1],
+            [0, 0, 1],
+            [1, 0, 0],
+            [1, 0, 0],
+            [0, 1, 0],
+            [0, 1, 0],
+        ];
+        let e: Vec<String> = (0..6)
+            .map(|j| {
+                let s: f64 = (0..3).map(|k| l[j][k] as f64 * f[k]).sum();
+                let ripple = 1e-7 * ((i * 7 + j * 3) % 5) as f64;
+                (0.01 * j as f64 + (1.0 + 0.01 * j as f64) * s + ripple).to_string()
+            })
+            .collect();
+        text.push_str(&format!("{},{},{},{}\n", f[0], f[1], f[2], e.join(",")));
+    }
+    let csv = temp("forces.csv", &text);
+    let doc = calibrate_json(csv.to_str().unwrap());
+    let c = &doc["accelerometers"]["c"];
+    assert!((c["K0"]["value"].as_f64().unwrap() - 0.02).abs() < 1e-6);
+    assert!((c["Ks"]["value"][0].as_f64().unwrap() - 1.02).abs() < 1e-6);
+}
+
+#[test]
+fn solve_gives_contract_json_and_recovers_motion() {
+    let st = temp("static.csv", &simulate(&["--seed", "6", "--samples", "20"]));
+    let o = incal(&[
+        "gfimu",
+        "calibrate",
+        "--input",
+        st.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success());
+    let cal = temp("cal.json", &stdout(&o));
+    let mo = temp(
+        "motion.csv",
+        &simulate(&["--kind", "motion", "--seed", "7", "--duration-s", "1.5"]),
+    );
+    let o = incal(&[
+        "gfimu",
+        "solve",
+        "--calibration",
+        cal.to_str().unwrap(),
+        "--input",
+        mo.to_str().unwrap(),
+        "--lever-arm-m",
+        "0.1",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc: Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let samples = doc["samples"].as_array().unwrap();
+    assert_eq!(samples.len(), 151);
+    for s in samples {
+        let mut keys: Vec<&String> = s.as_object().unwrap().keys().collect();
+        keys.sort();
+        assert_eq!(keys, ["f0_g", "omega_dot_rad_s2", "omega_rad_s", "time_s"]);
+    }
+    // Defaults: f0 = (0.05, 0, 1) g, 2 rad/s² about z until 1.005 s.
+    let s = &samples[100]; // t = 1.0 s
+    assert!((s["time_s"].as_f64().unwrap() - 1.0).abs() < 1e-12);
+    assert!((s["f0_g"][2].as_f64().unwrap() - 1.0).abs() < 1e-3);
+    assert!((s["f0_g"][0].as_f64().unwrap() - 0.05).abs() < 1e-3);
+    assert!((s["omega_dot_rad_s2"][2].as_f64().unwrap() - 2.0).abs() < 0.05);
+    assert!((s["omega_rad_s"][2].as_f64().unwrap() - 2.0).abs() < 0.01);
+}
+
+#[test]
+fn simulate_is_reproducible() {
+    for kind in ["static", "motion"] {
+        let a = simulate(&["--kind", kind, "--seed", "42"]);
+        let b = simulate(&["--kind", kind, "--seed", "42"]);
+        let c = simulate(&["--kind", kind, "--seed", "43"]);
+        assert_eq!(a.as_bytes(), b.as_bytes());
+        assert_ne!(a, c);
+    }
+}
+
+#[test]
+fn bad_calibration_inputs_are_refused() {
+    let good = simulate(&["--seed", "8", "--samples", "2"]);
+    // Missing accelerometer column.
+    let no_c = good
+        .lines()
+        .map(|l| {
+            if l.starts_with('#') {
+                return l.to_string();
+            }
+            let f: Vec<&str> = l.split(',').collect();
+            [&f[..3], &f[4..]].concat().join(",")
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let p = temp("noc.csv", &no_c);
+    let ps = p.to_str().unwrap();
+    refused(
+        &["gfimu", "calibrate", "--input", ps],
+        &[ps, "missing column 'c'"],
+    );
+
+    // NaN and text in a number: file and line named.
+    let p = temp(
+        "nan.csv",
+        "position,a,b,c,d,e,f\n+x,0,0,1,1,0,0\n-x,0,NaN,1,1,0,0\n",
+    );
+    let ps = p.to_str().unwrap();
+    refused(
+        &["gfimu", "calibrate", "--input", ps],
+        &[&format!("{ps}:3"), "'b'"],
+    );
+    let p = temp(
+        "text.csv",
+        "position,a,b,c,d,e,f\n+x,0,0,1,1,0,0\n-x,0,0,abc,1,0,0\n",
+    );
+    let ps = p.to_str().unwrap();
+    refused(
+        &["gfimu", "calibrate", "--input", ps],
+        &[&format!("{ps}:3"), "not a number"],
+    );
+    let p = temp("pos.csv", "position,a,b,c,d,e,f\n+q,0,0,1,1,0,0\n");
+    let ps = p.to_str().unwrap();
+    refused(
+        &["gfimu", "calibrate", "--input", ps],
+        &[&format!("{ps}:2"), "'+q'"],
+    );
+
+    // Empty file.
+    let p = temp("empty.csv", "");
+    let ps = p.to_str().unwrap();
+    refused(&["gfimu", "calibrate", "--input", ps], &[ps, "empty"]);
+
+    // Fewer than six positions (only ±x, ±y, +z).
+    let five: String = good
+        .lines()
+        .filter(|l| !l.starts_with("-z"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let p = temp("five.csv", &five);
+    let ps = p.to_str().unwrap();
+    refused(
+        &["gfimu", "calibrate", "--input", ps],
+        &[ps, "need at least 6, got 5"],
+    );
+
+    // Unseparable plan: six orientations, all horizontal in x–y.
+    let mut text = String::from("fx_g,fy_g,fz_g,a,b,c,d,e,f\n");
+    for (fx, fy) in [
+        (1.0, 0.0),
+        (-1.0, 0.0),
+        (0.0, 1.0),
+        (0.0, -1.0),
+        (0.6, 0.8),
+        (-0.8, 0.6),
+    ] {
+        text.push_str(&format!("{fx},{fy},0,0.1,0.2,{fx},{fx},{fy},{fy}\n"));
+    }
+    let p = temp("flat.csv", &text);
+    let ps = p.to_str().unwrap();
+    refused(
+        &["gfimu", "calibrate", "--input", ps],
+        &[ps, "cannot separate", "Ks_z"],
+    );
+
+    // Unknown option.
+    refused(
+        &["gfimu", "calibrate", "--input", ps, "--frobnicate"],
+        &["--frobnicate"],
+    );
+}
+
+#[test]
+fn bad_geometry_and_solve_inputs_are_refused() {
+    // Singular geometry: c and d at the same place.
+    let geo = temp(
+        "geo.toml",
+        r#"
+[[accelerometer]]
+name = "a"
+position_m = [0.1, 0.0, 0.0]
+direction = [0.0, 0.0, 1.0]
+[[accelerometer]]
+name = "b"
+position_m = [-0.1, 0.0, 0.0]
+direction = [0.0, 0.0, 1.0]
+[[accelerometer]]
+name = "c"
+position_m = [0.0, 0.1, 0.0]
+direction = [1.0, 0.0, 0.0]
+[[accelerometer]]
+name = "d"
+position_m = [0.0, 0.1, 0.0]
+direction = [1.0, 0.0, 0.0]
+[[accelerometer]]
+name = "e"
+position_m = [0.0, 0.0, 0.1]
+direction = [0.0, 1.0, 0.0]
+[[accelerometer]]
+name = "f"
+position_m = [0.0, 0.0, -0.1]
+direction = [0.0, 1.0, 0.0]
+"#,
+    );
+    let gs = geo.to_str().unwrap();
+    let csv = temp("st.csv", &simulate(&["--seed", "9"]));
+    let cs = csv.to_str().unwrap();
+    refused(
+        &["gfimu", "calibrate", "--input", cs, "--geometry", gs],
+        &[gs, "cannot", "omega_dot_z"],
+    );
+    // Malformed TOML names file and line.
+    let bad = temp(
+        "bad.toml",
+        "[[accelerometer]]\nname = \"a\"\nposition_m = [0.1, x]\n",
+    );
+    let bs = bad.to_str().unwrap();
+    refused(
+        &["gfimu", "calibrate", "--input", cs, "--geometry", bs],
+        &[&format!("{bs}:3")],
+    );
+
+    // Solve: calibration missing an accelerometer; series with bad time.
+    let cal = temp(
+        "cal.json",
+        "{\"accelerometers\": {\"a\": {\"K0\": {\"value\": 0}, \"Ks\": {\"value\": [0,0,1]}}}}",
+    );
+    let cals = cal.to_str().unwrap();
+    let series = temp("series.csv", "time_s,a,b,c,d,e,f\n0,0,0,0,0,0,0\n");
+    let ss = series.to_str().unwrap();
+    refused(
+        &["gfimu", "solve", "--calibration", cals, "--input", ss],
+        &[cals, "'b'"],
+    );
+    let o = incal(&["gfimu", "calibrate", "--input", cs, "--json"]);
+    let cal = temp("cal2.json", &stdout(&o));
+    let cals = cal.to_str().unwrap();
+    let series = temp(
+        "series2.csv",
+        "time_s,a,b,c,d,e,f\n0,0,0,0,0,0,1\n0,0,0,0,0,0,1\n",
+    );
+    let ss = series.to_str().unwrap();
+    refused(
+        &["gfimu", "solve", "--calibration", cals, "--input", ss],
+        &[&format!("{ss}:3"), "time_s"],
+    );
+    let series = temp("series3.csv", "time_s,a,b,c,d,e\n0,0,0,0,0,0\n");
+    let ss = series.to_str().unwrap();
+    refused(
+        &["gfimu", "solve", "--calibration", cals, "--input", ss],
+        &[ss, "missing column 'f'"],
+    );
+    let notjson = temp("not.json", "{\n \"accelerometers\": [1,\n");
+    let ns = notjson.to_str().unwrap();
+    refused(
+        &["gfimu", "solve", "--calibration", ns, "--input", ss],
+        &[ns, "not valid JSON"],
+    );
+}
