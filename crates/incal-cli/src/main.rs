@@ -35,6 +35,9 @@ enum Command {
     /// Simulate a rig from a known truth and write the input CSV of the matching procedure.
     #[command(subcommand)]
     Simulate(SimulateCommand),
+    /// Misalignment separation: gyro on a rate table, accelerometer on a vertical face (seed 003).
+    #[command(subcommand)]
+    Misalign(commands::misalign::Command),
     /// Compare the coefficients of two result files: difference, per mille and En.
     Compare(commands::compare::Args),
 }
@@ -43,12 +46,17 @@ enum Command {
 enum PlanCommand {
     /// Tumble plan: GJB 12-point, small-angle 12-point for a range, or N-point.
     Tumble(commands::tumble::PlanArgs),
+    /// Misalignment plan: predicted u of each angle for a configuration set.
+    Misalign(commands::misalign::PlanArgs),
 }
 
 #[derive(Subcommand, Debug)]
 enum SimulateCommand {
     /// Dividing-head tumble test.
     Tumble(commands::tumble::SimArgs),
+    /// Misalignment test: gyro on a rate table or accelerometer on a vertical face.
+    #[command(subcommand)]
+    Misalign(commands::misalign::SimCommand),
 }
 
 fn run(cli: Cli) -> CliResult<()> {
@@ -58,6 +66,9 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Plan(PlanCommand::Tumble(a)) => commands::tumble::plan(&a),
         Command::Simulate(SimulateCommand::Tumble(a)) => commands::tumble::simulate(&a),
         Command::Compare(a) => commands::compare::run(&a),
+        Command::Misalign(c) => commands::misalign::run(&c),
+        Command::Plan(PlanCommand::Misalign(a)) => commands::misalign::plan(&a),
+        Command::Simulate(SimulateCommand::Misalign(c)) => commands::misalign::simulate(&c),
     }
 }
 

@@ -2,4 +2,5 @@
 
 pub mod compare;
 pub mod demo;
+pub mod misalign;
 pub mod tumble;
