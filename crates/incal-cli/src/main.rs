@@ -35,6 +35,9 @@ enum Command {
     /// Simulate a rig from a known truth and write the input CSV of the matching procedure.
     #[command(subcommand)]
     Simulate(SimulateCommand),
+    /// Misalignment separation: gyro on a rate table, accelerometer on a vertical face (seed 003).
+    #[command(subcommand)]
+    Misalign(commands::misalign::Command),
     /// Compare the coefficients of two result files: difference, per mille and En.
     Compare(commands::compare::Args),
     /// Gyro-free inertial unit of six (or more) accelerometers: calibrate K0 and Ks, solve motion (seed 004).
@@ -54,6 +57,8 @@ enum GfimuCommand {
 enum PlanCommand {
     /// Tumble plan: GJB 12-point, small-angle 12-point for a range, or N-point.
     Tumble(commands::tumble::PlanArgs),
+    /// Misalignment plan: predicted u of each angle for a configuration set.
+    Misalign(commands::misalign::PlanArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -62,6 +67,9 @@ enum SimulateCommand {
     Tumble(commands::tumble::SimArgs),
     /// Gyro-free unit: six-position static test or rate-table motion.
     Gfimu(commands::gfimu::SimArgs),
+    /// Misalignment test: gyro on a rate table or accelerometer on a vertical face.
+    #[command(subcommand)]
+    Misalign(commands::misalign::SimCommand),
 }
 
 fn run(cli: Cli) -> CliResult<()> {
@@ -74,6 +82,9 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Gfimu(GfimuCommand::Calibrate(a)) => commands::gfimu::run_calibrate(&a),
         Command::Gfimu(GfimuCommand::Solve(a)) => commands::gfimu::run_solve(&a),
         Command::Simulate(SimulateCommand::Gfimu(a)) => commands::gfimu::simulate(&a),
+        Command::Misalign(c) => commands::misalign::run(&c),
+        Command::Plan(PlanCommand::Misalign(a)) => commands::misalign::plan(&a),
+        Command::Simulate(SimulateCommand::Misalign(c)) => commands::misalign::simulate(&c),
     }
 }
 

@@ -110,5 +110,6 @@ pub fn run(a: &Args) -> CliResult<()> {
     );
     tumble_section(a.seed)?;
     crate::commands::gfimu::demo_section(a.seed)?;
+    crate::commands::misalign::demo_section(a.seed)?;
     Ok(())
 }

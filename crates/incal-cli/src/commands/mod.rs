@@ -3,4 +3,5 @@
 pub mod compare;
 pub mod demo;
 pub mod gfimu;
+pub mod misalign;
 pub mod tumble;

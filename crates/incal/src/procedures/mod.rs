@@ -2,4 +2,5 @@
 //! map to physical coefficients, all on [`crate::estimation`].
 
 pub mod gfimu;
+pub mod misalign;
 pub mod tumble;

@@ -2,5 +2,6 @@
 //! instrument's axes.
 
 pub mod dividing_head;
+pub mod rate_table;
 
 pub use dividing_head::Mount;

@@ -5,6 +5,7 @@
 //! parallel run gives exactly the numbers of a serial one.
 
 pub mod gfimu;
+pub mod misalign;
 pub mod tumble;
 
 use rand::rngs::ChaCha8Rng;

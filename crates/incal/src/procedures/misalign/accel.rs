@@ -1,0 +1,175 @@
+//! Accelerometer misalignment on a vertical reference face (seed 003 §3;
+//! methods.md §3).
+//!
+//! # Model
+//! IA horizontal, the instrument turned by β about the horizontal normal of
+//! a vertical reference face:
+//!
+//! ```text
+//! V(β) = c + kI (−Δθy2 cos β + Δθz2 sin β)
+//! ```
+//!
+//! | symbol | unit | meaning |
+//! |---|---|---|
+//! | `V` | output | mean output at β |
+//! | `kI` | output per g | known scale factor |
+//! | `c` | output | `V0 + kI·(face verticality and fixture terms)`, constant |
+//! | `Δθy2, Δθz2` | rad | input axis vs mounting face |
+//!
+//! Least squares over any ≥ 3 distinct β; at the paper's 0/90/180/270° it
+//! gives `Δθy2 = (V(180°) − V(0))/(2kI)`, `Δθz2 = (V(90°) − V(270°))/(2kI)`
+//! (seed 003 eq. 10–13) with one degree of freedom for the uncertainty.
+//! Repeated rows at one β are samples ([`fit_means`]).
+
+use std::collections::BTreeMap;
+
+use super::{angle_key, azimuth, key_angle, small_gamma_warning, with_gamma, GAMMA};
+use crate::error::{Error, Result};
+use crate::estimation::{fit_means, Design, Estimates, Fit, Noise, PositionStats, WARN_COND};
+use crate::rigs::rate_table::face_factors;
+
+/// The two separable angles, in design order (after the offset `c`).
+pub const ACCEL_ANGLES: [&str; 2] = ["dtheta_y2", "dtheta_z2"];
+
+/// One recorded output.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AccelObservation {
+    /// Turn β about the face normal (rad).
+    pub beta_rad: f64,
+    /// Output (output units).
+    pub output: f64,
+}
+
+/// Options of [`calibrate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AccelOptions {
+    /// Known scale factor kI (output per g); finite, non-zero.
+    pub scale_factor: f64,
+    /// Noise policy of one sample.
+    pub noise: Noise,
+}
+
+/// Fit summary at one β.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AccelPosition {
+    /// β (rad, [0, 2π)).
+    pub beta_rad: f64,
+    /// Samples, mean and scatter.
+    pub stats: PositionStats,
+    /// Mean minus fitted output.
+    pub residual: f64,
+    /// Residual over its standard deviation.
+    pub standardized_residual: f64,
+}
+
+/// Everything an accelerometer misalignment calibration produces.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AccelResult {
+    /// `dtheta_y2, dtheta_z2, gamma` (rad).
+    pub angles: Estimates,
+    /// Azimuth ψ (rad, [0, 2π)).
+    pub azimuth: Estimates,
+    /// The constant `c` (output units), named `offset`.
+    pub offset: Estimates,
+    /// The linear fit (offset, Δθy2, Δθz2).
+    pub fit: Fit,
+    /// Per-position summaries.
+    pub positions: Vec<AccelPosition>,
+    /// Human-readable warnings.
+    pub warnings: Vec<String>,
+}
+
+/// Design matrix at angles `betas_rad`: `[1, −kI cos β, kI sin β]`.
+pub fn design(betas_rad: &[f64], scale_factor: f64) -> Result<Design> {
+    if !(scale_factor.is_finite() && scale_factor != 0.0) {
+        return Err(Error::InvalidValue {
+            what: "scale factor kI (output per g)".into(),
+            value: scale_factor.to_string(),
+        });
+    }
+    let rows: Vec<Vec<f64>> = betas_rad
+        .iter()
+        .map(|&b| {
+            let f = face_factors(b);
+            vec![1.0, scale_factor * f[0], scale_factor * f[1]]
+        })
+        .collect();
+    let mut names = vec!["offset".to_string()];
+    names.extend(ACCEL_ANGLES.iter().map(|s| s.to_string()));
+    Design::from_rows(names, &rows)
+}
+
+/// Calibrate from outputs at several β (module docs).
+pub fn calibrate(obs: &[AccelObservation], opts: &AccelOptions) -> Result<AccelResult> {
+    if let Some(o) = obs.iter().find(|o| !o.beta_rad.is_finite()) {
+        return Err(Error::InvalidValue {
+            what: "angle beta".into(),
+            value: o.beta_rad.to_string(),
+        });
+    }
+    let mut index: BTreeMap<i64, usize> = BTreeMap::new();
+    let mut groups: Vec<(f64, Vec<f64>)> = Vec::new();
+    for o in obs {
+        let k = angle_key(o.beta_rad);
+        let slot = *index.entry(k).or_insert_with(|| {
+            groups.push((key_angle(k), Vec::new()));
+            groups.len() - 1
+        });
+        groups[slot].1.push(o.output);
+    }
+    if groups.len() < 3 {
+        return Err(Error::TooFew {
+            what: "distinct angles beta (offset, dtheta_y2, dtheta_z2)".into(),
+            needed: 3,
+            got: groups.len(),
+        });
+    }
+    let betas: Vec<f64> = groups.iter().map(|g| g.0).collect();
+    let stats: Vec<PositionStats> = groups
+        .iter()
+        .map(|g| PositionStats::of(&g.1))
+        .collect::<Result<_>>()?;
+    let d = design(&betas, opts.scale_factor)?;
+    let (fit, weights) = fit_means(&d, &stats, opts.noise)?;
+    let two = fit.estimates.select(&ACCEL_ANGLES)?;
+    let offset = fit.estimates.select(&["offset"])?;
+    let angles = with_gamma(&two, 0, 1)?;
+    let az = azimuth(&two, 0, 1)?;
+    let std_res = fit.standardized_residuals(Some(&weights));
+    let positions = groups
+        .iter()
+        .zip(&stats)
+        .enumerate()
+        .map(|(i, (g, s))| AccelPosition {
+            beta_rad: g.0,
+            stats: *s,
+            residual: fit.residuals[i],
+            standardized_residual: std_res[i],
+        })
+        .collect();
+    let mut warnings = Vec::new();
+    if fit.diagnostics.condition > WARN_COND {
+        warnings.push(format!(
+            "weakly conditioned plan (condition number {:.2e}): {} is poorly determined",
+            fit.diagnostics.condition, fit.diagnostics.weakest
+        ));
+    }
+    if let Some(p) = fit.chi2_p_value {
+        if p < 0.01 {
+            warnings.push(format!(
+                "residuals between positions exceed the sample scatter (chi-square p = {p:.2e}): re-mounting error or drift; uncertainties are scaled up by the residual scatter"
+            ));
+        }
+    }
+    if let (Some(g), Some(u)) = (angles.value(GAMMA), angles.u(GAMMA)) {
+        warnings.extend(small_gamma_warning(g, u));
+    }
+    Ok(AccelResult {
+        angles,
+        azimuth: az,
+        offset,
+        fit,
+        positions,
+        warnings,
+    })
+}
