@@ -33,6 +33,9 @@ use crate::error::{Alias, Error, Result};
 /// treated as rank deficient (10 of the 16 significant digits of f64 lost).
 pub const DEFAULT_COND_LIMIT: f64 = 1e10;
 
+/// Significance level of the lack-of-fit test of [`Variance::AtLeast`].
+pub const LACK_OF_FIT_ALPHA: f64 = 0.05;
+
 /// Condition number beyond which a separable design earns a warning.
 pub const WARN_COND: f64 = 1e6;
 
@@ -151,8 +154,12 @@ pub enum Variance {
     },
     /// Weights are `1/σ_i²` from an independent estimate (e.g. the scatter
     /// of repeated samples) with `dof` degrees of freedom, and the residuals
-    /// may reveal more: `s² = max(1, Σ w r² / (n − p))`. Lack of fit is
-    /// never hidden, and the σ_i are never made smaller.
+    /// may reveal more: when they show lack of fit at the 5 % level
+    /// (`P(χ²_{n−p} ≥ Σ w r²) < 0.05`) the variance factor becomes
+    /// `s² = Σ w r² / (n − p)` with `n − p` degrees of freedom, else `s² = 1`.
+    /// Significant lack of fit is never hidden, the σ_i are never made
+    /// smaller, and chance excess in a few residual degrees of freedom does
+    /// not throw away the much better-determined prior variance.
     AtLeast {
         /// Degrees of freedom of the σ_i.
         dof: f64,
@@ -352,13 +359,13 @@ pub fn fit(design: &Design, y: &DVector<f64>, opts: &FitOptions) -> Result<Fit> 
         Variance::FromResiduals => (sigma * sigma, VarianceSource::Residuals, dof as f64),
         Variance::Known { dof: d } => (1.0, VarianceSource::Prior, d),
         Variance::AtLeast { dof: d } => {
-            let s2 = if dof > 0 {
-                weighted_rss / dof as f64
-            } else {
-                0.0
-            };
-            if s2 > 1.0 {
-                (s2, VarianceSource::Residuals, dof as f64)
+            let lack_of_fit = chi2_p_value.is_some_and(|p| p < LACK_OF_FIT_ALPHA);
+            if lack_of_fit {
+                (
+                    weighted_rss / dof as f64,
+                    VarianceSource::Residuals,
+                    dof as f64,
+                )
             } else {
                 (1.0, VarianceSource::Prior, d)
             }
@@ -722,6 +729,33 @@ mod tests {
         let e = Design::new(names(&["a"]), DMatrix::zeros(0, 1)).unwrap();
         assert_eq!(e.diagnose(None, DEFAULT_COND_LIMIT).rank, 0);
         assert!(fit(&e, &DVector::zeros(0), &FitOptions::default()).is_err());
+    }
+
+    #[test]
+    fn chance_excess_keeps_the_prior() {
+        // 4 points, 3 terms: 1 residual dof. χ² = 2 < 3.84 (5 % point of χ²₁):
+        // the prior σ and its 50 dof stand.
+        let rows: Vec<Vec<f64>> = (0..4)
+            .map(|k| vec![1.0, k as f64, (k * k) as f64])
+            .collect();
+        let d = Design::from_rows(names(&["a", "b", "c"]), &rows).unwrap();
+        // Residual pattern of a 1-dof quadratic fit is ∝ (1, −3, 3, −1)/√20.
+        let amp = 2f64.sqrt();
+        let y = DVector::from_fn(4, |k, _| [1.0, -3.0, 3.0, -1.0][k] * amp / 20f64.sqrt());
+        let f = fit(
+            &d,
+            &y,
+            &FitOptions {
+                weights: Some(DVector::from_element(4, 1.0)),
+                variance: Variance::AtLeast { dof: 50.0 },
+                ..FitOptions::default()
+            },
+        )
+        .unwrap();
+        assert!((f.weighted_rss - 2.0).abs() < 1e-12);
+        assert_eq!(f.variance_source, VarianceSource::Prior);
+        assert_eq!(f.variance_factor, 1.0);
+        assert_eq!(f.estimates.dof(), 50.0);
     }
 
     #[test]

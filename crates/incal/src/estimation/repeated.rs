@@ -5,10 +5,11 @@
 //! where `s²` is the pooled within-position variance
 //! `s² = Σ_i Σ_k (y_ik − ȳ_i)² / Σ_i (n_i − 1)` (ν = Σ(n_i − 1) degrees of
 //! freedom). Because position-level errors (index angle, drift, re-mounting)
-//! do not average down with more samples, the variance factor is
-//! `max(1, χ²/(n−p))` ([`Variance::AtLeast`]): the residuals between
-//! positions can only raise the uncertainty, never hide behind the sample
-//! scatter. With a single sample per position the residual scatter alone is
+//! do not average down with more samples, the residuals between positions
+//! are tested against that scatter (χ², 5 % level) and, when they show lack
+//! of fit, the variance factor becomes `χ²/(n−p)` ([`Variance::AtLeast`]):
+//! the residuals can only raise the uncertainty, never hide behind the
+//! sample scatter. With a single sample per position the residual scatter alone is
 //! used (ν = n − p).
 //!
 //! # Excess variance with a known shape
