@@ -254,6 +254,26 @@ pub struct Fit {
 }
 
 impl Fit {
+    /// What an engineer must be told about this fit: a weakly conditioned
+    /// plan (condition number above [`WARN_COND`], naming the worst-determined
+    /// combination) and residuals beyond the prior noise (χ² p < 0.01), with
+    /// `likely_causes` saying what the rig usually does to cause them.
+    pub fn quality_warnings(&self, likely_causes: &str) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.diagnostics.condition > WARN_COND {
+            out.push(format!(
+                "weakly conditioned plan (condition number {:.2e}): the combination {} is poorly determined",
+                self.diagnostics.condition, self.diagnostics.weakest
+            ));
+        }
+        if let Some(p) = self.chi2_p_value.filter(|p| *p < 0.01) {
+            out.push(format!(
+                "residuals between positions exceed the sample scatter (chi-square p = {p:.2e}): {likely_causes}; uncertainties are scaled up by the residual scatter"
+            ));
+        }
+        out
+    }
+
     /// Standardized residuals `r_i √w_i / (s √(1 − h_ii))` (0 where `h_ii = 1`).
     pub fn standardized_residuals(&self, weights: Option<&DVector<f64>>) -> DVector<f64> {
         let s = self.variance_factor.sqrt();

@@ -36,7 +36,7 @@ use std::collections::BTreeMap;
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use crate::error::{Error, Result};
-use crate::estimation::{fit_means, Design, Estimates, Fit, Noise, PositionStats, WARN_COND};
+use crate::estimation::{fit_means, Design, Estimates, Fit, Noise, PositionStats};
 use crate::models::gfimu::{cross_axes, Geometry};
 
 /// Names of the fitted linear parameters of each accelerometer.
@@ -343,12 +343,16 @@ pub fn calibrate(
                 ));
             }
         }
-        if let Some(p) = fit.chi2_p_value {
-            if p < 0.01 {
-                warnings.push(format!(
-                    "accelerometer '{}': residuals between positions exceed the sample scatter (chi-square p = {p:.2e}); uncertainties scaled up by the residual scatter",
-                    acc.name
-                ));
+        for w in fit.quality_warnings("an unmodelled term, a mis-set position or drift") {
+            // The design (and so its conditioning) is shared by every
+            // accelerometer: say it once.
+            let w = if w.starts_with("weakly conditioned") {
+                w
+            } else {
+                format!("accelerometer '{}': {w}", acc.name)
+            };
+            if !warnings.contains(&w) {
+                warnings.push(w);
             }
         }
         accelerometers.push(AccelerometerCalibration {
@@ -360,14 +364,6 @@ pub fn calibrate(
             noise_output,
             k0_consistency,
         });
-    }
-    if let Some(a) = accelerometers.first() {
-        if a.fit.diagnostics.condition > WARN_COND {
-            warnings.push(format!(
-                "weakly conditioned plan (condition number {:.2e}): {} is poorly determined",
-                a.fit.diagnostics.condition, a.fit.diagnostics.weakest
-            ));
-        }
     }
     let positions = groups.iter().map(|g| (g.0, g.1[0].len())).collect();
     Ok(GfimuCalibration {

@@ -25,7 +25,7 @@ use std::collections::BTreeMap;
 
 use super::{angle_key, azimuth, key_angle, small_gamma_warning, with_gamma, GAMMA};
 use crate::error::{Error, Result};
-use crate::estimation::{fit_means, Design, Estimates, Fit, Noise, PositionStats, WARN_COND};
+use crate::estimation::{fit_means, Design, Estimates, Fit, Noise, PositionStats};
 use crate::rigs::rate_table::face_factors;
 
 /// The two separable angles, in design order (after the offset `c`).
@@ -147,20 +147,7 @@ pub fn calibrate(obs: &[AccelObservation], opts: &AccelOptions) -> Result<AccelR
             standardized_residual: std_res[i],
         })
         .collect();
-    let mut warnings = Vec::new();
-    if fit.diagnostics.condition > WARN_COND {
-        warnings.push(format!(
-            "weakly conditioned plan (condition number {:.2e}): {} is poorly determined",
-            fit.diagnostics.condition, fit.diagnostics.weakest
-        ));
-    }
-    if let Some(p) = fit.chi2_p_value {
-        if p < 0.01 {
-            warnings.push(format!(
-                "residuals between positions exceed the sample scatter (chi-square p = {p:.2e}): re-mounting error or drift; uncertainties are scaled up by the residual scatter"
-            ));
-        }
-    }
+    let mut warnings = fit.quality_warnings("re-mounting error or drift");
     if let (Some(g), Some(u)) = (angles.value(GAMMA), angles.u(GAMMA)) {
         warnings.extend(small_gamma_warning(g, u));
     }

@@ -40,7 +40,7 @@ use std::collections::BTreeMap;
 
 use super::{angle_key, azimuth, key_angle, small_gamma_warning, with_gamma};
 use crate::error::{Error, Result};
-use crate::estimation::{fit_means, Design, Estimates, Fit, Noise, PositionStats, WARN_COND};
+use crate::estimation::{fit_means, Design, Estimates, Fit, Noise, PositionStats};
 use crate::rigs::rate_table::gyro_factors;
 
 /// The five separable angles, in design order.
@@ -300,21 +300,11 @@ pub fn calibrate(obs: &[GyroObservation], opts: &GyroOptions) -> Result<GyroResu
             standardized_residual: std_res[i],
         })
         .collect();
-    let mut warnings = Vec::new();
-    if fit.diagnostics.condition > WARN_COND {
-        warnings.push(format!(
-            "weakly conditioned plan (condition number {:.2e}): {} is poorly determined",
-            fit.diagnostics.condition, fit.diagnostics.weakest
-        ));
-    }
-    if let Some(p) = fit.chi2_p_value {
-        if p < 0.01 {
-            warnings.push(format!(
-                "residuals between positions exceed the sample scatter (chi-square p = {p:.2e}): bias shift between mountings, drift or Earth-rate leakage; uncertainties are scaled up by the residual scatter{}",
-                if opts.per_config_bias { "" } else { " (consider a bias per configuration)" }
-            ));
-        }
-    }
+    let mut warnings = fit.quality_warnings(if opts.per_config_bias {
+        "drift or Earth-rate leakage"
+    } else {
+        "bias shift between mountings, drift or Earth-rate leakage (consider a bias per configuration)"
+    });
     let rates: Vec<f64> = positions.iter().map(|p| p.1).collect();
     if !(rates.iter().any(|r| *r > 0.0) && rates.iter().any(|r| *r < 0.0)) {
         warnings.push(

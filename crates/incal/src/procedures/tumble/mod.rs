@@ -43,7 +43,7 @@ use nalgebra::{DMatrix, DVector};
 use crate::error::{Error, Result};
 use crate::estimation::{
     fit, fit_means, fit_means_excess, Design, Estimates, Fit, FitOptions, Noise, PositionStats,
-    Variance, WARN_COND,
+    Variance,
 };
 use crate::models::{AccelerometerModel, Term};
 use crate::rigs::Mount;
@@ -435,20 +435,9 @@ pub fn calibrate(obs: &[Observation], opts: &TumbleOptions) -> Result<TumbleResu
         index_error_rad,
     } = fit_observations(obs, opts)?;
     let absorbed = absorbed(opts.mount, &opts.terms, &angles)?;
-    let mut warnings = Vec::new();
-    if fit.diagnostics.condition > WARN_COND {
-        warnings.push(format!(
-            "weakly conditioned plan (condition number {:.2e}): the combination {} is poorly determined",
-            fit.diagnostics.condition, fit.diagnostics.weakest
-        ));
-    }
-    if let Some(p) = fit.chi2_p_value {
-        if p < 0.01 {
-            warnings.push(format!(
-                "residuals between positions exceed what the sample scatter and the index-error model explain (chi-square p = {p:.2e}): drift or an unmodelled term; uncertainties are scaled up by the residual scatter"
-            ));
-        }
-    }
+    let warnings = fit.quality_warnings(
+        "drift or an unmodelled term (beyond what the index-error model explains)",
+    );
     let mut labels: Vec<String> = Vec::new();
     for o in obs {
         if let Some(p) = &o.pass {
