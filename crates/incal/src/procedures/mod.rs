@@ -1,4 +1,5 @@
 //! Calibration procedures: test plan + rig kinematics + linear(ised) model +
 //! map to physical coefficients, all on [`crate::estimation`].
 
+pub mod centrifuge;
 pub mod tumble;

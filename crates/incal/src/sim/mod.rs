@@ -4,6 +4,7 @@
 //! Monte Carlo trials draw from per-trial seeds derived by SplitMix64, so a
 //! parallel run gives exactly the numbers of a serial one.
 
+pub mod centrifuge;
 pub mod tumble;
 
 use rand::rngs::ChaCha8Rng;
