@@ -109,5 +109,6 @@ pub fn run(a: &Args) -> CliResult<()> {
         a.seed
     );
     tumble_section(a.seed)?;
+    crate::commands::centrifuge::demo_section(a.seed)?;
     Ok(())
 }
