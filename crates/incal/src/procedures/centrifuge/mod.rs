@@ -325,6 +325,7 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
         });
     }
     for o in obs {
+        Position::new(o.position.plane, o.position.phi_rad, o.position.polarity)?;
         crate::error::finite("rate omega", o.omega_rad_s)?;
         crate::error::finite("output", o.output)?;
     }
