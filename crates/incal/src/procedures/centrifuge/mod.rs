@@ -417,7 +417,28 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
                 &ctx,
                 noise,
             ) {
-                Ok(f) => regression[slot] = Some(f),
+                Ok(f) => {
+                    // The static radius ignores the nonlinearity at ~1 g;
+                    // seed 001 §2.1.1 bounds it by the nonlinearity
+                    // envelope: add a uniform type-B component with
+                    // half-width |K2 a_g² + K3 a_g³| (from this regression)
+                    // relative to a_g.
+                    if let (Some(sr), Some(w)) = (static_r[slot].as_mut(), static_w[slot]) {
+                        let a_g = sr.value
+                            * crate::rigs::centrifuge::centripetal_rate_squared(
+                                w,
+                                opts.latitude_rad,
+                                opts.opposite_sense,
+                            )
+                            / opts.g_local_m_s2;
+                        let k2 = f.fit.estimates.value("K2").unwrap_or(0.0);
+                        let k3 = f.fit.estimates.value("K3").unwrap_or(0.0);
+                        let hw = (k2 * a_g * a_g + f64::from(pol) * k3 * a_g.powi(3)).abs();
+                        let u_nl = sr.value * hw / a_g.abs().max(f64::MIN_POSITIVE) / 3f64.sqrt();
+                        sr.u = sr.u.hypot(u_nl);
+                    }
+                    regression[slot] = Some(f);
+                }
                 Err(e) => warnings.push(format!("regression radius, polarity {pol:+}: {e}")),
             }
             radius_table.extend(range_table(&speed_points, pol, lambda, opts, &ctx, noise));

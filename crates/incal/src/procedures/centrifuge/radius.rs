@@ -11,7 +11,10 @@
 //!   adds `u(K0)` through both `a_g` and `λ` although K0 cancels in
 //!   `a_g − λ = (E_a − E0)/K1`. `u(ω_g)` is taken as 0 (the rate of a
 //!   precision centrifuge is known to 1e-6 or better; add it to the table's
-//!   own budget).
+//!   own budget). [`super::calibrate`] adds the nonlinearity envelope at
+//!   ~1 g (uniform, half-width `|K2 a_g² + K3 a_g³|` from the regression)
+//!   as a type-B component, as seed 001 §2.1.1 suggests; without it the
+//!   static radius is biased by K2·(1 g)², a few ppm.
 //! * Regression–iteration radius (eq. 7), per polarity:
 //!   `E/K1 = b + (1 + c) a_i + K2 a_i² (+ K3 a_i³)` with
 //!   `a_i = s R (ω² + 2ωΩe sinΦ) cos λ / g_L + sin λ`; rescale
