@@ -252,3 +252,39 @@ fn earth_rate_and_sense_are_applied() {
     let rw = wrong.regression[0].as_ref().unwrap().radius_m.value;
     assert!((rw / r - 1.0).abs() > 1e-5, "{rw} vs {r}");
 }
+
+/// The printed budget is the propagation: for every coefficient the
+/// combined u of its lines equals the u of the reported coefficient, and a
+/// fixture tolerance of 1° adds the eq. 8 Δc2 as a type-B line with
+/// half-width `|dc2/dφ|·(|Δφ_net| + 1°)` (for K_ip at 45°:
+/// `|Kpp − K2|·Δφ`, seed 001 Table 3).
+#[test]
+fn budget_lines_add_up_to_the_reported_u() {
+    let obs = simulate(&sim(8, standard_positions()));
+    let mut o = options(3);
+    o.alignment_tolerance_rad = 1f64.to_radians();
+    let r = calibrate(&obs, &o).unwrap();
+    for b in &r.budgets {
+        let u = r.coefficients.u(&b.coefficient).unwrap();
+        assert!((b.combined_u - u).abs() <= 1e-12 * u, "{}", b.coefficient);
+    }
+    let b = r.budgets.iter().find(|b| b.coefficient == "K_ip").unwrap();
+    let line = b
+        .lines
+        .iter()
+        .find(|l| l.component == "alignment dc2(ip,45)")
+        .unwrap();
+    assert_eq!(line.sensitivity, 2.0);
+    let st = r.stations.iter().find(|s| s.label() == "ip,45").unwrap();
+    let net = st.alignment.iter().map(|a| a.delta_phi_rad).sum::<f64>() / 2.0;
+    let (k2, kpp) = (
+        r.coefficients.value("K2").unwrap(),
+        r.coefficients.value("K_pp").unwrap(),
+    );
+    let hw = (kpp - k2).abs() * (net.abs() + 1f64.to_radians());
+    assert!(
+        (line.u - hw / 3f64.sqrt()).abs() < 1e-3 * line.u,
+        "{line:?}"
+    );
+    assert!(b.combined_u_paper_eq10.unwrap() < b.combined_u);
+}
