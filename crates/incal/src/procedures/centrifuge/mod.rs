@@ -513,6 +513,17 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
         )));
     }
     for s in &stations {
+        let c = s.phi_rad.cos();
+        if let ([pol], true) = (&s.polarities[..], s.plane.ia_horizontal() && c.abs() > 1e-6) {
+            let sign = if *pol > 0 { "+" } else { "-" };
+            warnings.push(format!(
+                "one polarity only at {}: the odd quadratic cannot be separated there, its c2 includes {sign}{:.3}*K_oq",
+                s.label(),
+                c * c
+            ));
+        }
+    }
+    for s in &stations {
         if let Some(p) = s.fit.chi2_p_value {
             if p < 0.01 {
                 warnings.push(format!(
