@@ -29,6 +29,8 @@ enum Command {
     Demo(commands::demo::Args),
     /// Calibrate an accelerometer from a dividing-head tumble test (seed 000, GJB 1037A).
     Tumble(commands::tumble::Args),
+    /// Calibrate an accelerometer on a precision centrifuge: radius, K2/K3, cross-axis and cross-coupling terms (seed 001).
+    Centrifuge(commands::centrifuge::Args),
     /// Design a test plan and predict the uncertainty of every coefficient before the test.
     #[command(subcommand)]
     Plan(PlanCommand),
@@ -70,14 +72,18 @@ enum SimulateCommand {
     /// Misalignment test: gyro on a rate table or accelerometer on a vertical face.
     #[command(subcommand)]
     Misalign(commands::misalign::SimCommand),
+    /// Precision centrifuge test (IA, PA, OA radial and 45-degree cross positions).
+    Centrifuge(commands::centrifuge::SimArgs),
 }
 
 fn run(cli: Cli) -> CliResult<()> {
     match cli.command {
         Command::Demo(a) => commands::demo::run(&a),
         Command::Tumble(a) => commands::tumble::run(&a),
+        Command::Centrifuge(a) => commands::centrifuge::run(&a),
         Command::Plan(PlanCommand::Tumble(a)) => commands::tumble::plan(&a),
         Command::Simulate(SimulateCommand::Tumble(a)) => commands::tumble::simulate(&a),
+        Command::Simulate(SimulateCommand::Centrifuge(a)) => commands::centrifuge::simulate(&a),
         Command::Compare(a) => commands::compare::run(&a),
         Command::Gfimu(GfimuCommand::Calibrate(a)) => commands::gfimu::run_calibrate(&a),
         Command::Gfimu(GfimuCommand::Solve(a)) => commands::gfimu::run_solve(&a),

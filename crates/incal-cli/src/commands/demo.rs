@@ -111,5 +111,6 @@ pub fn run(a: &Args) -> CliResult<()> {
     tumble_section(a.seed)?;
     crate::commands::gfimu::demo_section(a.seed)?;
     crate::commands::misalign::demo_section(a.seed)?;
+    crate::commands::centrifuge::demo_section(a.seed)?;
     Ok(())
 }

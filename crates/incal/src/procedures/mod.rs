@@ -1,6 +1,7 @@
 //! Calibration procedures: test plan + rig kinematics + linear(ised) model +
 //! map to physical coefficients, all on [`crate::estimation`].
 
+pub mod centrifuge;
 pub mod gfimu;
 pub mod misalign;
 pub mod tumble;

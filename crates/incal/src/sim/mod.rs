@@ -4,6 +4,7 @@
 //! Monte Carlo trials draw from per-trial seeds derived by SplitMix64, so a
 //! parallel run gives exactly the numbers of a serial one.
 
+pub mod centrifuge;
 pub mod gfimu;
 pub mod misalign;
 pub mod tumble;

@@ -1,0 +1,1063 @@
+//! Centrifuge calibration of a pendulous accelerometer: test radius,
+//! input-axis nonlinearity, cross-axis nonlinearity and cross-coupling
+//! with ECM alignment errors and an uncertainty budget (seed 001;
+//! IEEE Std 836; methods.md §2).
+//!
+//! # Pipeline
+//! 1. Samples with the same plane, angle, polarity and rate form a point;
+//!    points with the same plane and angle form a *station* (both
+//!    polarities). Angles are taken modulo 180° (φ0 + 180° with polarity s
+//!    is φ0 with polarity −s).
+//! 2. At the IA-radial station (`ip,0`, else `io,0`): static tilt λ
+//!    (eq. 4), static radius per polarity (eq. 5–6) and the
+//!    regression–iteration radii R± (eq. 7) — see [`radius`]. A table of
+//!    regression radii for model orders 1–3 over growing input ranges shows
+//!    whether the model is adequate (seed 001 Table 2: order 1 drifts).
+//! 3. The regression radii give the ECM offset `r = (R+ − R−)/2` and, at
+//!    every position, the ECM radius and alignment error Δφ
+//!    ([`crate::rigs::centrifuge`], seed 001 §2.2).
+//! 4. Every station is fitted with the polarity model of eq. 9, against
+//!    the centripetal input `x` (g) computed with those radii:
+//!    `E/K1 = b± ± s± x + c2 x² ± q (w± x)² (+ ± c3 (w± x)³)` (`±` =
+//!    polarity; `q` only with both polarities, `c3` with model order 3;
+//!    `w± = cos(φ0 + Δφ±)/cos φ0` carries the ECM alignment error into the
+//!    odd terms, 1 when IA is not in the radial plane or is perpendicular
+//!    to the radial direction). Linear in the
+//!    parameters, solved by [`crate::estimation::fit_means`]: position means
+//!    weighted by the pooled sample scatter, never below the lack of fit.
+//! 5. Physical coefficients (g units) by the algebra of [`budget`]: IA
+//!    radial gives `K2 = c2`, `K3 = c3`, `K_oq = q`; PA radial (`ip,90` or
+//!    `po,0`) gives `K_pp`; OA radial (`io,90` or `po,90`) gives `K_oo`;
+//!    a cross station (`ip`, `io`, `po` at an angle off the axes, 45°
+//!    preferred) gives `K_ip`, `K_io`, `K_po` by eq. 2–3. Uncertainties by
+//!    GUM propagation ([`Estimates::map`]) with the budget printed line by
+//!    line: the c2 of each station (type A), the alignment Δc2 of each
+//!    station (eq. 8, type B, uniform with half-width
+//!    `|dc2/dφ| (|Δφ_net| + tolerance)`, `Δφ_net` the ECM alignment error
+//!    left after averaging both polarities, `tolerance` the fixture angle
+//!    bound given by the user) and K1 (the scale of `E/K1`).
+//!
+//! Because the ECM alignment error has opposite signs in the two
+//! polarities (module docs of [`crate::rigs::centrifuge`]), its first-order
+//! effect on the common c2 cancels; the paper's 1° deliberate errors (Tables
+//! 3–4) are what the `tolerance` covers.
+
+pub mod budget;
+pub mod radius;
+
+use std::collections::BTreeMap;
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::error::{Error, Result};
+use crate::estimation::{fit_means, Design, Estimates, Fit, Noise, PositionStats};
+use crate::models::Term;
+use crate::rigs::centrifuge::{Centrifuge, Plane, Position};
+use budget::{delta_c2, Budget, BudgetLine};
+use radius::{
+    regression_radius, static_radius, static_tilt, RadiusContext, RadiusFit, SpeedPoint, ValueU,
+};
+
+/// One recorded sample (one row of the input CSV).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Observation {
+    /// Fixture position.
+    pub position: Position,
+    /// Table rate ω (rad/s); 0 = at rest.
+    pub omega_rad_s: f64,
+    /// Instrument output E (output units).
+    pub output: f64,
+}
+
+/// Coefficients a centrifuge run can give, in report order.
+pub const CENTRIFUGE_TERMS: [Term; 8] = [
+    Term::K2,
+    Term::K3,
+    Term::Koq,
+    Term::Kpp,
+    Term::Koo,
+    Term::Kip,
+    Term::Kio,
+    Term::Kpo,
+];
+
+/// Options of [`calibrate`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct CentrifugeOptions {
+    /// Bias K0 (g) from the 1 g calibration, with u.
+    pub k0_g: ValueU,
+    /// Scale factor K1 (output/g), with u.
+    pub k1: ValueU,
+    /// Nominal radius R0 (m): start of the iteration, speed choice.
+    pub radius0_m: f64,
+    /// Latitude Φ (rad).
+    pub latitude_rad: f64,
+    /// Local gravity g_L (m/s²).
+    pub g_local_m_s2: f64,
+    /// Table spins opposite to Earth's sense.
+    pub opposite_sense: bool,
+    /// Model order of the radius regression and of the stations (2 or 3).
+    pub order: usize,
+    /// Bound of the fixture angle error (rad), for the type-B Δc2.
+    pub alignment_tolerance_rad: f64,
+    /// Output noise policy (σ in output units).
+    pub noise: Noise,
+    /// Coefficients required (`None`: every one the data supports).
+    pub terms: Option<Vec<Term>>,
+}
+
+/// ECM radius and alignment error of one polarity at a station.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Alignment {
+    /// ±1.
+    pub polarity: i8,
+    /// Distance of the ECM from the spin axis (m).
+    pub radius_m: f64,
+    /// True minus nominal radial angle Δφ (rad).
+    pub delta_phi_rad: f64,
+    /// c2 change this Δφ alone would cause (eq. 8), g/g².
+    pub delta_c2: f64,
+}
+
+/// Fit of one station (plane, φ0), eq. 9.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Station {
+    /// Plane.
+    pub plane: Plane,
+    /// Nominal angle φ0 in [0, π) (rad).
+    pub phi_rad: f64,
+    /// Polarities present.
+    pub polarities: Vec<i8>,
+    /// Number of points (plane, angle, polarity, rate).
+    pub points: usize,
+    /// Quadratic coefficient (g/g²).
+    pub c2: ValueU,
+    /// Odd quadratic (g/g²), with both polarities.
+    pub q: Option<ValueU>,
+    /// Cubic coefficient (g/g³), with order 3.
+    pub c3: Option<ValueU>,
+    /// ECM alignment per polarity.
+    pub alignment: Vec<Alignment>,
+    /// Half-width of the uniform type-B Δc2 (g/g²).
+    pub delta_c2_half_width: f64,
+    /// The linear fit.
+    pub fit: Fit,
+}
+
+impl Station {
+    /// `plane,phi_deg` label.
+    pub fn label(&self) -> String {
+        station_label(self.plane, self.phi_rad)
+    }
+}
+
+fn station_label(plane: Plane, phi_rad: f64) -> String {
+    let d = (phi_rad.to_degrees() * 1e6).round() / 1e6;
+    format!("{},{}", plane.name(), d)
+}
+
+/// One cell of the radius-versus-range table (seed 001 Table 2).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RadiusRangeRow {
+    /// Model order.
+    pub order: usize,
+    /// +1 or −1.
+    pub polarity: i8,
+    /// Largest input of the range (g).
+    pub max_input_g: f64,
+    /// Radius (m) and u, or why it could not be fitted.
+    pub radius: std::result::Result<ValueU, String>,
+    /// Lack-of-fit p-value (when the noise is known from the samples).
+    pub chi2_p_value: Option<f64>,
+}
+
+/// Everything a centrifuge calibration produces.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CentrifugeResult {
+    /// Label of the IA-radial station used for the radius.
+    pub ia_station: Option<String>,
+    /// Static tilt λ (rad), eq. 4.
+    pub tilt_rad: Option<ValueU>,
+    /// Static back-calculated radius (m) for polarity + and −, eq. 5–6.
+    pub static_radius: [Option<ValueU>; 2],
+    /// Rate used for each static radius (rad/s).
+    pub static_rate_rad_s: [Option<f64>; 2],
+    /// Regression–iteration radius fits, polarity + and −, eq. 7.
+    pub regression: [Option<RadiusFit>; 2],
+    /// Radius for model orders 1–3 over growing ranges (Table 2).
+    pub radius_table: Vec<RadiusRangeRow>,
+    /// Fixture-centre radius R (m).
+    pub centre_radius_m: ValueU,
+    /// Signed ECM offset r = (R+ − R−)/2 (m).
+    pub ecm_offset_m: ValueU,
+    /// Station fits.
+    pub stations: Vec<Station>,
+    /// Stations that could not be fitted, with the reason.
+    pub station_errors: Vec<(String, String)>,
+    /// Physical coefficients (g units).
+    pub coefficients: Estimates,
+    /// Uncertainty budget of every coefficient.
+    pub budgets: Vec<Budget>,
+    /// Coefficients the data cannot give, with the reason.
+    pub unsupported: Vec<(Term, String)>,
+    /// Warnings.
+    pub warnings: Vec<String>,
+}
+
+struct Point {
+    position: Position,
+    omega: f64,
+    samples: Vec<f64>,
+}
+
+/// Normalise (φ, polarity) to φ in [0°, 180°) and give a µ° key.
+fn normalise(pos: &Position) -> (i64, Position) {
+    let mut key = (pos.phi_rad.to_degrees() * 1e6).round() as i64;
+    key = key.rem_euclid(360_000_000);
+    let mut pol = pos.polarity;
+    if key >= 180_000_000 {
+        key -= 180_000_000;
+        pol = -pol;
+    }
+    (
+        key,
+        Position {
+            plane: pos.plane,
+            phi_rad: (key as f64 / 1e6).to_radians(),
+            polarity: pol,
+        },
+    )
+}
+
+/// Group into stations (plane, angle key) → points, in order of appearance.
+fn group(obs: &[Observation]) -> Vec<((Plane, i64), Vec<Point>)> {
+    let mut stations: Vec<((Plane, i64), Vec<Point>)> = Vec::new();
+    let mut index: BTreeMap<(Plane, i64), usize> = BTreeMap::new();
+    let mut pindex: BTreeMap<(Plane, i64, i8, i64), (usize, usize)> = BTreeMap::new();
+    for o in obs {
+        let (key, pos) = normalise(&o.position);
+        let s = *index.entry((pos.plane, key)).or_insert_with(|| {
+            stations.push(((pos.plane, key), Vec::new()));
+            stations.len() - 1
+        });
+        let wkey = (o.omega_rad_s * 1e9).round() as i64;
+        let (si, pi) = *pindex
+            .entry((pos.plane, key, pos.polarity, wkey))
+            .or_insert_with(|| {
+                stations[s].1.push(Point {
+                    position: pos,
+                    omega: o.omega_rad_s,
+                    samples: Vec::new(),
+                });
+                (s, stations[s].1.len() - 1)
+            });
+        stations[si].1[pi].samples.push(o.output);
+    }
+    stations
+}
+
+fn check_options(o: &CentrifugeOptions) -> Result<()> {
+    let pos = |what: &str, v: f64| -> Result<()> {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(Error::InvalidValue {
+                what: what.into(),
+                value: v.to_string(),
+            })
+        }
+    };
+    let nonneg = |what: &str, v: f64| -> Result<()> {
+        if v.is_finite() && v >= 0.0 {
+            Ok(())
+        } else {
+            Err(Error::InvalidValue {
+                what: what.into(),
+                value: v.to_string(),
+            })
+        }
+    };
+    crate::error::finite("K0", o.k0_g.value)?;
+    crate::error::finite("K1", o.k1.value)?;
+    if o.k1.value == 0.0 {
+        return Err(Error::InvalidValue {
+            what: "K1".into(),
+            value: "0".into(),
+        });
+    }
+    nonneg("u(K0)", o.k0_g.u)?;
+    nonneg("u(K1)", o.k1.u)?;
+    pos("nominal radius", o.radius0_m)?;
+    pos("local gravity", o.g_local_m_s2)?;
+    crate::error::finite("latitude", o.latitude_rad)?;
+    nonneg("alignment tolerance", o.alignment_tolerance_rad)?;
+    if !(2..=3).contains(&o.order) {
+        return Err(Error::Unsupported(format!(
+            "model order {} (use 2 or 3)",
+            o.order
+        )));
+    }
+    Ok(())
+}
+
+fn e_over_k1(samples: &[f64], k1: f64) -> Result<PositionStats> {
+    let y: Vec<f64> = samples.iter().map(|e| e / k1).collect();
+    PositionStats::of(&y)
+}
+
+fn noise_in_g(noise: Noise, k1: f64) -> Noise {
+    match noise {
+        Noise::Known { sigma } => Noise::Known {
+            sigma: sigma / k1.abs(),
+        },
+        Noise::Auto => Noise::Auto,
+    }
+}
+
+/// Calibrate from centrifuge observations (module docs).
+pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<CentrifugeResult> {
+    check_options(opts)?;
+    if obs.is_empty() {
+        return Err(Error::TooFew {
+            what: "observations".into(),
+            needed: 1,
+            got: 0,
+        });
+    }
+    for o in obs {
+        Position::new(o.position.plane, o.position.phi_rad, o.position.polarity)?;
+        crate::error::finite("rate omega", o.omega_rad_s)?;
+        crate::error::finite("output", o.output)?;
+    }
+    let k1 = opts.k1.value;
+    let noise = noise_in_g(opts.noise, k1);
+    let ctx = RadiusContext {
+        k0_g: opts.k0_g,
+        k1: opts.k1,
+        latitude_rad: opts.latitude_rad,
+        g_local_m_s2: opts.g_local_m_s2,
+        opposite_sense: opts.opposite_sense,
+    };
+    let nominal = Centrifuge {
+        r_plus_m: opts.radius0_m,
+        r_minus_m: opts.radius0_m,
+        latitude_rad: opts.latitude_rad,
+        g_local_m_s2: opts.g_local_m_s2,
+        opposite_sense: opts.opposite_sense,
+        tilt_rad: 0.0,
+    };
+    let groups = group(obs);
+    let mut warnings = Vec::new();
+
+    // --- IA-radial station: tilt and radius -------------------------------
+    let ia = [(Plane::Ip, 0i64), (Plane::Io, 0i64)]
+        .iter()
+        .find_map(|k| groups.iter().find(|g| g.0 == *k));
+    let mut tilt = None;
+    let mut static_r = [None, None];
+    let mut static_w = [None, None];
+    let mut regression: [Option<RadiusFit>; 2] = [None, None];
+    let mut radius_table = Vec::new();
+    if let Some((_, points)) = ia {
+        let at_rest: Vec<f64> = points
+            .iter()
+            .filter(|p| p.omega == 0.0)
+            .flat_map(|p| p.samples.iter().copied())
+            .collect();
+        if at_rest.is_empty() {
+            warnings.push(
+                "no at-rest rows at the IA-radial station: tilt taken as 0 and no static radius"
+                    .into(),
+            );
+        } else {
+            tilt = Some(static_tilt(&at_rest, &ctx)?);
+        }
+        let lambda = tilt.map_or(0.0, |t| t.value);
+        for (slot, pol) in [(0usize, 1i8), (1, -1)] {
+            let mine: Vec<&Point> = points
+                .iter()
+                .filter(|p| p.position.polarity == pol)
+                .collect();
+            if mine.iter().all(|p| p.omega == 0.0) {
+                continue;
+            }
+            if !at_rest.is_empty() {
+                // Speed nearest 1 g with the nominal radius.
+                let best = mine.iter().filter(|p| p.omega != 0.0).min_by(|a, b| {
+                    let fa = (nominal.centripetal_g(&a.position, a.omega) - 1.0).abs();
+                    let fb = (nominal.centripetal_g(&b.position, b.omega) - 1.0).abs();
+                    fa.total_cmp(&fb)
+                });
+                if let Some(b) = best {
+                    static_r[slot] = Some(static_radius(
+                        &b.samples,
+                        &at_rest,
+                        b.omega,
+                        f64::from(pol),
+                        &ctx,
+                    )?);
+                    static_w[slot] = Some(b.omega);
+                }
+            }
+            let speed_points: Vec<SpeedPoint> = mine
+                .iter()
+                .map(|p| {
+                    Ok(SpeedPoint {
+                        omega_rad_s: p.omega,
+                        stats: e_over_k1(&p.samples, k1)?,
+                    })
+                })
+                .collect::<Result<_>>()?;
+            match regression_radius(
+                &speed_points,
+                f64::from(pol),
+                opts.order,
+                opts.radius0_m,
+                lambda,
+                &ctx,
+                noise,
+            ) {
+                Ok(f) => {
+                    // The static radius ignores the nonlinearity at ~1 g;
+                    // seed 001 §2.1.1 bounds it by the nonlinearity
+                    // envelope: add a uniform type-B component with
+                    // half-width |K2 a_g² + K3 a_g³| (from this regression)
+                    // relative to a_g.
+                    if let (Some(sr), Some(w)) = (static_r[slot].as_mut(), static_w[slot]) {
+                        let a_g = sr.value
+                            * crate::rigs::centrifuge::centripetal_rate_squared(
+                                w,
+                                opts.latitude_rad,
+                                opts.opposite_sense,
+                            )
+                            / opts.g_local_m_s2;
+                        let k2 = f.fit.estimates.value("K2").unwrap_or(0.0);
+                        let k3 = f.fit.estimates.value("K3").unwrap_or(0.0);
+                        let hw = (k2 * a_g * a_g + f64::from(pol) * k3 * a_g.powi(3)).abs();
+                        let u_nl = sr.value * hw / a_g.abs().max(f64::MIN_POSITIVE) / 3f64.sqrt();
+                        sr.u = sr.u.hypot(u_nl);
+                    }
+                    regression[slot] = Some(f);
+                }
+                Err(e) => warnings.push(format!("regression radius, polarity {pol:+}: {e}")),
+            }
+            radius_table.extend(range_table(&speed_points, pol, lambda, opts, &ctx, noise));
+        }
+    } else {
+        warnings.push(
+            "no IA-radial station (ip,0 or io,0): radius not measured, nominal radius used".into(),
+        );
+    }
+
+    // --- ECM offset --------------------------------------------------------
+    let stat_u = |f: &RadiusFit| f.radius_m.value * f.fit.estimates.u("scale").unwrap_or(0.0);
+    let (r_plus, r_minus, u_r) = match (&regression[0], &regression[1]) {
+        (Some(p), Some(m)) => (
+            p.radius_m.value,
+            m.radius_m.value,
+            0.5 * stat_u(p).hypot(stat_u(m)),
+        ),
+        (Some(p), None) => {
+            warnings.push("only polarity + measured: ECM offset taken as 0".into());
+            (p.radius_m.value, p.radius_m.value, f64::NAN)
+        }
+        (None, Some(m)) => {
+            warnings.push("only polarity - measured: ECM offset taken as 0".into());
+            (m.radius_m.value, m.radius_m.value, f64::NAN)
+        }
+        (None, None) => (opts.radius0_m, opts.radius0_m, f64::NAN),
+    };
+    let (centre, offset) = budget::ecm_offset(r_plus, r_minus);
+    let u_centre = match (&regression[0], &regression[1]) {
+        (Some(p), Some(m)) => 0.5 * (p.radius_m.u.powi(2) + m.radius_m.u.powi(2)).sqrt(),
+        (Some(f), None) | (None, Some(f)) => f.radius_m.u,
+        (None, None) => f64::NAN,
+    };
+    let rig = Centrifuge {
+        r_plus_m: r_plus,
+        r_minus_m: r_minus,
+        tilt_rad: 0.0,
+        ..nominal
+    };
+
+    // --- stations ----------------------------------------------------------
+    let mut stations = Vec::new();
+    let mut station_errors = Vec::new();
+    for ((plane, key), points) in &groups {
+        let phi = (*key as f64 / 1e6).to_radians();
+        match fit_station(*plane, phi, points, &rig, opts.order, k1, noise) {
+            Ok(s) => stations.push(s),
+            Err(e) => station_errors.push((station_label(*plane, phi), e.to_string())),
+        }
+    }
+
+    // --- coefficients ------------------------------------------------------
+    let (coefficients, budgets, unsupported) = coefficients(&mut stations, &station_errors, opts)?;
+    if let Some(req) = &opts.terms {
+        for t in req {
+            if let Some((_, why)) = unsupported.iter().find(|(u, _)| u == t) {
+                return Err(Error::Unsupported(format!(
+                    "this position set cannot give {t}: {why}"
+                )));
+            }
+        }
+    }
+    if coefficients.is_empty() {
+        let why: Vec<String> = unsupported
+            .iter()
+            .map(|(t, w)| format!("{t}: {w}"))
+            .collect();
+        return Err(Error::Unsupported(format!(
+            "this position set gives no coefficient ({})",
+            why.join("; ")
+        )));
+    }
+    for s in &stations {
+        let c = s.phi_rad.cos();
+        if let ([pol], true) = (&s.polarities[..], s.plane.ia_horizontal() && c.abs() > 1e-6) {
+            let sign = if *pol > 0 { "+" } else { "-" };
+            warnings.push(format!(
+                "one polarity only at {}: the odd quadratic cannot be separated there, its c2 includes {sign}{:.3}*K_oq",
+                s.label(),
+                c * c
+            ));
+        }
+    }
+    for s in &stations {
+        if let Some(p) = s.fit.chi2_p_value {
+            if p < 0.01 {
+                warnings.push(format!(
+                    "station {}: residuals exceed the sample scatter (chi-square p = {p:.2e}); uncertainties scaled up",
+                    s.label()
+                ));
+            }
+        }
+    }
+    Ok(CentrifugeResult {
+        ia_station: ia.map(|g| station_label(g.0 .0, (g.0 .1 as f64 / 1e6).to_radians())),
+        tilt_rad: tilt,
+        static_radius: static_r,
+        static_rate_rad_s: static_w,
+        regression,
+        radius_table,
+        centre_radius_m: ValueU {
+            value: centre,
+            u: u_centre,
+        },
+        ecm_offset_m: ValueU {
+            value: offset,
+            u: u_r,
+        },
+        stations,
+        station_errors,
+        coefficients,
+        budgets,
+        unsupported,
+        warnings,
+    })
+}
+
+/// Regression radius for orders 1–3 on the data up to ⅓, ⅔ and all of the
+/// largest input (seed 001 Table 2 uses 7, 14 and 25 g).
+fn range_table(
+    points: &[SpeedPoint],
+    pol: i8,
+    lambda: f64,
+    opts: &CentrifugeOptions,
+    ctx: &RadiusContext,
+    noise: Noise,
+) -> Vec<RadiusRangeRow> {
+    let rate = |p: &SpeedPoint| {
+        opts.radius0_m
+            * crate::rigs::centrifuge::centripetal_rate_squared(
+                p.omega_rad_s,
+                opts.latitude_rad,
+                opts.opposite_sense,
+            )
+            / opts.g_local_m_s2
+    };
+    let max = points.iter().map(rate).fold(0.0, f64::max);
+    let mut out = Vec::new();
+    let mut done: Vec<usize> = Vec::new();
+    for frac in [1.0 / 3.0, 2.0 / 3.0, 1.0] {
+        let sub: Vec<SpeedPoint> = points
+            .iter()
+            .filter(|p| rate(p) <= frac * max * (1.0 + 1e-9))
+            .cloned()
+            .collect();
+        if done.contains(&sub.len()) {
+            continue;
+        }
+        done.push(sub.len());
+        let top = sub.iter().map(rate).fold(0.0, f64::max);
+        for order in 1..=3 {
+            let r = regression_radius(
+                &sub,
+                f64::from(pol),
+                order,
+                opts.radius0_m,
+                lambda,
+                ctx,
+                noise,
+            );
+            out.push(RadiusRangeRow {
+                order,
+                polarity: pol,
+                max_input_g: top,
+                chi2_p_value: r.as_ref().ok().and_then(|f| f.fit.chi2_p_value),
+                radius: r.map(|f| f.radius_m).map_err(|e| e.to_string()),
+            });
+        }
+    }
+    out
+}
+
+/// Axes (first, second) of a plane as model terms of their squares and
+/// product: (K_aa, K_bb, K_ab).
+fn plane_terms(plane: Plane) -> (Term, Term, Term) {
+    match plane {
+        Plane::Ip => (Term::K2, Term::Kpp, Term::Kip),
+        Plane::Io => (Term::K2, Term::Koo, Term::Kio),
+        Plane::Po => (Term::Kpp, Term::Koo, Term::Kpo),
+    }
+}
+
+/// Fit one station with the polarity model of eq. 9 (module docs).
+fn fit_station(
+    plane: Plane,
+    phi_rad: f64,
+    points: &[Point],
+    rig: &Centrifuge,
+    order: usize,
+    k1: f64,
+    noise: Noise,
+) -> Result<Station> {
+    let mut pols: Vec<i8> = points.iter().map(|p| p.position.polarity).collect();
+    pols.sort_unstable_by(|a, b| b.cmp(a));
+    pols.dedup();
+    let both = pols.len() == 2;
+    let mut names: Vec<String> = Vec::new();
+    for p in &pols {
+        let s = if *p > 0 { "+" } else { "-" };
+        names.push(format!("b{s}"));
+        names.push(format!("s{s}"));
+    }
+    names.push("c2".into());
+    if both {
+        names.push("q".into());
+    }
+    if order >= 3 {
+        names.push("c3".into());
+    }
+    let mut rows = Vec::new();
+    let mut stats = Vec::new();
+    for p in points {
+        let x = rig.centripetal_g(&p.position, p.omega);
+        let s = p.position.sign();
+        // Odd terms follow the input axis, whose angle to the radial
+        // direction is off by the ECM alignment error Δφ±, opposite in the
+        // two polarities: scale them by w = cos(φ0 + Δφ±)/cos φ0 so that
+        // the polarity-dependent part of K_oq·a_i|a_i| and K3·a_i³ does not
+        // leak into the common c2.
+        let w = if plane.ia_horizontal() && phi_rad.cos().abs() > 1e-6 {
+            let d = rig.geometry(&p.position).delta_phi_rad;
+            (phi_rad + d).cos() / phi_rad.cos()
+        } else {
+            1.0
+        };
+        let mut row = Vec::with_capacity(names.len());
+        for q in &pols {
+            let on = if *q == p.position.polarity { 1.0 } else { 0.0 };
+            row.push(on);
+            row.push(on * s * x);
+        }
+        row.push(x * x);
+        if both {
+            row.push(s * (w * x).powi(2));
+        }
+        if order >= 3 {
+            row.push(s * (w * x).powi(3));
+        }
+        rows.push(row);
+        stats.push(e_over_k1(&p.samples, k1)?);
+    }
+    let design = Design::from_rows(names, &rows)?;
+    let (fit, _) = fit_means(&design, &stats, noise)?;
+    let get = |n: &str| fit.estimates.get(n).map(|(value, u)| ValueU { value, u });
+    let c2 = get("c2").ok_or_else(|| Error::Unsupported("station fit lost c2".into()))?;
+    let alignment = pols
+        .iter()
+        .map(|&pol| {
+            let g = rig.geometry(&Position {
+                plane,
+                phi_rad,
+                polarity: pol,
+            });
+            Alignment {
+                polarity: pol,
+                radius_m: g.radius_m,
+                delta_phi_rad: g.delta_phi_rad,
+                delta_c2: 0.0,
+            }
+        })
+        .collect();
+    Ok(Station {
+        plane,
+        phi_rad,
+        polarities: pols,
+        points: points.len(),
+        c2,
+        q: if both { get("q") } else { None },
+        c3: if order >= 3 { get("c3") } else { None },
+        alignment,
+        delta_c2_half_width: 0.0,
+        fit,
+    })
+}
+
+fn is_key(s: &Station, plane: Plane, deg: f64) -> bool {
+    s.plane == plane && ((s.phi_rad.to_degrees() - deg).abs() < 1e-6)
+}
+
+fn is_axis(s: &Station) -> bool {
+    let d = s.phi_rad.to_degrees();
+    d.abs() < 1e-6 || (d - 90.0).abs() < 1e-6
+}
+
+/// A physical coefficient as a linear combination of inputs.
+type Combo = Vec<(usize, f64)>;
+
+fn add(a: &mut Combo, b: &Combo, f: f64) {
+    for (k, c) in b {
+        if let Some(e) = a.iter_mut().find(|(j, _)| j == k) {
+            e.1 += f * c;
+        } else {
+            a.push((*k, f * c));
+        }
+    }
+}
+
+struct Inputs {
+    names: Vec<String>,
+    values: Vec<f64>,
+    /// Covariance blocks: (first index, block).
+    blocks: Vec<(usize, DMatrix<f64>)>,
+    kind: Vec<&'static str>,
+    dof: Vec<f64>,
+    /// Station index of each input (None for K1).
+    station: Vec<Option<usize>>,
+}
+
+impl Inputs {
+    fn push_block(
+        &mut self,
+        station: Option<usize>,
+        kind: &'static str,
+        items: Vec<(String, f64)>,
+        cov: DMatrix<f64>,
+        dof: f64,
+    ) -> usize {
+        let first = self.names.len();
+        for (n, v) in items {
+            self.names.push(n);
+            self.values.push(v);
+            self.kind.push(kind);
+            self.dof.push(dof);
+            self.station.push(station);
+        }
+        self.blocks.push((first, cov));
+        first
+    }
+    fn covariance(&self) -> DMatrix<f64> {
+        let n = self.names.len();
+        let mut c = DMatrix::zeros(n, n);
+        for (first, b) in &self.blocks {
+            c.view_mut((*first, *first), b.shape()).copy_from(b);
+        }
+        c
+    }
+}
+
+#[allow(clippy::type_complexity)]
+fn coefficients(
+    stations: &mut [Station],
+    station_errors: &[(String, String)],
+    opts: &CentrifugeOptions,
+) -> Result<(Estimates, Vec<Budget>, Vec<(Term, String)>)> {
+    let find = |keys: &[(Plane, f64)]| -> Option<usize> {
+        keys.iter()
+            .find_map(|(p, d)| stations.iter().position(|s| is_key(s, *p, *d)))
+    };
+    let failed = |keys: &[(Plane, f64)]| -> Option<String> {
+        keys.iter().find_map(|(p, d)| {
+            let l = station_label(*p, d.to_radians());
+            station_errors
+                .iter()
+                .find(|(s, _)| *s == l)
+                .map(|(s, e)| format!("station {s} could not be fitted: {e}"))
+        })
+    };
+    let ia_keys = [(Plane::Ip, 0.0), (Plane::Io, 0.0)];
+    let pa_keys = [(Plane::Ip, 90.0), (Plane::Po, 0.0)];
+    let oa_keys = [(Plane::Io, 90.0), (Plane::Po, 90.0)];
+    let ia = find(&ia_keys);
+    let pa = find(&pa_keys);
+    let oa = find(&oa_keys);
+    let cross = |plane: Plane| -> Option<usize> {
+        stations
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.plane == plane && !is_axis(s))
+            .min_by(|a, b| {
+                let da = (a.1.phi_rad.to_degrees() - 45.0).abs();
+                let db = (b.1.phi_rad.to_degrees() - 45.0).abs();
+                da.total_cmp(&db)
+            })
+            .map(|(k, _)| k)
+    };
+    let mut unsupported: Vec<(Term, String)> = Vec::new();
+    let need = |idx: Option<usize>,
+                keys: &[(Plane, f64)],
+                what: &str|
+     -> std::result::Result<usize, String> {
+        idx.ok_or_else(|| {
+            failed(keys).unwrap_or_else(|| {
+                format!(
+                    "needs a {what} station ({})",
+                    keys.iter()
+                        .map(|(p, d)| format!("{},{}", p.name(), d))
+                        .collect::<Vec<_>>()
+                        .join(" or ")
+                )
+            })
+        })
+    };
+
+    // Inputs: K1, then per station c2 (with q, c3 at the IA station), dc2.
+    let mut inp = Inputs {
+        names: Vec::new(),
+        values: Vec::new(),
+        blocks: Vec::new(),
+        kind: Vec::new(),
+        dof: Vec::new(),
+        station: Vec::new(),
+    };
+    let k1_idx = inp.push_block(
+        None,
+        "B",
+        vec![("K1".into(), opts.k1.value)],
+        DMatrix::from_element(1, 1, opts.k1.u.powi(2)),
+        f64::INFINITY,
+    );
+    let mut c2_idx: BTreeMap<usize, usize> = BTreeMap::new();
+    let mut dc2_idx: BTreeMap<usize, usize> = BTreeMap::new();
+    let mut extra: BTreeMap<(usize, &'static str), usize> = BTreeMap::new();
+    for (k, s) in stations.iter().enumerate() {
+        let mut items = vec![(format!("c2({})", s.label()), s.c2.value)];
+        let mut which = vec!["c2"];
+        if Some(k) == ia {
+            if s.q.is_some() {
+                items.push((format!("q({})", s.label()), s.q.map_or(0.0, |v| v.value)));
+                which.push("q");
+            }
+            if s.c3.is_some() {
+                items.push((format!("c3({})", s.label()), s.c3.map_or(0.0, |v| v.value)));
+                which.push("c3");
+            }
+        }
+        let sel: Vec<&str> = which.clone();
+        let block = s.fit.estimates.select(&sel)?;
+        let first = inp.push_block(
+            Some(k),
+            "A",
+            items,
+            block.covariance().clone(),
+            s.fit.estimates.dof(),
+        );
+        for (j, w) in which.iter().enumerate() {
+            if *w == "c2" {
+                c2_idx.insert(k, first + j);
+            } else {
+                extra.insert((k, w), first + j);
+            }
+        }
+        let d = inp.push_block(
+            Some(k),
+            "B",
+            vec![(format!("alignment dc2({})", s.label()), 0.0)],
+            DMatrix::zeros(1, 1),
+            f64::INFINITY,
+        );
+        dc2_idx.insert(k, d);
+    }
+    let direct = |k: usize| -> Combo { vec![(c2_idx[&k], 1.0), (dc2_idx[&k], 1.0)] };
+
+    let mut combos: BTreeMap<Term, (Combo, Option<usize>)> = BTreeMap::new();
+    match need(ia, &ia_keys, "IA-radial") {
+        Ok(k) => {
+            combos.insert(Term::K2, (direct(k), None));
+            match extra.get(&(k, "c3")) {
+                Some(&j) => {
+                    combos.insert(Term::K3, (vec![(j, 1.0)], None));
+                }
+                None => unsupported.push((Term::K3, "needs model order 3".into())),
+            }
+            match extra.get(&(k, "q")) {
+                Some(&j) => {
+                    combos.insert(Term::Koq, (vec![(j, 1.0)], None));
+                }
+                None => unsupported.push((
+                    Term::Koq,
+                    "needs both polarities at the IA-radial station (the odd quadratic is separated from K2 only by the polarity reversal)".into(),
+                )),
+            }
+        }
+        Err(why) => {
+            for t in [Term::K2, Term::K3, Term::Koq] {
+                unsupported.push((t, why.clone()));
+            }
+        }
+    }
+    match need(pa, &pa_keys, "PA-radial") {
+        Ok(k) => {
+            combos.insert(Term::Kpp, (direct(k), None));
+        }
+        Err(why) => unsupported.push((Term::Kpp, why)),
+    }
+    match need(oa, &oa_keys, "OA-radial") {
+        Ok(k) => {
+            combos.insert(Term::Koo, (direct(k), None));
+        }
+        Err(why) => unsupported.push((Term::Koo, why)),
+    }
+    for plane in [Plane::Ip, Plane::Io, Plane::Po] {
+        let (ta, tb, tab) = plane_terms(plane);
+        let Some(k) = cross(plane) else {
+            unsupported.push((
+                tab,
+                format!(
+                    "needs a cross station in plane {} at an angle off the axes (e.g. {},45)",
+                    plane.name(),
+                    plane.name()
+                ),
+            ));
+            continue;
+        };
+        let (Some((ca, _)), Some((cb, _))) = (combos.get(&ta).cloned(), combos.get(&tb).cloned())
+        else {
+            unsupported.push((
+                tab,
+                format!("needs {ta} and {tb} from their radial stations"),
+            ));
+            continue;
+        };
+        let (s, c) = stations[k].phi_rad.sin_cos();
+        let mut combo = Vec::new();
+        add(&mut combo, &direct(k), 1.0 / (s * c));
+        add(&mut combo, &ca, -c * c / (s * c));
+        add(&mut combo, &cb, -s * s / (s * c));
+        combos.insert(tab, (combo, Some(k)));
+    }
+
+    // Point values (dc2 inputs are 0), then the type-B half-widths.
+    let value_of = |combo: &Combo| combo.iter().map(|(j, c)| c * inp.values[*j]).sum::<f64>();
+    let point: BTreeMap<Term, f64> = combos.iter().map(|(t, (c, _))| (*t, value_of(c))).collect();
+    let mut dc2_var: Vec<(usize, f64)> = Vec::new();
+    for (k, s) in stations.iter_mut().enumerate() {
+        let (ta, tb, tab) = plane_terms(s.plane);
+        let g = |t: Term| point.get(&t).copied().unwrap_or(0.0);
+        let (kaa, kbb, kab) = (g(ta), g(tb), g(tab));
+        for a in &mut s.alignment {
+            a.delta_c2 = delta_c2(kaa, kbb, kab, s.phi_rad, a.delta_phi_rad);
+        }
+        let net = s.alignment.iter().map(|a| a.delta_phi_rad).sum::<f64>()
+            / s.alignment.len().max(1) as f64;
+        let hw = delta_c2(
+            kaa,
+            kbb,
+            kab,
+            s.phi_rad,
+            net.abs() + opts.alignment_tolerance_rad,
+        )
+        .abs();
+        s.delta_c2_half_width = hw;
+        dc2_var.push((dc2_idx[&k], hw * hw / 3.0));
+    }
+    for (j, v) in dc2_var {
+        if let Some(b) = inp.blocks.iter_mut().find(|(f, _)| *f == j) {
+            b.1[(0, 0)] = v;
+        }
+    }
+
+    // Requested subset, report order.
+    let order: Vec<Term> = CENTRIFUGE_TERMS
+        .iter()
+        .copied()
+        .filter(|t| combos.contains_key(t))
+        .filter(|t| opts.terms.as_ref().is_none_or(|r| r.contains(t)))
+        .collect();
+    let n_in = inp.names.len();
+    let rows: Vec<Combo> = order.iter().map(|t| combos[t].0.clone()).collect();
+    let k1_0 = opts.k1.value;
+    let f = |x: &DVector<f64>| {
+        DVector::from_iterator(
+            rows.len(),
+            rows.iter()
+                .map(|c| x[k1_idx] / k1_0 * c.iter().map(|(j, a)| a * x[*j]).sum::<f64>()),
+        )
+    };
+    let jac = |x: &DVector<f64>| {
+        let mut m = DMatrix::zeros(rows.len(), n_in);
+        for (r, c) in rows.iter().enumerate() {
+            let sum: f64 = c.iter().map(|(j, a)| a * x[*j]).sum();
+            for (j, a) in c {
+                m[(r, *j)] += x[k1_idx] / k1_0 * a;
+            }
+            m[(r, k1_idx)] += sum / k1_0;
+        }
+        m
+    };
+    let used_dof = order
+        .iter()
+        .flat_map(|t| combos[t].0.iter().map(|(j, _)| inp.dof[*j]))
+        .fold(f64::INFINITY, f64::min);
+    let inputs = Estimates::new(
+        inp.names.clone(),
+        DVector::from_vec(inp.values.clone()),
+        inp.covariance(),
+        used_dof,
+    )?;
+    let x = inputs.values().clone();
+    let j = jac(&x);
+    let coefficients = inputs.map(order.iter().map(|t| t.name().to_string()).collect(), f, jac)?;
+    let budgets = order
+        .iter()
+        .enumerate()
+        .map(|(r, t)| {
+            let cross_station = combos[t].1;
+            let mut lines = Vec::new();
+            let mut own = Vec::new();
+            let mut dofs = Vec::new();
+            for k in 0..n_in {
+                let sens = j[(r, k)];
+                if sens == 0.0 {
+                    continue;
+                }
+                let u = inputs.u_at(k);
+                lines.push(BudgetLine {
+                    component: inp.names[k].clone(),
+                    kind: inp.kind[k],
+                    u,
+                    sensitivity: sens,
+                    contribution: sens.abs() * u,
+                });
+                own.push(cross_station.is_some() && inp.station[k] == cross_station);
+                dofs.push(inp.dof[k]);
+            }
+            let paper = cross_station
+                .is_some_and(|k| (stations[k].phi_rad.to_degrees() - 45.0).abs() < 1e-6);
+            Budget::from_lines(t.name().to_string(), lines, &own, &dofs, paper)
+        })
+        .collect();
+    Ok((coefficients, budgets, unsupported))
+}
