@@ -524,13 +524,11 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
         }
     }
     for s in &stations {
-        if let Some(p) = s.fit.chi2_p_value {
-            if p < 0.01 {
-                warnings.push(format!(
-                    "station {}: residuals exceed the sample scatter (chi-square p = {p:.2e}); uncertainties scaled up",
-                    s.label()
-                ));
-            }
+        for w in s
+            .fit
+            .quality_warnings("a model order too low for the speed range, drift, or rig vibration")
+        {
+            warnings.push(format!("station {}: {w}", s.label()));
         }
     }
     Ok(CentrifugeResult {
