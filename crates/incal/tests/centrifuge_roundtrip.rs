@@ -80,7 +80,8 @@ fn options(order: usize) -> CentrifugeOptions {
     }
 }
 
-/// Every coefficient and both regression radii: the truth lies within ±2u
+/// Every coefficient, both regression radii, the ECM offset and both
+/// static radii: the truth lies within ±2u
 /// in 90–99 % of 300 trials. The variances come from the pooled sample
 /// scatter (4 degrees of freedom per point, > 200 per station), so the
 /// normal ±2u rate (95.4 %) applies.
@@ -111,10 +112,25 @@ fn every_coefficient_and_radius_within_2u_at_95_percent() {
         }
         let ecm = res.ecm_offset_m;
         hits.push((ecm.value - r.ecm_offset_m() * eff).abs() <= 2.0 * ecm.u);
+        // The static radii (eq. 5–6, nonlinearity at 1 g removed) measure
+        // the same effective radius.
+        for (k, truth_r) in [r.r_plus_m * eff, r.r_minus_m * eff]
+            .into_iter()
+            .enumerate()
+        {
+            let st = res.static_radius[k].expect("static radius");
+            hits.push((st.value - truth_r).abs() <= 2.0 * st.u);
+        }
         hits
     });
     let mut names: Vec<String> = CENTRIFUGE_TERMS.iter().map(|t| t.to_string()).collect();
-    names.extend(["R+".into(), "R-".into(), "r".into()]);
+    names.extend([
+        "R+".into(),
+        "R-".into(),
+        "r".into(),
+        "static R+".into(),
+        "static R-".into(),
+    ]);
     for (k, name) in names.iter().enumerate() {
         let rate = runs.iter().filter(|h| h[k]).count() as f64 / trials as f64;
         assert!((0.90..=0.99).contains(&rate), "{name}: {rate}");
@@ -219,8 +235,8 @@ fn unseparable_requests_are_refused_by_name() {
 /// table spinning against Earth's sense, the regression radius is exact
 /// (to 1e-9 relative) when the procedure is told so, and off by about
 /// `2Ωe sinΦ/ω` (tens of ppm at low rates) when it is not. The static
-/// radius agrees with the truth within its u (which carries the
-/// nonlinearity envelope).
+/// radius, corrected for K2 and K3 at 1 g, is exact too, and the paper's
+/// uncorrected eq. 6 value reads high by (K2 + K_oq)·a_g.
 #[test]
 fn earth_rate_and_sense_are_applied() {
     let mut cfg = sim(
@@ -242,10 +258,20 @@ fn earth_rate_and_sense_are_applied() {
     let eff = 1.0 + truth().k_io;
     let r = good.regression[0].as_ref().unwrap().radius_m.value;
     assert!((r / (rig().r_plus_m * eff) - 1.0).abs() < 1e-7, "{r}");
+    // Noiseless: the corrected static radius is exact like the regression
+    // one; the uncorrected eq. 6 value reads high by the quadratic that
+    // polarity + sees, (K2 + K_oq)·a_g (4.4 ppm at 1 g).
     let st = good.static_radius[0].unwrap();
     assert!(
-        (st.value - rig().r_plus_m * eff).abs() < 2.0 * st.u,
+        (st.value / (rig().r_plus_m * eff) - 1.0).abs() < 1e-7,
         "{st:?}"
+    );
+    let raw = good.static_radius_uncorrected[0].unwrap();
+    let excess = raw.value / st.value - 1.0;
+    let quad = truth().k2 + truth().k_oq;
+    assert!(
+        (excess / quad - 1.0).abs() < 0.02,
+        "eq. 6 excess {excess:e}"
     );
     o.opposite_sense = false;
     let wrong = calibrate(&obs, &o).unwrap();

@@ -241,6 +241,7 @@ pub fn result_json(file: &str, r: &CentrifugeResult) -> Value {
             "static": {"R_plus_m": vu(r.static_radius[0]), "R_minus_m": vu(r.static_radius[1])},
             "regression": {"R_plus_m": vu(reg(0)), "R_minus_m": vu(reg(1))},
         },
+        "radius_static_eq6_uncorrected": {"R_plus_m": vu(r.static_radius_uncorrected[0]), "R_minus_m": vu(r.static_radius_uncorrected[1])},
         "coefficients": coefficients_json(&r.coefficients, term_unit),
         "alignment": {"ecm_offset_m": vu(Some(ValueU { value: r.ecm_offset_m.value.abs(), u: r.ecm_offset_m.u }))},
         "tilt_rad": vu(r.tilt_rad),
@@ -300,7 +301,18 @@ pub fn report(file: &str, r: &CentrifugeResult) -> String {
         {
             let (v, u) = mm(r.static_radius[0]);
             let (v2, u2) = mm(r.static_radius[1]);
-            vec!["static (eq. 5-6)".into(), v, u, v2, u2]
+            vec![
+                "static (eq. 5-6, K2/K3 at 1 g removed)".into(),
+                v,
+                u,
+                v2,
+                u2,
+            ]
+        },
+        {
+            let (v, u) = mm(r.static_radius_uncorrected[0]);
+            let (v2, u2) = mm(r.static_radius_uncorrected[1]);
+            vec!["static (eq. 5-6 as printed)".into(), v, u, v2, u2]
         },
         {
             let (v, u) = mm(reg(0));

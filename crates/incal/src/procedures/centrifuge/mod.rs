@@ -171,6 +171,44 @@ pub struct RadiusRangeRow {
     pub chi2_p_value: Option<f64>,
 }
 
+/// Remove the input-axis nonlinearity from an eq. 5–6 static radius.
+///
+/// At the static speed the centripetal input is `a_g` (g) and IA sees
+/// `a_i = p·a_g` (polarity p); the indicated input
+/// `a_i + K2 a_i² + K3 a_i³` makes eq. 6 read `R·(1 + p·K2·a_g + K3·a_g²)`.
+/// Returns `R_eq6 / (1 + p·K2·a_g + K3·a_g²)`, with `u` from `u(R_eq6)` and
+/// the covariance of (K2, K3) in `regression` (the regression–iteration fit
+/// of the same polarity; a missing term counts as 0 ± 0). GUM first order.
+pub fn correct_static_radius(
+    r_eq6: ValueU,
+    a_g: f64,
+    polarity: f64,
+    regression: &Estimates,
+) -> Result<ValueU> {
+    let names: Vec<&str> = ["K2", "K3"]
+        .into_iter()
+        .filter(|n| regression.index(n).is_some())
+        .collect();
+    let k = regression.select(&names)?;
+    let coef = |n: &str| k.value(n).unwrap_or(0.0);
+    let factor = 1.0 + polarity * coef("K2") * a_g + coef("K3") * a_g * a_g;
+    let r = r_eq6.value / factor;
+    // ∂r/∂K2 = −r·p·a_g/factor, ∂r/∂K3 = −r·a_g²/factor.
+    let jac = nalgebra::DMatrix::from_fn(1, names.len(), |_, j| {
+        let d = if names[j] == "K2" {
+            polarity * a_g
+        } else {
+            a_g * a_g
+        };
+        -r * d / factor
+    });
+    let var_k = (&jac * k.covariance() * jac.transpose())[(0, 0)];
+    Ok(ValueU {
+        value: r,
+        u: ((r_eq6.u / factor).powi(2) + var_k.max(0.0)).sqrt(),
+    })
+}
+
 /// Everything a centrifuge calibration produces.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CentrifugeResult {
@@ -178,8 +216,12 @@ pub struct CentrifugeResult {
     pub ia_station: Option<String>,
     /// Static tilt λ (rad), eq. 4.
     pub tilt_rad: Option<ValueU>,
-    /// Static back-calculated radius (m) for polarity + and −, eq. 5–6.
+    /// Static back-calculated radius (m) for polarity + and −, eq. 5–6,
+    /// with the nonlinearity at the 1 g speed removed by
+    /// [`correct_static_radius`] when the regression gives K2 (K3).
     pub static_radius: [Option<ValueU>; 2],
+    /// The same radius exactly as eq. 5–6 compute it (nonlinearity ignored).
+    pub static_radius_uncorrected: [Option<ValueU>; 2],
     /// Rate used for each static radius (rad/s).
     pub static_rate_rad_s: [Option<f64>; 2],
     /// Regression–iteration radius fits, polarity + and −, eq. 7.
@@ -355,6 +397,7 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
         .find_map(|k| groups.iter().find(|g| g.0 == *k));
     let mut tilt = None;
     let mut static_r = [None, None];
+    let mut static_uncorrected = [None, None];
     let mut static_w = [None, None];
     let mut regression: [Option<RadiusFit>; 2] = [None, None];
     let mut radius_table = Vec::new();
@@ -418,12 +461,15 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
                 noise,
             ) {
                 Ok(f) => {
-                    // The static radius ignores the nonlinearity at ~1 g;
-                    // seed 001 §2.1.1 bounds it by the nonlinearity
-                    // envelope: add a uniform type-B component with
-                    // half-width |K2 a_g² + K3 a_g³| (from this regression)
-                    // relative to a_g.
-                    if let (Some(sr), Some(w)) = (static_r[slot].as_mut(), static_w[slot]) {
+                    // Eq. 5–6 ignore the nonlinearity at a_g (~1 g): with
+                    // a_i = ±a_g the indicated input is
+                    // a_i + K2 a_i² + K3 a_i³, so the eq. 6 radius reads
+                    // R·(1 ± K2 a_g + K3 a_g²) (a few ppm). Remove that
+                    // factor with this polarity's K2, K3 and carry their
+                    // covariance, so the static radius is unbiased and its
+                    // u honest; the paper's uncorrected value is kept.
+                    if let (Some(sr), Some(w)) = (static_r[slot], static_w[slot]) {
+                        static_uncorrected[slot] = Some(sr);
                         let a_g = sr.value
                             * crate::rigs::centrifuge::centripetal_rate_squared(
                                 w,
@@ -431,11 +477,12 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
                                 opts.opposite_sense,
                             )
                             / opts.g_local_m_s2;
-                        let k2 = f.fit.estimates.value("K2").unwrap_or(0.0);
-                        let k3 = f.fit.estimates.value("K3").unwrap_or(0.0);
-                        let hw = (k2 * a_g * a_g + f64::from(pol) * k3 * a_g.powi(3)).abs();
-                        let u_nl = sr.value * hw / a_g.abs().max(f64::MIN_POSITIVE) / 3f64.sqrt();
-                        sr.u = sr.u.hypot(u_nl);
+                        static_r[slot] = Some(correct_static_radius(
+                            sr,
+                            a_g,
+                            f64::from(pol),
+                            &f.fit.estimates,
+                        )?);
                     }
                     regression[slot] = Some(f);
                 }
@@ -535,6 +582,7 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
         ia_station: ia.map(|g| station_label(g.0 .0, (g.0 .1 as f64 / 1e6).to_radians())),
         tilt_rad: tilt,
         static_radius: static_r,
+        static_radius_uncorrected: static_uncorrected,
         static_rate_rad_s: static_w,
         regression,
         radius_table,
