@@ -105,9 +105,25 @@ fn restore_sigpipe() {
     }
 }
 
+/// Let every option value start with a hyphen: biases, misalignments,
+/// latitudes and angles are often negative (`--k0 -1.2e-4`), and clap's own
+/// negative-number detection rejects negative exponents (`-1e-3`). A stray
+/// flag taken as a value (`--noise --json`) still fails, as an invalid number.
+fn allow_negative_values(cmd: clap::Command) -> clap::Command {
+    // Command-level, so it also reaches the args clap builds lazily.
+    cmd.allow_hyphen_values(true)
+        .mut_subcommands(allow_negative_values)
+}
+
+fn parse() -> Result<Cli, clap::Error> {
+    use clap::{CommandFactory, FromArgMatches};
+    let matches = allow_negative_values(Cli::command()).try_get_matches()?;
+    Cli::from_arg_matches(&matches)
+}
+
 fn main() -> ExitCode {
     restore_sigpipe();
-    let cli = match Cli::try_parse() {
+    let cli = match parse() {
         Ok(c) => c,
         Err(e) => {
             use clap::error::ErrorKind;

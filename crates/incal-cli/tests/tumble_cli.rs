@@ -81,6 +81,33 @@ fn simulate_is_reproducible_and_calibrates_to_contract_json() {
     assert!((k0 - 8e-3).abs() < 1e-5);
 }
 
+/// Negative option values (biases, misalignments), including negative
+/// exponents that clap's own number detection rejects.
+#[test]
+fn negative_option_values_are_values() {
+    let a = simulate(&[
+        "--k0-g",
+        "-1.5e-3",
+        "--delta-o-arcsec",
+        "-300",
+        "--seed",
+        "4",
+    ]);
+    let v = calibrate_json("negative.csv", &a, "pendulum");
+    let k0 = v["coefficients"]["K0"]["value"].as_f64().unwrap();
+    assert!((k0 + 1.5e-3).abs() < 1e-5, "{k0}");
+    let d = v["coefficients"]["delta_o"]["value"].as_f64().unwrap();
+    assert!((d + incal_arcsec(300.0)).abs() < 1e-6, "{d}");
+    // A flag is still not swallowed silently as a value.
+    let o = incal(&["simulate", "tumble", "--noise", "--json"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr_line(&o).contains("--noise"));
+}
+
+fn incal_arcsec(x: f64) -> f64 {
+    x / (180.0 * 3600.0 / std::f64::consts::PI)
+}
+
 #[test]
 fn gate_mount_reports_delta_p_and_k_io() {
     let a = simulate(&["--mount", "gate", "--seed", "3", "--passes", "2"]);

@@ -442,7 +442,11 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
     println!(
         "Tumble plan: {} (step {} deg), {} positions, largest input {:.3} g",
         plan_name(&plan),
-        plan.step_deg,
+        if plan.step_deg.is_finite() {
+            plan.step_deg.to_string()
+        } else {
+            "-".to_string()
+        },
         plan.angles_deg.len(),
         plan.max_input_g()
     );
