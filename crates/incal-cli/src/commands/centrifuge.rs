@@ -479,14 +479,8 @@ impl TruthArgs {
             k_oo: self.k_oo,
             k_oq: self.k_oq,
         };
-        for t in Term::ALL {
-            if !m.get(t).is_finite() {
-                return Err(usage(format!("truth {t} is not finite")));
-            }
-        }
-        if m.k1_out_per_g == 0.0 {
-            return Err(usage("truth K1 must not be 0"));
-        }
+        m.validate()
+            .map_err(|e| usage(format!("truth model: {e}")))?;
         Ok(m)
     }
 }

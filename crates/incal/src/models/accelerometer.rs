@@ -214,6 +214,21 @@ impl AccelerometerModel {
         }
     }
 
+    /// Refuse a model that cannot describe an instrument: a non-finite
+    /// coefficient, or a zero scale factor (every output would be 0).
+    pub fn validate(&self) -> Result<()> {
+        for t in Term::ALL {
+            crate::error::finite(&format!("coefficient {t}"), self.get(t))?;
+        }
+        if self.k1_out_per_g == 0.0 {
+            return Err(Error::InvalidValue {
+                what: "scale factor K1".into(),
+                value: "0".into(),
+            });
+        }
+        Ok(())
+    }
+
     /// Coefficient of `term`.
     pub fn get(&self, term: Term) -> f64 {
         match term {
