@@ -197,15 +197,7 @@ fn calibrated_unit_beats_nominal_unit() {
     let noise = 2e-4;
     let data = simulate_static(&g, &t, &six_positions(), 50, noise, 11).unwrap();
     let cal = calibrate(&g, &data, &CalibrateOptions::default()).unwrap();
-    let calibrated: Vec<CalibratedAccelerometer> = cal
-        .accelerometers
-        .iter()
-        .map(|a| CalibratedAccelerometer {
-            k0: a.k0(),
-            ks: a.ks(),
-            noise_output: a.noise_output,
-        })
-        .collect();
+    let calibrated = cal.calibrated();
     let nominal: Vec<CalibratedAccelerometer> = g
         .accelerometers()
         .iter()

@@ -286,6 +286,23 @@ fn mm(v: Option<ValueU>) -> (String, String) {
     })
 }
 
+/// Rows `component, type, u, sensitivity, contribution (µg/g²)` of a
+/// coefficient's uncertainty budget.
+fn budget_rows(b: &incal::procedures::centrifuge::budget::Budget) -> Vec<Vec<String>> {
+    b.lines
+        .iter()
+        .map(|l| {
+            vec![
+                l.component.clone(),
+                l.kind.to_string(),
+                sig(l.u, 3),
+                sig(l.sensitivity, 4),
+                sig(l.contribution * 1e6, 3),
+            ]
+        })
+        .collect()
+}
+
 /// The readable report of a centrifuge result.
 pub fn report(file: &str, r: &CentrifugeResult) -> String {
     let mut s = format!("Centrifuge calibration, {file}\n\n");
@@ -384,18 +401,8 @@ pub fn report(file: &str, r: &CentrifugeResult) -> String {
                 sig(p * 1e6, 3)
             ))
         ));
-        let rows: Vec<Vec<String>> = b
-            .lines
-            .iter()
-            .map(|l| {
-                vec![
-                    l.component.clone(),
-                    l.kind.to_string(),
-                    sig(l.u, 3),
-                    sig(l.sensitivity, 4),
-                    sig(l.contribution * 1e6, 3),
-                ]
-            })
+        let rows: Vec<Vec<String>> = budget_rows(b)
+            .into_iter()
             .chain(std::iter::once(vec![
                 "combined".into(),
                 String::new(),
@@ -744,19 +751,7 @@ pub fn demo_section(seed: u64) -> CliResult<()> {
         println!(
             "\n-- uncertainty budget of K_ip (GUM; the paper's eq. 10 weights c2 by 2, not 4)"
         );
-        let rows: Vec<Vec<String>> = b
-            .lines
-            .iter()
-            .map(|l| {
-                vec![
-                    l.component.clone(),
-                    l.kind.to_string(),
-                    sig(l.u, 3),
-                    sig(l.sensitivity, 4),
-                    sig(l.contribution * 1e6, 3),
-                ]
-            })
-            .collect();
+        let rows = budget_rows(b);
         print!(
             "{}",
             table(

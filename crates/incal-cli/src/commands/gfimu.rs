@@ -758,15 +758,7 @@ pub fn demo_section(seed: u64) -> CliResult<()> {
         gravity_m_s2: STANDARD_GRAVITY_M_S2,
     };
     let series = simulate_motion(&g, &truth, &m, noise, seed.wrapping_add(1)).map_err(core)?;
-    let calibrated: Vec<CalibratedAccelerometer> = cal
-        .accelerometers
-        .iter()
-        .map(|a| CalibratedAccelerometer {
-            k0: a.k0(),
-            ks: a.ks(),
-            noise_output: a.noise_output,
-        })
-        .collect();
+    let calibrated = cal.calibrated();
     let sol = solve(&g, &calibrated, &series, &SolveOptions::default()).map_err(core)?;
     println!(
         "\n-- motion: spin-up about {:?} at 2 rad/s^2 for 1.005 s, then constant rate; 100 Hz, 3 s",

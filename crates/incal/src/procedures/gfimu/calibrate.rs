@@ -125,6 +125,21 @@ pub struct GfimuCalibration {
     pub warnings: Vec<String>,
 }
 
+impl GfimuCalibration {
+    /// The calibrated K0, Ks and sample noise of every accelerometer, in
+    /// geometry order: the input of [`super::solve::solve`].
+    pub fn calibrated(&self) -> Vec<super::solve::CalibratedAccelerometer> {
+        self.accelerometers
+            .iter()
+            .map(|a| super::solve::CalibratedAccelerometer {
+                k0: a.k0(),
+                ks: a.ks(),
+                noise_output: a.noise_output,
+            })
+            .collect()
+    }
+}
+
 /// Paper's closed forms for one accelerometer from the six-position means
 /// `E = [E1..E6]` (+x, −x, +y, −y, +z, −z; seed 004, methods.md §4).
 #[derive(Debug, Clone, Copy, PartialEq)]
