@@ -11,6 +11,8 @@ use crate::error::{CliError, CliResult};
 pub struct Table {
     /// Path as given by the user (for messages).
     pub path: String,
+    /// SHA-256 of the file's bytes (lower-case hex), for the result's inputs.
+    pub sha256: String,
     headers: Vec<String>,
     index: HashMap<String, usize>,
     rows: Vec<(usize, Vec<String>)>,
@@ -92,10 +94,16 @@ impl Table {
         }
         Ok(Table {
             path: name.to_string(),
+            sha256: crate::output::sha256_hex(text),
             headers,
             index,
             rows,
         })
+    }
+
+    /// The record of this file as an input of a result.
+    pub fn input_file(&self, role: &str) -> incal::document::InputFile {
+        crate::output::input_file(role, &self.path, self.sha256.clone(), Some(self.rows.len()))
     }
 
     /// Number of data rows (at least 1 after a successful read).

@@ -5,8 +5,10 @@
 //! naming the file, the line and the problem).
 
 mod commands;
+mod documents;
 mod error;
 mod input;
+mod options;
 mod output;
 
 use std::process::ExitCode;

@@ -1,52 +1,264 @@
-//! Output helpers: JSON value/uncertainty objects and readable tables in
-//! the units engineers expect (µg, ppm, arcsec).
+//! Output: the one text renderer of every result document, the common
+//! result options (`--json`, `--output`, instrument identity) and plain
+//! text tables. Engineering units (µg, µg/g², arcsec, mm) come from
+//! [`incal::units::Unit::engineering`], the one place that chooses them.
 
-use incal::estimation::Estimates;
-use incal::models::Term;
-use incal::units::ARCSEC_PER_RAD;
-use serde_json::{json, Map, Value};
+use std::path::{Path, PathBuf};
 
-/// `{"value": v, "u": u, "unit": unit}`.
-pub fn vu_unit(value: f64, u: f64, unit: &str) -> Value {
-    json!({"value": value, "u": u, "unit": unit})
+use incal::document::{Cell, InputFile, ResultDocument, Table};
+use sha2::{Digest, Sha256};
+
+use crate::error::{usage, CliResult};
+
+/// Options every reducing command shares: output form and destination,
+/// and the identity of the instrument.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct ResultArgs {
+    /// Print the result document as one JSON object (schema incal.result/1) instead of the readable report.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the result to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Serial number of the instrument (recorded in the result).
+    #[arg(long)]
+    pub serial: Option<String>,
+    /// Model or part number of the instrument (recorded in the result).
+    #[arg(long)]
+    pub model: Option<String>,
+    /// Further identity or conditions, KEY=VALUE (repeatable), e.g. --meta operator=lee --meta temperature_c=23.
+    #[arg(long = "meta", value_name = "KEY=VALUE")]
+    pub meta: Vec<String>,
 }
 
-/// JSON number, or null when not finite (JSON has no NaN).
-pub fn num(x: f64) -> Value {
-    if x.is_finite() {
-        json!(x)
+impl ResultArgs {
+    /// Put the instrument identity into `doc`, render it (JSON or text)
+    /// and write it to `--output` or standard output.
+    pub fn emit(&self, mut doc: ResultDocument) -> CliResult<()> {
+        doc.instrument.serial = self.serial.clone();
+        doc.instrument.model = self.model.clone();
+        for kv in &self.meta {
+            let (k, v) = kv
+                .split_once('=')
+                .ok_or_else(|| usage(format!("--meta: '{kv}' is not KEY=VALUE")))?;
+            let k = k.trim();
+            if k.is_empty() || k == "serial" || k == "model" {
+                return Err(usage(format!(
+                    "--meta: '{kv}' needs a key other than serial and model (use --serial, --model)"
+                )));
+            }
+            doc.instrument.meta.insert(k.to_string(), v.trim().to_string());
+        }
+        let text = if self.json {
+            format!("{}\n", doc.to_json())
+        } else {
+            render(&doc)
+        };
+        write_text(self.output.as_deref(), &text)
+    }
+}
+
+/// SHA-256 of `bytes`, lower-case hex.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    let d = Sha256::digest(bytes);
+    d.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// The record of one input file of a result.
+pub fn input_file(role: &str, path: &str, bytes_sha256: String, rows: Option<usize>) -> InputFile {
+    InputFile {
+        role: role.to_string(),
+        path: path.to_string(),
+        sha256: bytes_sha256,
+        rows: rows.map(|r| r as u64),
+    }
+}
+
+/// Write `text` to `path` (standard output when `None` or `-`). A write
+/// error is a failure (exit 1) with one line, never a panic.
+pub fn write_text(path: Option<&Path>, text: &str) -> CliResult<()> {
+    use std::io::Write;
+    match path.filter(|p| p.as_os_str() != "-") {
+        Some(p) => std::fs::write(p, text).map_err(|e| {
+            crate::error::CliError::Failure(anyhow::anyhow!("{}: cannot write: {e}", p.display()))
+        }),
+        None => {
+            let mut out = std::io::stdout().lock();
+            out.write_all(text.as_bytes())
+                .and_then(|_| out.flush())
+                .map_err(|e| crate::error::CliError::Failure(anyhow::anyhow!("stdout: {e}")))
+        }
+    }
+}
+
+/// The readable report of any result document: title, instrument and
+/// inputs, coefficients (value, u, U95, dof in engineering units), fits,
+/// decisions, warnings, then every table of the procedure.
+pub fn render(doc: &ResultDocument) -> String {
+    let mut s = format!("{}\n", doc.title);
+    let inst = &doc.instrument;
+    let mut ids: Vec<String> = Vec::new();
+    if let Some(x) = &inst.serial {
+        ids.push(format!("serial {x}"));
+    }
+    if let Some(x) = &inst.model {
+        ids.push(format!("model {x}"));
+    }
+    ids.extend(inst.meta.iter().map(|(k, v)| format!("{k} {v}")));
+    if !ids.is_empty() {
+        s.push_str(&format!("instrument: {}\n", ids.join(", ")));
+    }
+    for i in &doc.inputs {
+        let rows = i.rows.map_or(String::new(), |r| format!(", {r} rows"));
+        s.push_str(&format!(
+            "{}: {} (sha256 {}{rows})\n",
+            i.role,
+            i.path,
+            &i.sha256[..i.sha256.len().min(16)]
+        ));
+    }
+    s.push_str("\nCoefficients\n");
+    let rows: Vec<Vec<String>> = doc
+        .coefficients
+        .iter()
+        .map(|(name, c)| {
+            let (scale, label) = c.unit.engineering();
+            vec![
+                name.to_string(),
+                sig(c.value * scale, 7),
+                sig(c.u * scale, 3),
+                sig(c.u95 * scale, 3),
+                dof_text(c.dof),
+                format!("{:.3}", c.k95),
+                label.to_string(),
+            ]
+        })
+        .collect();
+    s.push_str(&table(
+        &["name", "value", "u", "U95", "dof", "k95", "unit"],
+        &rows,
+    ));
+    s.push_str(
+        "u: standard uncertainty; U95 = k95 u covers the value with 95 % probability (k95: Student t for dof; inf: known variance)\n",
+    );
+    if !doc.fits.is_empty() {
+        s.push_str("\nFits\n");
+        let rows: Vec<Vec<String>> = doc
+            .fits
+            .iter()
+            .map(|f| {
+                let (scale, label) = f.residual_unit.engineering();
+                vec![
+                    f.label.clone(),
+                    f.observations.to_string(),
+                    f.parameters.to_string(),
+                    f.dof.to_string(),
+                    f.condition_number.map_or("-".into(), |c| sig(c, 3)),
+                    f.chi2_p_value.map_or("-".into(), |p| sig(p, 2)),
+                    match f.variance_source {
+                        incal::estimation::VarianceSource::Prior => "scatter/known".into(),
+                        incal::estimation::VarianceSource::Residuals => "residuals".into(),
+                    },
+                    f.residual_rms
+                        .map_or("-".into(), |r| format!("{} {label}", sig(r * scale, 3))),
+                ]
+            })
+            .collect();
+        s.push_str(&table(
+            &[
+                "fit",
+                "n",
+                "p",
+                "dof",
+                "condition",
+                "chi2 p",
+                "variance",
+                "residual rms",
+            ],
+            &rows,
+        ));
+    }
+    if !doc.decisions.is_empty() || !doc.warnings.is_empty() {
+        s.push('\n');
+    }
+    for d in &doc.decisions {
+        s.push_str(&format!("note: {}\n", d.message));
+    }
+    for w in &doc.warnings {
+        s.push_str(&format!("warning [{}]: {}\n", w.code, w.message));
+    }
+    for t in &doc.tables {
+        s.push('\n');
+        s.push_str(&render_table(t));
+    }
+    s
+}
+
+/// Degrees of freedom for people: integers plainly, `inf` for a known
+/// variance.
+pub fn dof_text(dof: Option<f64>) -> String {
+    match dof {
+        None => "inf".into(),
+        Some(d) if d.fract() == 0.0 => format!("{d:.0}"),
+        Some(d) => sig(d, 3),
+    }
+}
+
+/// A number in a table: integers plainly, others with 6 significant digits.
+fn cell_number(x: f64) -> String {
+    if x.fract() == 0.0 && x.abs() < 1e15 {
+        format!("{x:.0}")
     } else {
-        Value::Null
+        sig(x, 6)
     }
 }
 
-/// `{"NAME": {"value", "u", "unit"}}` for every estimate, with units from
-/// `unit_of`.
-pub fn coefficients_json(e: &Estimates, unit_of: impl Fn(&str) -> String) -> Value {
-    let mut m = Map::new();
-    for (k, name) in e.names().iter().enumerate() {
-        m.insert(
-            name.clone(),
-            vu_unit(e.values()[k], e.u_at(k), &unit_of(name)),
-        );
-    }
-    Value::Object(m)
-}
-
-/// Unit string of an accelerometer coefficient name.
-pub fn term_unit(name: &str) -> String {
-    Term::parse(name).map_or_else(|_| String::new(), |t| t.unit().to_string())
-}
-
-/// Display scale and unit for an accelerometer term in readable output.
-pub fn display_scale(term: Term) -> (f64, &'static str) {
-    match term {
-        Term::K0 => (1e6, "ug"),
-        Term::K1 => (1.0, "output/g"),
-        Term::K3 => (1e6, "ug/g^3"),
-        Term::DeltaO | Term::DeltaP => (ARCSEC_PER_RAD, "arcsec"),
-        _ => (1e6, "ug/g^2"),
-    }
+/// One document table in engineering units. A column with a unit is
+/// converted by it (its header says the unit shown); in a table with a
+/// `unit` column, the unit-less number columns are in each row's unit and
+/// are converted row by row.
+pub fn render_table(t: &Table) -> String {
+    let unit_col = t.columns.iter().position(|c| c.name == "unit");
+    let header: Vec<String> = t
+        .columns
+        .iter()
+        .map(|c| match &c.unit {
+            Some(u) if !u.engineering().1.is_empty() && u.engineering().1 != "1" => {
+                format!("{} ({})", c.name, u.engineering().1)
+            }
+            _ => c.name.clone(),
+        })
+        .collect();
+    let rows: Vec<Vec<String>> = t
+        .rows
+        .iter()
+        .map(|row| {
+            let row_unit = unit_col.and_then(|k| match &row[k] {
+                Cell::Text(u) => Some(incal::units::Unit::parse(u)),
+                _ => None,
+            });
+            row.iter()
+                .enumerate()
+                .map(|(k, cell)| match cell {
+                    Cell::Null => "-".into(),
+                    Cell::Text(x) if Some(k) == unit_col => row_unit
+                        .as_ref()
+                        .map_or(x.clone(), |u| u.engineering().1.to_string()),
+                    Cell::Text(x) => x.clone(),
+                    Cell::Number(x) => {
+                        let scale = match (&t.columns[k].unit, &row_unit) {
+                            (Some(u), _) => u.engineering().0,
+                            (None, Some(u)) => u.engineering().0,
+                            (None, None) => 1.0,
+                        };
+                        cell_number(x * scale)
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let hdr: Vec<&str> = header.iter().map(String::as_str).collect();
+    format!("{}\n{}", t.title, table(&hdr, &rows))
 }
 
 /// A plain text table with right-aligned columns after the first.
@@ -101,10 +313,10 @@ pub fn sig(x: f64, digits: usize) -> String {
     }
 }
 
-/// Print JSON to stdout, pretty.
-pub fn print_json(v: &Value) {
-    match serde_json::to_string_pretty(v) {
-        Ok(s) => println!("{s}"),
-        Err(_) => println!("{v}"),
-    }
+/// Pretty JSON of any serializable value, with a final newline.
+pub fn json_text(v: &serde_json::Value) -> String {
+    format!(
+        "{}\n",
+        serde_json::to_string_pretty(v).unwrap_or_else(|_| v.to_string())
+    )
 }

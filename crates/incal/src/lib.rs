@@ -21,11 +21,14 @@
 
 #![warn(missing_docs)]
 
+pub mod document;
 pub mod error;
 pub mod estimation;
 pub mod units;
+pub mod warning;
 
 pub use error::{Alias, Error, Result};
+pub use warning::{Warning, WarningCode};
 pub mod models;
 pub mod procedures;
 pub mod rigs;

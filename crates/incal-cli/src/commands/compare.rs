@@ -1,152 +1,187 @@
 //! `incal compare A.json B.json`: coefficient-by-coefficient comparison of
-//! two results (seed 000 compares methods in ‰; seed 001 Table 5 uses the
-//! normalized error).
+//! two result documents of the same procedure (seed 000 compares methods
+//! in ‰; seed 001 Table 5 uses the normalized error).
 //!
-//! For every coefficient present in both files:
-//! `d = x_A − x_B`, relative difference `d / |x_B|` (‰) and
-//! `En = d / sqrt(U_A² + U_B²)` with expanded uncertainties `U = 2u`
-//! (ISO/IEC 17043 B.3.1.3); `|En| ≤ 1` is satisfactory.
+//! For every coefficient present in both:
+//! `d = x_A − x_B`, relative difference `1000·d/|x_B|` (‰) and the
+//! normalized error `En = d / sqrt(U_A² + U_B²)` with each side's own
+//! expanded uncertainty `U95 = k95·u` (ISO/IEC 17043 B.3.1.3 with the
+//! coverage factor of each result's degrees of freedom); `|En| ≤ 1` is
+//! satisfactory. Computed in scaled form (every term divided by the
+//! largest magnitude involved), so values near the limits of `f64` neither
+//! overflow nor lose the answer.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
+use incal::document::Coefficient;
 use serde_json::{json, Map, Value};
 
+use crate::documents::read_document;
 use crate::error::{CliError, CliResult};
-use crate::output::{num, print_json, sig, table};
+use crate::output::{json_text, sig, table, write_text};
 
 /// Options of `incal compare`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// First result (JSON written by an incal command with --json).
+    /// First result (JSON written by an incal command with --json); - reads standard input.
     pub a: PathBuf,
     /// Second result (the reference for the relative difference).
     pub b: PathBuf,
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// Write to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
 }
 
-/// A coefficient read from a result file.
-#[derive(Debug, Clone, PartialEq)]
-struct Coef {
-    value: f64,
-    u: f64,
-    unit: String,
+/// One comparison: difference, per mille of |b| and En, in scaled form.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Comparison {
+    /// `a − b` (infinite only when it truly overflows).
+    pub difference: f64,
+    /// `1000·(a − b)/|b|` (`None` when b = 0).
+    pub relative_per_mille: Option<f64>,
+    /// `(a − b)/sqrt(U_a² + U_b²)` (`None` when both U are 0).
+    pub en: Option<f64>,
 }
 
-/// Every `{"value", "u"}` object under the top-level maps `coefficients`
-/// and `angles` (and their names), in file order.
-fn read_coefficients(path: &Path) -> CliResult<Vec<(String, Coef)>> {
-    let name = path.display().to_string();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?;
-    if text.trim().is_empty() {
-        return Err(CliError::Input(format!("{name}: empty file")));
-    }
-    let doc: Value = serde_json::from_str(&text)
-        .map_err(|e| CliError::Input(format!("{name}:{}: not valid JSON: {e}", e.line())))?;
-    let mut out = Vec::new();
-    for section in ["coefficients", "angles"] {
-        let Some(map) = doc.get(section).and_then(Value::as_object) else {
-            continue;
+/// Compare `a` with the reference `b` (module docs).
+pub fn compare(a: &Coefficient, b: &Coefficient) -> Comparison {
+    // Scale by the largest magnitude so no intermediate overflows: with
+    // s = max(|a|, |b|, U_a, U_b), every quotient below is formed from
+    // numbers in [−1, 1] (differences in [−2, 2]).
+    let s = [a.value.abs(), b.value.abs(), a.u95, b.u95]
+        .into_iter()
+        .fold(0.0, f64::max);
+    if s == 0.0 {
+        return Comparison {
+            difference: 0.0,
+            relative_per_mille: None,
+            en: None,
         };
-        for (k, v) in map {
-            let value = v.get("value").and_then(Value::as_f64);
-            let u = v.get("u").and_then(Value::as_f64);
-            match (value, u) {
-                (Some(value), Some(u)) if value.is_finite() && u.is_finite() && u >= 0.0 => {
-                    let unit = v
-                        .get("unit")
-                        .and_then(Value::as_str)
-                        .unwrap_or("")
-                        .to_string();
-                    out.push((k.clone(), Coef { value, u, unit }));
-                }
-                _ => {
-                    return Err(CliError::Input(format!(
-                        "{name}: {section}.{k} has no numeric \"value\" and non-negative \"u\""
-                    )))
-                }
-            }
-        }
     }
-    if out.is_empty() {
-        return Err(CliError::Input(format!(
-            "{name}: no \"coefficients\" or \"angles\" object with value/u entries"
-        )));
+    let (xa, xb, ua, ub) = (a.value / s, b.value / s, a.u95 / s, b.u95 / s);
+    let d = xa - xb;
+    let big_u = ua.hypot(ub);
+    Comparison {
+        difference: d * s,
+        relative_per_mille: (xb != 0.0).then(|| 1e3 * d / xb.abs()),
+        en: (big_u > 0.0).then(|| d / big_u),
     }
-    Ok(out)
 }
 
 /// `incal compare`.
 pub fn run(a: &Args) -> CliResult<()> {
-    let ca = read_coefficients(&a.a)?;
-    let cb = read_coefficients(&a.b)?;
+    let (na, _, da) = read_document(&a.a)?;
+    let (nb, _, db) = read_document(&a.b)?;
+    if da.procedure != db.procedure {
+        return Err(CliError::Input(format!(
+            "{na} is a {} result and {nb} a {} result: compare needs two results of the same procedure",
+            da.procedure, db.procedure
+        )));
+    }
     let mut rows = Vec::new();
     let mut m = Map::new();
-    for (name, x) in &ca {
-        let Some((_, y)) = cb.iter().find(|(n, _)| n == name) else {
+    for (name, x) in da.coefficients.iter() {
+        let Some(y) = db.coefficients.get(name) else {
             continue;
         };
-        if !x.unit.is_empty() && !y.unit.is_empty() && x.unit != y.unit {
+        if x.unit != y.unit {
             return Err(CliError::Input(format!(
-                "{name}: unit '{}' in {} but '{}' in {}",
-                x.unit,
-                a.a.display(),
-                y.unit,
-                a.b.display()
+                "{name}: unit '{}' in {na} but '{}' in {nb}",
+                x.unit, y.unit
             )));
         }
-        let d = x.value - y.value;
-        let rel = if y.value != 0.0 {
-            1e3 * d / y.value.abs()
-        } else {
-            f64::NAN
-        };
-        let big_u = 2.0 * (x.u * x.u + y.u * y.u).sqrt();
-        let en = if big_u > 0.0 { d / big_u } else { f64::NAN };
+        let c = compare(x, y);
+        if !c.difference.is_finite() {
+            return Err(CliError::Input(format!(
+                "{name}: the difference {} - ({}) overflows a double",
+                x.value, y.value
+            )));
+        }
         m.insert(
-            name.clone(),
+            name.to_string(),
             json!({
-                "a": x.value, "u_a": x.u, "b": y.value, "u_b": y.u,
-                "difference": d, "relative_per_mille": num(rel), "En": num(en),
-                "unit": if x.unit.is_empty() { &y.unit } else { &x.unit },
+                "a": x.value, "u_a": x.u, "U95_a": x.u95,
+                "b": y.value, "u_b": y.u, "U95_b": y.u95,
+                "difference": c.difference,
+                "relative_per_mille": c.relative_per_mille,
+                "En": c.en,
+                "unit": x.unit.as_str(),
             }),
         );
+        let (scale, label) = x.unit.engineering();
         rows.push(vec![
-            name.clone(),
-            sig(x.value, 7),
-            sig(y.value, 7),
-            sig(d, 3),
-            sig(rel, 3),
-            sig(en, 3),
-            if en.abs() <= 1.0 { "ok" } else { "DIFFERS" }.to_string(),
+            name.to_string(),
+            sig(x.value * scale, 7),
+            sig(y.value * scale, 7),
+            sig(c.difference * scale, 3),
+            c.relative_per_mille.map_or("-".into(), |r| sig(r, 3)),
+            c.en.map_or("-".into(), |e| sig(e, 3)),
+            match c.en {
+                Some(e) if e.abs() <= 1.0 => "ok",
+                Some(_) => "DIFFERS",
+                None => "-",
+            }
+            .to_string(),
+            label.to_string(),
         ]);
     }
     if m.is_empty() {
         return Err(CliError::Input(format!(
-            "{} and {} have no coefficient in common",
-            a.a.display(),
-            a.b.display()
+            "{na} and {nb} have no coefficient in common"
         )));
     }
-    if a.json {
-        print_json(&json!({
-            "a": a.a.display().to_string(),
-            "b": a.b.display().to_string(),
-            "convention": "difference = a - b; relative_per_mille = 1000*difference/|b|; En = difference/sqrt(U_a^2 + U_b^2), U = 2u",
+    let text = if a.json {
+        json_text(&json!({
+            "procedure": da.procedure.as_str(),
+            "a": na,
+            "b": nb,
+            "convention": "difference = a - b; relative_per_mille = 1000*difference/|b|; En = difference/sqrt(U95_a^2 + U95_b^2), U95 = k95*u of each result",
             "comparisons": Value::Object(m),
-        }));
+        }))
     } else {
-        println!("a = {}, b = {}", a.a.display(), a.b.display());
-        print!(
-            "{}",
-            table(
-                &["name", "a", "b", "a - b", "per mille", "En", "|En|<=1"],
-                &rows
-            )
-        );
-        println!("En = (a - b) / sqrt(U_a^2 + U_b^2), U = 2u; per mille relative to b");
+        let mut s = format!("{} results: a = {na}, b = {nb}\n", da.procedure);
+        s.push_str(&table(
+            &["name", "a", "b", "a - b", "per mille", "En", "|En|<=1", "unit"],
+            &rows,
+        ));
+        s.push_str("En = (a - b) / sqrt(U95_a^2 + U95_b^2), U95 = k95 u of each result; per mille relative to b\n");
+        s
+    };
+    write_text(a.output.as_deref(), &text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use incal::units::Unit;
+
+    fn c(v: f64, u: f64) -> Coefficient {
+        Coefficient::new("x", v, u, Unit::G, f64::INFINITY).unwrap()
     }
-    Ok(())
+
+    #[test]
+    fn en_uses_each_sides_u95() {
+        let a = Coefficient::new("x", 1.0, 0.1, Unit::G, 4.0).unwrap();
+        let b = c(0.5, 0.1);
+        let r = compare(&a, &b);
+        let expect = 0.5 / (a.u95.powi(2) + b.u95.powi(2)).sqrt();
+        assert!((r.en.unwrap() - expect).abs() < 1e-12);
+        assert!((r.relative_per_mille.unwrap() - 1000.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn extreme_values_do_not_overflow() {
+        let r = compare(&c(1e200, 1e199), &c(-1e200, 1e199));
+        assert!((r.en.unwrap() - 2e200 / (2f64.sqrt() * 1.959964e199)).abs() < 1e-3);
+        assert_eq!(r.difference, 2e200);
+        let r = compare(&c(1.7e308, 1e300), &c(-1.7e308, 1e300));
+        assert!(r.en.unwrap() > 1e6, "{r:?}");
+        assert!(r.difference.is_infinite());
+        let r = compare(&c(1e-300, 1e-310), &c(0.0, 1e-310));
+        assert!(r.en.unwrap() > 1.0 && r.en.unwrap().is_finite());
+        assert_eq!(r.relative_per_mille, None);
+    }
 }

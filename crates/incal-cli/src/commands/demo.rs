@@ -1,17 +1,15 @@
 //! `incal demo`: virtual instruments through every rig, calibrated, with
-//! estimate, truth and uncertainty side by side. Needs no input and no
-//! network; the same seed prints the same numbers.
+//! estimate, observable truth, U95 and degrees of freedom side by side.
+//! The scenarios are data of the core ([`incal::sim::demo`]); this file
+//! only renders them. Needs no input and no network; the same seed prints
+//! the same numbers.
 
-use incal::estimation::Estimates;
-use incal::models::{AccelerometerModel, Term};
-use incal::procedures::tumble::plan::TumblePlan;
-use incal::procedures::tumble::{calibrate, TumbleOptions};
-use incal::rigs::Mount;
-use incal::sim::tumble::{simulate, TumbleSim};
-use incal::units::arcsec_to_rad;
+use std::path::PathBuf;
+
+use incal::sim::demo::{sections, DemoCase};
 
 use crate::error::{core, CliResult};
-use crate::output::{display_scale, sig, table};
+use crate::output::{dof_text, render_table, sig, table, write_text};
 
 /// Options of `incal demo`.
 #[derive(clap::Args, Debug)]
@@ -19,98 +17,98 @@ pub struct Args {
     /// Random seed of every simulation.
     #[arg(long, default_value_t = 2015)]
     pub seed: u64,
+    /// Write the demo to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
 }
 
-/// Rows `term, estimate, truth, u, (est − truth)/u` for accelerometer terms.
-pub fn truth_rows(e: &Estimates, truth: impl Fn(&str) -> f64) -> Vec<Vec<String>> {
-    e.names()
+/// The estimate-versus-truth table of one case, in engineering units:
+/// `(est − truth)/U95` lies within ±1 for 95 % of honest estimates.
+fn truth_table(c: &DemoCase) -> String {
+    let shown: Vec<(&str, &incal::document::Coefficient)> = c
+        .document
+        .coefficients
         .iter()
-        .enumerate()
-        .map(|(k, name)| {
-            let term = Term::parse(name).ok();
-            let (scale, unit) = term.map_or((1.0, ""), display_scale);
-            let (v, u, t) = (e.values()[k], e.u_at(k), truth(name));
+        .filter(|(name, _)| c.truth.contains_key(*name))
+        .collect();
+    let rows: Vec<Vec<String>> = shown
+        .iter()
+        .map(|&(name, k)| {
+            let (scale, label) = k.unit.engineering();
+            let truth = c.truth.get(name).copied();
             vec![
-                name.clone(),
-                sig(v * scale, 7),
-                sig(t * scale, 7),
-                sig(u * scale, 3),
-                sig((v - t) / u, 2),
-                unit.to_string(),
+                name.to_string(),
+                sig(k.value * scale, 7),
+                truth.map_or("-".into(), |t| sig(t * scale, 7)),
+                sig(k.u95 * scale, 3),
+                dof_text(k.dof),
+                truth.map_or("-".into(), |t| {
+                    if k.u95 > 0.0 {
+                        sig((k.value - t) / k.u95, 2)
+                    } else {
+                        "-".into()
+                    }
+                }),
+                label.to_string(),
             ]
         })
-        .collect()
-}
-
-/// Header of [`truth_rows`] tables.
-pub const TRUTH_HEADER: [&str; 6] = ["term", "estimate", "truth", "u", "(est-truth)/u", "unit"];
-
-fn tumble_section(seed: u64) -> CliResult<()> {
-    let truth = AccelerometerModel {
-        delta_p_rad: arcsec_to_rad(-300.0),
-        k_io: 5e-7,
-        ..AccelerometerModel::seed000()
-    };
-    println!("== Tumble test on a dividing head (seed 000, GJB 1037A) ==");
-    println!("Virtual accelerometer: the seed 000 instrument (K1 = 10 output/g, K0 = 8 mg, ...),");
-    println!("10 samples per position, output noise 1e-6, index-angle error 1 arcsec rms.\n");
-    let cases = [
-        (
-            "pendulum mount, GJB 12-point",
-            Mount::Pendulum,
-            TumblePlan::gjb12(),
-        ),
-        ("gate mount, GJB 12-point", Mount::Gate, TumblePlan::gjb12()),
-        (
-            "pendulum mount, small-angle plan for a 0.5 g instrument",
-            Mount::Pendulum,
-            TumblePlan::for_range(0.5, 1.0).map_err(core)?,
-        ),
-    ];
-    for (k, (title, mount, plan)) in cases.into_iter().enumerate() {
-        let obs = simulate(&TumbleSim {
-            truth,
-            mount,
-            angles_deg: plan.angles_deg.clone(),
-            samples: 10,
-            noise: 1e-6,
-            index_error_rad: arcsec_to_rad(1.0),
-            passes: 1,
-            seed: seed.wrapping_add(k as u64),
-        });
-        let r = calibrate(&obs, &TumbleOptions::new(mount)).map_err(core)?;
-        println!(
-            "-- {title}: step {} deg, angles {:?}",
-            plan.step_deg, plan.angles_deg
-        );
-        print!(
-            "{}",
-            table(
-                &TRUTH_HEADER,
-                &truth_rows(&r.coefficients, |n| Term::parse(n)
-                    .map_or(f64::NAN, |t| truth.get(t)))
-            )
-        );
-        for a in &r.absorbed {
-            println!("note: {a}");
-        }
-        for w in &r.warnings {
-            println!("warning: {w}");
-        }
-        println!();
+        .collect();
+    let mut s = table(
+        &[
+            "name",
+            "estimate",
+            "truth",
+            "U95",
+            "dof",
+            "(est-truth)/U95",
+            "unit",
+        ],
+        &rows,
+    );
+    let more = c.document.coefficients.len() - shown.len();
+    if more > 0 {
+        s.push_str(&format!(
+            "({more} further coefficients without a simple truth are in the result document)\n"
+        ));
     }
-    Ok(())
+    s
 }
 
 /// `incal demo`.
 pub fn run(a: &Args) -> CliResult<()> {
-    println!(
-        "incal demo (seed {}): simulate, calibrate, compare with the truth\n",
+    let mut s = format!(
+        "incal demo (seed {}): simulate, calibrate, compare with the truth\n\
+         U95 = k95 u with k95 from the degrees of freedom: |(est-truth)/U95| <= 1 for 95 % of estimates.\n\n",
         a.seed
     );
-    tumble_section(a.seed)?;
-    crate::commands::gfimu::demo_section(a.seed)?;
-    crate::commands::misalign::demo_section(a.seed)?;
-    crate::commands::centrifuge::demo_section(a.seed)?;
-    Ok(())
+    for sec in sections(a.seed).map_err(core)? {
+        s.push_str(&format!("== {} ==\n{}\n\n", sec.title, sec.description));
+        for c in &sec.cases {
+            s.push_str(&format!("-- {}\n", c.heading));
+            s.push_str(&truth_table(c));
+            for d in &c.document.decisions {
+                if d.code == incal::document::DecisionCode::Absorbed {
+                    s.push_str(&format!("note: {}\n", d.message));
+                }
+            }
+            for w in &c.document.warnings {
+                s.push_str(&format!("warning [{}]: {}\n", w.code, w.message));
+            }
+            for t in c
+                .document
+                .tables
+                .iter()
+                .filter(|t| t.id == "budget.K_ip")
+                .chain(&c.tables)
+            {
+                s.push('\n');
+                s.push_str(&render_table(t));
+            }
+            for n in &c.notes {
+                s.push_str(&format!("{n}\n"));
+            }
+            s.push('\n');
+        }
+    }
+    write_text(a.output.as_deref(), &s)
 }

@@ -4,24 +4,23 @@
 use std::path::{Path, PathBuf};
 
 use clap::ValueEnum;
-use incal::estimation::{Estimates, Noise};
+use incal::document::InputFile;
 use incal::models::gfimu::{ArrayAccelerometer, Geometry};
 use incal::procedures::gfimu::{
-    calibrate, solve, CalibrateOptions, CalibratedAccelerometer, GfimuCalibration, MotionSolution,
+    calibrate, solve, CalibrateOptions, CalibratedAccelerometer, MotionSolution,
     SolveOptions, StaticSample,
 };
 use incal::sim::gfimu::{
-    motion_truth, simulate_motion, simulate_static, six_positions, GfimuTruth, MotionProfile,
+    simulate_motion, simulate_static, six_positions, GfimuTruth, MotionProfile,
 };
-use incal::units::{rad_to_arcsec, STANDARD_GRAVITY_M_S2};
+use incal::units::STANDARD_GRAVITY_M_S2;
 use nalgebra::Vector3;
-use serde_json::{json, Map, Value};
+use serde_json::{json, Value};
 
-use crate::commands::demo::TRUTH_HEADER;
-use crate::commands::tumble::write_output;
 use crate::error::{core, in_file, usage, CliError, CliResult};
 use crate::input::Table;
-use crate::output::{num, print_json, sig, table, vu_unit};
+use crate::options::noise_option;
+use crate::output::{input_file, json_text, sha256_hex, write_text, ResultArgs};
 
 /// Geometry choice shared by every gfimu command.
 #[derive(clap::Args, Debug, Clone)]
@@ -55,11 +54,18 @@ impl GeometryArgs {
     /// The geometry and a label for messages; refuses a geometry that
     /// cannot solve for f0 and ω̇ (naming the file).
     pub fn load(&self) -> CliResult<(Geometry, String)> {
-        let (g, label) = match &self.geometry {
+        self.load_with_input().map(|(g, l, _)| (g, l))
+    }
+
+    /// As [`GeometryArgs::load`], with the geometry file's input record
+    /// (`None` for the built-in layout).
+    pub fn load_with_input(&self) -> CliResult<(Geometry, String, Option<InputFile>)> {
+        let (g, label, input) = match &self.geometry {
             Some(p) => {
                 let name = p.display().to_string();
                 let text = std::fs::read_to_string(p)
                     .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?;
+                let input = input_file("geometry", &name, sha256_hex(text.as_bytes()), None);
                 if text.trim().is_empty() {
                     return Err(CliError::Input(format!(
                         "{name}: empty file (expected [[accelerometer]] tables)"
@@ -84,19 +90,24 @@ impl GeometryArgs {
                         direction: Vector3::from(a.direction),
                     })
                     .collect();
-                (Geometry::new(accs).map_err(|e| in_file(&name, e))?, name)
+                (
+                    Geometry::new(accs).map_err(|e| in_file(&name, e))?,
+                    name,
+                    Some(input),
+                )
             }
             None => {
                 let l = self.lever_arm_m.unwrap_or(DEFAULT_LEVER_ARM_M);
                 (
                     Geometry::paper(l).map_err(|e| usage(format!("--lever-arm-m: {e}")))?,
                     format!("paper layout, lever arm {l} m"),
+                    None,
                 )
             }
         };
         g.require_solvable()
             .map_err(|e| usage(format!("{label}: geometry cannot solve the motion: {e}")))?;
-        Ok((g, label))
+        Ok((g, label, input))
     }
 }
 
@@ -111,9 +122,8 @@ pub struct CalibrateArgs {
     /// Known standard deviation of one output sample (output units); default: from the data.
     #[arg(long)]
     pub noise: Option<f64>,
-    /// Print one JSON object instead of the readable report.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub result: ResultArgs,
 }
 
 /// Options of `incal gfimu solve`.
@@ -141,6 +151,9 @@ pub struct SolveArgs {
     /// Print one JSON object instead of CSV.
     #[arg(long)]
     pub json: bool,
+    /// Write to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
 }
 
 /// What `incal simulate gfimu` writes.
@@ -242,7 +255,7 @@ fn parse_position(s: &str) -> Option<Vector3<f64>> {
     Some(f)
 }
 
-fn read_static(path: &Path, g: &Geometry) -> CliResult<(String, Vec<StaticSample>)> {
+fn read_static(path: &Path, g: &Geometry) -> CliResult<(Table, Vec<StaticSample>)> {
     let t = Table::read(path)?;
     let pos_col = t.opt_column("position");
     let force_cols = match pos_col {
@@ -288,7 +301,7 @@ fn read_static(path: &Path, g: &Geometry) -> CliResult<(String, Vec<StaticSample
             outputs,
         });
     }
-    Ok((t.path.clone(), out))
+    Ok((t, out))
 }
 
 /// Never reached (a position or force column was found above); an error
@@ -299,150 +312,18 @@ fn unreachable_columns() -> CliResult<Vector3<f64>> {
 
 /// `incal gfimu calibrate`.
 pub fn run_calibrate(a: &CalibrateArgs) -> CliResult<()> {
-    let noise = match a.noise {
-        None => Noise::Auto,
-        Some(s) if s.is_finite() && s > 0.0 => Noise::Known { sigma: s },
-        Some(s) => return Err(usage(format!("--noise must be a positive number, got {s}"))),
-    };
-    let (g, label) = a.geometry.load()?;
-    let (file, samples) = read_static(&a.input, &g)?;
-    let cal =
-        calibrate(&g, &samples, &CalibrateOptions { noise }).map_err(|e| in_file(&file, e))?;
-    if a.json {
-        print_json(&calibration_json(&file, &label, &cal));
-    } else {
-        print!("{}", calibration_report(&file, &label, &cal));
-    }
-    Ok(())
-}
-
-fn vec_json(v: &Vector3<f64>) -> Value {
-    json!([v.x, v.y, v.z])
-}
-
-fn derived_unit(name: &str) -> &'static str {
-    if name.ends_with("_rad") {
-        "rad"
-    } else {
-        "output/g"
-    }
-}
-
-/// The JSON document of a gfimu calibration (contract:
-/// `accelerometers.NAME.K0.{value,u}`, `accelerometers.NAME.Ks.{value,u}`).
-pub fn calibration_json(file: &str, geometry: &str, c: &GfimuCalibration) -> Value {
-    let mut accs = Map::new();
-    for a in &c.accelerometers {
-        let l = &a.linear;
-        let mut m = Map::new();
-        m.insert("K0".into(), vu_unit(l.values()[0], l.u_at(0), "output"));
-        m.insert(
-            "Ks".into(),
-            json!({
-                "value": [l.values()[1], l.values()[2], l.values()[3]],
-                "u": [l.u_at(1), l.u_at(2), l.u_at(3)],
-                "unit": "output/g",
-            }),
-        );
-        m.insert("nominal_direction".into(), vec_json(&a.nominal_direction));
-        for (k, n) in a.derived.names().iter().enumerate() {
-            m.insert(
-                n.clone(),
-                vu_unit(a.derived.values()[k], a.derived.u_at(k), derived_unit(n)),
-            );
-        }
-        m.insert(
-            "noise_output".into(),
-            a.noise_output.map_or(Value::Null, num),
-        );
-        m.insert(
-            "k0_consistency".into(),
-            a.k0_consistency.map_or(Value::Null, |k| {
-                json!({
-                    "K0_x_pair": k.values[0], "K0_y_pair": k.values[1], "K0_z_pair": k.values[2],
-                    "u": k.u,
-                    "max_normalized_difference": num(k.max_normalized_difference),
-                    "unit": "output",
-                })
-            }),
-        );
-        let f = &a.fit;
-        m.insert(
-            "fit".into(),
-            json!({
-                "dof": f.dof,
-                "coefficient_dof": num(l.dof()),
-                "k95": l.coverage_factor(0.95),
-                "rank": f.diagnostics.rank,
-                "condition_number": num(f.diagnostics.condition),
-                "chi2_p_value": f.chi2_p_value.map(num),
-                "variance_source": f.variance_source,
-            }),
-        );
-        accs.insert(a.name.clone(), Value::Object(m));
-    }
-    json!({
-        "procedure": "gfimu-calibrate",
-        "input": file,
-        "geometry": geometry,
-        "note": "u is the standard uncertainty; U95 = k95 * u (per accelerometer under fit)",
-        "positions": c.positions.iter().map(|(f, n)| json!({"f_g": vec_json(f), "n": n})).collect::<Vec<_>>(),
-        "accelerometers": Value::Object(accs),
-        "warnings": c.warnings,
-    })
-}
-
-/// The readable report of a gfimu calibration.
-pub fn calibration_report(file: &str, geometry: &str, c: &GfimuCalibration) -> String {
-    let mut s = format!(
-        "Gyro-free unit calibration, {file} ({} positions; geometry: {geometry})\n\n",
-        c.positions.len()
-    );
-    let rows: Vec<Vec<String>> = c
-        .accelerometers
-        .iter()
-        .map(|a| {
-            let l = &a.linear;
-            let d = &a.derived;
-            let g = |n: &str| d.get(n).unwrap_or((f64::NAN, f64::NAN));
-            vec![
-                a.name.clone(),
-                format!("{} ± {}", sig(l.values()[0], 6), sig(l.u_at(0), 2)),
-                format!(
-                    "[{}, {}, {}]",
-                    sig(l.values()[1], 7),
-                    sig(l.values()[2], 7),
-                    sig(l.values()[3], 7)
-                ),
-                sig(l.u_at(1).max(l.u_at(2)).max(l.u_at(3)), 2),
-                sig(g("scale_factor").0, 7),
-                format!(
-                    "{} ± {}",
-                    sig(rad_to_arcsec(g("misalignment_rad").0), 4),
-                    sig(rad_to_arcsec(g("misalignment_rad").1), 2)
-                ),
-                a.k0_consistency
-                    .map_or("-".into(), |k| sig(k.max_normalized_difference, 2)),
-            ]
-        })
-        .collect();
-    s.push_str(&table(
-        &[
-            "acc",
-            "K0 (output)",
-            "Ks (output/g)",
-            "max u(Ks)",
-            "|Ks|",
-            "angle to nominal (arcsec)",
-            "K0 check (u)",
-        ],
-        &rows,
-    ));
-    s.push_str("\nu: standard uncertainty; K0 check: largest difference of the three six-position K0 estimates in units of its u\n");
-    for w in &c.warnings {
-        s.push_str(&format!("warning: {w}\n"));
-    }
-    s
+    let noise = noise_option(a.noise)?;
+    let (g, label, geometry_input) = a.geometry.load_with_input()?;
+    let (table, samples) = read_static(&a.input, &g)?;
+    let cal = calibrate(&g, &samples, &CalibrateOptions { noise })
+        .map_err(|e| in_file(&table.path, e))?;
+    let mut doc = cal
+        .document(&label, a.noise.is_some())
+        .map_err(|e| in_file(&table.path, e))?;
+    doc.inputs.push(table.input_file("input"));
+    doc.inputs.extend(geometry_input);
+    doc.options.insert("noise".into(), json!(a.noise));
+    a.result.emit(doc)
 }
 
 fn read_calibration(
@@ -552,11 +433,14 @@ pub fn run_solve(a: &SolveArgs) -> CliResult<()> {
         e => in_file(&file, e),
     })?;
     if a.json {
-        print_json(&solution_json(&file, &sol));
-        Ok(())
+        write_text(a.output.as_deref(), &json_text(&solution_json(&file, &sol)))
     } else {
-        write_output(None, &solution_csv(&sol))
+        write_text(a.output.as_deref(), &solution_csv(&sol))
     }
+}
+
+fn vec_json(v: &Vector3<f64>) -> Value {
+    json!([v.x, v.y, v.z])
 }
 
 /// The JSON document of a motion solution (contract: `samples[].{time_s,
@@ -597,7 +481,7 @@ pub fn solution_json(file: &str, s: &MotionSolution) -> Value {
         "uncertainty": u,
         "geometry": {
             "rank": s.diagnostics.rank,
-            "condition_number": num(s.diagnostics.condition),
+            "condition_number": s.diagnostics.condition.is_finite().then_some(s.diagnostics.condition),
         },
         "warnings": s.warnings,
     })
@@ -702,104 +586,5 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
             }
         }
     }
-    write_output(a.output.as_ref(), &text)
-}
-
-/// Rows `term, estimate, truth, u, (est − truth)/u, unit` in [`TRUTH_HEADER`]
-/// layout. Not [`truth_rows`]: K0 here is in output units, not the g of an
-/// accelerometer-model K0, so no µg scaling applies.
-fn vector_rows(e: &Estimates, truth: &[f64]) -> Vec<Vec<String>> {
-    e.names()
-        .iter()
-        .enumerate()
-        .map(|(k, name)| {
-            let (v, u) = (e.values()[k], e.u_at(k));
-            let t = truth.get(k).copied().unwrap_or(f64::NAN);
-            vec![
-                name.clone(),
-                sig(v, 7),
-                sig(t, 7),
-                sig(u, 3),
-                sig((v - t) / u, 2),
-                if k == 0 { "output" } else { "output/g" }.to_string(),
-            ]
-        })
-        .collect()
-}
-
-/// The gyro-free section of `incal demo`: calibrate a simulated unit by the
-/// six-position test, then recover a simulated rate-table motion and show
-/// the drift of ω integrated from ω̇.
-pub fn demo_section(seed: u64) -> CliResult<()> {
-    println!("== Gyro-free inertial unit: six accelerometers (seed 004, methods.md 4) ==");
-    println!("Paper layout, lever arm 0.1 m, K1 = 1 output/g, mrad misalignments;");
-    println!("six-position test with 20 samples per position, output noise 1e-4.\n");
-    let g = Geometry::paper(0.1).map_err(core)?;
-    let truth = GfimuTruth::typical(&g, 1.0);
-    let noise = 1e-4;
-    let data = simulate_static(&g, &truth, &six_positions(), 20, noise, seed).map_err(core)?;
-    let cal = calibrate(&g, &data, &CalibrateOptions::default()).map_err(core)?;
-    for (j, a) in cal.accelerometers.iter().enumerate() {
-        let t = [truth.k0[j], truth.ks[j].x, truth.ks[j].y, truth.ks[j].z];
-        println!("-- accelerometer {}", a.name);
-        print!("{}", table(&TRUTH_HEADER, &vector_rows(&a.linear, &t)));
-    }
-    for w in &cal.warnings {
-        println!("warning: {w}");
-    }
-    let m = MotionProfile {
-        axis: Vector3::new(0.2, -0.1, 1.0),
-        angular_accel_rad_s2: 2.0,
-        spin_up_s: 1.005,
-        omega0_rad_s: Vector3::zeros(),
-        f0_g: Vector3::new(0.05, 0.0, 1.0),
-        duration_s: 3.0,
-        rate_hz: 100.0,
-        gravity_m_s2: STANDARD_GRAVITY_M_S2,
-    };
-    let series = simulate_motion(&g, &truth, &m, noise, seed.wrapping_add(1)).map_err(core)?;
-    let calibrated = cal.calibrated();
-    let sol = solve(&g, &calibrated, &series, &SolveOptions::default()).map_err(core)?;
-    println!(
-        "\n-- motion: spin-up about {:?} at 2 rad/s^2 for 1.005 s, then constant rate; 100 Hz, 3 s",
-        [0.2, -0.1, 1.0]
-    );
-    let mut rows = Vec::new();
-    for s in sol.samples.iter().step_by(50) {
-        let (f0, wd, w) = motion_truth(&m, s.time_s);
-        let err = |a: &Vector3<f64>, b: &Vector3<f64>| (a - b).amax();
-        rows.push(vec![
-            sig(s.time_s, 3),
-            format!("{:.5}", s.f0_g.z),
-            format!("{:.5}", f0.z),
-            sig(err(&s.f0_g, &f0), 2),
-            format!("{:.4}", s.omega_dot_rad_s2.z),
-            format!("{:.4}", wd.z),
-            sig(s.u_omega_dot_rad_s2.map_or(f64::NAN, |u| u.z), 2),
-            format!("{:.5}", s.omega_rad_s.z),
-            format!("{:.5}", w.z),
-            sig(err(&s.omega_rad_s, &w), 2),
-        ]);
-    }
-    print!(
-        "{}",
-        table(
-            &[
-                "t_s",
-                "f0_z est",
-                "truth",
-                "max|f0 err| g",
-                "wdot_z est",
-                "truth",
-                "u",
-                "omega_z est",
-                "truth",
-                "max|omega drift|",
-            ],
-            &rows
-        )
-    );
-    println!("omega is integrated from the solved angular acceleration (no gyro to reset it): the noise alone gives a random walk,");
-    println!("calibration errors bias omega_dot into a linear drift, and the centripetal term feeds omega errors back, so the drift grows faster than sqrt(t).\n");
-    Ok(())
+    write_text(a.output.as_deref(), &text)
 }

@@ -5,25 +5,25 @@
 use std::path::PathBuf;
 
 use clap::{Subcommand, ValueEnum};
-use incal::estimation::{Estimates, Fit, Noise, VarianceSource};
-use incal::procedures::misalign::accel::{self, AccelObservation, AccelOptions, AccelResult};
-use incal::procedures::misalign::averaging::{average_record, RawSample, Record, TurnPolicy};
+use incal::procedures::misalign::accel::{self, AccelObservation, AccelOptions};
+use incal::procedures::misalign::averaging::{
+    average_record, RawSample, Record, RecordMean, TurnPolicy,
+};
 use incal::procedures::misalign::gyro::{
-    self, GyroConfig, GyroObservation, GyroOptions, GyroResult,
+    self, GyroConfig, GyroObservation, GyroOptions,
 };
 use incal::procedures::misalign::plan::{predict_accel, predict_gyro, Prediction};
 use incal::rigs::rate_table::{FaceMounting, GyroMounting};
 use incal::sim::misalign::{
     simulate_accel, simulate_gyro, simulate_gyro_records, AccelSim, GyroSim,
 };
-use incal::units::{arcsec_to_rad, rad_to_arcsec, rad_to_deg, ARCSEC_PER_RAD};
+use incal::units::{arcsec_to_rad, rad_to_arcsec, rad_to_deg};
 use serde_json::{json, Map, Value};
 
-use crate::commands::demo::TRUTH_HEADER;
-use crate::commands::tumble::write_output;
 use crate::error::{core, in_file, usage, CliError, CliResult};
 use crate::input::Table;
-use crate::output::{num, print_json, sig, table, vu_unit};
+use crate::options::noise_option;
+use crate::output::{json_text, sig, table, write_text, ResultArgs};
 
 /// `incal misalign …`.
 #[derive(Subcommand, Debug)]
@@ -70,9 +70,8 @@ pub struct GyroArgs {
     /// Raw records: average whole revolutions only, or every sample.
     #[arg(long, value_enum, default_value = "whole")]
     pub turns: TurnsArg,
-    /// Print one JSON object instead of the readable report.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub result: ResultArgs,
 }
 
 /// Options of `incal misalign accel`.
@@ -87,17 +86,8 @@ pub struct AccelArgs {
     /// Known standard deviation of one row's output (output units); default: from the data.
     #[arg(long)]
     pub noise: Option<f64>,
-    /// Print one JSON object instead of the readable report.
-    #[arg(long)]
-    pub json: bool,
-}
-
-fn noise_of(n: Option<f64>) -> CliResult<Noise> {
-    match n {
-        None => Ok(Noise::Auto),
-        Some(s) if s.is_finite() && s > 0.0 => Ok(Noise::Known { sigma: s }),
-        Some(s) => Err(usage(format!("--noise must be a positive number, got {s}"))),
-    }
+    #[command(flatten)]
+    pub result: ResultArgs,
 }
 
 fn scale_of(k: f64) -> CliResult<f64> {
@@ -152,13 +142,10 @@ fn read_records(t: &Table) -> CliResult<Vec<(usize, Record)>> {
     Ok(out)
 }
 
-/// A raw record's reduction, for the report.
-struct RecordRow {
-    line: usize,
-    mean: incal::procedures::misalign::averaging::RecordMean,
-}
+/// Raw records' reductions with their first file line.
+type RecordRows = Vec<(usize, RecordMean)>;
 
-fn read_gyro(a: &GyroArgs) -> CliResult<(String, Vec<GyroObservation>, Vec<RecordRow>)> {
+fn read_gyro(a: &GyroArgs) -> CliResult<(Table, Vec<GyroObservation>, RecordRows)> {
     let t = Table::read(&a.input)?;
     let file = t.path.clone();
     if t.opt_column("table_angle_deg").is_some() || t.opt_column("time_s").is_some() {
@@ -170,10 +157,10 @@ fn read_gyro(a: &GyroArgs) -> CliResult<(String, Vec<GyroObservation>, Vec<Recor
         for (line, r) in read_records(&t)? {
             let mean = average_record(&r, policy)
                 .map_err(|e| CliError::Input(format!("{file}:{line}: {e}")))?;
-            rows.push(RecordRow { line, mean });
+            rows.push((line, mean));
         }
-        let obs = rows.iter().map(|r| r.mean.observation).collect();
-        return Ok((file, obs, rows));
+        let obs = rows.iter().map(|r| r.1.observation).collect();
+        return Ok((t, obs, rows));
     }
     let (ca, cb, cr, co) = (
         t.column("alpha_deg")?,
@@ -194,7 +181,7 @@ fn read_gyro(a: &GyroArgs) -> CliResult<(String, Vec<GyroObservation>, Vec<Recor
             output: t.f64(row, co)?,
         });
     }
-    Ok((file, obs, Vec::new()))
+    Ok((t, obs, Vec::new()))
 }
 
 /// `incal misalign gyro|accel`.
@@ -209,34 +196,29 @@ fn run_gyro(a: &GyroArgs) -> CliResult<()> {
     let opts = GyroOptions {
         scale_factor: scale_of(a.scale_factor)?,
         per_config_bias: a.per_config_bias,
-        noise: noise_of(a.noise)?,
+        noise: noise_option(a.noise)?,
     };
-    let (file, obs, records) = read_gyro(a)?;
-    let r = gyro::calibrate(&obs, &opts).map_err(|e| in_file(&file, e))?;
-    let record_warnings: Vec<String> = records
-        .iter()
-        .filter_map(|r| {
-            r.mean
-                .warning
-                .as_ref()
-                .map(|w| format!("line {}: {w}", r.line))
-        })
-        .collect();
-    if a.json {
-        print_json(&gyro_json(&file, &opts, &r, &records, &record_warnings));
-    } else {
-        print!(
-            "{}",
-            gyro_report(&file, &opts, &r, &records, &record_warnings)
-        );
+    let (table, obs, records) = read_gyro(a)?;
+    let r = gyro::calibrate(&obs, &opts).map_err(|e| in_file(&table.path, e))?;
+    let mut doc = r
+        .document(&opts, &records)
+        .map_err(|e| in_file(&table.path, e))?;
+    doc.inputs.push(table.input_file("input"));
+    doc.options.insert("noise".into(), json!(a.noise));
+    if !records.is_empty() {
+        let turns = match a.turns {
+            TurnsArg::Whole => "whole",
+            TurnsArg::All => "all",
+        };
+        doc.options.insert("turns".into(), json!(turns));
     }
-    Ok(())
+    a.result.emit(doc)
 }
 
 fn run_accel(a: &AccelArgs) -> CliResult<()> {
     let opts = AccelOptions {
         scale_factor: scale_of(a.scale_factor)?,
-        noise: noise_of(a.noise)?,
+        noise: noise_option(a.noise)?,
     };
     let t = Table::read(&a.input)?;
     let (cb, co) = (t.column("beta_deg")?, t.column("output")?);
@@ -248,304 +230,10 @@ fn run_accel(a: &AccelArgs) -> CliResult<()> {
         });
     }
     let r = accel::calibrate(&obs, &opts).map_err(|e| in_file(&t.path, e))?;
-    if a.json {
-        print_json(&accel_json(&t.path, &opts, &r));
-    } else {
-        print!("{}", accel_report(&t.path, &opts, &r));
-    }
-    Ok(())
-}
-
-/// `{"NAME": {"value","u","unit":"rad"}}`.
-fn angles_json(e: &Estimates) -> Value {
-    let mut m = Map::new();
-    for (k, n) in e.names().iter().enumerate() {
-        m.insert(n.clone(), vu_unit(e.values()[k], e.u_at(k), "rad"));
-    }
-    Value::Object(m)
-}
-
-fn fit_json(f: &Fit) -> Value {
-    json!({
-        "positions": f.diagnostics.n_obs,
-        "parameters": f.diagnostics.n_params,
-        "dof": f.dof,
-        "unit_weight_sigma": num(f.sigma),
-        "chi2": f.weighted_rss,
-        "chi2_p_value": f.chi2_p_value.map(num),
-        "variance_source": f.variance_source,
-        "rank": f.diagnostics.rank,
-        "condition_number": num(f.diagnostics.condition),
-        "weakest_combination": f.diagnostics.weakest.to_string(),
-    })
-}
-
-fn coverage_json(e: &Estimates) -> Value {
-    json!({
-        "dof": num(e.dof()),
-        "k95": e.coverage_factor(0.95),
-        "note": "u is the standard uncertainty; U95 = k95 * u"
-    })
-}
-
-fn gyro_json(
-    file: &str,
-    o: &GyroOptions,
-    r: &GyroResult,
-    records: &[RecordRow],
-    record_warnings: &[String],
-) -> Value {
-    let mut biases = Map::new();
-    for (k, n) in r.biases.names().iter().enumerate() {
-        biases.insert(
-            n.clone(),
-            vu_unit(r.biases.values()[k], r.biases.u_at(k), "output"),
-        );
-    }
-    let positions: Vec<Value> = r
-        .positions
-        .iter()
-        .map(|p| {
-            json!({
-                "alpha_deg": rad_to_deg(p.config.alpha_rad),
-                "beta_deg": rad_to_deg(p.config.beta_rad),
-                "rate": p.rate_deg_s,
-                "n": p.stats.n,
-                "mean_output": p.stats.mean,
-                "std_output": num(p.stats.std),
-                "residual": p.residual,
-                "standardized_residual": num(p.standardized_residual),
-            })
-        })
-        .collect();
-    let recs: Vec<Value> = records
-        .iter()
-        .map(|x| {
-            json!({
-                "line": x.line,
-                "alpha_deg": rad_to_deg(x.mean.observation.alpha_rad),
-                "beta_deg": rad_to_deg(x.mean.observation.beta_rad),
-                "rate": x.mean.observation.rate_deg_s,
-                "samples": x.mean.n_total,
-                "samples_used": x.mean.n_used,
-                "turns": x.mean.turns_total,
-                "turns_used": x.mean.turns_used,
-                "measured_rate": x.mean.measured_rate_deg_s,
-                "mean_output": x.mean.observation.output,
-            })
-        })
-        .collect();
-    let mut warnings: Vec<String> = record_warnings.to_vec();
-    warnings.extend(r.warnings.iter().cloned());
-    json!({
-        "procedure": "misalign-gyro",
-        "input": file,
-        "scale_factor": o.scale_factor,
-        "scale_factor_unit": "output/(deg/s)",
-        "per_config_bias": o.per_config_bias,
-        "angles": angles_json(&r.angles),
-        "azimuth": vu_unit(r.azimuth.values()[0], r.azimuth.u_at(0), "rad"),
-        "biases": Value::Object(biases),
-        "coverage": coverage_json(&r.angles),
-        "fit": fit_json(&r.fit),
-        "positions": positions,
-        "records": recs,
-        "warnings": warnings,
-    })
-}
-
-fn accel_json(file: &str, o: &AccelOptions, r: &AccelResult) -> Value {
-    let positions: Vec<Value> = r
-        .positions
-        .iter()
-        .map(|p| {
-            json!({
-                "beta_deg": rad_to_deg(p.beta_rad),
-                "n": p.stats.n,
-                "mean_output": p.stats.mean,
-                "std_output": num(p.stats.std),
-                "residual": p.residual,
-                "standardized_residual": num(p.standardized_residual),
-            })
-        })
-        .collect();
-    json!({
-        "procedure": "misalign-accel",
-        "input": file,
-        "scale_factor": o.scale_factor,
-        "scale_factor_unit": "output/g",
-        "angles": angles_json(&r.angles),
-        "azimuth": vu_unit(r.azimuth.values()[0], r.azimuth.u_at(0), "rad"),
-        "offset": vu_unit(r.offset.values()[0], r.offset.u_at(0), "output"),
-        "coverage": coverage_json(&r.angles),
-        "fit": fit_json(&r.fit),
-        "positions": positions,
-        "warnings": r.warnings,
-    })
-}
-
-/// Rows `name, value″, u″, U95″` of angle estimates, plus the azimuth in deg.
-fn angle_rows(angles: &Estimates, az: &Estimates) -> Vec<Vec<String>> {
-    let k95 = angles.coverage_factor(0.95);
-    let mut rows: Vec<Vec<String>> = angles
-        .names()
-        .iter()
-        .enumerate()
-        .map(|(k, n)| {
-            let (v, u) = (
-                rad_to_arcsec(angles.values()[k]),
-                rad_to_arcsec(angles.u_at(k)),
-            );
-            vec![
-                n.clone(),
-                format!("{v:.2}"),
-                format!("{u:.3}"),
-                format!("{:.3}", k95 * u),
-                "arcsec".into(),
-            ]
-        })
-        .collect();
-    let (v, u) = (rad_to_deg(az.values()[0]), rad_to_deg(az.u_at(0)));
-    rows.push(vec![
-        "azimuth".into(),
-        format!("{v:.2}"),
-        format!("{u:.3}"),
-        format!("{:.3}", k95 * u),
-        "deg".into(),
-    ]);
-    rows
-}
-
-fn fit_lines(f: &Fit, angles: &Estimates) -> String {
-    let mut s = format!(
-        "\nu: standard uncertainty; U95 = {:.3} u ({} degrees of freedom, variance from {})\n",
-        angles.coverage_factor(0.95),
-        sig(angles.dof(), 4),
-        match f.variance_source {
-            VarianceSource::Prior => "the sample scatter",
-            VarianceSource::Residuals => "the residuals",
-        }
-    );
-    s.push_str(&format!(
-        "fit: {} positions, {} terms, dof {}, condition number {}",
-        f.diagnostics.n_obs,
-        f.diagnostics.n_params,
-        f.dof,
-        sig(f.diagnostics.condition, 3)
-    ));
-    if let Some(p) = f.chi2_p_value {
-        s.push_str(&format!(", chi-square p {}", sig(p, 2)));
-    }
-    s.push('\n');
-    s
-}
-
-fn gyro_report(
-    file: &str,
-    o: &GyroOptions,
-    r: &GyroResult,
-    records: &[RecordRow],
-    record_warnings: &[String],
-) -> String {
-    let mut s = format!(
-        "Gyro misalignment on a rate table (seed 003), {file}, kI = {} output/(deg/s), {}\n\n",
-        o.scale_factor,
-        if o.per_config_bias {
-            "bias per configuration"
-        } else {
-            "common bias"
-        }
-    );
-    s.push_str(&table(
-        &["angle", "value", "u", "U95", "unit"],
-        &angle_rows(&r.angles, &r.azimuth),
-    ));
-    s.push_str(&fit_lines(&r.fit, &r.angles));
-    for k in 0..r.biases.len() {
-        s.push_str(&format!(
-            "{} = {} ± {} (output)\n",
-            r.biases.names()[k],
-            sig(r.biases.values()[k], 6),
-            sig(r.biases.u_at(k), 2)
-        ));
-    }
-    if !records.is_empty() {
-        let used = records
-            .iter()
-            .filter(|x| x.mean.n_used < x.mean.n_total)
-            .count();
-        s.push_str(&format!(
-            "{} raw records averaged ({} truncated to whole turns)\n",
-            records.len(),
-            used
-        ));
-    }
-    for w in record_warnings.iter().chain(&r.warnings) {
-        s.push_str(&format!("warning: {w}\n"));
-    }
-    s.push_str("\nPositions\n");
-    let rows: Vec<Vec<String>> = r
-        .positions
-        .iter()
-        .map(|p| {
-            vec![
-                format!("{}", rad_to_deg(p.config.alpha_rad)),
-                format!("{}", rad_to_deg(p.config.beta_rad)),
-                format!("{}", p.rate_deg_s),
-                p.stats.n.to_string(),
-                sig(p.stats.mean, 8),
-                sig(p.residual, 3),
-                sig(p.standardized_residual, 3),
-            ]
-        })
-        .collect();
-    s.push_str(&table(
-        &[
-            "alpha_deg",
-            "beta_deg",
-            "rate",
-            "n",
-            "mean",
-            "residual",
-            "std.res",
-        ],
-        &rows,
-    ));
-    s
-}
-
-fn accel_report(file: &str, o: &AccelOptions, r: &AccelResult) -> String {
-    let mut s = format!(
-        "Accelerometer misalignment on a vertical face (seed 003), {file}, kI = {} output/g\n\n",
-        o.scale_factor
-    );
-    s.push_str(&table(
-        &["angle", "value", "u", "U95", "unit"],
-        &angle_rows(&r.angles, &r.azimuth),
-    ));
-    s.push_str(&fit_lines(&r.fit, &r.angles));
-    for w in &r.warnings {
-        s.push_str(&format!("warning: {w}\n"));
-    }
-    s.push_str("\nPositions\n");
-    let rows: Vec<Vec<String>> = r
-        .positions
-        .iter()
-        .map(|p| {
-            vec![
-                format!("{}", rad_to_deg(p.beta_rad)),
-                p.stats.n.to_string(),
-                sig(p.stats.mean, 8),
-                sig(p.residual, 3),
-                sig(p.standardized_residual, 3),
-            ]
-        })
-        .collect();
-    s.push_str(&table(
-        &["beta_deg", "n", "mean", "residual", "std.res"],
-        &rows,
-    ));
-    s
+    let mut doc = r.document(&opts).map_err(|e| in_file(&t.path, e))?;
+    doc.inputs.push(t.input_file("input"));
+    doc.options.insert("noise".into(), json!(a.noise));
+    a.result.emit(doc)
 }
 
 /// Parse `A:B` (deg) configuration pairs.
@@ -622,6 +310,9 @@ pub struct PlanArgs {
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// Write to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
 }
 
 /// `incal plan misalign`.
@@ -659,16 +350,16 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
             "gamma".into(),
             json!({"u": p.u_gamma_max, "unit": "rad", "note": "worst direction"}),
         );
-        print_json(&json!({
+        let doc = json!({
             "instrument": match a.instrument { Instrument::Gyro => "gyro", Instrument::Accel => "accel" },
             "observations": p.n_obs,
             "parameters": p.n_params,
             "predicted_u": Value::Object(u),
-        }));
-        return Ok(());
+        });
+        return write_text(a.output.as_deref(), &json_text(&doc));
     }
-    println!(
-        "Misalignment plan ({}): {} readings, {} terms, noise {} per reading, kI = {k}",
+    let mut s = format!(
+        "Misalignment plan ({}): {} readings, {} terms, noise {} per reading, kI = {k}\n",
         match a.instrument {
             Instrument::Gyro => "gyro on a rate table",
             Instrument::Accel => "accelerometer on a vertical face",
@@ -695,8 +386,8 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
         format!("{:.3}", rad_to_arcsec(p.u_gamma_max)),
         "arcsec".into(),
     ]);
-    print!("{}", table(&["angle", "predicted u", "unit"], &rows));
-    Ok(())
+    s.push_str(&table(&["angle", "predicted u", "unit"], &rows));
+    write_text(a.output.as_deref(), &s)
 }
 
 /// Options of `incal simulate misalign gyro`.
@@ -862,7 +553,7 @@ pub fn simulate(c: &SimCommand) -> CliResult<()> {
                     ));
                 }
             }
-            write_output(a.output.as_ref(), &text)
+            write_text(a.output.as_deref(), &text)
         }
         SimCommand::Accel(a) => {
             let cfg = accel_sim_of(a)?;
@@ -870,7 +561,7 @@ pub fn simulate(c: &SimCommand) -> CliResult<()> {
             for o in simulate_accel(&cfg) {
                 text.push_str(&format!("{},{}\n", deg9(o.beta_rad), o.output));
             }
-            write_output(a.output.as_ref(), &text)
+            write_text(a.output.as_deref(), &text)
         }
     }
 }
@@ -946,145 +637,4 @@ fn accel_sim_of(a: &SimAccelArgs) -> CliResult<AccelSim> {
         noise: a.noise,
         seed: a.seed,
     })
-}
-
-/// Rows `angle, estimate″, truth″, u″, (est−truth)/u, unit` for [`TRUTH_HEADER`].
-fn truth_rows_arcsec(e: &Estimates, truth: impl Fn(&str) -> f64) -> Vec<Vec<String>> {
-    e.names()
-        .iter()
-        .enumerate()
-        .map(|(k, n)| {
-            let (v, u, t) = (e.values()[k], e.u_at(k), truth(n));
-            vec![
-                n.clone(),
-                format!("{:.2}", v * ARCSEC_PER_RAD),
-                format!("{:.2}", t * ARCSEC_PER_RAD),
-                format!("{:.3}", u * ARCSEC_PER_RAD),
-                sig((v - t) / u, 2),
-                "arcsec".into(),
-            ]
-        })
-        .collect()
-}
-
-/// The misalignment section of `incal demo`.
-pub fn demo_section(seed: u64) -> CliResult<()> {
-    println!("== Misalignment separation (seed 003) ==");
-    let args = SimGyroArgs {
-        scale_factor: -2.9222,
-        bias: 0.002,
-        bias_shift: 2e-3,
-        dtheta_x0_arcsec: 2.4,
-        dtheta_y0_arcsec: -7.5,
-        dtheta_y1_arcsec: -54.0,
-        dtheta_z1_arcsec: 20.0,
-        dtheta_y2_arcsec: -162.2,
-        dtheta_z2_arcsec: 55.8,
-        configs: PAPER_CONFIGS.split(',').map(String::from).collect(),
-        rates_deg_s: vec![20.0, 30.0, 40.0],
-        records: 2,
-        turns: 1.0,
-        samples_per_turn: 36,
-        noise: 1e-3,
-        latitude_deg: 45.75,
-        time_series: false,
-        seed,
-        output: None,
-    };
-    let cfg = gyro_sim_of(&args)?;
-    let m = cfg.mounting;
-    let truth = |n: &str| match n {
-        "dtheta_y0" => m.dtheta_y0,
-        "dtheta_x0" => m.dtheta_x0,
-        "dtheta_y1" => m.dtheta_y1,
-        "dtheta_y2" => m.dtheta_y2,
-        "dtheta_z2" => m.dtheta_z2,
-        "gamma" => m.dtheta_y2.hypot(m.dtheta_z2),
-        _ => f64::NAN,
-    };
-    println!(
-        "Virtual gyro on a rate table: kI = -2.9222 V/(deg/s), the paper's five configurations,"
-    );
-    println!("+-20/30/40 deg/s, 2 one-turn records each, Earth rate at 45.75 deg N, noise 1 mV per sample,");
-    println!("bias shifting 2 mV rms between mountings (fitted per configuration).\n");
-    let obs = simulate_gyro(&cfg).map_err(core)?;
-    let r = gyro::calibrate(
-        &obs,
-        &GyroOptions {
-            scale_factor: cfg.scale_factor,
-            per_config_bias: true,
-            noise: Noise::Auto,
-        },
-    )
-    .map_err(core)?;
-    print!(
-        "{}",
-        table(&TRUTH_HEADER, &truth_rows_arcsec(&r.angles, truth))
-    );
-    for w in &r.warnings {
-        println!("warning: {w}");
-    }
-    // The same test with 2.5-turn records averaged as recorded.
-    let mut partial = cfg.clone();
-    partial.turns = 2.5;
-    partial.noise = 0.0;
-    partial.bias_shift = 0.0;
-    let obs = simulate_gyro(&partial).map_err(core)?;
-    let rp = gyro::calibrate(
-        &obs,
-        &GyroOptions {
-            scale_factor: cfg.scale_factor,
-            per_config_bias: false,
-            noise: Noise::Known { sigma: 1e-9 },
-        },
-    )
-    .map_err(core)?;
-    let worst = gyro::GYRO_ANGLES
-        .iter()
-        .map(|n| rad_to_arcsec((rp.angles.value(n).unwrap_or(f64::NAN) - truth(n)).abs()))
-        .fold(0.0, f64::max);
-    println!(
-        "\nnoiseless records of 2.5 turns averaged as recorded: largest angle error {worst:.2} arcsec (Earth rate); `incal misalign gyro --turns whole` removes it\n"
-    );
-
-    let acfg = accel_sim_of(&SimAccelArgs {
-        scale_factor: 1.299,
-        bias: -0.002,
-        dtheta_y0_arcsec: 30.0,
-        dtheta_y2_arcsec: -5.3,
-        dtheta_z2_arcsec: 20.5,
-        betas_deg: vec![0.0, 90.0, 180.0, 270.0],
-        samples: 10,
-        noise: 2e-5,
-        seed: seed.wrapping_add(1),
-        output: None,
-    })?;
-    println!("Virtual accelerometer on a vertical face: kI = 1.299 V/g, beta = 0/90/180/270 deg,");
-    println!("10 samples each, noise 20 uV.\n");
-    let ra = accel::calibrate(
-        &simulate_accel(&acfg),
-        &AccelOptions {
-            scale_factor: acfg.scale_factor,
-            noise: Noise::Auto,
-        },
-    )
-    .map_err(core)?;
-    let fm = acfg.mounting;
-    print!(
-        "{}",
-        table(
-            &TRUTH_HEADER,
-            &truth_rows_arcsec(&ra.angles, |n| match n {
-                "dtheta_y2" => fm.dtheta_y2,
-                "dtheta_z2" => fm.dtheta_z2,
-                "gamma" => fm.dtheta_y2.hypot(fm.dtheta_z2),
-                _ => f64::NAN,
-            })
-        )
-    );
-    for w in &ra.warnings {
-        println!("warning: {w}");
-    }
-    println!();
-    Ok(())
 }

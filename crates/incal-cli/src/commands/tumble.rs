@@ -1,23 +1,20 @@
 //! `incal tumble`, `incal plan tumble`, `incal simulate tumble`.
 
-use std::io::Write;
 use std::path::PathBuf;
 
 use clap::ValueEnum;
-use incal::estimation::Noise;
 use incal::models::{AccelerometerModel, Term};
 use incal::procedures::tumble::plan::{predict, TumblePlan};
-use incal::procedures::tumble::{
-    calibrate, default_terms, Observation, TumbleOptions, TumbleResult,
-};
+use incal::procedures::tumble::{calibrate, default_terms, Observation, TumbleOptions};
 use incal::rigs::Mount;
 use incal::sim::tumble::{simulate as sim_tumble, TumbleSim};
-use incal::units::{arcsec_to_rad, rad_to_arcsec, rad_to_deg};
+use incal::units::{arcsec_to_rad, rad_to_deg};
 use serde_json::{json, Map, Value};
 
-use crate::error::{core, in_file, usage, CliError, CliResult};
+use crate::error::{core, in_file, usage, CliResult};
 use crate::input::Table;
-use crate::output::{coefficients_json, display_scale, num, print_json, sig, table, term_unit};
+use crate::options::noise_option;
+use crate::output::{json_text, sig, table, write_text, ResultArgs};
 
 /// Mount on the dividing head.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -43,7 +40,7 @@ pub struct Args {
     /// Mount on the dividing head.
     #[arg(long, value_enum)]
     pub mount: MountArg,
-    /// Input CSV with columns angle_deg and output (optional: pass; others ignored).
+    /// Input CSV with columns angle_deg and output (optional: pass; others ignored); - reads standard input.
     #[arg(long)]
     pub input: PathBuf,
     /// Terms to fit, comma separated (default: K0,K1,K2,K3 and the mount's misalignment and cross-coupling).
@@ -52,9 +49,8 @@ pub struct Args {
     /// Known standard deviation of one output sample (output units); default: from the data.
     #[arg(long)]
     pub noise: Option<f64>,
-    /// Print one JSON object instead of the readable report.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub result: ResultArgs,
 }
 
 fn parse_terms(list: &Option<Vec<String>>, mount: Mount) -> CliResult<Vec<Term>> {
@@ -67,7 +63,7 @@ fn parse_terms(list: &Option<Vec<String>>, mount: Mount) -> CliResult<Vec<Term>>
     }
 }
 
-fn read_observations(path: &std::path::Path) -> CliResult<(String, Vec<Observation>)> {
+fn read_observations(path: &std::path::Path) -> CliResult<(Table, Vec<Observation>)> {
     let t = Table::read(path)?;
     let ca = t.column("angle_deg")?;
     let co = t.column("output")?;
@@ -85,19 +81,15 @@ fn read_observations(path: &std::path::Path) -> CliResult<(String, Vec<Observati
             pass,
         });
     }
-    Ok((t.path.clone(), obs))
+    Ok((t, obs))
 }
 
 /// `incal tumble`.
 pub fn run(a: &Args) -> CliResult<()> {
     let mount: Mount = a.mount.into();
     let terms = parse_terms(&a.terms, mount)?;
-    let noise = match a.noise {
-        None => Noise::Auto,
-        Some(s) if s.is_finite() && s > 0.0 => Noise::Known { sigma: s },
-        Some(s) => return Err(usage(format!("--noise must be a positive number, got {s}"))),
-    };
-    let (file, obs) = read_observations(&a.input)?;
+    let noise = noise_option(a.noise)?;
+    let (table, obs) = read_observations(&a.input)?;
     let result = calibrate(
         &obs,
         &TumbleOptions {
@@ -106,210 +98,13 @@ pub fn run(a: &Args) -> CliResult<()> {
             noise,
         },
     )
-    .map_err(|e| in_file(&file, e))?;
-    if a.json {
-        print_json(&result_json(&file, &result));
-    } else {
-        print!("{}", report(&file, &result));
-    }
-    Ok(())
-}
-
-/// The JSON document of a tumble result.
-pub fn result_json(file: &str, r: &TumbleResult) -> Value {
-    let f = &r.fit;
-    let positions: Vec<Value> = r
-        .positions
-        .iter()
-        .map(|p| {
-            json!({
-                "angle_deg": rad_to_deg(p.angle_rad),
-                "pass": p.pass,
-                "n": p.stats.n,
-                "mean_output": p.stats.mean,
-                "std_output": num(p.stats.std),
-                "residual": p.residual,
-                "standardized_residual": num(p.standardized_residual),
-            })
-        })
-        .collect();
-    let passes: Vec<Value> = r
-        .passes
-        .iter()
-        .map(|p| {
-            json!({
-                "reference": p.reference,
-                "other": p.other,
-                "reference_coefficients": coefficients_json(&p.reference_coefficients, term_unit),
-                "other_coefficients": coefficients_json(&p.other_coefficients, term_unit),
-                "difference": coefficients_json(&p.difference, term_unit),
-                "position_differences": p.position_differences.iter().map(|(t, d, u)| json!({
-                    "angle_deg": rad_to_deg(*t), "difference_output": d, "u_output": num(*u),
-                })).collect::<Vec<_>>(),
-            })
-        })
-        .collect();
-    json!({
-        "procedure": "tumble",
-        "input": file,
-        "mount": r.mount.name(),
-        "terms": r.terms.iter().map(|t| t.name()).collect::<Vec<_>>(),
-        "coefficients": coefficients_json(&r.coefficients, term_unit),
-        "coverage": {
-            "dof": num(r.coefficients.dof()),
-            "k95": r.coefficients.coverage_factor(0.95),
-            "note": "u is the standard uncertainty; U95 = k95 * u"
-        },
-        "fit": {
-            "positions": f.diagnostics.n_obs,
-            "parameters": f.diagnostics.n_params,
-            "dof": f.dof,
-            "residual_rms_output": num(residual_rms(r)),
-            "unit_weight_sigma": num(f.sigma),
-            "chi2": f.weighted_rss,
-            "chi2_p_value": f.chi2_p_value.map(num),
-            "variance_source": f.variance_source,
-            "rank": f.diagnostics.rank,
-            "condition_number": num(f.diagnostics.condition),
-            "weakest_combination": f.diagnostics.weakest.to_string(),
-        },
-        "index_error_arcsec": r.index_error_rad.map(|e| num(rad_to_arcsec(e))),
-        "positions": positions,
-        "absorbed": r.absorbed.iter().map(|a| a.to_string()).collect::<Vec<_>>(),
-        "passes": passes,
-        "pass_errors": r.pass_errors.iter().map(|(l, e)| json!({"pass": l, "error": e})).collect::<Vec<_>>(),
-        "warnings": r.warnings,
-    })
-}
-
-fn coefficient_rows(e: &incal::estimation::Estimates, k95: f64) -> Vec<Vec<String>> {
-    e.names()
-        .iter()
-        .enumerate()
-        .map(|(k, name)| {
-            let term = Term::parse(name).unwrap_or(Term::K0);
-            let (scale, unit) = display_scale(term);
-            let (v, u) = (e.values()[k] * scale, e.u_at(k) * scale);
-            vec![
-                name.clone(),
-                sig(v, 7),
-                sig(u, 3),
-                sig(k95 * u, 3),
-                unit.to_string(),
-            ]
-        })
-        .collect()
-}
-
-/// Root-mean-square residual of the position means, `sqrt(Σ r²/(n−p))`
-/// (output units; NaN without residual degrees of freedom).
-fn residual_rms(r: &TumbleResult) -> f64 {
-    let f = &r.fit;
-    if f.dof == 0 {
-        return f64::NAN;
-    }
-    (f.residuals.norm_squared() / f.dof as f64).sqrt()
-}
-
-/// The readable report of a tumble result.
-pub fn report(file: &str, r: &TumbleResult) -> String {
-    let mut s = String::new();
-    let f = &r.fit;
-    let k95 = r.coefficients.coverage_factor(0.95);
-    s.push_str(&format!(
-        "Tumble calibration, {} mount, {} ({} positions, {} terms)\n\n",
-        r.mount.name(),
-        file,
-        f.diagnostics.n_obs,
-        f.diagnostics.n_params
-    ));
-    s.push_str(&table(
-        &["term", "value", "u", "U95", "unit"],
-        &coefficient_rows(&r.coefficients, k95),
-    ));
-    s.push_str(&format!(
-        "\nu: standard uncertainty; U95 = {k95:.3} u ({} degrees of freedom, variance from {})\n",
-        sig(r.coefficients.dof(), 4),
-        match f.variance_source {
-            incal::estimation::VarianceSource::Prior => "the sample scatter",
-            incal::estimation::VarianceSource::Residuals => "the residuals",
-        }
-    ));
-    s.push_str(&format!(
-        "fit: dof {}, residual rms {} (output units), condition number {}",
-        f.dof,
-        sig(residual_rms(r), 3),
-        sig(f.diagnostics.condition, 3)
-    ));
-    if let Some(p) = f.chi2_p_value {
-        s.push_str(&format!(", chi-square p {}", sig(p, 2)));
-    }
-    s.push('\n');
-    if let Some(e) = r.index_error_rad {
-        s.push_str(&format!(
-            "index-angle error of the head estimated from the residuals: {} arcsec rms\n",
-            sig(rad_to_arcsec(e), 3)
-        ));
-    }
-    for a in &r.absorbed {
-        s.push_str(&format!("note: {a}\n"));
-    }
-    for w in &r.warnings {
-        s.push_str(&format!("warning: {w}\n"));
-    }
-    s.push_str("\nPositions\n");
-    let rows: Vec<Vec<String>> = r
-        .positions
-        .iter()
-        .map(|p| {
-            vec![
-                format!("{:.4}", rad_to_deg(p.angle_rad)),
-                p.pass.clone().unwrap_or_default(),
-                p.stats.n.to_string(),
-                sig(p.stats.mean, 10),
-                sig(p.stats.std, 3),
-                sig(p.residual, 3),
-                sig(p.standardized_residual, 3),
-            ]
-        })
-        .collect();
-    s.push_str(&table(
-        &[
-            "angle_deg",
-            "pass",
-            "n",
-            "mean",
-            "std",
-            "residual",
-            "std.res",
-        ],
-        &rows,
-    ));
-    for p in &r.passes {
-        s.push_str(&format!(
-            "\nPass difference: {} minus {} (u from both passes)\n",
-            p.other, p.reference
-        ));
-        let k = p.difference.coverage_factor(0.95);
-        s.push_str(&table(
-            &["term", "difference", "u", "U95", "unit"],
-            &coefficient_rows(&p.difference, k),
-        ));
-        let rows: Vec<Vec<String>> = p
-            .position_differences
-            .iter()
-            .map(|(t, d, u)| vec![format!("{:.4}", rad_to_deg(*t)), sig(*d, 3), sig(*u, 3)])
-            .collect();
-        s.push_str(&format!(
-            "\nPer-angle mean output, {} minus {} (hysteresis, drift)\n",
-            p.other, p.reference
-        ));
-        s.push_str(&table(&["angle_deg", "difference", "u"], &rows));
-    }
-    for (l, e) in &r.pass_errors {
-        s.push_str(&format!("pass {l} alone: {e}\n"));
-    }
-    s
+    .map_err(|e| in_file(&table.path, e))?;
+    let mut doc = result
+        .document(a.noise.is_some())
+        .map_err(|e| in_file(&table.path, e))?;
+    doc.inputs.push(table.input_file("input"));
+    doc.options.insert("noise".into(), json!(a.noise));
+    a.result.emit(doc)
 }
 
 /// Plan selection shared by `plan tumble` and `simulate tumble`.
@@ -380,15 +175,21 @@ pub struct PlanArgs {
     /// Nominal scale factor K1 (output/g), needed for the prediction.
     #[arg(long)]
     pub k1: Option<f64>,
-    /// Standard deviation of one position's averaged output (output units), needed for the prediction.
+    /// Standard deviation of one output sample (output units), needed for the prediction.
     #[arg(long)]
     pub noise: Option<f64>,
+    /// Samples averaged per position (the position mean has noise/sqrt(samples)).
+    #[arg(long, default_value_t = 1)]
+    pub samples: usize,
     /// Standard deviation of the head's index-angle error (arcsec), added as output noise K1·cosθ·ε.
     #[arg(long, default_value_t = 0.0)]
     pub index_error_arcsec: f64,
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// Write to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
 }
 
 /// `incal plan tumble`.
@@ -396,18 +197,28 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
     let plan = a.plan.plan()?;
     let mount: Mount = a.mount.into();
     let terms = parse_terms(&a.terms, mount)?;
+    if a.samples == 0 {
+        return Err(usage("--samples must be at least 1"));
+    }
     let prediction = match (a.k1, a.noise) {
-        (Some(k1), Some(noise)) => Some(
-            predict(
-                mount,
-                &terms,
-                &plan.angles_rad(),
-                k1,
-                noise,
-                arcsec_to_rad(a.index_error_arcsec),
+        (Some(k1), Some(noise)) => {
+            if !(noise.is_finite() && noise > 0.0) {
+                return Err(usage(format!(
+                    "--noise must be a positive number, got {noise}"
+                )));
+            }
+            Some(
+                predict(
+                    mount,
+                    &terms,
+                    &plan.angles_rad(),
+                    k1,
+                    noise / (a.samples as f64).sqrt(),
+                    arcsec_to_rad(a.index_error_arcsec),
+                )
+                .map_err(core)?,
             )
-            .map_err(core)?,
-        ),
+        }
         (None, None) => None,
         _ => {
             return Err(usage(
@@ -418,7 +229,7 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
     if a.json {
         let mut doc = json!({
             "plan": plan_name(&plan),
-            "step_deg": num(plan.step_deg),
+            "step_deg": plan.step_deg.is_finite().then_some(plan.step_deg),
             "angles_deg": plan.angles_deg,
             "max_input_g": plan.max_input_g(),
             "mount": mount.name(),
@@ -428,19 +239,20 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
             let mut units = Map::new();
             for (k, n) in p.names().iter().enumerate() {
                 u.insert(n.clone(), json!(p.u_at(k)));
-                units.insert(n.clone(), json!(term_unit(n)));
+                let unit = Term::parse(n).map_err(core)?.unit();
+                units.insert(n.clone(), json!(unit.as_str()));
             }
             doc["predicted_u"] = Value::Object(u);
             doc["units"] = Value::Object(units);
             doc["k1"] = json!(a.k1);
             doc["noise"] = json!(a.noise);
+            doc["samples"] = json!(a.samples);
             doc["index_error_arcsec"] = json!(a.index_error_arcsec);
         }
-        print_json(&doc);
-        return Ok(());
+        return write_text(a.output.as_deref(), &json_text(&doc));
     }
-    println!(
-        "Tumble plan: {} (step {} deg), {} positions, largest input {:.3} g",
+    let mut s = format!(
+        "Tumble plan: {} (step {} deg), {} positions, largest input {:.3} g\n",
         plan_name(&plan),
         if plan.step_deg.is_finite() {
             plan.step_deg.to_string()
@@ -450,44 +262,41 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
         plan.angles_deg.len(),
         plan.max_input_g()
     );
-    println!(
-        "angles (deg): {}",
+    s.push_str(&format!(
+        "angles (deg): {}\n",
         plan.angles_deg
             .iter()
             .map(|x| format!("{x}"))
             .collect::<Vec<_>>()
             .join(", ")
-    );
+    ));
     if let Some(p) = prediction {
-        println!(
-            "\nPredicted standard uncertainty ({} mount, K1 = {}, noise {:e} per position, index error {} arcsec):",
+        s.push_str(&format!(
+            "\nPredicted standard uncertainty ({} mount, K1 = {}, noise {:e} per sample, {} samples per position, index error {} arcsec):\n",
             mount.name(),
             a.k1.unwrap_or(f64::NAN),
             a.noise.unwrap_or(f64::NAN),
+            a.samples,
             a.index_error_arcsec
-        );
-        let rows: Vec<Vec<String>> = p
-            .names()
-            .iter()
-            .enumerate()
-            .map(|(k, n)| {
-                let term = Term::parse(n).unwrap_or(Term::K0);
-                let (scale, unit) = display_scale(term);
-                vec![n.clone(), sig(p.u_at(k) * scale, 3), unit.to_string()]
-            })
-            .collect();
-        print!("{}", table(&["term", "predicted u", "unit"], &rows));
+        ));
+        let mut rows = Vec::new();
+        for (k, n) in p.names().iter().enumerate() {
+            let unit = Term::parse(n).map_err(core)?.unit();
+            let (scale, label) = unit.engineering();
+            rows.push(vec![n.clone(), sig(p.u_at(k) * scale, 3), label.to_string()]);
+        }
+        s.push_str(&table(&["term", "predicted u", "unit"], &rows));
     } else {
-        println!("(give --k1 and --noise for the predicted uncertainty of every coefficient)");
+        s.push_str("(give --k1 and --noise for the predicted uncertainty of every coefficient)\n");
     }
-    Ok(())
+    write_text(a.output.as_deref(), &s)
 }
 
 /// Truth coefficients for simulators (default: the seed 000 instrument).
 #[derive(clap::Args, Debug, Clone)]
 pub struct TruthArgs {
     /// Bias K0 (g).
-    #[arg(long, default_value_t = 8e-3)]
+    #[arg(long = "k0", visible_alias = "k0-g", default_value_t = 8e-3)]
     pub k0_g: f64,
     /// Scale factor K1 (output/g).
     #[arg(long, default_value_t = 10.0)]
@@ -616,18 +425,5 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
             None => text.push_str(&format!("{angle},{}\n", o.output)),
         }
     }
-    write_output(a.output.as_ref(), &text)
-}
-
-/// Write `text` to `path`, or to stdout.
-pub fn write_output(path: Option<&PathBuf>, text: &str) -> CliResult<()> {
-    match path {
-        Some(p) => std::fs::write(p, text)
-            .map_err(|e| CliError::Failure(anyhow::anyhow!("{}: cannot write: {e}", p.display()))),
-        None => {
-            let mut out = std::io::stdout().lock();
-            out.write_all(text.as_bytes())
-                .map_err(|e| CliError::Failure(anyhow::anyhow!("stdout: {e}")))
-        }
-    }
+    write_text(a.output.as_deref(), &text)
 }

@@ -160,6 +160,37 @@ impl Estimates {
         Estimates::new(names, y, propagate(&self.covariance, &j), self.dof)
     }
 
+    /// Append derived quantities `g(x̂)` to the estimates, with the full
+    /// joint covariance: `[x̂; g(x̂)]` with Jacobian `[I; J_g]`, so the new
+    /// entries keep their correlation with the old ones (GUM, JCGM 100
+    /// §5.2). `jacobian` is `∂g/∂x` (rows: new names).
+    pub fn augment(
+        &self,
+        names: Vec<String>,
+        g: impl Fn(&DVector<f64>) -> DVector<f64>,
+        jacobian: impl Fn(&DVector<f64>) -> DMatrix<f64>,
+    ) -> Result<Estimates> {
+        let (n, m) = (self.len(), names.len());
+        let mut all = self.names.clone();
+        all.extend(names);
+        self.map(
+            all,
+            |x| {
+                let y = g(x);
+                DVector::from_iterator(n + y.len(), x.iter().chain(y.iter()).copied())
+            },
+            |x| {
+                let j = jacobian(x);
+                let mut full = DMatrix::zeros(n + j.nrows(), n);
+                full.view_mut((0, 0), (n, n)).fill_with_identity();
+                if j.ncols() == n && j.nrows() == m {
+                    full.view_mut((n, 0), (m, n)).copy_from(&j);
+                }
+                full
+            },
+        )
+    }
+
     /// As [`Estimates::map`], with the Jacobian by central differences
     /// (step `h_k = 1e-6·max(|x_k|, u_k, 1e-12)`).
     pub fn map_numeric(

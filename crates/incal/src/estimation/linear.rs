@@ -27,6 +27,7 @@ use nalgebra::{DMatrix, DVector};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 use super::estimates::Estimates;
+use crate::warning::{Warning, WarningCode};
 use crate::error::{Alias, Error, Result};
 
 /// Default limit on the equilibrated condition number: beyond it a design is
@@ -188,7 +189,9 @@ impl Default for FitOptions {
 }
 
 /// Which source the variance factor finally came from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum VarianceSource {
     /// Estimated from the residuals (`s² = χ²/(n−p)`).
@@ -258,17 +261,23 @@ impl Fit {
     /// plan (condition number above [`WARN_COND`], naming the worst-determined
     /// combination) and residuals beyond the prior noise (χ² p < 0.01), with
     /// `likely_causes` saying what the rig usually does to cause them.
-    pub fn quality_warnings(&self, likely_causes: &str) -> Vec<String> {
+    pub fn quality_warnings(&self, likely_causes: &str) -> Vec<Warning> {
         let mut out = Vec::new();
         if self.diagnostics.condition > WARN_COND {
-            out.push(format!(
-                "weakly conditioned plan (condition number {:.2e}): the combination {} is poorly determined",
-                self.diagnostics.condition, self.diagnostics.weakest
+            out.push(Warning::new(
+                WarningCode::WeakConditioning,
+                format!(
+                    "weakly conditioned plan (condition number {:.2e}): the combination {} is poorly determined",
+                    self.diagnostics.condition, self.diagnostics.weakest
+                ),
             ));
         }
         if let Some(p) = self.chi2_p_value.filter(|p| *p < 0.01) {
-            out.push(format!(
-                "residuals between positions exceed the sample scatter (chi-square p = {p:.2e}): {likely_causes}; uncertainties are scaled up by the residual scatter"
+            out.push(Warning::new(
+                WarningCode::LackOfFit,
+                format!(
+                    "residuals between positions exceed the sample scatter (chi-square p = {p:.2e}): {likely_causes}; uncertainties are scaled up by the residual scatter"
+                ),
             ));
         }
         out

@@ -98,14 +98,15 @@ impl Term {
         }
     }
 
-    /// Unit string of the coefficient (g-unit convention).
-    pub fn unit(self) -> &'static str {
+    /// Unit of the coefficient (g-unit convention).
+    pub fn unit(self) -> crate::units::Unit {
+        use crate::units::Unit;
         match self {
-            Term::K0 => "g",
-            Term::K1 => "output/g",
-            Term::K3 => "g/g^3",
-            Term::DeltaO | Term::DeltaP => "rad",
-            _ => "g/g^2",
+            Term::K0 => Unit::G,
+            Term::K1 => Unit::OutputPerG,
+            Term::K3 => Unit::GPerG3,
+            Term::DeltaO | Term::DeltaP => Unit::Rad,
+            _ => Unit::GPerG2,
         }
     }
 

@@ -5,6 +5,7 @@
 //! parallel run gives exactly the numbers of a serial one.
 
 pub mod centrifuge;
+pub mod demo;
 pub mod gfimu;
 pub mod misalign;
 pub mod tumble;

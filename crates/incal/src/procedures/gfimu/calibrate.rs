@@ -93,6 +93,8 @@ pub struct AccelerometerCalibration {
     pub linear: Estimates,
     /// Derived coefficients [`DERIVED_TERMS`] (output/g, rad).
     pub derived: Estimates,
+    /// [`LINEAR_TERMS`] then [`DERIVED_TERMS`] with their joint covariance.
+    pub joint: Estimates,
     /// The least-squares fit of the position means.
     pub fit: Fit,
     /// Standard deviation of one output sample from the pooled scatter
@@ -122,7 +124,7 @@ pub struct GfimuCalibration {
     /// Distinct positions (specific force, g) and their sample counts.
     pub positions: Vec<(Vector3<f64>, usize)>,
     /// Warnings (weak plan, lack of fit, inconsistent K0).
-    pub warnings: Vec<String>,
+    pub warnings: Vec<crate::Warning>,
 }
 
 impl GfimuCalibration {
@@ -198,7 +200,8 @@ pub fn design(positions: &[Vector3<f64>]) -> Result<Design> {
     Design::from_rows(LINEAR_TERMS.iter().map(|s| s.to_string()).collect(), &rows)
 }
 
-/// Map `(K0, Ks)` to [`DERIVED_TERMS`] with analytic Jacobian (module docs).
+/// `(K0, Ks)` with [`DERIVED_TERMS`] appended, analytic Jacobian (module
+/// docs), joint covariance kept ([`Estimates::augment`]).
 fn derive(linear: &Estimates, l: &Vector3<f64>) -> Result<Estimates> {
     let (p, q) = cross_axes(l);
     let ks_of = |x: &DVector<f64>| Vector3::new(x[1], x[2], x[3]);
@@ -241,7 +244,7 @@ fn derive(linear: &Estimates, l: &Vector3<f64>) -> Result<Estimates> {
         }
         j
     };
-    linear.map(
+    linear.augment(
         DERIVED_TERMS.iter().map(|s| s.to_string()).collect(),
         f,
         jac,
@@ -320,7 +323,8 @@ pub fn calibrate(
             .collect::<Result<_>>()?;
         let (fit, weights) = fit_means(&d, &stats, opts.noise)?;
         let linear = fit.estimates.clone();
-        let derived = derive(&linear, &acc.direction)?;
+        let joint = derive(&linear, &acc.direction)?;
+        let derived = joint.select(&DERIVED_TERMS)?;
         let (s2, dof) = crate::estimation::pooled_variance(&stats);
         let noise_output = (dof > 0).then(|| s2.sqrt());
         // The check tests lack of fit itself, so it uses the noise from the
@@ -352,19 +356,22 @@ pub fn calibrate(
         });
         if let Some(c) = &k0_consistency {
             if c.max_normalized_difference > 3.0 {
-                warnings.push(format!(
-                    "accelerometer '{}': the three six-position K0 estimates disagree by up to {:.1} u (an even-order error term or a mis-set position)",
-                    acc.name, c.max_normalized_difference
+                warnings.push(crate::Warning::new(
+                    crate::WarningCode::InconsistentBias,
+                    format!(
+                        "accelerometer '{}': the three six-position K0 estimates disagree by up to {:.1} u (an even-order error term or a mis-set position)",
+                        acc.name, c.max_normalized_difference
+                    ),
                 ));
             }
         }
         for w in fit.quality_warnings("an unmodelled term, a mis-set position or drift") {
             // The design (and so its conditioning) is shared by every
             // accelerometer: say it once.
-            let w = if w.starts_with("weakly conditioned") {
+            let w = if w.code == crate::WarningCode::WeakConditioning {
                 w
             } else {
-                format!("accelerometer '{}': {w}", acc.name)
+                w.prefixed(&format!("accelerometer '{}'", acc.name))
             };
             if !warnings.contains(&w) {
                 warnings.push(w);
@@ -375,6 +382,7 @@ pub fn calibrate(
             nominal_direction: acc.direction,
             linear,
             derived,
+            joint,
             fit,
             noise_output,
             k0_consistency,

@@ -91,7 +91,7 @@ pub struct MotionSolution {
     /// Rank and condition of the calibrated N×6 system.
     pub diagnostics: Diagnostics,
     /// Warnings (weak geometry).
-    pub warnings: Vec<String>,
+    pub warnings: Vec<crate::Warning>,
 }
 
 /// The measurement model of one sample (module docs), for Gauss–Newton.
@@ -220,9 +220,12 @@ pub fn solve(
     }
     let mut warnings = Vec::new();
     if diagnostics.condition > crate::estimation::WARN_COND {
-        warnings.push(format!(
-            "weak calibrated geometry (condition number {:.2e}): {} is poorly determined",
-            diagnostics.condition, diagnostics.weakest
+        warnings.push(crate::Warning::new(
+            crate::WarningCode::WeakConditioning,
+            format!(
+                "weak calibrated geometry (condition number {:.2e}): {} is poorly determined",
+                diagnostics.condition, diagnostics.weakest
+            ),
         ));
     }
     let sigmas: Option<Vec<f64>> = cal.iter().map(|c| c.noise_output).collect();

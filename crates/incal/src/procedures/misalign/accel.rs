@@ -75,8 +75,8 @@ pub struct AccelResult {
     pub fit: Fit,
     /// Per-position summaries.
     pub positions: Vec<AccelPosition>,
-    /// Human-readable warnings.
-    pub warnings: Vec<String>,
+    /// Warnings.
+    pub warnings: Vec<crate::Warning>,
 }
 
 /// Design matrix at angles `betas_rad`: `[1, −kI cos β, kI sin β]`.

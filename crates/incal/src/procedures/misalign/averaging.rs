@@ -64,7 +64,7 @@ pub struct RecordMean {
     /// Table rate measured from angle and time (°/s, signed).
     pub measured_rate_deg_s: f64,
     /// A warning about this record (partial turn, rate mismatch).
-    pub warning: Option<String>,
+    pub warning: Option<crate::Warning>,
 }
 
 /// Tolerance on "whole number of turns", in turns.
@@ -167,7 +167,10 @@ pub fn average_record(r: &Record, policy: TurnPolicy) -> Result<RecordMean> {
         warning: if warnings.is_empty() {
             None
         } else {
-            Some(warnings.join("; "))
+            Some(crate::Warning::new(
+                crate::WarningCode::PartialTurns,
+                warnings.join("; "),
+            ))
         },
     })
 }

@@ -153,8 +153,8 @@ pub struct GyroResult {
     pub fit: Fit,
     /// Per-position summaries.
     pub positions: Vec<GyroPosition>,
-    /// Human-readable warnings.
-    pub warnings: Vec<String>,
+    /// Warnings.
+    pub warnings: Vec<crate::Warning>,
 }
 
 /// Group samples into positions (α, β, ω) in order of first appearance.
@@ -307,9 +307,10 @@ pub fn calibrate(obs: &[GyroObservation], opts: &GyroOptions) -> Result<GyroResu
     });
     let rates: Vec<f64> = positions.iter().map(|p| p.1).collect();
     if !(rates.iter().any(|r| *r > 0.0) && rates.iter().any(|r| *r < 0.0)) {
-        warnings.push(
-            "no forward/reverse pair: the bias is separated from the angles only through the rate dependence".into(),
-        );
+        warnings.push(crate::Warning::new(
+            crate::WarningCode::NoReversal,
+            "no forward/reverse pair: the bias is separated from the angles only through the rate dependence",
+        ));
     }
     if let (Some(g), Some(u)) = (angles.value(super::GAMMA), angles.u(super::GAMMA)) {
         warnings.extend(small_gamma_warning(g, u));

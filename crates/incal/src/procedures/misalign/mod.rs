@@ -70,8 +70,14 @@ pub fn with_gamma(angles: &Estimates, iy: usize, iz: usize) -> Result<Estimates>
 /// The azimuth `ψ = atan2(−Δθy2, Δθz2)` in [0, 2π) with its uncertainty
 /// (module docs); `iy`, `iz` as in [`with_gamma`].
 pub fn azimuth(angles: &Estimates, iy: usize, iz: usize) -> Result<Estimates> {
+    with_azimuth(angles, iy, iz)?.select(&[AZIMUTH])
+}
+
+/// `angles` with the azimuth ψ appended (joint covariance kept, see
+/// [`Estimates::augment`]); `iy`, `iz` as in [`with_gamma`].
+pub fn with_azimuth(angles: &Estimates, iy: usize, iz: usize) -> Result<Estimates> {
     let n = angles.len();
-    angles.map(
+    angles.augment(
         vec![AZIMUTH.to_string()],
         |x| DVector::from_element(1, (-x[iy]).atan2(x[iz]).rem_euclid(std::f64::consts::TAU)),
         |x| {
@@ -89,13 +95,13 @@ pub fn azimuth(angles: &Estimates, iy: usize, iz: usize) -> Result<Estimates> {
 /// A warning when γ is within 3 u of zero: then the first-order u of γ is
 /// not valid (γ is biased upward, Rayleigh-like) and the azimuth is poorly
 /// determined.
-pub fn small_gamma_warning(gamma: f64, u_gamma: f64) -> Option<String> {
+pub fn small_gamma_warning(gamma: f64, u_gamma: f64) -> Option<crate::Warning> {
     if gamma <= 3.0 * u_gamma {
-        Some(format!(
+        Some(crate::Warning::new(crate::WarningCode::SmallAngle, format!(
             "gamma ({:.2} arcsec) is within 3 u ({:.2} arcsec) of zero: its linear uncertainty is not reliable and the azimuth is poorly determined",
             crate::units::rad_to_arcsec(gamma),
             crate::units::rad_to_arcsec(3.0 * u_gamma)
-        ))
+        )))
     } else {
         None
     }

@@ -193,8 +193,8 @@ pub struct TumbleResult {
     pub passes: Vec<PassComparison>,
     /// Passes that could not be fitted on their own, with the reason.
     pub pass_errors: Vec<(String, String)>,
-    /// Human-readable warnings (weak conditioning, lack of fit).
-    pub warnings: Vec<String>,
+    /// Warnings (weak conditioning, lack of fit).
+    pub warnings: Vec<crate::Warning>,
 }
 
 /// Design matrix of the linear parameters `p` at head angles `angles_rad`.

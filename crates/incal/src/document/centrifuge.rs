@@ -1,0 +1,254 @@
+//! The result document of a centrifuge calibration (seed 001).
+
+use serde_json::{json, Map, Value};
+
+use super::{
+    term_unit, Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure, ResultDocument, Table,
+    Warning, WarningCode,
+};
+use crate::error::Result;
+use crate::procedures::centrifuge::radius::ValueU;
+use crate::procedures::centrifuge::{CentrifugeOptions, CentrifugeResult};
+use crate::units::Unit;
+
+/// Unit of a centrifuge coefficient: accelerometer terms, radii in m,
+/// the tilt in rad.
+fn unit_of(name: &str) -> Result<Unit> {
+    if name.ends_with("_m") {
+        Ok(Unit::M)
+    } else if name.ends_with("_rad") {
+        Ok(Unit::Rad)
+    } else {
+        term_unit(name)
+    }
+}
+
+fn vu(v: Option<ValueU>) -> Value {
+    match v.filter(|x| x.value.is_finite() && x.u.is_finite()) {
+        Some(x) => json!({"value": x.value, "u": x.u}),
+        None => Value::Null,
+    }
+}
+
+impl CentrifugeResult {
+    /// The result document: `K2, K3, K_oq, K_pp, K_oo, K_ip, K_io, K_po`
+    /// (those the data supports, g units) and the radii `R_plus_m`,
+    /// `R_minus_m` (regression), `R_plus_static_m`, `R_minus_static_m`,
+    /// `R_centre_m`, `ecm_offset_m` and the tilt `tilt_rad`, all with the
+    /// joint covariance of [`CentrifugeResult::joint`]; the seed-001
+    /// contract objects `radius` and `alignment`; radius-by-range, stations
+    /// and budgets as tables.
+    pub fn document(&self, opts: &CentrifugeOptions) -> Result<ResultDocument> {
+        let mut b = DocumentBuilder::new(
+            Procedure::Centrifuge,
+            format!(
+                "Centrifuge calibration ({} stations, model order {})",
+                self.stations.len(),
+                opts.order
+            ),
+        );
+        b.estimates(&self.coefficients, "", unit_of)?; // TEMP until the joint estimates land
+        for s in &self.stations {
+            b.fit(FitSummary::of(
+                &format!("station {}", s.label()),
+                &s.fit,
+                Unit::G,
+            ));
+        }
+        for (k, f) in self.regression.iter().enumerate() {
+            if let Some(f) = f {
+                let pol = if k == 0 { "+" } else { "-" };
+                b.fit(FitSummary::of(
+                    &format!("radius regression, polarity {pol}"),
+                    &f.fit,
+                    Unit::G,
+                ));
+            }
+        }
+        b.option("k0_g", json!(opts.k0_g.value));
+        b.option("u_k0_g", json!(opts.k0_g.u));
+        b.option("k1", json!(opts.k1.value));
+        b.option("u_k1", json!(opts.k1.u));
+        b.option("radius_m", json!(opts.radius0_m));
+        b.option("latitude_deg", json!(opts.latitude_rad.to_degrees()));
+        b.option("gravity_m_s2", json!(opts.g_local_m_s2));
+        b.option("opposite_sense", json!(opts.opposite_sense));
+        b.option("order", json!(opts.order));
+        b.option(
+            "alignment_tolerance_deg",
+            json!(opts.alignment_tolerance_rad.to_degrees()),
+        );
+
+        // Seed 001 contract objects.
+        let reg = |k: usize| self.regression[k].as_ref().map(|f| f.radius_m);
+        b.extra(
+            "radius",
+            json!({
+                "static": {"R_plus_m": vu(self.static_radius[0]), "R_minus_m": vu(self.static_radius[1])},
+                "regression": {"R_plus_m": vu(reg(0)), "R_minus_m": vu(reg(1))},
+            }),
+        )?;
+        b.extra(
+            "radius_static_eq6_uncorrected",
+            json!({"R_plus_m": vu(self.static_radius_uncorrected[0]), "R_minus_m": vu(self.static_radius_uncorrected[1])}),
+        )?;
+        b.extra(
+            "alignment",
+            json!({"ecm_offset_m": vu(Some(ValueU { value: self.ecm_offset_m.value.abs(), u: self.ecm_offset_m.u }))}),
+        )?;
+
+        let mut t = Table::new(
+            "radius-by-range",
+            "Regression radius by range and model order (seed 001 Table 2)",
+            &[
+                ("order", None),
+                ("polarity", None),
+                ("max_input_g", None),
+                ("radius", Some(Unit::M)),
+                ("u_radius", Some(Unit::M)),
+                ("lack_of_fit_p", Some(Unit::One)),
+                ("error", None),
+            ],
+        );
+        for row in &self.radius_table {
+            let (r, u, e) = match &row.radius {
+                Ok(v) => (Cell::num(v.value), Cell::num(v.u), Cell::Null),
+                Err(e) => (Cell::Null, Cell::Null, Cell::text(e.clone())),
+            };
+            t.push(vec![
+                Cell::num(row.order as f64),
+                Cell::num(f64::from(row.polarity)),
+                Cell::num(row.max_input_g),
+                r,
+                u,
+                Cell::opt(row.chi2_p_value),
+                e,
+            ])?;
+        }
+        b.table(t);
+
+        let mut t = Table::new(
+            "alignment",
+            "ECM radius and alignment error per station and polarity",
+            &[
+                ("station", None),
+                ("polarity", None),
+                ("ecm_radius", Some(Unit::M)),
+                ("delta_phi", Some(Unit::Rad)),
+                ("delta_c2", Some(Unit::GPerG2)),
+            ],
+        );
+        for s in &self.stations {
+            for a in &s.alignment {
+                t.push(vec![
+                    Cell::text(s.label()),
+                    Cell::num(f64::from(a.polarity)),
+                    Cell::num(a.radius_m),
+                    Cell::num(a.delta_phi_rad),
+                    Cell::num(a.delta_c2),
+                ])?;
+            }
+        }
+        b.table(t);
+
+        let mut t = Table::new(
+            "stations",
+            "Station fits (eq. 9)",
+            &[
+                ("station", None),
+                ("points", None),
+                ("c2", Some(Unit::GPerG2)),
+                ("u_c2", Some(Unit::GPerG2)),
+                ("q", Some(Unit::GPerG2)),
+                ("u_q", Some(Unit::GPerG2)),
+                ("c3", Some(Unit::GPerG3)),
+                ("u_c3", Some(Unit::GPerG3)),
+                ("delta_c2_half_width", Some(Unit::GPerG2)),
+                ("dof", None),
+                ("chi2_p", Some(Unit::One)),
+            ],
+        );
+        for s in &self.stations {
+            let (q, uq) = s.q.map_or((None, None), |v| (Some(v.value), Some(v.u)));
+            let (c3, uc3) = s.c3.map_or((None, None), |v| (Some(v.value), Some(v.u)));
+            t.push(vec![
+                Cell::text(s.label()),
+                Cell::num(s.points as f64),
+                Cell::num(s.c2.value),
+                Cell::num(s.c2.u),
+                Cell::opt(q),
+                Cell::opt(uq),
+                Cell::opt(c3),
+                Cell::opt(uc3),
+                Cell::num(s.delta_c2_half_width),
+                Cell::num(s.fit.dof as f64),
+                Cell::opt(s.fit.chi2_p_value),
+            ])?;
+        }
+        b.table(t);
+
+        let mut budgets = Map::new();
+        for bu in &self.budgets {
+            let unit = unit_of(&bu.coefficient)?;
+            let mut t = Table::new(
+                &format!("budget.{}", bu.coefficient),
+                &format!(
+                    "Uncertainty budget of {} (GUM; contributions in {}){}",
+                    bu.coefficient,
+                    unit.engineering().1,
+                    bu.combined_u_paper_eq10.map_or(String::new(), |p| format!(
+                        "; paper eq. 10 would give u = {:.3e} {}",
+                        p,
+                        unit.as_str()
+                    ))
+                ),
+                &[
+                    ("component", None),
+                    ("type", None),
+                    ("u", Some(Unit::One)),
+                    ("sensitivity", Some(Unit::One)),
+                    ("contribution", Some(unit.clone())),
+                ],
+            );
+            for l in &bu.lines {
+                t.push(vec![
+                    Cell::text(l.component.clone()),
+                    Cell::text(l.kind.to_string()),
+                    Cell::num(l.u),
+                    Cell::num(l.sensitivity),
+                    Cell::num(l.contribution),
+                ])?;
+            }
+            t.push(vec![
+                Cell::text("combined"),
+                Cell::Null,
+                Cell::Null,
+                Cell::Null,
+                Cell::num(bu.combined_u),
+            ])?;
+            budgets.insert(
+                bu.coefficient.clone(),
+                json!({
+                    "combined_u": bu.combined_u,
+                    "combined_u_paper_eq10": bu.combined_u_paper_eq10,
+                    "effective_dof": bu.effective_dof.is_finite().then_some(bu.effective_dof),
+                    "unit": unit.as_str(),
+                }),
+            );
+            b.table(t);
+        }
+        b.extra("budgets", Value::Object(budgets))?;
+
+        for (t, why) in &self.unsupported {
+            b.decision(DecisionCode::NotDetermined, format!("{t}: {why}"));
+        }
+        for (st, e) in &self.station_errors {
+            b.warnings([Warning::new(
+                WarningCode::PartFailed,
+                format!("station {st} could not be fitted: {e}"),
+            )]);
+        }
+        b.warnings(self.warnings.iter().map(|w| Warning::new(WarningCode::PartFailed, w.clone()))); // TEMP
+        Ok(b.finish())
+    }
+}

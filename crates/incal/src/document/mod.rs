@@ -1,0 +1,716 @@
+//! The one result document of every procedure (schema `incal.result/1`).
+//!
+//! Every reducing procedure turns its result into a [`ResultDocument`]:
+//! the coefficients as one flat map of typed parameters (value, standard
+//! uncertainty u, unit, degrees of freedom, coverage factor k95 and
+//! U95 = k95·u), their correlation matrix, the fits' diagnostics, the
+//! procedure's tables as data, typed warnings and the decisions the tool
+//! made. Consumers (the text renderer, `compare`, records, reports) are
+//! written once against this shape, for every procedure.
+//!
+//! # Conventions
+//! * Values are SI- or g-based (accelerations in local g, angles in rad,
+//!   lengths in m) and each carries its [`Unit`] string; the text renderer
+//!   converts to engineering units with [`Unit::engineering`].
+//! * `u` is the standard uncertainty (JCGM 100 §2.3.1); `k95` the Student-t
+//!   quantile `t_{0.975, ν}` for the coefficient's effective degrees of
+//!   freedom ν (JCGM 100 Annex G; the normal 1.960 when ν is infinite,
+//!   written `"dof": null`); `U95 = k95·u`.
+//! * The correlation matrix covers every coefficient, in the order of
+//!   `coefficients`. Blocks added separately ([`DocumentBuilder::estimates`])
+//!   are independent (zero correlation between blocks); a procedure whose
+//!   blocks share an input adds them as one joint block.
+//! * No number in a document is non-finite: a value that is not available
+//!   is `null` (in tables and optional fields) or absent.
+//!
+//! The JSON Schema of this type is checked into the repository at
+//! `schema/result.schema.json` ([`json_schema`]).
+
+pub mod centrifuge;
+pub mod gfimu;
+pub mod misalign;
+pub mod tumble;
+
+use std::collections::BTreeMap;
+
+use nalgebra::DMatrix;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use crate::error::{Error, Result};
+use crate::estimation::{coverage_factor, Estimates, Fit, VarianceSource};
+use crate::units::Unit;
+pub use crate::warning::{Warning, WarningCode};
+
+/// The schema identifier written in every document.
+pub const SCHEMA: &str = "incal.result/1";
+
+/// The procedure that produced a document.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum Procedure {
+    /// Dividing-head tumble test (seed 000, GJB 1037A).
+    Tumble,
+    /// Precision centrifuge (seed 001, IEEE Std 836).
+    Centrifuge,
+    /// Gyro misalignment on a rate table (seed 003).
+    MisalignGyro,
+    /// Accelerometer misalignment on a vertical face (seed 003).
+    MisalignAccel,
+    /// Gyro-free unit: K0 and Ks of every accelerometer (seed 004).
+    GfimuCalibrate,
+}
+
+impl Procedure {
+    /// The procedure id as in the JSON (`tumble`, `misalign-gyro`, …).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Procedure::Tumble => "tumble",
+            Procedure::Centrifuge => "centrifuge",
+            Procedure::MisalignGyro => "misalign-gyro",
+            Procedure::MisalignAccel => "misalign-accel",
+            Procedure::GfimuCalibrate => "gfimu-calibrate",
+        }
+    }
+}
+
+impl std::fmt::Display for Procedure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Who the result is about. Extra `key: value` pairs (from `--meta`) sit
+/// beside `serial` and `model`.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub struct Instrument {
+    /// Serial number (`null` when not given).
+    pub serial: Option<String>,
+    /// Model or part number (`null` when not given).
+    pub model: Option<String>,
+    /// Further identity and conditions (`--meta key=value`).
+    #[serde(flatten)]
+    pub meta: BTreeMap<String, String>,
+}
+
+/// One input file: the path as given and the SHA-256 of its bytes, so a
+/// result can be traced to its raw data.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub struct InputFile {
+    /// What the file is to the procedure (`input`, `calibration`,
+    /// `geometry`, `from`).
+    pub role: String,
+    /// The path as given on the command line (`-` for standard input).
+    pub path: String,
+    /// SHA-256 of the file's bytes, lower-case hex.
+    pub sha256: String,
+    /// Data rows used (`null` when not a table).
+    pub rows: Option<u64>,
+}
+
+/// One estimated coefficient.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct Coefficient {
+    /// Estimate.
+    pub value: f64,
+    /// Standard uncertainty u (same unit).
+    pub u: f64,
+    /// Unit of `value`, `u` and `U95`.
+    pub unit: Unit,
+    /// Effective degrees of freedom of u; `null` = infinite (known variance).
+    pub dof: Option<f64>,
+    /// Coverage factor for 95 % (Student t with `dof`).
+    pub k95: f64,
+    /// Expanded uncertainty `U95 = k95 · u`.
+    #[serde(rename = "U95")]
+    pub u95: f64,
+}
+
+impl Coefficient {
+    /// A coefficient from value, u, unit and degrees of freedom
+    /// (`f64::INFINITY` or anything above 1e6 for a known variance).
+    /// Fails when value or u is not finite or u is negative.
+    pub fn new(name: &str, value: f64, u: f64, unit: Unit, dof: f64) -> Result<Self> {
+        if !value.is_finite() || !u.is_finite() || u < 0.0 {
+            return Err(Error::InvalidValue {
+                what: format!("coefficient {name} (value, u)"),
+                value: format!("{value}, {u}"),
+            });
+        }
+        let k95 = coverage_factor(dof, 0.95);
+        let dof = (dof.is_finite() && dof < 1e6).then_some(dof);
+        Ok(Self {
+            value,
+            u,
+            unit,
+            dof,
+            k95,
+            u95: k95 * u,
+        })
+    }
+
+    /// Degrees of freedom as a number (`f64::INFINITY` for `null`).
+    pub fn dof_value(&self) -> f64 {
+        self.dof.unwrap_or(f64::INFINITY)
+    }
+}
+
+/// The coefficients, in the procedure's order; serialized as one JSON
+/// object `{NAME: Coefficient}` in that order.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Coefficients(Vec<(String, Coefficient)>);
+
+impl Coefficients {
+    /// Number of coefficients.
+    pub fn len(&self) -> usize {
+        self.0.len()
+    }
+    /// True when there is none.
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+    /// The coefficient called `name`.
+    pub fn get(&self, name: &str) -> Option<&Coefficient> {
+        self.0.iter().find(|(n, _)| n == name).map(|(_, c)| c)
+    }
+    /// `(name, coefficient)` in order.
+    pub fn iter(&self) -> impl Iterator<Item = (&str, &Coefficient)> {
+        self.0.iter().map(|(n, c)| (n.as_str(), c))
+    }
+    /// Names in order.
+    pub fn names(&self) -> Vec<String> {
+        self.0.iter().map(|(n, _)| n.clone()).collect()
+    }
+    fn push(&mut self, name: String, c: Coefficient) -> Result<()> {
+        if self.get(&name).is_some() {
+            return Err(Error::Unsupported(format!(
+                "result document: coefficient {name} given twice"
+            )));
+        }
+        self.0.push((name, c));
+        Ok(())
+    }
+}
+
+impl Serialize for Coefficients {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (n, c) in &self.0 {
+            m.serialize_entry(n, c)?;
+        }
+        m.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for Coefficients {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Coefficients;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an object of coefficients {NAME: {value, u, unit, dof, k95, U95}}")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut a: A,
+            ) -> std::result::Result<Coefficients, A::Error> {
+                let mut out: Vec<(String, Coefficient)> = Vec::new();
+                while let Some((k, v)) = a.next_entry::<String, Coefficient>()? {
+                    if out.iter().any(|(n, _)| *n == k) {
+                        return Err(serde::de::Error::custom(format!(
+                            "coefficient {k} appears twice"
+                        )));
+                    }
+                    out.push((k, v));
+                }
+                Ok(Coefficients(out))
+            }
+        }
+        d.deserialize_map(V)
+    }
+}
+
+impl JsonSchema for Coefficients {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "Coefficients".into()
+    }
+    fn json_schema(g: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let c = g.subschema_for::<Coefficient>();
+        schemars::json_schema!({
+            "type": "object",
+            "description": "Every estimated coefficient by name, in the procedure's order.",
+            "additionalProperties": c
+        })
+    }
+}
+
+/// Correlation matrix `ρ_jk = C_jk/(u_j u_k)` of the coefficients.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct Correlation {
+    /// Coefficient names, in the order of the rows and columns.
+    pub names: Vec<String>,
+    /// Symmetric matrix with unit diagonal (row-major lists).
+    pub matrix: Vec<Vec<f64>>,
+}
+
+/// Diagnostics of one least-squares fit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct FitSummary {
+    /// Which fit (`main`, a station, an accelerometer, …).
+    pub label: String,
+    /// Observations (position means).
+    pub observations: usize,
+    /// Fitted parameters.
+    pub parameters: usize,
+    /// Residual degrees of freedom `n − p`.
+    pub dof: usize,
+    /// Numerical rank of the design.
+    pub rank: usize,
+    /// Condition number of the column-equilibrated design.
+    pub condition_number: Option<f64>,
+    /// `Σ w r²` (χ² when the weights are inverse variances).
+    pub chi2: Option<f64>,
+    /// Lack-of-fit p-value `P(χ²_{n−p} ≥ Σ w r²)` (with known or scatter σ).
+    pub chi2_p_value: Option<f64>,
+    /// Where the variance factor came from.
+    pub variance_source: VarianceSource,
+    /// `sqrt(Σ r²/(n − p))` of the unweighted residuals (`null` when n = p).
+    pub residual_rms: Option<f64>,
+    /// Unit of the residuals.
+    pub residual_unit: Unit,
+    /// The combination of terms the design determines worst.
+    pub weakest_combination: String,
+}
+
+fn finite(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
+}
+
+impl FitSummary {
+    /// Summary of `fit` with residuals in `residual_unit`.
+    pub fn of(label: &str, fit: &Fit, residual_unit: Unit) -> FitSummary {
+        let rms = if fit.dof > 0 {
+            (fit.residuals.norm_squared() / fit.dof as f64).sqrt()
+        } else {
+            f64::NAN
+        };
+        FitSummary {
+            label: label.to_string(),
+            observations: fit.diagnostics.n_obs,
+            parameters: fit.diagnostics.n_params,
+            dof: fit.dof,
+            rank: fit.diagnostics.rank,
+            condition_number: finite(fit.diagnostics.condition),
+            chi2: finite(fit.weighted_rss),
+            chi2_p_value: fit.chi2_p_value.and_then(finite),
+            variance_source: fit.variance_source,
+            residual_rms: finite(rms),
+            residual_unit,
+            weakest_combination: fit.diagnostics.weakest.to_string(),
+        }
+    }
+}
+
+/// A table cell: a number, a text or `null` (not available).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum Cell {
+    /// A finite number.
+    Number(f64),
+    /// A label.
+    Text(String),
+    /// Not available.
+    Null,
+}
+
+impl Cell {
+    /// A number, or `Null` when not finite.
+    pub fn num(x: f64) -> Cell {
+        if x.is_finite() {
+            Cell::Number(x)
+        } else {
+            Cell::Null
+        }
+    }
+    /// An optional number.
+    pub fn opt(x: Option<f64>) -> Cell {
+        x.map_or(Cell::Null, Cell::num)
+    }
+    /// A text.
+    pub fn text(s: impl Into<String>) -> Cell {
+        Cell::Text(s.into())
+    }
+}
+
+/// A column of a [`Table`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct Column {
+    /// Column name (snake case, units not in the name: see `unit`).
+    pub name: String,
+    /// Unit of the numbers in the column (`null` for labels and counts).
+    pub unit: Option<Unit>,
+}
+
+/// A procedure's table as data (positions and residuals, stations,
+/// budgets, per-accelerometer blocks, …).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct Table {
+    /// Stable identifier (`positions`, `stations`, `budget.K_ip`, …).
+    pub id: String,
+    /// Title for people.
+    pub title: String,
+    /// Columns.
+    pub columns: Vec<Column>,
+    /// Rows, each with one cell per column.
+    pub rows: Vec<Vec<Cell>>,
+}
+
+impl Table {
+    /// An empty table with columns `(name, unit)`.
+    pub fn new(id: &str, title: &str, columns: &[(&str, Option<Unit>)]) -> Table {
+        Table {
+            id: id.to_string(),
+            title: title.to_string(),
+            columns: columns
+                .iter()
+                .map(|(n, u)| Column {
+                    name: n.to_string(),
+                    unit: u.clone(),
+                })
+                .collect(),
+            rows: Vec::new(),
+        }
+    }
+    /// Append a row (must have one cell per column).
+    pub fn push(&mut self, row: Vec<Cell>) -> Result<()> {
+        if row.len() != self.columns.len() {
+            return Err(Error::Unsupported(format!(
+                "table {}: row of {} cells for {} columns",
+                self.id,
+                row.len(),
+                self.columns.len()
+            )));
+        }
+        self.rows.push(row);
+        Ok(())
+    }
+}
+
+/// Why the tool decided something the user did not ask for explicitly.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum DecisionCode {
+    /// Where the variance behind u came from (sample scatter, residuals,
+    /// known noise).
+    VarianceSource,
+    /// A term not modelled that the plan cannot separate: the fitted
+    /// coefficients absorb it.
+    Absorbed,
+    /// An error source estimated from the residuals and included in u
+    /// (e.g. the dividing head's index-angle error).
+    ExcessVariance,
+    /// A coefficient the data cannot give, and why.
+    NotDetermined,
+    /// An input taken from another result (`--from`).
+    ChainedInput,
+}
+
+/// A decision the tool made, with its reason.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub struct Decision {
+    /// Stable code.
+    pub code: DecisionCode,
+    /// What was decided and why.
+    pub message: String,
+}
+
+/// The result document of every procedure (module docs).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct ResultDocument {
+    /// Always `incal.result/1` for this version of the shape.
+    pub schema: String,
+    /// The procedure.
+    pub procedure: Procedure,
+    /// A one-line title for people.
+    pub title: String,
+    /// Version of incal that wrote the document.
+    pub incal_version: String,
+    /// The instrument.
+    pub instrument: Instrument,
+    /// Input files with their hashes.
+    pub inputs: Vec<InputFile>,
+    /// The options that shaped the result (names with units, as on the
+    /// command line without the leading dashes).
+    pub options: BTreeMap<String, Value>,
+    /// Every estimated coefficient.
+    pub coefficients: Coefficients,
+    /// Correlation of the coefficients.
+    pub correlation: Correlation,
+    /// Diagnostics of the fits behind the coefficients.
+    pub fits: Vec<FitSummary>,
+    /// The procedure's tables.
+    pub tables: Vec<Table>,
+    /// Warnings.
+    pub warnings: Vec<Warning>,
+    /// Decisions the tool made.
+    pub decisions: Vec<Decision>,
+    /// Procedure-specific top-level objects kept for their established
+    /// contracts (`radius`, `alignment` of the centrifuge, `angles` of the
+    /// misalignment tests, `accelerometers` of the gyro-free unit, …).
+    #[serde(flatten)]
+    pub extra: BTreeMap<String, Value>,
+}
+
+impl ResultDocument {
+    /// Parse a document from JSON text, checking the schema id.
+    /// Errors name the JSON path where possible.
+    pub fn from_json(text: &str) -> std::result::Result<ResultDocument, String> {
+        let v: Value =
+            serde_json::from_str(text).map_err(|e| format!("line {}: not valid JSON: {e}", e.line()))?;
+        match v.get("schema").and_then(Value::as_str) {
+            Some(SCHEMA) => {}
+            Some(other) => {
+                return Err(format!(
+                    "$.schema: '{other}' is not a schema this version reads ({SCHEMA})"
+                ))
+            }
+            None => return Err(format!("$.schema: missing: not an incal result ({SCHEMA})")),
+        }
+        serde_json::from_value(v).map_err(|e| format!("not a valid {SCHEMA} document: {e}"))
+    }
+
+    /// Pretty JSON text (ends without a newline).
+    pub fn to_json(&self) -> String {
+        // Serializing plain data with string keys cannot fail.
+        serde_json::to_string_pretty(self).unwrap_or_default()
+    }
+
+    /// The covariance of two coefficients from the correlation matrix.
+    pub fn covariance(&self, a: &str, b: &str) -> Option<f64> {
+        let ia = self.correlation.names.iter().position(|n| n == a)?;
+        let ib = self.correlation.names.iter().position(|n| n == b)?;
+        let (ca, cb) = (self.coefficients.get(a)?, self.coefficients.get(b)?);
+        Some(self.correlation.matrix[ia][ib] * ca.u * cb.u)
+    }
+}
+
+/// The JSON Schema of [`ResultDocument`] (the file
+/// `schema/result.schema.json` is this, pretty-printed).
+pub fn json_schema() -> Value {
+    let s = schemars::schema_for!(ResultDocument);
+    serde_json::to_value(s).unwrap_or(Value::Null)
+}
+
+/// Builds a [`ResultDocument`]: the procedure adds its coefficients
+/// (block by block), fits, tables, warnings and decisions; the caller (the
+/// command-line tool) adds instrument, inputs and options.
+#[derive(Debug, Clone)]
+pub struct DocumentBuilder {
+    doc: ResultDocument,
+    blocks: Vec<DMatrix<f64>>,
+}
+
+impl DocumentBuilder {
+    /// A document of `procedure` with a title.
+    pub fn new(procedure: Procedure, title: impl Into<String>) -> Self {
+        Self {
+            doc: ResultDocument {
+                schema: SCHEMA.to_string(),
+                procedure,
+                title: title.into(),
+                incal_version: env!("CARGO_PKG_VERSION").to_string(),
+                instrument: Instrument::default(),
+                inputs: Vec::new(),
+                options: BTreeMap::new(),
+                coefficients: Coefficients::default(),
+                correlation: Correlation::default(),
+                fits: Vec::new(),
+                tables: Vec::new(),
+                warnings: Vec::new(),
+                decisions: Vec::new(),
+                extra: BTreeMap::new(),
+            },
+            blocks: Vec::new(),
+        }
+    }
+
+    /// Add every estimate of `e` as a coefficient named `prefix + name`,
+    /// with the unit `unit_of(name)` and the block's degrees of freedom.
+    /// `e` is one correlation block: it is taken as independent of every
+    /// other block (module docs).
+    pub fn estimates(
+        &mut self,
+        e: &Estimates,
+        prefix: &str,
+        unit_of: impl Fn(&str) -> Result<Unit>,
+    ) -> Result<&mut Self> {
+        for (k, name) in e.names().iter().enumerate() {
+            let full = format!("{prefix}{name}");
+            let c = Coefficient::new(&full, e.values()[k], e.u_at(k), unit_of(name)?, e.dof())?;
+            self.doc.coefficients.push(full, c)?;
+        }
+        self.blocks.push(e.correlation());
+        Ok(self)
+    }
+
+    /// Add one coefficient with no correlation to any other.
+    pub fn coefficient(&mut self, name: &str, c: Coefficient) -> Result<&mut Self> {
+        self.doc.coefficients.push(name.to_string(), c)?;
+        self.blocks.push(DMatrix::identity(1, 1));
+        Ok(self)
+    }
+
+    /// Add a fit summary.
+    pub fn fit(&mut self, f: FitSummary) -> &mut Self {
+        self.doc.fits.push(f);
+        self
+    }
+
+    /// Add a table.
+    pub fn table(&mut self, t: Table) -> &mut Self {
+        self.doc.tables.push(t);
+        self
+    }
+
+    /// Add warnings.
+    pub fn warnings(&mut self, w: impl IntoIterator<Item = Warning>) -> &mut Self {
+        self.doc.warnings.extend(w);
+        self
+    }
+
+    /// Add a decision.
+    pub fn decision(&mut self, code: DecisionCode, message: impl Into<String>) -> &mut Self {
+        self.doc.decisions.push(Decision {
+            code,
+            message: message.into(),
+        });
+        self
+    }
+
+    /// Set a procedure-specific top-level object (fails on a reserved key).
+    pub fn extra(&mut self, key: &str, value: Value) -> Result<&mut Self> {
+        const RESERVED: [&str; 14] = [
+            "schema",
+            "procedure",
+            "title",
+            "incal_version",
+            "instrument",
+            "inputs",
+            "options",
+            "coefficients",
+            "correlation",
+            "fits",
+            "tables",
+            "warnings",
+            "decisions",
+            "verdicts",
+        ];
+        if RESERVED.contains(&key) {
+            return Err(Error::Unsupported(format!(
+                "result document: '{key}' is a reserved key"
+            )));
+        }
+        self.doc.extra.insert(key.to_string(), value);
+        Ok(self)
+    }
+
+    /// Set an option that shaped the result.
+    pub fn option(&mut self, key: &str, value: Value) -> &mut Self {
+        self.doc.options.insert(key.to_string(), value);
+        self
+    }
+
+    /// The document, with the block-diagonal correlation matrix.
+    pub fn finish(self) -> ResultDocument {
+        let mut doc = self.doc;
+        let n: usize = self.blocks.iter().map(|b| b.nrows()).sum();
+        let mut m = vec![vec![0.0; n]; n];
+        let mut at = 0;
+        for b in &self.blocks {
+            for j in 0..b.nrows() {
+                for k in 0..b.ncols() {
+                    let r = b[(j, k)];
+                    // Round-off can leave |ρ| a hair above 1.
+                    m[at + j][at + k] = if r.is_finite() { r.clamp(-1.0, 1.0) } else { 0.0 };
+                }
+            }
+            at += b.nrows();
+        }
+        doc.correlation = Correlation {
+            names: doc.coefficients.names(),
+            matrix: m,
+        };
+        doc
+    }
+}
+
+/// A coefficient's unit when every name is an accelerometer term
+/// ([`crate::models::Term`]); fails on any other name.
+pub fn term_unit(name: &str) -> Result<Unit> {
+    crate::models::Term::parse(name).map(|t| t.unit())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::DVector;
+
+    fn block() -> Estimates {
+        Estimates::new(
+            vec!["K0".into(), "K1".into()],
+            DVector::from_vec(vec![1e-3, 10.0]),
+            DMatrix::from_row_slice(2, 2, &[1e-12, 5e-13, 5e-13, 1e-12]),
+            6.0,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn coefficients_carry_k95_and_u95_and_keep_their_order() {
+        let mut b = DocumentBuilder::new(Procedure::Tumble, "t");
+        b.estimates(&block(), "", term_unit).unwrap();
+        let doc = b.finish();
+        assert_eq!(doc.coefficients.names(), ["K0", "K1"]);
+        let k0 = doc.coefficients.get("K0").unwrap();
+        assert!((k0.k95 - 2.447).abs() < 1e-3);
+        assert!((k0.u95 - k0.k95 * 1e-6).abs() < 1e-18);
+        assert_eq!(k0.dof, Some(6.0));
+        assert_eq!(doc.correlation.matrix[0][1], 0.5);
+        let text = doc.to_json();
+        let back = ResultDocument::from_json(&text).unwrap();
+        assert_eq!(back, doc);
+        // Order survives the round trip (K1 before K0 would be alphabetical).
+        let v: Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(v["schema"], SCHEMA);
+        assert_eq!(v["coefficients"]["K0"]["U95"].as_f64(), Some(k0.u95));
+    }
+
+    #[test]
+    fn non_finite_and_duplicate_coefficients_are_refused() {
+        assert!(Coefficient::new("x", f64::NAN, 1.0, Unit::G, 1.0).is_err());
+        assert!(Coefficient::new("x", 1.0, f64::INFINITY, Unit::G, 1.0).is_err());
+        let mut b = DocumentBuilder::new(Procedure::Tumble, "t");
+        b.estimates(&block(), "", term_unit).unwrap();
+        assert!(b.estimates(&block(), "", term_unit).is_err());
+        assert!(b.extra("coefficients", Value::Null).is_err());
+    }
+
+    #[test]
+    fn infinite_dof_is_null_with_the_normal_quantile() {
+        let c = Coefficient::new("x", 1.0, 0.1, Unit::G, f64::INFINITY).unwrap();
+        assert_eq!(c.dof, None);
+        assert!((c.k95 - 1.95996).abs() < 1e-4);
+    }
+
+    #[test]
+    fn other_documents_are_refused_with_a_path() {
+        assert!(ResultDocument::from_json("{}")
+            .unwrap_err()
+            .contains("$.schema"));
+        assert!(ResultDocument::from_json(r#"{"schema": "x/2"}"#)
+            .unwrap_err()
+            .contains("x/2"));
+    }
+}

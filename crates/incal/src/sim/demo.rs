@@ -1,0 +1,434 @@
+//! The scenarios of `incal demo`, as data: every rig simulated from a known
+//! truth with a seed, calibrated by its procedure into the one result
+//! document, with the truth of every coefficient *as the plan observes it*.
+//!
+//! "As observed": a term the plan cannot separate from the fitted ones is
+//! absorbed by them (e.g. with K_pp not modelled a 1 g tumble reports
+//! `K0 + K_pp` and `K2 − K_pp`, [`crate::procedures::tumble::Absorption`]),
+//! so the truth shown beside each estimate is the combination the estimate
+//! really measures; the centrifuge's radii are the effective ones,
+//! `R(1 + K_io)` (module docs of [`crate::procedures::centrifuge::radius`]).
+//! A coefficient with no simple truth (a bias that shifts between
+//! mountings) has none (`None`).
+
+use std::collections::BTreeMap;
+
+use nalgebra::Vector3;
+
+use crate::document::{Cell, ResultDocument, Table};
+use crate::error::Result;
+use crate::estimation::Noise;
+use crate::models::gfimu::Geometry;
+use crate::models::{AccelerometerModel, Term};
+use crate::procedures::tumble::plan::TumblePlan;
+use crate::procedures::tumble::{calibrate as tumble_calibrate, TumbleOptions, TumbleResult};
+use crate::rigs::Mount;
+use crate::units::{arcsec_to_rad, rad_to_arcsec, Unit, STANDARD_GRAVITY_M_S2};
+
+/// One calibrated scenario.
+#[derive(Debug, Clone)]
+pub struct DemoCase {
+    /// What was simulated (plan, mount, …).
+    pub heading: String,
+    /// The calibration's result document.
+    pub document: ResultDocument,
+    /// Truth of each coefficient as the plan observes it (document units).
+    pub truth: BTreeMap<String, f64>,
+    /// Further tables (e.g. the motion recovered by the gyro-free unit).
+    pub tables: Vec<Table>,
+    /// Further findings, one line each.
+    pub notes: Vec<String>,
+}
+
+/// One rig of the demo.
+#[derive(Debug, Clone)]
+pub struct DemoSection {
+    /// Title (rig, source, standard).
+    pub title: String,
+    /// The virtual instrument and the plan, in a few lines.
+    pub description: String,
+    /// Its scenarios.
+    pub cases: Vec<DemoCase>,
+}
+
+/// Every section of the demo for `seed` (same seed, same numbers).
+pub fn sections(seed: u64) -> Result<Vec<DemoSection>> {
+    Ok(vec![
+        tumble(seed)?,
+        gfimu(seed)?,
+        misalign(seed)?,
+        centrifuge(seed)?,
+    ])
+}
+
+/// Truth of a tumble's fitted terms as observed: each fitted coefficient
+/// plus the absorbed terms it carries (`K_fitted + factor·K_absorbed`).
+pub fn tumble_observed_truth(r: &TumbleResult, truth: &AccelerometerModel) -> BTreeMap<String, f64> {
+    let mut out: BTreeMap<String, f64> = r
+        .terms
+        .iter()
+        .map(|t| (t.name().to_string(), truth.get(*t)))
+        .collect();
+    for a in &r.absorbed {
+        for (t, f) in &a.into {
+            if let Some(v) = out.get_mut(t.name()) {
+                *v += f * truth.get(a.term);
+            }
+        }
+    }
+    out
+}
+
+fn tumble(seed: u64) -> Result<DemoSection> {
+    let truth = AccelerometerModel {
+        delta_p_rad: arcsec_to_rad(-300.0),
+        k_io: 5e-7,
+        k_pp: 2e-6,
+        ..AccelerometerModel::seed000()
+    };
+    let cases = [
+        (
+            "pendulum mount, GJB 12-point",
+            Mount::Pendulum,
+            TumblePlan::gjb12(),
+        ),
+        ("gate mount, GJB 12-point", Mount::Gate, TumblePlan::gjb12()),
+        (
+            "pendulum mount, small-angle plan for a 0.5 g instrument",
+            Mount::Pendulum,
+            TumblePlan::for_range(0.5, 1.0)?,
+        ),
+    ];
+    let mut out = Vec::new();
+    for (k, (title, mount, plan)) in cases.into_iter().enumerate() {
+        let obs = super::tumble::simulate(&super::tumble::TumbleSim {
+            truth,
+            mount,
+            angles_deg: plan.angles_deg.clone(),
+            samples: 10,
+            noise: 1e-6,
+            index_error_rad: arcsec_to_rad(1.0),
+            passes: 1,
+            seed: seed.wrapping_add(k as u64),
+        });
+        let r = tumble_calibrate(&obs, &TumbleOptions::new(mount))?;
+        out.push(DemoCase {
+            heading: format!(
+                "{title}: angles {} deg",
+                plan.angles_deg
+                    .iter()
+                    .map(|a| format!("{a}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            truth: tumble_observed_truth(&r, &truth),
+            document: r.document(false)?,
+            tables: Vec::new(),
+            notes: Vec::new(),
+        });
+    }
+    Ok(DemoSection {
+        title: "Tumble test on a dividing head (seed 000, GJB 1037A)".into(),
+        description: "Virtual accelerometer: the seed 000 instrument (K1 = 10 output/g, K0 = 8 mg, ...) with K_pp = 2 ug/g^2,\n\
+                      10 samples per position, output noise 1e-6, index-angle error 1 arcsec rms.\n\
+                      A 1 g tumble cannot separate K_pp (pendulum) or K_oo (gate) from K0 and K2: the truth column shows\n\
+                      what the plan observes (K0 + K_pp, K2 - K_pp)."
+            .into(),
+        cases: out,
+    })
+}
+
+fn gfimu(seed: u64) -> Result<DemoSection> {
+    use crate::procedures::gfimu::{calibrate, solve, CalibrateOptions, SolveOptions};
+    use crate::sim::gfimu::{
+        motion_truth, simulate_motion, simulate_static, six_positions, GfimuTruth, MotionProfile,
+    };
+    let g = Geometry::paper(0.1)?;
+    let truth = GfimuTruth::typical(&g, 1.0);
+    let noise = 1e-4;
+    let data = simulate_static(&g, &truth, &six_positions(), 20, noise, seed)?;
+    let cal = calibrate(&g, &data, &CalibrateOptions::default())?;
+    let mut t = BTreeMap::new();
+    for (j, a) in cal.accelerometers.iter().enumerate() {
+        t.insert(format!("{}.K0", a.name), truth.k0[j]);
+        t.insert(format!("{}.Ks_x", a.name), truth.ks[j].x);
+        t.insert(format!("{}.Ks_y", a.name), truth.ks[j].y);
+        t.insert(format!("{}.Ks_z", a.name), truth.ks[j].z);
+        t.insert(format!("{}.scale_factor", a.name), truth.ks[j].norm());
+    }
+    let m = MotionProfile {
+        axis: Vector3::new(0.2, -0.1, 1.0),
+        angular_accel_rad_s2: 2.0,
+        spin_up_s: 1.005,
+        omega0_rad_s: Vector3::zeros(),
+        f0_g: Vector3::new(0.05, 0.0, 1.0),
+        duration_s: 3.0,
+        rate_hz: 100.0,
+        gravity_m_s2: STANDARD_GRAVITY_M_S2,
+    };
+    let series = simulate_motion(&g, &truth, &m, noise, seed.wrapping_add(1))?;
+    let sol = solve(&g, &cal.calibrated(), &series, &SolveOptions::default())?;
+    let mut motion = Table::new(
+        "motion",
+        "Motion recovered from the calibrated unit: spin-up about (0.2, -0.1, 1) at 2 rad/s^2 for 1.005 s, then constant rate; 100 Hz, 3 s",
+        &[
+            ("t_s", None),
+            ("f0_z", None),
+            ("truth_f0_z", None),
+            ("max_f0_error_g", None),
+            ("omega_dot_z", Some(Unit::Other("rad/s^2".into()))),
+            ("truth_omega_dot_z", Some(Unit::Other("rad/s^2".into()))),
+            ("u_omega_dot_z", Some(Unit::Other("rad/s^2".into()))),
+            ("omega_z", Some(Unit::RadPerS)),
+            ("truth_omega_z", Some(Unit::RadPerS)),
+            ("max_omega_drift", Some(Unit::RadPerS)),
+        ],
+    );
+    for s in sol.samples.iter().step_by(50) {
+        let (f0, wd, w) = motion_truth(&m, s.time_s);
+        let err = |a: &Vector3<f64>, b: &Vector3<f64>| (a - b).amax();
+        motion.push(vec![
+            Cell::num(s.time_s),
+            Cell::num(s.f0_g.z),
+            Cell::num(f0.z),
+            Cell::num(err(&s.f0_g, &f0)),
+            Cell::num(s.omega_dot_rad_s2.z),
+            Cell::num(wd.z),
+            Cell::opt(s.u_omega_dot_rad_s2.map(|u| u.z)),
+            Cell::num(s.omega_rad_s.z),
+            Cell::num(w.z),
+            Cell::num(err(&s.omega_rad_s, &w)),
+        ])?;
+    }
+    Ok(DemoSection {
+        title: "Gyro-free inertial unit: six accelerometers (seed 004, methods.md 4)".into(),
+        description: "Paper layout, lever arm 0.1 m, K1 = 1 output/g, mrad misalignments;\n\
+                      six-position test with 20 samples per position, output noise 1e-4."
+            .into(),
+        cases: vec![DemoCase {
+            heading: "six-position calibration, then a rate-table motion".into(),
+            document: cal.document("paper layout, lever arm 0.1 m", false)?,
+            truth: t,
+            tables: vec![motion],
+            notes: vec![
+                "omega is integrated from the solved angular acceleration (no gyro to reset it): the noise alone gives a random walk,".into(),
+                "calibration errors bias omega_dot into a linear drift, and the centripetal term feeds omega errors back, so the drift grows faster than sqrt(t).".into(),
+            ],
+        }],
+    })
+}
+
+fn misalign(seed: u64) -> Result<DemoSection> {
+    use crate::procedures::misalign::accel::{self, AccelOptions};
+    use crate::procedures::misalign::gyro::{self, GyroConfig, GyroOptions, GYRO_ANGLES};
+    use crate::rigs::rate_table::{FaceMounting, GyroMounting};
+    use crate::sim::misalign::{simulate_accel, simulate_gyro, AccelSim, GyroSim};
+    let cfg = GyroSim {
+        mounting: GyroMounting {
+            dtheta_x0: arcsec_to_rad(2.4),
+            dtheta_y0: arcsec_to_rad(-7.5),
+            dtheta_y1: arcsec_to_rad(-54.0),
+            dtheta_z1: arcsec_to_rad(20.0),
+            dtheta_y2: arcsec_to_rad(-162.2),
+            dtheta_z2: arcsec_to_rad(55.8),
+        },
+        scale_factor: -2.9222,
+        bias: 0.002,
+        bias_shift: 2e-3,
+        configs: GyroConfig::paper(),
+        rates_deg_s: vec![20.0, 30.0, 40.0],
+        records: 2,
+        turns: 1.0,
+        samples_per_turn: 36,
+        noise: 1e-3,
+        latitude_rad: 45.75f64.to_radians(),
+        seed,
+    };
+    let m = cfg.mounting;
+    let angle_truth = |y2: f64, z2: f64| -> BTreeMap<String, f64> {
+        let mut t = BTreeMap::new();
+        t.insert("dtheta_y2".to_string(), y2);
+        t.insert("dtheta_z2".to_string(), z2);
+        t.insert("gamma".to_string(), y2.hypot(z2));
+        t.insert(
+            "azimuth".to_string(),
+            (-y2).atan2(z2).rem_euclid(std::f64::consts::TAU),
+        );
+        t
+    };
+    let mut gt = angle_truth(m.dtheta_y2, m.dtheta_z2);
+    gt.insert("dtheta_y0".into(), m.dtheta_y0);
+    gt.insert("dtheta_x0".into(), m.dtheta_x0);
+    gt.insert("dtheta_y1".into(), m.dtheta_y1);
+    let gopts = GyroOptions {
+        scale_factor: cfg.scale_factor,
+        per_config_bias: true,
+        noise: Noise::Auto,
+    };
+    let r = gyro::calibrate(&simulate_gyro(&cfg)?, &gopts)?;
+    // The same test, noiseless, with 2.5-turn records averaged as recorded.
+    let mut partial = cfg.clone();
+    partial.turns = 2.5;
+    partial.noise = 0.0;
+    partial.bias_shift = 0.0;
+    let rp = gyro::calibrate(
+        &simulate_gyro(&partial)?,
+        &GyroOptions {
+            scale_factor: cfg.scale_factor,
+            per_config_bias: false,
+            noise: Noise::Known { sigma: 1e-9 },
+        },
+    )?;
+    let worst = GYRO_ANGLES
+        .iter()
+        .map(|n| {
+            let t = gt.get(*n).copied().unwrap_or(f64::NAN);
+            rad_to_arcsec((rp.angles.value(n).unwrap_or(f64::NAN) - t).abs())
+        })
+        .fold(0.0, f64::max);
+    let acfg = AccelSim {
+        mounting: FaceMounting {
+            dtheta_y0: arcsec_to_rad(30.0),
+            dtheta_y1: 0.0,
+            dtheta_y2: arcsec_to_rad(-5.3),
+            dtheta_z2: arcsec_to_rad(20.5),
+        },
+        scale_factor: 1.299,
+        bias: -0.002,
+        betas_rad: [0.0f64, 90.0, 180.0, 270.0]
+            .iter()
+            .map(|b| b.to_radians())
+            .collect(),
+        samples: 10,
+        noise: 2e-5,
+        seed: seed.wrapping_add(1),
+    };
+    let aopts = AccelOptions {
+        scale_factor: acfg.scale_factor,
+        noise: Noise::Auto,
+    };
+    let ra = accel::calibrate(&simulate_accel(&acfg), &aopts)?;
+    Ok(DemoSection {
+        title: "Misalignment separation (seed 003)".into(),
+        description: "Virtual gyro on a rate table: kI = -2.9222 V/(deg/s), the paper's five configurations,\n\
+                      +-20/30/40 deg/s, 2 one-turn records each, Earth rate at 45.75 deg N, noise 1 mV per sample,\n\
+                      bias shifting 2 mV rms between mountings (fitted per configuration).\n\
+                      Virtual accelerometer on a vertical face: kI = 1.299 V/g, beta = 0/90/180/270 deg, 10 samples each, noise 20 uV."
+            .into(),
+        cases: vec![
+            DemoCase {
+                heading: "gyro on a rate table".into(),
+                document: r.document(&gopts, &[])?,
+                truth: gt,
+                tables: Vec::new(),
+                notes: vec![format!(
+                    "noiseless records of 2.5 turns averaged as recorded: largest angle error {worst:.2} arcsec (Earth rate); `incal misalign gyro --turns whole` removes it"
+                )],
+            },
+            DemoCase {
+                heading: "accelerometer on a vertical face".into(),
+                document: ra.document(&aopts)?,
+                truth: angle_truth(acfg.mounting.dtheta_y2, acfg.mounting.dtheta_z2),
+                tables: Vec::new(),
+                notes: Vec::new(),
+            },
+        ],
+    })
+}
+
+/// The centrifuge scenario's truth instrument (g units).
+pub fn centrifuge_truth() -> AccelerometerModel {
+    AccelerometerModel {
+        k0_g: 1.2e-4,
+        k1_out_per_g: 1.3,
+        k2: 3.9e-6,
+        k3: 5e-9,
+        delta_o_rad: arcsec_to_rad(40.0),
+        delta_p_rad: arcsec_to_rad(-20.0),
+        k_ip: 7e-6,
+        k_io: 2e-6,
+        k_po: -1e-6,
+        k_pp: 4.6e-7,
+        k_oo: -3e-7,
+        k_oq: 5e-7,
+    }
+}
+
+fn centrifuge(seed: u64) -> Result<DemoSection> {
+    use crate::procedures::centrifuge::radius::ValueU;
+    use crate::procedures::centrifuge::{calibrate, CentrifugeOptions, CENTRIFUGE_TERMS};
+    use crate::rigs::centrifuge::Centrifuge;
+    use crate::sim::centrifuge::{rates_for_levels, simulate, standard_positions, CentrifugeSim};
+    let truth = centrifuge_truth();
+    let rig = Centrifuge {
+        r_plus_m: 0.714775,
+        r_minus_m: 0.705794,
+        latitude_rad: 39.9f64.to_radians(),
+        g_local_m_s2: STANDARD_GRAVITY_M_S2,
+        opposite_sense: false,
+        tilt_rad: arcsec_to_rad(60.0),
+    };
+    let obs = simulate(&CentrifugeSim {
+        truth,
+        rig,
+        positions: standard_positions(),
+        rates_rad_s: rates_for_levels(
+            &[0.0, 1.0, 2.0, 4.0, 7.0, 10.0, 14.0, 18.0, 22.0, 25.0],
+            0.71,
+            STANDARD_GRAVITY_M_S2,
+        ),
+        samples: 5,
+        noise: 2e-6,
+        seed,
+    });
+    let opts = CentrifugeOptions {
+        k0_g: ValueU {
+            value: truth.k0_g,
+            u: 2e-6,
+        },
+        k1: ValueU {
+            value: truth.k1_out_per_g,
+            u: 1.3e-6,
+        },
+        radius0_m: 0.71,
+        latitude_rad: rig.latitude_rad,
+        g_local_m_s2: rig.g_local_m_s2,
+        opposite_sense: false,
+        order: 3,
+        alignment_tolerance_rad: 0.0,
+        noise: Noise::Auto,
+        terms: None,
+    };
+    let r = calibrate(&obs, &opts)?;
+    let mut t: BTreeMap<String, f64> = CENTRIFUGE_TERMS
+        .iter()
+        .map(|term: &Term| (term.name().to_string(), truth.get(*term)))
+        .collect();
+    // Radii measured at ip,0 are effective: R(1 + K_io).
+    let eff = 1.0 + truth.k_io;
+    for (name, v) in [
+        ("R_plus_m", rig.r_plus_m),
+        ("R_minus_m", rig.r_minus_m),
+        ("R_plus_static_m", rig.r_plus_m),
+        ("R_minus_static_m", rig.r_minus_m),
+        ("R_centre_m", 0.5 * (rig.r_plus_m + rig.r_minus_m)),
+        ("ecm_offset_m", rig.ecm_offset_m()),
+    ] {
+        t.insert(name.to_string(), v * eff);
+    }
+    Ok(DemoSection {
+        title: "Precision centrifuge: radius, nonlinearity, cross-coupling (seed 001, IEEE Std 836)".into(),
+        description: "Virtual accelerometer (K1 = 1.3 output/g), R+ = 0.714775 m, R- = 0.705794 m (ECM offset 4.49 mm),\n\
+                      IA tilt 60 arcsec, latitude 39.9 deg, 0..25 g at ip,0 ip,90 io,90 ip,45 io,45 po,45, both polarities,\n\
+                      5 samples per point, output noise 2e-6; K0 and K1 known to 2 ug and 1 ppm.\n\
+                      Radii are effective radii R(1 + K_io), as the paper measures them."
+            .into(),
+        cases: vec![DemoCase {
+            heading: "full position set, model order 3".into(),
+            document: r.document(&opts)?,
+            truth: t,
+            tables: Vec::new(),
+            notes: Vec::new(),
+        }],
+    })
+}

@@ -1,0 +1,103 @@
+//! Typed warnings: every warning a procedure gives carries a stable code
+//! (for machines: records, limits, reports) and a message (for people).
+//!
+//! Codes are part of the result schema (`incal.result/1`): a code is never
+//! renamed or reused; new situations get new codes.
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// What a warning is about. Serialized in kebab-case (`weak-conditioning`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum WarningCode {
+    /// The plan determines some combination of terms poorly (condition
+    /// number above [`crate::estimation::WARN_COND`]).
+    WeakConditioning,
+    /// Residuals between positions exceed the sample scatter (χ² test);
+    /// uncertainties were scaled up by the residual scatter.
+    LackOfFit,
+    /// A rate test without a forward/reverse pair: the bias is separated
+    /// only through the rate dependence.
+    NoReversal,
+    /// The total misalignment γ is within 3 u of zero: its linear u and the
+    /// azimuth are unreliable.
+    SmallAngle,
+    /// A raw record does not cover whole table turns, or was truncated.
+    PartialTurns,
+    /// Part of the data could not be reduced on its own (a pass, a station,
+    /// a radius fit); the message says which and why.
+    PartFailed,
+    /// A centrifuge station has one polarity only: the odd quadratic is
+    /// not separated there.
+    OnePolarity,
+    /// The centrifuge run lacks a piece the radius needs (at-rest rows, the
+    /// IA-radial station, one polarity); a nominal value was used.
+    RadiusIncomplete,
+    /// An input estimate was given without its uncertainty: it is treated
+    /// as exact, and every u derived from it is too small by its share.
+    MissingUncertainty,
+    /// The six-position bias estimates of one accelerometer disagree beyond
+    /// their uncertainty.
+    InconsistentBias,
+    /// The array geometry or a calibrated quantity is outside the range in
+    /// which the procedure's linear model holds.
+    ModelRange,
+}
+
+impl WarningCode {
+    /// The stable code string (`weak-conditioning`, …).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            WarningCode::WeakConditioning => "weak-conditioning",
+            WarningCode::LackOfFit => "lack-of-fit",
+            WarningCode::NoReversal => "no-reversal",
+            WarningCode::SmallAngle => "small-angle",
+            WarningCode::PartialTurns => "partial-turns",
+            WarningCode::PartFailed => "part-failed",
+            WarningCode::OnePolarity => "one-polarity",
+            WarningCode::RadiusIncomplete => "radius-incomplete",
+            WarningCode::MissingUncertainty => "missing-uncertainty",
+            WarningCode::InconsistentBias => "inconsistent-bias",
+            WarningCode::ModelRange => "model-range",
+        }
+    }
+}
+
+impl std::fmt::Display for WarningCode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// A warning: a stable code and a one-line message.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub struct Warning {
+    /// Stable code.
+    pub code: WarningCode,
+    /// What happened and what it means for the numbers.
+    pub message: String,
+}
+
+impl Warning {
+    /// A warning with `code` and `message`.
+    pub fn new(code: WarningCode, message: impl Into<String>) -> Self {
+        Self {
+            code,
+            message: message.into(),
+        }
+    }
+
+    /// The same warning with `prefix: ` before its message (e.g. the
+    /// station or line it concerns).
+    pub fn prefixed(mut self, prefix: &str) -> Self {
+        self.message = format!("{prefix}: {}", self.message);
+        self
+    }
+}
+
+impl std::fmt::Display for Warning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} [{}]", self.message, self.code)
+    }
+}
