@@ -44,6 +44,8 @@ enum Command {
     Misalign(commands::misalign::Command),
     /// Compare the coefficients of two result files: difference, per mille and En.
     Compare(commands::compare::Args),
+    /// Print the JSON Schema of the result document (incal.result/1).
+    Schema(commands::schema::Args),
     /// Gyro-free inertial unit of six (or more) accelerometers: calibrate K0 and Ks, solve motion (seed 004).
     #[command(subcommand)]
     Gfimu(GfimuCommand),
@@ -87,6 +89,7 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Simulate(SimulateCommand::Tumble(a)) => commands::tumble::simulate(&a),
         Command::Simulate(SimulateCommand::Centrifuge(a)) => commands::centrifuge::simulate(&a),
         Command::Compare(a) => commands::compare::run(&a),
+        Command::Schema(a) => commands::schema::run(&a),
         Command::Gfimu(GfimuCommand::Calibrate(a)) => commands::gfimu::run_calibrate(&a),
         Command::Gfimu(GfimuCommand::Solve(a)) => commands::gfimu::run_solve(&a),
         Command::Simulate(SimulateCommand::Gfimu(a)) => commands::gfimu::simulate(&a),

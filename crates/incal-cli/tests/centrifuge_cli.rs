@@ -98,7 +98,10 @@ fn good_input_gives_the_contract_json() {
     expect.sort();
     assert_eq!(keys(coef), expect);
     for name in &expect {
-        assert_eq!(keys(&coef[name]), ["u", "unit", "value"]);
+        assert_eq!(
+            keys(&coef[name]),
+            ["U95", "dof", "k95", "u", "unit", "value"]
+        );
     }
     assert_eq!(coef["K2"]["unit"], "g/g^2");
     assert_eq!(coef["K3"]["unit"], "g/g^3");
@@ -111,7 +114,7 @@ fn good_input_gives_the_contract_json() {
     // The readable report runs too.
     let out = incal(&calibrate_args(p));
     assert!(out.status.success());
-    assert!(String::from_utf8_lossy(&out.stdout).contains("Budget of K_ip"));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("Uncertainty budget of K_ip"));
     let _ = std::fs::remove_file(&path);
 }
 

@@ -153,7 +153,7 @@ fn simulate_is_reproducible_and_round_trips() {
         } else {
             5.3f64.hypot(20.5)
         };
-        let k95 = v["coverage"]["k95"].as_f64().unwrap();
+        let k95 = v["coefficients"]["gamma"]["k95"].as_f64().unwrap();
         assert!(
             (g * 206_264.806 - truth).abs() <= k95 * u * 206_264.806 + 1e-9,
             "{kind}"
@@ -185,13 +185,25 @@ fn raw_time_series_is_averaged_and_partial_turns_warned() {
         "-2.9222",
         "--json",
     ]));
-    let recs = v["records"].as_array().unwrap();
-    assert_eq!(recs.len(), 30);
-    assert_eq!(recs[0]["turns_used"].as_f64().unwrap().round(), 2.0);
-    let w = v["warnings"].as_array().unwrap();
-    assert!(w
+    let recs = v["tables"]
+        .as_array()
+        .unwrap()
         .iter()
-        .any(|x| x.as_str().unwrap().contains("not a whole number")));
+        .find(|t| t["id"] == "records")
+        .expect("records table");
+    let cols: Vec<&str> = recs["columns"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["name"].as_str().unwrap())
+        .collect();
+    let used = cols.iter().position(|c| *c == "turns_used").unwrap();
+    let rows = recs["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 30);
+    assert_eq!(rows[0][used].as_f64().unwrap().round(), 2.0);
+    let w = v["warnings"].as_array().unwrap();
+    assert!(w.iter().any(|x| x["code"] == "partial-turns"
+        && x["message"].as_str().unwrap().contains("not a whole number")));
 }
 
 #[test]

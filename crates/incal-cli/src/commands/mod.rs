@@ -5,4 +5,5 @@ pub mod compare;
 pub mod demo;
 pub mod gfimu;
 pub mod misalign;
+pub mod schema;
 pub mod tumble;

@@ -430,6 +430,7 @@ pub struct Decision {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ResultDocument {
     /// Always `incal.result/1` for this version of the shape.
+    #[schemars(extend("const" = "incal.result/1"))]
     pub schema: String,
     /// The procedure.
     pub procedure: Procedure,
