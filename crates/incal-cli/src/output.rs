@@ -204,12 +204,16 @@ pub fn dof_text(dof: Option<f64>) -> String {
     }
 }
 
-/// A number in a table: integers plainly, others with 6 significant digits.
+/// A number in a table: 6 significant digits, trailing zeros dropped
+/// (`30.0000` → `30`, `0.110000` → `0.11`).
 fn cell_number(x: f64) -> String {
-    if x.fract() == 0.0 && x.abs() < 1e15 {
-        format!("{x:.0}")
-    } else {
-        sig(x, 6)
+    let s = sig(x, 6);
+    match s.split_once('e') {
+        Some((m, e)) if m.contains('.') => {
+            format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.'))
+        }
+        None if s.contains('.') => s.trim_end_matches('0').trim_end_matches('.').to_string(),
+        _ => s,
     }
 }
 

@@ -59,7 +59,7 @@ pub struct GyroArgs {
     #[arg(long)]
     pub input: PathBuf,
     /// Known gyro scale factor kI (output per deg/s).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, visible_alias = "k1", allow_hyphen_values = true)]
     pub scale_factor: f64,
     /// Fit one bias per (alpha, beta) configuration instead of a common one.
     #[arg(long)]
@@ -67,8 +67,8 @@ pub struct GyroArgs {
     /// Known standard deviation of one row's output (output units); default: from the data.
     #[arg(long)]
     pub noise: Option<f64>,
-    /// Raw records: average whole revolutions only, or every sample.
-    #[arg(long, value_enum, default_value = "whole")]
+    /// Raw records: average whole table revolutions only, or every sample (--turns is an old name of this option).
+    #[arg(long = "average", alias = "turns", value_enum, default_value = "whole")]
     pub turns: TurnsArg,
     #[command(flatten)]
     pub result: ResultArgs,
@@ -81,7 +81,7 @@ pub struct AccelArgs {
     #[arg(long)]
     pub input: PathBuf,
     /// Known accelerometer scale factor kI (output per g).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, visible_alias = "k1", allow_hyphen_values = true)]
     pub scale_factor: f64,
     /// Known standard deviation of one row's output (output units); default: from the data.
     #[arg(long)]
@@ -210,7 +210,7 @@ fn run_gyro(a: &GyroArgs) -> CliResult<()> {
             TurnsArg::Whole => "whole",
             TurnsArg::All => "all",
         };
-        doc.options.insert("turns".into(), json!(turns));
+        doc.options.insert("average".into(), json!(turns));
     }
     a.result.emit(doc)
 }
@@ -298,11 +298,11 @@ pub struct PlanArgs {
         allow_hyphen_values = true
     )]
     pub betas_deg: Vec<f64>,
-    /// Readings (record means or samples) per position.
-    #[arg(long, default_value_t = 1)]
+    /// Samples (rows: record means or single readings) per position.
+    #[arg(long = "samples", visible_alias = "readings", default_value_t = 1)]
     pub readings: usize,
     /// Scale factor kI (gyro: output per deg/s; accelerometer: output per g).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, visible_alias = "k1", allow_hyphen_values = true)]
     pub scale_factor: f64,
     /// Standard deviation of one reading (output units).
     #[arg(long)]
@@ -319,7 +319,7 @@ pub struct PlanArgs {
 pub fn plan(a: &PlanArgs) -> CliResult<()> {
     let k = scale_of(a.scale_factor)?;
     if a.readings == 0 {
-        return Err(usage("--readings must be at least 1"));
+        return Err(usage("--samples must be at least 1"));
     }
     let p: Prediction = match a.instrument {
         Instrument::Gyro => {
@@ -448,7 +448,7 @@ pub struct SimGyroArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Write the CSV here instead of standard output.
-    #[arg(long)]
+    #[arg(long, short = 'o', value_name = "FILE")]
     pub output: Option<PathBuf>,
 }
 
@@ -602,7 +602,7 @@ pub struct SimAccelArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Write the CSV here instead of standard output.
-    #[arg(long)]
+    #[arg(long, short = 'o', value_name = "FILE")]
     pub output: Option<PathBuf>,
 }
 

@@ -78,10 +78,14 @@ impl TumbleResult {
         if let Some(e) = self.index_error_rad {
             b.decision(
                 DecisionCode::ExcessVariance,
-                format!(
-                    "index-angle error of the head estimated from the residuals: {:.3} arcsec rms, included in u",
-                    rad_to_arcsec(e)
-                ),
+                if e > 0.0 {
+                    format!(
+                        "index-angle error of the head estimated from the residuals: {:.3} arcsec rms, included in u",
+                        rad_to_arcsec(e)
+                    )
+                } else {
+                    "index-angle error of the head: none detected beyond the sample scatter".into()
+                },
             );
             b.extra("index_error_arcsec", json!(rad_to_arcsec(e)))?;
         }

@@ -322,7 +322,7 @@ fn misalign(seed: u64) -> Result<DemoSection> {
                 truth: gt,
                 tables: Vec::new(),
                 notes: vec![format!(
-                    "noiseless records of 2.5 turns averaged as recorded: largest angle error {worst:.2} arcsec (Earth rate); `incal misalign gyro --turns whole` removes it"
+                    "noiseless records of 2.5 turns averaged as recorded: largest angle error {worst:.2} arcsec (Earth rate); `incal misalign gyro --average whole` removes it"
                 )],
             },
             DemoCase {

@@ -1,0 +1,261 @@
+//! Every reducing command writes one result document (`incal.result/1`):
+//! it validates against the checked-in JSON Schema, carries the contract
+//! keys, traces its inputs by SHA-256, and `compare` works on every
+//! procedure. Snapshots (insta) pin every command's text and JSON output on
+//! fixed seeded inputs.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+/// A per-test working directory (inputs are given by relative path, so
+/// the outputs, which echo the path, are the same on every machine).
+fn workdir(test: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("incal-doc-{}-{test}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn incal_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_incal"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("runs incal")
+}
+
+fn ok(o: &Output) -> String {
+    assert!(
+        o.status.success(),
+        "exit {:?}: {}",
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8(o.stdout.clone()).unwrap()
+}
+
+fn schema() -> Value {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../schema/result.schema.json");
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::Digest;
+    sha2::Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// Simulate with `sim` into `file` in `dir`.
+fn simulate(dir: &Path, file: &str, sim: &[&str]) {
+    let mut args = vec!["simulate"];
+    args.extend_from_slice(sim);
+    args.extend_from_slice(&["--output", file]);
+    ok(&incal_in(dir, &args));
+}
+
+/// The five reducing commands on simulated input: (name, procedure id,
+/// simulate args, input file, reduce args without --json).
+fn cases() -> Vec<(&'static str, &'static str, Vec<&'static str>, &'static str, Vec<&'static str>)> {
+    vec![
+        (
+            "tumble",
+            "tumble",
+            vec!["tumble", "--seed", "11", "--passes", "2"],
+            "tumble.csv",
+            vec!["tumble", "--mount", "pendulum", "--input", "tumble.csv"],
+        ),
+        (
+            "centrifuge",
+            "centrifuge",
+            vec!["centrifuge", "--seed", "12"],
+            "centrifuge.csv",
+            vec![
+                "centrifuge",
+                "--input",
+                "centrifuge.csv",
+                "--k0",
+                "1.2e-4",
+                "--u-k0",
+                "2e-6",
+                "--k1",
+                "1.3",
+                "--u-k1",
+                "1.3e-6",
+                "--radius-m",
+                "0.71",
+                "--latitude-deg",
+                "39.9",
+            ],
+        ),
+        (
+            "misalign-gyro",
+            "misalign-gyro",
+            vec!["misalign", "gyro", "--seed", "13"],
+            "gyro.csv",
+            vec![
+                "misalign",
+                "gyro",
+                "--input",
+                "gyro.csv",
+                "--scale-factor",
+                "-2.9222",
+            ],
+        ),
+        (
+            "misalign-accel",
+            "misalign-accel",
+            vec!["misalign", "accel", "--seed", "14"],
+            "accel.csv",
+            vec![
+                "misalign",
+                "accel",
+                "--input",
+                "accel.csv",
+                "--scale-factor",
+                "1.299",
+            ],
+        ),
+        (
+            "gfimu-calibrate",
+            "gfimu-calibrate",
+            vec!["gfimu", "--seed", "15"],
+            "gfimu.csv",
+            vec!["gfimu", "calibrate", "--input", "gfimu.csv"],
+        ),
+    ]
+}
+
+#[test]
+fn every_procedure_writes_a_valid_document_and_compares() {
+    let dir = workdir("all");
+    let validator = jsonschema::validator_for(&schema()).unwrap();
+    for (name, procedure, sim, file, reduce) in cases() {
+        simulate(&dir, file, &sim);
+        let mut args = reduce.clone();
+        args.extend_from_slice(&[
+            "--json",
+            "--serial",
+            "SN-042",
+            "--meta",
+            "operator=lee",
+        ]);
+        let text = ok(&incal_in(&dir, &args));
+        let doc: Value = serde_json::from_str(&text).unwrap();
+        let errors: Vec<String> = validator
+            .iter_errors(&doc)
+            .map(|e| format!("{e} at {}", e.instance_path()))
+            .collect();
+        assert!(errors.is_empty(), "{name}: {errors:?}");
+        assert_eq!(doc["schema"], "incal.result/1", "{name}");
+        assert_eq!(doc["procedure"], procedure);
+        assert_eq!(doc["instrument"]["serial"], "SN-042");
+        assert_eq!(doc["instrument"]["model"], Value::Null);
+        assert_eq!(doc["instrument"]["operator"], "lee");
+        let input = &doc["inputs"][0];
+        assert_eq!(input["path"], file);
+        let bytes = std::fs::read(dir.join(file)).unwrap();
+        assert_eq!(input["sha256"], sha256_hex(&bytes), "{name}");
+        let coef = doc["coefficients"].as_object().unwrap();
+        assert!(!coef.is_empty());
+        for (k, c) in coef {
+            let (u, k95, big_u) = (
+                c["u"].as_f64().unwrap(),
+                c["k95"].as_f64().unwrap(),
+                c["U95"].as_f64().unwrap(),
+            );
+            assert!(c["value"].as_f64().unwrap().is_finite(), "{name} {k}");
+            assert!(c["unit"].is_string(), "{name} {k}");
+            assert!((big_u - k95 * u).abs() <= 1e-12 * big_u.abs(), "{name} {k}");
+            assert!(k95 >= 1.959, "{name} {k}");
+        }
+        let names: Vec<&str> = doc["correlation"]["names"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| n.as_str().unwrap())
+            .collect();
+        let keys: Vec<&str> = coef.keys().map(String::as_str).collect();
+        let mut sorted = names.clone();
+        sorted.sort();
+        let mut ksorted = keys.clone();
+        ksorted.sort();
+        assert_eq!(sorted, ksorted, "{name}: correlation covers every coefficient");
+        let m = doc["correlation"]["matrix"].as_array().unwrap();
+        assert_eq!(m.len(), names.len());
+        for (i, row) in m.iter().enumerate() {
+            let row = row.as_array().unwrap();
+            assert_eq!(row.len(), names.len());
+            assert!((row[i].as_f64().unwrap() - 1.0).abs() < 1e-12);
+            for (j, r) in row.iter().enumerate() {
+                let r = r.as_f64().unwrap();
+                assert!(r.abs() <= 1.0, "{name}");
+                assert_eq!(r, m[j][i].as_f64().unwrap(), "{name}: symmetric");
+            }
+        }
+        for w in doc["warnings"].as_array().unwrap() {
+            assert!(w["code"].is_string() && w["message"].is_string());
+        }
+
+        // compare: a result with itself differs by 0 everywhere.
+        let out = format!("{name}.json");
+        std::fs::write(dir.join(&out), &text).unwrap();
+        let cmp: Value = serde_json::from_str(&ok(&incal_in(
+            &dir,
+            &["compare", &out, &out, "--json"],
+        )))
+        .unwrap();
+        let comps = cmp["comparisons"].as_object().unwrap();
+        assert_eq!(comps.len(), coef.len(), "{name}: every coefficient compared");
+        for (k, c) in comps {
+            assert_eq!(c["difference"], 0.0, "{name} {k}");
+            assert_eq!(c["En"], 0.0, "{name} {k}");
+            for key in ["a", "b", "difference", "relative_per_mille", "En", "unit"] {
+                assert!(c.get(key).is_some(), "{name} {k}: {key}");
+            }
+        }
+    }
+    // Two different procedures: refused with one line.
+    let o = incal_in(&dir, &["compare", "tumble.json", "centrifuge.json"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("same procedure"), "{err}");
+    // Not an incal result: refused naming the path.
+    std::fs::write(dir.join("other.json"), "{\"coefficients\": {}}").unwrap();
+    let o = incal_in(&dir, &["compare", "other.json", "tumble.json"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("other.json: $.schema"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn output_file_holds_what_stdout_would() {
+    let dir = workdir("output");
+    simulate(&dir, "t.csv", &["tumble", "--seed", "3"]);
+    let base = ["tumble", "--mount", "pendulum", "--input", "t.csv", "--json"];
+    let stdout = ok(&incal_in(&dir, &base));
+    let mut args = base.to_vec();
+    args.extend_from_slice(&["--output", "r.json"]);
+    assert_eq!(ok(&incal_in(&dir, &args)), "");
+    assert_eq!(std::fs::read_to_string(dir.join("r.json")).unwrap(), stdout);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Snapshots of every reducing command's text and JSON on fixed seeds.
+#[test]
+fn snapshots_of_every_report() {
+    let dir = workdir("snap");
+    for (name, _, sim, file, reduce) in cases() {
+        simulate(&dir, file, &sim);
+        let text = ok(&incal_in(&dir, &reduce));
+        insta::assert_snapshot!(format!("{name}_text"), text);
+        let mut args = reduce.clone();
+        args.push("--json");
+        let json = ok(&incal_in(&dir, &args));
+        insta::assert_snapshot!(format!("{name}_json"), json);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
