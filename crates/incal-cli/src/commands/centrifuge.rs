@@ -158,7 +158,11 @@ fn scale_inputs(a: &Args) -> CliResult<ScaleInputs> {
     let k1 = pick("--k1", "--u-k1", "K1", a.k1, a.u_k1)?;
     // The covariance holds only when both come from the same result.
     let cov_k0_k1 = match (&from, a.k0, a.k1) {
-        (Some((_, _, doc)), None, None) => doc.covariance("K0", "K1").unwrap_or(0.0),
+        (Some((file, _, doc)), None, None) => doc.covariance("K0", "K1").ok_or_else(|| {
+            CliError::Input(format!(
+                "{file}: $.correlation: no entry for K0 and K1"
+            ))
+        })?,
         _ => 0.0,
     };
     Ok(ScaleInputs {

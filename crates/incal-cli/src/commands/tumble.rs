@@ -270,12 +270,12 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
             .collect::<Vec<_>>()
             .join(", ")
     ));
-    if let Some(p) = prediction {
+    if let (Some(p), Some(k1), Some(noise)) = (prediction, a.k1, a.noise) {
         s.push_str(&format!(
             "\nPredicted standard uncertainty ({} mount, K1 = {}, noise {:e} per sample, {} samples per position, index error {} arcsec):\n",
             mount.name(),
-            a.k1.unwrap_or(f64::NAN),
-            a.noise.unwrap_or(f64::NAN),
+            k1,
+            noise,
             a.samples,
             a.index_error_arcsec
         ));
