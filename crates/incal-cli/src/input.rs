@@ -5,6 +5,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use crate::error::{CliError, CliResult};
+use crate::io;
 
 /// A CSV file read into memory, with the line number of every row.
 #[derive(Debug, Clone)]
@@ -17,13 +18,13 @@ pub struct Table {
 }
 
 impl Table {
-    /// Read `path`. Fails (exit 2) when it cannot be read, is empty, has no
-    /// data rows, repeats a column name or has a row of the wrong width.
+    /// Read `path` (`-`: standard input, named `<stdin>` in messages; a
+    /// leading UTF-8 byte-order mark is skipped). Fails (exit 2) when it
+    /// cannot be read, is empty, has no data rows, repeats a column name or
+    /// has a row of the wrong width.
     pub fn read(path: &Path) -> CliResult<Table> {
-        let name = path.display().to_string();
-        let text = std::fs::read(path)
-            .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?;
-        Self::parse(&name, &text)
+        let (name, bytes) = io::read_bytes(path)?;
+        Self::parse(&name, &bytes)
     }
 
     /// Parse CSV text (see [`Table::read`]).
