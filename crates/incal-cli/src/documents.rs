@@ -6,27 +6,15 @@ use std::path::Path;
 use incal::document::ResultDocument;
 
 use crate::error::{CliError, CliResult};
-use crate::output::sha256_hex;
 
 /// Read a result document: `(display name, SHA-256 of the bytes,
 /// document)`. `-` reads standard input; a UTF-8 BOM is accepted. Anything
 /// that is not an incal result is refused with one line naming the file
 /// and the JSON path.
 pub fn read_document(path: &Path) -> CliResult<(String, String, ResultDocument)> {
-    let mut name = path.display().to_string();
-    let bytes = if name == "-" {
-        name = "<stdin>".into();
-        let mut b = Vec::new();
-        std::io::Read::read_to_end(&mut std::io::stdin(), &mut b)
-            .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?;
-        b
-    } else {
-        std::fs::read(path).map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?
-    };
-    let sha = sha256_hex(&bytes);
+    let (name, bytes, sha) = crate::io::read_hashed(path)?;
     let text = std::str::from_utf8(&bytes)
         .map_err(|_| CliError::Input(format!("{name}: not UTF-8 text")))?;
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     if text.trim().is_empty() {
         return Err(CliError::Input(format!("{name}: empty file")));
     }

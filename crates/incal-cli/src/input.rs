@@ -5,6 +5,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use crate::error::{CliError, CliResult};
+use crate::io;
 
 /// A CSV file read into memory, with the line number of every row.
 #[derive(Debug, Clone)]
@@ -19,13 +20,15 @@ pub struct Table {
 }
 
 impl Table {
-    /// Read `path`. Fails (exit 2) when it cannot be read, is empty, has no
-    /// data rows, repeats a column name or has a row of the wrong width.
+    /// Read `path` (`-`: standard input, named `<stdin>` in messages; a
+    /// leading UTF-8 byte-order mark is skipped). Fails (exit 2) when it
+    /// cannot be read, is empty, has no data rows, repeats a column name or
+    /// has a row of the wrong width.
     pub fn read(path: &Path) -> CliResult<Table> {
-        let name = path.display().to_string();
-        let text = std::fs::read(path)
-            .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?;
-        Self::parse(&name, &text)
+        let (name, bytes, sha) = io::read_hashed(path)?;
+        let mut t = Self::parse(&name, &bytes)?;
+        t.sha256 = sha;
+        Ok(t)
     }
 
     /// Parse CSV text (see [`Table::read`]).
@@ -103,7 +106,9 @@ impl Table {
 
     /// The record of this file as an input of a result.
     pub fn input_file(&self, role: &str) -> incal::document::InputFile {
-        crate::output::input_file(role, &self.path, self.sha256.clone(), Some(self.rows.len()))
+        // The path as given: `-` for standard input (named `<stdin>` in messages).
+        let path = if self.path == "<stdin>" { "-" } else { &self.path };
+        crate::output::input_file(role, path, self.sha256.clone(), Some(self.rows.len()))
     }
 
     /// Number of data rows (at least 1 after a successful read).

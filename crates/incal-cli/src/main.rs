@@ -1,19 +1,25 @@
 //! `incal`: the command-line tool of the incal calibration library.
 //!
 //! Thin by design: parse options, read files, call the core, print. Exit
-//! codes: 0 ok, 1 failure, 2 bad usage or bad input (one line on stderr
-//! naming the file, the line and the problem).
+//! codes: 0 ok, 1 failure, 2 bad usage or bad input, with one line on
+//! stderr naming the file and line, or the option, and the problem. The one
+//! exception: a command group without its subcommand (`incal`, `incal plan`)
+//! prints its usage to stderr, still exit 2.
 
 mod commands;
 mod documents;
 mod error;
 mod input;
+mod io;
 mod options;
 mod output;
 
+use std::ffi::OsString;
+use std::io::Write;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::error::{ContextKind, ContextValue, ErrorKind};
+use clap::{CommandFactory, Parser, Subcommand};
 
 use crate::error::CliResult;
 
@@ -121,39 +127,266 @@ fn allow_negative_values(cmd: clap::Command) -> clap::Command {
 }
 
 fn parse() -> Result<Cli, clap::Error> {
-    use clap::{CommandFactory, FromArgMatches};
+    use clap::FromArgMatches;
     let matches = allow_negative_values(Cli::command()).try_get_matches()?;
     Cli::from_arg_matches(&matches)
+}
+
+/// The command the user was running, as far as the arguments name one
+/// (`incal`, `incal tumble`, `incal simulate misalign gyro`): the words of
+/// `args` (after the program name) that name a subcommand of the one before.
+fn command_path(root: &clap::Command, args: &[OsString]) -> String {
+    let mut cmd = root;
+    let mut path = vec![root.get_name().to_string()];
+    for arg in args.iter().skip(1) {
+        let Some(word) = arg.to_str() else { break };
+        if word.starts_with('-') {
+            continue;
+        }
+        match cmd.find_subcommand(word) {
+            Some(sub) => {
+                path.push(sub.get_name().to_string());
+                cmd = sub;
+            }
+            None => break,
+        }
+    }
+    path.join(" ")
+}
+
+/// A string or list of strings from clap's structured error context.
+fn context_strings(e: &clap::Error, kind: ContextKind) -> Vec<String> {
+    match e.get(kind) {
+        Some(ContextValue::String(s)) => vec![s.clone()],
+        Some(ContextValue::Strings(v)) => v.clone(),
+        Some(ContextValue::StyledStr(s)) => vec![s.to_string()],
+        Some(ContextValue::StyledStrs(v)) => v.iter().map(|s| s.to_string()).collect(),
+        _ => Vec::new(),
+    }
+}
+
+/// `, did you mean 'X'?` for clap's suggestions (and `; TIP` for its
+/// other tips), or nothing.
+fn did_you_mean(e: &clap::Error, kind: ContextKind) -> String {
+    let mut out = String::new();
+    let quoted: Vec<String> = context_strings(e, kind)
+        .iter()
+        .map(|s| format!("'{s}'"))
+        .collect();
+    if !quoted.is_empty() {
+        out.push_str(&format!(", did you mean {}?", quoted.join(" or ")));
+    }
+    for tip in context_strings(e, ContextKind::Suggested) {
+        out.push_str(&format!("; {}", one_line(&tip)));
+    }
+    out
+}
+
+/// Lines of `text` trimmed and joined into one (`; ` between them, or a
+/// space after a line ending in `:`).
+fn one_line(text: &str) -> String {
+    let mut out = String::new();
+    for line in text.lines().map(str::trim).filter(|l| !l.is_empty()) {
+        if !out.is_empty() {
+            out.push_str(if out.ends_with(':') { " " } else { "; " });
+        }
+        out.push_str(line);
+    }
+    out
+}
+
+/// clap's own message as one line, without the `error: ` prefix, the usage
+/// and the "For more information" hint.
+fn clap_message(e: &clap::Error) -> String {
+    let text = e.to_string();
+    let kept: Vec<&str> = text
+        .lines()
+        .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
+        .collect();
+    let msg = one_line(&kept.join("\n"));
+    let msg = msg.strip_prefix("error: ").unwrap_or(&msg).to_string();
+    if msg.is_empty() {
+        "bad usage".to_string()
+    } else {
+        msg
+    }
+}
+
+/// The one-line message (without the `incal: ` prefix) of a usage error of
+/// `command` (e.g. `incal tumble`): names the option and, for a choice, the
+/// values allowed.
+fn usage_message(e: &clap::Error, command: &str) -> String {
+    let see = format!(" (see '{command} --help')");
+    let first = |kind| context_strings(e, kind).into_iter().next();
+    match e.kind() {
+        ErrorKind::MissingRequiredArgument => {
+            let missing = context_strings(e, ContextKind::InvalidArg);
+            if missing.is_empty() {
+                return clap_message(e) + &see;
+            }
+            let what = if missing.iter().all(|m| m.starts_with('-')) {
+                "option"
+            } else {
+                "argument"
+            };
+            let plural = if missing.len() > 1 { "s" } else { "" };
+            format!(
+                "missing required {what}{plural} {}{see}",
+                missing.join(", ")
+            )
+        }
+        ErrorKind::InvalidValue => {
+            let (Some(arg), Some(value)) = (
+                first(ContextKind::InvalidArg),
+                first(ContextKind::InvalidValue),
+            ) else {
+                return clap_message(e) + &see;
+            };
+            let head = if value.is_empty() {
+                format!("a value is required for '{arg}' but none was supplied")
+            } else {
+                format!("invalid value '{value}' for '{arg}'")
+            };
+            let valid = context_strings(e, ContextKind::ValidValue);
+            if valid.is_empty() {
+                head + &see
+            } else {
+                format!("{head} (possible values: {})", valid.join(", "))
+            }
+        }
+        ErrorKind::UnknownArgument => match first(ContextKind::InvalidArg) {
+            Some(arg) => {
+                let what = if arg.starts_with('-') {
+                    "unknown option"
+                } else {
+                    "unexpected argument"
+                };
+                let hint = did_you_mean(e, ContextKind::SuggestedArg);
+                format!("{what} '{arg}'{hint}{see}")
+            }
+            None => clap_message(e) + &see,
+        },
+        ErrorKind::InvalidSubcommand => match first(ContextKind::InvalidSubcommand) {
+            Some(sub) => {
+                let hint = did_you_mean(e, ContextKind::SuggestedSubcommand);
+                format!("unknown command '{sub}'{hint}{see}")
+            }
+            None => clap_message(e) + &see,
+        },
+        _ => clap_message(e) + &see,
+    }
+}
+
+/// One line on standard error; a standard error that cannot be written to
+/// is ignored (there is nowhere left to report it).
+fn say(line: &str) {
+    let _ = writeln!(std::io::stderr().lock(), "incal: {}", one_line(line));
+}
+
+/// Exit code for a command-line that did not parse: help and version on
+/// stdout (0, or 1 when stdout cannot be written), the usage of a group
+/// given without its subcommand on stderr (2), otherwise one line (2).
+fn parse_failure(e: &clap::Error) -> ExitCode {
+    match e.kind() {
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
+            let printed = e.print().and_then(|()| std::io::stdout().flush());
+            if printed.is_ok() {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::FAILURE
+            }
+        }
+        ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            // clap sends this one to stderr: the usage and the commands.
+            let _ = e.print();
+            ExitCode::from(2)
+        }
+        _ => {
+            let args: Vec<OsString> = std::env::args_os().collect();
+            let command = command_path(&Cli::command(), &args);
+            say(&usage_message(e, &command));
+            ExitCode::from(2)
+        }
+    }
 }
 
 fn main() -> ExitCode {
     restore_sigpipe();
     let cli = match parse() {
         Ok(c) => c,
-        Err(e) => {
-            use clap::error::ErrorKind;
-            if matches!(
-                e.kind(),
-                ErrorKind::DisplayHelp
-                    | ErrorKind::DisplayVersion
-                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
-            ) {
-                let _ = e.print();
-                return ExitCode::SUCCESS;
-            }
-            // One line: clap's first line, without its "error: " prefix.
-            let text = e.to_string();
-            let first = text.lines().next().unwrap_or("bad usage");
-            let first = first.strip_prefix("error: ").unwrap_or(first);
-            eprintln!("incal: {first} (see 'incal --help')");
-            return ExitCode::from(2);
-        }
+        Err(e) => return parse_failure(&e),
     };
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("incal: {e}");
+            say(&e.to_string());
             ExitCode::from(e.exit_code())
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The usage message for `args`, which must fail to parse.
+    fn message(args: &[&str]) -> String {
+        let args: Vec<OsString> = args.iter().map(OsString::from).collect();
+        let e = allow_negative_values(Cli::command())
+            .try_get_matches_from(&args)
+            .unwrap_err();
+        usage_message(&e, &command_path(&Cli::command(), &args))
+    }
+
+    #[test]
+    fn command_path_follows_subcommands_only() {
+        let path = |args: &[&str]| {
+            let args: Vec<OsString> = args.iter().map(OsString::from).collect();
+            command_path(&Cli::command(), &args)
+        };
+        assert_eq!(path(&["incal"]), "incal");
+        assert_eq!(path(&["incal", "--bogus"]), "incal");
+        assert_eq!(path(&["incal", "tumble", "--mount", "x"]), "incal tumble");
+        assert_eq!(
+            path(&["incal", "simulate", "misalign", "gyro", "--seed", "1"]),
+            "incal simulate misalign gyro"
+        );
+        assert_eq!(path(&["incal", "tumbel", "tumble"]), "incal");
+    }
+
+    #[test]
+    fn messages_name_the_option_in_one_line() {
+        assert_eq!(
+            message(&["incal", "tumble", "--input", "x.csv"]),
+            "missing required option --mount <MOUNT> (see 'incal tumble --help')"
+        );
+        assert_eq!(
+            message(&["incal", "tumble", "--mount", "x", "--input", "x.csv"]),
+            "invalid value 'x' for '--mount <MOUNT>' (possible values: pendulum, gate)"
+        );
+        assert_eq!(
+            message(&["incal", "tumble", "--bogus"]),
+            "unknown option '--bogus' (see 'incal tumble --help')"
+        );
+        assert_eq!(
+            message(&["incal", "simulate", "tumbel"]),
+            "unknown command 'tumbel', did you mean 'tumble'? (see 'incal simulate --help')"
+        );
+        let m = message(&["incal", "simulate", "tumble", "--seed", "x"]);
+        assert!(
+            m.starts_with("invalid value 'x' for '--seed <SEED>': "),
+            "{m}"
+        );
+        assert_eq!(m.lines().count(), 1);
+    }
+
+    #[test]
+    fn one_line_joins_lines() {
+        assert_eq!(one_line("a\n\n  b\n"), "a; b");
+        assert_eq!(
+            one_line("cannot be used with:\n\t--x\n"),
+            "cannot be used with: --x"
+        );
+        assert_eq!(one_line("plain"), "plain");
     }
 }

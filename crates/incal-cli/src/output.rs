@@ -3,7 +3,7 @@
 //! text tables. Engineering units (µg, µg/g², arcsec, mm) come from
 //! [`incal::units::Unit::engineering`], the one place that chooses them.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use incal::document::{Cell, InputFile, ResultDocument, Table};
 use sha2::{Digest, Sha256};
@@ -74,22 +74,7 @@ pub fn input_file(role: &str, path: &str, bytes_sha256: String, rows: Option<usi
     }
 }
 
-/// Write `text` to `path` (standard output when `None` or `-`). A write
-/// error is a failure (exit 1) with one line, never a panic.
-pub fn write_text(path: Option<&Path>, text: &str) -> CliResult<()> {
-    use std::io::Write;
-    match path.filter(|p| p.as_os_str() != "-") {
-        Some(p) => std::fs::write(p, text).map_err(|e| {
-            crate::error::CliError::Failure(anyhow::anyhow!("{}: cannot write: {e}", p.display()))
-        }),
-        None => {
-            let mut out = std::io::stdout().lock();
-            out.write_all(text.as_bytes())
-                .and_then(|_| out.flush())
-                .map_err(|e| crate::error::CliError::Failure(anyhow::anyhow!("stdout: {e}")))
-        }
-    }
-}
+pub use crate::io::write_text;
 
 /// The readable report of any result document: title, instrument and
 /// inputs, coefficients (value, u, U95, dof in engineering units), fits,

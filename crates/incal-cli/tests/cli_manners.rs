@@ -1,0 +1,280 @@
+//! Manners of the real `incal` binary: exit codes (0 ok, 1 failure, 2 bad
+//! usage or input), exactly one stderr line naming the option or file, no
+//! panics, `-` for standard input, a UTF-8 byte-order mark accepted.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::{Command, Output, Stdio};
+
+fn incal(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_incal"))
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("runs incal")
+}
+
+/// `incal ARGS` with `input` on standard input.
+fn incal_with_stdin(args: &[&str], input: &[u8]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_incal"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("runs incal");
+    let mut stdin = child.stdin.take().unwrap();
+    stdin.write_all(input).unwrap();
+    drop(stdin);
+    child.wait_with_output().unwrap()
+}
+
+/// A unique temp file with `content`.
+fn temp(name: &str, content: &[u8]) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("incal-cli-manners-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, content).unwrap();
+    p
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).to_string()
+}
+
+/// The single stderr line of `o` (fails unless there is exactly one).
+fn stderr_line(o: &Output) -> String {
+    let s = stderr(o);
+    assert!(!s.contains("panicked"), "panic: {s}");
+    assert_eq!(s.trim_end().lines().count(), 1, "one stderr line, got: {s}");
+    assert!(s.ends_with('\n'), "line ends with a newline: {s:?}");
+    s.trim_end().to_string()
+}
+
+fn simulated_tumble_csv() -> Vec<u8> {
+    let o = incal(&["simulate", "tumble", "--seed", "7"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(o.stdout.starts_with(b"angle_deg,output\n"));
+    o.stdout
+}
+
+#[test]
+fn bare_incal_is_bad_usage_with_the_usage_on_stderr() {
+    let o = incal(&[]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(o.stdout.is_empty(), "nothing on stdout");
+    let e = stderr(&o);
+    assert!(e.contains("Usage: incal"), "{e}");
+    assert!(e.contains("tumble"), "lists the commands: {e}");
+}
+
+#[test]
+fn a_command_group_without_its_subcommand_is_bad_usage() {
+    for group in ["plan", "misalign", "simulate", "gfimu"] {
+        let o = incal(&[group]);
+        assert_eq!(o.status.code(), Some(2), "incal {group}");
+        assert!(o.stdout.is_empty(), "incal {group}: nothing on stdout");
+        let e = stderr(&o);
+        assert!(e.contains(&format!("Usage: incal {group}")), "{e}");
+    }
+    let o = incal(&["simulate", "misalign"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("Usage: incal simulate misalign"));
+}
+
+#[test]
+fn help_and_version_are_success_on_stdout() {
+    for args in [
+        &["--help"][..],
+        &["--version"],
+        &["tumble", "--help"],
+        &["help"],
+    ] {
+        let o = incal(args);
+        assert_eq!(o.status.code(), Some(0), "incal {args:?}");
+        assert!(!o.stdout.is_empty(), "incal {args:?}: on stdout");
+        assert!(o.stderr.is_empty(), "incal {args:?}: {}", stderr(&o));
+    }
+}
+
+#[test]
+#[cfg(target_os = "linux")]
+fn help_to_a_full_stdout_is_a_quiet_failure() {
+    for args in [&["--help"][..], &["--version"]] {
+        let o = Command::new(env!("CARGO_BIN_EXE_incal"))
+            .args(args)
+            .stdout(std::fs::File::create("/dev/full").unwrap())
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(1), "incal {args:?} >/dev/full");
+        assert!(o.stderr.is_empty(), "quiet: {}", stderr(&o));
+    }
+}
+
+#[test]
+fn missing_required_option_is_named() {
+    let o = incal(&["tumble", "--input", "x.csv"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(
+        stderr_line(&o),
+        "incal: missing required option --mount <MOUNT> (see 'incal tumble --help')"
+    );
+    let o = incal(&["tumble"]);
+    assert_eq!(o.status.code(), Some(2));
+    let line = stderr_line(&o);
+    assert!(
+        line.contains("--mount") && line.contains("--input"),
+        "{line}"
+    );
+}
+
+#[test]
+fn invalid_choice_lists_the_allowed_values() {
+    let o = incal(&["tumble", "--mount", "sideways", "--input", "x.csv"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(
+        stderr_line(&o),
+        "incal: invalid value 'sideways' for '--mount <MOUNT>' (possible values: pendulum, gate)"
+    );
+}
+
+#[test]
+fn unknown_option_is_named_with_a_suggestion() {
+    let o = incal(&["tumble", "--bogus"]);
+    assert_eq!(o.status.code(), Some(2));
+    let line = stderr_line(&o);
+    assert!(line.contains("'--bogus'"), "{line}");
+    assert!(line.contains("incal tumble --help"), "{line}");
+
+    let o = incal(&["tumble", "--mount", "gate", "--input", "x.csv", "--jsn"]);
+    assert_eq!(o.status.code(), Some(2));
+    let line = stderr_line(&o);
+    assert!(
+        line.contains("'--jsn'") && line.contains("'--json'"),
+        "{line}"
+    );
+
+    let o = incal(&["tumbel"]);
+    assert_eq!(o.status.code(), Some(2));
+    let line = stderr_line(&o);
+    assert!(
+        line.contains("'tumbel'") && line.contains("'tumble'"),
+        "{line}"
+    );
+}
+
+#[test]
+fn bad_number_is_one_line_naming_the_option() {
+    let o = incal(&["simulate", "tumble", "--seed", "abc"]);
+    assert_eq!(o.status.code(), Some(2));
+    let line = stderr_line(&o);
+    assert!(line.contains("--seed") && line.contains("'abc'"), "{line}");
+}
+
+#[test]
+#[cfg(target_os = "linux")]
+fn unwritable_output_file_is_a_failure() {
+    let o = incal(&["simulate", "tumble", "--output", "/dev/full"]);
+    assert_eq!(o.status.code(), Some(1));
+    let line = stderr_line(&o);
+    assert!(line.contains("/dev/full"), "{line}");
+    assert!(line.contains("No space left on device"), "{line}");
+}
+
+#[test]
+#[cfg(target_os = "linux")]
+fn full_stdout_is_a_failure() {
+    let o = Command::new(env!("CARGO_BIN_EXE_incal"))
+        .args(["simulate", "tumble"])
+        .stdout(std::fs::File::create("/dev/full").unwrap())
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let line = stderr_line(&o);
+    assert!(line.contains("stdout"), "{line}");
+}
+
+#[test]
+fn dash_reads_standard_input_through_a_pipe() {
+    let mut sim = Command::new(env!("CARGO_BIN_EXE_incal"))
+        .args(["simulate", "tumble", "--seed", "7"])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_incal"))
+        .args(["tumble", "--mount", "pendulum", "--input", "-"])
+        .stdin(Stdio::from(sim.stdout.take().unwrap()))
+        .output()
+        .unwrap();
+    assert!(sim.wait().unwrap().success());
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(o.stderr.is_empty(), "{}", stderr(&o));
+    // The report names the input as given (`-`) with its hash.
+    assert!(String::from_utf8_lossy(&o.stdout).contains("input: - (sha256 "));
+}
+
+#[test]
+fn bad_standard_input_is_named_stdin() {
+    let o = incal_with_stdin(&["tumble", "--mount", "pendulum", "--input", "-"], b"");
+    assert_eq!(o.status.code(), Some(2));
+    let line = stderr_line(&o);
+    assert!(line.starts_with("incal: <stdin>: "), "{line}");
+
+    let o = incal_with_stdin(
+        &["tumble", "--mount", "pendulum", "--input", "-"],
+        b"angle_deg,output\n0,abc\n",
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr_line(&o).starts_with("incal: <stdin>:2: "));
+}
+
+#[test]
+fn a_leading_bom_is_accepted() {
+    let csv = simulated_tumble_csv();
+    let plain = temp("plain.csv", &csv);
+    let mut with_bom = b"\xEF\xBB\xBF".to_vec();
+    with_bom.extend_from_slice(&csv);
+    let bom = temp("bom.csv", &with_bom);
+    let run = |p: &PathBuf| {
+        let o = incal(&[
+            "tumble",
+            "--mount",
+            "pendulum",
+            "--input",
+            p.to_str().unwrap(),
+            "--json",
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        v["coefficients"].clone()
+    };
+    let a = run(&plain);
+    assert!(a.is_object(), "{a}");
+    assert_eq!(a, run(&bom), "same coefficients with and without a BOM");
+
+    // On standard input too.
+    let o = incal_with_stdin(
+        &["tumble", "--mount", "pendulum", "--input", "-", "--json"],
+        &with_bom,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+#[test]
+fn unreadable_input_is_bad_input_naming_the_file() {
+    let dir = std::env::temp_dir().join(format!("incal-cli-manners-{}", std::process::id()));
+    let missing = dir.join("no-such-file.csv");
+    let o = incal(&[
+        "tumble",
+        "--mount",
+        "pendulum",
+        "--input",
+        missing.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let line = stderr_line(&o);
+    assert!(
+        line.starts_with(&format!("incal: {}: cannot read: ", missing.display())),
+        "{line}"
+    );
+}
