@@ -59,8 +59,6 @@ pub fn read_hashed(path: &Path) -> CliResult<(String, Vec<u8>, String)> {
 
 /// As [`read_bytes`], checked to be UTF-8; invalid UTF-8 fails (exit 2) with
 /// `NAME:LINE: not valid UTF-8`.
-// Not every build uses it yet: the commands move to it one by one.
-#[allow(dead_code)]
 pub fn read_text(path: &Path) -> CliResult<(String, String)> {
     let (name, bytes) = read_bytes(path)?;
     match String::from_utf8(bytes) {

@@ -20,7 +20,7 @@ use serde_json::{json, Value};
 use crate::error::{core, in_file, usage, CliError, CliResult};
 use crate::input::Table;
 use crate::options::noise_option;
-use crate::output::{input_file, json_text, sha256_hex, write_text, ResultArgs};
+use crate::output::{input_file, json_text, write_text, ResultArgs};
 
 /// Geometry choice shared by every gfimu command.
 #[derive(clap::Args, Debug, Clone)]
@@ -62,10 +62,10 @@ impl GeometryArgs {
     pub fn load_with_input(&self) -> CliResult<(Geometry, String, Option<InputFile>)> {
         let (g, label, input) = match &self.geometry {
             Some(p) => {
-                let name = p.display().to_string();
-                let text = std::fs::read_to_string(p)
-                    .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?;
-                let input = input_file("geometry", &name, sha256_hex(text.as_bytes()), None);
+                let (name, bytes, sha) = crate::io::read_hashed(p)?;
+                let text = String::from_utf8(bytes)
+                    .map_err(|_| CliError::Input(format!("{name}: not valid UTF-8")))?;
+                let input = input_file("geometry", &p.display().to_string(), sha, None);
                 if text.trim().is_empty() {
                     return Err(CliError::Input(format!(
                         "{name}: empty file (expected [[accelerometer]] tables)"
@@ -330,9 +330,7 @@ fn read_calibration(
     path: &Path,
     g: &Geometry,
 ) -> CliResult<(String, Vec<CalibratedAccelerometer>)> {
-    let name = path.display().to_string();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?;
+    let (name, text) = crate::io::read_text(path)?;
     if text.trim().is_empty() {
         return Err(CliError::Input(format!(
             "{name}: empty file (expected the JSON of 'incal gfimu calibrate --json')"
