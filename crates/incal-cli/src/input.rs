@@ -107,7 +107,11 @@ impl Table {
     /// The record of this file as an input of a result.
     pub fn input_file(&self, role: &str) -> incal::document::InputFile {
         // The path as given: `-` for standard input (named `<stdin>` in messages).
-        let path = if self.path == "<stdin>" { "-" } else { &self.path };
+        let path = if self.path == "<stdin>" {
+            "-"
+        } else {
+            &self.path
+        };
         crate::output::input_file(role, path, self.sha256.clone(), Some(self.rows.len()))
     }
 

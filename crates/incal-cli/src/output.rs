@@ -47,7 +47,9 @@ impl ResultArgs {
                     "--meta: '{kv}' needs a key other than serial and model (use --serial, --model)"
                 )));
             }
-            doc.instrument.meta.insert(k.to_string(), v.trim().to_string());
+            doc.instrument
+                .meta
+                .insert(k.to_string(), v.trim().to_string());
         }
         let text = if self.json {
             format!("{}\n", doc.to_json())

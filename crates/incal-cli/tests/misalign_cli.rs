@@ -203,7 +203,10 @@ fn raw_time_series_is_averaged_and_partial_turns_warned() {
     assert_eq!(rows[0][used].as_f64().unwrap().round(), 2.0);
     let w = v["warnings"].as_array().unwrap();
     assert!(w.iter().any(|x| x["code"] == "partial-turns"
-        && x["message"].as_str().unwrap().contains("not a whole number")));
+        && x["message"]
+            .as_str()
+            .unwrap()
+            .contains("not a whole number")));
 }
 
 #[test]

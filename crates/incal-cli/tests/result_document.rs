@@ -58,7 +58,13 @@ fn simulate(dir: &Path, file: &str, sim: &[&str]) {
 
 /// The five reducing commands on simulated input: (name, procedure id,
 /// simulate args, input file, reduce args without --json).
-fn cases() -> Vec<(&'static str, &'static str, Vec<&'static str>, &'static str, Vec<&'static str>)> {
+fn cases() -> Vec<(
+    &'static str,
+    &'static str,
+    Vec<&'static str>,
+    &'static str,
+    Vec<&'static str>,
+)> {
     vec![
         (
             "tumble",
@@ -135,13 +141,7 @@ fn every_procedure_writes_a_valid_document_and_compares() {
     for (name, procedure, sim, file, reduce) in cases() {
         simulate(&dir, file, &sim);
         let mut args = reduce.clone();
-        args.extend_from_slice(&[
-            "--json",
-            "--serial",
-            "SN-042",
-            "--meta",
-            "operator=lee",
-        ]);
+        args.extend_from_slice(&["--json", "--serial", "SN-042", "--meta", "operator=lee"]);
         let text = ok(&incal_in(&dir, &args));
         let doc: Value = serde_json::from_str(&text).unwrap();
         let errors: Vec<String> = validator
@@ -182,7 +182,10 @@ fn every_procedure_writes_a_valid_document_and_compares() {
         sorted.sort();
         let mut ksorted = keys.clone();
         ksorted.sort();
-        assert_eq!(sorted, ksorted, "{name}: correlation covers every coefficient");
+        assert_eq!(
+            sorted, ksorted,
+            "{name}: correlation covers every coefficient"
+        );
         let m = doc["correlation"]["matrix"].as_array().unwrap();
         assert_eq!(m.len(), names.len());
         for (i, row) in m.iter().enumerate() {
@@ -202,13 +205,14 @@ fn every_procedure_writes_a_valid_document_and_compares() {
         // compare: a result with itself differs by 0 everywhere.
         let out = format!("{name}.json");
         std::fs::write(dir.join(&out), &text).unwrap();
-        let cmp: Value = serde_json::from_str(&ok(&incal_in(
-            &dir,
-            &["compare", &out, &out, "--json"],
-        )))
-        .unwrap();
+        let cmp: Value =
+            serde_json::from_str(&ok(&incal_in(&dir, &["compare", &out, &out, "--json"]))).unwrap();
         let comps = cmp["comparisons"].as_object().unwrap();
-        assert_eq!(comps.len(), coef.len(), "{name}: every coefficient compared");
+        assert_eq!(
+            comps.len(),
+            coef.len(),
+            "{name}: every coefficient compared"
+        );
         for (k, c) in comps {
             assert_eq!(c["difference"], 0.0, "{name} {k}");
             assert_eq!(c["En"], 0.0, "{name} {k}");
@@ -235,7 +239,9 @@ fn every_procedure_writes_a_valid_document_and_compares() {
 fn output_file_holds_what_stdout_would() {
     let dir = workdir("output");
     simulate(&dir, "t.csv", &["tumble", "--seed", "3"]);
-    let base = ["tumble", "--mount", "pendulum", "--input", "t.csv", "--json"];
+    let base = [
+        "tumble", "--mount", "pendulum", "--input", "t.csv", "--json",
+    ];
     let stdout = ok(&incal_in(&dir, &base));
     let mut args = base.to_vec();
     args.extend_from_slice(&["--output", "r.json"]);
@@ -257,5 +263,119 @@ fn snapshots_of_every_report() {
         let json = ok(&incal_in(&dir, &args));
         insta::assert_snapshot!(format!("{name}_json"), json);
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `centrifuge --from TUMBLE.json` gives the coefficients of passing K0
+/// and K1 by hand, and records where they came from; `--k0` without
+/// `--u-k0` is a warning, not a silent 0.
+#[test]
+fn centrifuge_from_a_tumble_result() {
+    let dir = workdir("from");
+    simulate(
+        &dir,
+        "t.csv",
+        &["tumble", "--k0", "1.2e-4", "--k1", "1.3", "--seed", "21"],
+    );
+    let stdout = ok(&incal_in(
+        &dir,
+        &[
+            "tumble", "--mount", "pendulum", "--input", "t.csv", "--json", "-o", "t.json",
+        ],
+    ));
+    assert_eq!(stdout, "", "written to the file, not stdout");
+    let t: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("t.json")).unwrap()).unwrap();
+    simulate(&dir, "c.csv", &["centrifuge", "--seed", "22"]);
+    let common = [
+        "centrifuge",
+        "--input",
+        "c.csv",
+        "--radius-m",
+        "0.71",
+        "--latitude-deg",
+        "39.9",
+        "--json",
+    ];
+    let mut from = common.to_vec();
+    from.extend_from_slice(&["--from", "t.json"]);
+    let a: Value = serde_json::from_str(&ok(&incal_in(&dir, &from))).unwrap();
+    let num = |v: &Value| v.as_f64().unwrap().to_string();
+    let (k0, u0) = (
+        num(&t["coefficients"]["K0"]["value"]),
+        num(&t["coefficients"]["K0"]["u"]),
+    );
+    let (k1, u1) = (
+        num(&t["coefficients"]["K1"]["value"]),
+        num(&t["coefficients"]["K1"]["u"]),
+    );
+    let mut by_hand = common.to_vec();
+    by_hand.extend_from_slice(&["--k0", &k0, "--u-k0", &u0, "--k1", &k1, "--u-k1", &u1]);
+    let b: Value = serde_json::from_str(&ok(&incal_in(&dir, &by_hand))).unwrap();
+    let (ca, cb) = (
+        a["coefficients"].as_object().unwrap(),
+        b["coefficients"].as_object().unwrap(),
+    );
+    assert_eq!(ca.keys().collect::<Vec<_>>(), cb.keys().collect::<Vec<_>>());
+    for (name, x) in ca {
+        let (va, vb) = (
+            x["value"].as_f64().unwrap(),
+            cb[name]["value"].as_f64().unwrap(),
+        );
+        assert!(
+            (va - vb).abs() <= 1e-12 * va.abs().max(1e-300),
+            "{name}: {va} vs {vb}"
+        );
+        let (ua, ub) = (x["u"].as_f64().unwrap(), cb[name]["u"].as_f64().unwrap());
+        // Only the K0–K1 covariance differs: a small change, if any.
+        assert!((ua - ub).abs() <= 0.5 * ub, "{name}: {ua} vs {ub}");
+    }
+    assert!(a["inputs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|i| i["role"] == "from" && i["path"] == "t.json"));
+    assert!(a["decisions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|d| d["code"] == "chained-input"));
+    assert!(b["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|w| w["code"] != "missing-uncertainty"));
+    // Explicit values without their u: a warning, not a silent 0.
+    let mut bare = common.to_vec();
+    bare.extend_from_slice(&["--k0", &k0, "--k1", &k1]);
+    let c: Value = serde_json::from_str(&ok(&incal_in(&dir, &bare))).unwrap();
+    let missing: Vec<&Value> = c["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|w| w["code"] == "missing-uncertainty")
+        .collect();
+    assert_eq!(missing.len(), 2, "{missing:?}");
+    // --from must be a tumble result.
+    simulate(&dir, "a.csv", &["misalign", "accel", "--seed", "2"]);
+    ok(&incal_in(
+        &dir,
+        &[
+            "misalign",
+            "accel",
+            "--input",
+            "a.csv",
+            "--scale-factor",
+            "1.299",
+            "--json",
+            "-o",
+            "m.json",
+        ],
+    ));
+    let mut wrong = common.to_vec();
+    wrong.extend_from_slice(&["--from", "m.json"]);
+    let o = incal_in(&dir, &wrong);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("needs a tumble result"));
     let _ = std::fs::remove_dir_all(&dir);
 }

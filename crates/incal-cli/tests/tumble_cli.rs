@@ -185,7 +185,10 @@ fn compare_reports_difference_per_mille_and_en() {
     assert!((k1["relative_per_mille"].as_f64().unwrap() - 1e3 * d / b.abs()).abs() < 1e-12);
     // En with each side's own U95 = k95 u (not 2u).
     let (ua, ub) = (k1["U95_a"].as_f64().unwrap(), k1["U95_b"].as_f64().unwrap());
-    assert!(ua > 2.0 * k1["u_a"].as_f64().unwrap(), "k95 > 2 with few dof");
+    assert!(
+        ua > 2.0 * k1["u_a"].as_f64().unwrap(),
+        "k95 > 2 with few dof"
+    );
     let en = d / (ua * ua + ub * ub).sqrt();
     assert!((k1["En"].as_f64().unwrap() - en).abs() < 1e-12);
 }

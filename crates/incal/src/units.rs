@@ -35,7 +35,6 @@ pub fn arcsec_to_rad(arcsec: f64) -> f64 {
     arcsec / ARCSEC_PER_RAD
 }
 
-
 /// The unit of a number in a result document.
 ///
 /// Values in the JSON are SI- or g-based (accelerations in local g,

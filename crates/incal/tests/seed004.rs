@@ -129,7 +129,9 @@ fn inconsistent_k0_is_flagged() {
     let c = cal.accelerometers[0].k0_consistency.unwrap();
     assert!(c.max_normalized_difference > 10.0, "{c:?}");
     assert!(
-        cal.warnings.iter().any(|w| w.code == incal::WarningCode::InconsistentBias && w.message.contains("'a'")),
+        cal.warnings
+            .iter()
+            .any(|w| w.code == incal::WarningCode::InconsistentBias && w.message.contains("'a'")),
         "{:?}",
         cal.warnings
     );

@@ -131,7 +131,12 @@ fn scale_inputs(a: &Args) -> CliResult<ScaleInputs> {
         None => None,
     };
     let mut warnings = Vec::new();
-    let mut pick = |flag: &str, uflag: &str, name: &str, v: Option<f64>, u: Option<f64>| -> CliResult<ValueU> {
+    let mut pick = |flag: &str,
+                    uflag: &str,
+                    name: &str,
+                    v: Option<f64>,
+                    u: Option<f64>|
+     -> CliResult<ValueU> {
         match (v, &from) {
             (Some(value), _) => {
                 if u.is_none() {
@@ -140,18 +145,28 @@ fn scale_inputs(a: &Args) -> CliResult<ScaleInputs> {
                         format!("{flag} given without {uflag}: {name} is taken as exact, and every u derived from it is too small by its share"),
                     ));
                 }
-                Ok(ValueU { value, u: u.unwrap_or(0.0) })
+                Ok(ValueU {
+                    value,
+                    u: u.unwrap_or(0.0),
+                })
             }
             (None, Some((file, _, doc))) => {
                 if u.is_some() {
-                    return Err(usage(format!("{uflag} goes with {flag} (the u of --from comes from the result)")));
+                    return Err(usage(format!(
+                        "{uflag} goes with {flag} (the u of --from comes from the result)"
+                    )));
                 }
                 let c = doc.coefficients.get(name).ok_or_else(|| {
                     CliError::Input(format!("{file}: $.coefficients.{name}: missing"))
                 })?;
-                Ok(ValueU { value: c.value, u: c.u })
+                Ok(ValueU {
+                    value: c.value,
+                    u: c.u,
+                })
             }
-            (None, None) => Err(usage(format!("give {flag} (with {uflag}) or --from TUMBLE.json"))),
+            (None, None) => Err(usage(format!(
+                "give {flag} (with {uflag}) or --from TUMBLE.json"
+            ))),
         }
     };
     let k0 = pick("--k0", "--u-k0", "K0", a.k0, a.u_k0)?;
@@ -159,9 +174,7 @@ fn scale_inputs(a: &Args) -> CliResult<ScaleInputs> {
     // The covariance holds only when both come from the same result.
     let cov_k0_k1 = match (&from, a.k0, a.k1) {
         (Some((file, _, doc)), None, None) => doc.covariance("K0", "K1").ok_or_else(|| {
-            CliError::Input(format!(
-                "{file}: $.correlation: no entry for K0 and K1"
-            ))
+            CliError::Input(format!("{file}: $.correlation: no entry for K0 and K1"))
         })?,
         _ => 0.0,
     };
@@ -225,7 +238,12 @@ pub fn run(a: &Args) -> CliResult<()> {
 #[derive(clap::Args, Debug, Clone)]
 pub struct TruthArgs {
     /// Bias K0 (g).
-    #[arg(long = "k0", visible_alias = "k0-g", default_value_t = 1.2e-4, allow_hyphen_values = true)]
+    #[arg(
+        long = "k0",
+        visible_alias = "k0-g",
+        default_value_t = 1.2e-4,
+        allow_hyphen_values = true
+    )]
     pub k0_g: f64,
     /// Scale factor K1 (output/g).
     #[arg(long, default_value_t = 1.3, allow_hyphen_values = true)]

@@ -144,7 +144,16 @@ pub fn run(a: &Args) -> CliResult<()> {
     } else {
         let mut s = format!("{} results: a = {na}, b = {nb}\n", da.procedure);
         s.push_str(&table(
-            &["name", "a", "b", "a - b", "per mille", "En", "|En|<=1", "unit"],
+            &[
+                "name",
+                "a",
+                "b",
+                "a - b",
+                "per mille",
+                "En",
+                "|En|<=1",
+                "unit",
+            ],
             &rows,
         ));
         s.push_str("En = (a - b) / sqrt(U95_a^2 + U95_b^2), U95 = k95 u of each result; per mille relative to b\n");

@@ -7,8 +7,8 @@ use clap::ValueEnum;
 use incal::document::InputFile;
 use incal::models::gfimu::{ArrayAccelerometer, Geometry};
 use incal::procedures::gfimu::{
-    calibrate, solve, CalibrateOptions, CalibratedAccelerometer, MotionSolution,
-    SolveOptions, StaticSample,
+    calibrate, solve, CalibrateOptions, CalibratedAccelerometer, MotionSolution, SolveOptions,
+    StaticSample,
 };
 use incal::sim::gfimu::{
     simulate_motion, simulate_static, six_positions, GfimuTruth, MotionProfile,

@@ -9,9 +9,7 @@ use incal::procedures::misalign::accel::{self, AccelObservation, AccelOptions};
 use incal::procedures::misalign::averaging::{
     average_record, RawSample, Record, RecordMean, TurnPolicy,
 };
-use incal::procedures::misalign::gyro::{
-    self, GyroConfig, GyroObservation, GyroOptions,
-};
+use incal::procedures::misalign::gyro::{self, GyroConfig, GyroObservation, GyroOptions};
 use incal::procedures::misalign::plan::{predict_accel, predict_gyro, Prediction};
 use incal::rigs::rate_table::{FaceMounting, GyroMounting};
 use incal::sim::misalign::{

@@ -16,5 +16,8 @@ pub struct Args {
 
 /// `incal schema`.
 pub fn run(a: &Args) -> CliResult<()> {
-    write_text(a.output.as_deref(), &json_text(&incal::document::json_schema()))
+    write_text(
+        a.output.as_deref(),
+        &json_text(&incal::document::json_schema()),
+    )
 }

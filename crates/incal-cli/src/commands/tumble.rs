@@ -283,7 +283,11 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
         for (k, n) in p.names().iter().enumerate() {
             let unit = Term::parse(n).map_err(core)?.unit();
             let (scale, label) = unit.engineering();
-            rows.push(vec![n.clone(), sig(p.u_at(k) * scale, 3), label.to_string()]);
+            rows.push(vec![
+                n.clone(),
+                sig(p.u_at(k) * scale, 3),
+                label.to_string(),
+            ]);
         }
         s.push_str(&table(&["term", "predicted u", "unit"], &rows));
     } else {

@@ -248,7 +248,11 @@ impl CentrifugeResult {
                 format!("station {st} could not be fitted: {e}"),
             )]);
         }
-        b.warnings(self.warnings.iter().map(|w| Warning::new(WarningCode::PartFailed, w.clone()))); // TEMP
+        b.warnings(
+            self.warnings
+                .iter()
+                .map(|w| Warning::new(WarningCode::PartFailed, w.clone())),
+        ); // TEMP
         Ok(b.finish())
     }
 }

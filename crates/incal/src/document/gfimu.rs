@@ -117,12 +117,7 @@ impl GfimuCalibration {
         let mut pos = Table::new(
             "positions",
             "Static positions",
-            &[
-                ("fx_g", None),
-                ("fy_g", None),
-                ("fz_g", None),
-                ("n", None),
-            ],
+            &[("fx_g", None), ("fy_g", None), ("fz_g", None), ("n", None)],
         );
         for (f, n) in &self.positions {
             pos.push(vec![

@@ -468,8 +468,8 @@ impl ResultDocument {
     /// Parse a document from JSON text, checking the schema id.
     /// Errors name the JSON path where possible.
     pub fn from_json(text: &str) -> std::result::Result<ResultDocument, String> {
-        let v: Value =
-            serde_json::from_str(text).map_err(|e| format!("line {}: not valid JSON: {e}", e.line()))?;
+        let v: Value = serde_json::from_str(text)
+            .map_err(|e| format!("line {}: not valid JSON: {e}", e.line()))?;
         match v.get("schema").and_then(Value::as_str) {
             Some(SCHEMA) => {}
             Some(other) => {
@@ -634,7 +634,11 @@ impl DocumentBuilder {
                 for k in 0..b.ncols() {
                     let r = b[(j, k)];
                     // Round-off can leave |ρ| a hair above 1.
-                    m[at + j][at + k] = if r.is_finite() { r.clamp(-1.0, 1.0) } else { 0.0 };
+                    m[at + j][at + k] = if r.is_finite() {
+                        r.clamp(-1.0, 1.0)
+                    } else {
+                        0.0
+                    };
                 }
             }
             at += b.nrows();

@@ -148,7 +148,11 @@ impl TumbleResult {
                 ],
             );
             for (a, d, u) in &p.position_differences {
-                t.push(vec![Cell::num(a.to_degrees()), Cell::num(*d), Cell::num(*u)])?;
+                t.push(vec![
+                    Cell::num(a.to_degrees()),
+                    Cell::num(*d),
+                    Cell::num(*u),
+                ])?;
             }
             b.table(t);
         }

@@ -27,8 +27,8 @@ use nalgebra::{DMatrix, DVector};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 use super::estimates::Estimates;
-use crate::warning::{Warning, WarningCode};
 use crate::error::{Alias, Error, Result};
+use crate::warning::{Warning, WarningCode};
 
 /// Default limit on the equilibrated condition number: beyond it a design is
 /// treated as rank deficient (10 of the 16 significant digits of f64 lost).

@@ -63,7 +63,10 @@ pub fn sections(seed: u64) -> Result<Vec<DemoSection>> {
 
 /// Truth of a tumble's fitted terms as observed: each fitted coefficient
 /// plus the absorbed terms it carries (`K_fitted + factor·K_absorbed`).
-pub fn tumble_observed_truth(r: &TumbleResult, truth: &AccelerometerModel) -> BTreeMap<String, f64> {
+pub fn tumble_observed_truth(
+    r: &TumbleResult,
+    truth: &AccelerometerModel,
+) -> BTreeMap<String, f64> {
     let mut out: BTreeMap<String, f64> = r
         .terms
         .iter()
