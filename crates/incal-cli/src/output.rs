@@ -109,7 +109,7 @@ pub fn render(doc: &ResultDocument) -> String {
         .coefficients
         .iter()
         .map(|(name, c)| {
-            let (scale, label) = c.unit.engineering();
+            let (scale, label) = c.unit.engineering_for(c.value);
             vec![
                 name.to_string(),
                 sig(c.value * scale, 7),

@@ -56,15 +56,18 @@ fn simulate(dir: &Path, file: &str, sim: &[&str]) {
     ok(&incal_in(dir, &args));
 }
 
-/// The five reducing commands on simulated input: (name, procedure id,
-/// simulate args, input file, reduce args without --json).
-fn cases() -> Vec<(
+/// One reducing command on simulated input: name, procedure id,
+/// simulate args, input file, reduce args without --json.
+type Case = (
     &'static str,
     &'static str,
     Vec<&'static str>,
     &'static str,
     Vec<&'static str>,
-)> {
+);
+
+/// The five reducing commands on simulated input.
+fn cases() -> Vec<Case> {
     vec![
         (
             "tumble",

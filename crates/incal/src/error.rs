@@ -20,6 +20,31 @@ pub struct Alias {
     pub coefficients: Vec<f64>,
 }
 
+impl Alias {
+    /// The combination alone, e.g. `K0 - K2 - 0.500*K_pp` (no reason
+    /// attached): how the weakest direction of a well-posed design is named.
+    pub fn combination(&self) -> String {
+        let mut s = String::new();
+        for (k, (name, c)) in self.terms.iter().zip(&self.coefficients).enumerate() {
+            let mag = c.abs();
+            if k == 0 {
+                if *c < 0.0 {
+                    s.push('-');
+                }
+            } else {
+                s.push_str(if *c < 0.0 { " - " } else { " + " });
+            }
+            if (mag - 1.0).abs() < 5e-4 {
+                s.push_str(name);
+            } else {
+                s.push_str(&format!("{mag:.3}*{name}"));
+            }
+        }
+        s
+    }
+}
+
+/// The combination with why it cannot be observed (for refusals).
 impl std::fmt::Display for Alias {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         if self.terms.len() == 1 {
@@ -29,25 +54,7 @@ impl std::fmt::Display for Alias {
                 self.terms[0]
             );
         }
-        let mut first = true;
-        for (name, c) in self.terms.iter().zip(&self.coefficients) {
-            let sign = if *c < 0.0 { "-" } else { "+" };
-            let mag = c.abs();
-            if first {
-                if *c < 0.0 {
-                    write!(f, "-")?;
-                }
-                first = false;
-            } else {
-                write!(f, " {sign} ")?;
-            }
-            if (mag - 1.0).abs() < 5e-4 {
-                write!(f, "{name}")?;
-            } else {
-                write!(f, "{mag:.3}*{name}")?;
-            }
-        }
-        write!(f, " (regressors linearly dependent)")
+        write!(f, "{} (regressors linearly dependent)", self.combination())
     }
 }
 

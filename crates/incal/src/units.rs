@@ -127,6 +127,18 @@ impl Unit {
     }
 }
 
+impl Unit {
+    /// As [`Unit::engineering`], for a value of magnitude `magnitude`: an
+    /// angle of 0.1 rad (5.7°) or more, such as an azimuth, reads in
+    /// degrees rather than arcseconds.
+    pub fn engineering_for(&self, magnitude: f64) -> (f64, &str) {
+        match self {
+            Unit::Rad if magnitude.abs() >= 0.1 => (180.0 / std::f64::consts::PI, "deg"),
+            other => other.engineering(),
+        }
+    }
+}
+
 impl std::fmt::Display for Unit {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.as_str())

@@ -111,7 +111,7 @@ pub fn run(a: &Args) -> CliResult<()> {
                 "unit": x.unit.as_str(),
             }),
         );
-        let (scale, label) = x.unit.engineering();
+        let (scale, label) = x.unit.engineering_for(x.value.abs().max(y.value.abs()));
         rows.push(vec![
             name.to_string(),
             sig(x.value * scale, 7),

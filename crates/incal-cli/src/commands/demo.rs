@@ -34,7 +34,7 @@ fn truth_table(c: &DemoCase) -> String {
     let rows: Vec<Vec<String>> = shown
         .iter()
         .map(|&(name, k)| {
-            let (scale, label) = k.unit.engineering();
+            let (scale, label) = k.unit.engineering_for(k.value);
             let truth = c.truth.get(name).copied();
             vec![
                 name.to_string(),

@@ -146,7 +146,7 @@ pub struct SolveArgs {
     )]
     pub omega0_rad_s: Vec<f64>,
     /// Local gravity that defines the g unit (m/s^2).
-    #[arg(long, default_value_t = STANDARD_GRAVITY_M_S2)]
+    #[arg(long, visible_alias = "g-local", default_value_t = STANDARD_GRAVITY_M_S2)]
     pub gravity_m_s2: f64,
     /// Print one JSON object instead of CSV.
     #[arg(long)]
@@ -219,7 +219,7 @@ pub struct SimArgs {
     )]
     pub f0_g: Vec<f64>,
     /// Local gravity that defines the g unit (m/s^2).
-    #[arg(long, default_value_t = STANDARD_GRAVITY_M_S2)]
+    #[arg(long, visible_alias = "g-local", default_value_t = STANDARD_GRAVITY_M_S2)]
     pub gravity_m_s2: f64,
     /// Random seed (same seed, same file).
     #[arg(long, default_value_t = 1)]

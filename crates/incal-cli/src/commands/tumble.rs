@@ -272,7 +272,7 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
     ));
     if let (Some(p), Some(k1), Some(noise)) = (prediction, a.k1, a.noise) {
         s.push_str(&format!(
-            "\nPredicted standard uncertainty ({} mount, K1 = {}, noise {:e} per sample, {} samples per position, index error {} arcsec):\n",
+            "\nPredicted standard uncertainty ({} mount, K1 = {}, noise {:e} per sample, samples per position {}, index error {} arcsec):\n",
             mount.name(),
             k1,
             noise,

@@ -65,8 +65,8 @@ impl CentrifugeResult {
                 ));
             }
         }
-        b.option("k0_g", json!(opts.k0_g.value));
-        b.option("u_k0_g", json!(opts.k0_g.u));
+        b.option("k0", json!(opts.k0_g.value));
+        b.option("u_k0", json!(opts.k0_g.u));
         b.option("k1", json!(opts.k1.value));
         b.option("u_k1", json!(opts.k1.u));
         b.option("radius_m", json!(opts.radius0_m));

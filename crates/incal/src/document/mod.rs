@@ -308,7 +308,7 @@ impl FitSummary {
             variance_source: fit.variance_source,
             residual_rms: finite(rms),
             residual_unit,
-            weakest_combination: fit.diagnostics.weakest.to_string(),
+            weakest_combination: fit.diagnostics.weakest.combination(),
         }
     }
 }
@@ -479,7 +479,13 @@ impl ResultDocument {
             }
             None => return Err(format!("$.schema: missing: not an incal result ({SCHEMA})")),
         }
-        serde_json::from_value(v).map_err(|e| format!("not a valid {SCHEMA} document: {e}"))
+        // From the text, not the Value: the coefficients keep their order.
+        let de = &mut serde_json::Deserializer::from_str(text);
+        serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let path = if path == "." { "$".to_string() } else { format!("$.{path}") };
+            format!("{path}: not a valid {SCHEMA} document: {}", e.inner())
+        })
     }
 
     /// Pretty JSON text (ends without a newline).

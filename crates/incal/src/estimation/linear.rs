@@ -268,7 +268,8 @@ impl Fit {
                 WarningCode::WeakConditioning,
                 format!(
                     "weakly conditioned plan (condition number {:.2e}): the combination {} is poorly determined",
-                    self.diagnostics.condition, self.diagnostics.weakest
+                    self.diagnostics.condition,
+                    self.diagnostics.weakest.combination()
                 ),
             ));
         }

@@ -204,7 +204,8 @@ impl Geometry {
         let warning = (d.condition > WARN_COND).then(|| {
             format!(
                 "weak array geometry (condition number {:.2e}): {} is poorly determined",
-                d.condition, d.weakest
+                d.condition,
+                d.weakest.combination()
             )
         });
         Ok((d, warning))

@@ -224,7 +224,8 @@ pub fn solve(
             crate::WarningCode::WeakConditioning,
             format!(
                 "weak calibrated geometry (condition number {:.2e}): {} is poorly determined",
-                diagnostics.condition, diagnostics.weakest
+                diagnostics.condition,
+                diagnostics.weakest.combination()
             ),
         ));
     }
