@@ -314,3 +314,115 @@ fn budget_lines_add_up_to_the_reported_u() {
     );
     assert!(b.combined_u_paper_eq10.unwrap() < b.combined_u);
 }
+
+/// The fixture-centre radius `R_centre_m = (R+ + R−)/2` (seed 001 §2.2):
+/// the effective truth lies within ±2u in 90–99 % of 300 trials, as for the
+/// other radii (u(K1) = 0 here; the shared-K1 term is checked by
+/// tests/centrifuge_mc.rs).
+#[test]
+fn centre_radius_within_2u_at_95_percent() {
+    let eff = 1.0 + truth().k_io;
+    let truth_r = rig().centre_radius_m() * eff;
+    let trials = 300;
+    let runs = monte_carlo(12, trials, |s| {
+        let obs = simulate(&sim(s, standard_positions()));
+        let res = calibrate(&obs, &options(3)).expect("calibrates");
+        let (v, u) = res.joint.get("R_centre_m").expect("R_centre_m");
+        assert_eq!((v, u), (res.centre_radius_m.value, res.centre_radius_m.u));
+        (v - truth_r).abs() <= 2.0 * u
+    });
+    let rate = runs.iter().filter(|h| **h).count() as f64 / trials as f64;
+    assert!((0.90..=0.99).contains(&rate), "R_centre_m: {rate}");
+}
+
+/// `joint` holds the coefficients (exactly `coefficients`) followed by the
+/// radius quantities in the documented order; every radius field carries
+/// the joint u; K1 is one input: cov(R+, R−) contains the full
+/// `R+ R− (u(K1)/K1)²` and cov(K2, R+) = −K2 R+ (u(K1)/K1)² (K2 ∝ K1,
+/// R ∝ 1/K1).
+#[test]
+fn joint_estimates_share_k1_and_match_the_fields() {
+    let obs = simulate(&sim(8, standard_positions()));
+    let mut o = options(3);
+    let rel = 1e-5;
+    o.k1.u = rel * o.k1.value;
+    o.k0_g.u = 2e-6;
+    let r = calibrate(&obs, &o).unwrap();
+    let j = &r.joint;
+    let mut expect: Vec<String> = r.coefficients.names().to_vec();
+    expect.extend(
+        [
+            "R_plus_m",
+            "R_minus_m",
+            "R_plus_static_m",
+            "R_minus_static_m",
+            "R_centre_m",
+            "ecm_offset_m",
+            "tilt_rad",
+        ]
+        .map(String::from),
+    );
+    assert_eq!(j.names(), &expect[..]);
+    let names: Vec<&str> = r.coefficients.names().iter().map(|s| s.as_str()).collect();
+    let head = j.select(&names).unwrap();
+    assert_eq!(head.values(), r.coefficients.values());
+    assert_eq!(head.covariance(), r.coefficients.covariance());
+    assert!(j.dof() <= r.coefficients.dof());
+    let vu = |n: &str| {
+        let (value, u) = j.get(n).unwrap();
+        ValueU { value, u }
+    };
+    assert_eq!(r.regression[0].as_ref().unwrap().radius_m, vu("R_plus_m"));
+    assert_eq!(r.regression[1].as_ref().unwrap().radius_m, vu("R_minus_m"));
+    assert_eq!(r.static_radius[0], Some(vu("R_plus_static_m")));
+    assert_eq!(r.static_radius[1], Some(vu("R_minus_static_m")));
+    assert_eq!(r.centre_radius_m, vu("R_centre_m"));
+    assert_eq!(r.ecm_offset_m, vu("ecm_offset_m"));
+    assert_eq!(r.tilt_rad, Some(vu("tilt_rad")));
+    let c = j.covariance();
+    let at = |n: &str| j.index(n).unwrap();
+    let (rp, rm, k2) = (
+        j.value("R_plus_m").unwrap(),
+        j.value("R_minus_m").unwrap(),
+        j.value("K2").unwrap(),
+    );
+    let cov_pm = c[(at("R_plus_m"), at("R_minus_m"))];
+    assert!(
+        (cov_pm / (rp * rm * rel * rel) - 1.0).abs() < 1e-6,
+        "{cov_pm:e}"
+    );
+    let cov_k2 = c[(at("K2"), at("R_plus_m"))];
+    assert!(
+        (cov_k2 / (-k2 * rp * rel * rel) - 1.0).abs() < 1e-6,
+        "{cov_k2:e}"
+    );
+    // R_centre_m: the K1 term does not average down.
+    let u_c = vu("R_centre_m").u;
+    assert!(u_c >= 0.5 * (rp + rm) * rel, "{u_c:e}");
+}
+
+/// The static radius in `joint` is the eq. 5–6 radius corrected for the
+/// nonlinearity at ~1 g exactly as `correct_static_radius` does: the same
+/// value; with u(K1) = 0 the shared K1 adds nothing, and the u agree to
+/// 1e-4 (the joint map also lets `a_g = R·rate²/g` follow the eq. 6 radius,
+/// which `correct_static_radius` takes as exact: a relative change of
+/// ~K2·a_g, a few ppm).
+#[test]
+fn joint_static_radius_is_correct_static_radius() {
+    use incal::procedures::centrifuge::correct_static_radius;
+    use incal::rigs::centrifuge::centripetal_rate_squared;
+    let obs = simulate(&sim(9, standard_positions()));
+    let o = options(3);
+    let r = calibrate(&obs, &o).unwrap();
+    for (k, pol) in [(0usize, 1.0), (1, -1.0)] {
+        let raw = r.static_radius_uncorrected[k].unwrap();
+        let w = r.static_rate_rad_s[k].unwrap();
+        let a_g = raw.value * centripetal_rate_squared(w, o.latitude_rad, o.opposite_sense)
+            / o.g_local_m_s2;
+        let fit = &r.regression[k].as_ref().unwrap().fit.estimates;
+        let c = correct_static_radius(raw, a_g, pol, fit).unwrap();
+        let st = r.static_radius[k].unwrap();
+        assert!((st.value / c.value - 1.0).abs() < 1e-14, "{st:?} {c:?}");
+        assert!((st.u / c.u - 1.0).abs() < 1e-4, "{st:?} {c:?}");
+    }
+}

@@ -36,6 +36,15 @@
 //!    `|dc2/dφ| (|Δφ_net| + tolerance)`, `Δφ_net` the ECM alignment error
 //!    left after averaging both polarities, `tolerance` the fixture angle
 //!    bound given by the user) and K1 (the scale of `E/K1`).
+//! 6. One propagation for everything: the coefficients of step 5 and the
+//!    radius quantities of steps 2–3 (`R±`, static `R±`, `R = (R+ + R−)/2`,
+//!    `r`, λ) are one map of one input vector (K0, K1, the raw means E0 and
+//!    E_a±, each regression fit's parameters, each station fit's c2, q, c3
+//!    and the type-B Δc2) through [`Estimates::map`], so the covariance is
+//!    complete: K1, shared by every `E/K1`, enters R+ and R− fully
+//!    correlated and does not average down in `R`
+//!    (`CentrifugeResult::joint`). The coefficient budgets are the rows of
+//!    that Jacobian for the coefficients.
 //!
 //! Because the ECM alignment error has opposite signs in the two
 //! polarities (module docs of [`crate::rigs::centrifuge`]), its first-order
@@ -50,12 +59,15 @@ use std::collections::BTreeMap;
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::{Error, Result};
-use crate::estimation::{fit_means, Design, Estimates, Fit, Noise, PositionStats};
+use crate::estimation::{
+    fit_means, numeric_jacobian, Design, Estimates, Fit, Noise, PositionStats,
+};
 use crate::models::Term;
 use crate::rigs::centrifuge::{Centrifuge, Plane, Position};
 use budget::{delta_c2, Budget, BudgetLine};
 use radius::{
-    regression_radius, static_radius, static_tilt, RadiusContext, RadiusFit, SpeedPoint, ValueU,
+    radius_from_scale, regression_radius, static_radius, static_tilt, RadiusContext, RadiusFit,
+    SpeedPoint, ValueU,
 };
 
 /// One recorded sample (one row of the input CSV).
@@ -175,10 +187,14 @@ pub struct RadiusRangeRow {
 ///
 /// At the static speed the centripetal input is `a_g` (g) and IA sees
 /// `a_i = p·a_g` (polarity p); the indicated input
-/// `a_i + K2 a_i² + K3 a_i³` makes eq. 6 read `R·(1 + p·K2·a_g + K3·a_g²)`.
-/// Returns `R_eq6 / (1 + p·K2·a_g + K3·a_g²)`, with `u` from `u(R_eq6)` and
-/// the covariance of (K2, K3) in `regression` (the regression–iteration fit
-/// of the same polarity; a missing term counts as 0 ± 0). GUM first order.
+/// `a_i + K2 a_i² + K3 a_i³` makes eq. 6 read `R·(1 + p·K2·a_g + K3·a_g²)`
+/// ([`radius::static_nonlinearity_factor`]). Returns
+/// `R_eq6 / (1 + p·K2·a_g + K3·a_g²)` (m), with `u` propagated by
+/// [`Estimates::map`] from `u(R_eq6)` and the covariance of (K2, K3) in
+/// `regression` (the regression–iteration fit of the same polarity; a
+/// missing term counts as 0 ± 0), `R_eq6` independent of (K2, K3), `a_g`
+/// exact. GUM first order. [`calibrate`] applies the same correction inside
+/// its joint propagation (`CentrifugeResult::joint`), where K1 is shared.
 pub fn correct_static_radius(
     r_eq6: ValueU,
     a_g: f64,
@@ -190,22 +206,43 @@ pub fn correct_static_radius(
         .filter(|n| regression.index(n).is_some())
         .collect();
     let k = regression.select(&names)?;
-    let coef = |n: &str| k.value(n).unwrap_or(0.0);
-    let factor = 1.0 + polarity * coef("K2") * a_g + coef("K3") * a_g * a_g;
-    let r = r_eq6.value / factor;
-    // ∂r/∂K2 = −r·p·a_g/factor, ∂r/∂K3 = −r·a_g²/factor.
-    let jac = nalgebra::DMatrix::from_fn(1, names.len(), |_, j| {
-        let d = if names[j] == "K2" {
-            polarity * a_g
-        } else {
-            a_g * a_g
-        };
-        -r * d / factor
-    });
-    let var_k = (&jac * k.covariance() * jac.transpose())[(0, 0)];
+    let n = names.len();
+    let mut cov = DMatrix::zeros(n + 1, n + 1);
+    cov[(0, 0)] = r_eq6.u * r_eq6.u;
+    cov.view_mut((1, 1), (n, n)).copy_from(k.covariance());
+    let mut values = vec![r_eq6.value];
+    values.extend(k.values().iter());
+    let mut in_names = vec!["R_eq6".to_string()];
+    in_names.extend(names.iter().map(|s| s.to_string()));
+    let inputs = Estimates::new(in_names, DVector::from_vec(values), cov, k.dof())?;
+    let k2_at = names.iter().position(|n| *n == "K2").map(|j| j + 1);
+    let k3_at = names.iter().position(|n| *n == "K3").map(|j| j + 1);
+    let factor = move |x: &DVector<f64>| {
+        let c = |at: Option<usize>| at.map_or(0.0, |j| x[j]);
+        radius::static_nonlinearity_factor(c(k2_at), c(k3_at), a_g, polarity)
+    };
+    let out = inputs.map(
+        vec!["R".into()],
+        |x| DVector::from_element(1, x[0] / factor(x)),
+        |x| {
+            // ∂r/∂R_eq6 = 1/factor, ∂r/∂K2 = −r·p·a_g/factor,
+            // ∂r/∂K3 = −r·a_g²/factor.
+            let f = factor(x);
+            let r = x[0] / f;
+            let mut j = DMatrix::zeros(1, n + 1);
+            j[(0, 0)] = 1.0 / f;
+            if let Some(k) = k2_at {
+                j[(0, k)] = -r * polarity * a_g / f;
+            }
+            if let Some(k) = k3_at {
+                j[(0, k)] = -r * a_g * a_g / f;
+            }
+            j
+        },
+    )?;
     Ok(ValueU {
-        value: r,
-        u: ((r_eq6.u / factor).powi(2) + var_k.max(0.0)).sqrt(),
+        value: out.values()[0],
+        u: out.u_at(0),
     })
 }
 
@@ -214,30 +251,76 @@ pub fn correct_static_radius(
 pub struct CentrifugeResult {
     /// Label of the IA-radial station used for the radius.
     pub ia_station: Option<String>,
-    /// Static tilt λ (rad), eq. 4.
+    /// Static tilt λ (rad), eq. 4 (`tilt_rad` of [`CentrifugeResult::joint`]).
     pub tilt_rad: Option<ValueU>,
     /// Static back-calculated radius (m) for polarity + and −, eq. 5–6,
-    /// with the nonlinearity at the 1 g speed removed by
-    /// [`correct_static_radius`] when the regression gives K2 (K3).
+    /// with the nonlinearity at the 1 g speed removed as
+    /// [`correct_static_radius`] does when the regression gives K2 (K3):
+    /// `R_plus_static_m` / `R_minus_static_m` of [`CentrifugeResult::joint`].
     pub static_radius: [Option<ValueU>; 2],
     /// The same radius exactly as eq. 5–6 compute it (nonlinearity ignored).
     pub static_radius_uncorrected: [Option<ValueU>; 2],
     /// Rate used for each static radius (rad/s).
     pub static_rate_rad_s: [Option<f64>; 2],
-    /// Regression–iteration radius fits, polarity + and −, eq. 7.
+    /// Regression–iteration radius fits, polarity + and −, eq. 7; the u of
+    /// each `radius_m` is that of `R_plus_m` / `R_minus_m` in
+    /// [`CentrifugeResult::joint`].
     pub regression: [Option<RadiusFit>; 2],
     /// Radius for model orders 1–3 over growing ranges (Table 2).
     pub radius_table: Vec<RadiusRangeRow>,
-    /// Fixture-centre radius R (m).
+    /// Fixture-centre radius R = (R+ + R−)/2 (m), `R_centre_m` of
+    /// [`CentrifugeResult::joint`] (shared K1 included); the nominal radius
+    /// with u = NaN when no regression radius was measured.
     pub centre_radius_m: ValueU,
-    /// Signed ECM offset r = (R+ − R−)/2 (m).
+    /// Signed ECM offset r = (R+ − R−)/2 (m), `ecm_offset_m` of
+    /// [`CentrifugeResult::joint`]; 0 with u = NaN unless both polarities
+    /// were measured.
     pub ecm_offset_m: ValueU,
     /// Station fits.
     pub stations: Vec<Station>,
     /// Stations that could not be fitted, with the reason.
     pub station_errors: Vec<(String, String)>,
-    /// Physical coefficients (g units).
+    /// Physical coefficients (g units), in the order of
+    /// [`CENTRIFUGE_TERMS`], those available and requested: the leading
+    /// block of [`CentrifugeResult::joint`] (same values and covariance),
+    /// with `dof` the minimum over the inputs of the coefficients only
+    /// (K1, the station fits, the type-B Δc2). The coefficient map depends
+    /// on the same inputs as before the joint propagation, K1 once, so
+    /// values and u are those of the coefficient map alone; K1 shows only
+    /// in the cross-covariance with the radii.
     pub coefficients: Estimates,
+    /// Coefficients and radius quantities from one GUM propagation
+    /// ([`Estimates::map`]) of one input vector, with the full covariance.
+    ///
+    /// Names, in order, those available: the coefficients (as in
+    /// [`CentrifugeResult::coefficients`]: `K2`, `K3`, `K_oq`, `K_pp`,
+    /// `K_oo`, `K_ip`, `K_io`, `K_po`; g units), then
+    /// * `R_plus_m`, `R_minus_m`: regression–iteration radii (m, eq. 7,
+    ///   [`radius::radius_from_scale`]);
+    /// * `R_plus_static_m`, `R_minus_static_m`: static radii (m, eq. 5–6,
+    ///   [`radius::eq6_radius`], divided by the nonlinearity factor
+    ///   `1 ± K2 a_g + K3 a_g²` of [`correct_static_radius`] with that
+    ///   polarity's regression K2, K3 when there is a regression);
+    /// * `R_centre_m = (R+ + R−)/2` (m, seed 001 §2.2; the one regression
+    ///   radius when only one polarity was measured);
+    /// * `ecm_offset_m = (R+ − R−)/2` (m, signed; both polarities only);
+    /// * `tilt_rad`: λ = E0/K1 − K0 (rad, eq. 4).
+    ///
+    /// Inputs: K1 and K0 (u from the options), the at-rest mean E0 and the
+    /// static-speed means E_a± (raw output, u = s/√n), each polarity's
+    /// regression parameters (`b`, `scale`, `K2`, `K3`, covariance block of
+    /// that fit), each station's c2 (with `q`, `c3` at the IA-radial
+    /// station; covariance block of the station fit) and the type-B Δc2.
+    /// K1 is one input: the scale of every `E/K1`, it is fully correlated
+    /// between R+ and R− (`u²(R±) ⊃ (R± u(K1)/K1)²`, which does not average
+    /// down in `R_centre_m`), between the radii and the tilt, and
+    /// anti-correlated between the radii and the coefficients (a larger K1
+    /// shrinks the radius and grows c2 ∝ K1). Blocks from different fits are
+    /// independent: the regression fits and the IA-radial station fit share
+    /// data, and that cross-covariance is not modelled. `dof`: the minimum
+    /// over the inputs used (the raw means count as ∞, as for the static
+    /// radius of [`radius::static_radius`]).
+    pub joint: Estimates,
     /// Uncertainty budget of every coefficient.
     pub budgets: Vec<Budget>,
     /// Coefficients the data cannot give, with the reason.
@@ -401,6 +484,10 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
     let mut static_w = [None, None];
     let mut regression: [Option<RadiusFit>; 2] = [None, None];
     let mut radius_table = Vec::new();
+    // Raw means behind the tilt and the static radii, for the joint
+    // propagation: E0 (at rest, both polarities) and E_a per polarity.
+    let mut e0_stats = None;
+    let mut e_a_stats: [Option<PositionStats>; 2] = [None, None];
     if let Some((_, points)) = ia {
         let at_rest: Vec<f64> = points
             .iter()
@@ -414,6 +501,7 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
             );
         } else {
             tilt = Some(static_tilt(&at_rest, &ctx)?);
+            e0_stats = Some(PositionStats::of(&at_rest)?);
         }
         let lambda = tilt.map_or(0.0, |t| t.value);
         for (slot, pol) in [(0usize, 1i8), (1, -1)] {
@@ -440,6 +528,7 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
                         &ctx,
                     )?);
                     static_w[slot] = Some(b.omega);
+                    e_a_stats[slot] = Some(PositionStats::of(&b.samples)?);
                 }
             }
             let speed_points: Vec<SpeedPoint> = mine
@@ -461,29 +550,12 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
                 noise,
             ) {
                 Ok(f) => {
-                    // Eq. 5–6 ignore the nonlinearity at a_g (~1 g): with
-                    // a_i = ±a_g the indicated input is
-                    // a_i + K2 a_i² + K3 a_i³, so the eq. 6 radius reads
-                    // R·(1 ± K2 a_g + K3 a_g²) (a few ppm). Remove that
-                    // factor with this polarity's K2, K3 and carry their
-                    // covariance, so the static radius is unbiased and its
-                    // u honest; the paper's uncorrected value is kept.
-                    if let (Some(sr), Some(w)) = (static_r[slot], static_w[slot]) {
-                        static_uncorrected[slot] = Some(sr);
-                        let a_g = sr.value
-                            * crate::rigs::centrifuge::centripetal_rate_squared(
-                                w,
-                                opts.latitude_rad,
-                                opts.opposite_sense,
-                            )
-                            / opts.g_local_m_s2;
-                        static_r[slot] = Some(correct_static_radius(
-                            sr,
-                            a_g,
-                            f64::from(pol),
-                            &f.fit.estimates,
-                        )?);
-                    }
+                    // Eq. 5–6 ignore the nonlinearity at a_g (~1 g): the
+                    // joint propagation below divides the eq. 6 radius by
+                    // 1 ± K2 a_g + K3 a_g² with this polarity's K2, K3
+                    // (correct_static_radius); the paper's uncorrected
+                    // value is kept.
+                    static_uncorrected[slot] = static_r[slot];
                     regression[slot] = Some(f);
                 }
                 Err(e) => warnings.push(format!("regression radius, polarity {pol:+}: {e}")),
@@ -496,30 +568,20 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
         );
     }
 
-    // --- ECM offset --------------------------------------------------------
-    let stat_u = |f: &RadiusFit| f.radius_m.value * f.fit.estimates.u("scale").unwrap_or(0.0);
-    let (r_plus, r_minus, u_r) = match (&regression[0], &regression[1]) {
-        (Some(p), Some(m)) => (
-            p.radius_m.value,
-            m.radius_m.value,
-            0.5 * stat_u(p).hypot(stat_u(m)),
-        ),
+    // --- ECM offset (values; u from the joint propagation below) ------------
+    let (r_plus, r_minus) = match (&regression[0], &regression[1]) {
+        (Some(p), Some(m)) => (p.radius_m.value, m.radius_m.value),
         (Some(p), None) => {
             warnings.push("only polarity + measured: ECM offset taken as 0".into());
-            (p.radius_m.value, p.radius_m.value, f64::NAN)
+            (p.radius_m.value, p.radius_m.value)
         }
         (None, Some(m)) => {
             warnings.push("only polarity - measured: ECM offset taken as 0".into());
-            (m.radius_m.value, m.radius_m.value, f64::NAN)
+            (m.radius_m.value, m.radius_m.value)
         }
-        (None, None) => (opts.radius0_m, opts.radius0_m, f64::NAN),
+        (None, None) => (opts.radius0_m, opts.radius0_m),
     };
     let (centre, offset) = budget::ecm_offset(r_plus, r_minus);
-    let u_centre = match (&regression[0], &regression[1]) {
-        (Some(p), Some(m)) => 0.5 * (p.radius_m.u.powi(2) + m.radius_m.u.powi(2)).sqrt(),
-        (Some(f), None) | (None, Some(f)) => f.radius_m.u,
-        (None, None) => f64::NAN,
-    };
     let rig = Centrifuge {
         r_plus_m: r_plus,
         r_minus_m: r_minus,
@@ -538,8 +600,18 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
         }
     }
 
-    // --- coefficients ------------------------------------------------------
-    let (coefficients, budgets, unsupported) = coefficients(&mut stations, &station_errors, opts)?;
+    // --- coefficients and radii, one propagation ---------------------------
+    let radius_inputs = RadiusInputs {
+        e0: e0_stats,
+        static_point: [0, 1].map(|k| e_a_stats[k].zip(static_w[k])),
+        regression: [regression[0].as_ref(), regression[1].as_ref()],
+    };
+    let Estimated {
+        coefficients,
+        joint,
+        budgets,
+        unsupported,
+    } = estimate(&mut stations, &station_errors, &radius_inputs, opts)?;
     if let Some(req) = &opts.terms {
         for t in req {
             if let Some((_, why)) = unsupported.iter().find(|(u, _)| u == t) {
@@ -578,6 +650,29 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
             warnings.push(format!("station {}: {w}", s.label()));
         }
     }
+    // Every radius field carries the u of the joint propagation.
+    let ju = |name: &str| joint.get(name).map(|(value, u)| ValueU { value, u });
+    for (k, name) in [(0usize, "R_plus_m"), (1, "R_minus_m")] {
+        if let (Some(f), Some(v)) = (regression[k].as_mut(), ju(name)) {
+            f.radius_m.u = v.u;
+        }
+    }
+    for (k, name) in [(0usize, "R_plus_static_m"), (1, "R_minus_static_m")] {
+        if let Some(v) = ju(name) {
+            static_r[k] = Some(v);
+        }
+    }
+    let centre_radius_m = ju("R_centre_m").unwrap_or(ValueU {
+        value: centre,
+        u: f64::NAN,
+    });
+    let ecm_offset_m = ju("ecm_offset_m").unwrap_or(ValueU {
+        value: offset,
+        u: f64::NAN,
+    });
+    if let Some(v) = ju("tilt_rad") {
+        tilt = Some(v);
+    }
     Ok(CentrifugeResult {
         ia_station: ia.map(|g| station_label(g.0 .0, (g.0 .1 as f64 / 1e6).to_radians())),
         tilt_rad: tilt,
@@ -586,17 +681,12 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
         static_rate_rad_s: static_w,
         regression,
         radius_table,
-        centre_radius_m: ValueU {
-            value: centre,
-            u: u_centre,
-        },
-        ecm_offset_m: ValueU {
-            value: offset,
-            u: u_r,
-        },
+        centre_radius_m,
+        ecm_offset_m,
         stations,
         station_errors,
         coefficients,
+        joint,
         budgets,
         unsupported,
         warnings,
@@ -783,6 +873,107 @@ fn add(a: &mut Combo, b: &Combo, f: f64) {
     }
 }
 
+/// What the IA-radial station gives the joint propagation for the radius
+/// quantities (raw output statistics, regression fits).
+struct RadiusInputs<'a> {
+    /// At-rest output (E0), both polarities.
+    e0: Option<PositionStats>,
+    /// Per polarity (+, −): output at the static speed (E_a) and that speed.
+    static_point: [Option<(PositionStats, f64)>; 2],
+    /// Per polarity: the regression–iteration fit.
+    regression: [Option<&'a RadiusFit>; 2],
+}
+
+/// Where one polarity's regression inputs sit in the joint input vector.
+struct RegressionAt {
+    /// Index of `scale`.
+    scale: usize,
+    /// Fitted scale ŝ and last iterate r (m).
+    scale_hat: f64,
+    r_m: f64,
+    /// Indices of K2, K3 (when the order has them).
+    k2: Option<usize>,
+    k3: Option<usize>,
+}
+
+/// The radius quantities as functions of the joint input vector
+/// (formulas: [`CentrifugeResult::joint`]).
+struct RadiusMap {
+    k1: usize,
+    k1_used: f64,
+    /// Indices of K0 and E0 (with at-rest rows).
+    k0_e0: Option<(usize, usize)>,
+    g_local_m_s2: f64,
+    /// Per polarity (+, −): regression inputs.
+    regression: [Option<RegressionAt>; 2],
+    /// Per polarity: index of E_a and rate² (rad²/s²) of the static speed.
+    static_point: [Option<(usize, f64)>; 2],
+}
+
+impl RadiusMap {
+    /// Named outputs at `x`, in the order of [`CentrifugeResult::joint`].
+    fn eval(&self, x: &DVector<f64>) -> Vec<(&'static str, f64)> {
+        let k1 = x[self.k1];
+        let ratio = k1 / self.k1_used;
+        let reg = [0, 1].map(|k| {
+            self.regression[k]
+                .as_ref()
+                .map(|r| radius_from_scale(r.r_m, r.scale_hat, x[r.scale], self.k1_used, k1))
+        });
+        let mut out = Vec::with_capacity(7);
+        if let Some(v) = reg[0] {
+            out.push(("R_plus_m", v));
+        }
+        if let Some(v) = reg[1] {
+            out.push(("R_minus_m", v));
+        }
+        for (k, name, sign) in [(0, "R_plus_static_m", 1.0), (1, "R_minus_static_m", -1.0)] {
+            let (Some((k0, e0)), Some((ea, rate2))) = (self.k0_e0, self.static_point[k]) else {
+                continue;
+            };
+            let g = self.g_local_m_s2;
+            let r6 = radius::eq6_radius(x[k0], k1, x[ea], x[e0], rate2, sign, g);
+            let v = match &self.regression[k] {
+                // The regression's K2, K3 are in units of E/K1_used: with
+                // K1 they scale as K1/K1_used and (K1/K1_used)².
+                Some(r) => {
+                    let a_g = r6 * rate2 / g;
+                    let k2 = r.k2.map_or(0.0, |j| x[j] * ratio);
+                    let k3 = r.k3.map_or(0.0, |j| x[j] * ratio * ratio);
+                    r6 / radius::static_nonlinearity_factor(k2, k3, a_g, sign)
+                }
+                None => r6,
+            };
+            out.push((name, v));
+        }
+        match reg {
+            [Some(p), Some(m)] => {
+                let (centre, offset) = budget::ecm_offset(p, m);
+                out.push(("R_centre_m", centre));
+                out.push(("ecm_offset_m", offset));
+            }
+            [Some(v), None] | [None, Some(v)] => out.push(("R_centre_m", v)),
+            [None, None] => {}
+        }
+        if let Some((k0, e0)) = self.k0_e0 {
+            out.push(("tilt_rad", radius::tilt_at(x[k0], k1, x[e0])));
+        }
+        out
+    }
+    fn values(&self, x: &DVector<f64>) -> DVector<f64> {
+        let v = self.eval(x);
+        DVector::from_iterator(v.len(), v.into_iter().map(|(_, y)| y))
+    }
+}
+
+/// What [`estimate`] gives [`calibrate`].
+struct Estimated {
+    coefficients: Estimates,
+    joint: Estimates,
+    budgets: Vec<Budget>,
+    unsupported: Vec<(Term, String)>,
+}
+
 struct Inputs {
     names: Vec<String>,
     values: Vec<f64>,
@@ -824,12 +1015,14 @@ impl Inputs {
     }
 }
 
-#[allow(clippy::type_complexity)]
-fn coefficients(
+/// Coefficients, radius quantities and budgets from one propagation of one
+/// input vector (module docs, [`CentrifugeResult::joint`]).
+fn estimate(
     stations: &mut [Station],
     station_errors: &[(String, String)],
+    radii: &RadiusInputs,
     opts: &CentrifugeOptions,
-) -> Result<(Estimates, Vec<Budget>, Vec<(Term, String)>)> {
+) -> Result<Estimated> {
     let find = |keys: &[(Plane, f64)]| -> Option<usize> {
         keys.iter()
             .find_map(|(p, d)| stations.iter().position(|s| is_key(s, *p, *d)))
@@ -895,6 +1088,85 @@ fn coefficients(
         DMatrix::from_element(1, 1, opts.k1.u.powi(2)),
         f64::INFINITY,
     );
+    // Radius inputs: K0 and E0 (tilt, static radii), then per polarity E_a
+    // and the regression parameters. They follow K1 so that a coefficient
+    // budget (lines in input order, zero sensitivities left out) is as
+    // before.
+    let k0_e0 = match radii.e0 {
+        Some(e0) => {
+            let k0 = inp.push_block(
+                None,
+                "B",
+                vec![("K0".into(), opts.k0_g.value)],
+                DMatrix::from_element(1, 1, opts.k0_g.u.powi(2)),
+                f64::INFINITY,
+            );
+            let e = inp.push_block(
+                None,
+                "A",
+                vec![("E0".into(), e0.mean)],
+                DMatrix::from_element(1, 1, radius::sem(&e0).powi(2)),
+                f64::INFINITY,
+            );
+            Some((k0, e))
+        }
+        None => None,
+    };
+    let mut reg_at: [Option<RegressionAt>; 2] = [None, None];
+    let mut static_at: [Option<(usize, f64)>; 2] = [None, None];
+    for (k, sign) in [(0usize, "+"), (1, "-")] {
+        if let (Some(_), Some((ea, w))) = (k0_e0, radii.static_point[k]) {
+            let j = inp.push_block(
+                None,
+                "A",
+                vec![(format!("E_a({sign})"), ea.mean)],
+                DMatrix::from_element(1, 1, radius::sem(&ea).powi(2)),
+                f64::INFINITY,
+            );
+            let rate2 = crate::rigs::centrifuge::centripetal_rate_squared(
+                w,
+                opts.latitude_rad,
+                opts.opposite_sense,
+            );
+            static_at[k] = Some((j, rate2));
+        }
+        if let Some(f) = radii.regression[k] {
+            let e = &f.fit.estimates;
+            let first = inp.push_block(
+                None,
+                "A",
+                e.names()
+                    .iter()
+                    .zip(e.values().iter())
+                    .map(|(n, v)| (format!("{n}({sign})"), *v))
+                    .collect(),
+                e.covariance().clone(),
+                e.dof(),
+            );
+            let at = |n: &str| e.index(n).map(|j| first + j);
+            let scale = at("scale").ok_or_else(|| {
+                Error::Unsupported("regression radius fit has no scale term".into())
+            })?;
+            reg_at[k] = Some(RegressionAt {
+                scale,
+                scale_hat: inp.values[scale],
+                r_m: f.radius_m.value,
+                k2: at("K2"),
+                k3: at("K3"),
+            });
+        }
+    }
+    let radius_map = RadiusMap {
+        k1: k1_idx,
+        k1_used: opts.k1.value,
+        k0_e0,
+        g_local_m_s2: opts.g_local_m_s2,
+        regression: reg_at,
+        static_point: static_at,
+    };
+    let radius_first = k1_idx + 1;
+    let radius_end = inp.names.len();
+
     let mut c2_idx: BTreeMap<usize, usize> = BTreeMap::new();
     let mut dc2_idx: BTreeMap<usize, usize> = BTreeMap::new();
     let mut extra: BTreeMap<(usize, &'static str), usize> = BTreeMap::new();
@@ -1067,15 +1339,52 @@ fn coefficients(
         .iter()
         .flat_map(|t| combos[t].0.iter().map(|(j, _)| inp.dof[*j]))
         .fold(f64::INFINITY, f64::min);
+    // Every radius input is used by some radius quantity.
+    let joint_dof = inp.dof[radius_first..radius_end]
+        .iter()
+        .copied()
+        .fold(used_dof, f64::min);
     let inputs = Estimates::new(
         inp.names.clone(),
         DVector::from_vec(inp.values.clone()),
         inp.covariance(),
-        used_dof,
+        joint_dof,
     )?;
     let x = inputs.values().clone();
     let j = jac(&x);
-    let coefficients = inputs.map(order.iter().map(|t| t.name().to_string()).collect(), f, jac)?;
+    // Coefficient rows: analytic (a linear combination times K1/K1_used);
+    // radius rows: central differences with the steps of
+    // `Estimates::map_numeric`.
+    let steps: Vec<f64> = (0..n_in)
+        .map(|k| 1e-6 * x[k].abs().max(inputs.u_at(k)).max(1e-12))
+        .collect();
+    let radius_f = |x: &DVector<f64>| radius_map.values(x);
+    let mut names: Vec<String> = order.iter().map(|t| t.name().to_string()).collect();
+    names.extend(radius_map.eval(&x).into_iter().map(|(n, _)| n.to_string()));
+    let joint = inputs.map(
+        names,
+        |x| {
+            let c = f(x);
+            let r = radius_f(x);
+            DVector::from_iterator(c.len() + r.len(), c.iter().chain(r.iter()).copied())
+        },
+        |x| {
+            let jc = jac(x);
+            let jr = numeric_jacobian(&radius_f, x, &steps);
+            let mut m = DMatrix::zeros(jc.nrows() + jr.nrows(), n_in);
+            m.rows_mut(0, jc.nrows()).copy_from(&jc);
+            m.rows_mut(jc.nrows(), jr.nrows()).copy_from(&jr);
+            m
+        },
+    )?;
+    let coef_names: Vec<&str> = order.iter().map(|t| t.name()).collect();
+    let head = joint.select(&coef_names)?;
+    let coefficients = Estimates::new(
+        head.names().to_vec(),
+        head.values().clone(),
+        head.covariance().clone(),
+        used_dof,
+    )?;
     let budgets = order
         .iter()
         .enumerate()
@@ -1105,5 +1414,10 @@ fn coefficients(
             Budget::from_lines(t.name().to_string(), lines, &own, &dofs, paper)
         })
         .collect();
-    Ok((coefficients, budgets, unsupported))
+    Ok(Estimated {
+        coefficients,
+        joint,
+        budgets,
+        unsupported,
+    })
 }

@@ -18,8 +18,21 @@
 //! * Regression–iteration radius (eq. 7), per polarity:
 //!   `E/K1 = b + (1 + c) a_i + K2 a_i² (+ K3 a_i³)` with
 //!   `a_i = s R (ω² + 2ωΩe sinΦ) cos λ / g_L + sin λ`; rescale
-//!   `R ← R (1 + c)` and refit until `|c| < 1e-13` (so `R = R0 Π(1 + c_k)`).
-//!   `u(R)² = (R u(c))² + (R u(K1)/K1)²` (the scale of `E/K1` is that of K1).
+//!   `R ← R (1 + c)` and refit until `|c| < 1e-13` (so `R = R0 Π(1 + c_k)`);
+//!   if `|c|` is still above the tolerance after the last allowed iteration
+//!   ([`RadiusIteration`]) that is an error, never a radius.
+//!   As a function of its inputs the radius is ([`radius_from_scale`])
+//!   `R = r · (ŝ + δs)/ŝ · K1_used/K1` (`r` the last iterate, `ŝ = 1 + c`
+//!   the last fitted scale, `K1_used` the K1 the data were divided by): the
+//!   scale of `E/K1` is that of K1, so to first order
+//!   `u(R)² = (R u(c))² + (R u(K1)/K1)²`, propagated by [`Estimates::map`].
+//!   K1 is *one* input shared by both polarities, the static radii, the
+//!   tilt and the coefficients; [`super::calibrate`] propagates all of them
+//!   together (`CentrifugeResult::joint`), so the K1 term is fully correlated
+//!   between R+ and R−.
+//!
+//! Units: radii in m, λ in rad, accelerations in g_L units, outputs in the
+//! instrument's output units, K1 in output/g, K0 in g.
 //!
 //! Both radii are *effective* radii, as in the paper: whatever multiplies
 //! `a_i` at the IA-radial station counts as radius. With the 1 g on the
@@ -27,7 +40,7 @@
 //! `ip,0`, `R (1 + K_ip)` at `io,0`), a few ppm; the coefficients are
 //! insensitive to it (c2 moves by twice that fraction).
 
-use nalgebra::DVector;
+use nalgebra::{DMatrix, DVector};
 
 use crate::error::{Error, Result};
 use crate::estimation::{fit_means, Design, Estimates, Fit, Noise, PositionStats};
@@ -58,20 +71,84 @@ pub struct RadiusContext {
     pub opposite_sense: bool,
 }
 
-/// Static tilt λ (rad) from at-rest samples of the IA-radial station
-/// (seed 001 eq. 4). `samples` are raw outputs.
-pub fn static_tilt(samples: &[f64], ctx: &RadiusContext) -> Result<ValueU> {
-    let st = PositionStats::of(samples)?;
-    let u_e0 = if st.n > 1 {
-        st.std / (st.n as f64).sqrt()
+/// Static tilt `λ = E0/K1 − K0` (rad; seed 001 eq. 4, small angle), with
+/// `E0` the mean at-rest output, `K1` in output/g, `K0` in g.
+pub fn tilt_at(k0_g: f64, k1: f64, e0: f64) -> f64 {
+    e0 / k1 - k0_g
+}
+
+/// Standard uncertainty of a mean of `s.n` samples, `s/√n` (0 for one
+/// sample: no scatter is known).
+pub(crate) fn sem(s: &PositionStats) -> f64 {
+    if s.n > 1 {
+        s.std / (s.n as f64).sqrt()
     } else {
         0.0
-    };
-    let k1 = ctx.k1.value;
-    let lambda = st.mean / k1 - ctx.k0_g.value;
-    let u = (ctx.k0_g.u.powi(2) + (u_e0 / k1).powi(2) + (st.mean * ctx.k1.u / (k1 * k1)).powi(2))
-        .sqrt();
-    Ok(ValueU { value: lambda, u })
+    }
+}
+
+/// Static tilt λ (rad) from at-rest samples of the IA-radial station
+/// (seed 001 eq. 4, [`tilt_at`]). `samples` are raw outputs. The
+/// uncertainty is propagated from `u(K0)`, `u(K1)` and `u(E0) = s/√n` by
+/// [`Estimates::map`] (inputs independent):
+/// `u²(λ) = u²(K0) + (u(E0)/K1)² + (E0 u(K1)/K1²)²`.
+pub fn static_tilt(samples: &[f64], ctx: &RadiusContext) -> Result<ValueU> {
+    let st = PositionStats::of(samples)?;
+    let inputs = Estimates::new(
+        vec!["K0".into(), "K1".into(), "E0".into()],
+        DVector::from_vec(vec![ctx.k0_g.value, ctx.k1.value, st.mean]),
+        DMatrix::from_diagonal(&DVector::from_vec(vec![
+            ctx.k0_g.u.powi(2),
+            ctx.k1.u.powi(2),
+            sem(&st).powi(2),
+        ])),
+        f64::INFINITY,
+    )?;
+    let lambda = inputs.map(
+        vec!["tilt_rad".into()],
+        |x| DVector::from_element(1, tilt_at(x[0], x[1], x[2])),
+        |x| DMatrix::from_row_slice(1, 3, &[-1.0, -x[2] / (x[1] * x[1]), 1.0 / x[1]]),
+    )?;
+    Ok(ValueU {
+        value: lambda.values()[0],
+        u: lambda.u_at(0),
+    })
+}
+
+/// Static back-calculated radius (m) of seed 001 eq. 5–6 (typo fixed):
+/// `λ = E0/K1 − K0`, `a_g = E_a/K1 − K0`,
+/// `R = s (a_g − sin λ) g_L / (rate² cos λ)` with `rate² = ω² + 2ωΩe sinΦ`
+/// (rad²/s², [`centripetal_rate_squared`]), polarity `s = ±1`, `g_L` in
+/// m/s². K0 cancels to first order (`a_g − λ = (E_a − E0)/K1`).
+pub fn eq6_radius(
+    k0_g: f64,
+    k1: f64,
+    e_a: f64,
+    e0: f64,
+    rate2: f64,
+    polarity: f64,
+    g_local_m_s2: f64,
+) -> f64 {
+    let lambda = tilt_at(k0_g, k1, e0);
+    let a_g = e_a / k1 - k0_g;
+    polarity * (a_g - lambda.sin()) * g_local_m_s2 / (rate2 * lambda.cos())
+}
+
+/// Factor by which the input-axis nonlinearity inflates an eq. 5–6 static
+/// radius: `1 + p·K2·a_g + K3·a_g²` (K2 in g/g², K3 in g/g³, `a_g` the
+/// centripetal input in g at the static speed, `p` the polarity); see
+/// [`super::correct_static_radius`].
+pub fn static_nonlinearity_factor(k2: f64, k3: f64, a_g: f64, polarity: f64) -> f64 {
+    1.0 + polarity * k2 * a_g + k3 * a_g * a_g
+}
+
+/// Regression–iteration radius (m) as a function of its inputs (eq. 7):
+/// `R = r · (scale/scale_hat) · (k1_used/k1)`, with `r` the last iterate
+/// (m), `scale_hat` the last fitted `1 + c`, `scale` its perturbed value,
+/// `k1_used` the K1 the outputs were divided by and `k1` its perturbed
+/// value. At the estimate (`scale = scale_hat`, `k1 = k1_used`) it is `r`.
+pub fn radius_from_scale(r_m: f64, scale_hat: f64, scale: f64, k1_used: f64, k1: f64) -> f64 {
+    r_m * (scale / scale_hat) * (k1_used / k1)
 }
 
 /// Static back-calculated radius (m) at one speed (module docs, eq. 5–6).
@@ -86,13 +163,6 @@ pub fn static_radius(
 ) -> Result<ValueU> {
     let a = PositionStats::of(e_a)?;
     let z = PositionStats::of(e0)?;
-    let sem = |s: &PositionStats| {
-        if s.n > 1 {
-            s.std / (s.n as f64).sqrt()
-        } else {
-            0.0
-        }
-    };
     let rate2 = centripetal_rate_squared(omega_rad_s, ctx.latitude_rad, ctx.opposite_sense);
     if rate2 <= 0.0 {
         return Err(Error::InvalidValue {
@@ -104,7 +174,7 @@ pub fn static_radius(
     let inputs = Estimates::new(
         vec!["K0".into(), "K1".into(), "E_a".into(), "E0".into()],
         DVector::from_vec(vec![ctx.k0_g.value, ctx.k1.value, a.mean, z.mean]),
-        nalgebra::DMatrix::from_diagonal(&DVector::from_vec(vec![
+        DMatrix::from_diagonal(&DVector::from_vec(vec![
             ctx.k0_g.u.powi(2),
             ctx.k1.u.powi(2),
             sem(&a).powi(2),
@@ -113,12 +183,7 @@ pub fn static_radius(
         f64::INFINITY,
     )?;
     let f = move |x: &DVector<f64>| {
-        let lambda = x[3] / x[1] - x[0];
-        let a_g = x[2] / x[1] - x[0];
-        DVector::from_element(
-            1,
-            polarity * (a_g - lambda.sin()) * g / (rate2 * lambda.cos()),
-        )
+        DVector::from_element(1, eq6_radius(x[0], x[1], x[2], x[3], rate2, polarity, g))
     };
     let r = inputs.map_numeric(vec!["R".into()], f)?;
     Ok(ValueU {
@@ -136,7 +201,7 @@ pub struct RadiusFit {
     pub max_input_g: f64,
     /// Radius and u (m).
     pub radius_m: ValueU,
-    /// Iterations until |c| < 1e-13.
+    /// Fits until `|c|` fell below the tolerance ([`RadiusIteration`]).
     pub iterations: usize,
     /// The last fit (terms `b`, `scale`, `K2`, `K3` as the order has them).
     pub fit: Fit,
@@ -153,9 +218,34 @@ pub struct SpeedPoint {
     pub stats: PositionStats,
 }
 
-/// Regression–iteration radius for one polarity (module docs).
+/// Iteration control of the regression–iteration radius
+/// ([`regression_radius_with`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RadiusIteration {
+    /// Most fits (rescalings `R ← R (1 + c)`) tried; at least 1.
+    pub max_iter: usize,
+    /// Convergence: stop at the first fit with `|c| < tol` (dimensionless,
+    /// the relative radius change).
+    pub tol: f64,
+}
+
+impl Default for RadiusIteration {
+    /// 60 iterations, `|c| < 1e-13` (the iteration converges in a handful:
+    /// after the first rescaling only the `sin λ` offset and the
+    /// higher-order terms move `c`).
+    fn default() -> Self {
+        Self {
+            max_iter: 60,
+            tol: 1e-13,
+        }
+    }
+}
+
+/// Regression–iteration radius for one polarity (module docs, seed 001
+/// eq. 7) with the default [`RadiusIteration`].
 /// `points` are the IA-radial points of that polarity (static ones
-/// included: they pin the bias), `r0_m` the starting radius, `tilt_rad` λ.
+/// included: they pin the bias), `r0_m` the starting radius (m),
+/// `tilt_rad` λ (rad), `polarity` ±1, `order` 1–3.
 pub fn regression_radius(
     points: &[SpeedPoint],
     polarity: f64,
@@ -165,10 +255,47 @@ pub fn regression_radius(
     ctx: &RadiusContext,
     noise: Noise,
 ) -> Result<RadiusFit> {
+    regression_radius_with(
+        points,
+        polarity,
+        order,
+        r0_m,
+        tilt_rad,
+        ctx,
+        noise,
+        &RadiusIteration::default(),
+    )
+}
+
+/// [`regression_radius`] with explicit iteration control.
+///
+/// Fails when `|c| ≥ iteration.tol` after `iteration.max_iter` fits (no
+/// radius is returned from an unconverged iteration). The radius is the
+/// last iterate `r`; its u is propagated by [`Estimates::map`] through
+/// [`radius_from_scale`] from the fitted scale (u from the fit) and K1
+/// (u from `ctx`), taken as independent:
+/// `u(R)² = (r u(scale)/ŝ)² + (R u(K1)/K1)²`.
+#[allow(clippy::too_many_arguments)]
+pub fn regression_radius_with(
+    points: &[SpeedPoint],
+    polarity: f64,
+    order: usize,
+    r0_m: f64,
+    tilt_rad: f64,
+    ctx: &RadiusContext,
+    noise: Noise,
+    iteration: &RadiusIteration,
+) -> Result<RadiusFit> {
     if !(1..=3).contains(&order) {
         return Err(Error::Unsupported(format!(
             "model order {order} (use 1, 2 or 3)"
         )));
+    }
+    if iteration.max_iter == 0 || !(iteration.tol.is_finite() && iteration.tol > 0.0) {
+        return Err(Error::InvalidValue {
+            what: "radius iteration control (max_iter ≥ 1, tol > 0)".into(),
+            value: format!("{}, {}", iteration.max_iter, iteration.tol),
+        });
     }
     let mut names = vec!["b".to_string(), "scale".to_string()];
     if order >= 2 {
@@ -184,7 +311,8 @@ pub fn regression_radius(
         .collect();
     let mut r = r0_m;
     let (sl, cl) = (tilt_rad.sin(), tilt_rad.cos());
-    for iter in 1..=60 {
+    let mut last_c = f64::NAN;
+    for iter in 1..=iteration.max_iter {
         let rows: Vec<Vec<f64>> = rate2
             .iter()
             .map(|k| {
@@ -202,8 +330,8 @@ pub fn regression_radius(
             });
         }
         let c = scale - 1.0;
-        if c.abs() < 1e-13 || iter == 60 {
-            let u = ((r * u_scale).powi(2) + (r * ctx.k1.u / ctx.k1.value).powi(2)).sqrt();
+        if c.abs() < iteration.tol {
+            let radius_m = propagate_radius(r, scale, u_scale, f.estimates.dof(), ctx)?;
             let rms = if f.dof > 0 {
                 (f.residuals.norm_squared() / f.dof as f64).sqrt()
             } else {
@@ -216,15 +344,146 @@ pub fn regression_radius(
             return Ok(RadiusFit {
                 order,
                 max_input_g,
-                radius_m: ValueU { value: r, u },
+                radius_m,
                 iterations: iter,
                 fit: f,
                 residual_rms_g: rms,
             });
         }
+        last_c = c;
         r *= scale;
     }
-    Err(Error::Unsupported(
-        "regression-iteration radius did not converge".into(),
-    ))
+    Err(Error::Unsupported(format!(
+        "regression-iteration radius did not converge: |c| = {:.3e} after {} iterations (tolerance {:.0e})",
+        last_c.abs(),
+        iteration.max_iter,
+        iteration.tol
+    )))
+}
+
+/// Radius `r` and its u from the fitted scale `ŝ ± u_scale` and K1
+/// ([`radius_from_scale`], [`Estimates::map`]).
+fn propagate_radius(
+    r_m: f64,
+    scale_hat: f64,
+    u_scale: f64,
+    dof: f64,
+    ctx: &RadiusContext,
+) -> Result<ValueU> {
+    let k1_used = ctx.k1.value;
+    let inputs = Estimates::new(
+        vec!["scale".into(), "K1".into()],
+        DVector::from_vec(vec![scale_hat, k1_used]),
+        DMatrix::from_diagonal(&DVector::from_vec(vec![u_scale.powi(2), ctx.k1.u.powi(2)])),
+        dof,
+    )?;
+    let out = inputs.map(
+        vec!["R".into()],
+        |x| DVector::from_element(1, radius_from_scale(r_m, scale_hat, x[0], k1_used, x[1])),
+        |x| {
+            let rr = radius_from_scale(r_m, scale_hat, x[0], k1_used, x[1]);
+            DMatrix::from_row_slice(1, 2, &[rr / x[0], -rr / x[1]])
+        },
+    )?;
+    Ok(ValueU {
+        value: out.values()[0],
+        u: out.u_at(0),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const G: f64 = 9.8012;
+
+    fn ctx(u_k1: f64) -> RadiusContext {
+        RadiusContext {
+            k0_g: ValueU {
+                value: 1.2e-4,
+                u: 0.0,
+            },
+            k1: ValueU {
+                value: 1.3,
+                u: u_k1,
+            },
+            latitude_rad: 39.9f64.to_radians(),
+            g_local_m_s2: G,
+            opposite_sense: false,
+        }
+    }
+
+    /// Noiseless `E/K1` means of an IA-radial run, polarity +, R = 0.7148 m,
+    /// λ = 3e-4 rad, K2 = 4e-6: `b + a + K2 a²` at 0–25 g.
+    fn points(tilt: f64) -> Vec<SpeedPoint> {
+        let c = ctx(0.0);
+        [0.0, 1.0, 2.0, 4.0, 7.0, 10.0, 14.0, 18.0, 22.0, 25.0]
+            .iter()
+            .map(|l: &f64| {
+                let w = (l * G / 0.71).sqrt();
+                let k = centripetal_rate_squared(w, c.latitude_rad, c.opposite_sense);
+                let a = 0.7148 * k * tilt.cos() / G + tilt.sin();
+                SpeedPoint {
+                    omega_rad_s: w,
+                    stats: PositionStats {
+                        n: 5,
+                        mean: c.k0_g.value + a + 4e-6 * a * a,
+                        std: 1e-6,
+                    },
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn regression_radius_converges_to_the_truth() {
+        let noise = Noise::Known { sigma: 1e-6 };
+        let f = regression_radius(&points(3e-4), 1.0, 2, 0.71, 3e-4, &ctx(0.0), noise).unwrap();
+        assert!((f.radius_m.value / 0.7148 - 1.0).abs() < 1e-12, "{f:?}");
+        assert!(f.iterations >= 2 && f.iterations < 60, "{}", f.iterations);
+    }
+
+    /// An iteration that has not reached `|c| < tol` is an error, not a
+    /// radius: the start 0.71 m is 0.7 % off, so one fit leaves |c| ≈ 7e-3.
+    #[test]
+    fn unconverged_regression_radius_is_an_error() {
+        let noise = Noise::Known { sigma: 1e-6 };
+        let one = RadiusIteration {
+            max_iter: 1,
+            ..RadiusIteration::default()
+        };
+        let e = regression_radius_with(&points(3e-4), 1.0, 2, 0.71, 3e-4, &ctx(0.0), noise, &one)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("did not converge"), "{e}");
+        // With the default control the same data converge.
+        assert!(regression_radius(&points(3e-4), 1.0, 2, 0.71, 3e-4, &ctx(0.0), noise).is_ok());
+    }
+
+    /// The propagated u is `sqrt((R u(scale))² + (R u(K1)/K1)²)`.
+    #[test]
+    fn regression_radius_u_has_the_k1_term() {
+        let noise = Noise::Known { sigma: 1e-6 };
+        let c = ctx(1.3e-5);
+        let f = regression_radius(&points(0.0), 1.0, 2, 0.71, 0.0, &c, noise).unwrap();
+        let r = f.radius_m.value;
+        let us = f.fit.estimates.u("scale").unwrap();
+        let expect = (r * us).hypot(r * 1e-5);
+        assert!((f.radius_m.u / expect - 1.0).abs() < 1e-9, "{f:?}");
+    }
+
+    #[test]
+    fn tilt_u_is_the_gum_propagation() {
+        let mut c = ctx(1e-4);
+        c.k0_g.u = 2e-6;
+        let samples = [5.0e-4, 5.2e-4, 4.9e-4, 5.1e-4];
+        let t = static_tilt(&samples, &c).unwrap();
+        let st = PositionStats::of(&samples).unwrap();
+        let u_e0 = st.std / 2.0;
+        let expect =
+            (2e-6f64.powi(2) + (u_e0 / 1.3).powi(2) + (st.mean * 1e-4 / (1.3 * 1.3)).powi(2))
+                .sqrt();
+        assert_eq!(t.value, st.mean / 1.3 - 1.2e-4);
+        assert!((t.u / expect - 1.0).abs() < 1e-12);
+    }
 }
