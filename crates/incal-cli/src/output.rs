@@ -181,13 +181,13 @@ pub fn render(doc: &ResultDocument) -> String {
     s
 }
 
-/// Degrees of freedom for people: integers plainly, `inf` for a known
-/// variance.
+/// Degrees of freedom for people: whole numbers from 10 up (an effective
+/// dof of 80.3 reads 80), one decimal below, `inf` for a known variance.
 pub fn dof_text(dof: Option<f64>) -> String {
     match dof {
         None => "inf".into(),
-        Some(d) if d.fract() == 0.0 => format!("{d:.0}"),
-        Some(d) => sig(d, 3),
+        Some(d) if d.fract() == 0.0 || d >= 10.0 => format!("{d:.0}"),
+        Some(d) => format!("{d:.1}"),
     }
 }
 

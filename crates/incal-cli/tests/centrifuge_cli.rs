@@ -94,9 +94,35 @@ fn good_input_gives_the_contract_json() {
     let r_plus = radius["regression"]["R_plus_m"]["value"].as_f64().unwrap();
     assert!((r_plus - 0.714775).abs() < 1e-5, "{r_plus}");
     let coef = &doc["coefficients"];
-    let mut expect = vec!["K2", "K3", "K_oq", "K_pp", "K_oo", "K_ip", "K_io", "K_po"];
+    let mut expect = vec![
+        "K2",
+        "K3",
+        "K_oq",
+        "K_pp",
+        "K_oo",
+        "K_ip",
+        "K_io",
+        "K_po",
+        "R_plus_m",
+        "R_minus_m",
+        "R_plus_static_m",
+        "R_minus_static_m",
+        "R_centre_m",
+        "ecm_offset_m",
+        "tilt_rad",
+    ];
     expect.sort();
     assert_eq!(keys(coef), expect);
+    // The radii of the "radius" object are the coefficients of the same name.
+    assert_eq!(
+        coef["R_plus_m"]["value"],
+        radius["regression"]["R_plus_m"]["value"]
+    );
+    assert_eq!(
+        coef["R_minus_static_m"]["value"],
+        radius["static"]["R_minus_m"]["value"]
+    );
+    assert_eq!(coef["R_plus_m"]["unit"], "m");
     for name in &expect {
         assert_eq!(
             keys(&coef[name]),

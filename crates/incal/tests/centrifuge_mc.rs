@@ -83,6 +83,7 @@ fn options(k1: f64) -> CentrifugeOptions {
             u: 0.0,
         },
         k1: ValueU { value: k1, u: U_K1 },
+        cov_k0_k1: 0.0,
         radius0_m: R0,
         latitude_rad: 39.9f64.to_radians(),
         g_local_m_s2: G,

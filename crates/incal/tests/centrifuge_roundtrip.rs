@@ -69,6 +69,7 @@ fn options(order: usize) -> CentrifugeOptions {
             value: t.k1_out_per_g,
             u: 0.0,
         },
+        cov_k0_k1: 0.0,
         radius0_m: R0,
         latitude_rad: 39.9f64.to_radians(),
         g_local_m_s2: G,

@@ -4,7 +4,7 @@
 //! (m/s²)/(m/s²)²; the algebra is unit-free, so they are used as printed.
 
 use incal::procedures::centrifuge::budget::{
-    c2_at, cross_coupling, delta_c2, ecm_offset, Budget, BudgetLine,
+    c2_at, cross_coupling, delta_c2, ecm_offset, Budget, BudgetLine, UncertaintyType,
 };
 use incal::rigs::centrifuge::ecm_geometry;
 
@@ -105,7 +105,7 @@ fn eq10_paper_and_gum_conventions_differ_by_the_c2_weight() {
         .iter()
         .map(|(n, s, u, _)| BudgetLine {
             component: n.to_string(),
-            kind: "A",
+            kind: UncertaintyType::A,
             u: *u,
             sensitivity: *s,
             contribution: s.abs() * u,

@@ -202,7 +202,7 @@ pub fn run(a: &Args) -> CliResult<()> {
     let opts = CentrifugeOptions {
         k0_g: si.k0,
         k1: si.k1,
-        // TEMP cov_k0_k1: si.cov_k0_k1,
+        cov_k0_k1: si.cov_k0_k1,
         radius0_m: a.radius_m,
         latitude_rad: a.latitude_deg.to_radians(),
         g_local_m_s2: a.gravity_m_s2,

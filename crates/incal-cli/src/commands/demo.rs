@@ -67,8 +67,13 @@ fn truth_table(c: &DemoCase) -> String {
     );
     let more = c.document.coefficients.len() - shown.len();
     if more > 0 {
+        let (noun, verb) = if more == 1 {
+            ("coefficient", "is")
+        } else {
+            ("coefficients", "are")
+        };
         s.push_str(&format!(
-            "({more} further coefficients without a simple truth are in the result document)\n"
+            "({more} further {noun} without a simple truth {verb} in the result document)\n"
         ));
     }
     s

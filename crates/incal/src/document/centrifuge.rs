@@ -34,7 +34,7 @@ impl CentrifugeResult {
     /// The result document: `K2, K3, K_oq, K_pp, K_oo, K_ip, K_io, K_po`
     /// (those the data supports, g units) and the radii `R_plus_m`,
     /// `R_minus_m` (regression), `R_plus_static_m`, `R_minus_static_m`,
-    /// `R_centre_m`, `ecm_offset_m` and the tilt `tilt_rad`, all with the
+    /// `R_centre_m`, `ecm_offset_m` and the static tilt `tilt_rad`, all with the
     /// joint covariance of [`CentrifugeResult::joint`]; the seed-001
     /// contract objects `radius` and `alignment`; radius-by-range, stations
     /// and budgets as tables.
@@ -47,7 +47,15 @@ impl CentrifugeResult {
                 opts.order
             ),
         );
-        b.estimates(&self.coefficients, "", unit_of)?; // TEMP until the joint estimates land
+        // One joint block: coefficients and radii share K1 (and K0, E0).
+        // Each coefficient's dof is the Welch–Satterthwaite dof of its
+        // budget; the radii take the joint's (the smallest of their inputs).
+        b.estimates_dof(&self.joint, "", unit_of, |name| {
+            self.budgets
+                .iter()
+                .find(|bu| bu.coefficient == name)
+                .map_or(self.joint.dof(), |bu| bu.effective_dof)
+        })?;
         for s in &self.stations {
             b.fit(FitSummary::of(
                 &format!("station {}", s.label()),
@@ -68,6 +76,7 @@ impl CentrifugeResult {
         b.option("k0", json!(opts.k0_g.value));
         b.option("u_k0", json!(opts.k0_g.u));
         b.option("k1", json!(opts.k1.value));
+        b.option("cov_k0_k1", json!(opts.cov_k0_k1));
         b.option("u_k1", json!(opts.k1.u));
         b.option("radius_m", json!(opts.radius0_m));
         b.option("latitude_deg", json!(opts.latitude_rad.to_degrees()));
@@ -213,7 +222,7 @@ impl CentrifugeResult {
             for l in &bu.lines {
                 t.push(vec![
                     Cell::text(l.component.clone()),
-                    Cell::text(l.kind.to_string()),
+                    Cell::text(l.kind.as_str()),
                     Cell::num(l.u),
                     Cell::num(l.sensitivity),
                     Cell::num(l.contribution),
@@ -248,11 +257,7 @@ impl CentrifugeResult {
                 format!("station {st} could not be fitted: {e}"),
             )]);
         }
-        b.warnings(
-            self.warnings
-                .iter()
-                .map(|w| Warning::new(WarningCode::PartFailed, w.clone())),
-        ); // TEMP
+        b.warnings(self.warnings.iter().cloned());
         Ok(b.finish())
     }
 }

@@ -483,7 +483,11 @@ impl ResultDocument {
         let de = &mut serde_json::Deserializer::from_str(text);
         serde_path_to_error::deserialize(de).map_err(|e| {
             let path = e.path().to_string();
-            let path = if path == "." { "$".to_string() } else { format!("$.{path}") };
+            let path = if path == "." {
+                "$".to_string()
+            } else {
+                format!("$.{path}")
+            };
             format!("{path}: not a valid {SCHEMA} document: {}", e.inner())
         })
     }
@@ -553,9 +557,28 @@ impl DocumentBuilder {
         prefix: &str,
         unit_of: impl Fn(&str) -> Result<Unit>,
     ) -> Result<&mut Self> {
+        self.estimates_dof(e, prefix, unit_of, |_| e.dof())
+    }
+
+    /// As [`DocumentBuilder::estimates`], with each coefficient's own
+    /// effective degrees of freedom `dof_of(name)` (e.g. Welch–Satterthwaite
+    /// from its budget, JCGM 100 eq. G.2b) instead of the block's.
+    pub fn estimates_dof(
+        &mut self,
+        e: &Estimates,
+        prefix: &str,
+        unit_of: impl Fn(&str) -> Result<Unit>,
+        dof_of: impl Fn(&str) -> f64,
+    ) -> Result<&mut Self> {
         for (k, name) in e.names().iter().enumerate() {
             let full = format!("{prefix}{name}");
-            let c = Coefficient::new(&full, e.values()[k], e.u_at(k), unit_of(name)?, e.dof())?;
+            let c = Coefficient::new(
+                &full,
+                e.values()[k],
+                e.u_at(k),
+                unit_of(name)?,
+                dof_of(name),
+            )?;
             self.doc.coefficients.push(full, c)?;
         }
         self.blocks.push(e.correlation());

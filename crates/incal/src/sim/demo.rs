@@ -393,6 +393,7 @@ fn centrifuge(seed: u64) -> Result<DemoSection> {
             value: truth.k1_out_per_g,
             u: 1.3e-6,
         },
+        cov_k0_k1: 0.0,
         radius0_m: 0.71,
         latitude_rad: rig.latitude_rad,
         g_local_m_s2: rig.g_local_m_s2,

@@ -41,13 +41,39 @@ pub fn ecm_offset(r_plus_m: f64, r_minus_m: f64) -> (f64, f64) {
     (0.5 * (r_plus_m + r_minus_m), 0.5 * (r_plus_m - r_minus_m))
 }
 
+/// How a component's standard uncertainty was evaluated (JCGM 100 §4.2,
+/// §4.3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum UncertaintyType {
+    /// Type A: statistical analysis of series of observations.
+    A,
+    /// Type B: other means (a stated bound, a given u).
+    B,
+}
+
+impl UncertaintyType {
+    /// `A` or `B`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            UncertaintyType::A => "A",
+            UncertaintyType::B => "B",
+        }
+    }
+}
+
+impl std::fmt::Display for UncertaintyType {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
 /// One line of an uncertainty budget.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BudgetLine {
     /// Component (e.g. `c2(ip,45)`, `alignment dc2(ip,45)`, `K2`, `K1`).
     pub component: String,
     /// `A` (statistical) or `B` (other means, e.g. uniform bound).
-    pub kind: &'static str,
+    pub kind: UncertaintyType,
     /// Standard uncertainty of the component (its own unit).
     pub u: f64,
     /// Sensitivity coefficient `∂K/∂x`.

@@ -64,7 +64,8 @@ use crate::estimation::{
 };
 use crate::models::Term;
 use crate::rigs::centrifuge::{Centrifuge, Plane, Position};
-use budget::{delta_c2, Budget, BudgetLine};
+use crate::warning::{Warning, WarningCode};
+use budget::{delta_c2, Budget, BudgetLine, UncertaintyType};
 use radius::{
     radius_from_scale, regression_radius, static_radius, static_tilt, RadiusContext, RadiusFit,
     SpeedPoint, ValueU,
@@ -100,6 +101,9 @@ pub struct CentrifugeOptions {
     pub k0_g: ValueU,
     /// Scale factor K1 (output/g), with u.
     pub k1: ValueU,
+    /// Covariance of K0 and K1 (g·output/g), e.g. from the tumble result
+    /// they came from; 0 when they were estimated independently.
+    pub cov_k0_k1: f64,
     /// Nominal radius R0 (m): start of the iteration, speed choice.
     pub radius0_m: f64,
     /// Latitude Φ (rad).
@@ -326,7 +330,7 @@ pub struct CentrifugeResult {
     /// Coefficients the data cannot give, with the reason.
     pub unsupported: Vec<(Term, String)>,
     /// Warnings.
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
 }
 
 struct Point {
@@ -495,10 +499,10 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
             .flat_map(|p| p.samples.iter().copied())
             .collect();
         if at_rest.is_empty() {
-            warnings.push(
-                "no at-rest rows at the IA-radial station: tilt taken as 0 and no static radius"
-                    .into(),
-            );
+            warnings.push(Warning::new(
+                WarningCode::RadiusIncomplete,
+                "no at-rest rows at the IA-radial station: tilt taken as 0 and no static radius",
+            ));
         } else {
             tilt = Some(static_tilt(&at_rest, &ctx)?);
             e0_stats = Some(PositionStats::of(&at_rest)?);
@@ -558,25 +562,35 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
                     static_uncorrected[slot] = static_r[slot];
                     regression[slot] = Some(f);
                 }
-                Err(e) => warnings.push(format!("regression radius, polarity {pol:+}: {e}")),
+                Err(e) => warnings.push(Warning::new(
+                    WarningCode::PartFailed,
+                    format!("regression radius, polarity {pol:+}: {e}"),
+                )),
             }
             radius_table.extend(range_table(&speed_points, pol, lambda, opts, &ctx, noise));
         }
     } else {
-        warnings.push(
-            "no IA-radial station (ip,0 or io,0): radius not measured, nominal radius used".into(),
-        );
+        warnings.push(Warning::new(
+            WarningCode::RadiusIncomplete,
+            "no IA-radial station (ip,0 or io,0): radius not measured, nominal radius used",
+        ));
     }
 
     // --- ECM offset (values; u from the joint propagation below) ------------
     let (r_plus, r_minus) = match (&regression[0], &regression[1]) {
         (Some(p), Some(m)) => (p.radius_m.value, m.radius_m.value),
         (Some(p), None) => {
-            warnings.push("only polarity + measured: ECM offset taken as 0".into());
+            warnings.push(Warning::new(
+                WarningCode::RadiusIncomplete,
+                "only polarity + measured: ECM offset taken as 0",
+            ));
             (p.radius_m.value, p.radius_m.value)
         }
         (None, Some(m)) => {
-            warnings.push("only polarity - measured: ECM offset taken as 0".into());
+            warnings.push(Warning::new(
+                WarningCode::RadiusIncomplete,
+                "only polarity - measured: ECM offset taken as 0",
+            ));
             (m.radius_m.value, m.radius_m.value)
         }
         (None, None) => (opts.radius0_m, opts.radius0_m),
@@ -635,10 +649,13 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
         let c = s.phi_rad.cos();
         if let ([pol], true) = (&s.polarities[..], s.plane.ia_horizontal() && c.abs() > 1e-6) {
             let sign = if *pol > 0 { "+" } else { "-" };
-            warnings.push(format!(
-                "one polarity only at {}: the odd quadratic cannot be separated there, its c2 includes {sign}{:.3}*K_oq",
-                s.label(),
-                c * c
+            warnings.push(Warning::new(
+                WarningCode::OnePolarity,
+                format!(
+                    "one polarity only at {}: the odd quadratic cannot be separated there, its c2 includes {sign}{:.3}*K_oq",
+                    s.label(),
+                    c * c
+                ),
             ));
         }
     }
@@ -647,7 +664,7 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
             .fit
             .quality_warnings("a model order too low for the speed range, drift, or rig vibration")
         {
-            warnings.push(format!("station {}: {w}", s.label()));
+            warnings.push(w.prefixed(&format!("station {}", s.label())));
         }
     }
     // Every radius field carries the u of the joint propagation.
@@ -979,7 +996,9 @@ struct Inputs {
     values: Vec<f64>,
     /// Covariance blocks: (first index, block).
     blocks: Vec<(usize, DMatrix<f64>)>,
-    kind: Vec<&'static str>,
+    /// Covariances between blocks: (j, k, C_jk).
+    cross: Vec<(usize, usize, f64)>,
+    kind: Vec<UncertaintyType>,
     dof: Vec<f64>,
     /// Station index of each input (None for K1).
     station: Vec<Option<usize>>,
@@ -989,7 +1008,7 @@ impl Inputs {
     fn push_block(
         &mut self,
         station: Option<usize>,
-        kind: &'static str,
+        kind: UncertaintyType,
         items: Vec<(String, f64)>,
         cov: DMatrix<f64>,
         dof: f64,
@@ -1010,6 +1029,10 @@ impl Inputs {
         let mut c = DMatrix::zeros(n, n);
         for (first, b) in &self.blocks {
             c.view_mut((*first, *first), b.shape()).copy_from(b);
+        }
+        for &(j, k, v) in &self.cross {
+            c[(j, k)] = v;
+            c[(k, j)] = v;
         }
         c
     }
@@ -1077,13 +1100,14 @@ fn estimate(
         names: Vec::new(),
         values: Vec::new(),
         blocks: Vec::new(),
+        cross: Vec::new(),
         kind: Vec::new(),
         dof: Vec::new(),
         station: Vec::new(),
     };
     let k1_idx = inp.push_block(
         None,
-        "B",
+        UncertaintyType::B,
         vec![("K1".into(), opts.k1.value)],
         DMatrix::from_element(1, 1, opts.k1.u.powi(2)),
         f64::INFINITY,
@@ -1096,14 +1120,18 @@ fn estimate(
         Some(e0) => {
             let k0 = inp.push_block(
                 None,
-                "B",
+                UncertaintyType::B,
                 vec![("K0".into(), opts.k0_g.value)],
                 DMatrix::from_element(1, 1, opts.k0_g.u.powi(2)),
                 f64::INFINITY,
             );
+            // K0 and K1 from one tumble fit are correlated.
+            if opts.cov_k0_k1 != 0.0 {
+                inp.cross.push((k0, k1_idx, opts.cov_k0_k1));
+            }
             let e = inp.push_block(
                 None,
-                "A",
+                UncertaintyType::A,
                 vec![("E0".into(), e0.mean)],
                 DMatrix::from_element(1, 1, radius::sem(&e0).powi(2)),
                 f64::INFINITY,
@@ -1118,7 +1146,7 @@ fn estimate(
         if let (Some(_), Some((ea, w))) = (k0_e0, radii.static_point[k]) {
             let j = inp.push_block(
                 None,
-                "A",
+                UncertaintyType::A,
                 vec![(format!("E_a({sign})"), ea.mean)],
                 DMatrix::from_element(1, 1, radius::sem(&ea).powi(2)),
                 f64::INFINITY,
@@ -1134,7 +1162,7 @@ fn estimate(
             let e = &f.fit.estimates;
             let first = inp.push_block(
                 None,
-                "A",
+                UncertaintyType::A,
                 e.names()
                     .iter()
                     .zip(e.values().iter())
@@ -1187,7 +1215,7 @@ fn estimate(
         let block = s.fit.estimates.select(&sel)?;
         let first = inp.push_block(
             Some(k),
-            "A",
+            UncertaintyType::A,
             items,
             block.covariance().clone(),
             s.fit.estimates.dof(),
@@ -1201,7 +1229,7 @@ fn estimate(
         }
         let d = inp.push_block(
             Some(k),
-            "B",
+            UncertaintyType::B,
             vec![(format!("alignment dc2({})", s.label()), 0.0)],
             DMatrix::zeros(1, 1),
             f64::INFINITY,
