@@ -416,6 +416,13 @@ fn check_options(o: &CentrifugeOptions) -> Result<()> {
     }
     nonneg("u(K0)", o.k0_g.u)?;
     nonneg("u(K1)", o.k1.u)?;
+    crate::error::finite("covariance of K0 and K1", o.cov_k0_k1)?;
+    if o.cov_k0_k1.abs() > o.k0_g.u * o.k1.u * (1.0 + 1e-9) {
+        return Err(Error::InvalidValue {
+            what: "covariance of K0 and K1 (larger than u(K0)·u(K1))".into(),
+            value: o.cov_k0_k1.to_string(),
+        });
+    }
     pos("nominal radius", o.radius0_m)?;
     pos("local gravity", o.g_local_m_s2)?;
     crate::error::finite("latitude", o.latitude_rad)?;
