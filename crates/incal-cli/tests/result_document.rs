@@ -401,3 +401,85 @@ fn centrifuge_from_a_tumble_result() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("needs a tumble result"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Snapshots of the commands that are not reductions: plans, compare and
+/// the demo (text and, where they have one, JSON).
+#[test]
+fn snapshots_of_plans_compare_and_demo() {
+    let dir = workdir("snap-other");
+    let runs: Vec<(&str, Vec<&str>)> = vec![
+        (
+            "plan_tumble",
+            vec![
+                "plan",
+                "tumble",
+                "--range-g",
+                "0.5",
+                "--k1",
+                "10",
+                "--noise",
+                "1e-6",
+                "--samples",
+                "10",
+            ],
+        ),
+        (
+            "plan_misalign_gyro",
+            vec![
+                "plan",
+                "misalign",
+                "--scale-factor",
+                "-2.9222",
+                "--noise",
+                "1e-3",
+            ],
+        ),
+        (
+            "plan_misalign_accel",
+            vec![
+                "plan",
+                "misalign",
+                "--instrument",
+                "accel",
+                "--scale-factor",
+                "1.299",
+                "--noise",
+                "2e-5",
+                "--samples",
+                "10",
+            ],
+        ),
+    ];
+    for (name, args) in runs {
+        insta::assert_snapshot!(format!("{name}_text"), ok(&incal_in(&dir, &args)));
+        let mut j = args.clone();
+        j.push("--json");
+        let v: Value = serde_json::from_str(&ok(&incal_in(&dir, &j))).unwrap();
+        insta::assert_snapshot!(
+            format!("{name}_json"),
+            serde_json::to_string_pretty(&rounded(v)).unwrap()
+        );
+    }
+    for seed in ["31", "32"] {
+        let csv = format!("t{seed}.csv");
+        let out = format!("t{seed}.json");
+        simulate(&dir, &csv, &["tumble", "--seed", seed]);
+        ok(&incal_in(
+            &dir,
+            &[
+                "tumble", "--mount", "pendulum", "--input", &csv, "--json", "-o", &out,
+            ],
+        ));
+    }
+    let cmp = ["compare", "t31.json", "t32.json"];
+    insta::assert_snapshot!("compare_text", ok(&incal_in(&dir, &cmp)));
+    let mut j = cmp.to_vec();
+    j.push("--json");
+    let v: Value = serde_json::from_str(&ok(&incal_in(&dir, &j))).unwrap();
+    insta::assert_snapshot!(
+        "compare_json",
+        serde_json::to_string_pretty(&rounded(v)).unwrap()
+    );
+    insta::assert_snapshot!("demo_text", ok(&incal_in(&dir, &["demo"])));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -357,11 +357,9 @@ fn read_calibration(
         let ks: Vec<f64> = a
             .pointer("/Ks/value")
             .and_then(Value::as_array)
-            .map(|v| v.iter().filter_map(Value::as_f64).collect())
-            .unwrap_or_default();
-        if ks.len() != 3 {
-            return Err(bad("Ks.value must be an array of three numbers"));
-        }
+            .filter(|v| v.len() == 3)
+            .and_then(|v| v.iter().map(Value::as_f64).collect::<Option<Vec<f64>>>())
+            .ok_or_else(|| bad("Ks.value must be an array of three numbers"))?;
         let noise_output = match a.get("noise_output") {
             None | Some(Value::Null) => None,
             Some(v) => Some(

@@ -357,7 +357,7 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
         return write_text(a.output.as_deref(), &json_text(&doc));
     }
     let mut s = format!(
-        "Misalignment plan ({}): {} readings, {} terms, noise {} per reading, kI = {k}\n",
+        "Misalignment plan ({}): {} samples, {} terms, noise {} per sample, kI = {k}\n",
         match a.instrument {
             Instrument::Gyro => "gyro on a rate table",
             Instrument::Accel => "accelerometer on a vertical face",

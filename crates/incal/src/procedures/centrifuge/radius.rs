@@ -322,7 +322,10 @@ pub fn regression_radius_with(
             .collect();
         let d = Design::from_rows(names.clone(), &rows)?;
         let (f, _) = fit_means(&d, &stats, noise)?;
-        let (scale, u_scale) = f.estimates.get("scale").unwrap_or((f64::NAN, f64::NAN));
+        let (scale, u_scale) = f
+            .estimates
+            .get("scale")
+            .ok_or_else(|| Error::Unsupported("regression fit has no scale term".into()))?;
         if !(scale.is_finite() && scale > 0.0) {
             return Err(Error::InvalidValue {
                 what: "regression scale (1 + c)".into(),
