@@ -4,7 +4,10 @@
 use serde_json::{json, Map, Value};
 
 use super::tumble::variance_decision;
-use super::{Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure, ResultDocument, Table};
+use super::{
+    position_stats, position_table, Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure,
+    ResultDocument, Table,
+};
 use crate::error::{Error, Result};
 use crate::estimation::{Estimates, Fit};
 use crate::procedures::misalign::accel::{AccelOptions, AccelResult};
@@ -117,31 +120,27 @@ impl GyroResult {
             }
         }
         b.warnings(self.warnings.iter().cloned());
-        let mut t = Table::new(
+        let mut t = position_table(
             "positions",
             "Positions",
             &[
                 ("alpha", Some(Unit::Deg)),
                 ("beta", Some(Unit::Deg)),
                 ("rate", Some(Unit::DegPerS)),
-                ("n", None),
-                ("mean", Some(Unit::Output)),
-                ("std", Some(Unit::Output)),
-                ("residual", Some(Unit::Output)),
-                ("standardized_residual", Some(Unit::One)),
             ],
         );
         for p in &self.positions {
-            t.push(vec![
+            let mut row = vec![
                 Cell::num(p.config.alpha_rad.to_degrees()),
                 Cell::num(p.config.beta_rad.to_degrees()),
                 Cell::num(p.rate_deg_s),
-                Cell::num(p.stats.n as f64),
-                Cell::num(p.stats.mean),
-                Cell::num(p.stats.std),
-                Cell::num(p.residual),
-                Cell::num(p.standardized_residual),
-            ])?;
+            ];
+            row.extend(position_stats(
+                &p.stats,
+                p.residual,
+                p.standardized_residual,
+            ));
+            t.push(row)?;
         }
         b.table(t);
         if !records.is_empty() {
@@ -204,27 +203,15 @@ impl AccelResult {
         b.option("scale_factor", json!(opts.scale_factor));
         b.option("scale_factor_unit", json!(Unit::OutputPerG.as_str()));
         b.warnings(self.warnings.iter().cloned());
-        let mut t = Table::new(
-            "positions",
-            "Positions",
-            &[
-                ("beta", Some(Unit::Deg)),
-                ("n", None),
-                ("mean", Some(Unit::Output)),
-                ("std", Some(Unit::Output)),
-                ("residual", Some(Unit::Output)),
-                ("standardized_residual", Some(Unit::One)),
-            ],
-        );
+        let mut t = position_table("positions", "Positions", &[("beta", Some(Unit::Deg))]);
         for p in &self.positions {
-            t.push(vec![
-                Cell::num(p.beta_rad.to_degrees()),
-                Cell::num(p.stats.n as f64),
-                Cell::num(p.stats.mean),
-                Cell::num(p.stats.std),
-                Cell::num(p.residual),
-                Cell::num(p.standardized_residual),
-            ])?;
+            let mut row = vec![Cell::num(p.beta_rad.to_degrees())];
+            row.extend(position_stats(
+                &p.stats,
+                p.residual,
+                p.standardized_residual,
+            ));
+            t.push(row)?;
         }
         b.table(t);
         Ok(b.finish())

@@ -398,6 +398,37 @@ impl Table {
     }
 }
 
+/// The columns every position table ends with: samples, mean and scatter
+/// of the output, residual of the fit and standardized residual.
+pub(crate) const POSITION_STATS: [(&str, Option<Unit>); 5] = [
+    ("n", None),
+    ("mean", Some(Unit::Output)),
+    ("std", Some(Unit::Output)),
+    ("residual", Some(Unit::Output)),
+    ("standardized_residual", Some(Unit::One)),
+];
+
+/// The cells of [`POSITION_STATS`] for one position.
+pub(crate) fn position_stats(
+    stats: &crate::estimation::PositionStats,
+    residual: f64,
+    standardized_residual: f64,
+) -> [Cell; 5] {
+    [
+        Cell::num(stats.n as f64),
+        Cell::num(stats.mean),
+        Cell::num(stats.std),
+        Cell::num(residual),
+        Cell::num(standardized_residual),
+    ]
+}
+
+/// A table whose columns are `lead` then [`POSITION_STATS`].
+pub(crate) fn position_table(id: &str, title: &str, lead: &[(&str, Option<Unit>)]) -> Table {
+    let cols: Vec<(&str, Option<Unit>)> = lead.iter().cloned().chain(POSITION_STATS).collect();
+    Table::new(id, title, &cols)
+}
+
 /// Why the tool decided something the user did not ask for explicitly.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]

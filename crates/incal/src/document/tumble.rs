@@ -3,8 +3,8 @@
 use serde_json::json;
 
 use super::{
-    term_unit, Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure, ResultDocument, Table,
-    Warning, WarningCode,
+    position_stats, position_table, term_unit, Cell, DecisionCode, DocumentBuilder, FitSummary,
+    Procedure, ResultDocument, Table, Warning, WarningCode,
 };
 use crate::error::Result;
 use crate::estimation::{Estimates, VarianceSource};
@@ -100,29 +100,22 @@ impl TumbleResult {
             )]);
         }
 
-        let mut pos = Table::new(
+        let mut pos = position_table(
             "positions",
             "Positions",
-            &[
-                ("angle", Some(Unit::Deg)),
-                ("pass", None),
-                ("n", None),
-                ("mean", Some(Unit::Output)),
-                ("std", Some(Unit::Output)),
-                ("residual", Some(Unit::Output)),
-                ("standardized_residual", Some(Unit::One)),
-            ],
+            &[("angle", Some(Unit::Deg)), ("pass", None)],
         );
         for p in &self.positions {
-            pos.push(vec![
+            let mut row = vec![
                 Cell::num(p.angle_rad.to_degrees()),
                 p.pass.clone().map_or(Cell::Null, Cell::Text),
-                Cell::num(p.stats.n as f64),
-                Cell::num(p.stats.mean),
-                Cell::num(p.stats.std),
-                Cell::num(p.residual),
-                Cell::num(p.standardized_residual),
-            ])?;
+            ];
+            row.extend(position_stats(
+                &p.stats,
+                p.residual,
+                p.standardized_residual,
+            ));
+            pos.push(row)?;
         }
         b.table(pos);
         for p in &self.passes {
