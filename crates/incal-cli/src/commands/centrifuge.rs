@@ -217,7 +217,13 @@ pub fn run(a: &Args) -> CliResult<()> {
     let mut doc = r.document(&opts).map_err(|e| in_file(&table.path, e))?;
     doc.inputs.push(table.input_file("input"));
     if let Some((name, sha, from)) = &si.from {
-        doc.inputs.push(input_file("from", name, sha.clone(), None));
+        // The path as given: `-` for standard input.
+        let path = if name == "<stdin>" {
+            "-"
+        } else {
+            name.as_str()
+        };
+        doc.inputs.push(input_file("from", path, sha.clone(), None));
         doc.decisions.push(Decision {
             code: DecisionCode::ChainedInput,
             message: format!(

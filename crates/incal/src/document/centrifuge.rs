@@ -214,8 +214,8 @@ impl CentrifugeResult {
                 &[
                     ("component", None),
                     ("type", None),
-                    ("u", Some(Unit::One)),
-                    ("sensitivity", Some(Unit::One)),
+                    ("u", None),
+                    ("sensitivity", None),
                     ("contribution", Some(unit.clone())),
                 ],
             );
@@ -248,6 +248,10 @@ impl CentrifugeResult {
         }
         b.extra("budgets", Value::Object(budgets))?;
 
+        b.decision(
+            DecisionCode::VarianceSource,
+            "each station and radius fit: variance from the pooled scatter of repeated samples, or from its residuals when they show lack of fit (chi-square, 5 %); see the Fits",
+        );
         for (t, why) in &self.unsupported {
             b.decision(DecisionCode::NotDetermined, format!("{t}: {why}"));
         }

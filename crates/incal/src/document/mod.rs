@@ -693,8 +693,10 @@ impl DocumentBuilder {
             for j in 0..b.nrows() {
                 for k in 0..b.ncols() {
                     let r = b[(j, k)];
-                    // Round-off can leave |ρ| a hair above 1.
-                    m[at + j][at + k] = if r.is_finite() {
+                    // Round-off can leave |ρ| a hair off 1.
+                    m[at + j][at + k] = if j == k {
+                        1.0
+                    } else if r.is_finite() {
                         r.clamp(-1.0, 1.0)
                     } else {
                         0.0
