@@ -7,24 +7,16 @@
 use incal::estimation::Noise;
 use incal::procedures::centrifuge::radius::ValueU;
 use incal::procedures::centrifuge::{calibrate, CentrifugeOptions};
-use incal::rigs::centrifuge::Centrifuge;
 use incal::sim::centrifuge::{rates_for_levels, simulate, standard_positions, CentrifugeSim};
-use incal::sim::demo::centrifuge_truth;
-use incal::units::{arcsec_to_rad, STANDARD_GRAVITY_M_S2};
+use incal::sim::demo::{centrifuge_rig, centrifuge_truth};
+use incal::units::STANDARD_GRAVITY_M_S2;
 
 #[test]
 fn k0_k1_covariance_enters_the_tilt_exactly() {
     let truth = centrifuge_truth();
     let obs = simulate(&CentrifugeSim {
         truth,
-        rig: Centrifuge {
-            r_plus_m: 0.714775,
-            r_minus_m: 0.705794,
-            latitude_rad: 39.9f64.to_radians(),
-            g_local_m_s2: STANDARD_GRAVITY_M_S2,
-            opposite_sense: false,
-            tilt_rad: arcsec_to_rad(60.0),
-        },
+        rig: centrifuge_rig(),
         positions: standard_positions(),
         rates_rad_s: rates_for_levels(&[0.0, 1.0, 4.0, 10.0, 25.0], 0.71, STANDARD_GRAVITY_M_S2),
         samples: 5,

@@ -58,8 +58,18 @@ fn unit_of(name: &str) -> Unit {
     }
 }
 
-fn common(b: &mut DocumentBuilder, fit: &Fit, joint: &Estimates, known_noise: bool) -> Result<()> {
-    b.estimates(joint, "", |n| Ok(unit_of(n)))?;
+/// The parts both tests share: the joint estimates of `angles` with γ, ψ
+/// and the rest of the fit as coefficients, the fit, the variance
+/// decision and the `angles`/`azimuth` contract objects. Returns the joint.
+fn common(
+    b: &mut DocumentBuilder,
+    fit: &Fit,
+    angles: &[&str],
+    noise: crate::estimation::Noise,
+) -> Result<Estimates> {
+    let joint = joint(fit, angles)?;
+    let known_noise = matches!(noise, crate::estimation::Noise::Known { .. });
+    b.estimates(&joint, "", |n| Ok(unit_of(n)))?;
     b.fit(FitSummary::of("main", fit, Unit::Output));
     b.decision(
         DecisionCode::VarianceSource,
@@ -71,11 +81,11 @@ fn common(b: &mut DocumentBuilder, fit: &Fit, joint: &Estimates, known_noise: bo
         .filter(|n| n.starts_with("dtheta_") || *n == GAMMA)
         .cloned()
         .collect();
-    b.extra("angles", value_u_map(joint, &angle_names, "rad"))?;
+    b.extra("angles", value_u_map(&joint, &angle_names, "rad"))?;
     if let Some((v, u)) = joint.get(AZIMUTH) {
         b.extra("azimuth", json!({"value": v, "u": u, "unit": "rad"}))?;
     }
-    Ok(())
+    Ok(joint)
 }
 
 impl GyroResult {
@@ -99,13 +109,11 @@ impl GyroResult {
                 }
             ),
         );
-        let angles = crate::procedures::misalign::gyro::GYRO_ANGLES;
-        let j = joint(&self.fit, &angles)?;
-        common(
+        let j = common(
             &mut b,
             &self.fit,
-            &j,
-            matches!(opts.noise, crate::estimation::Noise::Known { .. }),
+            &crate::procedures::misalign::gyro::GYRO_ANGLES,
+            opts.noise,
         )?;
         b.extra(
             "biases",
@@ -189,13 +197,11 @@ impl AccelResult {
             Procedure::MisalignAccel,
             "Accelerometer misalignment on a vertical face (seed 003)",
         );
-        let angles = crate::procedures::misalign::accel::ACCEL_ANGLES;
-        let j = joint(&self.fit, &angles)?;
-        common(
+        let j = common(
             &mut b,
             &self.fit,
-            &j,
-            matches!(opts.noise, crate::estimation::Noise::Known { .. }),
+            &crate::procedures::misalign::accel::ACCEL_ANGLES,
+            opts.noise,
         )?;
         if let Some((v, u)) = j.get("offset") {
             b.extra("offset", json!({"value": v, "u": u, "unit": "output"}))?;

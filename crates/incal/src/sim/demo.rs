@@ -357,20 +357,25 @@ pub fn centrifuge_truth() -> AccelerometerModel {
     }
 }
 
-fn centrifuge(seed: u64) -> Result<DemoSection> {
-    use crate::procedures::centrifuge::radius::ValueU;
-    use crate::procedures::centrifuge::{calibrate, CentrifugeOptions, CENTRIFUGE_TERMS};
-    use crate::rigs::centrifuge::Centrifuge;
-    use crate::sim::centrifuge::{rates_for_levels, simulate, standard_positions, CentrifugeSim};
-    let truth = centrifuge_truth();
-    let rig = Centrifuge {
+/// The centrifuge scenario's rig: seed 001's radii (ECM offset 4.49 mm),
+/// IA tilt 60″, latitude 39.9° N, standard gravity.
+pub fn centrifuge_rig() -> crate::rigs::centrifuge::Centrifuge {
+    crate::rigs::centrifuge::Centrifuge {
         r_plus_m: 0.714775,
         r_minus_m: 0.705794,
         latitude_rad: 39.9f64.to_radians(),
         g_local_m_s2: STANDARD_GRAVITY_M_S2,
         opposite_sense: false,
         tilt_rad: arcsec_to_rad(60.0),
-    };
+    }
+}
+
+fn centrifuge(seed: u64) -> Result<DemoSection> {
+    use crate::procedures::centrifuge::radius::ValueU;
+    use crate::procedures::centrifuge::{calibrate, CentrifugeOptions, CENTRIFUGE_TERMS};
+    use crate::sim::centrifuge::{rates_for_levels, simulate, standard_positions, CentrifugeSim};
+    let truth = centrifuge_truth();
+    let rig = centrifuge_rig();
     let obs = simulate(&CentrifugeSim {
         truth,
         rig,
