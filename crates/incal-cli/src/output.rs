@@ -29,6 +29,30 @@ pub struct ResultArgs {
     /// Further identity or conditions, KEY=VALUE (repeatable), e.g. --meta operator=lee --meta temperature_c=23.
     #[arg(long = "meta", value_name = "KEY=VALUE")]
     pub meta: Vec<String>,
+    /// Limits file (TOML): judge every limited coefficient (pass, fail, conditional-pass, conditional-fail).
+    #[arg(long, value_name = "FILE")]
+    pub limits: Option<PathBuf>,
+}
+
+/// Judge `doc` against the limits file `path` (its hash joins the inputs).
+pub fn apply_limits(doc: &mut ResultDocument, path: &std::path::Path) -> CliResult<()> {
+    let (name, text) = crate::io::read_text(path)?;
+    let limits = incal::document::limits::Limits::parse(&text)
+        .map_err(|e| crate::error::CliError::Input(format!("{name}: {e}")))?;
+    incal::document::limits::apply(doc, &limits)
+        .map_err(|e| crate::error::CliError::Input(format!("{name}: {e}")))?;
+    let shown = if name == "<stdin>" {
+        "-"
+    } else {
+        name.as_str()
+    };
+    doc.inputs.push(input_file(
+        "limits",
+        shown,
+        sha256_hex(text.as_bytes()),
+        None,
+    ));
+    Ok(())
 }
 
 impl ResultArgs {
@@ -50,6 +74,9 @@ impl ResultArgs {
             doc.instrument
                 .meta
                 .insert(k.to_string(), v.trim().to_string());
+        }
+        if let Some(l) = &self.limits {
+            apply_limits(&mut doc, l)?;
         }
         let text = if self.json {
             format!("{}\n", doc.to_json())
@@ -105,12 +132,13 @@ pub fn render(doc: &ResultDocument) -> String {
         ));
     }
     s.push_str("\nCoefficients\n");
+    let verdicts = doc.verdicts.as_ref();
     let rows: Vec<Vec<String>> = doc
         .coefficients
         .iter()
         .map(|(name, c)| {
             let (scale, label) = c.unit.engineering_for(c.value);
-            vec![
+            let mut row = vec![
                 name.to_string(),
                 sig(c.value * scale, 7),
                 sig(c.u * scale, 3),
@@ -118,16 +146,35 @@ pub fn render(doc: &ResultDocument) -> String {
                 dof_text(c.dof),
                 format!("{:.3}", c.k95),
                 label.to_string(),
-            ]
+            ];
+            if let Some(v) = verdicts {
+                row.push(v.get(name).map_or(String::new(), |v| {
+                    let lim = |x: Option<f64>| x.map_or("-".to_string(), |x| sig(x * scale, 6));
+                    format!("{} [{}, {}]", v.verdict, lim(v.min), lim(v.max))
+                }));
+            }
+            row
         })
         .collect();
-    s.push_str(&table(
-        &["name", "value", "u", "U95", "dof", "k95", "unit"],
-        &rows,
-    ));
+    let mut header = vec!["name", "value", "u", "U95", "dof", "k95", "unit"];
+    if verdicts.is_some() {
+        header.push("verdict [min, max]");
+    }
+    s.push_str(&table(&header, &rows));
     s.push_str(
         "u: standard uncertainty; U95 = k95 u covers the value with 95 % probability (k95: Student t for dof; inf: known variance)\n",
     );
+    if let (Some(v), Some(rule)) = (doc.verdict, doc.decision_rule) {
+        let rule = match rule {
+            incal::document::limits::DecisionRule::Simple => {
+                "simple acceptance: value against the limits"
+            }
+            incal::document::limits::DecisionRule::GuardBand => {
+                "guard band: value +- U95 against the limits (ILAC-G8)"
+            }
+        };
+        s.push_str(&format!("verdict: {v} ({rule})\n"));
+    }
     if !doc.fits.is_empty() {
         s.push_str("\nFits\n");
         let rows: Vec<Vec<String>> = doc

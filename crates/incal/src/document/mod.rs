@@ -28,6 +28,7 @@
 
 pub mod centrifuge;
 pub mod gfimu;
+pub mod limits;
 pub mod misalign;
 pub mod tumble;
 
@@ -488,6 +489,16 @@ pub struct ResultDocument {
     pub warnings: Vec<Warning>,
     /// Decisions the tool made.
     pub decisions: Vec<Decision>,
+    /// Each limited coefficient judged against its limits (with
+    /// `--limits`; see [`limits`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verdicts: Option<BTreeMap<String, limits::CoefficientVerdict>>,
+    /// The overall verdict: the worst of `verdicts`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verdict: Option<limits::Verdict>,
+    /// The decision rule behind the verdicts.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decision_rule: Option<limits::DecisionRule>,
     /// Procedure-specific top-level objects kept for their established
     /// contracts (`radius`, `alignment` of the centrifuge, `angles` of the
     /// misalignment tests, `accelerometers` of the gyro-free unit, …).
@@ -572,6 +583,9 @@ impl DocumentBuilder {
                 tables: Vec::new(),
                 warnings: Vec::new(),
                 decisions: Vec::new(),
+                verdicts: None,
+                verdict: None,
+                decision_rule: None,
                 extra: BTreeMap::new(),
             },
             blocks: Vec::new(),
@@ -652,7 +666,7 @@ impl DocumentBuilder {
 
     /// Set a procedure-specific top-level object (fails on a reserved key).
     pub fn extra(&mut self, key: &str, value: Value) -> Result<&mut Self> {
-        const RESERVED: [&str; 14] = [
+        const RESERVED: [&str; 16] = [
             "schema",
             "procedure",
             "title",
@@ -667,6 +681,8 @@ impl DocumentBuilder {
             "warnings",
             "decisions",
             "verdicts",
+            "verdict",
+            "decision_rule",
         ];
         if RESERVED.contains(&key) {
             return Err(Error::Unsupported(format!(

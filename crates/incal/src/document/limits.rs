@@ -1,0 +1,320 @@
+//! Limits and pass/fail decisions with the measurement uncertainty taken
+//! into account (ILAC-G8:2019; JCGM 106:2012).
+//!
+//! A limits file (TOML) gives, per procedure and coefficient, a lower
+//! and/or upper tolerance limit, in the coefficient's JSON unit or with an
+//! explicit unit, and one decision rule for the file:
+//!
+//! ```toml
+//! rule = "guard-band"            # or "simple" (default)
+//! [tumble]
+//! K0 = { min = -1e-3, max = 1e-3 }          # g, the JSON unit of K0
+//! K2 = { max = 20, unit = "ug/g^2" }        # explicit unit
+//! delta_o = { min = -900, max = 900, unit = "arcsec" }
+//! [gfimu-calibrate]
+//! "a.K0" = { min = -0.01, max = 0.01 }
+//! ```
+//!
+//! # Decision rules
+//! With the coefficient's value `x`, its expanded uncertainty `U = U95`
+//! and the tolerance interval `[min, max]` (a missing side is unbounded):
+//! * `simple` (ILAC-G8 §4.2.1, simple acceptance, shared risk): `pass`
+//!   when `min ≤ x ≤ max`, else `fail`.
+//! * `guard-band` (ILAC-G8 §4.2.2–4.2.3, guard band `w = U`): `pass` when
+//!   `min ≤ x − U` and `x + U ≤ max` (the whole interval inside), `fail`
+//!   when `x + U < min` or `x − U > max` (wholly outside), otherwise
+//!   `conditional-pass` when `x` itself is inside and `conditional-fail`
+//!   when it is outside.
+//!
+//! The overall verdict is the worst one: `fail` before `conditional-fail`
+//! before `conditional-pass` before `pass`.
+
+use std::collections::BTreeMap;
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use super::{Procedure, ResultDocument};
+use crate::units::Unit;
+
+/// How a value and its uncertainty are judged against a limit.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum DecisionRule {
+    /// Value against the limit (ILAC-G8 simple acceptance).
+    #[default]
+    Simple,
+    /// Value ± U95 against the limit (ILAC-G8 guard band w = U).
+    GuardBand,
+}
+
+/// The verdict on one coefficient or on the whole result.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize, JsonSchema,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Verdict {
+    /// Inside the limits (with U95 under the guard-band rule).
+    Pass,
+    /// The value is inside, but value ± U95 crosses a limit.
+    ConditionalPass,
+    /// The value is outside, but value ± U95 reaches inside.
+    ConditionalFail,
+    /// Outside the limits (wholly, with U95, under the guard-band rule).
+    Fail,
+}
+
+impl Verdict {
+    /// `pass`, `conditional-pass`, `conditional-fail`, `fail`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Verdict::Pass => "pass",
+            Verdict::ConditionalPass => "conditional-pass",
+            Verdict::ConditionalFail => "conditional-fail",
+            Verdict::Fail => "fail",
+        }
+    }
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// One coefficient judged against its limits (all numbers in the
+/// coefficient's JSON unit).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct CoefficientVerdict {
+    /// Lower limit (`null`: none).
+    pub min: Option<f64>,
+    /// Upper limit (`null`: none).
+    pub max: Option<f64>,
+    /// The verdict.
+    pub verdict: Verdict,
+}
+
+/// One limit as written in the file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Limit {
+    /// Lower limit.
+    pub min: Option<f64>,
+    /// Upper limit.
+    pub max: Option<f64>,
+    /// Unit of `min`/`max` (default: the coefficient's JSON unit).
+    pub unit: Option<String>,
+}
+
+/// A limits file: the decision rule and, per procedure id, the limits of
+/// its coefficients.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+pub struct Limits {
+    /// The decision rule (default `simple`).
+    #[serde(default)]
+    pub rule: DecisionRule,
+    /// `procedure id → coefficient name → limit`.
+    #[serde(flatten)]
+    pub procedures: BTreeMap<String, BTreeMap<String, Limit>>,
+}
+
+impl Limits {
+    /// Parse a limits file (TOML). Errors say where (line, key) and what.
+    pub fn parse(text: &str) -> std::result::Result<Limits, String> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let limits: Limits = toml::from_str(text).map_err(|e| {
+            let line = e
+                .span()
+                .map(|s| text[..s.start.min(text.len())].lines().count().max(1));
+            let msg = e.message().replace('\n', " ");
+            match line {
+                Some(l) => format!("line {l}: {msg}"),
+                None => msg,
+            }
+        })?;
+        for (p, coefs) in &limits.procedures {
+            let known: std::result::Result<Procedure, _> =
+                serde_json::from_value(serde_json::Value::String(p.clone()));
+            if known.is_err() {
+                return Err(format!(
+                    "[{p}]: not a procedure (tumble, centrifuge, misalign-gyro, misalign-accel, gfimu-calibrate)"
+                ));
+            }
+            for (name, l) in coefs {
+                let at = format!("[{p}] {name}");
+                match (l.min, l.max) {
+                    (None, None) => return Err(format!("{at}: give min and/or max")),
+                    (Some(a), Some(b)) if a > b => {
+                        return Err(format!("{at}: min {a} is above max {b}"))
+                    }
+                    _ => {}
+                }
+                if l.min.is_some_and(|x| !x.is_finite()) || l.max.is_some_and(|x| !x.is_finite()) {
+                    return Err(format!("{at}: limits must be finite numbers"));
+                }
+            }
+        }
+        Ok(limits)
+    }
+}
+
+/// How many JSON units one `unit` is, for a coefficient in `json`:
+/// the JSON unit itself, its engineering unit, or a common SI prefix of it.
+fn unit_factor(json: &Unit, unit: &str) -> Option<f64> {
+    if unit == json.as_str() {
+        return Some(1.0);
+    }
+    let (scale, label) = json.engineering();
+    if unit == label {
+        return Some(1.0 / scale);
+    }
+    let rad = std::f64::consts::PI / 180.0;
+    match (json, unit) {
+        (Unit::Rad, "deg") => Some(rad),
+        (Unit::Rad, "arcmin") => Some(rad / 60.0),
+        (Unit::Rad, "mrad") => Some(1e-3),
+        (Unit::Rad, "urad") => Some(1e-6),
+        (Unit::G, "mg") => Some(1e-3),
+        (Unit::M, "um") => Some(1e-6),
+        (Unit::M, "cm") => Some(1e-2),
+        (Unit::GPerG2, "mg/g^2") => Some(1e-3),
+        (Unit::GPerG3, "mg/g^3") => Some(1e-3),
+        _ => None,
+    }
+}
+
+/// Judge `value ± u95` against `[min, max]` with `rule` (module docs).
+pub fn judge(
+    value: f64,
+    u95: f64,
+    min: Option<f64>,
+    max: Option<f64>,
+    rule: DecisionRule,
+) -> Verdict {
+    let lo = min.unwrap_or(f64::NEG_INFINITY);
+    let hi = max.unwrap_or(f64::INFINITY);
+    let inside = lo <= value && value <= hi;
+    match rule {
+        DecisionRule::Simple => {
+            if inside {
+                Verdict::Pass
+            } else {
+                Verdict::Fail
+            }
+        }
+        DecisionRule::GuardBand => {
+            if lo <= value - u95 && value + u95 <= hi {
+                Verdict::Pass
+            } else if value + u95 < lo || value - u95 > hi {
+                Verdict::Fail
+            } else if inside {
+                Verdict::ConditionalPass
+            } else {
+                Verdict::ConditionalFail
+            }
+        }
+    }
+}
+
+/// Judge every limited coefficient of `doc` and set its `verdicts`,
+/// `verdict` and `decision_rule`. Fails (naming the key) when the file has
+/// no limits for this procedure, names a coefficient the result does not
+/// have, or gives a unit that does not fit the coefficient.
+pub fn apply(doc: &mut ResultDocument, limits: &Limits) -> std::result::Result<(), String> {
+    let p: Procedure = doc.procedure;
+    let coefs = limits
+        .procedures
+        .get(p.as_str())
+        .ok_or_else(|| format!("no [{p}] section: no limits for this procedure"))?;
+    let mut verdicts = BTreeMap::new();
+    for (name, l) in coefs {
+        let c = doc.coefficients.get(name).ok_or_else(|| {
+            format!(
+                "[{p}] {name}: not a coefficient of this result (it has {})",
+                doc.coefficients.names().join(", ")
+            )
+        })?;
+        let f = match &l.unit {
+            None => 1.0,
+            Some(u) => unit_factor(&c.unit, u).ok_or_else(|| {
+                format!(
+                    "[{p}] {name}: unit '{u}' does not fit the coefficient's unit '{}'",
+                    c.unit
+                )
+            })?,
+        };
+        let (min, max) = (l.min.map(|x| x * f), l.max.map(|x| x * f));
+        verdicts.insert(
+            name.clone(),
+            CoefficientVerdict {
+                min,
+                max,
+                verdict: judge(c.value, c.u95, min, max, limits.rule),
+            },
+        );
+    }
+    doc.verdict = verdicts.values().map(|v| v.verdict).max();
+    doc.verdicts = Some(verdicts);
+    doc.decision_rule = Some(limits.rule);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Hand-made cases for each verdict, limits [−1, 1], U = 0.2.
+    #[test]
+    fn guard_band_gives_each_of_the_four_verdicts() {
+        let g = DecisionRule::GuardBand;
+        let (lo, hi) = (Some(-1.0), Some(1.0));
+        assert_eq!(judge(0.5, 0.2, lo, hi, g), Verdict::Pass);
+        assert_eq!(judge(0.9, 0.2, lo, hi, g), Verdict::ConditionalPass);
+        assert_eq!(judge(1.1, 0.2, lo, hi, g), Verdict::ConditionalFail);
+        assert_eq!(judge(1.3, 0.2, lo, hi, g), Verdict::Fail);
+        assert_eq!(judge(-0.9, 0.2, lo, hi, g), Verdict::ConditionalPass);
+        assert_eq!(judge(-1.1, 0.2, lo, hi, g), Verdict::ConditionalFail);
+        assert_eq!(judge(-1.3, 0.2, lo, hi, g), Verdict::Fail);
+        // Boundaries: touching the limit with value ± U is still inside.
+        assert_eq!(judge(0.8, 0.2, lo, hi, g), Verdict::Pass);
+        assert_eq!(judge(1.2, 0.2, lo, hi, g), Verdict::ConditionalFail);
+        // One-sided limits.
+        assert_eq!(judge(5.0, 0.2, None, Some(1.0), g), Verdict::Fail);
+        assert_eq!(judge(-5.0, 0.2, None, Some(1.0), g), Verdict::Pass);
+    }
+
+    #[test]
+    fn simple_rule_ignores_the_uncertainty() {
+        let s = DecisionRule::Simple;
+        assert_eq!(judge(0.9, 0.5, Some(-1.0), Some(1.0), s), Verdict::Pass);
+        assert_eq!(judge(1.1, 0.5, Some(-1.0), Some(1.0), s), Verdict::Fail);
+    }
+
+    #[test]
+    fn limits_files_are_checked() {
+        let ok = Limits::parse("rule = \"guard-band\"\n[tumble]\nK0 = { max = 1e-3 }\n").unwrap();
+        assert_eq!(ok.rule, DecisionRule::GuardBand);
+        assert!(Limits::parse("[tumble]\nK0 = {}\n")
+            .unwrap_err()
+            .contains("min and/or max"));
+        assert!(Limits::parse("[tumble]\nK0 = { min = 2, max = 1 }\n")
+            .unwrap_err()
+            .contains("above max"));
+        assert!(Limits::parse("rule = \"lenient\"\n")
+            .unwrap_err()
+            .contains("line 1"));
+        assert!(Limits::parse("[tumble]\nK0 = { mx = 1 }\n").is_err());
+        assert!(Limits::parse("[tumbel]\nK0 = { max = 1 }\n")
+            .unwrap_err()
+            .contains("not a procedure"));
+    }
+
+    #[test]
+    fn units_convert_to_the_json_unit() {
+        assert_eq!(unit_factor(&Unit::G, "ug"), Some(1e-6));
+        assert_eq!(unit_factor(&Unit::G, "g"), Some(1.0));
+        assert!((unit_factor(&Unit::Rad, "arcsec").unwrap() - 4.84813681e-6).abs() < 1e-14);
+        assert_eq!(unit_factor(&Unit::M, "mm"), Some(1e-3));
+        assert_eq!(unit_factor(&Unit::G, "arcsec"), None);
+    }
+}
