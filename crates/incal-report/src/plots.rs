@@ -350,7 +350,7 @@ fn rows_plots(t: &Table, rows: &[usize], lay: &Layout, panel: Option<&str>) -> V
         Some((sp, dof)) => {
             let (s, l) = display_unit(t.columns[res].unit.as_ref(), sp);
             format!(
-                "Bars: ±U95 of each mean, U95 = t95·s_p/√n with s_p = {} {l} the pooled sample scatter of the rows plotted (ν = Σ(n−1) = {dof:.0}, t95 = {k95:.3}); the fit's uncertainty policy may raise it (see Fits).",
+                "Bars: ±U95 of each mean, U95 = t95·s_p/√n, with s_p = {} {l} the pooled sample scatter of the rows plotted (ν = Σ(n−1) = {dof:.0}, t95 = {k95:.3}); the fit's uncertainty policy may raise it (see Fits).",
                 trimmed(sp * s, 3)
             )
         }
