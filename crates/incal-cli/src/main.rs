@@ -52,6 +52,8 @@ enum Command {
     Compare(commands::compare::Args),
     /// Print the JSON Schema of the result document (incal.result/1).
     Schema(commands::schema::Args),
+    /// Write one self-contained HTML report (printable certificate) of a result file, with plots.
+    Report(commands::report::Args),
     /// Gyro-free inertial unit of six (or more) accelerometers: calibrate K0 and Ks, solve motion (seed 004).
     #[command(subcommand)]
     Gfimu(GfimuCommand),
@@ -96,6 +98,7 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Simulate(SimulateCommand::Centrifuge(a)) => commands::centrifuge::simulate(&a),
         Command::Compare(a) => commands::compare::run(&a),
         Command::Schema(a) => commands::schema::run(&a),
+        Command::Report(a) => commands::report::run(&a),
         Command::Gfimu(GfimuCommand::Calibrate(a)) => commands::gfimu::run_calibrate(&a),
         Command::Gfimu(GfimuCommand::Solve(a)) => commands::gfimu::run_solve(&a),
         Command::Simulate(SimulateCommand::Gfimu(a)) => commands::gfimu::simulate(&a),

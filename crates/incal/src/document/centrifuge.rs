@@ -36,8 +36,8 @@ impl CentrifugeResult {
     /// `R_minus_m` (regression), `R_plus_static_m`, `R_minus_static_m`,
     /// `R_centre_m`, `ecm_offset_m` and the static tilt `tilt_rad`, all with the
     /// joint covariance of [`CentrifugeResult::joint`]; the seed-001
-    /// contract objects `radius` and `alignment`; radius-by-range, stations
-    /// and budgets as tables.
+    /// contract objects `radius` and `alignment`; radius-by-range, stations,
+    /// the station points (input, mean E/K1, residual) and budgets as tables.
     pub fn document(&self, opts: &CentrifugeOptions) -> Result<ResultDocument> {
         let mut b = DocumentBuilder::new(
             Procedure::Centrifuge,
@@ -193,6 +193,34 @@ impl CentrifugeResult {
                 Cell::num(s.fit.dof as f64),
                 Cell::opt(s.fit.chi2_p_value),
             ])?;
+        }
+        b.table(t);
+
+        let mut t = Table::new(
+            "points",
+            "Station points (eq. 9 fit): mean E/K1 against the centripetal input",
+            &[
+                ("station", None),
+                ("polarity", None),
+                ("input_g", None),
+                ("n", None),
+                ("mean", Some(Unit::G)),
+                ("std", Some(Unit::G)),
+                ("residual", Some(Unit::G)),
+            ],
+        );
+        for s in &self.stations {
+            for (k, p) in s.point_data.iter().enumerate() {
+                t.push(vec![
+                    Cell::text(s.label()),
+                    Cell::num(f64::from(p.polarity)),
+                    Cell::num(p.input_g),
+                    Cell::num(p.stats.n as f64),
+                    Cell::num(p.stats.mean),
+                    Cell::num(p.stats.std),
+                    Cell::opt(s.fit.residuals.get(k).copied()),
+                ])?;
+            }
         }
         b.table(t);
 

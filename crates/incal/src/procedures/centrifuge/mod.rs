@@ -135,6 +135,20 @@ pub struct Alignment {
     pub delta_c2: f64,
 }
 
+/// One point of a station fit (one polarity and rate): the abscissa and
+/// the mean that eq. 9 fits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StationPoint {
+    /// ±1.
+    pub polarity: i8,
+    /// Table rate ω (rad/s).
+    pub omega_rad_s: f64,
+    /// Centripetal input `x = R±(φ0)·(ω² + 2ωΩe sinΦ)/g_L` (g).
+    pub input_g: f64,
+    /// Samples, mean and scatter of `E/K1` (g).
+    pub stats: PositionStats,
+}
+
 /// Fit of one station (plane, φ0), eq. 9.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Station {
@@ -158,6 +172,8 @@ pub struct Station {
     pub delta_c2_half_width: f64,
     /// The linear fit.
     pub fit: Fit,
+    /// The points fitted, in the order of `fit.residuals`.
+    pub point_data: Vec<StationPoint>,
 }
 
 impl Station {
@@ -811,6 +827,7 @@ fn fit_station(
     }
     let mut rows = Vec::new();
     let mut stats = Vec::new();
+    let mut point_data = Vec::with_capacity(points.len());
     for p in points {
         let x = rig.centripetal_g(&p.position, p.omega);
         let s = p.position.sign();
@@ -839,7 +856,14 @@ fn fit_station(
             row.push(s * (w * x).powi(3));
         }
         rows.push(row);
-        stats.push(e_over_k1(&p.samples, k1)?);
+        let st = e_over_k1(&p.samples, k1)?;
+        point_data.push(StationPoint {
+            polarity: p.position.polarity,
+            omega_rad_s: p.omega,
+            input_g: x,
+            stats: st,
+        });
+        stats.push(st);
     }
     let design = Design::from_rows(names, &rows)?;
     let (fit, _) = fit_means(&design, &stats, noise)?;
@@ -872,6 +896,7 @@ fn fit_station(
         alignment,
         delta_c2_half_width: 0.0,
         fit,
+        point_data,
     })
 }
 

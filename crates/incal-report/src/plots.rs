@@ -1,0 +1,1015 @@
+//! Plots as inline SVG, chosen from the shape of the document only (no
+//! per-procedure code):
+//!
+//! * every table with a `residual` column: the residual at each row
+//!   against the table's abscissa, with ±U95 bars of the row's mean, and,
+//!   when the table also has `mean`, the data (mean) against the fitted
+//!   model (mean − residual);
+//! * coefficients named `GROUP.NAME` (one block per accelerometer, …):
+//!   for every `NAME` shared by two or more groups in one unit, its value
+//!   ±U95 across the groups;
+//! * when neither gives a plot: every coefficient's value ±U95, one plot
+//!   per unit;
+//! * the history of a coefficient over the calibrations of an instrument,
+//!   with its limits.
+//!
+//! The abscissa of a table is its numeric column, before the statistics
+//! columns (`n`, `mean`, `std`, `residual`, …), with the most distinct
+//! values (the later one on a tie); the other columns before the
+//! statistics name the series (a pass, a configuration, a station and
+//! polarity). Plots are drawn by `plotters` with its SVG backend only: text
+//! is SVG `<text>` in the generic `sans-serif` family, so nothing is
+//! loaded from outside the file.
+
+use incal::document::{Cell, ResultDocument, Table};
+use incal::estimation::coverage_factor;
+use incal::units::Unit;
+use plotters::prelude::*;
+
+use crate::format::{esc, trimmed};
+use crate::{HistorySeries, ReportError};
+
+/// Columns that hold statistics of a row, not its coordinates.
+const STAT_COLUMNS: [&str; 6] = [
+    "n",
+    "mean",
+    "std",
+    "residual",
+    "standardized_residual",
+    "fitted",
+];
+
+/// Colours of the series (Tableau 10), also used by the HTML legend.
+pub const PALETTE: [(u8, u8, u8); 10] = [
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (214, 39, 40),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (127, 127, 127),
+    (188, 189, 34),
+    (23, 190, 207),
+];
+
+/// `#rrggbb` of series `k`.
+pub fn colour_hex(k: usize) -> String {
+    let (r, g, b) = PALETTE[k % PALETTE.len()];
+    format!("#{r:02x}{g:02x}{b:02x}")
+}
+
+/// One point, with an optional half-width of its error bar.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pt {
+    /// Abscissa (display units).
+    pub x: f64,
+    /// Ordinate (display units).
+    pub y: f64,
+    /// Half-width of the bar (display units).
+    pub bar: Option<f64>,
+}
+
+/// How a series is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Style {
+    /// Dots (with their bars).
+    Dots,
+    /// A line through the points in the order of x.
+    Line,
+}
+
+/// A series of a plot; series with the same `key` share a colour and one
+/// entry of the legend.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Series {
+    /// Index of the legend entry (colour).
+    pub key: usize,
+    /// How it is drawn.
+    pub style: Style,
+    /// Points.
+    pub points: Vec<Pt>,
+}
+
+/// The abscissa: numbers, or categories at 0, 1, 2, …
+#[derive(Debug, Clone, PartialEq)]
+pub enum XAxis {
+    /// Numbers.
+    Numeric,
+    /// Named positions 0, 1, …
+    Categories(Vec<String>),
+}
+
+/// A horizontal reference line (zero, a limit).
+#[derive(Debug, Clone, PartialEq)]
+pub struct HLine {
+    /// Ordinate (display units).
+    pub y: f64,
+    /// A limit (red) or a reference (grey).
+    pub limit: bool,
+}
+
+/// One plot, independent of how it is drawn.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plot {
+    /// `residual`, `fitted`, `coefficients` or `history`.
+    pub kind: &'static str,
+    /// What it is drawn from: a table id, a coefficient name or group.
+    pub source: String,
+    /// Title (plain text).
+    pub title: String,
+    /// Axis descriptions (plain text).
+    pub x_desc: String,
+    /// Axis descriptions (plain text).
+    pub y_desc: String,
+    /// Abscissa.
+    pub x_axis: XAxis,
+    /// Shift the dots of series apart along x so that points at the same
+    /// abscissa stay visible.
+    pub dodge: bool,
+    /// Series.
+    pub series: Vec<Series>,
+    /// Legend entries by key (empty: no legend).
+    pub legend: Vec<String>,
+    /// Reference lines.
+    pub hlines: Vec<HLine>,
+    /// What the plot shows and how the bars are computed (plain text).
+    pub caption: String,
+}
+
+/// Display scale and label for numbers of `unit` of magnitude up to
+/// `magnitude`: the engineering unit of [`Unit::engineering_for`], except
+/// that g-based values of 0.1 g or more (a centrifuge output in g) read in
+/// g rather than in millions of µg.
+pub fn display_unit(unit: Option<&Unit>, magnitude: f64) -> (f64, String) {
+    match unit {
+        None => (1.0, String::new()),
+        Some(Unit::G) if magnitude.abs() >= 0.1 => (1.0, "g".into()),
+        Some(u) => {
+            let (s, l) = u.engineering_for(magnitude);
+            (
+                s,
+                if l == "1" {
+                    String::new()
+                } else {
+                    l.to_string()
+                },
+            )
+        }
+    }
+}
+
+/// `name (unit)`, or the name alone for a unit-less quantity.
+pub fn with_unit(name: &str, unit: &str) -> String {
+    if unit.is_empty() {
+        name.to_string()
+    } else {
+        format!("{name} ({unit})")
+    }
+}
+
+fn number(c: &Cell) -> Option<f64> {
+    match c {
+        Cell::Number(x) if x.is_finite() => Some(*x),
+        _ => None,
+    }
+}
+
+fn column(t: &Table, name: &str) -> Option<usize> {
+    t.columns.iter().position(|c| c.name == name)
+}
+
+/// A cell as a series label part: text as it is, a number as
+/// `name value unit` in the column's engineering unit; `None` for null.
+fn label_part(t: &Table, k: usize, c: &Cell) -> Option<String> {
+    match c {
+        Cell::Text(s) => Some(s.clone()),
+        Cell::Number(x) => {
+            let (scale, unit) = display_unit(t.columns[k].unit.as_ref(), *x);
+            let v = trimmed(x * scale, 4);
+            Some(if unit.is_empty() {
+                format!("{} {v}", t.columns[k].name)
+            } else {
+                format!("{} {v} {unit}", t.columns[k].name)
+            })
+        }
+        Cell::Null => None,
+    }
+}
+
+/// Series in one plot before a table is split into panels.
+const MAX_SERIES: usize = 6;
+
+/// How the rows of a table are plotted: abscissa, series and panels.
+struct Layout {
+    /// Column of the abscissa (`None`: the row number).
+    x_col: Option<usize>,
+    /// Display scale and unit of the abscissa.
+    x_scale: f64,
+    /// Axis description of the abscissa.
+    x_desc: String,
+    /// Lead columns that name the series.
+    series_cols: Vec<usize>,
+}
+
+/// The numeric lead column with the most distinct values (the later one
+/// on a tie).
+fn abscissa(t: &Table, lead_end: usize) -> Option<usize> {
+    let mut best: Option<(usize, usize)> = None;
+    for k in 0..lead_end {
+        let mut vals: Vec<f64> = Vec::new();
+        let mut numeric = true;
+        for row in &t.rows {
+            match &row[k] {
+                Cell::Number(x) => vals.push(*x),
+                Cell::Text(_) => numeric = false,
+                Cell::Null => {}
+            }
+        }
+        if !numeric || vals.is_empty() {
+            continue;
+        }
+        vals.sort_by(f64::total_cmp);
+        vals.dedup();
+        if best.is_none_or(|(_, d)| vals.len() >= d) {
+            best = Some((k, vals.len()));
+        }
+    }
+    best.map(|(k, _)| k)
+}
+
+/// Rows grouped by the label of `cols` (in order of appearance): labels
+/// and row indices.
+fn group_rows(t: &Table, rows: &[usize], cols: &[usize]) -> (Vec<String>, Vec<Vec<usize>>) {
+    let mut labels: Vec<String> = Vec::new();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for &i in rows {
+        let label = cols
+            .iter()
+            .filter_map(|&k| label_part(t, k, &t.rows[i][k]))
+            .collect::<Vec<_>>()
+            .join(", ");
+        match labels.iter().position(|l| *l == label) {
+            Some(g) => groups[g].push(i),
+            None => {
+                labels.push(label);
+                groups.push(vec![i]);
+            }
+        }
+    }
+    (labels, groups)
+}
+
+/// The residual plot and, with a `mean` column, the fitted-against-data
+/// plot of a table (module docs); nothing for a table without `residual`.
+/// A table with more than six series is split into panels by its first
+/// series column (e.g. one pair of plots per centrifuge station).
+pub fn table_plots(t: &Table) -> Vec<Plot> {
+    if column(t, "residual").is_none() {
+        return Vec::new();
+    }
+    let lead_end = t
+        .columns
+        .iter()
+        .position(|c| STAT_COLUMNS.contains(&c.name.as_str()))
+        .unwrap_or(t.columns.len());
+    let x_col = abscissa(t, lead_end);
+    let x_mag = x_col.map_or(0.0, |k| {
+        t.rows
+            .iter()
+            .filter_map(|r| number(&r[k]))
+            .fold(0.0, |m, x| f64::max(m, x.abs()))
+    });
+    let (x_scale, x_label) = display_unit(x_col.and_then(|k| t.columns[k].unit.as_ref()), x_mag);
+    let x_desc = match x_col {
+        Some(k) => with_unit(&t.columns[k].name, &x_label),
+        None => "row".to_string(),
+    };
+    let series_cols: Vec<usize> = (0..lead_end).filter(|&k| Some(k) != x_col).collect();
+    let all: Vec<usize> = (0..t.rows.len()).collect();
+    let (labels, _) = group_rows(t, &all, &series_cols);
+    let layout = Layout {
+        x_col,
+        x_scale,
+        x_desc,
+        series_cols: series_cols.clone(),
+    };
+    if labels.len() <= MAX_SERIES || series_cols.len() < 2 {
+        return rows_plots(t, &all, &layout, None);
+    }
+    let panel_col = series_cols[0];
+    let (panels, panel_rows) = group_rows(t, &all, &[panel_col]);
+    let layout = Layout {
+        series_cols: series_cols[1..].to_vec(),
+        ..layout
+    };
+    panels
+        .iter()
+        .zip(&panel_rows)
+        .flat_map(|(p, rows)| rows_plots(t, rows, &layout, Some(p.as_str())))
+        .collect()
+}
+
+/// The residual and fitted plots of `rows` of a table.
+fn rows_plots(t: &Table, rows: &[usize], lay: &Layout, panel: Option<&str>) -> Vec<Plot> {
+    let Some(res) = column(t, "residual") else {
+        return Vec::new();
+    };
+    let mean = column(t, "mean");
+    let (mut legend, groups) = group_rows(t, rows, &lay.series_cols);
+    if legend.len() == 1 && legend[0].is_empty() {
+        legend.clear();
+    }
+    // Pooled sample scatter of the rows plotted: (s_p, dof = Σ(n − 1)).
+    let (n_col, std_col) = (column(t, "n"), column(t, "std"));
+    let pooled = n_col.zip(std_col).and_then(|(nc, sc)| {
+        let (mut ss, mut dof) = (0.0, 0.0);
+        for &i in rows {
+            if let (Some(s), Some(n)) = (number(&t.rows[i][sc]), number(&t.rows[i][nc])) {
+                if n >= 2.0 {
+                    ss += (n - 1.0) * s * s;
+                    dof += n - 1.0;
+                }
+            }
+        }
+        (dof > 0.0 && ss.is_finite()).then(|| ((ss / dof).sqrt(), dof))
+    });
+    let k95 = pooled.map_or(f64::NAN, |(_, dof)| coverage_factor(dof, 0.95));
+    let bar = |i: usize| -> Option<f64> {
+        let (sp, _) = pooled?;
+        let n = number(&t.rows[i][n_col?])?;
+        (n >= 1.0).then(|| k95 * sp / n.sqrt())
+    };
+    let x_of = |i: usize| -> f64 {
+        match lay.x_col {
+            Some(k) => number(&t.rows[i][k]).map_or(f64::NAN, |x| x * lay.x_scale),
+            None => i as f64,
+        }
+    };
+    let bar_text = match pooled {
+        Some((sp, dof)) => {
+            let (s, l) = display_unit(t.columns[res].unit.as_ref(), sp);
+            format!(
+                "Bars: ±U95 of each mean, U95 = t95·s_p/√n, with s_p = {} {l} the pooled sample scatter of the rows plotted (ν = Σ(n−1) = {dof:.0}, t95 = {k95:.3}); the fit's uncertainty policy may raise it (see Fits).",
+                trimmed(sp * s, 3)
+            )
+        }
+        None => "No bars: no repeated samples (n < 2).".to_string(),
+    };
+    let series_text = if legend.is_empty() {
+        String::new()
+    } else {
+        format!(
+            " One colour per {}.",
+            lay.series_cols
+                .iter()
+                .map(|&k| t.columns[k].name.clone())
+                .collect::<Vec<_>>()
+                .join(" and ")
+        )
+    };
+    let (in_panel, panel_title) = match panel {
+        Some(p) => (format!(" ({p})"), format!(" — {p}")),
+        None => (String::new(), String::new()),
+    };
+    let source = match panel {
+        Some(p) => format!("{}: {p}", t.id),
+        None => t.id.clone(),
+    };
+    let x_desc = &lay.x_desc;
+    let magnitude = |col: usize| {
+        rows.iter()
+            .filter_map(|&i| number(&t.rows[i][col]))
+            .fold(0.0, |m, x| f64::max(m, x.abs()))
+    };
+
+    let mut out = Vec::new();
+    let (rs, rl) = display_unit(t.columns[res].unit.as_ref(), magnitude(res));
+    let series: Vec<Series> = groups
+        .iter()
+        .enumerate()
+        .map(|(key, rows)| Series {
+            key,
+            style: Style::Dots,
+            points: rows
+                .iter()
+                .filter_map(|&i| {
+                    let y = number(&t.rows[i][res])?;
+                    Some(Pt {
+                        x: x_of(i),
+                        y: y * rs,
+                        bar: bar(i).map(|b| b * rs),
+                    })
+                })
+                .filter(|p| p.x.is_finite())
+                .collect(),
+        })
+        .collect();
+    out.push(Plot {
+        kind: "residual",
+        source: source.clone(),
+        title: format!("Residuals: {}{panel_title}", t.title),
+        x_desc: x_desc.clone(),
+        y_desc: with_unit("residual", &rl),
+        x_axis: XAxis::Numeric,
+        dodge: series.len() > 1,
+        series,
+        legend: legend.clone(),
+        hlines: vec![HLine {
+            y: 0.0,
+            limit: false,
+        }],
+        caption: format!(
+            "Residual (data − fitted model) of every row of table {}{in_panel} against {x_desc}.{series_text} {bar_text}",
+            t.id
+        ),
+    });
+
+    if let Some(mean) = mean {
+        let (ms, ml) = display_unit(t.columns[mean].unit.as_ref(), magnitude(mean));
+        let mut series = Vec::new();
+        for (key, rows) in groups.iter().enumerate() {
+            let mut data = Vec::new();
+            let mut fitted = Vec::new();
+            for &i in rows {
+                let (Some(m), x) = (number(&t.rows[i][mean]), x_of(i)) else {
+                    continue;
+                };
+                if !x.is_finite() {
+                    continue;
+                }
+                data.push(Pt {
+                    x,
+                    y: m * ms,
+                    bar: bar(i).map(|b| b * ms),
+                });
+                if let Some(r) = number(&t.rows[i][res]) {
+                    fitted.push(Pt {
+                        x,
+                        y: (m - r) * ms,
+                        bar: None,
+                    });
+                }
+            }
+            fitted.sort_by(|a, b| a.x.total_cmp(&b.x));
+            series.push(Series {
+                key,
+                style: Style::Line,
+                points: fitted,
+            });
+            series.push(Series {
+                key,
+                style: Style::Dots,
+                points: data,
+            });
+        }
+        out.push(Plot {
+            kind: "fitted",
+            source,
+            title: format!("Fitted model and data: {}{panel_title}", t.title),
+            x_desc: x_desc.clone(),
+            y_desc: with_unit("mean", &ml),
+            x_axis: XAxis::Numeric,
+            dodge: false,
+            series,
+            legend,
+            hlines: Vec::new(),
+            caption: format!(
+                "Data (dots: the mean of each row of table {}{in_panel}) and the fitted model (line through mean − residual at the same abscissae, in order of {x_desc}; straight between them, not the model's curve).{series_text} {bar_text}",
+                t.id
+            ),
+        });
+    }
+    out
+}
+
+/// Limits `(min, max)` of a coefficient, when a verdict gives them.
+pub type Limits = (Option<f64>, Option<f64>);
+
+/// Value ±U95 of `names` (all in one unit) as categories.
+fn coefficient_plot(
+    doc: &ResultDocument,
+    names: &[&str],
+    labels: Vec<String>,
+    limits: Option<Limits>,
+    source: String,
+    title: String,
+    caption: String,
+) -> Option<Plot> {
+    let coefs: Vec<_> = names
+        .iter()
+        .filter_map(|n| doc.coefficients.get(n))
+        .collect();
+    let first = coefs.first()?;
+    let mag = coefs.iter().fold(0.0, |m, c| f64::max(m, c.value.abs()));
+    let (s, l) = display_unit(Some(&first.unit), mag);
+    let points = coefs
+        .iter()
+        .enumerate()
+        .map(|(i, c)| Pt {
+            x: i as f64,
+            y: c.value * s,
+            bar: Some(c.u95 * s),
+        })
+        .collect();
+    let mut hlines = Vec::new();
+    if let Some((lo, hi)) = limits {
+        hlines.extend(lo.into_iter().chain(hi).map(|y| HLine {
+            y: y * s,
+            limit: true,
+        }));
+    }
+    Some(Plot {
+        kind: "coefficients",
+        source,
+        title: title.clone(),
+        x_desc: String::new(),
+        y_desc: with_unit(&title, &l),
+        x_axis: XAxis::Categories(labels),
+        dodge: false,
+        series: vec![Series {
+            key: 0,
+            style: Style::Dots,
+            points,
+        }],
+        legend: Vec::new(),
+        hlines,
+        caption,
+    })
+}
+
+/// Coefficient plots (module docs): one per `NAME` of `GROUP.NAME`
+/// coefficients shared by two or more groups in one unit; when `fallback`,
+/// and there are none, one per unit over every coefficient. `limits` gives
+/// a coefficient's limits, if any.
+pub fn coefficient_plots(
+    doc: &ResultDocument,
+    fallback: bool,
+    limits: &dyn Fn(&str) -> Option<Limits>,
+) -> Vec<Plot> {
+    // Groups keyed by (suffix, unit), in the order of first appearance.
+    let mut groups: Vec<(String, Unit, Vec<&str>)> = Vec::new();
+    for (name, c) in doc.coefficients.iter() {
+        let Some((_, suffix)) = name.rsplit_once('.') else {
+            continue;
+        };
+        match groups
+            .iter_mut()
+            .find(|(s, u, _)| s == suffix && *u == c.unit)
+        {
+            Some(g) => g.2.push(name),
+            None => groups.push((suffix.to_string(), c.unit.clone(), vec![name])),
+        }
+    }
+    let common_limits = |names: &[&str]| -> Option<Limits> {
+        let first = limits(names.first()?)?;
+        names
+            .iter()
+            .all(|n| limits(n) == Some(first))
+            .then_some(first)
+    };
+    let mut out: Vec<Plot> = groups
+        .iter()
+        .filter(|(_, _, names)| names.len() >= 2)
+        .filter_map(|(suffix, _, names)| {
+            let labels = names
+                .iter()
+                .map(|n| n.rsplit_once('.').map_or(*n, |(p, _)| p).to_string())
+                .collect();
+            coefficient_plot(
+                doc,
+                names,
+                labels,
+                common_limits(names),
+                format!("*.{suffix}"),
+                suffix.clone(),
+                format!(
+                    "{suffix} of every {} with its ±U95 (k95·u of each coefficient){}.",
+                    names
+                        .iter()
+                        .map(|n| n.rsplit_once('.').map_or(*n, |(p, _)| p))
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    if common_limits(names).is_some() {
+                        "; red lines: its limits"
+                    } else {
+                        ""
+                    }
+                ),
+            )
+        })
+        .collect();
+    if out.is_empty() && fallback {
+        let mut units: Vec<(Unit, Vec<&str>)> = Vec::new();
+        for (name, c) in doc.coefficients.iter() {
+            match units.iter_mut().find(|(u, _)| *u == c.unit) {
+                Some(g) => g.1.push(name),
+                None => units.push((c.unit.clone(), vec![name])),
+            }
+        }
+        out = units
+            .iter()
+            .filter_map(|(unit, names)| {
+                coefficient_plot(
+                    doc,
+                    names,
+                    names.iter().map(|n| n.to_string()).collect(),
+                    common_limits(names),
+                    format!("unit {unit}"),
+                    "value".into(),
+                    format!(
+                        "Every coefficient in {unit} with its ±U95 (k95·u); no table of this result has residuals to plot."
+                    ),
+                )
+            })
+            .collect();
+    }
+    out
+}
+
+/// The history plot of one coefficient: value ±U95 of each calibration in
+/// order, with its limits.
+pub fn history_plot(h: &HistorySeries) -> Plot {
+    let mag = h.points.iter().fold(0.0, |m, p| f64::max(m, p.value.abs()));
+    let (s, l) = display_unit(Some(&h.unit), mag);
+    let points = h
+        .points
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.value.is_finite())
+        .map(|(i, p)| Pt {
+            x: i as f64,
+            y: p.value * s,
+            bar: p.u95.is_finite().then_some(p.u95 * s),
+        })
+        .collect();
+    let hlines = [h.min, h.max]
+        .into_iter()
+        .flatten()
+        .filter(|y| y.is_finite())
+        .map(|y| HLine {
+            y: y * s,
+            limit: true,
+        })
+        .collect();
+    Plot {
+        kind: "history",
+        source: h.coefficient.clone(),
+        title: format!("History of {}", h.coefficient),
+        x_desc: "calibration (record id)".into(),
+        y_desc: with_unit(&h.coefficient, &l),
+        x_axis: XAxis::Categories(h.points.iter().map(|p| format!("#{}", p.id)).collect()),
+        dodge: false,
+        series: vec![Series {
+            key: 0,
+            style: Style::Line,
+            points: h
+                .points
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| p.value.is_finite())
+                .map(|(i, p)| Pt {
+                    x: i as f64,
+                    y: p.value * s,
+                    bar: None,
+                })
+                .collect(),
+        }]
+        .into_iter()
+        .chain([Series {
+            key: 0,
+            style: Style::Dots,
+            points,
+        }])
+        .collect(),
+        legend: Vec::new(),
+        hlines,
+        caption: format!(
+            "{} of this instrument in every stored calibration, oldest first, with ±U95 bars{}.",
+            h.coefficient,
+            match (h.min, h.max) {
+                (None, None) => "; no limits given".to_string(),
+                _ => format!(
+                    "; red lines: the limits ({})",
+                    [
+                        h.min.map(|v| format!("min {} {l}", trimmed(v * s, 4))),
+                        h.max.map(|v| format!("max {} {l}", trimmed(v * s, 4)))
+                    ]
+                    .into_iter()
+                    .flatten()
+                    .collect::<Vec<_>>()
+                    .join(", ")
+                ),
+            }
+        ),
+    }
+}
+
+/// Range `[lo, hi]` of `values`, widened by 6 % (a span of zero becomes
+/// ±10 % of the value, or ±1).
+fn padded(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return (-1.0, 1.0);
+    }
+    let span = hi - lo;
+    if span <= f64::EPSILON * hi.abs().max(lo.abs()) || span == 0.0 {
+        let d = if hi.abs() > 0.0 { 0.1 * hi.abs() } else { 1.0 };
+        return (lo - d, hi + d);
+    }
+    (lo - 0.06 * span, hi + 0.06 * span)
+}
+
+fn plot_err<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> ReportError {
+    ReportError::Plot(e.to_string())
+}
+
+/// Width and height of a plot (px; the CSS scales it to the page):
+/// lower for category plots (coefficients, history).
+fn size(p: &Plot) -> (u32, u32) {
+    match p.x_axis {
+        XAxis::Numeric => (760, 380),
+        XAxis::Categories(_) => (760, 300),
+    }
+}
+
+/// A tick label: 4 significant digits, and 0 for a tick within a
+/// millionth of the span of zero (not `-1.1e-19`).
+fn tick(v: f64, span: f64) -> String {
+    if v.abs() <= 1e-6 * span.abs() {
+        "0".into()
+    } else {
+        trimmed(v, 4)
+    }
+}
+
+/// The plot as one `<svg>` element (no XML declaration, no namespace
+/// URL: inline SVG in HTML needs neither).
+pub fn render_svg(p: &Plot) -> Result<String, ReportError> {
+    let mut buf = String::new();
+    {
+        let root = SVGBackend::with_string(&mut buf, size(p)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        let (x0, x1) = match &p.x_axis {
+            XAxis::Numeric => padded(p.series.iter().flat_map(|s| s.points.iter().map(|q| q.x))),
+            XAxis::Categories(c) => (-0.5, c.len().max(1) as f64 - 0.5),
+        };
+        let (y0, y1) = padded(
+            p.series
+                .iter()
+                .flat_map(|s| s.points.iter())
+                .flat_map(|q| {
+                    let b = q.bar.unwrap_or(0.0);
+                    [q.y - b, q.y + b]
+                })
+                .chain(p.hlines.iter().map(|h| h.y)),
+        );
+        let mut chart = ChartBuilder::on(&root)
+            .margin(14)
+            .x_label_area_size(if p.x_desc.is_empty() { 30 } else { 46 })
+            .y_label_area_size(84)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(plot_err)?;
+        let categories = match &p.x_axis {
+            XAxis::Categories(c) => Some(c.clone()),
+            XAxis::Numeric => None,
+        };
+        let x_fmt = |x: &f64| match &categories {
+            Some(c) => {
+                let i = x.round();
+                if (x - i).abs() < 1e-6 && i >= 0.0 && (i as usize) < c.len() {
+                    c[i as usize].clone()
+                } else {
+                    String::new()
+                }
+            }
+            None => tick(*x, x1 - x0),
+        };
+        let y_fmt = |y: &f64| tick(*y, y1 - y0);
+        let n_x_labels = categories.as_ref().map_or(10, |c| c.len().clamp(1, 24));
+        chart
+            .configure_mesh()
+            .x_desc(p.x_desc.as_str())
+            .y_desc(p.y_desc.as_str())
+            .x_labels(n_x_labels)
+            .y_labels(8)
+            .x_label_formatter(&x_fmt)
+            .y_label_formatter(&y_fmt)
+            .label_style(("sans-serif", 13))
+            .axis_desc_style(("sans-serif", 15))
+            .bold_line_style(BLACK.mix(0.12))
+            .light_line_style(BLACK.mix(0.04))
+            .draw()
+            .map_err(plot_err)?;
+        for h in &p.hlines {
+            let style = if h.limit {
+                RGBColor(200, 0, 0).stroke_width(2)
+            } else {
+                BLACK.mix(0.45).stroke_width(1)
+            };
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    vec![(x0, h.y), (x1, h.y)],
+                    style,
+                )))
+                .map_err(plot_err)?;
+        }
+        let cap = 0.008 * (x1 - x0);
+        let keys = p.series.iter().map(|s| s.key + 1).max().unwrap_or(1);
+        for s in &p.series {
+            // Dodged series sit side by side, 1 % of the span apart.
+            let shift = if p.dodge {
+                0.01 * (x1 - x0) * (s.key as f64 - 0.5 * (keys as f64 - 1.0))
+            } else {
+                0.0
+            };
+            let moved: Vec<Pt> = s
+                .points
+                .iter()
+                .map(|q| Pt {
+                    x: q.x + shift,
+                    ..*q
+                })
+                .collect();
+            let (r, g, b) = PALETTE[s.key % PALETTE.len()];
+            let colour = RGBColor(r, g, b);
+            match s.style {
+                Style::Line => {
+                    chart
+                        .draw_series(LineSeries::new(
+                            s.points.iter().map(|q| (q.x, q.y)),
+                            colour.stroke_width(2),
+                        ))
+                        .map_err(plot_err)?;
+                }
+                Style::Dots => {
+                    for q in &moved {
+                        if let Some(b) = q.bar.filter(|b| *b > 0.0 && b.is_finite()) {
+                            let segs = [
+                                vec![(q.x, q.y - b), (q.x, q.y + b)],
+                                vec![(q.x - cap, q.y - b), (q.x + cap, q.y - b)],
+                                vec![(q.x - cap, q.y + b), (q.x + cap, q.y + b)],
+                            ];
+                            chart
+                                .draw_series(
+                                    segs.into_iter()
+                                        .map(|v| PathElement::new(v, colour.stroke_width(1))),
+                                )
+                                .map_err(plot_err)?;
+                        }
+                    }
+                    chart
+                        .draw_series(
+                            moved
+                                .iter()
+                                .map(|q| Circle::new((q.x, q.y), 4, colour.filled())),
+                        )
+                        .map_err(plot_err)?;
+                }
+            }
+        }
+        root.present().map_err(plot_err)?;
+    }
+    // Inline SVG in HTML takes its namespace from the parser: drop the
+    // xmlns URL so that the file names no address at all.
+    Ok(buf.replacen(" xmlns=\"http://www.w3.org/2000/svg\"", "", 1))
+}
+
+/// The plot as an HTML `<figure>`: title, the SVG, a legend in HTML (one
+/// swatch per series colour) and the caption.
+pub fn figure_html(p: &Plot, index: usize) -> Result<String, ReportError> {
+    let svg = render_svg(p)?;
+    let mut s = format!(
+        "<figure class=\"plot\" id=\"plot-{index}\" data-plot=\"{}\" data-source=\"{}\">\n<h3>{}</h3>\n",
+        esc(p.kind),
+        esc(&p.source),
+        esc(&p.title)
+    );
+    s.push_str(&svg);
+    if !p.legend.is_empty() {
+        s.push_str("<p class=\"legend\">");
+        for (k, l) in p.legend.iter().enumerate() {
+            s.push_str(&format!(
+                "<span class=\"key\"><span class=\"swatch\" style=\"background-color:{}\"></span>{}</span> ",
+                colour_hex(k),
+                esc(l)
+            ));
+        }
+        s.push_str("</p>\n");
+    }
+    s.push_str(&format!(
+        "<figcaption>{}</figcaption>\n</figure>\n",
+        esc(&p.caption)
+    ));
+    Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use incal::document::Column;
+
+    fn table() -> Table {
+        Table {
+            id: "positions".into(),
+            title: "Positions".into(),
+            columns: vec![
+                Column {
+                    name: "angle".into(),
+                    unit: Some(Unit::Deg),
+                },
+                Column {
+                    name: "pass".into(),
+                    unit: None,
+                },
+                Column {
+                    name: "n".into(),
+                    unit: None,
+                },
+                Column {
+                    name: "mean".into(),
+                    unit: Some(Unit::Output),
+                },
+                Column {
+                    name: "std".into(),
+                    unit: Some(Unit::Output),
+                },
+                Column {
+                    name: "residual".into(),
+                    unit: Some(Unit::Output),
+                },
+            ],
+            rows: vec![
+                vec![
+                    Cell::Number(0.0),
+                    Cell::Text("cw".into()),
+                    Cell::Number(4.0),
+                    Cell::Number(1.0),
+                    Cell::Number(0.1),
+                    Cell::Number(0.01),
+                ],
+                vec![
+                    Cell::Number(90.0),
+                    Cell::Text("cw".into()),
+                    Cell::Number(4.0),
+                    Cell::Number(2.0),
+                    Cell::Number(0.1),
+                    Cell::Number(-0.01),
+                ],
+                vec![
+                    Cell::Number(0.0),
+                    Cell::Text("ccw".into()),
+                    Cell::Number(4.0),
+                    Cell::Number(1.1),
+                    Cell::Number(0.1),
+                    Cell::Number(0.02),
+                ],
+            ],
+        }
+    }
+
+    #[test]
+    fn a_table_with_residuals_gives_residual_and_fitted_plots() {
+        let plots = table_plots(&table());
+        assert_eq!(plots.len(), 2);
+        let (r, f) = (&plots[0], &plots[1]);
+        assert_eq!(r.kind, "residual");
+        assert_eq!(r.x_desc, "angle (deg)");
+        assert_eq!(r.legend, ["cw", "ccw"]);
+        assert_eq!(r.series.len(), 2);
+        // Pooled s_p = 0.1 on 9 dof; bar = t95(9)·0.1/2.
+        let b = r.series[0].points[0].bar.unwrap();
+        assert!((b - coverage_factor(9.0, 0.95) * 0.05).abs() < 1e-12);
+        assert_eq!(f.kind, "fitted");
+        let fitted = &f.series[0];
+        assert_eq!(fitted.style, Style::Line);
+        assert_eq!(fitted.points[1].y, 2.0 + 0.01);
+        assert!(render_svg(f).unwrap().starts_with("<svg"));
+    }
+
+    #[test]
+    fn tables_without_residuals_give_no_plot() {
+        let mut t = table();
+        t.columns[5].name = "difference".into();
+        assert!(table_plots(&t).is_empty());
+    }
+
+    #[test]
+    fn centrifuge_outputs_in_g_read_in_g() {
+        assert_eq!(display_unit(Some(&Unit::G), 25.0), (1.0, "g".into()));
+        assert_eq!(display_unit(Some(&Unit::G), 1e-4), (1e6, "ug".into()));
+        assert_eq!(display_unit(Some(&Unit::One), 1.0), (1.0, String::new()));
+    }
+
+    #[test]
+    fn flat_ranges_are_widened() {
+        assert_eq!(padded([2.0, 2.0].into_iter()), (1.8, 2.2));
+        assert_eq!(padded(std::iter::empty()), (-1.0, 1.0));
+        let (lo, hi) = padded([0.0, 1.0].into_iter());
+        assert!(lo < 0.0 && hi > 1.0);
+    }
+}

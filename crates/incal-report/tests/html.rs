@@ -1,0 +1,333 @@
+//! The report parsed as HTML: every section, the coefficient table, every
+//! document table, plots as inline SVG, nothing referenced outside the
+//! file, every text escaped; history plots with limits; verdicts.
+
+use incal::document::{
+    Cell, Coefficient, DecisionCode, DocumentBuilder, Procedure, ResultDocument, Table, Warning,
+    WarningCode,
+};
+use incal::units::Unit;
+use incal_report::{render_html, render_html_with, HistoryPoint, HistorySeries, RenderOptions};
+use scraper::{Html, Selector};
+use serde_json::json;
+
+fn sel(s: &str) -> Selector {
+    Selector::parse(s).unwrap()
+}
+
+/// Nothing in `html` loads from elsewhere: no `src`, `href`, `srcset`,
+/// `action`, `data` or `xlink:href` attribute, no `<script>`, `<link>`,
+/// `<iframe>`, `<object>` or `<img>`, no CSS `url(` or `@import`, and no
+/// address (`://`) anywhere.
+fn assert_self_contained(html: &str) {
+    let doc = Html::parse_document(html);
+    for el in doc.select(&sel("*")) {
+        for (name, value) in el.value().attrs() {
+            assert!(
+                !matches!(
+                    name,
+                    "src" | "href" | "srcset" | "action" | "data" | "xlink:href" | "poster"
+                ),
+                "<{} {name}=\"{value}\">",
+                el.value().name()
+            );
+            assert!(!value.contains("url("), "{name}=\"{value}\"");
+        }
+    }
+    for tag in ["script", "link", "iframe", "object", "embed", "img", "base"] {
+        assert_eq!(doc.select(&sel(tag)).count(), 0, "<{tag}>");
+    }
+    for style in doc.select(&sel("style")) {
+        let css: String = style.text().collect();
+        assert!(!css.contains("url("), "CSS url(");
+        assert!(!css.contains("@import"), "CSS @import");
+    }
+    assert!(!html.contains("://"), "an address in the file");
+}
+
+/// A document of an imaginary procedure with hostile text everywhere,
+/// two accelerometer-like blocks (dotted names) and one table with
+/// residuals.
+fn hostile() -> ResultDocument {
+    let evil = "<script>alert(1)</script>";
+    let mut b = DocumentBuilder::new(Procedure::Tumble, format!("Title {evil}"));
+    for (name, v, unit) in [
+        ("a.K0", 1e-4, Unit::Output),
+        ("b.K0", -2e-4, Unit::Output),
+        ("a.misalignment_rad", 2e-3, Unit::Rad),
+        ("b.misalignment_rad", 1e-3, Unit::Rad),
+    ] {
+        b.coefficient(
+            name,
+            Coefficient::new(name, v, v.abs() / 10.0, unit, 12.0).unwrap(),
+        )
+        .unwrap();
+    }
+    let mut t = Table::new(
+        "positions",
+        &format!("Positions {evil}"),
+        &[
+            ("angle", Some(Unit::Deg)),
+            ("pass", None),
+            ("n", None),
+            ("mean", Some(Unit::Output)),
+            ("std", Some(Unit::Output)),
+            ("residual", Some(Unit::Output)),
+        ],
+    );
+    for (k, pass) in [(0.0, "cw"), (90.0, evil), (180.0, "cw"), (270.0, evil)] {
+        t.push(vec![
+            Cell::num(k),
+            Cell::text(pass),
+            Cell::num(5.0),
+            Cell::num(f64::to_radians(k).sin()),
+            Cell::num(1e-3),
+            Cell::num(1e-4),
+        ])
+        .unwrap();
+    }
+    b.table(t);
+    b.warnings([Warning::new(WarningCode::LackOfFit, evil.to_string())]);
+    b.decision(DecisionCode::VarianceSource, evil);
+    let mut doc = b.finish();
+    doc.instrument.serial = Some(evil.into());
+    doc.instrument.model = Some("M&M \"quoted\" 'single'".into());
+    doc.instrument.meta.insert(evil.into(), evil.into());
+    doc.inputs.push(incal::document::InputFile {
+        role: "input".into(),
+        path: format!("{evil}.csv"),
+        sha256: "ab".repeat(32),
+        rows: Some(4),
+    });
+    doc
+}
+
+fn fixed(doc: &ResultDocument, history: &[HistorySeries]) -> String {
+    render_html_with(
+        doc,
+        history,
+        &RenderOptions {
+            date: Some("2026-01-02 03:04 UTC".into()),
+        },
+    )
+    .unwrap()
+}
+
+#[test]
+fn hostile_text_is_escaped_and_the_file_is_self_contained() {
+    let doc = hostile();
+    let html = fixed(&doc, &[]);
+    assert_self_contained(&html);
+    assert!(!html.contains("<script>"), "unescaped markup");
+    assert!(html.contains("&lt;script&gt;alert(1)&lt;/script&gt;"));
+    let parsed = Html::parse_document(&html);
+    // The serial reads as text in the identity table.
+    let cells: Vec<String> = parsed
+        .select(&sel("header table.identity td"))
+        .map(|c| c.text().collect())
+        .collect();
+    assert!(
+        cells.iter().any(|c| c == "<script>alert(1)</script>"),
+        "{cells:?}"
+    );
+    assert!(cells.iter().any(|c| c == "M&M \"quoted\" 'single'"));
+    // The full SHA-256 of the input.
+    assert!(parsed
+        .select(&sel("header table.inputs .hash"))
+        .any(|h| h.text().collect::<String>() == "ab".repeat(32)));
+    // The legend and the plot (SVG text) of a hostile pass label escape too.
+    let legend: Vec<String> = parsed
+        .select(&sel("p.legend .key"))
+        .map(|k| k.text().collect::<String>().trim().to_string())
+        .collect();
+    assert!(
+        legend.contains(&"<script>alert(1)</script>".to_string()),
+        "{legend:?}"
+    );
+    assert!(html.contains("2026-01-02 03:04 UTC"));
+}
+
+#[test]
+fn every_section_table_and_plot_is_present() {
+    let doc = hostile();
+    let html = fixed(&doc, &[]);
+    let parsed = Html::parse_document(&html);
+    for id in ["header", "coefficients", "fits", "notes", "tables", "plots"] {
+        assert_eq!(parsed.select(&sel(&format!("#{id}"))).count(), 1, "#{id}");
+    }
+    assert_eq!(
+        parsed.select(&sel("#history")).count(),
+        0,
+        "no history given"
+    );
+    let names: Vec<String> = parsed
+        .select(&sel("table.coefficients tbody tr td:first-child"))
+        .map(|c| c.text().collect())
+        .collect();
+    assert_eq!(names, doc.coefficients.names());
+    assert_eq!(
+        parsed
+            .select(&sel("div.doc-table[data-table=\"positions\"] table"))
+            .count(),
+        1
+    );
+    let kinds: Vec<&str> = parsed
+        .select(&sel("figure.plot"))
+        .map(|f| f.value().attr("data-plot").unwrap())
+        .collect();
+    assert_eq!(
+        kinds,
+        ["residual", "fitted", "coefficients", "coefficients"],
+        "residual and fitted from the table, one plot per shared coefficient name"
+    );
+    for f in parsed.select(&sel("figure.plot")) {
+        assert_eq!(f.select(&sel("svg")).count(), 1);
+        assert!(f.select(&sel("svg circle")).count() >= 2);
+        assert!(!f
+            .select(&sel("figcaption"))
+            .next()
+            .unwrap()
+            .text()
+            .collect::<String>()
+            .is_empty());
+    }
+    // SVG text in the generic family only.
+    for t in parsed.select(&sel("svg text")) {
+        assert_eq!(t.value().attr("font-family"), Some("sans-serif"));
+    }
+    // A4 print stylesheet with page breaks between sections.
+    let css: String = parsed
+        .select(&sel("style"))
+        .next()
+        .unwrap()
+        .text()
+        .collect();
+    assert!(css.contains("@media print"));
+    assert!(css.contains("size: A4"));
+    assert!(css.contains("break-before: page"));
+    // Same input, same bytes.
+    assert_eq!(html, fixed(&doc, &[]));
+}
+
+#[test]
+fn a_result_without_residuals_or_blocks_still_gets_a_plot() {
+    let mut b = DocumentBuilder::new(Procedure::MisalignAccel, "plain");
+    for (name, unit) in [("x", Unit::Rad), ("y", Unit::Rad), ("z", Unit::Output)] {
+        b.coefficient(
+            name,
+            Coefficient::new(name, 1e-3, 1e-4, unit, f64::INFINITY).unwrap(),
+        )
+        .unwrap();
+    }
+    let html = render_html(&b.finish(), &[]).unwrap();
+    assert_self_contained(&html);
+    let parsed = Html::parse_document(&html);
+    let sources: Vec<&str> = parsed
+        .select(&sel("figure.plot[data-plot=\"coefficients\"]"))
+        .map(|f| f.value().attr("data-source").unwrap())
+        .collect();
+    assert_eq!(sources, ["unit rad", "unit output"]);
+    // The date defaults to now, in UTC.
+    let date: String = parsed
+        .select(&sel("header table.identity tr"))
+        .map(|r| r.text().collect::<String>())
+        .find(|t| t.starts_with("report date"))
+        .unwrap();
+    assert!(date.ends_with(" UTC"), "{date}");
+}
+
+#[test]
+fn history_plots_show_every_calibration_and_the_limits() {
+    let doc = hostile();
+    let series = |name: &str, min, max| HistorySeries {
+        coefficient: name.into(),
+        unit: Unit::G,
+        points: (0..3)
+            .map(|i| HistoryPoint {
+                id: 10 + i,
+                created_utc: format!("2026-01-0{}T00:00:00Z", i + 1),
+                value: 8e-3 + 1e-6 * i as f64,
+                u95: 5e-7,
+            })
+            .collect(),
+        min,
+        max,
+    };
+    let history = [
+        series("K0", Some(7.9e-3), Some(8.1e-3)),
+        series("K<2>", None, None),
+    ];
+    let html = fixed(&doc, &history);
+    assert_self_contained(&html);
+    let parsed = Html::parse_document(&html);
+    let section = parsed
+        .select(&sel("section#history"))
+        .next()
+        .expect("history");
+    let figures: Vec<_> = section
+        .select(&sel("figure[data-plot=\"history\"]"))
+        .collect();
+    assert_eq!(figures.len(), 2);
+    // Three calibrations: three dots; limits: two red lines on the first.
+    assert_eq!(figures[0].select(&sel("svg circle")).count(), 3);
+    let red = |f: &scraper::ElementRef| {
+        f.select(&sel("svg polyline"))
+            .filter(|p| p.value().attr("stroke") == Some("#C80000"))
+            .count()
+    };
+    assert_eq!(red(&figures[0]), 2);
+    assert_eq!(red(&figures[1]), 0);
+    // Record ids on the axis, values in µg in the table.
+    assert!(figures[0].text().any(|t| t.trim() == "#12"));
+    let rows: Vec<String> = section
+        .select(&sel("table.history tbody tr"))
+        .map(|r| r.text().collect::<Vec<_>>().join("|"))
+        .collect();
+    assert_eq!(rows.len(), 6);
+    assert_eq!(rows[0], "10|2026-01-01T00:00:00Z|8000.000|0.500");
+    assert!(html.contains("History of K&lt;2&gt;"));
+}
+
+#[test]
+fn verdicts_show_in_the_coefficient_table_and_the_header() {
+    let mut doc = hostile();
+    doc.extra.insert(
+        "verdicts".into(),
+        json!({
+            "a.K0": {"min": -1e-3, "max": 1e-3, "verdict": "pass"},
+            "b.K0": {"min": -1e-3, "max": 1e-3, "verdict": "fail"},
+        }),
+    );
+    doc.extra.insert("verdict".into(), json!("fail"));
+    let html = fixed(&doc, &[]);
+    let parsed = Html::parse_document(&html);
+    let header: Vec<String> = parsed
+        .select(&sel("table.coefficients thead th"))
+        .map(|c| c.text().collect())
+        .collect();
+    assert_eq!(header.last().unwrap(), "verdict");
+    assert!(header.contains(&"limits".to_string()));
+    let verdicts: Vec<String> = parsed
+        .select(&sel("table.coefficients tbody tr td:last-child"))
+        .map(|c| c.text().collect())
+        .collect();
+    assert_eq!(verdicts, ["pass", "fail", "–", "–"]);
+    assert_eq!(
+        parsed
+            .select(&sel("table.coefficients .verdict-fail"))
+            .count(),
+        1
+    );
+    assert_eq!(parsed.select(&sel("header .verdict-fail")).count(), 1);
+    // The K0 plot draws the common limits.
+    let k0 = parsed
+        .select(&sel("figure[data-source=\"*.K0\"]"))
+        .next()
+        .unwrap();
+    assert_eq!(
+        k0.select(&sel("svg polyline"))
+            .filter(|p| p.value().attr("stroke") == Some("#C80000"))
+            .count(),
+        2
+    );
+}
