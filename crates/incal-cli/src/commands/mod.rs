@@ -5,5 +5,6 @@ pub mod compare;
 pub mod demo;
 pub mod gfimu;
 pub mod misalign;
+pub mod record;
 pub mod schema;
 pub mod tumble;
