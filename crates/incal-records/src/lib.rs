@@ -52,6 +52,9 @@ pub use history::{Drift, HistoryPoint, Repeatability};
 pub const MIGRATIONS: &[(i64, &str, &str)] =
     &[(1, "0001_init", include_str!("../migrations/0001_init.sql"))];
 
+/// The table that tracks the migrations applied (created when missing).
+pub const SCHEMA_MIGRATIONS: &str = include_str!("../migrations/schema_migrations.sql");
+
 /// How long a writer waits for another writer's lock before failing.
 pub const BUSY_TIMEOUT: Duration = Duration::from_secs(60);
 
@@ -363,14 +366,8 @@ impl Store {
             .conn
             .transaction_with_behavior(TransactionBehavior::Immediate)
             .map_err(|e| db_err(&name, e))?;
-        tx.execute_batch(
-            "CREATE TABLE IF NOT EXISTS schema_migrations (
-                version BIGINT PRIMARY KEY,
-                name TEXT NOT NULL,
-                applied_utc TEXT NOT NULL
-            )",
-        )
-        .map_err(|e| db_err(&name, e))?;
+        tx.execute_batch(SCHEMA_MIGRATIONS)
+            .map_err(|e| db_err(&name, e))?;
         let have: i64 = tx
             .query_row(
                 "SELECT COALESCE(MAX(version), 0) FROM schema_migrations",

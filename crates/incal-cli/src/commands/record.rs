@@ -18,7 +18,7 @@ use serde::Serialize;
 use serde_json::{json, Value};
 
 use crate::error::{CliError, CliResult};
-use crate::output::{json_text, render, sig, table, write_text};
+use crate::output::{dof_text, json_text, render, sig, table, write_text};
 
 /// `incal record …`.
 #[derive(Subcommand, Debug)]
@@ -481,7 +481,7 @@ fn history(a: &HistoryArgs) -> CliResult<()> {
 fn history_text(h: &History) -> String {
     let mag = h.points.iter().map(|p| p.value.abs()).fold(0.0, f64::max);
     let (scale, label) = h.unit.engineering_for(mag);
-    let dof = |d: Option<f64>| d.map_or("inf".to_string(), |d| sig(d, 3));
+    let dof = dof_text;
     let mut s = format!(
         "{} of serial {}: {} calibration{} (superseded records left out)\n",
         h.coefficient,
