@@ -57,6 +57,9 @@ enum Command {
     /// Gyro-free inertial unit of six (or more) accelerometers: calibrate K0 and Ks, solve motion (seed 004).
     #[command(subcommand)]
     Gfimu(GfimuCommand),
+    /// Calibration records: store results per instrument (append-only, hash-chained), list, show, supersede, history and drift, verify.
+    #[command(subcommand)]
+    Record(commands::record::Command),
 }
 
 #[derive(Subcommand, Debug)]
@@ -105,6 +108,7 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Misalign(c) => commands::misalign::run(&c),
         Command::Plan(PlanCommand::Misalign(a)) => commands::misalign::plan(&a),
         Command::Simulate(SimulateCommand::Misalign(c)) => commands::misalign::simulate(&c),
+        Command::Record(c) => commands::record::run(&c),
     }
 }
 

@@ -16,3 +16,15 @@ pub fn noise_option(noise: Option<f64>) -> CliResult<Noise> {
         Some(s) => Err(usage(format!("--noise must be a positive number, got {s}"))),
     }
 }
+
+/// The records store: `--db`, else `$INCAL_DB` (when not empty), else
+/// `incal.db` in the working directory.
+pub fn db_path(db: Option<&std::path::Path>) -> std::path::PathBuf {
+    if let Some(p) = db {
+        return p.to_path_buf();
+    }
+    match std::env::var_os("INCAL_DB") {
+        Some(p) if !p.is_empty() => std::path::PathBuf::from(p),
+        _ => std::path::PathBuf::from("incal.db"),
+    }
+}

@@ -149,7 +149,8 @@ pub fn render(doc: &ResultDocument) -> String {
             ];
             if let Some(v) = verdicts {
                 row.push(v.get(name).map_or(String::new(), |v| {
-                    let lim = |x: Option<f64>| x.map_or("-".to_string(), |x| cell_number(x * scale));
+                    let lim =
+                        |x: Option<f64>| x.map_or("-".to_string(), |x| cell_number(x * scale));
                     format!("{} [{}, {}]", v.verdict, lim(v.min), lim(v.max))
                 }));
             }

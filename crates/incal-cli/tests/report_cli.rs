@@ -329,3 +329,49 @@ fn the_report_goes_to_stdout_without_o_and_a_non_result_is_refused() {
     assert_eq!(o.status.code(), Some(2));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `incal report --limits FILE --db PATH`: verdicts in the certificate and
+/// a history plot of each limited coefficient once the store holds two or
+/// more calibrations of the instrument.
+#[test]
+fn report_with_limits_and_history_from_the_store() {
+    let d = std::env::temp_dir().join(format!("incal-report-db-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let run = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_incal"))
+            .current_dir(&d)
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        String::from_utf8(o.stdout).unwrap()
+    };
+    std::fs::write(
+        d.join("l.toml"),
+        "rule = \"guard-band\"\n[tumble]\nK0 = { min = 7900, max = 8100, unit = \"ug\" }\n",
+    )
+    .unwrap();
+    for seed in ["1", "2", "3"] {
+        run(&["simulate", "tumble", "--seed", seed, "-o", "t.csv"]);
+        run(&[
+            "tumble", "--mount", "pendulum", "--input", "t.csv", "--serial", "SN-7", "--json",
+            "-o", "r.json",
+        ]);
+        run(&["record", "add", "r.json", "--db", "s.db"]);
+    }
+    run(&[
+        "report", "r.json", "--limits", "l.toml", "--db", "s.db", "-o", "r.html",
+    ]);
+    let html = std::fs::read_to_string(d.join("r.html")).unwrap();
+    assert!(html.contains("id=\"history\""), "history section");
+    assert!(html.contains("verdict-pass"), "K0 judged");
+    // Without a store nothing breaks: no history section.
+    run(&["report", "r.json", "--limits", "l.toml", "-o", "n.html"]);
+    let html = std::fs::read_to_string(d.join("n.html")).unwrap();
+    assert!(!html.contains("id=\"history\""));
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -102,16 +102,16 @@ struct Judged {
 fn verdict_of(doc: &ResultDocument, name: Option<&str>) -> Option<Judged> {
     match name {
         None => Some(Judged {
-            verdict: doc.extra.get("verdict")?.as_str()?.to_string(),
+            verdict: doc.verdict?.as_str().to_string(),
             min: None,
             max: None,
         }),
         Some(n) => {
-            let v = doc.extra.get("verdicts")?.get(n)?;
+            let v = doc.verdicts.as_ref()?.get(n)?;
             Some(Judged {
-                verdict: v.get("verdict")?.as_str()?.to_string(),
-                min: v.get("min").and_then(Value::as_f64),
-                max: v.get("max").and_then(Value::as_f64),
+                verdict: v.verdict.as_str().to_string(),
+                min: v.min,
+                max: v.max,
             })
         }
     }

@@ -9,7 +9,6 @@ use incal::document::{
 use incal::units::Unit;
 use incal_report::{render_html, render_html_with, HistoryPoint, HistorySeries, RenderOptions};
 use scraper::{Html, Selector};
-use serde_json::json;
 
 fn sel(s: &str) -> Selector {
     Selector::parse(s).unwrap()
@@ -291,14 +290,22 @@ fn history_plots_show_every_calibration_and_the_limits() {
 #[test]
 fn verdicts_show_in_the_coefficient_table_and_the_header() {
     let mut doc = hostile();
-    doc.extra.insert(
-        "verdicts".into(),
-        json!({
-            "a.K0": {"min": -1e-3, "max": 1e-3, "verdict": "pass"},
-            "b.K0": {"min": -1e-3, "max": 1e-3, "verdict": "fail"},
-        }),
+    use incal::document::limits::{CoefficientVerdict, DecisionRule, Verdict};
+    let judged = |verdict| CoefficientVerdict {
+        min: Some(-1e-3),
+        max: Some(1e-3),
+        verdict,
+    };
+    doc.verdicts = Some(
+        [
+            ("a.K0".to_string(), judged(Verdict::Pass)),
+            ("b.K0".to_string(), judged(Verdict::Fail)),
+        ]
+        .into_iter()
+        .collect(),
     );
-    doc.extra.insert("verdict".into(), json!("fail"));
+    doc.verdict = Some(Verdict::Fail);
+    doc.decision_rule = Some(DecisionRule::GuardBand);
     let html = fixed(&doc, &[]);
     let parsed = Html::parse_document(&html);
     let header: Vec<String> = parsed

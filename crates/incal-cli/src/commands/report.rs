@@ -4,9 +4,13 @@
 
 use std::path::PathBuf;
 
+use incal::document::ResultDocument;
+use incal_report::{HistoryPoint, HistorySeries};
+
 use crate::documents::read_document;
 use crate::error::{CliError, CliResult};
-use crate::output::write_text;
+use crate::options::db_path;
+use crate::output::{apply_limits, write_text};
 
 /// Options of `incal report`.
 #[derive(clap::Args, Debug)]
@@ -16,12 +20,63 @@ pub struct Args {
     /// Write the HTML to this file instead of standard output.
     #[arg(long, short = 'o', value_name = "FILE")]
     pub output: Option<PathBuf>,
+    /// Limits file (TOML): verdicts in the coefficient table, limits in the plots.
+    #[arg(long, value_name = "FILE")]
+    pub limits: Option<PathBuf>,
+    /// Records store for the history plots of the limited coefficients (default: $INCAL_DB, else incal.db; used when given or present).
+    #[arg(long, value_name = "PATH")]
+    pub db: Option<PathBuf>,
 }
 
 /// `incal report`.
 pub fn run(a: &Args) -> CliResult<()> {
-    let (_, _, doc) = read_document(&a.result)?;
-    let html = incal_report::render_html(&doc, &[])
+    let (_, _, mut doc) = read_document(&a.result)?;
+    if let Some(l) = &a.limits {
+        apply_limits(&mut doc, l)?;
+    }
+    let history = history(a, &doc)?;
+    let html = incal_report::render_html(&doc, &history)
         .map_err(|e| CliError::Failure(anyhow::anyhow!("{e}")))?;
     write_text(a.output.as_deref(), &html)
+}
+
+/// The history of every limited coefficient of the instrument, from the
+/// store, when the store exists, the result has a serial and there are two
+/// or more calibrations.
+fn history(a: &Args, doc: &ResultDocument) -> CliResult<Vec<HistorySeries>> {
+    let path = db_path(a.db.as_deref());
+    let (Some(serial), Some(verdicts)) = (&doc.instrument.serial, &doc.verdicts) else {
+        return Ok(Vec::new());
+    };
+    if a.db.is_none() && !path.exists() {
+        return Ok(Vec::new());
+    }
+    let store = incal_records::Store::open_existing(&path)
+        .map_err(|e| CliError::Input(format!("{}: {e}", path.display())))?;
+    let mut out = Vec::new();
+    for (name, v) in verdicts {
+        let h = store
+            .history(serial, name)
+            .map_err(|e| CliError::Input(format!("{}: {e}", path.display())))?;
+        if h.points.len() < 2 {
+            continue;
+        }
+        out.push(HistorySeries {
+            coefficient: name.clone(),
+            unit: h.unit.clone(),
+            points: h
+                .points
+                .iter()
+                .map(|p| HistoryPoint {
+                    id: p.id,
+                    created_utc: p.created_utc.clone(),
+                    value: p.value,
+                    u95: p.u95,
+                })
+                .collect(),
+            min: v.min,
+            max: v.max,
+        });
+    }
+    Ok(out)
 }

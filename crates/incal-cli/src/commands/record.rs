@@ -1,0 +1,558 @@
+//! `incal record …`: calibration records in an embedded store (the
+//! `incal-records` crate): add a result, list, show, supersede (the only
+//! way to correct: nothing is updated or deleted), history and drift of
+//! one coefficient, verify the hash chain.
+//!
+//! The store is `--db PATH`, else `$INCAL_DB`, else `incal.db` in the
+//! working directory. Bad input (a file that is not an incal result, a
+//! serial missing or in conflict, an unknown record) is exit 2 with one
+//! line; a chain that does not verify is exit 1 with
+//! `incal: record N: …`.
+
+use std::path::{Path, PathBuf};
+
+use clap::Subcommand;
+use incal::document::ResultDocument;
+use incal_records::{Error as StoreError, History, NewRecord, Store};
+use serde::Serialize;
+use serde_json::{json, Value};
+
+use crate::error::{CliError, CliResult};
+use crate::output::{dof_text, json_text, render, sig, table, write_text};
+
+/// `incal record …`.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Store a result document (from a reducing command's --json) as a new record; prints its id.
+    Add(AddArgs),
+    /// List the records (all, or of one serial) and what supersedes what.
+    List(ListArgs),
+    /// Show one record: its identity and the stored result document, unchanged.
+    Show(ShowArgs),
+    /// Correct a record: store a new result that supersedes it, with a reason (nothing is deleted).
+    Supersede(SupersedeArgs),
+    /// One coefficient of one instrument across its calibrations: drift per day, repeatability, En of the latest.
+    History(HistoryArgs),
+    /// Recompute the hash chain and every stored document's hash; exit 1 naming the first record that does not match.
+    Verify(VerifyArgs),
+}
+
+/// The store every subcommand uses.
+#[derive(clap::Args, Debug, Clone)]
+pub struct DbArgs {
+    /// The records store (an SQLite file); default: $INCAL_DB, else incal.db in the working directory.
+    #[arg(long, value_name = "PATH")]
+    pub db: Option<PathBuf>,
+}
+
+impl DbArgs {
+    /// `--db`, else `$INCAL_DB` (when not empty), else `incal.db`.
+    fn path(&self) -> PathBuf {
+        crate::options::db_path(self.db.as_deref())
+    }
+}
+
+/// Output form and destination.
+#[derive(clap::Args, Debug, Clone)]
+pub struct OutArgs {
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Write to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+/// Who, where and when of a new record.
+#[derive(clap::Args, Debug, Clone)]
+pub struct WhoArgs {
+    /// Serial of the instrument: needed when the result has no instrument.serial, and must equal it otherwise.
+    #[arg(long)]
+    pub serial: Option<String>,
+    /// Who made the calibration (default: the result's instrument.operator, from --meta operator=...).
+    #[arg(long)]
+    pub operator: Option<String>,
+    /// Where: rig, bench or lab (default: the result's instrument.station, from --meta station=...).
+    #[arg(long)]
+    pub station: Option<String>,
+    /// The record's time, RFC 3339 (e.g. 2024-11-05T14:00:00Z or 2024-11-05), instead of now: for entering past calibrations. History dates the calibration by it.
+    #[arg(long, value_name = "TIME")]
+    pub created_utc: Option<String>,
+}
+
+/// Options of `incal record add`.
+#[derive(clap::Args, Debug)]
+pub struct AddArgs {
+    /// The result document (JSON written by a reducing command with --json); - reads standard input.
+    pub result: PathBuf,
+    #[command(flatten)]
+    pub db: DbArgs,
+    #[command(flatten)]
+    pub who: WhoArgs,
+    #[command(flatten)]
+    pub out: OutArgs,
+}
+
+/// Options of `incal record supersede`.
+#[derive(clap::Args, Debug)]
+pub struct SupersedeArgs {
+    /// Id of the record to correct.
+    pub id: i64,
+    /// The corrected result document; - reads standard input.
+    pub result: PathBuf,
+    /// Why the record is corrected (kept in the audit trail).
+    #[arg(long, required = true)]
+    pub reason: String,
+    #[command(flatten)]
+    pub db: DbArgs,
+    #[command(flatten)]
+    pub who: WhoArgs,
+    #[command(flatten)]
+    pub out: OutArgs,
+}
+
+/// Options of `incal record list`.
+#[derive(clap::Args, Debug)]
+pub struct ListArgs {
+    /// Only the records of this serial.
+    #[arg(long)]
+    pub serial: Option<String>,
+    #[command(flatten)]
+    pub db: DbArgs,
+    #[command(flatten)]
+    pub out: OutArgs,
+}
+
+/// Options of `incal record show`.
+#[derive(clap::Args, Debug)]
+pub struct ShowArgs {
+    /// Record id.
+    pub id: i64,
+    #[command(flatten)]
+    pub db: DbArgs,
+    #[command(flatten)]
+    pub out: OutArgs,
+}
+
+/// Options of `incal record history`.
+#[derive(clap::Args, Debug)]
+pub struct HistoryArgs {
+    /// Serial of the instrument.
+    #[arg(long, required = true)]
+    pub serial: String,
+    /// Coefficient name as in the results (K0, K1, dtheta_y2, ...).
+    #[arg(long, required = true)]
+    pub coefficient: String,
+    #[command(flatten)]
+    pub db: DbArgs,
+    #[command(flatten)]
+    pub out: OutArgs,
+}
+
+/// Options of `incal record verify`.
+#[derive(clap::Args, Debug)]
+pub struct VerifyArgs {
+    #[command(flatten)]
+    pub db: DbArgs,
+    #[command(flatten)]
+    pub out: OutArgs,
+}
+
+/// `incal record …`.
+pub fn run(c: &Command) -> CliResult<()> {
+    match c {
+        Command::Add(a) => add(a),
+        Command::List(a) => list(a),
+        Command::Show(a) => show(a),
+        Command::Supersede(a) => supersede(a),
+        Command::History(a) => history(a),
+        Command::Verify(a) => verify(a),
+    }
+}
+
+/// A store error as a CLI error: bad input and unusable stores exit 2,
+/// a broken chain and database failures exit 1.
+fn store_err(e: StoreError) -> CliError {
+    if e.is_input() {
+        CliError::Input(e.to_string())
+    } else {
+        CliError::Failure(anyhow::anyhow!("{e}"))
+    }
+}
+
+fn open(db: &DbArgs, create: bool) -> CliResult<Store> {
+    let path = db.path();
+    if create {
+        Store::open(&path)
+    } else {
+        Store::open_existing(&path)
+    }
+    .map_err(store_err)
+}
+
+/// The result file's text (BOM stripped, UTF-8 checked), checked to be an
+/// incal result and to agree with --serial, --operator and --station.
+fn read_result(path: &Path, who: &WhoArgs) -> CliResult<(String, String, ResultDocument)> {
+    let (name, text) = crate::io::read_text(path)?;
+    if text.trim().is_empty() {
+        return Err(CliError::Input(format!("{name}: empty file")));
+    }
+    let doc =
+        ResultDocument::from_json(&text).map_err(|e| CliError::Input(format!("{name}: {e}")))?;
+    let given = [
+        (
+            "serial",
+            doc.instrument.serial.as_deref(),
+            who.serial.as_deref(),
+        ),
+        (
+            "operator",
+            doc.instrument.meta.get("operator").map(String::as_str),
+            who.operator.as_deref(),
+        ),
+        (
+            "station",
+            doc.instrument.meta.get("station").map(String::as_str),
+            who.station.as_deref(),
+        ),
+    ];
+    for (key, in_doc, opt) in given {
+        if let (Some(d), Some(g)) = (in_doc, opt) {
+            if d != g {
+                return Err(CliError::Input(format!(
+                    "--{key} '{g}' differs from {name}'s instrument.{key} '{d}'"
+                )));
+            }
+        }
+        if opt.is_some_and(|g| g.trim().is_empty()) {
+            return Err(CliError::Input(format!("--{key}: empty")));
+        }
+    }
+    if let Some(t) = &who.created_utc {
+        incal_records::time::normalize_utc(t)
+            .map_err(|e| CliError::Input(format!("--created-utc: {e}")))?;
+    }
+    Ok((name, text, doc))
+}
+
+fn request<'a>(text: &'a str, who: &'a WhoArgs) -> NewRecord<'a> {
+    NewRecord {
+        document: text,
+        serial: who.serial.as_deref(),
+        operator: who.operator.as_deref(),
+        station: who.station.as_deref(),
+        created_utc: who.created_utc.as_deref(),
+    }
+}
+
+fn print_added(out: &OutArgs, added: &incal_records::Added) -> CliResult<()> {
+    let text = if out.json {
+        json_text(&json!({"id": added.id, "sha256": added.sha256}))
+    } else {
+        format!("{}\n", added.id)
+    };
+    write_text(out.output.as_deref(), &text)
+}
+
+fn add(a: &AddArgs) -> CliResult<()> {
+    let (name, text, doc) = read_result(&a.result, &a.who)?;
+    if doc.instrument.serial.is_none() && a.who.serial.is_none() {
+        return Err(CliError::Input(format!(
+            "{name}: the result has no instrument.serial: give --serial"
+        )));
+    }
+    let mut store = open(&a.db, true)?;
+    let added = store.add(&request(&text, &a.who)).map_err(store_err)?;
+    print_added(&a.out, &added)
+}
+
+fn supersede(a: &SupersedeArgs) -> CliResult<()> {
+    if a.reason.trim().is_empty() {
+        return Err(CliError::Input("--reason: empty".into()));
+    }
+    // No serial anywhere is fine here: the old record's is taken.
+    let (_, text, _) = read_result(&a.result, &a.who)?;
+    let mut store = open(&a.db, false)?;
+    let added = store
+        .supersede(a.id, &request(&text, &a.who), &a.reason)
+        .map_err(store_err)?;
+    print_added(&a.out, &added)
+}
+
+fn list(a: &ListArgs) -> CliResult<()> {
+    let store = open(&a.db, false)?;
+    let records = store.list(a.serial.as_deref()).map_err(store_err)?;
+    let text = if a.out.json {
+        let rows: Vec<Value> = records
+            .iter()
+            .map(|r| {
+                json!({
+                    "id": r.id,
+                    "serial": r.serial,
+                    "procedure": r.procedure,
+                    "created_utc": r.created_utc,
+                    "sha256": r.sha256,
+                    "operator": r.operator,
+                    "station": r.station,
+                    "superseded_by": r.superseded_by,
+                })
+            })
+            .collect();
+        json_text(&json!({ "records": rows }))
+    } else if records.is_empty() {
+        "no records\n".to_string()
+    } else {
+        let dash = |s: &Option<String>| s.clone().unwrap_or_else(|| "-".into());
+        let rows: Vec<Vec<String>> = records
+            .iter()
+            .map(|r| {
+                vec![
+                    r.id.to_string(),
+                    r.serial.clone(),
+                    r.procedure.clone(),
+                    r.created_utc.clone(),
+                    r.sha256[..16.min(r.sha256.len())].to_string(),
+                    dash(&r.operator),
+                    dash(&r.station),
+                    r.superseded_by.map_or("-".into(), |s| s.to_string()),
+                ]
+            })
+            .collect();
+        table(
+            &[
+                "id",
+                "serial",
+                "procedure",
+                "created_utc",
+                "sha256",
+                "operator",
+                "station",
+                "superseded_by",
+            ],
+            &rows,
+        )
+    };
+    write_text(a.out.output.as_deref(), &text)
+}
+
+/// `incal record show --json`: the record's identity and the stored
+/// document embedded verbatim (the exact stored text, so it is the
+/// original JSON value, every number to the last bit).
+#[derive(Serialize)]
+struct ShowJson<'a> {
+    id: i64,
+    serial: &'a str,
+    procedure: &'a str,
+    created_utc: &'a str,
+    operator: Option<&'a str>,
+    station: Option<&'a str>,
+    sha256: &'a str,
+    record_hash: &'a str,
+    prev_hash: &'a str,
+    supersedes: Option<Value>,
+    superseded_by: Option<i64>,
+    result: &'a serde_json::value::RawValue,
+}
+
+fn show(a: &ShowArgs) -> CliResult<()> {
+    let store = open(&a.db, false)?;
+    let r = store.show(a.id).map_err(store_err)?;
+    let broken = |why: String| {
+        CliError::Failure(anyhow::anyhow!(
+            "record {}: {why} (run 'incal record verify')",
+            r.id
+        ))
+    };
+    let text = if a.out.json {
+        let raw = serde_json::value::RawValue::from_string(r.document.trim().to_string())
+            .map_err(|e| broken(format!("the stored document is not JSON: {e}")))?;
+        let j = ShowJson {
+            id: r.id,
+            serial: &r.serial,
+            procedure: &r.procedure,
+            created_utc: &r.created_utc,
+            operator: r.operator.as_deref(),
+            station: r.station.as_deref(),
+            sha256: &r.sha256,
+            record_hash: &r.record_hash,
+            prev_hash: &r.prev_hash,
+            supersedes: r
+                .supersedes
+                .as_ref()
+                .map(|s| json!({"id": s.old_id, "reason": s.reason})),
+            superseded_by: r.superseded_by,
+            result: &raw,
+        };
+        let s =
+            serde_json::to_string_pretty(&j).map_err(|e| broken(format!("cannot print: {e}")))?;
+        format!("{s}\n")
+    } else {
+        let doc = ResultDocument::from_json(&r.document)
+            .map_err(|e| broken(format!("the stored document no longer reads: {e}")))?;
+        let mut s = format!(
+            "record {} of serial {}, {} (sha256 {})\n",
+            r.id, r.serial, r.created_utc, r.sha256
+        );
+        let who: Vec<String> = [("operator", &r.operator), ("station", &r.station)]
+            .iter()
+            .filter_map(|(k, v)| v.as_ref().map(|v| format!("{k} {v}")))
+            .collect();
+        if !who.is_empty() {
+            s.push_str(&format!("{}\n", who.join(", ")));
+        }
+        if let Some(sup) = &r.supersedes {
+            s.push_str(&format!(
+                "supersedes record {}: {}\n",
+                sup.old_id, sup.reason
+            ));
+        }
+        if let Some(by) = r.superseded_by {
+            s.push_str(&format!("SUPERSEDED by record {by}\n"));
+        }
+        s.push('\n');
+        s.push_str(&render(&doc));
+        s
+    };
+    write_text(a.out.output.as_deref(), &text)
+}
+
+fn num(x: Option<f64>) -> Value {
+    x.filter(|v| v.is_finite()).map_or(Value::Null, Value::from)
+}
+
+/// The JSON of a history (README, "Calibration records").
+pub fn history_json(h: &History) -> Value {
+    let points: Vec<Value> = h
+        .points
+        .iter()
+        .map(|p| {
+            json!({
+                "id": p.id,
+                "created_utc": p.created_utc,
+                "value": num(Some(p.value)),
+                "u": num(Some(p.u)),
+                "U95": num(Some(p.u95)),
+                "dof": num(p.dof),
+            })
+        })
+        .collect();
+    let d = h.drift.as_ref();
+    let r = h.repeatability.as_ref();
+    json!({
+        "serial": h.serial,
+        "coefficient": h.coefficient,
+        "unit": h.unit.as_str(),
+        "points": points,
+        "drift_per_day": {
+            "value": num(d.map(|d| d.value)),
+            "u": num(d.map(|d| d.u)),
+            "dof": num(d.and_then(|d| d.dof)),
+            "unit": format!("{}/day", h.unit),
+            "variance_source": d.map(|d| json!(d.variance_source)),
+        },
+        "repeatability": {
+            "value": num(r.map(|r| r.value)),
+            "dof": num(r.map(|r| r.dof)),
+        },
+        "En_latest": num(h.en_latest),
+        "notes": h.notes,
+    })
+}
+
+fn history(a: &HistoryArgs) -> CliResult<()> {
+    let store = open(&a.db, false)?;
+    let h = store
+        .history(&a.serial, &a.coefficient)
+        .map_err(store_err)?;
+    let text = if a.out.json {
+        json_text(&history_json(&h))
+    } else {
+        history_text(&h)
+    };
+    write_text(a.out.output.as_deref(), &text)
+}
+
+fn history_text(h: &History) -> String {
+    let mag = h.points.iter().map(|p| p.value.abs()).fold(0.0, f64::max);
+    let (scale, label) = h.unit.engineering_for(mag);
+    let dof = dof_text;
+    let mut s = format!(
+        "{} of serial {}: {} calibration{} (superseded records left out)\n",
+        h.coefficient,
+        h.serial,
+        h.points.len(),
+        if h.points.len() == 1 { "" } else { "s" }
+    );
+    let rows: Vec<Vec<String>> = h
+        .points
+        .iter()
+        .map(|p| {
+            vec![
+                p.id.to_string(),
+                p.created_utc.clone(),
+                sig(p.value * scale, 7),
+                sig(p.u * scale, 3),
+                sig(p.u95 * scale, 3),
+                dof(p.dof),
+                label.to_string(),
+            ]
+        })
+        .collect();
+    s.push_str(&table(
+        &["id", "created_utc", "value", "u", "U95", "dof", "unit"],
+        &rows,
+    ));
+    s.push('\n');
+    match &h.drift {
+        Some(d) => {
+            let src = match d.variance_source {
+                incal::estimation::VarianceSource::Prior => "from the calibrations' u",
+                incal::estimation::VarianceSource::Residuals => {
+                    "scaled up: the values scatter beyond their u"
+                }
+            };
+            s.push_str(&format!(
+                "drift: {} {label}/day, u {} (dof {}; {src})\n",
+                sig(d.value * scale, 4),
+                sig(d.u * scale, 3),
+                dof(d.dof)
+            ));
+        }
+        None => s.push_str("drift: -\n"),
+    }
+    match &h.repeatability {
+        Some(r) => s.push_str(&format!(
+            "repeatability: {} {label} (standard deviation of the values, dof {})\n",
+            sig(r.value * scale, 3),
+            r.dof
+        )),
+        None => s.push_str("repeatability: -\n"),
+    }
+    match h.en_latest {
+        Some(en) => s.push_str(&format!(
+            "En of the latest against the previous: {} ({})\n",
+            sig(en, 3),
+            if en.abs() <= 1.0 { "agrees" } else { "DIFFERS" }
+        )),
+        None => s.push_str("En of the latest against the previous: -\n"),
+    }
+    for n in &h.notes {
+        s.push_str(&format!("note: {n}\n"));
+    }
+    s.push_str("method: drift by weighted least squares x = a + b t (t in days, weights 1/u^2); En = (x_n - x_n-1)/sqrt(U95_n^2 + U95_n-1^2)\n");
+    s
+}
+
+fn verify(a: &VerifyArgs) -> CliResult<()> {
+    let store = open(&a.db, false)?;
+    let v = store.verify().map_err(store_err)?;
+    let text = if a.out.json {
+        json_text(&json!({"records": v.records, "head": v.head}))
+    } else {
+        format!(
+            "ok: {} records, hash chain intact; head {}\n",
+            v.records, v.head
+        )
+    };
+    write_text(a.out.output.as_deref(), &text)
+}

@@ -1,0 +1,574 @@
+//! `incal record …` through the real binary: the JSON contract of add,
+//! list, show, supersede, history and verify; drift recovered from
+//! simulated tumble calibrations whose K0 steps linearly over chosen dates;
+//! bad input; a store file changed behind incal's back; concurrent writer
+//! processes; and `record add` killed at random moments.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use incal::document::{Coefficient, DocumentBuilder, Procedure};
+use incal::units::Unit;
+use serde_json::Value;
+
+fn incal(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_incal"))
+        .args(args)
+        .env_remove("INCAL_DB")
+        .stdin(Stdio::null())
+        .output()
+        .expect("runs incal")
+}
+
+/// `incal ARGS`, which must succeed; its standard output.
+fn ok(args: &[&str]) -> String {
+    let o = incal(args);
+    assert!(
+        o.status.success(),
+        "incal {args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8(o.stdout).unwrap()
+}
+
+fn ok_json(args: &[&str]) -> Value {
+    serde_json::from_str(&ok(args)).unwrap()
+}
+
+/// `incal ARGS`, which must fail with `code` and exactly one stderr line,
+/// no panic; that line.
+fn fails(code: i32, args: &[&str]) -> String {
+    let o = incal(args);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert_eq!(o.status.code(), Some(code), "incal {args:?}: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    assert!(err.starts_with("incal: "), "{err}");
+    err.trim_end().to_string()
+}
+
+/// A fresh directory for one test.
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("incal-record-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// A tumble result of `incal tumble` on `incal simulate tumble --k0 K0`.
+fn tumble_result(dir: &Path, tag: &str, k0: f64, seed: u64, serial: Option<&str>) -> PathBuf {
+    let csv = dir.join(format!("{tag}.csv"));
+    let json = dir.join(format!("{tag}.json"));
+    ok(&[
+        "simulate",
+        "tumble",
+        "--k0",
+        &k0.to_string(),
+        "--seed",
+        &seed.to_string(),
+        "-o",
+        s(&csv),
+    ]);
+    let mut args = vec![
+        "tumble",
+        "--mount",
+        "pendulum",
+        "--input",
+        s(&csv),
+        "--json",
+        "-o",
+        s(&json),
+    ];
+    if let Some(sn) = serial {
+        args.extend(["--serial", sn]);
+    }
+    ok(&args);
+    json
+}
+
+#[test]
+fn add_list_show_supersede_history_verify_keep_the_contract() {
+    let dir = temp_dir("contract");
+    let db = dir.join("lab.db");
+    let db = s(&db);
+    // K0 drifts 0.2 µg/day from 8 mg; calibrations on irregular dates.
+    let k0_0 = 8e-3;
+    let rate = 0.2e-6;
+    let dates = [
+        ("2024-01-10", 0),
+        ("2024-04-02", 83),
+        ("2024-09-15", 249),
+        ("2025-02-01", 388),
+    ];
+    let mut ids = Vec::new();
+    let mut files = Vec::new();
+    for (k, (date, day)) in dates.iter().enumerate() {
+        let k0 = k0_0 + rate * *day as f64;
+        let f = tumble_result(&dir, &format!("cal{k}"), k0, 100 + k as u64, Some("SN-7"));
+        let added = ok_json(&[
+            "record",
+            "add",
+            s(&f),
+            "--db",
+            db,
+            "--operator",
+            "lee",
+            "--created-utc",
+            date,
+            "--json",
+        ]);
+        let bytes = std::fs::read(&f).unwrap();
+        let keys: Vec<&str> = added
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(String::as_str)
+            .collect();
+        assert_eq!(keys, ["id", "sha256"]);
+        assert_eq!(
+            added["sha256"].as_str().unwrap(),
+            incal_records::sha256_hex(&bytes),
+            "sha256 of the stored bytes"
+        );
+        ids.push(added["id"].as_i64().unwrap());
+        files.push(f);
+    }
+    assert_eq!(ids, [1, 2, 3, 4]);
+
+    // A wrong result (a K0 far off), then its correction.
+    let wrong = tumble_result(&dir, "wrong", 9e-3, 7, None);
+    let text_id = ok(&[
+        "record",
+        "add",
+        s(&wrong),
+        "--db",
+        db,
+        "--serial",
+        "SN-7",
+        "--created-utc",
+        "2025-06-01T09:00:00Z",
+    ]);
+    assert_eq!(text_id, "5\n", "text form: the id alone");
+    let right = tumble_result(&dir, "right", k0_0 + rate * 508.0, 8, Some("SN-7"));
+    let sup = ok_json(&[
+        "record",
+        "supersede",
+        "5",
+        s(&right),
+        "--reason",
+        "wrong K0 truth entered",
+        "--db",
+        db,
+        "--created-utc",
+        "2025-06-01T10:00:00Z",
+        "--json",
+    ]);
+    assert_eq!(sup["id"], 6);
+    fails(
+        2,
+        &[
+            "record",
+            "supersede",
+            "5",
+            s(&right),
+            "--reason",
+            "again",
+            "--db",
+            db,
+        ],
+    );
+
+    // list: exact keys, superseded_by.
+    let list = ok_json(&["record", "list", "--db", db, "--json"]);
+    let recs = list["records"].as_array().unwrap();
+    assert_eq!(recs.len(), 6);
+    for r in recs {
+        for key in [
+            "id",
+            "serial",
+            "procedure",
+            "created_utc",
+            "sha256",
+            "superseded_by",
+        ] {
+            assert!(r.get(key).is_some(), "{key} in {r}");
+        }
+        assert_eq!(r["serial"], "SN-7");
+        assert_eq!(r["procedure"], "tumble");
+    }
+    assert_eq!(recs[0]["created_utc"], "2024-01-10T00:00:00Z");
+    assert_eq!(recs[4]["superseded_by"], 6);
+    assert_eq!(recs[5]["superseded_by"], Value::Null);
+    let none = ok_json(&["record", "list", "--db", db, "--serial", "SN-0", "--json"]);
+    assert_eq!(none["records"].as_array().unwrap().len(), 0);
+    assert!(ok(&["record", "list", "--db", db]).contains("SN-7"));
+
+    // show: the document unchanged.
+    for (id, f) in [(2, &files[1]), (5, &wrong)] {
+        let shown = ok_json(&["record", "show", &id.to_string(), "--db", db, "--json"]);
+        assert_eq!(shown["id"], id);
+        assert_eq!(shown["serial"], "SN-7");
+        let original: Value = serde_json::from_str(&std::fs::read_to_string(f).unwrap()).unwrap();
+        assert_eq!(shown["result"], original, "record {id}");
+    }
+    let text = ok(&["record", "show", "6", "--db", db]);
+    assert!(
+        text.contains("supersedes record 5: wrong K0 truth entered"),
+        "{text}"
+    );
+    assert!(text.contains("Coefficients"), "{text}");
+
+    // history: superseded record 5 left out, drift recovered.
+    let h = ok_json(&[
+        "record",
+        "history",
+        "--serial",
+        "SN-7",
+        "--coefficient",
+        "K0",
+        "--db",
+        db,
+        "--json",
+    ]);
+    let pts = h["points"].as_array().unwrap();
+    let pid: Vec<i64> = pts.iter().map(|p| p["id"].as_i64().unwrap()).collect();
+    assert_eq!(pid, [1, 2, 3, 4, 6]);
+    for p in pts {
+        for key in ["id", "created_utc", "value", "U95"] {
+            assert!(p[key].is_number() || p[key].is_string(), "{key} in {p}");
+        }
+    }
+    assert_eq!(h["unit"], "g");
+    let d = &h["drift_per_day"];
+    let (dv, du) = (d["value"].as_f64().unwrap(), d["u"].as_f64().unwrap());
+    assert!(du > 0.0);
+    assert!(
+        (dv - rate).abs() < 3.0 * du,
+        "drift {dv} ± {du} per day vs truth {rate}"
+    );
+    assert!(h["repeatability"]["value"].as_f64().unwrap() > 0.0);
+    assert_eq!(h["repeatability"]["dof"], 4.0);
+    assert!(h["En_latest"].is_number());
+    let table = ok(&[
+        "record",
+        "history",
+        "--serial",
+        "SN-7",
+        "--coefficient",
+        "K0",
+        "--db",
+        db,
+    ]);
+    assert!(
+        table.contains("created_utc") && table.contains("ug/day"),
+        "{table}"
+    );
+
+    let v = ok(&["record", "verify", "--db", db]);
+    assert!(v.starts_with("ok: 6 records"), "{v}");
+    let vj = ok_json(&["record", "verify", "--db", db, "--json"]);
+    assert_eq!(vj["records"], 6);
+
+    // $INCAL_DB, and incal.db in the working directory.
+    let o = Command::new(env!("CARGO_BIN_EXE_incal"))
+        .args(["record", "list", "--json"])
+        .env("INCAL_DB", db)
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let from_env: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(from_env["records"].as_array().unwrap().len(), 6);
+    let o = Command::new(env!("CARGO_BIN_EXE_incal"))
+        .args(["record", "add", s(&files[0])])
+        .env_remove("INCAL_DB")
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    assert!(dir.join("incal.db").exists());
+}
+
+#[test]
+fn bad_input_is_one_line_and_exit_2() {
+    let dir = temp_dir("bad");
+    let db = dir.join("r.db");
+    let db = s(&db);
+    let with = tumble_result(&dir, "with", 8e-3, 1, Some("SN-1"));
+    let without = tumble_result(&dir, "without", 8e-3, 2, None);
+    let csv = dir.join("with.csv");
+    let m = fails(2, &["record", "add", s(&csv), "--db", db]);
+    assert!(m.contains("with.csv") && m.contains("JSON"), "{m}");
+    let other = dir.join("other.json");
+    std::fs::write(&other, r#"{"schema": "incal.plan/1"}"#).unwrap();
+    let m = fails(2, &["record", "add", s(&other), "--db", db]);
+    assert!(m.contains("other.json") && m.contains("$.schema"), "{m}");
+    let m = fails(2, &["record", "add", s(&without), "--db", db]);
+    assert!(m.contains("--serial"), "{m}");
+    let m = fails(
+        2,
+        &["record", "add", s(&with), "--db", db, "--serial", "SN-2"],
+    );
+    assert!(m.contains("--serial 'SN-2'") && m.contains("SN-1"), "{m}");
+    let m = fails(
+        2,
+        &[
+            "record",
+            "add",
+            s(&with),
+            "--db",
+            db,
+            "--created-utc",
+            "2024-13-01",
+        ],
+    );
+    assert!(m.contains("--created-utc"), "{m}");
+    let m = fails(2, &["record", "add", s(&dir.join("none.json")), "--db", db]);
+    assert!(m.contains("none.json"), "{m}");
+    // Nothing was written; reading commands do not create a store.
+    let m = fails(2, &["record", "list", "--db", db]);
+    assert!(m.contains("r.db") && m.contains("no records store"), "{m}");
+    assert!(!Path::new(db).exists());
+
+    ok(&["record", "add", s(&with), "--db", db]);
+    assert!(fails(2, &["record", "show", "7", "--db", db]).contains("record 7"));
+    fails(2, &["record", "show", "x", "--db", db]);
+    let m = fails(
+        2,
+        &[
+            "record",
+            "history",
+            "--serial",
+            "SN-1",
+            "--coefficient",
+            "K9",
+            "--db",
+            db,
+        ],
+    );
+    assert!(m.contains("K9") && m.contains("K0"), "{m}");
+    fails(
+        2,
+        &[
+            "record",
+            "history",
+            "--serial",
+            "SN-9",
+            "--coefficient",
+            "K0",
+            "--db",
+            db,
+        ],
+    );
+    let m = fails(2, &["record", "history", "--serial", "SN-1", "--db", db]);
+    assert!(m.contains("--coefficient"), "{m}");
+    fails(2, &["record", "supersede", "1", s(&with), "--db", db]);
+    fails(
+        2,
+        &[
+            "record",
+            "supersede",
+            "1",
+            s(&with),
+            "--reason",
+            " ",
+            "--db",
+            db,
+        ],
+    );
+    let junk = dir.join("junk.db");
+    std::fs::write(&junk, vec![b'x'; 4096]).unwrap();
+    let m = fails(2, &["record", "list", "--db", s(&junk)]);
+    assert!(m.contains("junk.db"), "{m}");
+    // One calibration: history without drift, nulls and no non-finite number.
+    let h = ok_json(&[
+        "record",
+        "history",
+        "--serial",
+        "SN-1",
+        "--coefficient",
+        "K0",
+        "--db",
+        db,
+        "--json",
+    ]);
+    assert_eq!(h["drift_per_day"]["value"], Value::Null);
+    assert_eq!(h["repeatability"]["value"], Value::Null);
+    assert_eq!(h["En_latest"], Value::Null);
+    ok(&["record", "verify", "--db", db]);
+}
+
+#[test]
+fn verify_names_a_record_changed_behind_incals_back() {
+    let dir = temp_dir("tamper");
+    let db = dir.join("r.db");
+    for k in 0..3 {
+        let f = tumble_result(&dir, &format!("t{k}"), 8e-3, 20 + k, Some("SN-3"));
+        ok(&["record", "add", s(&f), "--db", s(&db)]);
+    }
+    ok(&["record", "verify", "--db", s(&db)]);
+    // A coefficient value edited in the stored document of record 2.
+    let c = rusqlite::Connection::open(&db).unwrap();
+    let doc: String = c
+        .query_row("SELECT document FROM records WHERE id = 2", [], |r| {
+            r.get(0)
+        })
+        .unwrap();
+    let mut v: Value = serde_json::from_str(&doc).unwrap();
+    let k0 = v["coefficients"]["K0"]["value"].as_f64().unwrap();
+    v["coefficients"]["K0"]["value"] = Value::from(k0 + 1e-6);
+    c.execute(
+        "UPDATE records SET document = ?1 WHERE id = 2",
+        [serde_json::to_string_pretty(&v).unwrap()],
+    )
+    .unwrap();
+    drop(c);
+    let m = fails(1, &["record", "verify", "--db", s(&db)]);
+    assert!(m.starts_with("incal: record 2: "), "{m}");
+}
+
+/// SplitMix64, seeded: the kill delays.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+}
+
+/// A small result document with a distinct K0.
+fn small_doc(k: usize) -> String {
+    let mut b = DocumentBuilder::new(Procedure::Tumble, "kill test");
+    let c = Coefficient::new("K0", 1e-3 + k as f64 * 1e-9, 1e-6, Unit::G, 10.0).unwrap();
+    b.coefficient("K0", c).unwrap();
+    let mut doc = b.finish();
+    doc.instrument.serial = Some("SN-K".into());
+    doc.to_json()
+}
+
+#[test]
+fn killing_record_add_at_random_moments_never_leaves_a_partial_record() {
+    const TRIALS: usize = 400;
+    let dir = temp_dir("kill");
+    let db = dir.join("k.db");
+    let docs: Vec<PathBuf> = (0..TRIALS)
+        .map(|k| {
+            let p = dir.join(format!("d{k}.json"));
+            std::fs::write(&p, small_doc(k)).unwrap();
+            p
+        })
+        .collect();
+    // How long one add takes here (on a scratch store): the delays span it.
+    let scratch = dir.join("scratch.db");
+    let mut took = Vec::new();
+    for d in docs.iter().take(5) {
+        let t = Instant::now();
+        ok(&["record", "add", s(d), "--db", s(&scratch)]);
+        took.push(t.elapsed());
+    }
+    took.sort();
+    let span = (took[2].as_micros() as u64 * 3 / 2).clamp(2_000, 20_000);
+    let mut rng = Rng(0x1AB_5EED);
+    let started = Instant::now();
+    let mut completed = Vec::new();
+    let mut killed = 0;
+    for (k, d) in docs.iter().enumerate() {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_incal"))
+            .args(["record", "add", s(d), "--db", s(&db), "--json"])
+            .env_remove("INCAL_DB")
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_micros(rng.next() % span));
+        let _ = child.kill();
+        let out = child.wait_with_output().unwrap();
+        if out.status.success() {
+            completed.push(k);
+        } else {
+            killed += 1;
+            // Killed, never failed on its own.
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(out.status.code().is_none(), "trial {k}: {err}");
+        }
+    }
+    let elapsed = started.elapsed();
+    eprintln!(
+        "{TRIALS} trials in {elapsed:?}: {} completed, {killed} killed (delays 0..{span} µs)",
+        completed.len()
+    );
+    assert!(
+        killed > TRIALS / 10,
+        "too few kills ({killed}) to test anything"
+    );
+    assert!(completed.len() > TRIALS / 10, "too few completed adds");
+    let v = ok(&["record", "verify", "--db", s(&db)]);
+    assert!(v.starts_with("ok: "), "{v}");
+    let store = incal_records::Store::open_existing(&db).unwrap();
+    let list = store.list(None).unwrap();
+    assert!(list.len() >= completed.len() && list.len() <= TRIALS);
+    // Every add that reported success is there, whole, with its document.
+    for k in &completed {
+        let sha = incal_records::sha256_hex(small_doc(*k).as_bytes());
+        let r = list.iter().find(|r| r.sha256 == sha);
+        assert!(r.is_some(), "trial {k} succeeded but its record is missing");
+        let shown = store.show(r.unwrap().id).unwrap();
+        assert_eq!(shown.document, small_doc(*k));
+    }
+    let c = rusqlite::Connection::open(&db).unwrap();
+    let check: String = c
+        .query_row("PRAGMA integrity_check", [], |r| r.get(0))
+        .unwrap();
+    assert_eq!(check, "ok");
+    // The store still takes records after all that.
+    ok(&["record", "add", s(&docs[0]), "--db", s(&db)]);
+    ok(&["record", "verify", "--db", s(&db)]);
+}
+
+#[test]
+fn eight_writer_processes_at_once_lose_nothing() {
+    const WRITERS: usize = 8;
+    const EACH: usize = 3;
+    let dir = temp_dir("procs");
+    let db = dir.join("p.db");
+    let docs: Vec<PathBuf> = (0..WRITERS * EACH)
+        .map(|k| {
+            let p = dir.join(format!("d{k}.json"));
+            std::fs::write(&p, small_doc(1000 + k)).unwrap();
+            p
+        })
+        .collect();
+    // Each writer is a shell-free chain: one process per record, the
+    // writers' processes all running at once.
+    let handles: Vec<_> = (0..WRITERS)
+        .map(|w| {
+            let mine: Vec<PathBuf> = docs[w * EACH..(w + 1) * EACH].to_vec();
+            let db = db.clone();
+            std::thread::spawn(move || {
+                for d in mine {
+                    ok(&["record", "add", s(&d), "--db", s(&db)]);
+                }
+            })
+        })
+        .collect();
+    for h in handles {
+        h.join().expect("a writer failed");
+    }
+    let list = ok_json(&["record", "list", "--db", s(&db), "--json"]);
+    let ids: Vec<i64> = list["records"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["id"].as_i64().unwrap())
+        .collect();
+    assert_eq!(ids, (1..=(WRITERS * EACH) as i64).collect::<Vec<_>>());
+    ok(&["record", "verify", "--db", s(&db)]);
+}
