@@ -3,5 +3,6 @@
 
 pub mod centrifuge;
 pub mod gfimu;
+pub mod gyro;
 pub mod misalign;
 pub mod tumble;

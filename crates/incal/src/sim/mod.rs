@@ -7,6 +7,7 @@
 pub mod centrifuge;
 pub mod demo;
 pub mod gfimu;
+pub mod gyro;
 pub mod misalign;
 pub mod tumble;
 

@@ -1,0 +1,92 @@
+//! Gyro tests on the rate table and the dividing head (IEEE Std 952 /
+//! 1431 / 517): the rate-transfer test ([`rate`]) and the multi-position
+//! test ([`positions`]).
+//!
+//! Both are reduced from the means of repeated samples (per rate, per head
+//! angle and azimuth) on the one least-squares engine, with the variance of
+//! the means from the pooled sample scatter (or `--noise`), and both are
+//! planned by running the same reduction on noise-free means with a known
+//! noise (so the plan and the reduction cannot disagree).
+//!
+//! # Units
+//! Rates in deg/s at the input (`rate_deg_s`), the scale factor K1 in
+//! output/(deg/s), drift terms in deg/h, deg/h/g and deg/h/g² as IEEE
+//! Std 1431 quotes them. The Earth rate is
+//! [`crate::units::EARTH_RATE_RAD_S`] (7.292115e-5 rad/s = 15.041 deg/h).
+
+pub mod positions;
+pub mod rate;
+
+use crate::estimation::{Noise, PositionStats};
+use crate::units::EARTH_RATE_RAD_S;
+
+/// Earth rate in deg/h (15.0411 deg/h).
+pub fn earth_rate_deg_h() -> f64 {
+    EARTH_RATE_RAD_S.to_degrees() * 3600.0
+}
+
+/// Earth rate in deg/s.
+pub fn earth_rate_deg_s() -> f64 {
+    EARTH_RATE_RAD_S.to_degrees()
+}
+
+/// Check a latitude (rad): finite and within ±90°.
+pub fn check_latitude(latitude_rad: f64) -> crate::error::Result<()> {
+    if latitude_rad.is_finite() && latitude_rad.abs() <= std::f64::consts::FRAC_PI_2 + 1e-12 {
+        Ok(())
+    } else {
+        Err(crate::error::Error::InvalidValue {
+            what: "latitude (must be within -90..90 deg)".into(),
+            value: format!("{} deg", latitude_rad.to_degrees()),
+        })
+    }
+}
+
+/// Group values by a key, keeping the order of first appearance.
+pub(crate) fn group<K: PartialEq + Clone>(
+    items: impl Iterator<Item = (K, f64)>,
+) -> Vec<(K, Vec<f64>)> {
+    let mut out: Vec<(K, Vec<f64>)> = Vec::new();
+    for (k, v) in items {
+        match out.iter_mut().find(|(kk, _)| *kk == k) {
+            Some((_, vs)) => vs.push(v),
+            None => out.push((k, vec![v])),
+        }
+    }
+    out
+}
+
+/// Position statistics scaled by `s` (mean and scatter in new units).
+pub(crate) fn scale_stats(p: &PositionStats, s: f64) -> PositionStats {
+    PositionStats {
+        n: p.n,
+        mean: p.mean * s,
+        std: p.std * s.abs(),
+    }
+}
+
+/// A noise option scaled by `s` (|s|).
+pub(crate) fn scale_noise(n: Noise, s: f64) -> Noise {
+    match n {
+        Noise::Auto => Noise::Auto,
+        Noise::Known { sigma } => Noise::Known {
+            sigma: sigma * s.abs(),
+        },
+    }
+}
+
+/// Welch–Satterthwaite effective degrees of freedom (JCGM 100 eq. G.2b) of
+/// `u_c² = Σ u_i²` from components `(u_i, ν_i)`.
+pub fn welch_satterthwaite(components: &[(f64, f64)]) -> f64 {
+    let uc2: f64 = components.iter().map(|(u, _)| u * u).sum();
+    let den: f64 = components
+        .iter()
+        .filter(|(u, nu)| *u > 0.0 && nu.is_finite())
+        .map(|(u, nu)| u.powi(4) / nu)
+        .sum();
+    if den > 0.0 {
+        uc2 * uc2 / den
+    } else {
+        f64::INFINITY
+    }
+}

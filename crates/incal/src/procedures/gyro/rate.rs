@@ -1,0 +1,587 @@
+//! Rate-transfer test on a rate table (IEEE Std 952-1997 §12.3.3, IEEE Std
+//! 1431-2004 §10.3.4): scale factor, bias, nonlinearity, asymmetry and
+//! scale-factor repeatability.
+//!
+//! # Model
+//! The input axis (IA) is along the table axis, up (`s = +1`) or down
+//! (`s = −1`). The table turns at `ω_k` (deg/s, positive counter-clockwise
+//! seen from above, the sense of the Earth's rotation), so the rate along IA
+//! is
+//!
+//! ```text
+//! ω_in = s (ω_k + Ω_e sin φ)                        (deg/s)
+//! E    = K1 (ω_in + B + K2 ω_in² + K3 ω_in³)        (IEEE 952 eq. C.1, reduced)
+//! ```
+//!
+//! which is linear in `a0 = K1 B`, `a1 = K1`, `a2 = K1 K2`, `a3 = K1 K3`:
+//! the position means are fitted for `a` ([`crate::estimation::fit_means`])
+//! and mapped to `K1 = a1` (output/(deg/s)), `B = 3600 a0/a1` (deg/h),
+//! `K2 = a2/a1` (1/(deg/s)), `K3 = a3/a1` (1/(deg/s)²) with their
+//! covariance (JCGM 100 §5.2).
+//!
+//! * **Asymmetry** (IEEE 952 §3, "scale factor asymmetry"): a second fit
+//!   with separate slopes for positive and negative input rates and a shared
+//!   bias, `E = a0 + K1⁺ ω⁺ + K1⁻ ω⁻ (+ a2 ω² + a3 ω³)` with
+//!   `ω⁺ = max(ω_in, 0)`, `ω⁻ = min(ω_in, 0)`;
+//!   `asymmetry = (K1⁺ − K1⁻)/K̄1 · 10⁶` ppm with `K̄1 = (K1⁺ + K1⁻)/2`.
+//! * **Nonlinearity** (IEEE 952 §3, "scale factor nonlinearity"): the largest
+//!   deviation of the mean outputs from their least-squares straight line
+//!   `E = c0 + c1 ω_in`, in ppm of the full-scale output `|c1| max|ω_in|`.
+//! * **Repeatability**: with a `run` label, each run is fitted alone and the
+//!   standard deviation of its K1 across runs is given in ppm of their mean,
+//!   with `runs − 1` degrees of freedom.
+//! * **Rate-table rate error** `ε` (relative, type B, `--rate-uncertainty-ppm`):
+//!   the true rates are `(1 + ε) ω_k`, so the fitted K1, B, K2, K3 move by
+//!   `(K1, −B, K2, 2 K3) ε`; that covariance is added with infinite degrees
+//!   of freedom and each coefficient's dof is Welch–Satterthwaite.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::{earth_rate_deg_s, group, welch_satterthwaite};
+use crate::error::{Error, Result};
+use crate::estimation::{fit_means, Design, Estimates, Fit, Noise, PositionStats};
+use crate::warning::{Warning, WarningCode};
+
+/// One sample of a rate-transfer test.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RateObservation {
+    /// Commanded table rate (deg/s), positive counter-clockwise from above.
+    pub rate_deg_s: f64,
+    /// Gyro output (output units).
+    pub output: f64,
+    /// Run label (`None`: a single run).
+    pub run: Option<String>,
+}
+
+/// Direction of the input axis on the table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InputAxis {
+    /// IA up, along the table's positive rotation axis (`s = +1`).
+    Up,
+    /// IA down (`s = −1`).
+    Down,
+}
+
+impl InputAxis {
+    /// `s = ±1`.
+    pub fn sign(self) -> f64 {
+        match self {
+            InputAxis::Up => 1.0,
+            InputAxis::Down => -1.0,
+        }
+    }
+    /// `up` or `down`.
+    pub fn name(self) -> &'static str {
+        match self {
+            InputAxis::Up => "up",
+            InputAxis::Down => "down",
+        }
+    }
+}
+
+/// A term of the rate model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum RateTerm {
+    /// Bias (deg/h).
+    B,
+    /// Scale factor (output/(deg/s)); always fitted.
+    K1,
+    /// Second-order nonlinearity (1/(deg/s)).
+    K2,
+    /// Third-order nonlinearity (1/(deg/s)²).
+    K3,
+}
+
+impl RateTerm {
+    /// Parse `K1`, `B`, `K2`, `K3` (case-insensitive).
+    pub fn parse(s: &str) -> Result<RateTerm> {
+        match s.trim().to_ascii_uppercase().as_str() {
+            "K1" => Ok(RateTerm::K1),
+            "B" => Ok(RateTerm::B),
+            "K2" => Ok(RateTerm::K2),
+            "K3" => Ok(RateTerm::K3),
+            other => Err(Error::Unsupported(format!(
+                "unknown rate-test term '{other}' (terms: K1, B, K2, K3)"
+            ))),
+        }
+    }
+    /// The coefficient name.
+    pub fn name(self) -> &'static str {
+        match self {
+            RateTerm::B => "B",
+            RateTerm::K1 => "K1",
+            RateTerm::K2 => "K2",
+            RateTerm::K3 => "K3",
+        }
+    }
+    /// Unit string of the coefficient.
+    pub fn unit(self) -> &'static str {
+        match self {
+            RateTerm::B => "deg/h",
+            RateTerm::K1 => "output/(deg/s)",
+            RateTerm::K2 => "1/(deg/s)",
+            RateTerm::K3 => "1/(deg/s)^2",
+        }
+    }
+    /// Power of ω_in of the regressor.
+    fn power(self) -> i32 {
+        match self {
+            RateTerm::B => 0,
+            RateTerm::K1 => 1,
+            RateTerm::K2 => 2,
+            RateTerm::K3 => 3,
+        }
+    }
+}
+
+/// Options of the rate-transfer reduction.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RateOptions {
+    /// Latitude φ (rad).
+    pub latitude_rad: f64,
+    /// Input axis up or down.
+    pub ia: InputAxis,
+    /// Terms (K1 is added when missing).
+    pub terms: Vec<RateTerm>,
+    /// Noise of one output sample.
+    pub noise: Noise,
+    /// Relative standard uncertainty of the table rate (ppm, type B).
+    pub rate_uncertainty_ppm: f64,
+}
+
+/// One rate of the test (samples at the same rate and run).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RatePosition {
+    /// Commanded table rate (deg/s).
+    pub rate_deg_s: f64,
+    /// Input rate along IA (deg/s).
+    pub input_deg_s: f64,
+    /// Run label.
+    pub run: Option<String>,
+    /// Sample statistics of the output.
+    pub stats: PositionStats,
+    /// Residual of the model fit (output units).
+    pub residual: f64,
+    /// Standardized residual of the model fit.
+    pub standardized_residual: f64,
+    /// Deviation from the least-squares straight line (output units).
+    pub line_deviation: f64,
+}
+
+/// Scale factor of one run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunK1 {
+    /// Run label.
+    pub run: String,
+    /// Rates in the run.
+    pub rates: usize,
+    /// K1 of the run alone (output/(deg/s)).
+    pub k1: f64,
+    /// Its standard uncertainty.
+    pub u: f64,
+}
+
+/// Result of the rate-transfer test.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RateResult {
+    /// `K1`, `B`, `K2`, `K3` (those fitted), in the units of [`RateTerm::unit`],
+    /// including the rate-table type-B component.
+    pub coefficients: Estimates,
+    /// Effective degrees of freedom of each coefficient (Welch–Satterthwaite).
+    pub dof: Vec<(String, f64)>,
+    /// `K1_pos`, `K1_neg` (output/(deg/s)) and `asymmetry` (ppm), when the
+    /// input rates have both signs.
+    pub asymmetry: Option<Estimates>,
+    /// Nonlinearity: largest deviation from the straight line, ppm of full scale.
+    pub nonlinearity_ppm_fs: f64,
+    /// Full-scale output used for the nonlinearity (output units).
+    pub full_scale_output: f64,
+    /// Fit of the model (in the `a` parameters).
+    pub fit: Fit,
+    /// Per-rate statistics and residuals.
+    pub positions: Vec<RatePosition>,
+    /// K1 of each run (two or more runs).
+    pub runs: Vec<RunK1>,
+    /// Scale-factor repeatability (ppm) and its degrees of freedom.
+    pub repeatability: Option<(f64, f64)>,
+    /// Terms fitted, in model order.
+    pub terms: Vec<RateTerm>,
+    /// Warnings.
+    pub warnings: Vec<Warning>,
+}
+
+/// Input rate along IA (deg/s): `s (ω_table + Ω_e sin φ)`.
+pub fn input_rate_deg_s(rate_deg_s: f64, latitude_rad: f64, ia: InputAxis) -> f64 {
+    ia.sign() * (rate_deg_s + earth_rate_deg_s() * latitude_rad.sin())
+}
+
+fn normalized_terms(terms: &[RateTerm]) -> Vec<RateTerm> {
+    let mut t: Vec<RateTerm> = terms.to_vec();
+    if !t.contains(&RateTerm::K1) {
+        t.push(RateTerm::K1);
+    }
+    t.sort();
+    t.dedup();
+    t
+}
+
+/// Group samples into positions (rate, run), in order of first appearance.
+pub fn positions_of(obs: &[RateObservation]) -> Result<Vec<(f64, Option<String>, PositionStats)>> {
+    for o in obs {
+        if !(o.rate_deg_s.is_finite() && o.output.is_finite()) {
+            return Err(Error::InvalidValue {
+                what: "rate or output".into(),
+                value: format!("{} / {}", o.rate_deg_s, o.output),
+            });
+        }
+    }
+    group(
+        obs.iter()
+            .map(|o| ((o.rate_deg_s.to_bits(), o.run.clone()), o.output)),
+    )
+    .into_iter()
+    .map(|((bits, run), v)| Ok((f64::from_bits(bits), run, PositionStats::of(&v)?)))
+    .collect()
+}
+
+/// Design with one column per term: `ω_in^power`, names `a0..a3` by term.
+fn design(inputs: &[f64], terms: &[RateTerm]) -> Result<Design> {
+    let names = terms.iter().map(|t| t.name().to_string()).collect();
+    let rows: Vec<Vec<f64>> = inputs
+        .iter()
+        .map(|w| terms.iter().map(|t| w.powi(t.power())).collect())
+        .collect();
+    Design::new(
+        names,
+        DMatrix::from_fn(inputs.len(), terms.len(), |i, j| rows[i][j]),
+    )
+}
+
+/// Map `a` (in term order) to the physical coefficients.
+fn to_physical(a: &DVector<f64>, terms: &[RateTerm]) -> DVector<f64> {
+    let k = terms.iter().position(|t| *t == RateTerm::K1).unwrap_or(0);
+    let a1 = a[k];
+    DVector::from_iterator(
+        terms.len(),
+        terms.iter().enumerate().map(|(j, t)| match t {
+            RateTerm::K1 => a1,
+            RateTerm::B => 3600.0 * a[j] / a1,
+            _ => a[j] / a1,
+        }),
+    )
+}
+
+/// Fit the model to position statistics: the `a` fit and the physical
+/// estimates (without the type-B rate error).
+fn fit_model(
+    inputs: &[f64],
+    stats: &[PositionStats],
+    terms: &[RateTerm],
+    noise: Noise,
+) -> Result<(Fit, DVector<f64>, Estimates)> {
+    let d = design(inputs, terms)?;
+    let (fit, w) = fit_means(&d, stats, noise)?;
+    let k = terms.iter().position(|t| *t == RateTerm::K1).unwrap_or(0);
+    if !(fit.estimates.values()[k].abs() > 0.0) {
+        return Err(Error::InvalidValue {
+            what: "scale factor K1 (the output does not follow the rate)".into(),
+            value: fit.estimates.values()[k].to_string(),
+        });
+    }
+    let names = terms.iter().map(|t| t.name().to_string()).collect();
+    let t2 = terms.to_vec();
+    let phys = fit
+        .estimates
+        .map_numeric(names, move |a| to_physical(a, &t2))?;
+    Ok((fit, w, phys))
+}
+
+/// Reduce a rate-transfer test (module docs).
+pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResult> {
+    super::check_latitude(opts.latitude_rad)?;
+    if !(opts.rate_uncertainty_ppm.is_finite() && opts.rate_uncertainty_ppm >= 0.0) {
+        return Err(Error::InvalidValue {
+            what: "rate uncertainty (ppm, must be >= 0)".into(),
+            value: opts.rate_uncertainty_ppm.to_string(),
+        });
+    }
+    let terms = normalized_terms(&opts.terms);
+    let pos = positions_of(obs)?;
+    let distinct_rates = {
+        let mut r: Vec<u64> = pos.iter().map(|p| p.0.to_bits()).collect();
+        r.sort();
+        r.dedup();
+        r.len()
+    };
+    if distinct_rates < terms.len() {
+        return Err(Error::TooFew {
+            what: format!(
+                "distinct table rates for the terms {}",
+                terms
+                    .iter()
+                    .map(|t| t.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            needed: terms.len(),
+            got: distinct_rates,
+        });
+    }
+    let inputs: Vec<f64> = pos
+        .iter()
+        .map(|p| input_rate_deg_s(p.0, opts.latitude_rad, opts.ia))
+        .collect();
+    let stats: Vec<PositionStats> = pos.iter().map(|p| p.2).collect();
+    let (fit, weights, phys) = fit_model(&inputs, &stats, &terms, opts.noise)?;
+    let mut warnings = fit.quality_warnings(
+        "table-rate errors, a nonlinearity not modelled (add K2/K3), or drift between rates",
+    );
+
+    // Type-B rate-table error: (K1, −B, K2, 2 K3) ε.
+    let eps = opts.rate_uncertainty_ppm * 1e-6;
+    let j = DVector::from_iterator(
+        terms.len(),
+        terms.iter().enumerate().map(|(k, t)| {
+            let v = phys.values()[k];
+            match t {
+                RateTerm::K1 | RateTerm::K2 => v,
+                RateTerm::B => -v,
+                RateTerm::K3 => 2.0 * v,
+            }
+        }),
+    );
+    let cov_b = &j * j.transpose() * (eps * eps);
+    let coefficients = Estimates::new(
+        phys.names().to_vec(),
+        phys.values().clone(),
+        phys.covariance() + &cov_b,
+        phys.dof(),
+    )?;
+    let dof = terms
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            (
+                t.name().to_string(),
+                welch_satterthwaite(&[
+                    (phys.u_at(k), phys.dof()),
+                    (j[k].abs() * eps, f64::INFINITY),
+                ]),
+            )
+        })
+        .collect();
+
+    // Straight line for the nonlinearity, with the same weights.
+    let line_terms = [RateTerm::B, RateTerm::K1];
+    let line = crate::estimation::fit(
+        &design(&inputs, &line_terms)?,
+        &DVector::from_iterator(stats.len(), stats.iter().map(|s| s.mean)),
+        &crate::estimation::FitOptions {
+            weights: Some(weights.clone()),
+            ..Default::default()
+        },
+    )?;
+    let max_in = inputs.iter().fold(0.0f64, |m, w| m.max(w.abs()));
+    let full_scale_output = line.estimates.values()[1].abs() * max_in;
+    let max_dev = line.residuals.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+    let nonlinearity_ppm_fs = if full_scale_output > 0.0 {
+        max_dev / full_scale_output * 1e6
+    } else {
+        0.0
+    };
+
+    let std_res = fit.standardized_residuals(Some(&weights));
+    let positions = pos
+        .iter()
+        .enumerate()
+        .map(|(i, (rate, run, st))| RatePosition {
+            rate_deg_s: *rate,
+            input_deg_s: inputs[i],
+            run: run.clone(),
+            stats: *st,
+            residual: fit.residuals[i],
+            standardized_residual: std_res[i],
+            line_deviation: line.residuals[i],
+        })
+        .collect();
+
+    let asymmetry = match asymmetry_fit(&inputs, &stats, &terms, opts.noise) {
+        Ok(a) => a,
+        Err(e) => {
+            warnings.push(Warning::new(
+                WarningCode::PartFailed,
+                format!("asymmetry not determined: {e}"),
+            ));
+            None
+        }
+    };
+    if asymmetry.is_none() && !warnings.iter().any(|w| w.code == WarningCode::PartFailed) {
+        warnings.push(Warning::new(
+            WarningCode::OnePolarity,
+            "input rates of one sign only: the scale-factor asymmetry is not determined",
+        ));
+    }
+
+    // Runs: each alone.
+    let mut runs = Vec::new();
+    let mut labels: Vec<String> = Vec::new();
+    for p in &pos {
+        if let Some(r) = &p.1 {
+            if !labels.contains(r) {
+                labels.push(r.clone());
+            }
+        }
+    }
+    if labels.len() >= 2 {
+        for label in &labels {
+            let idx: Vec<usize> = (0..pos.len())
+                .filter(|&i| pos[i].1.as_deref() == Some(label.as_str()))
+                .collect();
+            let inp: Vec<f64> = idx.iter().map(|&i| inputs[i]).collect();
+            let st: Vec<PositionStats> = idx.iter().map(|&i| stats[i]).collect();
+            match fit_model(&inp, &st, &terms, opts.noise) {
+                Ok((_, _, e)) => runs.push(RunK1 {
+                    run: label.clone(),
+                    rates: idx.len(),
+                    k1: e.value("K1").unwrap_or(f64::NAN),
+                    u: e.u("K1").unwrap_or(f64::NAN),
+                }),
+                Err(e) => warnings.push(Warning::new(
+                    WarningCode::PartFailed,
+                    format!("run {label} alone: {e}"),
+                )),
+            }
+        }
+    }
+    let repeatability = (runs.len() >= 2).then(|| {
+        let n = runs.len() as f64;
+        let mean = runs.iter().map(|r| r.k1).sum::<f64>() / n;
+        let sd = (runs.iter().map(|r| (r.k1 - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        (sd / mean.abs() * 1e6, n - 1.0)
+    });
+
+    Ok(RateResult {
+        coefficients,
+        dof,
+        asymmetry,
+        nonlinearity_ppm_fs,
+        full_scale_output,
+        fit,
+        positions,
+        runs,
+        repeatability,
+        terms,
+        warnings,
+    })
+}
+
+/// The joint fit with separate slopes (module docs); `None` when the input
+/// rates have one sign only.
+fn asymmetry_fit(
+    inputs: &[f64],
+    stats: &[PositionStats],
+    terms: &[RateTerm],
+    noise: Noise,
+) -> Result<Option<Estimates>> {
+    let pos = inputs.iter().filter(|w| **w > 0.0).count();
+    let neg = inputs.iter().filter(|w| **w < 0.0).count();
+    if pos == 0 || neg == 0 {
+        return Ok(None);
+    }
+    let mut names: Vec<String> = Vec::new();
+    let mut cols: Vec<Box<dyn Fn(f64) -> f64>> = Vec::new();
+    if terms.contains(&RateTerm::B) {
+        names.push("B".into());
+        cols.push(Box::new(|_| 1.0));
+    }
+    names.push("K1_pos".into());
+    cols.push(Box::new(|w: f64| w.max(0.0)));
+    names.push("K1_neg".into());
+    cols.push(Box::new(|w: f64| w.min(0.0)));
+    if terms.contains(&RateTerm::K2) {
+        names.push("K2".into());
+        cols.push(Box::new(|w: f64| w * w));
+    }
+    if terms.contains(&RateTerm::K3) {
+        names.push("K3".into());
+        cols.push(Box::new(|w: f64| w * w * w));
+    }
+    let m = DMatrix::from_fn(inputs.len(), cols.len(), |i, j| cols[j](inputs[i]));
+    let d = Design::new(names.clone(), m)?;
+    let (fit, _) = fit_means(&d, stats, noise)?;
+    let slopes = fit.estimates.select(&["K1_pos", "K1_neg"])?;
+    let out = slopes.augment(
+        vec!["asymmetry".into()],
+        |x| {
+            let mean = 0.5 * (x[0] + x[1]);
+            DVector::from_vec(vec![(x[0] - x[1]) / mean * 1e6])
+        },
+        |x| {
+            let mean = 0.5 * (x[0] + x[1]);
+            // d/dx0 of (x0−x1)/mean = 1/mean − (x0−x1)/(2 mean²), likewise for x1.
+            let d = x[0] - x[1];
+            DMatrix::from_row_slice(
+                1,
+                2,
+                &[
+                    (1.0 / mean - d / (2.0 * mean * mean)) * 1e6,
+                    (-1.0 / mean - d / (2.0 * mean * mean)) * 1e6,
+                ],
+            )
+        },
+    )?;
+    Ok(Some(out))
+}
+
+/// Predicted standard uncertainty of every coefficient for a plan: the
+/// reduction run on noise-free means at the nominal scale factor `k1`
+/// with a known noise `noise` per sample and `samples` samples per rate.
+/// Returns the physical estimates (K1, B, K2, K3 as chosen) and, when the
+/// rates have both signs, the asymmetry block.
+pub fn plan(
+    rates_deg_s: &[f64],
+    samples: usize,
+    noise: f64,
+    k1: f64,
+    opts: &RateOptions,
+) -> Result<RateResult> {
+    if samples == 0 {
+        return Err(Error::TooFew {
+            what: "samples per rate".into(),
+            needed: 1,
+            got: 0,
+        });
+    }
+    if !(noise.is_finite() && noise > 0.0) {
+        return Err(Error::InvalidValue {
+            what: "noise (must be > 0)".into(),
+            value: noise.to_string(),
+        });
+    }
+    if !(k1.is_finite() && k1 != 0.0) {
+        return Err(Error::InvalidValue {
+            what: "nominal K1 (must be finite and non-zero)".into(),
+            value: k1.to_string(),
+        });
+    }
+    // Noise-free means: each rate gets `samples` identical samples.
+    let obs: Vec<RateObservation> = rates_deg_s
+        .iter()
+        .flat_map(|&r| {
+            let e = k1 * input_rate_deg_s(r, opts.latitude_rad, opts.ia);
+            std::iter::repeat_n(
+                RateObservation {
+                    rate_deg_s: r,
+                    output: e,
+                    run: None,
+                },
+                samples,
+            )
+        })
+        .collect();
+    let o = RateOptions {
+        noise: Noise::Known { sigma: noise },
+        ..opts.clone()
+    };
+    calibrate(&obs, &o)
+}
