@@ -57,6 +57,9 @@ enum Command {
     /// Gyro-free inertial unit of six (or more) accelerometers: calibrate K0 and Ks, solve motion (seed 004).
     #[command(subcommand)]
     Gfimu(GfimuCommand),
+    /// Gyro tests: rate-transfer test on a rate table, multi-position test on a dividing head (IEEE Std 952 / 1431 / 517).
+    #[command(subcommand)]
+    Gyro(commands::gyro::Command),
     /// Calibration records: store results per instrument (append-only, hash-chained), list, show, supersede, history and drift, verify.
     #[command(subcommand)]
     Record(commands::record::Command),
@@ -76,6 +79,10 @@ enum PlanCommand {
     Tumble(commands::tumble::PlanArgs),
     /// Misalignment plan: predicted u of each angle for a configuration set.
     Misalign(commands::misalign::PlanArgs),
+    /// Gyro rate-transfer plan: predicted u of K1, B, K2, K3 and the asymmetry for a set of table rates.
+    GyroRate(commands::gyro::PlanRateArgs),
+    /// Gyro multi-position plan: predicted u of every drift term for head angles and azimuths.
+    GyroPositions(commands::gyro::PlanPositionsArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -89,6 +96,10 @@ enum SimulateCommand {
     Misalign(commands::misalign::SimCommand),
     /// Precision centrifuge test (IA, PA, OA radial and 45-degree cross positions).
     Centrifuge(commands::centrifuge::SimArgs),
+    /// Gyro rate-transfer test on a rate table; writes the input CSV of `incal gyro rate`.
+    GyroRate(commands::gyro::SimRateArgs),
+    /// Gyro multi-position test on a dividing head; writes the input CSV of `incal gyro positions`.
+    GyroPositions(commands::gyro::SimPositionsArgs),
 }
 
 fn run(cli: Cli) -> CliResult<()> {
@@ -109,6 +120,14 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Plan(PlanCommand::Misalign(a)) => commands::misalign::plan(&a),
         Command::Simulate(SimulateCommand::Misalign(c)) => commands::misalign::simulate(&c),
         Command::Record(c) => commands::record::run(&c),
+        Command::Gyro(commands::gyro::Command::Rate(a)) => commands::gyro::run_rate(&a),
+        Command::Gyro(commands::gyro::Command::Positions(a)) => commands::gyro::run_positions(&a),
+        Command::Plan(PlanCommand::GyroRate(a)) => commands::gyro::plan_rate(&a),
+        Command::Plan(PlanCommand::GyroPositions(a)) => commands::gyro::plan_positions(&a),
+        Command::Simulate(SimulateCommand::GyroRate(a)) => commands::gyro::simulate_rate_cmd(&a),
+        Command::Simulate(SimulateCommand::GyroPositions(a)) => {
+            commands::gyro::simulate_positions_cmd(&a)
+        }
     }
 }
 

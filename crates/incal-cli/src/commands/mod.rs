@@ -4,6 +4,7 @@ pub mod centrifuge;
 pub mod compare;
 pub mod demo;
 pub mod gfimu;
+pub mod gyro;
 pub mod misalign;
 pub mod record;
 pub mod report;

@@ -28,6 +28,7 @@
 
 pub mod centrifuge;
 pub mod gfimu;
+pub mod gyro;
 pub mod limits;
 pub mod misalign;
 pub mod tumble;
@@ -61,6 +62,10 @@ pub enum Procedure {
     MisalignAccel,
     /// Gyro-free unit: K0 and Ks of every accelerometer (seed 004).
     GfimuCalibrate,
+    /// Gyro rate-transfer test on a rate table (IEEE Std 952 / 1431).
+    GyroRate,
+    /// Gyro multi-position test on a dividing head (IEEE Std 517 / 1431).
+    GyroPositions,
 }
 
 impl Procedure {
@@ -72,6 +77,8 @@ impl Procedure {
             Procedure::MisalignGyro => "misalign-gyro",
             Procedure::MisalignAccel => "misalign-accel",
             Procedure::GfimuCalibrate => "gfimu-calibrate",
+            Procedure::GyroRate => "gyro-rate",
+            Procedure::GyroPositions => "gyro-positions",
         }
     }
 }

@@ -78,6 +78,11 @@ pub(crate) fn scale_noise(n: Noise, s: f64) -> Noise {
 /// Welch–Satterthwaite effective degrees of freedom (JCGM 100 eq. G.2b) of
 /// `u_c² = Σ u_i²` from components `(u_i, ν_i)`.
 pub fn welch_satterthwaite(components: &[(f64, f64)]) -> f64 {
+    // One contributing component: its own dof, exactly (no rounding).
+    let mut live = components.iter().filter(|(u, _)| *u > 0.0);
+    if let (Some(only), None) = (live.next(), live.next()) {
+        return only.1;
+    }
     let uc2: f64 = components.iter().map(|(u, _)| u * u).sum();
     let den: f64 = components
         .iter()

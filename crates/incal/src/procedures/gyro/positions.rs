@@ -378,7 +378,7 @@ pub fn calibrate(obs: &[PositionObservation], opts: &PositionsOptions) -> Result
             )?;
             let (fit, w) = fit_means(&design, &stats, opts.noise)?;
             let k1 = fit.estimates.values()[0];
-            if !(k1.abs() > 0.0) {
+            if k1 == 0.0 || !k1.is_finite() {
                 return Err(Error::InvalidValue {
                     what: "fitted scale factor K1".into(),
                     value: k1.to_string(),

@@ -282,7 +282,7 @@ fn fit_model(
     let d = design(inputs, terms)?;
     let (fit, w) = fit_means(&d, stats, noise)?;
     let k = terms.iter().position(|t| *t == RateTerm::K1).unwrap_or(0);
-    if !(fit.estimates.values()[k].abs() > 0.0) {
+    if fit.estimates.values()[k] == 0.0 || !fit.estimates.values()[k].is_finite() {
         return Err(Error::InvalidValue {
             what: "scale factor K1 (the output does not follow the rate)".into(),
             value: fit.estimates.values()[k].to_string(),
@@ -326,6 +326,15 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
             needed: terms.len(),
             got: distinct_rates,
         });
+    }
+    if let Some(first) = obs.first() {
+        if obs.iter().all(|o| o.output == first.output) {
+            return Err(Error::InvalidValue {
+                what: "output: constant at every rate, so the scale factor K1 is not observable"
+                    .into(),
+                value: first.output.to_string(),
+            });
+        }
     }
     let inputs: Vec<f64> = pos
         .iter()

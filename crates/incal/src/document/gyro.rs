@@ -1,0 +1,251 @@
+//! The result documents of the gyro rate-transfer and multi-position tests.
+
+use serde_json::json;
+
+use super::tumble::variance_decision;
+use super::{
+    position_stats, position_table, Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure,
+    ResultDocument, Table,
+};
+use crate::error::{Error, Result};
+use crate::procedures::gyro::positions::{DriftTerm, PositionsResult, ScaleFactor};
+use crate::procedures::gyro::rate::{RateResult, RateTerm};
+use crate::units::Unit;
+
+fn rate_unit(name: &str) -> Result<Unit> {
+    match name {
+        "asymmetry" => Ok(Unit::Other("ppm".into())),
+        "K1_pos" | "K1_neg" => Ok(Unit::OutputPerDegS),
+        other => RateTerm::parse(other).map(|t| Unit::parse(t.unit())),
+    }
+}
+
+fn drift_unit(name: &str) -> Result<Unit> {
+    if name == "K1" {
+        return Ok(Unit::OutputPerDegS);
+    }
+    DriftTerm::parse(name).map(|t| Unit::parse(t.unit()))
+}
+
+fn dof_lookup(dof: &[(String, f64)], name: &str) -> f64 {
+    dof.iter()
+        .find(|d| d.0 == name)
+        .map_or(f64::INFINITY, |d| d.1)
+}
+
+impl RateResult {
+    /// The result document: coefficients `K1`, `B`, `K2`, `K3` (those
+    /// fitted), `asymmetry` (ppm) with `K1_pos`, `K1_neg`; top-level
+    /// `nonlinearity_ppm_fs`; per-rate table; per-run K1.
+    pub fn document(&self, known_noise: bool, rate_uncertainty_ppm: f64) -> Result<ResultDocument> {
+        let f = &self.fit;
+        let mut b = DocumentBuilder::new(
+            Procedure::GyroRate,
+            format!(
+                "Gyro rate-transfer test ({} rates, terms {})",
+                f.diagnostics.n_obs,
+                self.terms
+                    .iter()
+                    .map(|t| t.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        );
+        b.estimates_dof(&self.coefficients, "", rate_unit, |n| {
+            dof_lookup(&self.dof, n)
+        })?;
+        if let Some(a) = &self.asymmetry {
+            b.estimates(a, "", rate_unit)?;
+        }
+        b.fit(FitSummary::of("main", f, Unit::Output));
+        b.option(
+            "terms",
+            json!(self.terms.iter().map(|t| t.name()).collect::<Vec<_>>()),
+        );
+        b.option("rate_uncertainty_ppm", json!(rate_uncertainty_ppm));
+        b.decision(
+            DecisionCode::VarianceSource,
+            variance_decision(f.variance_source, known_noise),
+        );
+        if !self.nonlinearity_ppm_fs.is_finite() {
+            return Err(Error::InvalidValue {
+                what: "nonlinearity".into(),
+                value: self.nonlinearity_ppm_fs.to_string(),
+            });
+        }
+        b.extra("nonlinearity_ppm_fs", json!(self.nonlinearity_ppm_fs))?;
+        b.extra("full_scale_output", json!(self.full_scale_output))?;
+        if let Some((ppm, dof)) = self.repeatability {
+            b.extra(
+                "scale_factor_repeatability",
+                json!({"value": ppm, "unit": "ppm", "dof": dof, "runs": self.runs.len()}),
+            )?;
+        }
+        b.warnings(self.warnings.iter().cloned());
+
+        let mut pos = position_table(
+            "positions",
+            "Rates",
+            &[
+                ("rate", Some(Unit::DegPerS)),
+                ("input_rate", Some(Unit::DegPerS)),
+                ("run", None),
+            ],
+        );
+        for p in &self.positions {
+            let mut row = vec![
+                Cell::num(p.rate_deg_s),
+                Cell::num(p.input_deg_s),
+                p.run.clone().map_or(Cell::Null, Cell::Text),
+            ];
+            row.extend(position_stats(
+                &p.stats,
+                p.residual,
+                p.standardized_residual,
+            ));
+            pos.push(row)?;
+        }
+        b.table(pos);
+        let fs = self.full_scale_output;
+        let mut line = Table::new(
+            "nonlinearity",
+            "Deviation of the mean output from the least-squares straight line (IEEE Std 952 nonlinearity)",
+            &[
+                ("input_rate", Some(Unit::DegPerS)),
+                ("deviation", Some(Unit::Output)),
+                ("deviation_ppm_fs", Some(Unit::Other("ppm".into()))),
+            ],
+        );
+        for p in &self.positions {
+            line.push(vec![
+                Cell::num(p.input_deg_s),
+                Cell::num(p.line_deviation),
+                Cell::opt((fs > 0.0).then(|| p.line_deviation / fs * 1e6)),
+            ])?;
+        }
+        b.table(line);
+        if !self.runs.is_empty() {
+            let mut t = Table::new(
+                "runs",
+                "Scale factor of each run alone",
+                &[
+                    ("run", None),
+                    ("rates", None),
+                    ("K1", Some(Unit::OutputPerDegS)),
+                    ("u", Some(Unit::OutputPerDegS)),
+                ],
+            );
+            for r in &self.runs {
+                t.push(vec![
+                    Cell::text(r.run.clone()),
+                    Cell::num(r.rates as f64),
+                    Cell::num(r.k1),
+                    Cell::num(r.u),
+                ])?;
+            }
+            b.table(t);
+        }
+        Ok(b.finish())
+    }
+}
+
+impl PositionsResult {
+    /// The result document: drift coefficients `B`, `D_I`, … (those fitted,
+    /// deg/h, deg/h/g, deg/h/g²), `K1` when fitted; per-position table.
+    pub fn document(
+        &self,
+        known_noise: bool,
+        scale_factor: ScaleFactor,
+        axial: &str,
+    ) -> Result<ResultDocument> {
+        let f = &self.fit;
+        let mut b = DocumentBuilder::new(
+            Procedure::GyroPositions,
+            format!(
+                "Gyro multi-position test, {axial} axial ({} positions, terms {})",
+                f.diagnostics.n_obs,
+                self.terms
+                    .iter()
+                    .map(|t| t.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        );
+        b.estimates_dof(&self.coefficients, "", drift_unit, |n| {
+            dof_lookup(&self.dof, n)
+        })?;
+        let fitted_k1 = matches!(scale_factor, ScaleFactor::Fit);
+        b.fit(FitSummary::of(
+            "main",
+            f,
+            if fitted_k1 {
+                Unit::Output
+            } else {
+                Unit::Other("deg/h".into())
+            },
+        ));
+        b.option("axial", json!(axial));
+        b.option(
+            "terms",
+            json!(self.terms.iter().map(|t| t.name()).collect::<Vec<_>>()),
+        );
+        match scale_factor {
+            ScaleFactor::Known { k1, u, dof } => {
+                b.extra(
+                    "scale_factor",
+                    json!({"value": k1, "u": u, "unit": "output/(deg/s)", "dof": if dof.is_finite() { json!(dof) } else { json!(null) }, "source": "given"}),
+                )?;
+                b.decision(
+                    DecisionCode::VarianceSource,
+                    format!(
+                        "{}; u(K1) propagated into every drift term",
+                        variance_decision(f.variance_source, known_noise)
+                    ),
+                );
+            }
+            ScaleFactor::Fit => {
+                b.decision(
+                    DecisionCode::VarianceSource,
+                    format!(
+                        "{}; K1 fitted from the Earth-rate projection",
+                        variance_decision(f.variance_source, known_noise)
+                    ),
+                );
+            }
+        }
+        b.warnings(self.warnings.iter().cloned());
+        let res_unit = if fitted_k1 {
+            Unit::Output
+        } else {
+            Unit::Other("deg/h".into())
+        };
+        let mut t = Table::new(
+            "positions",
+            "Positions",
+            &[
+                ("angle", Some(Unit::Deg)),
+                ("azimuth", Some(Unit::Deg)),
+                ("earth_rate_ia", Some(Unit::Other("deg/h".into()))),
+                ("n", None),
+                ("mean", Some(Unit::Output)),
+                ("std", Some(Unit::Output)),
+                ("residual", Some(res_unit)),
+                ("standardized_residual", Some(Unit::One)),
+            ],
+        );
+        for p in &self.positions {
+            t.push(vec![
+                Cell::num(p.angle_rad.to_degrees()),
+                Cell::num(p.azimuth_rad.to_degrees()),
+                Cell::num(p.earth_rate_deg_h),
+                Cell::num(p.stats.n as f64),
+                Cell::num(p.stats.mean),
+                Cell::num(p.stats.std),
+                Cell::num(p.residual),
+                Cell::num(p.standardized_residual),
+            ])?;
+        }
+        b.table(t);
+        Ok(b.finish())
+    }
+}
