@@ -73,9 +73,9 @@ fn rate_test_u95_covers_truth() {
                     (v - t).abs() <= coverage_factor(dof, 0.95) * u
                 })
                 .collect();
-            let a = r.asymmetry.as_ref().expect("both signs");
-            let (v, u) = a.get("asymmetry").unwrap();
-            hits.push(v.abs() <= a.coverage_factor(0.95) * u);
+            let (v, u) = r.coefficients.get("asymmetry").expect("both signs");
+            let dof = r.dof.iter().find(|d| d.0 == "asymmetry").unwrap().1;
+            hits.push(v.abs() <= coverage_factor(dof, 0.95) * u);
             hits
         });
         for (k, name) in ["B", "K1", "K2", "K3", "asymmetry"].iter().enumerate() {
@@ -102,13 +102,22 @@ fn rate_test_recovers_asymmetry() {
         let mut cfg = rate_sim(s);
         cfg.k1_pos = 0.02 * (1.0 + 150e-6);
         cfg.k1_neg = 0.02 * (1.0 - 150e-6);
-        cfg.k2 = 0.0;
         cfg.k3 = 0.0;
         let obs = simulate_rate(&cfg);
-        let r = gr::calibrate(&obs, &rate_opts(&[RateTerm::B, RateTerm::K1], Noise::Auto)).unwrap();
-        let a = r.asymmetry.unwrap();
-        let (v, u) = a.get("asymmetry").unwrap();
-        (v, (v - 300.0).abs() <= a.coverage_factor(0.95) * u, u)
+        let r = gr::calibrate(
+            &obs,
+            &rate_opts(&[RateTerm::B, RateTerm::K1, RateTerm::K2], Noise::Auto),
+        )
+        .unwrap();
+        // With the asymmetry in the model, K2 and B stay unbiased.
+        let (k2, uk2) = r.coefficients.get("K2").unwrap();
+        assert!((k2 - 2e-5).abs() < 6.0 * uk2, "K2 {k2} ± {uk2}");
+        let (v, u) = r.coefficients.get("asymmetry").unwrap();
+        (
+            v,
+            (v - 300.0).abs() <= r.coefficients.coverage_factor(0.95) * u,
+            u,
+        )
     });
     let cov = runs.iter().filter(|r| r.1).count() as f64 / TRIALS as f64;
     let mean = runs.iter().map(|r| r.0).sum::<f64>() / TRIALS as f64;

@@ -526,23 +526,20 @@ pub fn plan_rate(a: &PlanRateArgs) -> CliResult<()> {
         rate_uncertainty_ppm: a.rate_uncertainty_ppm,
     };
     let p = gr::plan(&a.rates_deg_s, a.samples, a.noise, k1, &opts).map_err(core)?;
-    let mut rows: Vec<(String, f64, String)> = p
-        .terms
+    let rows: Vec<(String, f64, String)> = p
+        .coefficients
+        .names()
         .iter()
         .enumerate()
-        .map(|(k, t)| {
+        .filter(|(_, n)| !n.starts_with("K1_"))
+        .map(|(k, n)| {
             (
-                t.name().to_string(),
+                n.clone(),
                 p.coefficients.u_at(k),
-                t.unit().to_string(),
+                gr::coefficient_unit(n).to_string(),
             )
         })
         .collect();
-    if let Some(asym) = &p.asymmetry {
-        if let Some(u) = asym.u("asymmetry") {
-            rows.push(("asymmetry".into(), u, "ppm".into()));
-        }
-    }
     let header = json!({
         "plan": "gyro-rate",
         "rates_deg_s": a.rates_deg_s,

@@ -9,13 +9,12 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::procedures::gyro::positions::{DriftTerm, PositionsResult, ScaleFactor};
-use crate::procedures::gyro::rate::{RateResult, RateTerm};
+use crate::procedures::gyro::rate::{coefficient_unit, RateResult, RateTerm};
 use crate::units::Unit;
 
 fn rate_unit(name: &str) -> Result<Unit> {
     match name {
-        "asymmetry" => Ok(Unit::Other("ppm".into())),
-        "K1_pos" | "K1_neg" => Ok(Unit::OutputPerDegS),
+        "asymmetry" | "K1_pos" | "K1_neg" => Ok(Unit::parse(coefficient_unit(name))),
         other => RateTerm::parse(other).map(|t| Unit::parse(t.unit())),
     }
 }
@@ -35,7 +34,7 @@ fn dof_lookup(dof: &[(String, f64)], name: &str) -> f64 {
 
 impl RateResult {
     /// The result document: coefficients `K1`, `B`, `K2`, `K3` (those
-    /// fitted), `asymmetry` (ppm) with `K1_pos`, `K1_neg`; top-level
+    /// fitted), `asymmetry` (ppm), `K1_pos`, `K1_neg` (rates of both signs); top-level
     /// `nonlinearity_ppm_fs`; per-rate table; per-run K1.
     pub fn document(&self, known_noise: bool, rate_uncertainty_ppm: f64) -> Result<ResultDocument> {
         let f = &self.fit;
@@ -54,9 +53,6 @@ impl RateResult {
         b.estimates_dof(&self.coefficients, "", rate_unit, |n| {
             dof_lookup(&self.dof, n)
         })?;
-        if let Some(a) = &self.asymmetry {
-            b.estimates(a, "", rate_unit)?;
-        }
         b.fit(FitSummary::of("main", f, Unit::Output));
         b.option(
             "terms",

@@ -19,11 +19,16 @@
 //! `K2 = a2/a1` (1/(deg/s)), `K3 = a3/a1` (1/(deg/s)²) with their
 //! covariance (JCGM 100 §5.2).
 //!
-//! * **Asymmetry** (IEEE 952 §3, "scale factor asymmetry"): a second fit
-//!   with separate slopes for positive and negative input rates and a shared
-//!   bias, `E = a0 + K1⁺ ω⁺ + K1⁻ ω⁻ (+ a2 ω² + a3 ω³)` with
-//!   `ω⁺ = max(ω_in, 0)`, `ω⁻ = min(ω_in, 0)`;
-//!   `asymmetry = (K1⁺ − K1⁻)/K̄1 · 10⁶` ppm with `K̄1 = (K1⁺ + K1⁻)/2`.
+//! * **Asymmetry** (IEEE 952 §3, "scale factor asymmetry"): with input
+//!   rates of both signs the model has separate slopes `K1⁺ = K1 + ΔK/2`
+//!   for positive and `K1⁻ = K1 − ΔK/2` for negative rates and a shared
+//!   bias, i.e. one more regressor `|ω_in|` with coefficient `c = ΔK/2`:
+//!   `E = a0 + a1 ω + c |ω| + a2 ω² + a3 ω³`, one fit, one covariance;
+//!   `asymmetry = ΔK/K1 · 10⁶ = 2c/a1 · 10⁶` ppm, and `K1_pos`, `K1_neg`
+//!   derived. Left out of the model, an asymmetry leaks into B and K2
+//!   (|ω| resembles a constant plus ω²); when the rates cannot separate
+//!   `|ω|` from the other terms (e.g. two magnitudes with K2) the model
+//!   falls back to one slope and a warning names the combination.
 //! * **Nonlinearity** (IEEE 952 §3, "scale factor nonlinearity"): the largest
 //!   deviation of the mean outputs from their least-squares straight line
 //!   `E = c0 + c1 ω_in`, in ppm of the full-scale output `|c1| max|ω_in|`.
@@ -134,6 +139,16 @@ impl RateTerm {
     }
 }
 
+/// Unit string of any rate-test coefficient (`K1`, `B`, `K2`, `K3`,
+/// `asymmetry` in ppm, `K1_pos`/`K1_neg`).
+pub fn coefficient_unit(name: &str) -> &'static str {
+    match name {
+        "asymmetry" => "ppm",
+        "K1_pos" | "K1_neg" => "output/(deg/s)",
+        other => RateTerm::parse(other).map_or("1", |t| t.unit()),
+    }
+}
+
 /// Options of the rate-transfer reduction.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RateOptions {
@@ -189,9 +204,10 @@ pub struct RateResult {
     pub coefficients: Estimates,
     /// Effective degrees of freedom of each coefficient (Welch–Satterthwaite).
     pub dof: Vec<(String, f64)>,
-    /// `K1_pos`, `K1_neg` (output/(deg/s)) and `asymmetry` (ppm), when the
+    /// True when the asymmetry is in the model (`asymmetry`, `K1_pos` and
+    /// `K1_neg` are then among the coefficients).
     /// input rates have both signs.
-    pub asymmetry: Option<Estimates>,
+    pub asymmetric: bool,
     /// Nonlinearity: largest deviation from the straight line, ppm of full scale.
     pub nonlinearity_ppm_fs: f64,
     /// Full-scale output used for the nonlinearity (output units).
@@ -244,56 +260,101 @@ pub fn positions_of(obs: &[RateObservation]) -> Result<Vec<(f64, Option<String>,
     .collect()
 }
 
-/// Design with one column per term: `ω_in^power`, names `a0..a3` by term.
-fn design(inputs: &[f64], terms: &[RateTerm]) -> Result<Design> {
-    let names = terms.iter().map(|t| t.name().to_string()).collect();
-    let rows: Vec<Vec<f64>> = inputs
-        .iter()
-        .map(|w| terms.iter().map(|t| w.powi(t.power())).collect())
-        .collect();
+/// Design with one column per term (`ω_in^power`), plus `|ω_in|` named
+/// `asymmetry` when `asym`.
+fn design(inputs: &[f64], terms: &[RateTerm], asym: bool) -> Result<Design> {
+    let mut names: Vec<String> = terms.iter().map(|t| t.name().to_string()).collect();
+    if asym {
+        names.push("asymmetry".into());
+    }
+    let p = names.len();
     Design::new(
         names,
-        DMatrix::from_fn(inputs.len(), terms.len(), |i, j| rows[i][j]),
-    )
-}
-
-/// Map `a` (in term order) to the physical coefficients.
-fn to_physical(a: &DVector<f64>, terms: &[RateTerm]) -> DVector<f64> {
-    let k = terms.iter().position(|t| *t == RateTerm::K1).unwrap_or(0);
-    let a1 = a[k];
-    DVector::from_iterator(
-        terms.len(),
-        terms.iter().enumerate().map(|(j, t)| match t {
-            RateTerm::K1 => a1,
-            RateTerm::B => 3600.0 * a[j] / a1,
-            _ => a[j] / a1,
+        DMatrix::from_fn(inputs.len(), p, |i, j| match terms.get(j) {
+            Some(t) => inputs[i].powi(t.power()),
+            None => inputs[i].abs(),
         }),
     )
 }
 
-/// Fit the model to position statistics: the `a` fit and the physical
-/// estimates (without the type-B rate error).
+/// Map `a` (terms in order, then `c` of `|ω|` when present) to the
+/// physical coefficients (module docs).
+fn to_physical(a: &DVector<f64>, terms: &[RateTerm]) -> DVector<f64> {
+    let k = terms.iter().position(|t| *t == RateTerm::K1).unwrap_or(0);
+    let a1 = a[k];
+    DVector::from_iterator(
+        a.len(),
+        a.iter().enumerate().map(|(j, v)| match terms.get(j) {
+            Some(RateTerm::K1) => a1,
+            Some(RateTerm::B) => 3600.0 * v / a1,
+            Some(_) => v / a1,
+            None => 2.0 * v / a1 * 1e6,
+        }),
+    )
+}
+
+/// Fit the model to position statistics: the `a` fit, its weights and the
+/// physical estimates (without the type-B rate error).
 fn fit_model(
     inputs: &[f64],
     stats: &[PositionStats],
     terms: &[RateTerm],
+    asym: bool,
     noise: Noise,
 ) -> Result<(Fit, DVector<f64>, Estimates)> {
-    let d = design(inputs, terms)?;
+    let d = design(inputs, terms, asym)?;
     let (fit, w) = fit_means(&d, stats, noise)?;
     let k = terms.iter().position(|t| *t == RateTerm::K1).unwrap_or(0);
-    if fit.estimates.values()[k] == 0.0 || !fit.estimates.values()[k].is_finite() {
+    let a1 = fit.estimates.values()[k];
+    if a1 == 0.0 || !a1.is_finite() {
         return Err(Error::InvalidValue {
             what: "scale factor K1 (the output does not follow the rate)".into(),
-            value: fit.estimates.values()[k].to_string(),
+            value: a1.to_string(),
         });
     }
-    let names = terms.iter().map(|t| t.name().to_string()).collect();
+    let names = d.names().to_vec();
     let t2 = terms.to_vec();
     let phys = fit
         .estimates
         .map_numeric(names, move |a| to_physical(a, &t2))?;
     Ok((fit, w, phys))
+}
+
+/// A fit, its weights, the physical estimates, whether the asymmetry is in
+/// the model, and why not.
+type BestFit = (Fit, DVector<f64>, Estimates, bool, Option<Warning>);
+
+/// The model with the asymmetry when the rates have both signs and can
+/// separate it; else the symmetric model and why not.
+fn fit_best(
+    inputs: &[f64],
+    stats: &[PositionStats],
+    terms: &[RateTerm],
+    noise: Noise,
+) -> Result<BestFit> {
+    let both = inputs.iter().any(|w| *w > 0.0) && inputs.iter().any(|w| *w < 0.0);
+    if !both {
+        let (f, w, e) = fit_model(inputs, stats, terms, false, noise)?;
+        let warn = Warning::new(
+            WarningCode::OnePolarity,
+            "input rates of one sign only: the scale-factor asymmetry is not determined",
+        );
+        return Ok((f, w, e, false, Some(warn)));
+    }
+    match fit_model(inputs, stats, terms, true, noise) {
+        Ok((f, w, e)) => Ok((f, w, e, true, None)),
+        Err(
+            err @ (Error::Unseparable { .. } | Error::IllConditioned { .. } | Error::TooFew { .. }),
+        ) => {
+            let (f, w, e) = fit_model(inputs, stats, terms, false, noise)?;
+            let warn = Warning::new(
+                WarningCode::PartFailed,
+                format!("asymmetry not determined (one slope fitted): {err}"),
+            );
+            Ok((f, w, e, false, Some(warn)))
+        }
+        Err(e) => Err(e),
+    }
 }
 
 /// Reduce a rate-transfer test (module docs).
@@ -341,37 +402,41 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
         .map(|p| input_rate_deg_s(p.0, opts.latitude_rad, opts.ia))
         .collect();
     let stats: Vec<PositionStats> = pos.iter().map(|p| p.2).collect();
-    let (fit, weights, phys) = fit_model(&inputs, &stats, &terms, opts.noise)?;
+    let (fit, weights, phys, asymmetric, asym_warning) =
+        fit_best(&inputs, &stats, &terms, opts.noise)?;
     let mut warnings = fit.quality_warnings(
         "table-rate errors, a nonlinearity not modelled (add K2/K3), or drift between rates",
     );
+    warnings.extend(asym_warning);
 
-    // Type-B rate-table error: (K1, −B, K2, 2 K3) ε.
+    // Type-B rate-table error: (K1, −B, K2, 2 K3, 0) ε.
     let eps = opts.rate_uncertainty_ppm * 1e-6;
     let j = DVector::from_iterator(
-        terms.len(),
-        terms.iter().enumerate().map(|(k, t)| {
+        phys.len(),
+        (0..phys.len()).map(|k| {
             let v = phys.values()[k];
-            match t {
-                RateTerm::K1 | RateTerm::K2 => v,
-                RateTerm::B => -v,
-                RateTerm::K3 => 2.0 * v,
+            match terms.get(k) {
+                Some(RateTerm::K1) | Some(RateTerm::K2) => v,
+                Some(RateTerm::B) => -v,
+                Some(RateTerm::K3) => 2.0 * v,
+                None => 0.0,
             }
         }),
     );
     let cov_b = &j * j.transpose() * (eps * eps);
-    let coefficients = Estimates::new(
+    let base = Estimates::new(
         phys.names().to_vec(),
         phys.values().clone(),
         phys.covariance() + &cov_b,
         phys.dof(),
     )?;
-    let dof = terms
+    let mut dof: Vec<(String, f64)> = phys
+        .names()
         .iter()
         .enumerate()
-        .map(|(k, t)| {
+        .map(|(k, n)| {
             (
-                t.name().to_string(),
+                n.clone(),
                 welch_satterthwaite(&[
                     (phys.u_at(k), phys.dof()),
                     (j[k].abs() * eps, f64::INFINITY),
@@ -379,11 +444,39 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
             )
         })
         .collect();
+    let coefficients = if asymmetric {
+        let ik = terms.iter().position(|t| *t == RateTerm::K1).unwrap_or(0);
+        let ia = base.len() - 1;
+        let n = base.len();
+        let e = base.augment(
+            vec!["K1_pos".into(), "K1_neg".into()],
+            move |x| {
+                let dk = x[ia] * 1e-6 * x[ik];
+                DVector::from_vec(vec![x[ik] + 0.5 * dk, x[ik] - 0.5 * dk])
+            },
+            move |x| {
+                // K1± = K1 (1 ± A·1e-6/2): ∂/∂K1 = 1 ± A·1e-6/2, ∂/∂A = ±K1·1e-6/2.
+                let mut m = DMatrix::zeros(2, n);
+                let h = 0.5e-6;
+                m[(0, ik)] = 1.0 + h * x[ia];
+                m[(1, ik)] = 1.0 - h * x[ia];
+                m[(0, ia)] = h * x[ik];
+                m[(1, ia)] = -h * x[ik];
+                m
+            },
+        )?;
+        let d_k1 = dof.iter().find(|d| d.0 == "K1").map_or(e.dof(), |d| d.1);
+        dof.push(("K1_pos".into(), d_k1));
+        dof.push(("K1_neg".into(), d_k1));
+        e
+    } else {
+        base
+    };
 
     // Straight line for the nonlinearity, with the same weights.
     let line_terms = [RateTerm::B, RateTerm::K1];
     let line = crate::estimation::fit(
-        &design(&inputs, &line_terms)?,
+        &design(&inputs, &line_terms, false)?,
         &DVector::from_iterator(stats.len(), stats.iter().map(|s| s.mean)),
         &crate::estimation::FitOptions {
             weights: Some(weights.clone()),
@@ -414,24 +507,7 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
         })
         .collect();
 
-    let asymmetry = match asymmetry_fit(&inputs, &stats, &terms, opts.noise) {
-        Ok(a) => a,
-        Err(e) => {
-            warnings.push(Warning::new(
-                WarningCode::PartFailed,
-                format!("asymmetry not determined: {e}"),
-            ));
-            None
-        }
-    };
-    if asymmetry.is_none() && !warnings.iter().any(|w| w.code == WarningCode::PartFailed) {
-        warnings.push(Warning::new(
-            WarningCode::OnePolarity,
-            "input rates of one sign only: the scale-factor asymmetry is not determined",
-        ));
-    }
-
-    // Runs: each alone.
+    // Runs: each alone, with the same model.
     let mut runs = Vec::new();
     let mut labels: Vec<String> = Vec::new();
     for p in &pos {
@@ -448,7 +524,7 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
                 .collect();
             let inp: Vec<f64> = idx.iter().map(|&i| inputs[i]).collect();
             let st: Vec<PositionStats> = idx.iter().map(|&i| stats[i]).collect();
-            match fit_model(&inp, &st, &terms, opts.noise) {
+            match fit_model(&inp, &st, &terms, asymmetric, opts.noise) {
                 Ok((_, _, e)) => runs.push(RunK1 {
                     run: label.clone(),
                     rates: idx.len(),
@@ -472,7 +548,7 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
     Ok(RateResult {
         coefficients,
         dof,
-        asymmetry,
+        asymmetric,
         nonlinearity_ppm_fs,
         full_scale_output,
         fit,
@@ -484,69 +560,11 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
     })
 }
 
-/// The joint fit with separate slopes (module docs); `None` when the input
-/// rates have one sign only.
-fn asymmetry_fit(
-    inputs: &[f64],
-    stats: &[PositionStats],
-    terms: &[RateTerm],
-    noise: Noise,
-) -> Result<Option<Estimates>> {
-    let pos = inputs.iter().filter(|w| **w > 0.0).count();
-    let neg = inputs.iter().filter(|w| **w < 0.0).count();
-    if pos == 0 || neg == 0 {
-        return Ok(None);
-    }
-    let mut names: Vec<String> = Vec::new();
-    let mut cols: Vec<Box<dyn Fn(f64) -> f64>> = Vec::new();
-    if terms.contains(&RateTerm::B) {
-        names.push("B".into());
-        cols.push(Box::new(|_| 1.0));
-    }
-    names.push("K1_pos".into());
-    cols.push(Box::new(|w: f64| w.max(0.0)));
-    names.push("K1_neg".into());
-    cols.push(Box::new(|w: f64| w.min(0.0)));
-    if terms.contains(&RateTerm::K2) {
-        names.push("K2".into());
-        cols.push(Box::new(|w: f64| w * w));
-    }
-    if terms.contains(&RateTerm::K3) {
-        names.push("K3".into());
-        cols.push(Box::new(|w: f64| w * w * w));
-    }
-    let m = DMatrix::from_fn(inputs.len(), cols.len(), |i, j| cols[j](inputs[i]));
-    let d = Design::new(names.clone(), m)?;
-    let (fit, _) = fit_means(&d, stats, noise)?;
-    let slopes = fit.estimates.select(&["K1_pos", "K1_neg"])?;
-    let out = slopes.augment(
-        vec!["asymmetry".into()],
-        |x| {
-            let mean = 0.5 * (x[0] + x[1]);
-            DVector::from_vec(vec![(x[0] - x[1]) / mean * 1e6])
-        },
-        |x| {
-            let mean = 0.5 * (x[0] + x[1]);
-            // d/dx0 of (x0−x1)/mean = 1/mean − (x0−x1)/(2 mean²), likewise for x1.
-            let d = x[0] - x[1];
-            DMatrix::from_row_slice(
-                1,
-                2,
-                &[
-                    (1.0 / mean - d / (2.0 * mean * mean)) * 1e6,
-                    (-1.0 / mean - d / (2.0 * mean * mean)) * 1e6,
-                ],
-            )
-        },
-    )?;
-    Ok(Some(out))
-}
-
 /// Predicted standard uncertainty of every coefficient for a plan: the
 /// reduction run on noise-free means at the nominal scale factor `k1`
 /// with a known noise `noise` per sample and `samples` samples per rate.
-/// Returns the physical estimates (K1, B, K2, K3 as chosen) and, when the
-/// rates have both signs, the asymmetry block.
+/// The result's coefficients hold the predicted u (K1, B, K2, K3 as
+/// chosen, and the asymmetry when the rates separate it).
 pub fn plan(
     rates_deg_s: &[f64],
     samples: usize,
