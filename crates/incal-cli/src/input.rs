@@ -147,19 +147,32 @@ impl Table {
     }
 
     /// A finite number from a cell, or an error naming file, line, column.
+    /// Magnitudes beyond [`MAX_ABS_VALUE`] are refused as out of range: no
+    /// instrument reading, time or angle is that large, and sums of their
+    /// squares would overflow.
     pub fn f64(&self, row: usize, col: usize) -> CliResult<f64> {
         let text = self.text(row, col);
-        let v: f64 = text.parse().map_err(|_| {
+        let shown = crate::output::clip(text);
+        let v: f64 = text.trim().parse().map_err(|_| {
             self.error_at(
                 row,
-                format!("column '{}': '{text}' is not a number", self.headers[col]),
+                format!("column '{}': '{shown}' is not a number", self.headers[col]),
             )
         })?;
         if !v.is_finite() {
             return Err(self.error_at(
                 row,
                 format!(
-                    "column '{}': '{text}' is not a finite number",
+                    "column '{}': '{shown}' is not a finite number",
+                    self.headers[col]
+                ),
+            ));
+        }
+        if v.abs() > MAX_ABS_VALUE {
+            return Err(self.error_at(
+                row,
+                format!(
+                    "column '{}': {shown} is out of range (|value| <= 1e15)",
                     self.headers[col]
                 ),
             ));
@@ -172,6 +185,9 @@ impl Table {
         CliError::Input(format!("{}:{}: {msg}", self.path, self.line(row)))
     }
 }
+
+/// Largest magnitude of a number read from a CSV cell.
+pub const MAX_ABS_VALUE: f64 = 1e15;
 
 fn short_csv_error(e: &csv::Error) -> String {
     match e.kind() {

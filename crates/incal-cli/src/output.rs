@@ -359,3 +359,25 @@ pub fn json_text(v: &serde_json::Value) -> String {
         serde_json::to_string_pretty(v).unwrap_or_else(|_| v.to_string())
     )
 }
+
+/// A value echoed in a message, clipped to 40 characters (a 100k-character
+/// cell or a 301-digit number is shown by its start).
+pub fn clip(s: &str) -> String {
+    const MAX: usize = 40;
+    if s.chars().count() <= MAX {
+        s.to_string()
+    } else {
+        let head: String = s.chars().take(MAX).collect();
+        format!("{head}... ({} characters)", s.chars().count())
+    }
+}
+
+/// A number echoed in a message: as typed when short, else in scientific notation.
+pub fn num(x: f64) -> String {
+    let s = format!("{x}");
+    if s.len() > 24 {
+        format!("{x:.6e}")
+    } else {
+        s
+    }
+}

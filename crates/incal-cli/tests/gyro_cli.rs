@@ -448,7 +448,7 @@ fn bad_rate_input_is_refused_with_file_and_line() {
             "--latitude-deg",
             "0",
         ]),
-        &["bad6.csv", "K1"],
+        &["bad6.csv", "every row", "scale factor is not observable"],
     );
 }
 

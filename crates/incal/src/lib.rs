@@ -25,6 +25,7 @@ pub mod document;
 pub mod error;
 pub mod estimation;
 pub mod units;
+pub mod validity;
 pub mod warning;
 
 pub use error::{Alias, Error, Result};

@@ -43,7 +43,7 @@ pub struct Args {
     #[arg(long)]
     pub radius_m: f64,
     /// Latitude of the centrifuge (deg, north positive).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::options::latitude_deg)]
     pub latitude_deg: f64,
     /// Local gravity g_L (m/s^2): the g unit of every coefficient.
     #[arg(long = "gravity-m-s2", visible_alias = "g-local", default_value_t = STANDARD_GRAVITY_M_S2)]
@@ -139,6 +139,18 @@ fn scale_inputs(a: &Args) -> CliResult<ScaleInputs> {
      -> CliResult<ValueU> {
         match (v, &from) {
             (Some(value), _) => {
+                if let Some(u) = u {
+                    // An input's u as large as the value (K1) or a whole g
+                    // (K0) leaves nothing to calibrate.
+                    let limit = if name == "K1" { value.abs() } else { 1.0 };
+                    if !(u.is_finite() && u >= 0.0 && u < limit) {
+                        return Err(usage(format!(
+                            "{uflag} must be >= 0 and below {}, got {}",
+                            if name == "K1" { "|--k1|" } else { "1 g" },
+                            crate::output::num(u)
+                        )));
+                    }
+                }
                 if u.is_none() {
                     warnings.push(Warning::new(
                         WarningCode::MissingUncertainty,
@@ -327,7 +339,7 @@ pub struct SimArgs {
     #[arg(long, default_value_t = 60.0, allow_hyphen_values = true)]
     pub tilt_arcsec: f64,
     /// Latitude (deg, north positive).
-    #[arg(long, default_value_t = 39.9, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 39.9, allow_hyphen_values = true, value_parser = crate::options::latitude_deg)]
     pub latitude_deg: f64,
     /// Local gravity (m/s^2).
     #[arg(long = "gravity-m-s2", visible_alias = "g-local", default_value_t = STANDARD_GRAVITY_M_S2)]
@@ -399,15 +411,29 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
     if !(a.noise.is_finite() && a.noise >= 0.0) {
         return Err(usage("--noise must be a non-negative number"));
     }
-    for (name, v) in [
-        ("--r-plus-m", a.r_plus_m),
-        ("--r-minus-m", a.r_minus_m),
-        ("--radius-m", a.radius_m),
-        ("--gravity-m-s2", a.g_local),
+    for (name, v, max) in [
+        ("--r-plus-m", a.r_plus_m, 100.0),
+        ("--r-minus-m", a.r_minus_m, 100.0),
+        ("--radius-m", a.radius_m, 100.0),
+        ("--gravity-m-s2", a.g_local, 100.0),
     ] {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(usage(format!("{name} must be a positive number")));
+        if !(v.is_finite() && v > 0.0 && v <= max) {
+            return Err(usage(format!(
+                "{name} must be a positive number at most {max}, got {}",
+                crate::output::num(v)
+            )));
         }
+    }
+    if a.tilt_arcsec.abs() > 36000.0 {
+        return Err(usage(
+            "--tilt-arcsec must be at most 36000 (10 deg) in magnitude",
+        ));
+    }
+    if let Some(l) = a.levels_g.iter().find(|l| **l > 1000.0) {
+        return Err(usage(format!(
+            "--levels-g: {} is beyond any centrifuge (at most 1000 g)",
+            crate::output::num(*l)
+        )));
     }
     if !(a.tilt_arcsec.is_finite() && a.latitude_deg.is_finite()) {
         return Err(usage("--tilt-arcsec and --latitude-deg must be finite"));
@@ -433,8 +459,14 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         noise: a.noise,
         seed: a.seed,
     };
+    crate::options::sim_size(&[
+        ("positions", cfg.positions.len() as f64),
+        ("--levels-g", cfg.rates_rad_s.len() as f64),
+        ("--samples", a.samples as f64),
+    ])?;
     let mut text = String::from("plane,phi_deg,polarity,omega_rad_s,output\n");
     for o in sim_centrifuge(&cfg) {
+        crate::options::finite_output(o.output)?;
         let phi = (rad_to_deg(o.position.phi_rad) * 1e9).round() / 1e9;
         text.push_str(&format!(
             "{},{phi},{},{},{}\n",

@@ -21,10 +21,7 @@ use crate::documents::read_document;
 use crate::error::{core, in_file, usage, CliError, CliResult};
 use crate::input::Table;
 use crate::options::noise_option;
-use crate::output::{input_file, json_text, sig, table, write_text, ResultArgs};
-
-/// Largest number of rows a simulator writes (samples × positions × runs).
-const MAX_SIM_ROWS: usize = 10_000_000;
+use crate::output::{input_file, json_text, num, sig, table, write_text, ResultArgs};
 
 /// `incal gyro …`.
 #[derive(Subcommand, Debug)]
@@ -77,17 +74,8 @@ fn latitude(deg: f64) -> CliResult<f64> {
     } else {
         Err(usage(format!(
             "--latitude-deg must be within -90..90, got {}",
-            short(deg)
+            num(deg)
         )))
-    }
-}
-
-fn short(x: f64) -> String {
-    let s = format!("{x}");
-    if s.len() > 24 {
-        format!("{x:.6e}")
-    } else {
-        s
     }
 }
 
@@ -126,7 +114,7 @@ pub struct RateArgs {
     #[arg(long)]
     pub input: PathBuf,
     /// Latitude of the rate table (deg, -90..90): the Earth rate's vertical component is an input.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::options::latitude_deg)]
     pub latitude_deg: f64,
     /// Input axis along the table axis, up or down.
     #[arg(long, value_enum, default_value = "up")]
@@ -157,7 +145,7 @@ fn read_rate(path: &Path) -> CliResult<(Table, Vec<RateObservation>)> {
                 row,
                 format!(
                     "rate_deg_s {} is beyond any rate table (|rate| <= 1e5 deg/s)",
-                    short(rate)
+                    num(rate)
                 ),
             ));
         }
@@ -188,7 +176,7 @@ pub fn run_rate(a: &RateArgs) -> CliResult<()> {
     if !(a.rate_uncertainty_ppm.is_finite() && (0.0..=1e5).contains(&a.rate_uncertainty_ppm)) {
         return Err(usage(format!(
             "--rate-uncertainty-ppm must be within 0..1e5, got {}",
-            short(a.rate_uncertainty_ppm)
+            num(a.rate_uncertainty_ppm)
         )));
     }
     let (t, obs) = read_rate(&a.input)?;
@@ -222,7 +210,7 @@ pub struct PositionsArgs {
     #[arg(long)]
     pub input: PathBuf,
     /// Latitude (deg, -90..90).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::options::latitude_deg)]
     pub latitude_deg: f64,
     /// Azimuth of the head axis (deg from north towards east); needed unless the CSV has azimuth_deg.
     #[arg(long)]
@@ -274,7 +262,7 @@ fn read_positions(
                 row,
                 format!(
                     "angle_deg {} is out of range (|angle| <= 1e4 deg)",
-                    short(angle)
+                    num(angle)
                 ),
             ));
         }
@@ -287,7 +275,7 @@ fn read_positions(
                 row,
                 format!(
                     "azimuth_deg {} is out of range (|azimuth| <= 1e4 deg)",
-                    short(az)
+                    num(az)
                 ),
             ));
         }
@@ -322,7 +310,7 @@ fn scale_factor(a: &PositionsArgs) -> CliResult<ScaleChoice> {
             Some(u) => {
                 return Err(usage(format!(
                     "--u-k1 must be >= 0 and smaller than |--k1|, got {}",
-                    short(u)
+                    num(u)
                 )))
             }
             None => {
@@ -437,7 +425,7 @@ pub struct PlanRateArgs {
     #[arg(long)]
     pub k1: f64,
     /// Latitude (deg).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = crate::options::latitude_deg)]
     pub latitude_deg: f64,
     /// Input axis up or down.
     #[arg(long, value_enum, default_value = "up")]
@@ -460,7 +448,7 @@ fn check_plan_noise(noise: f64, samples: usize) -> CliResult<()> {
     if !(noise.is_finite() && noise > 0.0) {
         return Err(usage(format!(
             "--noise must be a positive number, got {}",
-            short(noise)
+            num(noise)
         )));
     }
     if samples == 0 {
@@ -513,7 +501,7 @@ pub fn plan_rate(a: &PlanRateArgs) -> CliResult<()> {
         if !(r.is_finite() && r.abs() <= 1e5) {
             return Err(usage(format!(
                 "--rates-deg-s: {} is not a table rate (|rate| <= 1e5 deg/s)",
-                short(*r)
+                num(*r)
             )));
         }
     }
@@ -581,7 +569,7 @@ pub struct PlanPositionsArgs {
     #[arg(long, value_delimiter = ',', default_value = "0")]
     pub azimuths_deg: Vec<f64>,
     /// Latitude (deg).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::options::latitude_deg)]
     pub latitude_deg: f64,
     /// Gyro axis along the head axis.
     #[arg(long, value_enum, default_value = "sa")]
@@ -619,7 +607,7 @@ fn check_angles(flag: &str, v: &[f64]) -> CliResult<()> {
     if let Some(x) = v.iter().find(|x| !(x.is_finite() && x.abs() <= 1e4)) {
         return Err(usage(format!(
             "{flag}: {} is not an angle (|angle| <= 1e4 deg)",
-            short(*x)
+            num(*x)
         )));
     }
     Ok(())
@@ -725,7 +713,7 @@ pub struct SimRateArgs {
     #[arg(long, default_value_t = 0.0)]
     pub k3: f64,
     /// Latitude (deg).
-    #[arg(long, default_value_t = 45.0)]
+    #[arg(long, default_value_t = 45.0, value_parser = crate::options::latitude_deg)]
     pub latitude_deg: f64,
     /// Input axis up or down.
     #[arg(long, value_enum, default_value = "up")]
@@ -757,18 +745,6 @@ pub struct SimRateArgs {
     pub output: Option<PathBuf>,
 }
 
-fn check_rows(positions: usize, samples: usize, runs: usize) -> CliResult<()> {
-    let rows = positions
-        .checked_mul(samples)
-        .and_then(|r| r.checked_mul(runs.max(1)));
-    match rows {
-        Some(r) if r <= MAX_SIM_ROWS => Ok(()),
-        _ => Err(usage(format!(
-            "the simulation would write more than {MAX_SIM_ROWS} rows (positions x samples x runs)"
-        ))),
-    }
-}
-
 /// `incal simulate gyro-rate`.
 pub fn simulate_rate_cmd(a: &SimRateArgs) -> CliResult<()> {
     for (n, v) in [
@@ -795,7 +771,11 @@ pub fn simulate_rate_cmd(a: &SimRateArgs) -> CliResult<()> {
     if a.samples == 0 || a.runs == 0 {
         return Err(usage("--samples and --runs must be at least 1"));
     }
-    check_rows(a.rates_deg_s.len(), a.samples, a.runs)?;
+    crate::options::sim_size(&[
+        ("--rates-deg-s", a.rates_deg_s.len() as f64),
+        ("--samples", a.samples as f64),
+        ("--runs", a.runs as f64),
+    ])?;
     if let Some(r) = a
         .rates_deg_s
         .iter()
@@ -803,7 +783,7 @@ pub fn simulate_rate_cmd(a: &SimRateArgs) -> CliResult<()> {
     {
         return Err(usage(format!(
             "--rates-deg-s: {} is not a table rate (|rate| <= 1e5 deg/s)",
-            short(*r)
+            num(*r)
         )));
     }
     if !(a.noise.is_finite() && (0.0..=1e9).contains(&a.noise)) {
@@ -881,7 +861,7 @@ pub struct SimPositionsArgs {
     #[arg(long, default_value_t = 0.0)]
     pub d_ss_deg_h_g2: f64,
     /// Latitude (deg).
-    #[arg(long, default_value_t = 45.0)]
+    #[arg(long, default_value_t = 45.0, value_parser = crate::options::latitude_deg)]
     pub latitude_deg: f64,
     /// Azimuths of the head axis (deg), comma separated; two or more add an azimuth_deg column.
     #[arg(long, value_delimiter = ',', default_value = "0")]
@@ -925,7 +905,7 @@ pub fn simulate_positions_cmd(a: &SimPositionsArgs) -> CliResult<()> {
             return Err(usage(format!(
                 "{} truth must be finite and at most 1e7, got {}",
                 t.name(),
-                short(v)
+                num(v)
             )));
         }
     }
@@ -940,11 +920,11 @@ pub fn simulate_positions_cmd(a: &SimPositionsArgs) -> CliResult<()> {
     if a.samples == 0 {
         return Err(usage("--samples must be at least 1"));
     }
-    check_rows(
-        angles.len() * a.azimuths_deg.len().min(MAX_SIM_ROWS),
-        a.samples,
-        1,
-    )?;
+    crate::options::sim_size(&[
+        ("--angles-deg", angles.len() as f64),
+        ("--azimuths-deg", a.azimuths_deg.len() as f64),
+        ("--samples", a.samples as f64),
+    ])?;
     if !(a.noise.is_finite() && (0.0..=1e9).contains(&a.noise)) {
         return Err(usage("--noise must be a non-negative number (at most 1e9)"));
     }

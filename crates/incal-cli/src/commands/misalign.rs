@@ -437,7 +437,7 @@ pub struct SimGyroArgs {
     #[arg(long, default_value_t = 1e-3)]
     pub noise: f64,
     /// Latitude (deg), for the Earth rate.
-    #[arg(long, default_value_t = 45.75, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 45.75, allow_hyphen_values = true, value_parser = crate::options::latitude_deg)]
     pub latitude_deg: f64,
     /// Write raw records (time_s, table_angle_deg per sample) instead of record means.
     #[arg(long)]
@@ -475,6 +475,24 @@ fn gyro_sim_of(a: &SimGyroArgs) -> CliResult<GyroSim> {
             "--records must be at least 1 and --samples-per-turn at least 2",
         ));
     }
+    if a.turns > 1000.0 {
+        return Err(usage(format!(
+            "--turns must be at most 1000, got {}",
+            crate::output::num(a.turns)
+        )));
+    }
+    let configs = parse_configs(&a.configs)?;
+    let rows_per_record = if a.time_series {
+        (a.turns * a.samples_per_turn as f64).ceil()
+    } else {
+        1.0
+    };
+    crate::options::sim_size(&[
+        ("configurations", configs.len() as f64),
+        ("rates x 2 signs", 2.0 * a.rates_deg_s.len() as f64),
+        ("--records", a.records as f64),
+        ("samples per record", rows_per_record),
+    ])?;
     for (n, v) in [
         ("--scale-factor", a.scale_factor),
         ("--bias", a.bias),
@@ -502,7 +520,7 @@ fn gyro_sim_of(a: &SimGyroArgs) -> CliResult<GyroSim> {
         scale_factor: a.scale_factor,
         bias: a.bias,
         bias_shift: a.bias_shift,
-        configs: parse_configs(&a.configs)?,
+        configs,
         rates_deg_s: a.rates_deg_s.clone(),
         records: a.records,
         turns: a.turns,
@@ -535,7 +553,7 @@ pub fn simulate(c: &SimCommand) -> CliResult<()> {
                             r.rate_deg_s,
                             s.time_s,
                             deg9(s.table_angle_rad),
-                            s.output
+                            crate::options::finite_output(s.output)?
                         ));
                     }
                 }
@@ -547,7 +565,7 @@ pub fn simulate(c: &SimCommand) -> CliResult<()> {
                         deg9(o.alpha_rad),
                         deg9(o.beta_rad),
                         o.rate_deg_s,
-                        o.output
+                        crate::options::finite_output(o.output)?
                     ));
                 }
             }
@@ -557,7 +575,11 @@ pub fn simulate(c: &SimCommand) -> CliResult<()> {
             let cfg = accel_sim_of(a)?;
             let mut text = String::from("beta_deg,output\n");
             for o in simulate_accel(&cfg) {
-                text.push_str(&format!("{},{}\n", deg9(o.beta_rad), o.output));
+                text.push_str(&format!(
+                    "{},{}\n",
+                    deg9(o.beta_rad),
+                    crate::options::finite_output(o.output)?
+                ));
             }
             write_text(a.output.as_deref(), &text)
         }
@@ -607,9 +629,16 @@ pub struct SimAccelArgs {
 fn accel_sim_of(a: &SimAccelArgs) -> CliResult<AccelSim> {
     nonneg("--noise", a.noise)?;
     finite_list("--betas-deg", &a.betas_deg)?;
+    for b in &a.betas_deg {
+        crate::options::angle_deg("--betas-deg", *b)?;
+    }
     if a.samples == 0 {
         return Err(usage("--samples must be at least 1"));
     }
+    crate::options::sim_size(&[
+        ("angles", a.betas_deg.len() as f64),
+        ("--samples", a.samples as f64),
+    ])?;
     for (n, v) in [
         ("--scale-factor", a.scale_factor),
         ("--bias", a.bias),

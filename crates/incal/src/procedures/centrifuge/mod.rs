@@ -706,6 +706,25 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
         value: centre,
         u: f64::NAN,
     });
+    // A radius is a length: a negative one means the scale factor's sign
+    // (or K0) does not match the output, and every coefficient would be
+    // sign-flipped nonsense.
+    for (name, v) in [
+        ("R_centre_m", Some(centre_radius_m)),
+        ("R_plus_m", ju("R_plus_m")),
+        ("R_minus_m", ju("R_minus_m")),
+        ("R_plus_static_m", static_r[0]),
+        ("R_minus_static_m", static_r[1]),
+    ] {
+        if let Some(v) = v {
+            if !(v.value.is_finite() && v.value > 0.0) {
+                return Err(Error::Unsupported(format!(
+                    "the fitted radius {name} = {:.6} m is not positive: the sign of K1 ({}) does not match the output's response to the rate (check --k1 and the polarity)",
+                    v.value, opts.k1.value
+                )));
+            }
+        }
+    }
     let ecm_offset_m = ju("ecm_offset_m").unwrap_or(ValueU {
         value: offset,
         u: f64::NAN,

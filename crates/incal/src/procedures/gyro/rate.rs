@@ -388,15 +388,7 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
             got: distinct_rates,
         });
     }
-    if let Some(first) = obs.first() {
-        if obs.iter().all(|o| o.output == first.output) {
-            return Err(Error::InvalidValue {
-                what: "output: constant at every rate, so the scale factor K1 is not observable"
-                    .into(),
-                value: first.output.to_string(),
-            });
-        }
-    }
+    crate::validity::require_varying(obs.iter().map(|o| o.output), "output")?;
     let inputs: Vec<f64> = pos
         .iter()
         .map(|p| input_rate_deg_s(p.0, opts.latitude_rad, opts.ia))
@@ -404,6 +396,7 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
     let stats: Vec<PositionStats> = pos.iter().map(|p| p.2).collect();
     let (fit, weights, phys, asymmetric, asym_warning) =
         fit_best(&inputs, &stats, &terms, opts.noise)?;
+    crate::validity::require_scale_factor(&phys, "K1")?;
     let mut warnings = fit.quality_warnings(
         "table-rate errors, a nonlinearity not modelled (add K2/K3), or drift between rates",
     );

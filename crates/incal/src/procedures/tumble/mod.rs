@@ -427,6 +427,7 @@ fn position_differences(
 /// is fitted and their scatter enters the uncertainty. With two or more pass
 /// labels each pass is also fitted alone and the differences are reported.
 pub fn calibrate(obs: &[Observation], opts: &TumbleOptions) -> Result<TumbleResult> {
+    crate::validity::require_varying(obs.iter().map(|o| o.output), "output")?;
     let SingleFit {
         coefficients,
         fit,
@@ -434,6 +435,7 @@ pub fn calibrate(obs: &[Observation], opts: &TumbleOptions) -> Result<TumbleResu
         angles,
         index_error_rad,
     } = fit_observations(obs, opts)?;
+    crate::validity::require_scale_factor(&coefficients, "K1")?;
     let absorbed = absorbed(opts.mount, &opts.terms, &angles)?;
     let warnings = fit.quality_warnings(
         "drift or an unmodelled term (beyond what the index-error model explains)",
