@@ -46,8 +46,9 @@ struct GeometryFile {
 #[serde(deny_unknown_fields)]
 struct AccelerometerEntry {
     name: String,
-    position_m: [f64; 3],
-    direction: [f64; 3],
+    // Vec, then checked: serde's fixed-size arrays ignore extra elements.
+    position_m: Vec<f64>,
+    direction: Vec<f64>,
 }
 
 impl GeometryArgs {
@@ -81,15 +82,22 @@ impl GeometryArgs {
                         None => format!("{name}: {msg}"),
                     })
                 })?;
-                let accs = parsed
-                    .accelerometer
-                    .into_iter()
-                    .map(|a| ArrayAccelerometer {
+                let mut accs = Vec::with_capacity(parsed.accelerometer.len());
+                for (k, a) in parsed.accelerometer.into_iter().enumerate() {
+                    for (field, v) in [("position_m", &a.position_m), ("direction", &a.direction)] {
+                        if v.len() != 3 {
+                            return Err(CliError::Input(format!(
+                                "{name}: accelerometer[{k}].{field}: expected 3 numbers, got {}",
+                                v.len()
+                            )));
+                        }
+                    }
+                    accs.push(ArrayAccelerometer {
                         name: a.name,
-                        position_m: Vector3::from(a.position_m),
-                        direction: Vector3::from(a.direction),
-                    })
-                    .collect();
+                        position_m: Vector3::new(a.position_m[0], a.position_m[1], a.position_m[2]),
+                        direction: Vector3::new(a.direction[0], a.direction[1], a.direction[2]),
+                    });
+                }
                 (
                     Geometry::new(accs).map_err(|e| in_file(&name, e))?,
                     name,
@@ -98,6 +106,14 @@ impl GeometryArgs {
             }
             None => {
                 let l = self.lever_arm_m.unwrap_or(DEFAULT_LEVER_ARM_M);
+                // A lever arm is a dimension of a unit on a table: millimetres
+                // to a few metres.
+                if !(l.is_finite() && l > 0.0 && l <= 10.0) {
+                    return Err(usage(format!(
+                        "--lever-arm-m must be positive and at most 10 m, got {}",
+                        crate::output::num(l)
+                    )));
+                }
                 (
                     Geometry::paper(l).map_err(|e| usage(format!("--lever-arm-m: {e}")))?,
                     format!("paper layout, lever arm {l} m"),
@@ -258,6 +274,16 @@ fn parse_position(s: &str) -> Option<Vector3<f64>> {
 fn read_static(path: &Path, g: &Geometry) -> CliResult<(Table, Vec<StaticSample>)> {
     let t = Table::read(path)?;
     let pos_col = t.opt_column("position");
+    if pos_col.is_some()
+        && ["fx_g", "fy_g", "fz_g"]
+            .iter()
+            .any(|c| t.opt_column(c).is_some())
+    {
+        return Err(CliError::Input(format!(
+            "{}: both a 'position' column and fx_g/fy_g/fz_g columns: give one description of the specific force",
+            t.path
+        )));
+    }
     let force_cols = match pos_col {
         Some(_) => None,
         None => {
@@ -283,7 +309,7 @@ fn read_static(path: &Path, g: &Geometry) -> CliResult<(Table, Vec<StaticSample>
                     row,
                     format!(
                         "column 'position': '{}' is not one of +x, -x, +y, -y, +z, -z",
-                        t.text(row, c)
+                        crate::output::clip(t.text(row, c))
                     ),
                 )
             })?,

@@ -122,7 +122,22 @@ fn read_records(t: &Table) -> CliResult<Vec<(usize, Record)>> {
             table_angle_rad: t.f64(row, cg)?.to_radians(),
             output: t.f64(row, co)?,
         };
-        if last != Some(key) {
+        // A new record starts when the configuration or rate changes, or
+        // when the time goes back (records of one configuration written one
+        // after another, each from its own t = 0). Within a record the time
+        // must increase: a repeated time is refused at its own line.
+        let prev_time = out
+            .last()
+            .and_then(|(_, r)| r.samples.last())
+            .map(|p| p.time_s);
+        let restart = matches!(prev_time, Some(p) if s.time_s < p);
+        if last == Some(key) && prev_time == Some(s.time_s) {
+            return Err(t.error_at(
+                row,
+                format!("column 'time_s': {} repeats the previous sample's time (time must increase within a record)", s.time_s),
+            ));
+        }
+        if last != Some(key) || restart {
             out.push((
                 t.line(row),
                 Record {

@@ -72,9 +72,19 @@ fn read_observations(path: &std::path::Path) -> CliResult<(Table, Vec<Observatio
     for row in 0..t.row_count() {
         let angle = t.f64(row, ca)?;
         let output = t.f64(row, co)?;
-        let pass = cp
-            .map(|c| t.text(row, c).to_string())
-            .filter(|s| !s.is_empty());
+        let pass = match cp {
+            Some(c) => {
+                let label = t.text(row, c).trim();
+                if label.is_empty() {
+                    return Err(t.error_at(
+                        row,
+                        "column 'pass': empty label (label every row of a multi-pass file)".into(),
+                    ));
+                }
+                Some(label.to_string())
+            }
+            None => None,
+        };
         obs.push(Observation {
             angle_rad: angle.to_radians(),
             output,

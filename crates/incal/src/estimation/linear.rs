@@ -326,7 +326,7 @@ pub fn fit(design: &Design, y: &DVector<f64>, opts: &FitOptions) -> Result<Fit> 
         }
         if let Some(v) = w.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
             return Err(Error::InvalidValue {
-                what: "weight".into(),
+                what: "observation weight (1/variance: a zero, negative or non-finite noise level or sample scatter)".into(),
                 value: v.to_string(),
             });
         }

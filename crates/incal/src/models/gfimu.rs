@@ -73,6 +73,20 @@ impl Geometry {
                     value: "''".into(),
                 });
             }
+            // Names are CSV column names: no separators, quotes or comment
+            // marks, and none of the columns the files already use.
+            const RESERVED: [&str; 6] = ["time_s", "t", "position", "fx_g", "fy_g", "fz_g"];
+            let ok_chars = a
+                .name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'));
+            if !ok_chars || a.name.len() > 64 || RESERVED.contains(&a.name.as_str()) {
+                return Err(Error::Unsupported(format!(
+                    "accelerometer name '{}' cannot be a CSV column: use letters, digits, '_', '-', '.' (at most 64), not one of {}",
+                    a.name.chars().take(40).collect::<String>(),
+                    RESERVED.join(", ")
+                )));
+            }
             if out.iter().any(|b: &ArrayAccelerometer| b.name == a.name) {
                 return Err(Error::Unsupported(format!(
                     "accelerometer '{}' listed twice",

@@ -80,12 +80,19 @@ impl TumblePlan {
 
     /// `n` equally spaced angles from 0°.
     pub fn n_point(n: usize) -> Result<Self> {
-        if n < 2 {
+        // Four is the least that separates K0, K1 and a misalignment (the
+        // GJB 4-point test, 0/90/180/270); two (0/180) leave K1 unobservable.
+        if n < 4 {
             return Err(Error::TooFew {
-                what: "angles in an N-point plan".into(),
-                needed: 2,
+                what: "angles in an N-point plan (0/180 alone cannot observe K1)".into(),
+                needed: 4,
                 got: n,
             });
+        }
+        if n > 3600 {
+            return Err(Error::Unsupported(format!(
+                "an N-point plan has at most 3600 angles (0.1 deg steps), got {n}"
+            )));
         }
         let step = 360.0 / n as f64;
         Ok(Self {
