@@ -1,0 +1,453 @@
+//! Regression tests of issue 13's reproducers: each bad input now exits 2
+//! with one line naming the file (and line) or the option, or gives a
+//! correct result. One test per defect, named after it.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_incal"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("incal_hard_{}_{name}", std::process::id()))
+}
+
+fn write(name: &str, text: &str) -> PathBuf {
+    let p = tmp(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().unwrap()
+}
+
+fn ok(o: &Output) -> String {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8_lossy(&o.stdout).to_string()
+}
+
+/// Exit 2, exactly one stderr line, containing every `needle`, and short.
+fn refused(o: &Output, needles: &[&str]) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    assert!(
+        err.len() < 400,
+        "message too long ({} chars): {err}",
+        err.len()
+    );
+    for n in needles {
+        assert!(err.contains(n), "{n:?} not in {err}");
+    }
+}
+
+fn p(x: &PathBuf) -> &str {
+    x.to_str().unwrap()
+}
+
+#[test]
+fn tumble_with_constant_output_is_refused() {
+    let mut s = String::from("angle_deg,output\n");
+    for k in 0..12 {
+        s.push_str(&format!("{},1.5\n{},1.5\n", 30 * k, 30 * k));
+    }
+    let f = write("const.csv", &s);
+    refused(
+        &run(&["tumble", "--mount", "pendulum", "--input", p(&f)]),
+        &["const.csv", "scale factor is not observable"],
+    );
+}
+
+#[test]
+fn tumble_with_output_unrelated_to_the_input_is_refused() {
+    // Outputs that follow a pseudo-random pattern, not the angle: K1 is
+    // not different from zero.
+    let mut s = String::from("angle_deg,output\n");
+    for k in 0..24 {
+        let v = ((k * 7919) % 13) as f64 - 6.0;
+        s.push_str(&format!("{},{v}\n", 30 * (k / 2)));
+    }
+    let f = write("noise.csv", &s);
+    refused(
+        &run(&["tumble", "--mount", "pendulum", "--input", p(&f)]),
+        &["noise.csv", "K1 is not observable"],
+    );
+}
+
+fn centrifuge_csv() -> PathBuf {
+    let f = tmp("c.csv");
+    ok(&run(&["simulate", "centrifuge", "-o", p(&f)]));
+    f
+}
+
+#[test]
+fn centrifuge_with_negative_k1_is_refused_not_sign_flipped() {
+    let f = centrifuge_csv();
+    refused(
+        &run(&[
+            "centrifuge",
+            "--input",
+            p(&f),
+            "--k0",
+            "0",
+            "--u-k0",
+            "1e-6",
+            "--k1",
+            "-1.3",
+            "--u-k1",
+            "1e-5",
+            "--radius-m",
+            "0.71",
+            "--latitude-deg",
+            "39.9",
+        ]),
+        &["c.csv", "radius", "not positive", "K1"],
+    );
+}
+
+#[test]
+fn centrifuge_with_huge_u_k1_is_refused() {
+    let f = centrifuge_csv();
+    refused(
+        &run(&[
+            "centrifuge",
+            "--input",
+            p(&f),
+            "--k0",
+            "0",
+            "--u-k0",
+            "1e-6",
+            "--k1",
+            "1.3",
+            "--u-k1",
+            "1e300",
+            "--radius-m",
+            "0.71",
+            "--latitude-deg",
+            "39.9",
+        ]),
+        &["--u-k1"],
+    );
+}
+
+#[test]
+fn latitude_beyond_90_is_refused_everywhere() {
+    let f = centrifuge_csv();
+    refused(
+        &run(&[
+            "centrifuge",
+            "--input",
+            p(&f),
+            "--k0",
+            "0",
+            "--u-k0",
+            "1e-6",
+            "--k1",
+            "1.3",
+            "--u-k1",
+            "1e-5",
+            "--radius-m",
+            "0.71",
+            "--latitude-deg",
+            "200",
+        ]),
+        &["--latitude-deg", "200"],
+    );
+    refused(
+        &run(&["simulate", "misalign", "gyro", "--latitude-deg", "-91"]),
+        &["--latitude-deg"],
+    );
+    refused(
+        &run(&["simulate", "centrifuge", "--latitude-deg", "95"]),
+        &["--latitude-deg"],
+    );
+}
+
+#[test]
+fn huge_cell_in_a_gyro_time_series_is_refused_at_its_line() {
+    let f = tmp("g.csv");
+    ok(&run(&[
+        "simulate",
+        "misalign",
+        "gyro",
+        "--time-series",
+        "-o",
+        p(&f),
+    ]));
+    let text = std::fs::read_to_string(&f).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let mut cells: Vec<String> = lines[5].split(',').map(String::from).collect();
+    *cells.last_mut().unwrap() = "1e308".into();
+    lines[5] = cells.join(",");
+    let g = write("g_big.csv", &(lines.join("\n") + "\n"));
+    refused(
+        &run(&["misalign", "gyro", "--input", p(&g), "--k1", "-2.9222"]),
+        &["g_big.csv:6", "out of range"],
+    );
+}
+
+#[test]
+fn simulated_gyro_time_series_with_default_records_reduces() {
+    let f = tmp("g2.csv");
+    ok(&run(&[
+        "simulate",
+        "misalign",
+        "gyro",
+        "--time-series",
+        "-o",
+        p(&f),
+    ]));
+    let out = ok(&run(&[
+        "misalign",
+        "gyro",
+        "--input",
+        p(&f),
+        "--k1",
+        "-2.9222",
+        "--json",
+    ]));
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    // 5 configurations x 3 rates x 2 signs x 2 records.
+    assert_eq!(v["procedure"], "misalign-gyro");
+    let y2 = v["coefficients"]["dtheta_y2"]["value"].as_f64().unwrap();
+    assert!(
+        (y2 - (-162.2f64).to_radians() / 3600.0).abs() < 1e-5,
+        "{y2}"
+    );
+}
+
+#[test]
+fn repeated_time_in_a_raw_record_names_the_line_at_fault() {
+    let f = tmp("g3.csv");
+    ok(&run(&[
+        "simulate",
+        "misalign",
+        "gyro",
+        "--time-series",
+        "-o",
+        p(&f),
+    ]));
+    let text = std::fs::read_to_string(&f).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let prev_time = lines[8].split(',').nth(3).unwrap().to_string();
+    let mut cells: Vec<String> = lines[9].split(',').map(String::from).collect();
+    cells[3] = prev_time;
+    lines[9] = cells.join(",");
+    let g = write("g_time.csv", &(lines.join("\n") + "\n"));
+    refused(
+        &run(&["misalign", "gyro", "--input", p(&g), "--k1", "-2.9222"]),
+        &["g_time.csv:10", "time"],
+    );
+}
+
+#[test]
+fn compare_overflow_gives_a_finite_en() {
+    let t = tmp("t.csv");
+    ok(&run(&["simulate", "tumble", "-o", p(&t)]));
+    let out = ok(&run(&[
+        "tumble",
+        "--mount",
+        "pendulum",
+        "--input",
+        p(&t),
+        "--json",
+    ]));
+    let mut a: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let mut b = a.clone();
+    for (d, v) in [(&mut a, 1e200), (&mut b, -1e200)] {
+        d["coefficients"]["K0"]["value"] = serde_json::json!(v);
+        d["coefficients"]["K0"]["u"] = serde_json::json!(1e180);
+        d["coefficients"]["K0"]["U95"] = serde_json::json!(2e180);
+    }
+    let fa = write("a.json", &a.to_string());
+    let fb = write("b.json", &b.to_string());
+    let out = ok(&run(&["compare", p(&fa), p(&fb), "--json"]));
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let text = v.to_string();
+    assert!(
+        !text.contains("null") || !text.contains("\"En\":null"),
+        "{text}"
+    );
+    let out = ok(&run(&["compare", p(&fa), p(&fb)]));
+    let k0 = out.lines().find(|l| l.starts_with("K0")).unwrap();
+    assert!(k0.contains("DIFFERS"), "{k0}");
+}
+
+#[test]
+fn simulators_refuse_non_finite_truths() {
+    refused(
+        &run(&["simulate", "centrifuge", "--r-plus-m", "1e300"]),
+        &["--r-plus-m"],
+    );
+    refused(
+        &run(&["simulate", "misalign", "accel", "--betas-deg", "1e300,0"]),
+        &["--betas-deg"],
+    );
+}
+
+#[test]
+fn simulator_sizes_are_limited_with_the_limit_named() {
+    for args in [
+        &[
+            "simulate",
+            "misalign",
+            "gyro",
+            "--time-series",
+            "--turns",
+            "1e300",
+        ][..],
+        &[
+            "simulate",
+            "misalign",
+            "gyro",
+            "--time-series",
+            "--turns",
+            "1e6",
+        ][..],
+        &[
+            "simulate",
+            "misalign",
+            "gyro",
+            "--time-series",
+            "--samples-per-turn",
+            "1000000",
+        ][..],
+        &["simulate", "misalign", "gyro", "--records", "100000000000"][..],
+        &["simulate", "centrifuge", "--samples", "1000000000"][..],
+    ] {
+        let o = run(args);
+        refused(&o, &[]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains("10000000") || err.contains("at most 1000"),
+            "{args:?}: {err}"
+        );
+    }
+}
+
+#[test]
+fn plan_tumble_with_two_points_is_refused() {
+    refused(
+        &run(&["plan", "tumble", "--points", "2"]),
+        &["at least 4", "got 2"],
+    );
+    refused(&run(&["plan", "tumble", "--points", "1000000"]), &["3600"]);
+}
+
+#[test]
+fn empty_pass_label_is_refused() {
+    let f = tmp("t2.csv");
+    ok(&run(&["simulate", "tumble", "--passes", "2", "-o", p(&f)]));
+    let text = std::fs::read_to_string(&f).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    lines[3] = lines[3].rsplit_once(',').unwrap().0.to_string() + ",";
+    let g = write("t_empty.csv", &(lines.join("\n") + "\n"));
+    refused(
+        &run(&["tumble", "--mount", "pendulum", "--input", p(&g)]),
+        &["t_empty.csv:4", "pass", "empty"],
+    );
+}
+
+#[test]
+fn position_and_force_columns_together_are_refused() {
+    let f = tmp("s.csv");
+    ok(&run(&["simulate", "gfimu", "-o", p(&f)]));
+    let text = std::fs::read_to_string(&f).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let header = lines.next().unwrap();
+    assert!(header.contains("position"), "{header}");
+    let mut s = format!("{header},fx_g,fy_g,fz_g\n");
+    for l in lines {
+        s.push_str(&format!("{l},0,0,1\n"));
+    }
+    let g = write("s_both.csv", &s);
+    refused(
+        &run(&["gfimu", "calibrate", "--input", p(&g)]),
+        &["s_both.csv", "position", "fx_g"],
+    );
+}
+
+#[test]
+fn geometry_with_extra_elements_or_bad_names_is_refused() {
+    let f = tmp("s2.csv");
+    ok(&run(&["simulate", "gfimu", "-o", p(&f)]));
+    let acc = |name: &str, pos: &str| {
+        format!("[[accelerometer]]\nname = \"{name}\"\nposition_m = {pos}\ndirection = [0.0, 0.0, 1.0]\n")
+    };
+    let mut g = acc("a", "[0.1, 0.0, 0.0, 99]");
+    for n in ["b", "c", "d", "e", "f"] {
+        g.push_str(&acc(n, "[0.0, 0.1, 0.0]"));
+    }
+    let gf = write("g_extra.toml", &g);
+    refused(
+        &run(&["gfimu", "calibrate", "--input", p(&f), "--geometry", p(&gf)]),
+        &[
+            "g_extra.toml",
+            "accelerometer[0].position_m",
+            "3 numbers, got 4",
+        ],
+    );
+    for bad in ["a,b", "time_s", "#c"] {
+        let mut g = acc(bad, "[0.1, 0.0, 0.0]");
+        for n in ["b2", "c", "d", "e", "f"] {
+            g.push_str(&acc(n, "[0.0, 0.1, 0.0]"));
+        }
+        let gf = write("g_name.toml", &g);
+        refused(
+            &run(&["gfimu", "calibrate", "--input", p(&f), "--geometry", p(&gf)]),
+            &["g_name.toml", "cannot be a CSV column"],
+        );
+    }
+}
+
+#[test]
+fn huge_lever_arm_and_long_cells_are_not_echoed_whole() {
+    refused(
+        &run(&[
+            "gfimu",
+            "calibrate",
+            "--input",
+            "x.csv",
+            "--lever-arm-m",
+            "1e300",
+        ]),
+        &["--lever-arm-m", "1.000000e300"],
+    );
+    let long = "9".repeat(100_000) + "x";
+    let f = write("long.csv", &format!("angle_deg,output\n0,{long}\n"));
+    refused(
+        &run(&["tumble", "--mount", "pendulum", "--input", p(&f)]),
+        &["long.csv:2", "characters"],
+    );
+}
+
+#[test]
+fn json_with_a_bom_is_read_everywhere() {
+    let t = tmp("t3.csv");
+    ok(&run(&["simulate", "tumble", "-o", p(&t)]));
+    let out = ok(&run(&[
+        "tumble",
+        "--mount",
+        "pendulum",
+        "--input",
+        p(&t),
+        "--json",
+    ]));
+    let f = write("bom.json", &format!("\u{feff}{out}"));
+    ok(&run(&["compare", p(&f), p(&f)]));
+    ok(&run(&["report", p(&f), "-o", p(&tmp("bom.html"))]));
+    let c = centrifuge_csv();
+    ok(&run(&[
+        "centrifuge",
+        "--input",
+        p(&c),
+        "--from",
+        p(&f),
+        "--radius-m",
+        "0.71",
+        "--latitude-deg",
+        "39.9",
+    ]));
+}
