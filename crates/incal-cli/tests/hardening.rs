@@ -43,7 +43,7 @@ fn refused(o: &Output, needles: &[&str]) {
     }
 }
 
-fn p(x: &PathBuf) -> &str {
+fn p(x: &std::path::Path) -> &str {
     x.to_str().unwrap()
 }
 
