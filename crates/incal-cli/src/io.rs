@@ -16,12 +16,12 @@ const STDIN_NAME: &str = "<stdin>";
 const BOM: &[u8] = b"\xEF\xBB\xBF";
 
 /// True when `path` is `-`, the conventional name of stdin / stdout.
-fn is_dash(path: &Path) -> bool {
+pub fn is_dash(path: &Path) -> bool {
     path.as_os_str() == "-"
 }
 
 /// Display name of `path` for messages (`<stdin>` for `-`).
-fn display_name(path: &Path) -> String {
+pub fn display_name(path: &Path) -> String {
     if is_dash(path) {
         STDIN_NAME.to_string()
     } else {

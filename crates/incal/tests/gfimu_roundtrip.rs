@@ -143,11 +143,7 @@ fn motion_solution_recovers_f0_and_omega_dot() {
     let noise = 2e-4;
     let series = simulate_motion(&g, &t, &m, noise, 5).unwrap();
     let cal: Vec<CalibratedAccelerometer> = (0..6)
-        .map(|j| CalibratedAccelerometer {
-            k0: t.k0[j],
-            ks: t.ks[j],
-            noise_output: Some(noise),
-        })
+        .map(|j| CalibratedAccelerometer::new(t.k0[j], t.ks[j], Some(noise)))
         .collect();
     let sol = solve(&g, &cal, &series, &SolveOptions::default()).unwrap();
     assert_eq!(sol.samples.len(), 201);
@@ -201,11 +197,7 @@ fn calibrated_unit_beats_nominal_unit() {
     let nominal: Vec<CalibratedAccelerometer> = g
         .accelerometers()
         .iter()
-        .map(|a| CalibratedAccelerometer {
-            k0: 0.0,
-            ks: a.direction,
-            noise_output: Some(noise),
-        })
+        .map(|a| CalibratedAccelerometer::new(0.0, a.direction, Some(noise)))
         .collect();
     let m = profile();
     let series = simulate_motion(&g, &t, &m, noise, 12).unwrap();

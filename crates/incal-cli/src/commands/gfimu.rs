@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use clap::ValueEnum;
 use incal::document::InputFile;
 use incal::models::gfimu::{ArrayAccelerometer, Geometry};
+use incal::procedures::gfimu::solve::Solver;
 use incal::procedures::gfimu::{
     calibrate, solve, CalibrateOptions, CalibratedAccelerometer, MotionSolution, SolveOptions,
     StaticSample,
@@ -164,7 +165,10 @@ pub struct SolveArgs {
     /// Local gravity that defines the g unit (m/s^2).
     #[arg(long, visible_alias = "g-local", default_value_t = STANDARD_GRAVITY_M_S2)]
     pub gravity_m_s2: f64,
-    /// Print one JSON object instead of CSV.
+    /// Predicted u of the integrated angular rate (rad/s) beyond which a warning is given.
+    #[arg(long, default_value_t = 0.01)]
+    pub omega_u_limit_rad_s: f64,
+    /// Print one JSON object instead of CSV (held in memory; the CSV output streams).
     #[arg(long)]
     pub json: bool,
     /// Write to this file instead of standard output.
@@ -394,10 +398,32 @@ fn read_calibration(
                     .ok_or_else(|| bad("noise_output must be a positive number or null"))?,
             ),
         };
+        // The calibration's u (optional: a hand-made file may omit it).
+        let u_k0 = match a.pointer("/K0/u") {
+            None | Some(Value::Null) => 0.0,
+            Some(v) => v
+                .as_f64()
+                .filter(|u| u.is_finite() && *u >= 0.0)
+                .ok_or_else(|| bad("K0.u must be a non-negative number"))?,
+        };
+        let u_ks = match a.pointer("/Ks/u") {
+            None | Some(Value::Null) => Vector3::zeros(),
+            Some(v) => {
+                let u = v
+                    .as_array()
+                    .filter(|v| v.len() == 3)
+                    .and_then(|v| v.iter().map(Value::as_f64).collect::<Option<Vec<f64>>>())
+                    .filter(|u| u.iter().all(|x| x.is_finite() && *x >= 0.0))
+                    .ok_or_else(|| bad("Ks.u must be an array of three non-negative numbers"))?;
+                Vector3::new(u[0], u[1], u[2])
+            }
+        };
         out.push(CalibratedAccelerometer {
             k0,
             ks: Vector3::new(ks[0], ks[1], ks[2]),
             noise_output,
+            u_k0,
+            u_ks,
         });
     }
     Ok((name, out))
@@ -437,28 +463,184 @@ fn read_series(path: &Path, g: &Geometry) -> CliResult<(String, Series)> {
 /// `incal gfimu solve`.
 pub fn run_solve(a: &SolveArgs) -> CliResult<()> {
     let omega0 = vec3("--omega0-rad-s", &a.omega0_rad_s)?;
-    if !(a.gravity_m_s2.is_finite() && a.gravity_m_s2 > 0.0) {
-        return Err(usage("--gravity-m-s2 must be a positive number"));
+    if !(a.gravity_m_s2.is_finite() && a.gravity_m_s2 > 0.0 && a.gravity_m_s2 <= 100.0) {
+        return Err(usage(
+            "--gravity-m-s2 must be a positive number (at most 100)",
+        ));
+    }
+    if !(a.omega_u_limit_rad_s.is_finite() && a.omega_u_limit_rad_s > 0.0) {
+        return Err(usage("--omega-u-limit-rad-s must be a positive number"));
     }
     let (g, _) = a.geometry.load()?;
     let (cal_file, cal) = read_calibration(&a.calibration, &g)?;
-    let (file, series) = read_series(&a.input, &g)?;
     let opts = SolveOptions {
         omega0_rad_s: omega0,
         gravity_m_s2: a.gravity_m_s2,
+        omega_u_limit_rad_s: a.omega_u_limit_rad_s,
     };
-    let sol = solve(&g, &cal, &series, &opts).map_err(|e| match e {
+    // Everything about the calibration is checked before the series is read.
+    let solver = Solver::new(&g, &cal, &opts).map_err(|e| match e {
         incal::Error::Unseparable { .. } | incal::Error::IllConditioned { .. } => in_file(
             &cal_file,
             format!("calibrated geometry cannot solve the motion: {e}"),
         ),
-        e => in_file(&file, e),
+        e => in_file(&cal_file, e),
     })?;
     if a.json {
-        write_text(a.output.as_deref(), &json_text(&solution_json(&file, &sol)))
-    } else {
-        write_text(a.output.as_deref(), &solution_csv(&sol))
+        let (file, series) = read_series(&a.input, &g)?;
+        let sol = solve(&g, &cal, &series, &opts).map_err(|e| in_file(&file, e))?;
+        return write_text(a.output.as_deref(), &json_text(&solution_json(&file, &sol)));
     }
+    stream_solve(a, &g, solver)
+}
+
+/// `gfimu solve` to CSV, one row in, one row out: constant memory.
+fn stream_solve(a: &SolveArgs, g: &Geometry, mut solver: Solver) -> CliResult<()> {
+    use std::io::{BufRead, BufReader, Read, Write};
+    let name = crate::io::display_name(&a.input);
+    let input: Box<dyn Read> = if crate::io::is_dash(&a.input) {
+        Box::new(std::io::stdin().lock())
+    } else {
+        Box::new(
+            std::fs::File::open(&a.input)
+                .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?,
+        )
+    };
+    let mut reader = BufReader::with_capacity(1 << 16, input);
+    // Skip a UTF-8 byte-order mark.
+    if reader
+        .fill_buf()
+        .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?
+        .starts_with(b"\xEF\xBB\xBF")
+    {
+        reader.consume(3);
+    }
+    let mut csv = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .comment(Some(b'#'))
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(reader);
+    let out: Box<dyn Write> = match &a.output {
+        Some(p) if !crate::io::is_dash(p) => Box::new(
+            std::fs::File::create(p)
+                .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", p.display()))?,
+        ),
+        _ => Box::new(std::io::stdout().lock()),
+    };
+    let mut w = std::io::BufWriter::with_capacity(1 << 16, out);
+    let wfail =
+        |e: std::io::Error| CliError::Failure(anyhow::anyhow!("cannot write the solution: {e}"));
+    let mut rec = csv::ByteRecord::new();
+    let mut cols: Option<(usize, Vec<usize>, usize)> = None;
+    let mut rows = 0u64;
+    let mut prev_t: Option<f64> = None;
+    loop {
+        let more = csv.read_byte_record(&mut rec).map_err(|e| {
+            let line = e.position().map_or(0, |p| p.line());
+            CliError::Input(format!("{name}:{line}: not valid CSV"))
+        })?;
+        if !more {
+            break;
+        }
+        let line = rec.position().map_or(0, |p| p.line());
+        if rec.iter().all(|f| f.is_empty()) {
+            continue;
+        }
+        let Some((ct, ref acc, width)) = cols else {
+            let headers: Vec<String> = rec
+                .iter()
+                .map(|h| String::from_utf8_lossy(h).to_string())
+                .collect();
+            let find = |n: &str| {
+                headers.iter().position(|h| h == n).ok_or_else(|| {
+                    CliError::Input(format!(
+                        "{name}: missing column '{n}' (columns: {})",
+                        crate::output::clip(&headers.join(", "))
+                    ))
+                })
+            };
+            let ct = find("time_s")?;
+            let acc = g
+                .names()
+                .iter()
+                .map(|n| find(n))
+                .collect::<CliResult<Vec<usize>>>()?;
+            cols = Some((ct, acc, headers.len()));
+            let mut head = String::from(
+                "time_s,f0_x_g,f0_y_g,f0_z_g,omega_dot_x_rad_s2,omega_dot_y_rad_s2,omega_dot_z_rad_s2,omega_x_rad_s,omega_y_rad_s,omega_z_rad_s",
+            );
+            head.push_str(",u_f0_x_g,u_f0_y_g,u_f0_z_g,u_omega_dot_x_rad_s2,u_omega_dot_y_rad_s2,u_omega_dot_z_rad_s2,u_omega_x_rad_s,u_omega_y_rad_s,u_omega_z_rad_s\n");
+            w.write_all(head.as_bytes()).map_err(wfail)?;
+            continue;
+        };
+        if rec.len() != width {
+            return Err(CliError::Input(format!(
+                "{name}:{line}: {} fields, but the header has {width}",
+                rec.len()
+            )));
+        }
+        let num = |k: usize, what: &str| -> CliResult<f64> {
+            let text = std::str::from_utf8(&rec[k]).unwrap_or("");
+            match text.parse::<f64>() {
+                Ok(v) if v.is_finite() && v.abs() <= crate::input::MAX_ABS_VALUE => Ok(v),
+                _ => Err(CliError::Input(format!(
+                    "{name}:{line}: column '{what}': '{}' is not a finite number within 1e15",
+                    crate::output::clip(&String::from_utf8_lossy(&rec[k]))
+                ))),
+            }
+        };
+        let t = num(ct, "time_s")?;
+        if let Some(prev) = prev_t {
+            if t <= prev {
+                return Err(CliError::Input(format!(
+                    "{name}:{line}: column 'time_s': {t} is not after the previous sample ({prev})"
+                )));
+            }
+        }
+        prev_t = Some(t);
+        let mut e = Vec::with_capacity(acc.len());
+        for (k, n) in acc.iter().zip(g.names()) {
+            e.push(num(*k, &n)?);
+        }
+        let m = solver
+            .step(t, &e)
+            .map_err(|err| CliError::Input(format!("{name}:{line}: {err}")))?;
+        rows += 1;
+        let mut fields: Vec<f64> = vec![m.time_s];
+        fields.extend(m.f0_g.iter());
+        fields.extend(m.omega_dot_rad_s2.iter());
+        fields.extend(m.omega_rad_s.iter());
+        let mut s = fields
+            .iter()
+            .map(|x| x.to_string())
+            .collect::<Vec<_>>()
+            .join(",");
+        for u in [m.u_f0_g, m.u_omega_dot_rad_s2, m.u_omega_rad_s] {
+            match u {
+                Some(v) => s.push_str(&format!(",{},{},{}", v.x, v.y, v.z)),
+                None => s.push_str(",,,"),
+            }
+        }
+        s.push('\n');
+        w.write_all(s.as_bytes()).map_err(wfail)?;
+    }
+    if cols.is_none() {
+        return Err(CliError::Input(format!(
+            "{name}: empty file (expected a header row)"
+        )));
+    }
+    if rows == 0 {
+        return Err(CliError::Input(format!(
+            "{name}: no data rows after the header"
+        )));
+    }
+    writeln!(w, "# mode: {}", solver.mode().name()).map_err(wfail)?;
+    for x in solver.warnings() {
+        writeln!(w, "# warning: {x}").map_err(wfail)?;
+    }
+    w.flush().map_err(wfail)?;
+    Ok(())
 }
 
 fn vec_json(v: &Vector3<f64>) -> Value {
@@ -488,6 +670,7 @@ pub fn solution_json(file: &str, s: &MotionSolution) -> Value {
                     json!({
                         "u_f0_g": m.u_f0_g.as_ref().map(vec_json),
                         "u_omega_dot_rad_s2": m.u_omega_dot_rad_s2.as_ref().map(vec_json),
+                        "u_omega_rad_s": m.u_omega_rad_s.as_ref().map(vec_json),
                     })
                 })
                 .collect(),
@@ -505,28 +688,9 @@ pub fn solution_json(file: &str, s: &MotionSolution) -> Value {
             "rank": s.diagnostics.rank,
             "condition_number": s.diagnostics.condition.is_finite().then_some(s.diagnostics.condition),
         },
+        "mode": s.mode.name(),
         "warnings": s.warnings,
     })
-}
-
-fn solution_csv(s: &MotionSolution) -> String {
-    let mut out = String::from(
-        "time_s,f0_x_g,f0_y_g,f0_z_g,omega_dot_x_rad_s2,omega_dot_y_rad_s2,omega_dot_z_rad_s2,omega_x_rad_s,omega_y_rad_s,omega_z_rad_s\n",
-    );
-    for m in &s.samples {
-        let v: Vec<String> = std::iter::once(m.time_s)
-            .chain(m.f0_g.iter().copied())
-            .chain(m.omega_dot_rad_s2.iter().copied())
-            .chain(m.omega_rad_s.iter().copied())
-            .map(|x| x.to_string())
-            .collect();
-        out.push_str(&v.join(","));
-        out.push('\n');
-    }
-    for w in &s.warnings {
-        out.push_str(&format!("# warning: {w}\n"));
-    }
-    out
 }
 
 fn position_label(f: &Vector3<f64>) -> String {

@@ -137,6 +137,8 @@ impl GfimuCalibration {
                 k0: a.k0(),
                 ks: a.ks(),
                 noise_output: a.noise_output,
+                u_k0: a.linear.u_at(0),
+                u_ks: Vector3::new(a.linear.u_at(1), a.linear.u_at(2), a.linear.u_at(3)),
             })
             .collect()
     }

@@ -11,31 +11,52 @@
 //! (`f0` g, `ω̇` rad/s², `ω` rad/s, `r_j` m, `g` the local gravity in m/s²
 //! that defines the g unit). Unknowns per sample: `x = (f0, ω̇)`.
 //!
-//! # Integration of ω
-//! `ω_k = ω_{k−1} + (ω̇_{k−1} + ω̇_k)(t_k − t_{k−1})/2` (trapezoid), with
-//! `ω_0` given at the first sample. The centripetal term at sample k thus
-//! depends on the unknown `ω̇_k`; each sample is solved by
-//! [`crate::estimation::gauss_newton`] (analytic Jacobian), started from the
-//! previous sample's solution. The trapezoid is exact for ω̇ piecewise
-//! linear between samples; a step in ω̇ between two samples leaves an ω
-//! error of up to `|Δω̇| Δt / 2`.
+//! # Two ways to solve a sample
+//! The centripetal term is `Ks_jᵀ(W r_j − tr(W) r_j)/g` with `W = ωωᵀ`, linear
+//! in the six products `ω_a ω_b`. Only the products whose regressors are
+//! non-zero enter (for accelerometers sensing across their lever arm,
+//! `Ks ⟂ r`, the squares drop out).
+//!
+//! * **direct**: when the layout can separate f0, ω̇ *and* every product
+//!   that enters (e.g. twelve accelerometers, two across each of six lever
+//!   arms), each sample is one linear least-squares solve with no feedback;
+//!   ω is then only integrated, and its error is a random walk.
+//! * **feedback** (the six-accelerometer layout of the paper): the products
+//!   are computed from the integrated ω. Per sample: predict
+//!   `ω⁻ = ω_{k−1} + ω̇_{k−1} Δt`, solve the linear system for `(f0, ω̇_k)`,
+//!   integrate `ω_k = ω_{k−1} + (ω̇_{k−1} + ω̇_k) Δt/2` (trapezoid), and solve
+//!   once more with `ω_k` (a fixed-point step of the implicit trapezoid).
+//!   An error δω feeds back through the centripetal term into ω̇, so it
+//!   can grow exponentially: this is physics, and the solution reports it.
+//!
+//! Either way the weighted pseudo-inverse `P = (AᵀWA)⁻¹AᵀW` of the fixed
+//! design is computed once (SVD, [`crate::estimation::fit`]'s engine), so a
+//! sample costs one N×p product: 10⁶ samples take well under a second.
 //!
 //! # Uncertainty
-//! When the calibration gives every accelerometer's sample noise σ_j, the
-//! weights are `1/σ_j²` and each sample's f0, ω̇ get `u` from the fit
-//! (calibration uncertainty of K0, Ks not included, nor the error of the
-//! integrated ω: it enters f0 through the centripetal term as about
-//! `2|ω||δω| r/g`, which grows with the random walk of δω and must stay
-//! below the noise for u to be complete). With N > 6 and no σ,
-//! the residuals give the variance. With N = 6 and no σ no u is reported.
+//! Per sample, `C = C_noise + C_cal + C_ω`:
+//! * `C_noise = (AᵀWA)⁻¹` with `W = diag(1/σ_j²)` when the calibration gives
+//!   every accelerometer's sample noise σ_j (else from the residuals when
+//!   N > p, else none);
+//! * `C_cal = P diag(u²(K0_j) + Σ_a f_{j,a}² u²(Ks_{j,a})) Pᵀ`, the
+//!   calibration's u carried through the specific force `f_j` at each
+//!   accelerometer (JCGM 100 §5.1.2, components taken independent);
+//! * `C_ω = P G Σ_ω Gᵀ Pᵀ` (feedback only), the integrated-ω error through
+//!   the centripetal gradient `G_j = [Ks_j(ωᵀr_j) + r_j(Ks_jᵀω) − 2(Ks_jᵀr_j)ω]ᵀ/g`.
+//!
+//! The predicted ω error covariance is propagated with the solution,
+//! `Σ_k = F Σ_{k−1} Fᵀ + Δt² C_ω̇` with `F = I − Q Δt` and `Q` the
+//! ω̇ rows of `P G` (zero in direct mode): `u_omega_rad_s` is its diagonal,
+//! and a warning (`model-range`) says when it first exceeds
+//! [`SolveOptions::omega_u_limit_rad_s`]. A solution whose |ω| passes
+//! 10⁴ rad/s has diverged and is refused at that sample.
 
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 use crate::error::{Error, Result};
-use crate::estimation::{
-    gauss_newton, Diagnostics, FitOptions, GaussNewtonOptions, NonlinearModel, Variance,
-};
+use crate::estimation::{Design, Diagnostics, DEFAULT_COND_LIMIT, WARN_COND};
 use crate::models::gfimu::{Geometry, MOTION_TERMS};
+use crate::warning::{Warning, WarningCode};
 
 /// Calibrated coefficients of one accelerometer, geometry order.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -46,6 +67,23 @@ pub struct CalibratedAccelerometer {
     pub ks: Vector3<f64>,
     /// Standard deviation of one output sample (output), if known.
     pub noise_output: Option<f64>,
+    /// Standard uncertainty of K0 (output); 0 when not known.
+    pub u_k0: f64,
+    /// Standard uncertainty of each Ks component (output/g); 0 when not known.
+    pub u_ks: Vector3<f64>,
+}
+
+impl CalibratedAccelerometer {
+    /// K0, Ks and the sample noise, with no calibration uncertainty.
+    pub fn new(k0: f64, ks: Vector3<f64>, noise_output: Option<f64>) -> Self {
+        Self {
+            k0,
+            ks,
+            noise_output,
+            u_k0: 0.0,
+            u_ks: Vector3::zeros(),
+        }
+    }
 }
 
 /// Options of [`solve`].
@@ -55,6 +93,8 @@ pub struct SolveOptions {
     pub omega0_rad_s: Vector3<f64>,
     /// Local gravity defining the g unit (m/s²).
     pub gravity_m_s2: f64,
+    /// Predicted u(ω) (rad/s) beyond which the solution warns.
+    pub omega_u_limit_rad_s: f64,
 }
 
 impl Default for SolveOptions {
@@ -62,6 +102,7 @@ impl Default for SolveOptions {
         Self {
             omega0_rad_s: Vector3::zeros(),
             gravity_m_s2: crate::units::STANDARD_GRAVITY_M_S2,
+            omega_u_limit_rad_s: 0.01,
         }
     }
 }
@@ -81,6 +122,8 @@ pub struct MotionSample {
     pub u_f0_g: Option<Vector3<f64>>,
     /// Standard uncertainty of ω̇ (rad/s²), when the noise is known.
     pub u_omega_dot_rad_s2: Option<Vector3<f64>>,
+    /// Predicted standard uncertainty of the integrated ω (rad/s).
+    pub u_omega_rad_s: Option<Vector3<f64>>,
 }
 
 /// Result of [`solve`].
@@ -90,78 +133,482 @@ pub struct MotionSolution {
     pub samples: Vec<MotionSample>,
     /// Rank and condition of the calibrated N×6 system.
     pub diagnostics: Diagnostics,
-    /// Warnings (weak geometry).
+    /// Warnings (weak geometry, ω error growth).
     pub warnings: Vec<crate::Warning>,
+    /// How the samples were solved.
+    pub mode: SolveMode,
 }
 
-/// The measurement model of one sample (module docs), for Gauss–Newton.
-struct SampleModel<'a> {
-    geometry: &'a Geometry,
-    cal: &'a [CalibratedAccelerometer],
-    omega_prev: Vector3<f64>,
-    omega_dot_prev: Vector3<f64>,
-    half_dt: f64,
-    g: f64,
+/// How a layout solves a sample (module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub enum SolveMode {
+    /// f0, ω̇ and the products that enter, linear, no feedback.
+    Direct {
+        /// Names of the products solved as unknowns (`ww_xy`, …).
+        products: Vec<String>,
+    },
+    /// f0 and ω̇, the products from the integrated ω.
+    Feedback {
+        /// Why not direct: the combination the layout cannot separate.
+        reason: String,
+    },
 }
 
-impl SampleModel<'_> {
-    fn omega(&self, omega_dot: &Vector3<f64>) -> Vector3<f64> {
-        self.omega_prev + (self.omega_dot_prev + omega_dot) * self.half_dt
-    }
-    fn split(x: &DVector<f64>) -> (Vector3<f64>, Vector3<f64>) {
-        (
-            Vector3::new(x[0], x[1], x[2]),
-            Vector3::new(x[3], x[4], x[5]),
-        )
+impl SolveMode {
+    /// `direct` or `feedback`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            SolveMode::Direct { .. } => "direct",
+            SolveMode::Feedback { .. } => "feedback",
+        }
     }
 }
 
-impl NonlinearModel for SampleModel<'_> {
-    fn names(&self) -> Vec<String> {
-        MOTION_TERMS.iter().map(|s| s.to_string()).collect()
-    }
+/// Products `ω_a ω_b` in the order of [`PRODUCT_NAMES`].
+pub const PRODUCTS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+/// Names of the products.
+pub const PRODUCT_NAMES: [&str; 6] = ["ww_xx", "ww_yy", "ww_zz", "ww_xy", "ww_xz", "ww_yz"];
 
-    fn predict(&self, x: &DVector<f64>) -> DVector<f64> {
-        let (f0, wd) = Self::split(x);
-        let w = self.omega(&wd);
-        DVector::from_iterator(
-            self.cal.len(),
-            self.geometry
-                .accelerometers()
-                .iter()
-                .zip(self.cal)
-                .map(|(a, c)| {
-                    let r = a.position_m;
-                    c.k0 + c
-                        .ks
-                        .dot(&(f0 + (wd.cross(&r) + w.cross(&w.cross(&r))) / self.g))
-                }),
-        )
+/// Regressor of product `(a, b)` for sensitive vector `s` at lever arm `r`
+/// (times g): `s_a r_a − sᵀr` for a square, `s_a r_b + s_b r_a` else.
+fn product_regressor(s: &Vector3<f64>, r: &Vector3<f64>, (a, b): (usize, usize)) -> f64 {
+    if a == b {
+        s[a] * r[a] - s.dot(r)
+    } else {
+        s[a] * r[b] + s[b] * r[a]
     }
+}
 
-    /// `∂E_j/∂f0 = Ks_j`; `∂E_j/∂ω̇ = [r_j × Ks_j + (Δt/2) ∇_ω]/g` with
-    /// `∇_ω Ksᵀ(ω×(ω×r)) = Ks(ωᵀr) + r(Ksᵀω) − 2(Ksᵀr)ω`.
-    fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
-        let (_, wd) = Self::split(x);
-        let w = self.omega(&wd);
-        let mut j = DMatrix::zeros(self.cal.len(), 6);
-        for (i, (a, c)) in self
-            .geometry
-            .accelerometers()
-            .iter()
-            .zip(self.cal)
-            .enumerate()
-        {
+/// Centripetal specific force along `s` at `r`: `sᵀ(ω×(ω×r))` (g·m/s² units / g outside).
+fn centripetal(s: &Vector3<f64>, r: &Vector3<f64>, w: &Vector3<f64>) -> f64 {
+    s.dot(&w.cross(&w.cross(r)))
+}
+
+/// Which unknowns a layout can solve (module docs): the direct set when
+/// f0, ω̇ and every entering product separate, else feedback, with the
+/// inseparable combination named.
+pub fn solve_mode(geometry: &Geometry, ks: &[Vector3<f64>], g: f64) -> Result<SolveMode> {
+    let accs = geometry.accelerometers();
+    let scale = accs
+        .iter()
+        .map(|a| a.position_m.norm())
+        .fold(0.0, f64::max)
+        .max(1e-12);
+    let entering: Vec<usize> = (0..6)
+        .filter(|&k| {
+            accs.iter().zip(ks).any(|(a, s)| {
+                product_regressor(s, &a.position_m, PRODUCTS[k]).abs() > 1e-9 * scale * s.norm()
+            })
+        })
+        .collect();
+    let mut names: Vec<String> = MOTION_TERMS.iter().map(|s| s.to_string()).collect();
+    names.extend(entering.iter().map(|&k| PRODUCT_NAMES[k].to_string()));
+    let rows: Vec<Vec<f64>> = accs
+        .iter()
+        .zip(ks)
+        .map(|(a, s)| {
             let r = a.position_m;
-            let s = c.ks;
-            let grad = s * w.dot(&r) + r * s.dot(&w) - w * (2.0 * s.dot(&r));
-            let m = (r.cross(&s) + grad * self.half_dt) / self.g;
-            for k in 0..3 {
-                j[(i, k)] = s[k];
-                j[(i, 3 + k)] = m[k];
+            let m = r.cross(s) / g;
+            let mut row = vec![s.x, s.y, s.z, m.x, m.y, m.z];
+            row.extend(
+                entering
+                    .iter()
+                    .map(|&k| product_regressor(s, &r, PRODUCTS[k]) / g),
+            );
+            row
+        })
+        .collect();
+    let d = Design::from_rows(names, &rows)?.diagnose(None, DEFAULT_COND_LIMIT);
+    if entering.is_empty() || d.is_separable() && d.condition < WARN_COND {
+        return Ok(SolveMode::Direct {
+            products: entering
+                .iter()
+                .map(|&k| PRODUCT_NAMES[k].to_string())
+                .collect(),
+        });
+    }
+    let reason = match d.aliases.first() {
+        Some(a) => format!(
+            "{} accelerometers cannot separate f0, omega_dot and the products {}: {}",
+            accs.len(),
+            entering
+                .iter()
+                .map(|&k| PRODUCT_NAMES[k])
+                .collect::<Vec<_>>()
+                .join(", "),
+            a
+        ),
+        None => format!(
+            "f0, omega_dot and the products are weakly separated (condition number {:.2e})",
+            d.condition
+        ),
+    };
+    Ok(SolveMode::Feedback { reason })
+}
+
+/// A streaming motion solver: one call of [`Solver::step`] per sample, in
+/// time order, constant memory (module docs).
+#[derive(Debug, Clone)]
+pub struct Solver {
+    r: Vec<Vector3<f64>>,
+    cal: Vec<CalibratedAccelerometer>,
+    g: f64,
+    mode: SolveMode,
+    /// Indices (into PRODUCTS) of the products solved directly.
+    direct_products: Vec<usize>,
+    /// Weighted pseudo-inverse (p × N).
+    pinv: DMatrix<f64>,
+    /// `(AᵀWA)⁻¹` with W = 1/σ² (p × p), when σ is known.
+    cov_noise: Option<DMatrix<f64>>,
+    /// Design (N × p), for residual variance when σ is unknown.
+    design: DMatrix<f64>,
+    report_u: bool,
+    omega_u_limit: f64,
+    warned_at: Option<f64>,
+    prev: Option<(f64, Vector3<f64>, Vector3<f64>)>,
+    sigma_omega: Matrix3<f64>,
+    /// Sensitivity of the integrated ω to every calibration parameter
+    /// (3 × 4N: K0_j, Ks_j): calibration errors are systematic, so their
+    /// effect on ω grows linearly, not as a random walk.
+    j_cal: DMatrix<f64>,
+    /// Variances of the calibration parameters (4N).
+    u2_cal: DVector<f64>,
+    omega0: Vector3<f64>,
+    diagnostics: Diagnostics,
+    warnings: Vec<Warning>,
+    count: u64,
+}
+
+impl Solver {
+    /// Check the calibration and geometry and prepare the solve.
+    pub fn new(
+        geometry: &Geometry,
+        cal: &[CalibratedAccelerometer],
+        opts: &SolveOptions,
+    ) -> Result<Self> {
+        let n = geometry.len();
+        if cal.len() != n {
+            return Err(Error::Unsupported(format!(
+                "{} calibrated accelerometers for a geometry of {n}",
+                cal.len()
+            )));
+        }
+        let g = opts.gravity_m_s2;
+        if !(g.is_finite() && g > 0.0) {
+            return Err(Error::InvalidValue {
+                what: "gravity (m/s^2)".into(),
+                value: g.to_string(),
+            });
+        }
+        if let Some(v) = opts.omega0_rad_s.iter().find(|v| !v.is_finite()) {
+            return Err(Error::InvalidValue {
+                what: "initial angular rate".into(),
+                value: v.to_string(),
+            });
+        }
+        if !(opts.omega_u_limit_rad_s.is_finite() && opts.omega_u_limit_rad_s > 0.0) {
+            return Err(Error::InvalidValue {
+                what: "omega uncertainty limit (rad/s)".into(),
+                value: opts.omega_u_limit_rad_s.to_string(),
+            });
+        }
+        for (j, c) in cal.iter().enumerate() {
+            let finite = c.k0.is_finite()
+                && c.ks.iter().all(|v| v.is_finite())
+                && c.u_k0.is_finite()
+                && c.u_k0 >= 0.0
+                && c.u_ks.iter().all(|v| v.is_finite() && *v >= 0.0);
+            if !finite {
+                return Err(Error::InvalidValue {
+                    what: format!("calibration of accelerometer {}", j + 1),
+                    value: format!("K0 {} Ks {:?}", c.k0, c.ks.as_slice()),
+                });
+            }
+            if let Some(s) = c.noise_output {
+                if !(s.is_finite() && s > 0.0) {
+                    return Err(Error::InvalidValue {
+                        what: format!("noise of accelerometer {}", j + 1),
+                        value: s.to_string(),
+                    });
+                }
             }
         }
-        j
+        let ks: Vec<Vector3<f64>> = cal.iter().map(|c| c.ks).collect();
+        let base = geometry.motion_design(&ks, g)?;
+        let diagnostics = base.diagnose(None, DEFAULT_COND_LIMIT);
+        if !diagnostics.aliases.is_empty() {
+            return Err(Error::Unseparable {
+                aliases: diagnostics.aliases,
+            });
+        }
+        let mut warnings = Vec::new();
+        if diagnostics.condition > WARN_COND {
+            warnings.push(Warning::new(
+                WarningCode::WeakConditioning,
+                format!(
+                    "weak calibrated geometry (condition number {:.2e}): {} is poorly determined",
+                    diagnostics.condition,
+                    diagnostics.weakest.combination()
+                ),
+            ));
+        }
+        let mode = solve_mode(geometry, &ks, g)?;
+        let direct_products: Vec<usize> = match &mode {
+            SolveMode::Direct { products } => products
+                .iter()
+                .filter_map(|p| PRODUCT_NAMES.iter().position(|n| n == p))
+                .collect(),
+            SolveMode::Feedback { .. } => Vec::new(),
+        };
+        let r: Vec<Vector3<f64>> = geometry
+            .accelerometers()
+            .iter()
+            .map(|a| a.position_m)
+            .collect();
+        let p = 6 + direct_products.len();
+        let design = DMatrix::from_fn(n, p, |i, j| {
+            let s = &ks[i];
+            match j {
+                0..=2 => s[j],
+                3..=5 => r[i].cross(s)[j - 3] / g,
+                _ => product_regressor(s, &r[i], PRODUCTS[direct_products[j - 6]]) / g,
+            }
+        });
+        let sigmas: Option<Vec<f64>> = cal.iter().map(|c| c.noise_output).collect();
+        let w: DVector<f64> = match &sigmas {
+            Some(s) => DVector::from_iterator(n, s.iter().map(|s| 1.0 / (s * s))),
+            None => DVector::from_element(n, 1.0),
+        };
+        // (AᵀWA)⁻¹ by SVD of W^{1/2}A (never squares the condition number).
+        let sw = w.map(f64::sqrt);
+        let aw = DMatrix::from_fn(n, p, |i, j| design[(i, j)] * sw[i]);
+        let svd = aw.clone().svd(true, true);
+        let (Some(u), Some(vt)) = (svd.u.as_ref(), svd.v_t.as_ref()) else {
+            return Err(Error::Unsupported("SVD of the motion design failed".into()));
+        };
+        let smax = svd.singular_values.max();
+        if svd
+            .singular_values
+            .iter()
+            .any(|s| *s <= smax / DEFAULT_COND_LIMIT)
+        {
+            return Err(Error::IllConditioned {
+                terms: diagnostics.weakest.combination(),
+                condition: f64::INFINITY,
+                limit: DEFAULT_COND_LIMIT,
+            });
+        }
+        let sinv = DMatrix::from_diagonal(&svd.singular_values.map(|s| 1.0 / s));
+        let v = vt.transpose();
+        // P = V S⁻¹ Uᵀ W^{1/2}
+        let pinv_w = &v * &sinv * u.transpose();
+        let pinv = DMatrix::from_fn(p, n, |i, j| pinv_w[(i, j)] * sw[j]);
+        let cov_unit = &v * &sinv * &sinv * v.transpose();
+        let report_u = sigmas.is_some() || n > p;
+        Ok(Self {
+            r,
+            cal: cal.to_vec(),
+            g,
+            mode,
+            direct_products,
+            pinv,
+            cov_noise: sigmas.is_some().then_some(cov_unit),
+            design,
+            report_u,
+            omega_u_limit: opts.omega_u_limit_rad_s,
+            warned_at: None,
+            prev: None,
+            sigma_omega: Matrix3::zeros(),
+            j_cal: DMatrix::zeros(3, 4 * n),
+            u2_cal: DVector::from_iterator(
+                4 * n,
+                cal.iter()
+                    .flat_map(|c| [c.u_k0, c.u_ks.x, c.u_ks.y, c.u_ks.z].map(|u| u * u)),
+            ),
+            omega0: opts.omega0_rad_s,
+            diagnostics,
+            warnings,
+            count: 0,
+        })
+    }
+
+    /// How the samples are solved.
+    pub fn mode(&self) -> &SolveMode {
+        &self.mode
+    }
+
+    /// Rank and condition of the calibrated N×6 system.
+    pub fn diagnostics(&self) -> &Diagnostics {
+        &self.diagnostics
+    }
+
+    /// Warnings so far (geometry, ω error growth).
+    pub fn warnings(&self) -> &[Warning] {
+        &self.warnings
+    }
+
+    /// Outputs minus bias and, in feedback mode, the centripetal term at ω.
+    fn reduced(&self, e: &[f64], w: &Vector3<f64>) -> DVector<f64> {
+        DVector::from_fn(e.len(), |j, _| {
+            let c = &self.cal[j];
+            let cent = if self.direct_products.is_empty() {
+                centripetal(&c.ks, &self.r[j], w) / self.g
+            } else {
+                0.0
+            };
+            e[j] - c.k0 - cent
+        })
+    }
+
+    /// Solve one sample (time strictly after the previous one).
+    pub fn step(&mut self, t: f64, e: &[f64]) -> Result<MotionSample> {
+        let n = self.cal.len();
+        self.count += 1;
+        let k = self.count;
+        if e.len() != n {
+            return Err(Error::Unsupported(format!(
+                "sample {k}: {} outputs for {n} accelerometers",
+                e.len()
+            )));
+        }
+        if let Some(v) = std::iter::once(&t).chain(e.iter()).find(|v| !v.is_finite()) {
+            return Err(Error::InvalidValue {
+                what: format!("sample {k}"),
+                value: v.to_string(),
+            });
+        }
+        let feedback = matches!(self.mode, SolveMode::Feedback { .. });
+        let (x, w, dt) = match self.prev {
+            None => {
+                let w = self.omega0;
+                (&self.pinv * self.reduced(e, &w), w, 0.0)
+            }
+            Some((tp, wp, wdp)) => {
+                if t <= tp {
+                    return Err(Error::InvalidValue {
+                        what: format!("time of sample {k} (times must increase)"),
+                        value: t.to_string(),
+                    });
+                }
+                let dt = t - tp;
+                let mut w = wp + wdp * dt;
+                let mut x = &self.pinv * self.reduced(e, &w);
+                let passes = if feedback { 2 } else { 1 };
+                for _ in 0..passes {
+                    let wd = Vector3::new(x[3], x[4], x[5]);
+                    w = wp + (wdp + wd) * (0.5 * dt);
+                    if feedback {
+                        x = &self.pinv * self.reduced(e, &w);
+                    }
+                }
+                let wd = Vector3::new(x[3], x[4], x[5]);
+                w = wp + (wdp + wd) * (0.5 * dt);
+                (x, w, dt)
+            }
+        };
+        let f0 = Vector3::new(x[0], x[1], x[2]);
+        let wd = Vector3::new(x[3], x[4], x[5]);
+        if !(w.iter().all(|v| v.is_finite()) && w.amax() <= 1e4) {
+            return Err(Error::Unsupported(format!(
+                "the angular rate diverged at sample {k} (t = {t} s): |omega| beyond 1e4 rad/s ({}; a layout that solves the centripetal products directly avoids this)",
+                self.mode_reason()
+            )));
+        }
+
+        // Uncertainty (module docs).
+        let p = self.pinv.nrows();
+        let mut cov = match &self.cov_noise {
+            Some(c) => c.clone(),
+            None if n > p => {
+                let y = self.reduced(e, &w);
+                let res = &y - &self.design * &x;
+                let s2 = res.norm_squared() / (n - p) as f64;
+                let v = self.pinv.clone();
+                &v * v.transpose() * s2
+            }
+            None => DMatrix::zeros(p, p),
+        };
+        // Calibration: the sensitivity of x to every K0_j, Ks_j at the
+        // specific force f_j of each accelerometer, ∂x/∂K0_j = −P_:j,
+        // ∂x/∂Ks_ja = −P_:j f_ja.
+        let mut d_cal = DMatrix::zeros(p, 4 * n);
+        for j in 0..n {
+            let r = &self.r[j];
+            let fj = f0 + (wd.cross(r) + w.cross(&w.cross(r))) / self.g;
+            for i in 0..p {
+                let pij = self.pinv[(i, j)];
+                d_cal[(i, 4 * j)] = -pij;
+                for a in 0..3 {
+                    d_cal[(i, 4 * j + 1 + a)] = -pij * fj[a];
+                }
+            }
+        }
+        let cov_noise_only = cov.clone();
+        if self.u2_cal.iter().any(|v| *v > 0.0) {
+            let du = DMatrix::from_fn(p, 4 * n, |i, k| d_cal[(i, k)] * self.u2_cal[k]);
+            cov += du * d_cal.transpose();
+        }
+        // ω error: sample noise as a random walk (Σ), calibration as a
+        // systematic sensitivity (J), both through F = I − QΔt.
+        let (pg, f) = if feedback {
+            let gmat = DMatrix::from_fn(n, 3, |j, a| {
+                let s = &self.cal[j].ks;
+                let r = &self.r[j];
+                let grad = s * w.dot(r) + r * s.dot(&w) - w * (2.0 * s.dot(r));
+                grad[a] / self.g
+            });
+            let pg = &self.pinv * &gmat; // p × 3
+            let q = Matrix3::from_fn(|i, j| pg[(3 + i, j)]);
+            (Some(pg), Matrix3::identity() - q * dt)
+        } else {
+            (None, Matrix3::identity())
+        };
+        if dt > 0.0 {
+            let cwd = Matrix3::from_fn(|i, j| cov_noise_only[(3 + i, 3 + j)]);
+            self.sigma_omega = f * self.sigma_omega * f.transpose() + cwd * (dt * dt);
+            let fd = DMatrix::from_fn(3, 3, |i, j| f[(i, j)]);
+            let dwd = d_cal.rows(3, 3).into_owned();
+            self.j_cal = &fd * &self.j_cal + dwd * dt;
+        }
+        let ju = DMatrix::from_fn(3, 4 * n, |i, k| self.j_cal[(i, k)] * self.u2_cal[k]);
+        let sigma_cal = &ju * self.j_cal.transpose();
+        let sigma_total =
+            DMatrix::from_fn(3, 3, |i, j| self.sigma_omega[(i, j)] + sigma_cal[(i, j)]);
+        if let Some(pg) = &pg {
+            cov += pg * &sigma_total * pg.transpose();
+        }
+        let u_omega = Vector3::from_fn(|i, _| sigma_total[(i, i)].max(0.0).sqrt());
+        if self.report_u && self.warned_at.is_none() && u_omega.amax() > self.omega_u_limit {
+            self.warned_at = Some(t);
+            self.warnings.push(Warning::new(
+                WarningCode::ModelRange,
+                format!(
+                    "the predicted error of the integrated omega passes {} rad/s at t = {t} s (sample {k}); {}",
+                    self.omega_u_limit,
+                    self.mode_reason()
+                ),
+            ));
+        }
+        let u = |k0: usize| Vector3::from_fn(|i, _| cov[(k0 + i, k0 + i)].max(0.0).sqrt());
+        self.prev = Some((t, w, wd));
+        Ok(MotionSample {
+            time_s: t,
+            f0_g: f0,
+            omega_dot_rad_s2: wd,
+            omega_rad_s: w,
+            u_f0_g: self.report_u.then(|| u(0)),
+            u_omega_dot_rad_s2: self.report_u.then(|| u(3)),
+            u_omega_rad_s: self.report_u.then_some(u_omega),
+        })
+    }
+
+    fn mode_reason(&self) -> String {
+        match &self.mode {
+            SolveMode::Direct { .. } => "direct solution (no centripetal feedback): the error is the integrated omega_dot error, sample noise (a random walk) and calibration error (growing linearly)".into(),
+            SolveMode::Feedback { reason } => format!(
+                "the centripetal products come from the integrated omega, so its error feeds back ({reason})"
+            ),
+        }
     }
 }
 
@@ -173,135 +620,15 @@ pub fn solve(
     series: &[(f64, Vec<f64>)],
     opts: &SolveOptions,
 ) -> Result<MotionSolution> {
-    let n = geometry.len();
-    if cal.len() != n {
-        return Err(Error::Unsupported(format!(
-            "{} calibrated accelerometers for a geometry of {n}",
-            cal.len()
-        )));
-    }
-    let g = opts.gravity_m_s2;
-    if !(g.is_finite() && g > 0.0) {
-        return Err(Error::InvalidValue {
-            what: "gravity (m/s^2)".into(),
-            value: g.to_string(),
-        });
-    }
-    if let Some(v) = opts.omega0_rad_s.iter().find(|v| !v.is_finite()) {
-        return Err(Error::InvalidValue {
-            what: "initial angular rate".into(),
-            value: v.to_string(),
-        });
-    }
-    for (j, c) in cal.iter().enumerate() {
-        if !(c.k0.is_finite() && c.ks.iter().all(|v| v.is_finite())) {
-            return Err(Error::InvalidValue {
-                what: format!("calibration of accelerometer {}", j + 1),
-                value: format!("K0 {} Ks {:?}", c.k0, c.ks.as_slice()),
-            });
-        }
-        if let Some(s) = c.noise_output {
-            if !(s.is_finite() && s > 0.0) {
-                return Err(Error::InvalidValue {
-                    what: format!("noise of accelerometer {}", j + 1),
-                    value: s.to_string(),
-                });
-            }
-        }
-    }
-    // The calibrated system must separate f0 and ω̇ (names the weak term).
-    let ks: Vec<Vector3<f64>> = cal.iter().map(|c| c.ks).collect();
-    let design = geometry.motion_design(&ks, g)?;
-    let diagnostics = design.diagnose(None, crate::estimation::DEFAULT_COND_LIMIT);
-    if !diagnostics.aliases.is_empty() {
-        return Err(Error::Unseparable {
-            aliases: diagnostics.aliases,
-        });
-    }
-    let mut warnings = Vec::new();
-    if diagnostics.condition > crate::estimation::WARN_COND {
-        warnings.push(crate::Warning::new(
-            crate::WarningCode::WeakConditioning,
-            format!(
-                "weak calibrated geometry (condition number {:.2e}): {} is poorly determined",
-                diagnostics.condition,
-                diagnostics.weakest.combination()
-            ),
-        ));
-    }
-    let sigmas: Option<Vec<f64>> = cal.iter().map(|c| c.noise_output).collect();
-    let (weights, variance, report_u) = match &sigmas {
-        Some(s) => (
-            Some(DVector::from_iterator(n, s.iter().map(|s| 1.0 / (s * s)))),
-            Variance::Known { dof: f64::INFINITY },
-            true,
-        ),
-        None if n > 6 => (None, Variance::FromResiduals, true),
-        // Exactly determined, noise unknown: unit weights, no u.
-        None => (None, Variance::Known { dof: f64::INFINITY }, false),
-    };
-    let gn = GaussNewtonOptions {
-        fit: FitOptions {
-            weights,
-            variance,
-            ..FitOptions::default()
-        },
-        max_iter: 50,
-        tol: 1e-9,
-    };
-    let mut out: Vec<MotionSample> = Vec::with_capacity(series.len());
-    let mut x = DVector::zeros(6);
-    for (k, (t, e)) in series.iter().enumerate() {
-        if e.len() != n {
-            return Err(Error::Unsupported(format!(
-                "sample {}: {} outputs for {n} accelerometers",
-                k + 1,
-                e.len()
-            )));
-        }
-        if let Some(v) = std::iter::once(t).chain(e.iter()).find(|v| !v.is_finite()) {
-            return Err(Error::InvalidValue {
-                what: format!("sample {}", k + 1),
-                value: v.to_string(),
-            });
-        }
-        let (omega_prev, omega_dot_prev, half_dt) = match out.last() {
-            None => (opts.omega0_rad_s, Vector3::zeros(), 0.0),
-            Some(p) => {
-                if *t <= p.time_s {
-                    return Err(Error::InvalidValue {
-                        what: format!("time of sample {} (times must increase)", k + 1),
-                        value: t.to_string(),
-                    });
-                }
-                (p.omega_rad_s, p.omega_dot_rad_s2, 0.5 * (t - p.time_s))
-            }
-        };
-        let model = SampleModel {
-            geometry,
-            cal,
-            omega_prev,
-            omega_dot_prev,
-            half_dt,
-            g,
-        };
-        let y = DVector::from_column_slice(e);
-        let (fit, _) = gauss_newton(&model, &y, x.clone(), &gn)?;
-        x = fit.estimates.values().clone();
-        let (f0, wd) = SampleModel::split(&x);
-        let u = |k0: usize| Vector3::from_fn(|k, _| fit.estimates.u_at(k0 + k));
-        out.push(MotionSample {
-            time_s: *t,
-            f0_g: f0,
-            omega_dot_rad_s2: wd,
-            omega_rad_s: model.omega(&wd),
-            u_f0_g: report_u.then(|| u(0)),
-            u_omega_dot_rad_s2: report_u.then(|| u(3)),
-        });
+    let mut solver = Solver::new(geometry, cal, opts)?;
+    let mut samples = Vec::with_capacity(series.len());
+    for (t, e) in series {
+        samples.push(solver.step(*t, e)?);
     }
     Ok(MotionSolution {
-        samples: out,
-        diagnostics,
-        warnings,
+        samples,
+        diagnostics: solver.diagnostics.clone(),
+        warnings: solver.warnings.clone(),
+        mode: solver.mode.clone(),
     })
 }
