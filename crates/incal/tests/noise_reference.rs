@@ -226,7 +226,8 @@ fn greenhall_exact_sums_meet_the_paper_asymptotes() {
     }
     // White PM, unmodified: the closed form of the paper's case 4.
     let got = edf::greenhall(2, 2, 4, 1001, true, false).unwrap();
-    let big_m = (1001 - 8 + 1) as f64 / 4.0 * 4.0;
+    // L = m/F + m·d = 9, M = 1 + floor(S(N − L)/m) = 993, r = M/S.
+    let big_m = 993.0;
     let want = big_m / (70.0 / 36.0 - 1.0 / (big_m / 4.0));
     assert!(rel(got, want) < 1e-12, "{got} vs {want}");
 }
