@@ -8,6 +8,7 @@ pub mod centrifuge;
 pub mod demo;
 pub mod gfimu;
 pub mod misalign;
+pub mod noise;
 pub mod tumble;
 
 use rand::rngs::ChaCha8Rng;
