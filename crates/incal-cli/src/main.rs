@@ -60,6 +60,8 @@ enum Command {
     /// Calibration records: store results per instrument (append-only, hash-chained), list, show, supersede, history and drift, verify.
     #[command(subcommand)]
     Record(commands::record::Command),
+    /// Noise and stability of long static records: OADEV, MDEV, OHDEV, TDEV, TOTDEV with confidence bounds, IEEE 952 noise terms, bias stability.
+    Noise(commands::noise::Args),
 }
 
 #[derive(Subcommand, Debug)]
@@ -89,6 +91,8 @@ enum SimulateCommand {
     Misalign(commands::misalign::SimCommand),
     /// Precision centrifuge test (IA, PA, OA radial and 45-degree cross positions).
     Centrifuge(commands::centrifuge::SimArgs),
+    /// Rate-noise record (gyro) with IEEE 952 terms: quantization, white, flicker, random walk, ramp.
+    Noise(commands::noise::SimArgs),
 }
 
 fn run(cli: Cli) -> CliResult<()> {
@@ -109,6 +113,8 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Plan(PlanCommand::Misalign(a)) => commands::misalign::plan(&a),
         Command::Simulate(SimulateCommand::Misalign(c)) => commands::misalign::simulate(&c),
         Command::Record(c) => commands::record::run(&c),
+        Command::Noise(a) => commands::noise::run(&a),
+        Command::Simulate(SimulateCommand::Noise(a)) => commands::noise::simulate(&a),
     }
 }
 

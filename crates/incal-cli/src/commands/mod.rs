@@ -5,6 +5,7 @@ pub mod compare;
 pub mod demo;
 pub mod gfimu;
 pub mod misalign;
+pub mod noise;
 pub mod record;
 pub mod report;
 pub mod schema;

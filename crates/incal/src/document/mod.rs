@@ -30,6 +30,7 @@ pub mod centrifuge;
 pub mod gfimu;
 pub mod limits;
 pub mod misalign;
+pub mod noise;
 pub mod tumble;
 
 use std::collections::BTreeMap;
@@ -61,6 +62,8 @@ pub enum Procedure {
     MisalignAccel,
     /// Gyro-free unit: K0 and Ks of every accelerometer (seed 004).
     GfimuCalibrate,
+    /// Noise and stability: Allan family, IEEE Std 952 terms, bias stability.
+    Noise,
 }
 
 impl Procedure {
@@ -72,6 +75,7 @@ impl Procedure {
             Procedure::MisalignGyro => "misalign-gyro",
             Procedure::MisalignAccel => "misalign-accel",
             Procedure::GfimuCalibrate => "gfimu-calibrate",
+            Procedure::Noise => "noise",
         }
     }
 }

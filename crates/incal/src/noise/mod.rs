@@ -245,6 +245,16 @@ fn push(s: &mut DevSeries, v: Option<(f64, usize)>, edf: Option<f64>, p: f64) {
 /// Fails on fewer than 5 points, a non-finite sample, τ0 ≤ 0 or a
 /// confidence outside (0, 1).
 pub fn stability(x: &[f64], opts: &StabilityOptions) -> Result<Stability> {
+    stability_with_progress(x, opts, &|_| {})
+}
+
+/// As [`stability`], calling `tick(k)` after the k-th τ (for a progress
+/// bar).
+pub fn stability_with_progress(
+    x: &[f64],
+    opts: &StabilityOptions,
+    tick: &(dyn Fn(usize) + Sync),
+) -> Result<Stability> {
     if x.len() < 5 {
         return Err(Error::Unsupported(format!(
             "noise: {} samples; at least 5 are needed for one τ",
@@ -284,7 +294,7 @@ pub fn stability(x: &[f64], opts: &StabilityOptions) -> Result<Stability> {
         totdev: DevSeries::default(),
     };
     let mut last: Option<id::NoiseId> = None;
-    for &m in &ms {
+    for (k, &m) in ms.iter().enumerate() {
         let nid = id::identify(x, m).or(last);
         last = nid;
         let (aa, ah) = (nid.map(|n| n.alpha_allan), nid.map(|n| n.alpha_hadamard));
@@ -322,6 +332,7 @@ pub fn stability(x: &[f64], opts: &StabilityOptions) -> Result<Stability> {
             aa.and_then(|a| edf::totdev(a, m, n)),
             p,
         );
+        tick(k + 1);
     }
     Ok(st)
 }
