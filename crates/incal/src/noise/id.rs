@@ -20,65 +20,99 @@ pub struct NoiseId {
     pub alpha_hadamard: i32,
 }
 
-/// `x` minus its least-squares quadratic in the index.
-fn detrend2(x: &[f64]) -> Vec<f64> {
-    let n = x.len() as f64;
-    // t scaled to [−1, 1] keeps the normal equations well conditioned.
-    let c = (n - 1.0) / 2.0;
-    let sc = if c > 0.0 { 1.0 / c } else { 1.0 };
-    let mut a = Matrix3::<f64>::zeros();
-    let mut b = Vector3::<f64>::zeros();
-    for (i, &v) in x.iter().enumerate() {
-        let t = (i as f64 - c) * sc;
-        let p = Vector3::new(1.0, t, t * t);
-        a += p * p.transpose();
-        b += p * v;
-    }
-    let coef = a
-        .try_inverse()
-        .map(|ai| ai * b)
-        .unwrap_or_else(Vector3::zeros);
-    x.iter()
-        .enumerate()
-        .map(|(i, &v)| {
-            let t = (i as f64 - c) * sc;
-            v - (coef[0] + coef[1] * t + coef[2] * t * t)
-        })
-        .collect()
+/// Running sums of one differenced series for its lag-1 autocorrelation.
+#[derive(Clone, Copy, Default)]
+struct Acf {
+    n: f64,
+    sum: f64,
+    sum2: f64,
+    lag: f64,
+    first: f64,
+    last: f64,
+    prev: Option<f64>,
 }
 
-/// Lag-1 autocorrelation about the mean (Riley & Greenhall eq. 2).
-fn lag1(z: &[f64]) -> f64 {
-    let mu = z.iter().sum::<f64>() / z.len() as f64;
-    let mut num = 0.0;
-    let mut den = 0.0;
-    for w in z.windows(2) {
-        num += (w[0] - mu) * (w[1] - mu);
+impl Acf {
+    fn push(&mut self, z: f64) {
+        match self.prev {
+            None => self.first = z,
+            Some(p) => self.lag += p * z,
+        }
+        self.n += 1.0;
+        self.sum += z;
+        self.sum2 += z * z;
+        self.last = z;
+        self.prev = Some(z);
     }
-    for &v in z {
-        den += (v - mu) * (v - mu);
-    }
-    if den > 0.0 {
-        num / den
-    } else {
-        0.0
+    /// `Σ (z_i − μ)(z_{i+1} − μ) / Σ (z_i − μ)²` (Riley & Greenhall eq. 2)
+    /// from the sums.
+    fn r1(&self) -> f64 {
+        let mu = self.sum / self.n;
+        let num = self.lag - mu * (self.sum - self.last) - mu * (self.sum - self.first)
+            + (self.n - 1.0) * mu * mu;
+        let den = self.sum2 - self.n * mu * mu;
+        if den > 0.0 {
+            num / den
+        } else {
+            0.0
+        }
     }
 }
 
 /// Identify the noise at averaging factor `m` of phase data `x`; `None`
 /// when the decimated record has fewer than [`MIN_POINTS`] points.
+///
+/// Two passes over the decimated samples and no copy: the first fits the
+/// quadratic, the second forms the residuals and their first three
+/// differences on the fly with the sums of each series' lag-1
+/// autocorrelation.
 pub fn identify(x: &[f64], m: usize) -> Option<NoiseId> {
-    let dec: Vec<f64> = x.iter().step_by(m.max(1)).copied().collect();
-    if dec.len() < MIN_POINTS {
+    let m = m.max(1);
+    if x.is_empty() {
         return None;
     }
-    let mut z = detrend2(&dec);
-    let mut d = 0;
+    let n = (x.len() - 1) / m + 1;
+    if n < MIN_POINTS {
+        return None;
+    }
+    // t scaled to [−1, 1] keeps the normal equations well conditioned.
+    let c = (n as f64 - 1.0) / 2.0;
+    let sc = 1.0 / c;
+    let mut a = Matrix3::<f64>::zeros();
+    let mut b = Vector3::<f64>::zeros();
+    for i in 0..n {
+        let t = (i as f64 - c) * sc;
+        let p = Vector3::new(1.0, t, t * t);
+        a += p * p.transpose();
+        b += p * x[i * m];
+    }
+    let coef = a
+        .try_inverse()
+        .map(|ai| ai * b)
+        .unwrap_or_else(Vector3::zeros);
+    let mut acf = [Acf::default(); 4];
+    // The last value of each differenced series.
+    let mut hist: [Option<f64>; 3] = [None; 3];
+    for i in 0..n {
+        let t = (i as f64 - c) * sc;
+        let mut z = x[i * m] - (coef[0] + coef[1] * t + coef[2] * t * t);
+        acf[0].push(z);
+        for d in 0..3 {
+            let prev = hist[d].replace(z);
+            match prev {
+                Some(p) => {
+                    z -= p;
+                    acf[d + 1].push(z);
+                }
+                None => break,
+            }
+        }
+    }
     let mut allan = None;
-    loop {
-        let r1 = lag1(&z);
+    for (d, s) in acf.iter().enumerate() {
+        let r1 = s.r1();
         let delta = r1 / (1.0 + r1);
-        let alpha = 2 - 2 * d - (2.0 * delta).round_ties_even() as i32;
+        let alpha = 2 - 2 * d as i32 - (2.0 * delta).round_ties_even() as i32;
         if allan.is_none() && (delta < 0.25 || d >= 2) {
             allan = Some(alpha);
         }
@@ -88,7 +122,6 @@ pub fn identify(x: &[f64], m: usize) -> Option<NoiseId> {
                 alpha_hadamard: alpha,
             });
         }
-        z = z.windows(2).map(|w| w[1] - w[0]).collect();
-        d += 1;
     }
+    None
 }

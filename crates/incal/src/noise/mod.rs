@@ -293,9 +293,16 @@ pub fn stability_with_progress(
         tdev: DevSeries::default(),
         totdev: DevSeries::default(),
     };
+    // Identification per τ is independent of the others: in parallel.
+    let ids: Vec<Option<id::NoiseId>> = if par {
+        use rayon::prelude::*;
+        ms.par_iter().map(|&m| id::identify(x, m)).collect()
+    } else {
+        ms.iter().map(|&m| id::identify(x, m)).collect()
+    };
     let mut last: Option<id::NoiseId> = None;
     for (k, &m) in ms.iter().enumerate() {
-        let nid = id::identify(x, m).or(last);
+        let nid = ids[k].or(last);
         last = nid;
         let (aa, ah) = (nid.map(|n| n.alpha_allan), nid.map(|n| n.alpha_hadamard));
         st.alpha.push(aa);
