@@ -143,49 +143,19 @@ pub fn mvar(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> {
     let s = |i: usize| x[i + 2 * m] - 2.0 * x[i + m] + x[i];
     let blen = BLOCK.max(4 * m);
     let nb = nt.div_ceil(blen);
-    // One sliding chain is bound by the latency of its additions; eight
-    // chains over eight equal segments of a block run side by side.
-    const L: usize = 8;
     let block = |b: usize| -> f64 {
         let lo = b * blen;
         let hi = (lo + blen).min(nt);
-        let seg = (hi - lo) / L;
-        if seg < 4 * m {
-            let mut w = 0.0;
-            for i in lo..lo + m {
-                w += s(i);
-            }
-            let mut acc = w * w;
-            for j in lo + 1..hi {
-                w += s(j + m - 1) - s(j - 1);
-                acc += w * w;
-            }
-            return acc;
+        let mut w = 0.0;
+        for i in lo..lo + m {
+            w += s(i);
         }
-        let mut w = [0.0f64; L];
-        let mut acc = [0.0f64; L];
-        for l in 0..L {
-            let st = lo + l * seg;
-            for i in st..st + m {
-                w[l] += s(i);
-            }
-            acc[l] = w[l] * w[l];
+        let mut acc = w * w;
+        for j in lo + 1..hi {
+            w += s(j + m - 1) - s(j - 1);
+            acc += w * w;
         }
-        for k in 1..seg {
-            for l in 0..L {
-                let j = lo + l * seg + k;
-                w[l] += s(j + m - 1) - s(j - 1);
-                acc[l] += w[l] * w[l];
-            }
-        }
-        // The remainder after the eight segments, continuing lane 7.
-        let mut wl = w[L - 1];
-        let mut tail = 0.0;
-        for j in lo + L * seg..hi {
-            wl += s(j + m - 1) - s(j - 1);
-            tail += wl * wl;
-        }
-        (((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]))) + tail
+        acc
     };
     let sums: Vec<f64> = if parallel && nb > 1 {
         (0..nb).into_par_iter().map(block).collect()
