@@ -348,3 +348,28 @@ fn bad_input_is_one_line_and_exit_2() {
         "--arw-deg-rth",
     );
 }
+
+#[test]
+fn the_report_draws_the_allan_plot() {
+    let p = simulate("rep.csv", "csv", &[]);
+    let json = dir().join("rep.json");
+    ok(&incal(&[
+        "noise",
+        "--input",
+        p.to_str().unwrap(),
+        "--rate-hz",
+        "10",
+        "--quantity",
+        "gyro",
+        "--json",
+        "-o",
+        json.to_str().unwrap(),
+    ]));
+    let html = ok(&incal(&["report", json.to_str().unwrap()]));
+    let fig = html.find("data-plot=\"allan\"").expect("an Allan figure");
+    let svg = &html[fig..html[fig..].find("</svg>").unwrap() + fig];
+    // Dots for the deviations, lines for the bounds and the fitted terms.
+    assert!(svg.matches("<circle").count() >= 8, "dots");
+    assert!(svg.matches("<polyline").count() >= 8, "bars and lines");
+    assert!(html.contains("OADEV with 68.3 % bounds"));
+}
