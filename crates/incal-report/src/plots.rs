@@ -923,112 +923,6 @@ pub fn figure_html(p: &Plot, index: usize) -> Result<String, ReportError> {
     Ok(s)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use incal::document::Column;
-
-    fn table() -> Table {
-        Table {
-            id: "positions".into(),
-            title: "Positions".into(),
-            columns: vec![
-                Column {
-                    name: "angle".into(),
-                    unit: Some(Unit::Deg),
-                },
-                Column {
-                    name: "pass".into(),
-                    unit: None,
-                },
-                Column {
-                    name: "n".into(),
-                    unit: None,
-                },
-                Column {
-                    name: "mean".into(),
-                    unit: Some(Unit::Output),
-                },
-                Column {
-                    name: "std".into(),
-                    unit: Some(Unit::Output),
-                },
-                Column {
-                    name: "residual".into(),
-                    unit: Some(Unit::Output),
-                },
-            ],
-            rows: vec![
-                vec![
-                    Cell::Number(0.0),
-                    Cell::Text("cw".into()),
-                    Cell::Number(4.0),
-                    Cell::Number(1.0),
-                    Cell::Number(0.1),
-                    Cell::Number(0.01),
-                ],
-                vec![
-                    Cell::Number(90.0),
-                    Cell::Text("cw".into()),
-                    Cell::Number(4.0),
-                    Cell::Number(2.0),
-                    Cell::Number(0.1),
-                    Cell::Number(-0.01),
-                ],
-                vec![
-                    Cell::Number(0.0),
-                    Cell::Text("ccw".into()),
-                    Cell::Number(4.0),
-                    Cell::Number(1.1),
-                    Cell::Number(0.1),
-                    Cell::Number(0.02),
-                ],
-            ],
-        }
-    }
-
-    #[test]
-    fn a_table_with_residuals_gives_residual_and_fitted_plots() {
-        let plots = table_plots(&table());
-        assert_eq!(plots.len(), 2);
-        let (r, f) = (&plots[0], &plots[1]);
-        assert_eq!(r.kind, "residual");
-        assert_eq!(r.x_desc, "angle (deg)");
-        assert_eq!(r.legend, ["cw", "ccw"]);
-        assert_eq!(r.series.len(), 2);
-        // Pooled s_p = 0.1 on 9 dof; bar = t95(9)·0.1/2.
-        let b = r.series[0].points[0].bar.unwrap();
-        assert!((b - coverage_factor(9.0, 0.95) * 0.05).abs() < 1e-12);
-        assert_eq!(f.kind, "fitted");
-        let fitted = &f.series[0];
-        assert_eq!(fitted.style, Style::Line);
-        assert_eq!(fitted.points[1].y, 2.0 + 0.01);
-        assert!(render_svg(f).unwrap().starts_with("<svg"));
-    }
-
-    #[test]
-    fn tables_without_residuals_give_no_plot() {
-        let mut t = table();
-        t.columns[5].name = "difference".into();
-        assert!(table_plots(&t).is_empty());
-    }
-
-    #[test]
-    fn centrifuge_outputs_in_g_read_in_g() {
-        assert_eq!(display_unit(Some(&Unit::G), 25.0), (1.0, "g".into()));
-        assert_eq!(display_unit(Some(&Unit::G), 1e-4), (1e6, "ug".into()));
-        assert_eq!(display_unit(Some(&Unit::One), 1.0), (1.0, String::new()));
-    }
-
-    #[test]
-    fn flat_ranges_are_widened() {
-        assert_eq!(padded([2.0, 2.0].into_iter()), (1.8, 2.2));
-        assert_eq!(padded(std::iter::empty()), (-1.0, 1.0));
-        let (lo, hi) = padded([0.0, 1.0].into_iter());
-        assert!(lo < 0.0 && hi > 1.0);
-    }
-}
-
 /// The Allan plot of each channel of a noise result (`channels` in the
 /// document): OADEV against τ on log–log axes with its confidence bounds as
 /// bars, the fitted IEEE 952 model and each identified term's line.
@@ -1161,4 +1055,110 @@ pub fn allan_plots(doc: &ResultDocument) -> Vec<Plot> {
         });
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use incal::document::Column;
+
+    fn table() -> Table {
+        Table {
+            id: "positions".into(),
+            title: "Positions".into(),
+            columns: vec![
+                Column {
+                    name: "angle".into(),
+                    unit: Some(Unit::Deg),
+                },
+                Column {
+                    name: "pass".into(),
+                    unit: None,
+                },
+                Column {
+                    name: "n".into(),
+                    unit: None,
+                },
+                Column {
+                    name: "mean".into(),
+                    unit: Some(Unit::Output),
+                },
+                Column {
+                    name: "std".into(),
+                    unit: Some(Unit::Output),
+                },
+                Column {
+                    name: "residual".into(),
+                    unit: Some(Unit::Output),
+                },
+            ],
+            rows: vec![
+                vec![
+                    Cell::Number(0.0),
+                    Cell::Text("cw".into()),
+                    Cell::Number(4.0),
+                    Cell::Number(1.0),
+                    Cell::Number(0.1),
+                    Cell::Number(0.01),
+                ],
+                vec![
+                    Cell::Number(90.0),
+                    Cell::Text("cw".into()),
+                    Cell::Number(4.0),
+                    Cell::Number(2.0),
+                    Cell::Number(0.1),
+                    Cell::Number(-0.01),
+                ],
+                vec![
+                    Cell::Number(0.0),
+                    Cell::Text("ccw".into()),
+                    Cell::Number(4.0),
+                    Cell::Number(1.1),
+                    Cell::Number(0.1),
+                    Cell::Number(0.02),
+                ],
+            ],
+        }
+    }
+
+    #[test]
+    fn a_table_with_residuals_gives_residual_and_fitted_plots() {
+        let plots = table_plots(&table());
+        assert_eq!(plots.len(), 2);
+        let (r, f) = (&plots[0], &plots[1]);
+        assert_eq!(r.kind, "residual");
+        assert_eq!(r.x_desc, "angle (deg)");
+        assert_eq!(r.legend, ["cw", "ccw"]);
+        assert_eq!(r.series.len(), 2);
+        // Pooled s_p = 0.1 on 9 dof; bar = t95(9)·0.1/2.
+        let b = r.series[0].points[0].bar.unwrap();
+        assert!((b - coverage_factor(9.0, 0.95) * 0.05).abs() < 1e-12);
+        assert_eq!(f.kind, "fitted");
+        let fitted = &f.series[0];
+        assert_eq!(fitted.style, Style::Line);
+        assert_eq!(fitted.points[1].y, 2.0 + 0.01);
+        assert!(render_svg(f).unwrap().starts_with("<svg"));
+    }
+
+    #[test]
+    fn tables_without_residuals_give_no_plot() {
+        let mut t = table();
+        t.columns[5].name = "difference".into();
+        assert!(table_plots(&t).is_empty());
+    }
+
+    #[test]
+    fn centrifuge_outputs_in_g_read_in_g() {
+        assert_eq!(display_unit(Some(&Unit::G), 25.0), (1.0, "g".into()));
+        assert_eq!(display_unit(Some(&Unit::G), 1e-4), (1e6, "ug".into()));
+        assert_eq!(display_unit(Some(&Unit::One), 1.0), (1.0, String::new()));
+    }
+
+    #[test]
+    fn flat_ranges_are_widened() {
+        assert_eq!(padded([2.0, 2.0].into_iter()), (1.8, 2.2));
+        assert_eq!(padded(std::iter::empty()), (-1.0, 1.0));
+        let (lo, hi) = padded([0.0, 1.0].into_iter());
+        assert!(lo < 0.0 && hi > 1.0);
+    }
 }

@@ -7,6 +7,9 @@ use std::time::Instant;
 
 use incal::noise::{dev, phase_from_rate, TauGrid};
 
+/// A deviation kernel of `incal::noise::dev`.
+type Kernel = fn(&[f64], usize, f64, bool) -> Option<dev::VarN>;
+
 fn best(f: &mut dyn FnMut() -> f64) -> f64 {
     let mut t = f64::INFINITY;
     let mut sink = 0.0;
@@ -30,7 +33,7 @@ fn main() {
     let x = phase_from_rate(&y, 1.0);
     let g = TauGrid::parse(grid).expect("octave or all");
     let ms = g.factors(x.len());
-    let kernels: [(&str, fn(&[f64], usize, f64, bool) -> Option<dev::VarN>); 4] = [
+    let kernels: [(&str, Kernel); 4] = [
         ("oadev", dev::oavar),
         ("mdev", dev::mvar),
         ("ohdev", dev::ohvar),

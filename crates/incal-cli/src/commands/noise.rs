@@ -506,7 +506,7 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         return Err(usage("--rate-hz must be a positive number"));
     }
     let n = a.duration_s * a.rate_hz;
-    if !(n.is_finite() && n >= 4.0 && n <= 1e9) {
+    if !(n.is_finite() && (4.0..=1e9).contains(&n)) {
         return Err(usage(
             "--duration-s times --rate-hz must give between 4 and 1e9 samples",
         ));
