@@ -7,7 +7,9 @@ use std::path::{Path, PathBuf};
 
 use clap::ValueEnum;
 use incal::document::noise::{document, ChannelResult, Quantity};
-use incal::noise::{phase_from_rate, stability_with_progress, terms, StabilityOptions, TauGrid};
+use incal::noise::{
+    phase_from_rate_with, stability_with_progress, terms, StabilityOptions, TauGrid,
+};
 use incal::sim::noise::{rate_record, NoiseTruth};
 use incal::sim::trial_seed;
 use rayon::prelude::*;
@@ -126,9 +128,44 @@ fn unit_of(q: QuantityArg, unit: Option<&str>) -> CliResult<(Quantity, String, f
 /// The channels of a record: names and samples.
 struct Record {
     names: Vec<String>,
-    data: Vec<Vec<f64>>,
+    data: Samples,
     sha256: String,
     rows: usize,
+}
+
+/// Where the samples are: parsed columns (CSV), or the memory map of a
+/// binary file (read in place: the phase is the only copy).
+enum Samples {
+    Columns(Vec<Vec<f64>>),
+    Mapped {
+        map: memmap2::Mmap,
+        channels: usize,
+        f64le: bool,
+        index: Vec<usize>,
+    },
+}
+
+impl Samples {
+    /// Sample `r` of selected channel `k`.
+    fn get(&self, k: usize, r: usize) -> f64 {
+        match self {
+            Samples::Columns(c) => c[k][r],
+            Samples::Mapped {
+                map,
+                channels,
+                f64le,
+                index,
+            } => {
+                let w = if *f64le { 8 } else { 4 };
+                let at = (r * channels + index[k]) * w;
+                if *f64le {
+                    f64::from_le_bytes(map[at..at + 8].try_into().unwrap_or([0; 8]))
+                } else {
+                    f32::from_le_bytes(map[at..at + 4].try_into().unwrap_or([0; 4])) as f64
+                }
+            }
+        }
+    }
 }
 
 fn read_csv(path: &Path, columns: &[String]) -> CliResult<(String, Record)> {
@@ -206,7 +243,7 @@ fn read_csv(path: &Path, columns: &[String]) -> CliResult<(String, Record)> {
         name,
         Record {
             names: pick.iter().map(|&k| head[k].clone()).collect(),
-            data,
+            data: Samples::Columns(data),
             sha256: sha,
             rows,
         },
@@ -262,26 +299,21 @@ fn read_binary(
             .collect::<CliResult<_>>()?
     };
     let sha = sha256_hex(&map);
-    let mut data = Vec::new();
-    for &k in &pick {
-        let mut d = Vec::with_capacity(rows);
-        for r in 0..rows {
-            let at = r * frame + k * width;
-            let v = if f64le {
-                f64::from_le_bytes(map[at..at + 8].try_into().unwrap_or([0; 8]))
-            } else {
-                f32::from_le_bytes(map[at..at + 4].try_into().unwrap_or([0; 4])) as f64
-            };
-            if !v.is_finite() {
-                return Err(CliError::Input(format!(
-                    "{name}: sample {} of {}: not a finite number",
-                    r + 1,
-                    all[k]
-                )));
-            }
-            d.push(v);
+    let data = Samples::Mapped {
+        map,
+        channels,
+        f64le,
+        index: pick.clone(),
+    };
+    // Refuse a non-finite sample before any arithmetic (one pass, no copy).
+    for (k, &c) in pick.iter().enumerate() {
+        if let Some(r) = (0..rows).find(|&r| !data.get(k, r).is_finite()) {
+            return Err(CliError::Input(format!(
+                "{name}: sample {} of {}: not a finite number",
+                r + 1,
+                all[c]
+            )));
         }
-        data.push(d);
     }
     Ok((
         name,
@@ -364,13 +396,10 @@ pub fn run(a: &Args) -> CliResult<()> {
         None
     };
     let one = |k: usize| -> CliResult<ChannelResult> {
-        let y = &rec.data[k];
+        let d = &rec.data;
         let x: Vec<f64> = match a.data {
-            DataArg::Rate => {
-                let scaled: Vec<f64> = y.iter().map(|v| v * factor).collect();
-                phase_from_rate(&scaled, tau0)
-            }
-            DataArg::Angle => y.iter().map(|v| v * factor).collect(),
+            DataArg::Rate => phase_from_rate_with(rec.rows, tau0, |r| d.get(k, r) * factor),
+            DataArg::Angle => (0..rec.rows).map(|r| d.get(k, r) * factor).collect(),
         };
         let tick = |_: usize| {
             if let Some(b) = &bar {
@@ -389,7 +418,7 @@ pub fn run(a: &Args) -> CliResult<()> {
             .collect();
         Ok(ChannelResult {
             name: rec.names[k].clone(),
-            samples: y.len(),
+            samples: rec.rows,
             stability: st,
             fit,
             slope,

@@ -208,16 +208,25 @@ impl Stability {
 /// The mean is removed first (a linear phase term, to which every
 /// deviation here is blind) so the running sum keeps its precision.
 pub fn phase_from_rate(y: &[f64], tau0: f64) -> Vec<f64> {
-    let mean = if y.is_empty() {
-        0.0
-    } else {
-        y.iter().sum::<f64>() / y.len() as f64
-    };
-    let mut x = Vec::with_capacity(y.len() + 1);
+    phase_from_rate_with(y.len(), tau0, |i| y[i])
+}
+
+/// As [`phase_from_rate`] with the rate samples `y(0), …, y(n−1)` read
+/// twice through a function (e.g. straight from a memory-mapped file, so
+/// the phase is the only copy of the data).
+pub fn phase_from_rate_with(n: usize, tau0: f64, y: impl Fn(usize) -> f64) -> Vec<f64> {
+    let mut mean = 0.0;
+    for i in 0..n {
+        mean += y(i);
+    }
+    if n > 0 {
+        mean /= n as f64;
+    }
+    let mut x = Vec::with_capacity(n + 1);
     let mut acc = 0.0;
     x.push(0.0);
-    for &v in y {
-        acc += (v - mean) * tau0;
+    for i in 0..n {
+        acc += (y(i) - mean) * tau0;
         x.push(acc);
     }
     x
