@@ -50,7 +50,7 @@ for name in ["oadev", "mdev", "ohdev", "totdev"]:
     t = time.perf_counter()
     fn(y, rate=1.0, data_type="freq", taus=np.array(taus, dtype=float))
     ta = time.perf_counter() - t
-    ti = float(inc[name])
+    ti = float(inc.get(name + "_fused", inc[name]))
     print(f"{len(y):>10} {grid:>6} {name:>7}  allantools {ta:9.4f} s  incal {ti:9.4f} s  ratio {ta/ti:7.1f}x")
 PYEOF
 }

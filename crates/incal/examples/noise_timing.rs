@@ -39,6 +39,22 @@ fn main() {
         ("ohdev", dev::ohvar),
         ("totdev", dev::totvar),
     ];
+    let t = best(&mut || {
+        dev::oavar_many(&x, &ms, 1.0, true)
+            .iter()
+            .flatten()
+            .map(|v| v.var)
+            .sum()
+    });
+    println!("oadev_fused {t:.6}");
+    let t = best(&mut || {
+        dev::ohvar_many(&x, &ms, 1.0, true)
+            .iter()
+            .flatten()
+            .map(|v| v.var)
+            .sum()
+    });
+    println!("ohdev_fused {t:.6}");
     for (name, k) in kernels {
         let t = best(&mut || {
             ms.iter()

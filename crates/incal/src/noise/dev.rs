@@ -83,6 +83,94 @@ fn comb_sum<const K: usize>(s: [&[f64]; K], w: [f64; K], parallel: bool) -> f64 
     sums.iter().sum()
 }
 
+/// [`comb_sum`] for many averaging factors at once, block-major: for each
+/// block index every m takes its block of terms while the data near the
+/// block are in cache (the windows at offsets 0, m, 2m of small m overlap).
+/// The slices of factor m start at `mult[k]·m` and hold `len − span·m`
+/// terms. Each m's blocks and their ordered sum are exactly those of
+/// [`comb_sum`], so the numbers are the same bits.
+fn comb_many<const K: usize>(
+    x: &[f64],
+    ms: &[usize],
+    mult: [usize; K],
+    w: [f64; K],
+    span: usize,
+    parallel: bool,
+) -> Vec<Option<(f64, usize)>> {
+    let terms: Vec<usize> = ms
+        .iter()
+        .map(|&m| {
+            if m == 0 {
+                0
+            } else {
+                x.len().saturating_sub(span * m)
+            }
+        })
+        .collect();
+    let nb = terms.iter().map(|n| n.div_ceil(BLOCK)).max().unwrap_or(0);
+    let block = |b: usize| -> Vec<f64> {
+        ms.iter()
+            .zip(&terms)
+            .map(|(&m, &n)| {
+                let lo = b * BLOCK;
+                if lo >= n {
+                    return 0.0;
+                }
+                let hi = ((b + 1) * BLOCK).min(n);
+                comb_block(mult.map(|k| &x[k * m + lo..k * m + hi]), w)
+            })
+            .collect()
+    };
+    let parts: Vec<Vec<f64>> = if parallel && nb > 1 {
+        (0..nb).into_par_iter().map(block).collect()
+    } else {
+        (0..nb).map(block).collect()
+    };
+    (0..ms.len())
+        .map(|j| {
+            let n = terms[j];
+            (n > 0).then(|| {
+                let s: f64 = parts.iter().take(n.div_ceil(BLOCK)).map(|p| p[j]).sum();
+                (s, n)
+            })
+        })
+        .collect()
+}
+
+/// [`oavar`] at every factor of `ms` (one block-major sweep; same bits).
+pub fn oavar_many(x: &[f64], ms: &[usize], tau0: f64, parallel: bool) -> Vec<Option<VarN>> {
+    comb_many(x, ms, [2, 1, 0], [1.0, -2.0, 1.0], 2, parallel)
+        .into_iter()
+        .zip(ms)
+        .map(|(r, &m)| {
+            r.map(|(s, n)| {
+                let mt = m as f64 * tau0;
+                VarN {
+                    var: s / (2.0 * mt * mt * n as f64),
+                    n,
+                }
+            })
+        })
+        .collect()
+}
+
+/// [`ohvar`] at every factor of `ms` (one block-major sweep; same bits).
+pub fn ohvar_many(x: &[f64], ms: &[usize], tau0: f64, parallel: bool) -> Vec<Option<VarN>> {
+    comb_many(x, ms, [3, 2, 1, 0], [1.0, -3.0, 3.0, -1.0], 3, parallel)
+        .into_iter()
+        .zip(ms)
+        .map(|(r, &m)| {
+            r.map(|(s, n)| {
+                let mt = m as f64 * tau0;
+                VarN {
+                    var: s / (6.0 * mt * mt * n as f64),
+                    n,
+                }
+            })
+        })
+        .collect()
+}
+
 /// A variance and the number of terms behind it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VarN {
@@ -316,6 +404,19 @@ mod tests {
                     totvar(&x, m, 1.0, true).unwrap().var,
                 ];
                 assert_eq!(got.map(f64::to_bits), par.map(f64::to_bits));
+            }
+            let ms: Vec<usize> = (1..n / 3).step_by(1 + n / 40).collect();
+            let many = oavar_many(&x, &ms, 1.0, true);
+            let hmany = ohvar_many(&x, &ms, 1.0, true);
+            for (k, &m) in ms.iter().enumerate() {
+                assert_eq!(
+                    many[k].map(|v| v.var.to_bits()),
+                    oavar(&x, m, 1.0, false).map(|v| v.var.to_bits())
+                );
+                assert_eq!(
+                    hmany[k].map(|v| v.var.to_bits()),
+                    ohvar(&x, m, 1.0, false).map(|v| v.var.to_bits())
+                );
             }
             // TOTDEV beyond N/2 (all centres reflected).
             if n > 10 {

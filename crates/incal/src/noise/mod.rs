@@ -309,6 +309,8 @@ pub fn stability_with_progress(
     } else {
         ms.iter().map(|&m| id::identify(x, m)).collect()
     };
+    let oas = dev::oavar_many(x, &ms, t0, par);
+    let ohs = dev::ohvar_many(x, &ms, t0, par);
     let mut last: Option<id::NoiseId> = None;
     for (k, &m) in ms.iter().enumerate() {
         let nid = ids[k].or(last);
@@ -317,7 +319,7 @@ pub fn stability_with_progress(
         st.alpha.push(aa);
         st.alpha_hadamard.push(ah);
         let pair = |v: Option<dev::VarN>| v.map(|v| (v.var, v.n));
-        let oa = dev::oavar(x, m, t0, par);
+        let oa = oas[k];
         push(
             &mut st.oadev,
             pair(oa),
@@ -334,7 +336,7 @@ pub fn stability_with_progress(
             medf,
             p,
         );
-        let oh = dev::ohvar(x, m, t0, par);
+        let oh = ohs[k];
         push(
             &mut st.ohdev,
             pair(oh),
