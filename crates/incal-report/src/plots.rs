@@ -11,7 +11,10 @@
 //! * when neither gives a plot: every coefficient's value ±U95, one plot
 //!   per unit;
 //! * the history of a coefficient over the calibrations of an instrument,
-//!   with its limits.
+//!   with its limits;
+//! * a top-level `channels` object with `taus_s` and `oadev` (the noise
+//!   result): the Allan plot of each channel, log–log, with its bounds and
+//!   the fitted IEEE 952 lines ([`allan_plots`]).
 //!
 //! The abscissa of a table is its numeric column, before the statistics
 //! columns (`n`, `mean`, `std`, `residual`, …), with the most distinct
