@@ -91,3 +91,29 @@ fn a_short_white_record_reports_n_only() {
         .iter()
         .any(|w| w.code == incal::warning::WarningCode::NoiseTermNotIdentified));
 }
+
+#[test]
+fn the_fit_spans_seven_decades_of_tau() {
+    // A 10^8-sample record reaches τ = 2.5e7 s: the regressors then span
+    // ~30 orders of magnitude, which must not read as a zero column.
+    let taus: Vec<f64> = (0..25).map(|k| (1u64 << k) as f64).collect();
+    let model = |t: f64| (1.0 / t + terms::FLICKER * 1e-4 + 1e-10 * t / 3.0).sqrt();
+    let series = incal::noise::DevSeries {
+        value: taus.iter().map(|&t| Some(model(t))).collect(),
+        lo: vec![None; taus.len()],
+        hi: vec![None; taus.len()],
+        edf: taus.iter().map(|&t| Some(1e8 / t)).collect(),
+        n: vec![1; taus.len()],
+    };
+    let f = terms::fit_terms(&taus, &series, &vec![Some(0); taus.len()], 1.0).unwrap();
+    let n = f.terms[1].expect("N");
+    let b = f.terms[2].expect("B");
+    let k = f.terms[3].expect("K");
+    assert!(
+        (n.value - 1.0).abs() < 1e-6
+            && (b.value - 1e-2).abs() < 1e-6
+            && (k.value - 1e-5).abs() < 1e-9,
+        "{:?}",
+        f.terms
+    );
+}

@@ -121,7 +121,14 @@ fn fit_active(
             return Ok(None);
         }
         let names: Vec<String> = active.iter().map(|&j| format!("{}2", TERMS[j])).collect();
-        let a = DMatrix::from_fn(nobs, active.len(), |i, k| regressor(active[k], obs[i].0));
+        // Columns scaled to a largest entry of 1: over decades of τ the
+        // regressors span many orders of magnitude (τ² against 1/τ²), which
+        // would read as a zero column. θ_j = θ'_j / c_j afterwards.
+        let raw = DMatrix::from_fn(nobs, active.len(), |i, k| regressor(active[k], obs[i].0));
+        let c: Vec<f64> = (0..active.len())
+            .map(|k| raw.column(k).amax().max(f64::MIN_POSITIVE))
+            .collect();
+        let a = DMatrix::from_fn(nobs, active.len(), |i, k| raw[(i, k)] / c[k]);
         let y = DVector::from_iterator(nobs, obs.iter().map(|o| o.1 * o.1));
         let mut pred: Vec<f64> = obs.iter().map(|o| o.1 * o.1).collect();
         let mut last = None;
@@ -176,7 +183,10 @@ fn fit_active(
                 dof = dofr as f64;
             }
         }
-        let est = Estimates::new(names.clone(), f.estimates.values().clone(), cov, dof)?;
+        let p = active.len();
+        let vals = DVector::from_fn(p, |k, _| f.estimates.values()[k] / c[k]);
+        let cov = DMatrix::from_fn(p, p, |j, k| cov[(j, k)] / (c[j] * c[k]));
+        let est = Estimates::new(names.clone(), vals, cov, dof)?;
         let f = (est, chi2, dofr);
         let v = f.0.values();
         let worst = (0..active.len()).filter(|&k| v[k] < 0.0).min_by(|&a, &b| {
