@@ -63,6 +63,8 @@ enum Command {
     /// Calibration records: store results per instrument (append-only, hash-chained), list, show, supersede, history and drift, verify.
     #[command(subcommand)]
     Record(commands::record::Command),
+    /// Noise and stability of long static records: OADEV, MDEV, OHDEV, TDEV, TOTDEV with confidence bounds, IEEE 952 noise terms, bias stability.
+    Noise(commands::noise::Args),
 }
 
 #[derive(Subcommand, Debug)]
@@ -100,6 +102,8 @@ enum SimulateCommand {
     GyroRate(commands::gyro::SimRateArgs),
     /// Gyro multi-position test on a dividing head; writes the input CSV of `incal gyro positions`.
     GyroPositions(commands::gyro::SimPositionsArgs),
+    /// Rate-noise record (gyro) with IEEE 952 terms: quantization, white, flicker, random walk, ramp.
+    Noise(commands::noise::SimArgs),
 }
 
 fn run(cli: Cli) -> CliResult<()> {
@@ -128,6 +132,8 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Simulate(SimulateCommand::GyroPositions(a)) => {
             commands::gyro::simulate_positions_cmd(&a)
         }
+        Command::Noise(a) => commands::noise::run(&a),
+        Command::Simulate(SimulateCommand::Noise(a)) => commands::noise::simulate(&a),
     }
 }
 

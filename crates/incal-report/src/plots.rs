@@ -11,7 +11,10 @@
 //! * when neither gives a plot: every coefficient's value ±U95, one plot
 //!   per unit;
 //! * the history of a coefficient over the calibrations of an instrument,
-//!   with its limits.
+//!   with its limits;
+//! * a top-level `channels` object with `taus_s` and `oadev` (the noise
+//!   result): the Allan plot of each channel, log–log, with its bounds and
+//!   the fitted IEEE 952 lines ([`allan_plots`]).
 //!
 //! The abscissa of a table is its numeric column, before the statistics
 //! columns (`n`, `mean`, `std`, `residual`, …), with the most distinct
@@ -135,6 +138,9 @@ pub struct Plot {
     pub hlines: Vec<HLine>,
     /// What the plot shows and how the bars are computed (plain text).
     pub caption: String,
+    /// Coordinates are log10 of the values (Allan plots): ticks are
+    /// labelled with the values.
+    pub log_log: bool,
 }
 
 /// Display scale and label for numbers of `unit` of magnitude up to
@@ -423,6 +429,7 @@ fn rows_plots(t: &Table, rows: &[usize], lay: &Layout, panel: Option<&str>) -> V
             "Residual (data − fitted model) of every row of table {}{in_panel} against {x_desc}.{series_text} {bar_text}",
             t.id
         ),
+        log_log: false,
     });
 
     if let Some(mean) = mean {
@@ -478,6 +485,7 @@ fn rows_plots(t: &Table, rows: &[usize], lay: &Layout, panel: Option<&str>) -> V
                 "Data (dots: the mean of each row of table {}{in_panel}) and the fitted model (line through mean − residual at the same abscissae, in order of {x_desc}; straight between them, not the model's curve).{series_text} {bar_text}",
                 t.id
             ),
+            log_log: false,
         });
     }
     out
@@ -535,6 +543,7 @@ fn coefficient_plot(
         legend: Vec::new(),
         hlines,
         caption,
+        log_log: false,
     })
 }
 
@@ -702,6 +711,7 @@ pub fn history_plot(h: &HistorySeries) -> Plot {
                 ),
             }
         ),
+        log_log: false,
     }
 }
 
@@ -778,6 +788,7 @@ pub fn render_svg(p: &Plot) -> Result<String, ReportError> {
             XAxis::Categories(c) => Some(c.clone()),
             XAxis::Numeric => None,
         };
+        let log_log = p.log_log;
         let x_fmt = |x: &f64| match &categories {
             Some(c) => {
                 let i = x.round();
@@ -787,9 +798,16 @@ pub fn render_svg(p: &Plot) -> Result<String, ReportError> {
                     String::new()
                 }
             }
+            None if log_log => trimmed(10f64.powf(*x), 3),
             None => tick(*x, x1 - x0),
         };
-        let y_fmt = |y: &f64| tick(*y, y1 - y0);
+        let y_fmt = |y: &f64| {
+            if log_log {
+                trimmed(10f64.powf(*y), 3)
+            } else {
+                tick(*y, y1 - y0)
+            }
+        };
         let n_x_labels = categories.as_ref().map_or(10, |c| c.len().clamp(1, 24));
         chart
             .configure_mesh()
@@ -906,6 +924,140 @@ pub fn figure_html(p: &Plot, index: usize) -> Result<String, ReportError> {
         esc(&p.caption)
     ));
     Ok(s)
+}
+
+/// The Allan plot of each channel of a noise result (`channels` in the
+/// document): OADEV against τ on log–log axes with its confidence bounds as
+/// bars, the fitted IEEE 952 model and each identified term's line.
+pub fn allan_plots(doc: &ResultDocument) -> Vec<Plot> {
+    let Some(chans) = doc.extra.get("channels").and_then(|c| c.as_object()) else {
+        return Vec::new();
+    };
+    let conf = doc
+        .options
+        .get("confidence")
+        .and_then(|v| v.as_f64())
+        .unwrap_or(0.683);
+    let nums = |v: &serde_json::Value| -> Vec<Option<f64>> {
+        v.as_array()
+            .map(|a| a.iter().map(|x| x.as_f64().filter(|x| *x > 0.0)).collect())
+            .unwrap_or_default()
+    };
+    let mut out = Vec::new();
+    for (name, c) in chans {
+        let taus = nums(&c["taus_s"]);
+        let (val, lo, hi) = (
+            nums(&c["oadev"]["value"]),
+            nums(&c["oadev"]["lo"]),
+            nums(&c["oadev"]["hi"]),
+        );
+        let unit = c["unit"].as_str().unwrap_or("").to_string();
+        let mut series = Vec::new();
+        let mut dots = Vec::new();
+        for (k, t) in taus.iter().enumerate() {
+            let (Some(t), Some(v)) = (t, val.get(k).copied().flatten()) else {
+                continue;
+            };
+            dots.push(Pt {
+                x: t.log10(),
+                y: v.log10(),
+                bar: None,
+            });
+            if let (Some(l), Some(h)) = (lo.get(k).copied().flatten(), hi.get(k).copied().flatten())
+            {
+                series.push(Series {
+                    key: 0,
+                    style: Style::Line,
+                    points: vec![
+                        Pt {
+                            x: t.log10(),
+                            y: l.log10(),
+                            bar: None,
+                        },
+                        Pt {
+                            x: t.log10(),
+                            y: h.log10(),
+                            bar: None,
+                        },
+                    ],
+                });
+            }
+        }
+        if dots.is_empty() {
+            continue;
+        }
+        series.push(Series {
+            key: 0,
+            style: Style::Dots,
+            points: dots,
+        });
+        let line = |v: &serde_json::Value| -> Vec<Pt> {
+            nums(v)
+                .iter()
+                .zip(&taus)
+                .filter_map(|(y, t)| {
+                    Some(Pt {
+                        x: t.as_ref()?.log10(),
+                        y: y.as_ref()?.log10(),
+                        bar: None,
+                    })
+                })
+                .collect()
+        };
+        let mut legend = vec![format!("OADEV with {} % bounds", trimmed(100.0 * conf, 3))];
+        let fit = line(&c["fit_oadev"]);
+        if !fit.is_empty() {
+            legend.push("fitted IEEE 952 model".into());
+            series.push(Series {
+                key: legend.len() - 1,
+                style: Style::Line,
+                points: fit,
+            });
+        }
+        if let Some(terms) = c["fit_terms_oadev"].as_object() {
+            for (t, v) in terms {
+                let pts = line(v);
+                if !pts.is_empty() {
+                    legend.push(format!("term {t}"));
+                    series.push(Series {
+                        key: legend.len() - 1,
+                        style: Style::Line,
+                        points: pts,
+                    });
+                }
+            }
+        }
+        // Term lines far below the data would squash the plot: keep them
+        // within two decades under the lowest deviation.
+        let floor = series
+            .iter()
+            .filter(|s| s.key == 0)
+            .flat_map(|s| s.points.iter().map(|p| p.y))
+            .fold(f64::INFINITY, f64::min)
+            - 2.0;
+        for s in series.iter_mut().filter(|s| s.key > 1) {
+            s.points.retain(|p| p.y >= floor);
+        }
+        series.retain(|s| !s.points.is_empty());
+        out.push(Plot {
+            kind: "allan",
+            source: name.clone(),
+            title: format!("{name}: Allan deviation"),
+            x_desc: "averaging time tau (s)".into(),
+            y_desc: format!("OADEV ({unit})"),
+            x_axis: XAxis::Numeric,
+            dodge: false,
+            series,
+            legend,
+            hlines: Vec::new(),
+            caption: format!(
+                "Overlapping Allan deviation against averaging time, log-log; bars: chi-square bounds at {} % confidence with the equivalent degrees of freedom of the identified noise (Greenhall & Riley); lines: the IEEE Std 952 model fitted by weighted least squares and each identified term.",
+                trimmed(100.0 * conf, 3)
+            ),
+            log_log: true,
+        });
+    }
+    out
 }
 
 #[cfg(test)]

@@ -43,6 +43,11 @@ pub enum WarningCode {
     /// The array geometry or a calibrated quantity is outside the range in
     /// which the procedure's linear model holds.
     ModelRange,
+    /// An IEEE noise term (quantization, random walk, bias instability,
+    /// rate random walk, rate ramp) the record cannot support: not reported.
+    NoiseTermNotIdentified,
+    /// The record is too short for a requested averaging time.
+    ShortRecord,
 }
 
 impl WarningCode {
@@ -60,6 +65,8 @@ impl WarningCode {
             WarningCode::MissingUncertainty => "missing-uncertainty",
             WarningCode::InconsistentBias => "inconsistent-bias",
             WarningCode::ModelRange => "model-range",
+            WarningCode::NoiseTermNotIdentified => "noise-term-not-identified",
+            WarningCode::ShortRecord => "short-record",
         }
     }
 }

@@ -6,6 +6,7 @@ pub mod demo;
 pub mod gfimu;
 pub mod gyro;
 pub mod misalign;
+pub mod noise;
 pub mod record;
 pub mod report;
 pub mod schema;

@@ -31,6 +31,7 @@ pub mod gfimu;
 pub mod gyro;
 pub mod limits;
 pub mod misalign;
+pub mod noise;
 pub mod tumble;
 
 use std::collections::BTreeMap;
@@ -66,6 +67,8 @@ pub enum Procedure {
     GyroRate,
     /// Gyro multi-position test on a dividing head (IEEE Std 517 / 1431).
     GyroPositions,
+    /// Noise and stability: Allan family, IEEE Std 952 terms, bias stability.
+    Noise,
 }
 
 impl Procedure {
@@ -79,6 +82,7 @@ impl Procedure {
             Procedure::GfimuCalibrate => "gfimu-calibrate",
             Procedure::GyroRate => "gyro-rate",
             Procedure::GyroPositions => "gyro-positions",
+            Procedure::Noise => "noise",
         }
     }
 }

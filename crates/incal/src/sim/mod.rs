@@ -9,6 +9,7 @@ pub mod demo;
 pub mod gfimu;
 pub mod gyro;
 pub mod misalign;
+pub mod noise;
 pub mod tumble;
 
 use rand::rngs::ChaCha8Rng;

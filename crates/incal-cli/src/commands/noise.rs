@@ -1,0 +1,599 @@
+//! `incal noise`: Allan-family deviations with confidence intervals, IEEE
+//! Std 952 noise terms and bias stability of every channel of a record;
+//! `incal simulate noise`: seeded records with known terms.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+use clap::ValueEnum;
+use incal::document::noise::{document, ChannelResult, Quantity};
+use incal::noise::{
+    phase_from_rate_with, stability_with_progress, terms, StabilityOptions, TauGrid,
+};
+use incal::sim::noise::{rate_record, NoiseTruth};
+use incal::sim::trial_seed;
+use rayon::prelude::*;
+
+use crate::error::{usage, CliError, CliResult};
+use crate::output::{input_file, sha256_hex, ResultArgs};
+
+/// What the channels measure.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum QuantityArg {
+    /// Gyro (rate in deg/s, rad/s or deg/h).
+    Gyro,
+    /// Accelerometer (g, mg or m/s2).
+    Accel,
+    /// Anything else (terms in the input unit).
+    Generic,
+}
+
+/// Rate samples or their running sum.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum DataArg {
+    /// Rate ("frequency") samples in --unit.
+    Rate,
+    /// Angle or velocity-increment sums ("phase") in --unit times seconds.
+    Angle,
+}
+
+/// File format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FormatArg {
+    /// Text with a header line, comma separated.
+    Csv,
+    /// Raw little-endian 32-bit floats, channels interleaved.
+    F32le,
+    /// Raw little-endian 64-bit floats, channels interleaved.
+    F64le,
+}
+
+/// `incal noise`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Record: CSV with a header (optional time_s column; every other numeric column is a channel) or raw binary (--format).
+    #[arg(long, value_name = "FILE")]
+    pub input: PathBuf,
+    /// Sample rate in Hz (τ0 = 1/F).
+    #[arg(long)]
+    pub rate_hz: f64,
+    /// Channels to analyse (CSV column names, comma separated; default every column but time_s).
+    #[arg(long, value_delimiter = ',')]
+    pub columns: Vec<String>,
+    /// What the channels measure: sets the units of the noise terms.
+    #[arg(long, value_enum, default_value = "generic")]
+    pub quantity: QuantityArg,
+    /// Unit of the rate samples: deg/s, rad/s, deg/h (gyro); g, mg, m/s2 (accel); any text (generic). Default deg/s, g, 1.
+    #[arg(long)]
+    pub unit: Option<String>,
+    /// rate: samples are rates; angle: samples are angle (velocity) sums in unit times s.
+    #[arg(long, value_enum, default_value = "rate")]
+    pub data: DataArg,
+    /// Averaging times: octave, decade, all, or N points per decade.
+    #[arg(long, default_value = "octave")]
+    pub taus: String,
+    /// Confidence of the deviation bounds (0 < P < 1).
+    #[arg(long, default_value_t = 0.683)]
+    pub confidence: f64,
+    /// Averaging times (s) of the bias stability (std of the τ-averages), comma separated.
+    #[arg(long, value_delimiter = ',', default_values_t = vec![10.0, 100.0])]
+    pub stability_tau_s: Vec<f64>,
+    /// Input format.
+    #[arg(long, value_enum, default_value = "csv")]
+    pub format: FormatArg,
+    /// Interleaved channels of a binary input.
+    #[arg(long)]
+    pub channels: Option<usize>,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+    /// One thread (same numbers as the parallel default, bit for bit).
+    #[arg(long)]
+    pub sequential: bool,
+    #[command(flatten)]
+    pub result: ResultArgs,
+}
+
+/// (quantity, unit text, factor from the input unit to the internal unit).
+fn unit_of(q: QuantityArg, unit: Option<&str>) -> CliResult<(Quantity, String, f64)> {
+    let bad = |u: &str, ok: &str| usage(format!("--unit: '{u}' is not a {ok} unit"));
+    Ok(match q {
+        QuantityArg::Gyro => {
+            let u = unit.unwrap_or("deg/s");
+            let f = match u {
+                "deg/s" => 1.0,
+                "rad/s" => 180.0 / std::f64::consts::PI,
+                "deg/h" => 1.0 / 3600.0,
+                _ => return Err(bad(u, "gyro (deg/s, rad/s, deg/h)")),
+            };
+            (Quantity::Gyro, u.to_string(), f)
+        }
+        QuantityArg::Accel => {
+            let u = unit.unwrap_or("g");
+            let f = match u {
+                "g" => 1.0,
+                "mg" => 1e-3,
+                "m/s2" => 1.0 / incal::units::STANDARD_GRAVITY_M_S2,
+                _ => return Err(bad(u, "accelerometer (g, mg, m/s2)")),
+            };
+            (Quantity::Accel, u.to_string(), f)
+        }
+        QuantityArg::Generic => {
+            let u = unit.unwrap_or("1").to_string();
+            (Quantity::Generic(u.clone()), u, 1.0)
+        }
+    })
+}
+
+/// The channels of a record: names and samples.
+struct Record {
+    names: Vec<String>,
+    data: Samples,
+    sha256: String,
+    rows: usize,
+}
+
+/// Where the samples are: parsed columns (CSV), or the memory map of a
+/// binary file (read in place: the phase is the only copy).
+enum Samples {
+    Columns(Vec<Vec<f64>>),
+    Mapped {
+        map: memmap2::Mmap,
+        channels: usize,
+        f64le: bool,
+        index: Vec<usize>,
+    },
+}
+
+impl Samples {
+    /// Sample `r` of selected channel `k`.
+    fn get(&self, k: usize, r: usize) -> f64 {
+        match self {
+            Samples::Columns(c) => c[k][r],
+            Samples::Mapped {
+                map,
+                channels,
+                f64le,
+                index,
+            } => {
+                let w = if *f64le { 8 } else { 4 };
+                let at = (r * channels + index[k]) * w;
+                if *f64le {
+                    f64::from_le_bytes(map[at..at + 8].try_into().unwrap_or([0; 8]))
+                } else {
+                    f32::from_le_bytes(map[at..at + 4].try_into().unwrap_or([0; 4])) as f64
+                }
+            }
+        }
+    }
+}
+
+fn read_csv(path: &Path, columns: &[String]) -> CliResult<(String, Record)> {
+    let (name, bytes, sha) = crate::io::read_hashed(path)?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| {
+        let line = 1 + bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
+        CliError::Input(format!("{name}:{line}: not valid UTF-8"))
+    })?;
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
+    let Some((_, header)) = lines.next() else {
+        return Err(CliError::Input(format!(
+            "{name}: empty file: a header line is needed"
+        )));
+    };
+    let head: Vec<String> = header.split(',').map(|h| h.trim().to_string()).collect();
+    let pick: Vec<usize> = if columns.is_empty() {
+        (0..head.len()).filter(|&k| head[k] != "time_s").collect()
+    } else {
+        columns
+            .iter()
+            .map(|c| {
+                head.iter().position(|h| h == c).ok_or_else(|| {
+                    CliError::Input(format!(
+                        "{name}:1: no column '{c}' (columns: {})",
+                        head.join(", ")
+                    ))
+                })
+            })
+            .collect::<CliResult<_>>()?
+    };
+    if pick.is_empty() {
+        return Err(CliError::Input(format!(
+            "{name}:1: no channel column besides time_s"
+        )));
+    }
+    let mut data = vec![Vec::new(); pick.len()];
+    let mut rows = 0;
+    for (ln, line) in lines {
+        let cells: Vec<&str> = line.split(',').collect();
+        if cells.len() != head.len() {
+            return Err(CliError::Input(format!(
+                "{name}:{}: {} fields, the header has {}",
+                ln + 1,
+                cells.len(),
+                head.len()
+            )));
+        }
+        for (d, &k) in data.iter_mut().zip(&pick) {
+            let s = cells[k].trim();
+            let v: f64 = s.parse().map_err(|_| {
+                CliError::Input(format!(
+                    "{name}:{}: column {}: '{s}' is not a number",
+                    ln + 1,
+                    head[k]
+                ))
+            })?;
+            if !v.is_finite() {
+                return Err(CliError::Input(format!(
+                    "{name}:{}: column {}: '{s}' is not a finite number",
+                    ln + 1,
+                    head[k]
+                )));
+            }
+            d.push(v);
+        }
+        rows += 1;
+    }
+    Ok((
+        name,
+        Record {
+            names: pick.iter().map(|&k| head[k].clone()).collect(),
+            data: Samples::Columns(data),
+            sha256: sha,
+            rows,
+        },
+    ))
+}
+
+/// Raw interleaved little-endian floats, memory-mapped: each channel is
+/// converted to f64 straight from the map (the file is never copied whole).
+fn read_binary(
+    path: &Path,
+    channels: usize,
+    f64le: bool,
+    columns: &[String],
+) -> CliResult<(String, Record)> {
+    let name = path.display().to_string();
+    if path.as_os_str() == "-" {
+        return Err(usage(
+            "--format f32le/f64le: the input must be a file (memory-mapped), not standard input",
+        ));
+    }
+    let file = std::fs::File::open(path)
+        .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?;
+    // SAFETY: the map is read-only and private to this process; the file
+    // is not modified while incal runs (a concurrent writer would give wrong
+    // numbers, not memory unsafety beyond what reading a changing file does).
+    let map = unsafe { memmap2::Mmap::map(&file) }
+        .map_err(|e| CliError::Input(format!("{name}: cannot map: {e}")))?;
+    let width = if f64le { 8 } else { 4 };
+    let frame = width * channels;
+    if map.is_empty() {
+        return Err(CliError::Input(format!("{name}: empty file")));
+    }
+    if map.len() % frame != 0 {
+        return Err(CliError::Input(format!(
+            "{name}: {} bytes is not a whole number of {channels}-channel frames of {frame} bytes",
+            map.len()
+        )));
+    }
+    let rows = map.len() / frame;
+    let all: Vec<String> = (1..=channels).map(|k| format!("ch{k}")).collect();
+    let pick: Vec<usize> = if columns.is_empty() {
+        (0..channels).collect()
+    } else {
+        columns
+            .iter()
+            .map(|c| {
+                all.iter().position(|h| h == c).ok_or_else(|| {
+                    CliError::Input(format!(
+                        "{name}: no channel '{c}' (channels: ch1..ch{channels})"
+                    ))
+                })
+            })
+            .collect::<CliResult<_>>()?
+    };
+    let sha = sha256_hex(&map);
+    let data = Samples::Mapped {
+        map,
+        channels,
+        f64le,
+        index: pick.clone(),
+    };
+    // Refuse a non-finite sample before any arithmetic (one pass, no copy).
+    for (k, &c) in pick.iter().enumerate() {
+        if let Some(r) = (0..rows).find(|&r| !data.get(k, r).is_finite()) {
+            return Err(CliError::Input(format!(
+                "{name}: sample {} of {}: not a finite number",
+                r + 1,
+                all[c]
+            )));
+        }
+    }
+    Ok((
+        name,
+        Record {
+            names: pick.iter().map(|&k| all[k].clone()).collect(),
+            data,
+            sha256: sha,
+            rows,
+        },
+    ))
+}
+
+/// `incal noise`.
+pub fn run(a: &Args) -> CliResult<()> {
+    if !(a.rate_hz.is_finite() && a.rate_hz > 0.0) {
+        return Err(usage("--rate-hz must be a positive number"));
+    }
+    if !(a.confidence > 0.0 && a.confidence < 1.0) {
+        return Err(usage("--confidence must be between 0 and 1 (e.g. 0.683)"));
+    }
+    let grid = TauGrid::parse(&a.taus).ok_or_else(|| {
+        usage(format!(
+            "--taus: '{}' is not octave, decade, all or a number of points per decade (1-1000)",
+            a.taus
+        ))
+    })?;
+    if let Some(t) = a
+        .stability_tau_s
+        .iter()
+        .find(|t| !(t.is_finite() && **t > 0.0))
+    {
+        return Err(usage(format!(
+            "--stability-tau-s: {t} is not a positive time"
+        )));
+    }
+    let (quantity, unit, factor) = unit_of(a.quantity, a.unit.as_deref())?;
+    let (name, rec) = match a.format {
+        FormatArg::Csv => {
+            if a.channels.is_some() {
+                return Err(usage("--channels goes with --format f32le or f64le"));
+            }
+            read_csv(&a.input, &a.columns)?
+        }
+        FormatArg::F32le | FormatArg::F64le => {
+            let ch = a.channels.ok_or_else(|| {
+                usage("--format f32le/f64le needs --channels N (interleaved channels)")
+            })?;
+            if ch == 0 {
+                return Err(usage("--channels must be at least 1"));
+            }
+            read_binary(&a.input, ch, a.format == FormatArg::F64le, &a.columns)?
+        }
+    };
+    let tau0 = 1.0 / a.rate_hz;
+    let min = if a.data == DataArg::Rate { 4 } else { 5 };
+    if rec.rows < min {
+        return Err(CliError::Input(format!(
+            "{name}: {} samples; at least {min} are needed for one averaging time",
+            rec.rows
+        )));
+    }
+    let opts = StabilityOptions {
+        tau0_s: tau0,
+        grid,
+        confidence: a.confidence,
+        parallel: !a.sequential,
+    };
+    let total = (grid.factors(rec.rows + 1).len() * rec.names.len()) as u64;
+    let bar = if !a.quiet && std::io::stderr().is_terminal() {
+        let b = indicatif::ProgressBar::new(total);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{msg} [{bar:40}] {pos}/{len} averaging times {elapsed}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b.set_message("incal noise");
+        Some(b)
+    } else {
+        None
+    };
+    let one = |k: usize| -> CliResult<ChannelResult> {
+        let d = &rec.data;
+        let x: Vec<f64> = match a.data {
+            DataArg::Rate => phase_from_rate_with(rec.rows, tau0, |r| d.get(k, r) * factor),
+            DataArg::Angle => (0..rec.rows).map(|r| d.get(k, r) * factor).collect(),
+        };
+        let tick = |_: usize| {
+            if let Some(b) = &bar {
+                b.inc(1);
+            }
+        };
+        let st = stability_with_progress(&x, &opts, &tick)
+            .map_err(|e| CliError::Input(format!("{name}: channel {}: {e}", rec.names[k])))?;
+        let fit = terms::fit_terms(&st.taus_s, &st.oadev, &st.alpha, tau0)
+            .map_err(|e| CliError::Input(format!("{name}: channel {}: {e}", rec.names[k])))?;
+        let slope = terms::slope_readings(&st.taus_s, &st.oadev);
+        let bias_stability = a
+            .stability_tau_s
+            .iter()
+            .map(|&t| (t, terms::bias_stability(&x, tau0, t)))
+            .collect();
+        Ok(ChannelResult {
+            name: rec.names[k].clone(),
+            samples: rec.rows,
+            stability: st,
+            fit,
+            slope,
+            bias_stability,
+            to_input: 1.0 / factor,
+        })
+    };
+    let results: Vec<ChannelResult> = if a.sequential {
+        (0..rec.names.len()).map(one).collect::<CliResult<_>>()?
+    } else {
+        (0..rec.names.len())
+            .into_par_iter()
+            .map(one)
+            .collect::<CliResult<_>>()?
+    };
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let tables = grid != TauGrid::All;
+    let mut doc =
+        document(&results, &quantity, &unit, a.confidence, tables).map_err(crate::error::core)?;
+    let shown = if name == "<stdin>" {
+        "-".to_string()
+    } else {
+        name.clone()
+    };
+    doc.inputs.push(input_file(
+        "input",
+        &shown,
+        rec.sha256.clone(),
+        Some(rec.rows),
+    ));
+    for (k, v) in [
+        ("rate-hz", serde_json::json!(a.rate_hz)),
+        (
+            "quantity",
+            serde_json::json!(format!("{:?}", a.quantity).to_lowercase()),
+        ),
+        ("unit", serde_json::json!(unit)),
+        (
+            "data",
+            serde_json::json!(format!("{:?}", a.data).to_lowercase()),
+        ),
+        ("taus", serde_json::json!(a.taus)),
+        ("stability-tau-s", serde_json::json!(a.stability_tau_s)),
+    ] {
+        doc.options.insert(k.to_string(), v);
+    }
+    a.result.emit(doc)
+}
+
+/// `incal simulate noise`.
+#[derive(clap::Args, Debug)]
+pub struct SimArgs {
+    /// What to simulate (gyro: the term options below in their gyro units).
+    #[arg(long, value_enum, default_value = "gyro")]
+    pub quantity: QuantityArg,
+    /// Angle random walk N, deg/sqrt(h).
+    #[arg(long, default_value_t = 0.0)]
+    pub arw_deg_rth: f64,
+    /// Bias instability B, deg/h (flicker rate, Kasdin & Walter).
+    #[arg(long, default_value_t = 0.0)]
+    pub bias_instability_deg_h: f64,
+    /// Rate random walk K, deg/h/sqrt(h).
+    #[arg(long, default_value_t = 0.0)]
+    pub rrw_deg_h_rth: f64,
+    /// Angle quantization Q, arcsec.
+    #[arg(long, default_value_t = 0.0)]
+    pub quantization_arcsec: f64,
+    /// Rate ramp R, deg/h^2.
+    #[arg(long, default_value_t = 0.0)]
+    pub rate_ramp_deg_h2: f64,
+    /// Sample rate, Hz.
+    #[arg(long)]
+    pub rate_hz: f64,
+    /// Record length, s.
+    #[arg(long)]
+    pub duration_s: f64,
+    /// Channels (independent, seeded from --seed).
+    #[arg(long, default_value_t = 1)]
+    pub channels: usize,
+    /// Random seed.
+    #[arg(long)]
+    pub seed: u64,
+    /// Output format: csv (time_s,ch1,...) or raw interleaved f32le / f64le.
+    #[arg(long, value_enum, default_value = "csv")]
+    pub format: FormatArg,
+    /// Output file (- = standard output, csv only).
+    #[arg(long, short = 'o')]
+    pub output: PathBuf,
+}
+
+/// `incal simulate noise`: rate samples in deg/s.
+pub fn simulate(a: &SimArgs) -> CliResult<()> {
+    if a.quantity != QuantityArg::Gyro {
+        return Err(usage(
+            "simulate noise: only --quantity gyro is simulated (terms in gyro units)",
+        ));
+    }
+    for (n, v) in [
+        ("--arw-deg-rth", a.arw_deg_rth),
+        ("--bias-instability-deg-h", a.bias_instability_deg_h),
+        ("--rrw-deg-h-rth", a.rrw_deg_h_rth),
+        ("--quantization-arcsec", a.quantization_arcsec),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(usage(format!("{n} must be a non-negative number")));
+        }
+    }
+    if !a.rate_ramp_deg_h2.is_finite() {
+        return Err(usage("--rate-ramp-deg-h2 must be a finite number"));
+    }
+    if !(a.rate_hz.is_finite() && a.rate_hz > 0.0) {
+        return Err(usage("--rate-hz must be a positive number"));
+    }
+    let n = a.duration_s * a.rate_hz;
+    if !(n.is_finite() && (4.0..=1e9).contains(&n)) {
+        return Err(usage(
+            "--duration-s times --rate-hz must give between 4 and 1e9 samples",
+        ));
+    }
+    if a.channels == 0 || a.channels > 64 {
+        return Err(usage("--channels must be 1 to 64"));
+    }
+    let n = n.round() as usize;
+    let tau0 = 1.0 / a.rate_hz;
+    // Gyro units to the deg/s base of the simulator.
+    let truth = NoiseTruth {
+        q: a.quantization_arcsec / 3600.0,
+        n: a.arw_deg_rth / 60.0,
+        b: a.bias_instability_deg_h / 3600.0,
+        k: a.rrw_deg_h_rth / 216_000.0,
+        r: a.rate_ramp_deg_h2 / (3600.0 * 3600.0),
+    };
+    let chans: Vec<Vec<f64>> = (0..a.channels)
+        .into_par_iter()
+        .map(|c| rate_record(&truth, tau0, n, trial_seed(a.seed, c as u64)))
+        .collect();
+    match a.format {
+        FormatArg::Csv => {
+            let mut text = String::with_capacity(n * 24 * a.channels);
+            text.push_str("time_s");
+            for c in 1..=a.channels {
+                text.push_str(&format!(",ch{c}"));
+            }
+            text.push('\n');
+            for i in 0..n {
+                text.push_str(&format!("{}", i as f64 * tau0));
+                for ch in &chans {
+                    text.push_str(&format!(",{}", ch[i]));
+                }
+                text.push('\n');
+            }
+            crate::io::write_text(Some(&a.output), &text)
+        }
+        FormatArg::F32le | FormatArg::F64le => {
+            if a.output.as_os_str() == "-" {
+                return Err(usage(
+                    "--format f32le/f64le writes a file, not standard output",
+                ));
+            }
+            let w = if a.format == FormatArg::F64le { 8 } else { 4 };
+            let mut bytes = Vec::with_capacity(n * w * a.channels);
+            for i in 0..n {
+                for ch in &chans {
+                    if w == 8 {
+                        bytes.extend_from_slice(&ch[i].to_le_bytes());
+                    } else {
+                        bytes.extend_from_slice(&(ch[i] as f32).to_le_bytes());
+                    }
+                }
+            }
+            std::fs::write(&a.output, bytes).map_err(|e| {
+                CliError::Failure(anyhow::anyhow!("{}: cannot write: {e}", a.output.display()))
+            })
+        }
+    }
+}

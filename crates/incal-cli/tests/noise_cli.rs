@@ -1,0 +1,375 @@
+//! `incal noise` and `incal simulate noise` from outside: the interface
+//! contract (options, JSON keys, coefficient names and units), parallel =
+//! sequential bit for bit, CSV = binary, and bad input → exit 2, one line.
+
+use std::path::PathBuf;
+use std::process::{Command, Output, Stdio};
+
+use serde_json::Value;
+
+fn incal(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_incal"))
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("runs incal")
+}
+
+fn dir() -> PathBuf {
+    let d = std::env::temp_dir().join(format!("incal-noise-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn ok(o: &Output) -> String {
+    assert!(
+        o.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8(o.stdout.clone()).unwrap()
+}
+
+fn bad(o: &Output, needle: &str) {
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "stdout {}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
+    assert!(e.contains(needle), "{e} lacks {needle}");
+    assert!(!e.contains("panicked"), "{e}");
+}
+
+fn simulate(name: &str, format: &str, extra: &[&str]) -> PathBuf {
+    let p = dir().join(name);
+    let mut args = vec![
+        "simulate",
+        "noise",
+        "--quantity",
+        "gyro",
+        "--arw-deg-rth",
+        "0.1",
+        "--bias-instability-deg-h",
+        "2",
+        "--rrw-deg-h-rth",
+        "0",
+        "--rate-hz",
+        "10",
+        "--duration-s",
+        "2000",
+        "--seed",
+        "5",
+        "--format",
+        format,
+        "--output",
+        p.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    ok(&incal(&args));
+    p
+}
+
+#[test]
+fn contract_keys_units_and_truth() {
+    let p = simulate("g.csv", "csv", &["--channels", "2"]);
+    let out = ok(&incal(&[
+        "noise",
+        "--input",
+        p.to_str().unwrap(),
+        "--rate-hz",
+        "10",
+        "--quantity",
+        "gyro",
+        "--unit",
+        "deg/s",
+        "--json",
+    ]));
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["procedure"], "noise");
+    for ch in ["ch1", "ch2"] {
+        let c = &v["channels"][ch];
+        let taus = c["taus_s"].as_array().unwrap();
+        assert_eq!(taus[0].as_f64(), Some(0.1));
+        for d in ["oadev", "mdev", "ohdev", "tdev", "totdev"] {
+            for k in ["value", "lo", "hi", "edf", "n"] {
+                assert_eq!(
+                    c[d][k].as_array().unwrap().len(),
+                    taus.len(),
+                    "{ch}.{d}.{k}"
+                );
+            }
+            let (lo, val, hi) = (
+                c[d]["lo"][3].as_f64().unwrap(),
+                c[d]["value"][3].as_f64().unwrap(),
+                c[d]["hi"][3].as_f64().unwrap(),
+            );
+            assert!(lo < val && val < hi, "{d}");
+        }
+        assert_eq!(c["alpha"].as_array().unwrap().len(), taus.len());
+        let arw = &v["coefficients"][format!("{ch}.ARW")];
+        assert_eq!(arw["unit"], "deg/sqrt(h)");
+        let (val, u95) = (arw["value"].as_f64().unwrap(), arw["U95"].as_f64().unwrap());
+        assert!((val - 0.1).abs() < u95.max(0.003), "ARW {val} ± {u95}");
+        let b = &v["coefficients"][format!("{ch}.bias_instability")];
+        assert_eq!(b["unit"], "deg/h");
+        assert!(
+            (b["value"].as_f64().unwrap() - 2.0).abs() < 3.0 * b["U95"].as_f64().unwrap(),
+            "B {b}"
+        );
+        for s in ["bias_stability_10s", "bias_stability_100s"] {
+            assert_eq!(v["coefficients"][format!("{ch}.{s}")]["unit"], "deg/h");
+        }
+        // RRW is zero: never a confident number.
+        assert!(v["coefficients"].get(format!("{ch}.RRW")).is_none());
+    }
+    assert!(v["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|w| w["code"] == "noise-term-not-identified"));
+}
+
+#[test]
+fn parallel_equals_sequential_and_binary_equals_csv() {
+    let csv = simulate("p.csv", "csv", &["--channels", "3"]);
+    let bin = simulate("p.f64", "f64le", &["--channels", "3"]);
+    let run = |extra: &[&str], input: &PathBuf| {
+        let mut a = vec![
+            "noise",
+            "--input",
+            input.to_str().unwrap(),
+            "--rate-hz",
+            "10",
+            "--json",
+            "--quiet",
+        ];
+        a.extend_from_slice(extra);
+        let v: Value = serde_json::from_str(&ok(&incal(&a))).unwrap();
+        v
+    };
+    let par = run(&[], &csv);
+    let seq = run(&["--sequential"], &csv);
+    assert_eq!(par["channels"], seq["channels"]);
+    assert_eq!(par["coefficients"], seq["coefficients"]);
+    let b = run(&["--format", "f64le", "--channels", "3"], &bin);
+    assert_eq!(par["channels"], b["channels"]);
+    assert_eq!(par["coefficients"], b["coefficients"]);
+    // f32 data, one selected channel.
+    let b32 = simulate("p.f32", "f32le", &["--channels", "2"]);
+    let one = run(
+        &["--format", "f32le", "--channels", "2", "--columns", "ch2"],
+        &b32,
+    );
+    assert_eq!(one["channels"].as_object().unwrap().len(), 1);
+    assert!(
+        one["channels"]["ch2"]["oadev"]["value"][0]
+            .as_f64()
+            .unwrap()
+            > 0.0
+    );
+}
+
+#[test]
+fn angle_data_gives_the_rate_deviations() {
+    // The running sum of rate samples, given as angle, gives the same OADEV.
+    let d = dir();
+    let rate: Vec<f64> = (0..400)
+        .map(|i| ((i * 7919) % 101) as f64 / 50.0 - 1.0)
+        .collect();
+    let mut r = String::from("time_s,w\n");
+    let mut a = String::from("theta\n");
+    let mut acc = 0.0;
+    a.push_str("0\n");
+    for (i, v) in rate.iter().enumerate() {
+        r.push_str(&format!("{},{v}\n", i as f64));
+        acc += v;
+        a.push_str(&format!("{acc}\n"));
+    }
+    std::fs::write(d.join("r.csv"), r).unwrap();
+    std::fs::write(d.join("a.csv"), a).unwrap();
+    let get = |f: &str, data: &str, col: &str| -> Vec<f64> {
+        let v: Value = serde_json::from_str(&ok(&incal(&[
+            "noise",
+            "--input",
+            d.join(f).to_str().unwrap(),
+            "--rate-hz",
+            "1",
+            "--data",
+            data,
+            "--json",
+        ])))
+        .unwrap();
+        v["channels"][col]["oadev"]["value"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    let (x, y) = (get("r.csv", "rate", "w"), get("a.csv", "angle", "theta"));
+    assert_eq!(x.len(), y.len());
+    for (p, q) in x.iter().zip(&y) {
+        assert!(((p - q) / q).abs() < 1e-9, "{p} vs {q}");
+    }
+}
+
+#[test]
+fn bad_input_is_one_line_and_exit_2() {
+    let d = dir();
+    let w = |n: &str, s: &str| {
+        let p = d.join(n);
+        std::fs::write(&p, s).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let text = w("t.csv", "time_s,gx\n0,1\n1,abc\n2,3\n3,4\n4,5\n");
+    bad(
+        &incal(&["noise", "--input", &text, "--rate-hz", "1"]),
+        "t.csv:3",
+    );
+    let nan = w("nan.csv", "gx\n1\nNaN\n2\n3\n4\n");
+    bad(
+        &incal(&["noise", "--input", &nan, "--rate-hz", "1"]),
+        "nan.csv:3",
+    );
+    let empty = w("e.csv", "");
+    bad(
+        &incal(&["noise", "--input", &empty, "--rate-hz", "1"]),
+        "e.csv",
+    );
+    let short = w("s.csv", "gx\n1\n2\n");
+    bad(
+        &incal(&["noise", "--input", &short, "--rate-hz", "1"]),
+        "s.csv",
+    );
+    let good = w("g.csv", "gx\n1\n2\n3\n4\n5\n6\n");
+    bad(
+        &incal(&[
+            "noise",
+            "--input",
+            &good,
+            "--rate-hz",
+            "1",
+            "--columns",
+            "gy",
+        ]),
+        "gy",
+    );
+    bad(
+        &incal(&["noise", "--input", &good, "--rate-hz", "0"]),
+        "--rate-hz",
+    );
+    bad(
+        &incal(&[
+            "noise",
+            "--input",
+            &good,
+            "--rate-hz",
+            "1",
+            "--quantity",
+            "gyro",
+            "--unit",
+            "furlong/s",
+        ]),
+        "--unit",
+    );
+    bad(
+        &incal(&[
+            "noise",
+            "--input",
+            &good,
+            "--rate-hz",
+            "1",
+            "--taus",
+            "weekly",
+        ]),
+        "--taus",
+    );
+    bad(
+        &incal(&[
+            "noise",
+            "--input",
+            &good,
+            "--rate-hz",
+            "1",
+            "--confidence",
+            "1.5",
+        ]),
+        "--confidence",
+    );
+    bad(
+        &incal(&[
+            "noise",
+            "--input",
+            &good,
+            "--rate-hz",
+            "1",
+            "--format",
+            "f64le",
+        ]),
+        "--channels",
+    );
+    let odd = w("o.bin", "12345");
+    bad(
+        &incal(&[
+            "noise",
+            "--input",
+            &odd,
+            "--rate-hz",
+            "1",
+            "--format",
+            "f32le",
+            "--channels",
+            "1",
+        ]),
+        "o.bin",
+    );
+    bad(
+        &incal(&["noise", "--input", "/nonexistent/x.csv", "--rate-hz", "1"]),
+        "x.csv",
+    );
+    bad(
+        &incal(&[
+            "simulate",
+            "noise",
+            "--arw-deg-rth",
+            "-1",
+            "--rate-hz",
+            "1",
+            "--duration-s",
+            "10",
+            "--seed",
+            "1",
+            "-o",
+            "-",
+        ]),
+        "--arw-deg-rth",
+    );
+}
+
+#[test]
+fn the_report_draws_the_allan_plot() {
+    let p = simulate("rep.csv", "csv", &[]);
+    let json = dir().join("rep.json");
+    ok(&incal(&[
+        "noise",
+        "--input",
+        p.to_str().unwrap(),
+        "--rate-hz",
+        "10",
+        "--quantity",
+        "gyro",
+        "--json",
+        "-o",
+        json.to_str().unwrap(),
+    ]));
+    let html = ok(&incal(&["report", json.to_str().unwrap()]));
+    let fig = html.find("data-plot=\"allan\"").expect("an Allan figure");
+    let svg = &html[fig..html[fig..].find("</svg>").unwrap() + fig];
+    // Dots for the deviations, lines for the bounds and the fitted terms.
+    assert!(svg.matches("<circle").count() >= 8, "dots");
+    assert!(svg.matches("<polyline").count() >= 8, "bars and lines");
+    assert!(html.contains("OADEV with 68.3 % bounds"));
+}

@@ -1,0 +1,82 @@
+//! Speed of the Allan-family kernels (`cargo bench -p incal --bench noise`).
+//! Compare with allantools by `scripts/bench-allantools.sh`.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use incal::noise::{dev, id, phase_from_rate, stability, StabilityOptions, TauGrid};
+use incal::sim::noise::{rate_record, NoiseTruth};
+
+fn phase(n: usize) -> Vec<f64> {
+    let t = NoiseTruth {
+        n: 1.0,
+        ..Default::default()
+    };
+    phase_from_rate(&rate_record(&t, 1.0, n, 1), 1.0)
+}
+
+fn kernels(c: &mut Criterion) {
+    let mut g = c.benchmark_group("octave");
+    g.sample_size(10);
+    for n in [1_000_000usize, 10_000_000] {
+        let x = phase(n);
+        let ms = TauGrid::Octave.factors(x.len());
+        g.bench_with_input(BenchmarkId::new("oadev", n), &x, |b, x| {
+            b.iter(|| {
+                ms.iter()
+                    .map(|&m| dev::oavar(x, m, 1.0, true).unwrap().var)
+                    .sum::<f64>()
+            })
+        });
+        g.bench_with_input(BenchmarkId::new("mdev", n), &x, |b, x| {
+            b.iter(|| {
+                ms.iter()
+                    .map(|&m| dev::mvar(x, m, 1.0, true).unwrap().var)
+                    .sum::<f64>()
+            })
+        });
+        g.bench_with_input(BenchmarkId::new("ohdev", n), &x, |b, x| {
+            b.iter(|| {
+                ms.iter()
+                    .map(|&m| dev::ohvar(x, m, 1.0, true).unwrap().var)
+                    .sum::<f64>()
+            })
+        });
+        g.bench_with_input(BenchmarkId::new("totdev", n), &x, |b, x| {
+            b.iter(|| {
+                ms.iter()
+                    .map(|&m| dev::totvar(x, m, 1.0, true).unwrap().var)
+                    .sum::<f64>()
+            })
+        });
+        g.bench_with_input(BenchmarkId::new("noise_id", n), &x, |b, x| {
+            b.iter(|| ms.iter().filter_map(|&m| id::identify(x, m)).count())
+        });
+        g.bench_with_input(
+            BenchmarkId::new("stability_all_deviations_with_ci", n),
+            &x,
+            |b, x| b.iter(|| stability(x, &StabilityOptions::default()).unwrap()),
+        );
+    }
+    g.finish();
+    let mut g = c.benchmark_group("all_taus");
+    g.sample_size(10);
+    let x = phase(100_000);
+    let ms = TauGrid::All.factors(x.len());
+    g.bench_function("oadev_1e5", |b| {
+        b.iter(|| {
+            ms.iter()
+                .map(|&m| dev::oavar(&x, m, 1.0, true).unwrap().var)
+                .sum::<f64>()
+        })
+    });
+    g.bench_function("mdev_1e5", |b| {
+        b.iter(|| {
+            ms.iter()
+                .map(|&m| dev::mvar(&x, m, 1.0, true).unwrap().var)
+                .sum::<f64>()
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, kernels);
+criterion_main!(benches);

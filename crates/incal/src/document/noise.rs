@@ -1,0 +1,253 @@
+//! The result document of a noise and stability analysis
+//! (`"procedure": "noise"`).
+//!
+//! Top-level `channels`: per channel `taus_s`, each deviation as
+//! `{value, lo, hi, edf, n}`, `alpha`, the IEEE term fit's model curve and
+//! the slope-line readings. Coefficients `NAME.TERM` in engineering units
+//! (module [`NoiseUnits`]), only the identified terms.
+
+use serde_json::{json, Value};
+
+use super::{Cell, Coefficient, DocumentBuilder, Procedure, ResultDocument, Table};
+use crate::error::Result;
+use crate::noise::terms::{Term, TermFit};
+use crate::noise::{Deviation, Stability};
+use crate::units::{Unit, STANDARD_GRAVITY_M_S2};
+use crate::warning::{Warning, WarningCode};
+
+/// What the channels measure, and so the units of their terms.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Quantity {
+    /// Gyro: rate in deg/s internally (after the unit factor); terms in
+    /// deg/√h, deg/h, deg/h/√h, deg/h², arcsec.
+    Gyro,
+    /// Accelerometer: rate in g internally; terms in µg/√Hz, µg, µg/√s,
+    /// µg/s, m/s.
+    Accel,
+    /// Anything else: terms in the input unit `u` (u·√s, u, u/√s, u/s, u·s).
+    Generic(String),
+}
+
+/// Names, units and factors of the five terms and bias stability of one
+/// quantity. `factor` multiplies the amplitude in the base unit (rate unit
+/// after [`Quantity`]'s conversion, seconds).
+#[derive(Debug, Clone)]
+pub struct NoiseUnits {
+    /// (name, unit, factor) for Q, N, B, K, R.
+    pub terms: [(String, Unit, f64); 5],
+    /// Unit and factor of bias stability.
+    pub stability: (Unit, f64),
+}
+
+impl Quantity {
+    /// The units of the terms (IEEE Std 952 Annex C for gyros, IEEE Std
+    /// 1293 for accelerometers).
+    pub fn units(&self) -> NoiseUnits {
+        let o = |s: &str| Unit::Other(s.to_string());
+        match self {
+            Quantity::Gyro => NoiseUnits {
+                terms: [
+                    ("quantization".into(), o("arcsec"), 3600.0),
+                    ("ARW".into(), o("deg/sqrt(h)"), 60.0),
+                    ("bias_instability".into(), o("deg/h"), 3600.0),
+                    ("RRW".into(), o("deg/h/sqrt(h)"), 3600.0 * 60.0),
+                    ("rate_ramp".into(), o("deg/h^2"), 3600.0 * 3600.0),
+                ],
+                stability: (o("deg/h"), 3600.0),
+            },
+            Quantity::Accel => NoiseUnits {
+                terms: [
+                    ("quantization".into(), o("m/s"), STANDARD_GRAVITY_M_S2),
+                    ("VRW".into(), o("ug/sqrt(Hz)"), 1e6),
+                    ("bias_instability".into(), o("ug"), 1e6),
+                    ("acceleration_random_walk".into(), o("ug/sqrt(s)"), 1e6),
+                    ("acceleration_ramp".into(), o("ug/s"), 1e6),
+                ],
+                stability: (o("ug"), 1e6),
+            },
+            Quantity::Generic(u) => NoiseUnits {
+                terms: [
+                    ("Q".into(), o(&format!("{u}*s")), 1.0),
+                    ("N".into(), o(&format!("{u}*sqrt(s)")), 1.0),
+                    ("B".into(), o(u), 1.0),
+                    ("K".into(), o(&format!("{u}/sqrt(s)")), 1.0),
+                    ("R".into(), o(&format!("{u}/s")), 1.0),
+                ],
+                stability: (o(u), 1.0),
+            },
+        }
+    }
+}
+
+/// One analysed channel.
+#[derive(Debug, Clone)]
+pub struct ChannelResult {
+    /// Column name.
+    pub name: String,
+    /// Samples.
+    pub samples: usize,
+    /// The deviations at every τ.
+    pub stability: Stability,
+    /// The IEEE 952 term fit (in the internal rate unit).
+    pub fit: TermFit,
+    /// Slope-line readings Q, N, B, K, R (internal rate unit).
+    pub slope: [Option<f64>; 5],
+    /// Bias stability at each requested τ (s): value in the internal unit.
+    pub bias_stability: Vec<(f64, Option<Term>)>,
+    /// Factor from the internal rate unit back to the input unit (for the
+    /// deviations, which are reported in the input unit).
+    pub to_input: f64,
+}
+
+fn arr(v: &[Option<f64>], f: f64) -> Value {
+    Value::Array(
+        v.iter()
+            .map(|x| x.map_or(Value::Null, |x| json!(x * f)))
+            .collect(),
+    )
+}
+
+fn tau_label(t: f64) -> String {
+    if t.fract() == 0.0 {
+        format!("{}s", t as u64)
+    } else {
+        format!("{t}s").replace('.', "p")
+    }
+}
+
+/// Build the document. `unit` is the input unit string (deviations are in
+/// it; TDEV in `unit·s`); `tables` adds a readable τ table per channel.
+pub fn document(
+    channels: &[ChannelResult],
+    quantity: &Quantity,
+    unit: &str,
+    confidence: f64,
+    tables: bool,
+) -> Result<ResultDocument> {
+    let units = quantity.units();
+    let mut b = DocumentBuilder::new(
+        Procedure::Noise,
+        format!(
+            "Noise and stability: {} channel{}",
+            channels.len(),
+            if channels.len() == 1 { "" } else { "s" }
+        ),
+    );
+    let mut chans = serde_json::Map::new();
+    let mut warnings = Vec::new();
+    for c in channels {
+        let st = &c.stability;
+        let f = c.to_input;
+        let mut o = serde_json::Map::new();
+        o.insert("samples".into(), json!(c.samples));
+        o.insert("unit".into(), json!(unit));
+        o.insert("tdev_unit".into(), json!(format!("{unit}*s")));
+        o.insert("taus_s".into(), json!(st.taus_s));
+        for d in Deviation::ALL {
+            let s = st.series(d);
+            o.insert(
+                d.as_str().into(),
+                json!({
+                    "value": arr(&s.value, f),
+                    "lo": arr(&s.lo, f),
+                    "hi": arr(&s.hi, f),
+                    "edf": arr(&s.edf, 1.0),
+                    "n": s.n,
+                }),
+            );
+        }
+        o.insert("alpha".into(), json!(st.alpha));
+        let model: Vec<Option<f64>> = st
+            .taus_s
+            .iter()
+            .map(|&t| Some(c.fit.model(t)).filter(|v| *v > 0.0 && v.is_finite()))
+            .collect();
+        o.insert("fit_oadev".into(), arr(&model, f));
+        let mut lines = serde_json::Map::new();
+        for (j, t) in c.fit.terms.iter().enumerate() {
+            if let Some(t) = t {
+                let curve: Vec<Option<f64>> = st
+                    .taus_s
+                    .iter()
+                    .map(|&tau| Some(t.value * crate::noise::terms::regressor(j, tau).sqrt()))
+                    .collect();
+                lines.insert(crate::noise::terms::TERMS[j].into(), arr(&curve, f));
+            }
+        }
+        o.insert("fit_terms_oadev".into(), Value::Object(lines));
+        let mut slope = serde_json::Map::new();
+        for (j, v) in c.slope.iter().enumerate() {
+            let (name, u, k) = &units.terms[j];
+            slope.insert(
+                name.clone(),
+                json!({"value": v.map(|v| v * k), "unit": u.as_str()}),
+            );
+        }
+        o.insert("slope_readings".into(), Value::Object(slope));
+        chans.insert(c.name.clone(), Value::Object(o));
+
+        for (j, t) in c.fit.terms.iter().enumerate() {
+            if let Some(t) = t {
+                let (name, u, k) = &units.terms[j];
+                let full = format!("{}.{name}", c.name);
+                b.coefficient(
+                    &full,
+                    Coefficient::new(&full, t.value * k, t.u * k, u.clone(), t.dof)?,
+                )?;
+            }
+        }
+        for (tau, t) in &c.bias_stability {
+            let full = format!("{}.bias_stability_{}", c.name, tau_label(*tau));
+            match t {
+                Some(t) => {
+                    let (u, k) = &units.stability;
+                    b.coefficient(&full, Coefficient::new(&full, t.value * k, t.u * k, u.clone(), t.dof)?)?;
+                }
+                None => warnings.push(Warning::new(
+                    WarningCode::ShortRecord,
+                    format!("{}: the record holds fewer than two windows of {tau} s: no bias stability at {tau} s", c.name),
+                )),
+            }
+        }
+        for w in &c.fit.warnings {
+            warnings.push(Warning::new(w.code, format!("{}: {}", c.name, w.message)));
+        }
+        if tables {
+            let u = Some(Unit::Other(unit.to_string()));
+            let mut t = Table::new(
+                &format!("stability.{}", c.name),
+                &format!("{}: Allan family at each averaging time", c.name),
+                &[
+                    ("tau", Some(Unit::Other("s".into()))),
+                    ("alpha", None),
+                    ("oadev", u.clone()),
+                    ("oadev_lo", u.clone()),
+                    ("oadev_hi", u.clone()),
+                    ("mdev", u.clone()),
+                    ("ohdev", u.clone()),
+                    ("totdev", u.clone()),
+                    ("n", None),
+                ],
+            );
+            for (k, tau) in st.taus_s.iter().enumerate() {
+                let g = |v: Option<f64>| Cell::opt(v.map(|v| v * f));
+                t.push(vec![
+                    Cell::num(*tau),
+                    Cell::opt(st.alpha[k].map(f64::from)),
+                    g(st.oadev.value[k]),
+                    g(st.oadev.lo[k]),
+                    g(st.oadev.hi[k]),
+                    g(st.mdev.value[k]),
+                    g(st.ohdev.value[k]),
+                    g(st.totdev.value[k]),
+                    Cell::num(st.oadev.n[k] as f64),
+                ])?;
+            }
+            b.table(t);
+        }
+    }
+    b.warnings(warnings);
+    b.option("confidence", json!(confidence));
+    b.extra("channels", Value::Object(chans))?;
+    Ok(b.finish())
+}

@@ -1,0 +1,356 @@
+//! Noise and stability analysis: the Allan family of deviations with
+//! confidence intervals, noise identification, the IEEE Std 952 noise
+//! terms and bias stability.
+//!
+//! Data are handled as phase `x` (angle, or velocity increment, summed:
+//! `x_{k+1} = x_k + y_k τ0` from rate samples `y`), so every deviation
+//! follows NIST SP 1065 (Riley 2008) and Stable32 exactly. A deviation is in
+//! the rate unit (x unit per second); TDEV is in the x unit.
+
+pub mod dev;
+pub mod edf;
+pub mod id;
+pub mod terms;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+/// The averaging factors m (τ = m·τ0) to evaluate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum TauGrid {
+    /// m = 1, 2, 4, 8, … (Stable32 "octave").
+    Octave,
+    /// m = 1, 2, 4, 10, 20, 40, 100, … (Stable32 "decade").
+    Decade,
+    /// Every m = 1, 2, 3, ….
+    All,
+    /// `k` points per decade, m = round(10^(j/k)), duplicates dropped.
+    PerDecade(u32),
+}
+
+impl TauGrid {
+    /// Parse `octave|decade|all|N`.
+    pub fn parse(s: &str) -> Option<TauGrid> {
+        match s {
+            "octave" => Some(TauGrid::Octave),
+            "decade" => Some(TauGrid::Decade),
+            "all" => Some(TauGrid::All),
+            n => n
+                .parse::<u32>()
+                .ok()
+                .filter(|&k| (1..=1000).contains(&k))
+                .map(TauGrid::PerDecade),
+        }
+    }
+
+    /// The averaging factors for `n_phase` phase points: every m with
+    /// `m ≤ (n_phase − 1)/4` (Stable32's limit, so each deviation rests on
+    /// at least a quarter of the record), in increasing order.
+    pub fn factors(&self, n_phase: usize) -> Vec<usize> {
+        let max = n_phase.saturating_sub(1) / 4;
+        let mut out = Vec::new();
+        match *self {
+            TauGrid::Octave => {
+                let mut m = 1;
+                while m <= max {
+                    out.push(m);
+                    m *= 2;
+                }
+            }
+            TauGrid::Decade => {
+                let mut dec = 1;
+                'o: loop {
+                    for k in [1, 2, 4] {
+                        let m = k * dec;
+                        if m > max {
+                            break 'o;
+                        }
+                        out.push(m);
+                    }
+                    dec *= 10;
+                }
+            }
+            TauGrid::All => out.extend(1..=max),
+            TauGrid::PerDecade(k) => {
+                let mut j = 0;
+                loop {
+                    let m = 10f64.powf(j as f64 / k as f64).round() as usize;
+                    if m > max {
+                        break;
+                    }
+                    if out.last() != Some(&m) {
+                        out.push(m);
+                    }
+                    j += 1;
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The deviations computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Deviation {
+    /// Overlapping Allan deviation.
+    Oadev,
+    /// Modified Allan deviation.
+    Mdev,
+    /// Overlapping Hadamard deviation.
+    Ohdev,
+    /// Time deviation (x unit).
+    Tdev,
+    /// Total deviation.
+    Totdev,
+}
+
+impl Deviation {
+    /// Every deviation, in the document's order.
+    pub const ALL: [Deviation; 5] = [
+        Deviation::Oadev,
+        Deviation::Mdev,
+        Deviation::Ohdev,
+        Deviation::Tdev,
+        Deviation::Totdev,
+    ];
+    /// Key in the JSON.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Deviation::Oadev => "oadev",
+            Deviation::Mdev => "mdev",
+            Deviation::Ohdev => "ohdev",
+            Deviation::Tdev => "tdev",
+            Deviation::Totdev => "totdev",
+        }
+    }
+}
+
+/// One deviation at every τ of a grid: value, χ² bounds, EDF and terms
+/// (`None` where not defined or not available).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct DevSeries {
+    /// The deviation.
+    pub value: Vec<Option<f64>>,
+    /// Lower bound at the confidence level.
+    pub lo: Vec<Option<f64>>,
+    /// Upper bound at the confidence level.
+    pub hi: Vec<Option<f64>>,
+    /// Equivalent degrees of freedom.
+    pub edf: Vec<Option<f64>>,
+    /// Number of terms summed.
+    pub n: Vec<usize>,
+}
+
+/// Options of [`stability`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StabilityOptions {
+    /// Sample interval τ0 (s).
+    pub tau0_s: f64,
+    /// The τ grid.
+    pub grid: TauGrid,
+    /// Confidence of the bounds (Stable32's default 0.683).
+    pub confidence: f64,
+    /// Split each sum over rayon (results identical either way).
+    pub parallel: bool,
+}
+
+impl Default for StabilityOptions {
+    fn default() -> Self {
+        Self {
+            tau0_s: 1.0,
+            grid: TauGrid::Octave,
+            confidence: 0.683,
+            parallel: true,
+        }
+    }
+}
+
+/// The stability of one record at every τ of the grid.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Stability {
+    /// Averaging factors m.
+    pub m: Vec<usize>,
+    /// τ = m·τ0 (s).
+    pub taus_s: Vec<f64>,
+    /// Noise exponent α of S_y identified at each τ (Allan family);
+    /// beyond the last τ with enough points, the last identified value.
+    pub alpha: Vec<Option<i32>>,
+    /// Noise exponent with up to three differences (Hadamard).
+    pub alpha_hadamard: Vec<Option<i32>>,
+    /// Overlapping Allan deviation.
+    pub oadev: DevSeries,
+    /// Modified Allan deviation.
+    pub mdev: DevSeries,
+    /// Overlapping Hadamard deviation.
+    pub ohdev: DevSeries,
+    /// Time deviation.
+    pub tdev: DevSeries,
+    /// Total deviation.
+    pub totdev: DevSeries,
+}
+
+impl Stability {
+    /// The series of deviation `d`.
+    pub fn series(&self, d: Deviation) -> &DevSeries {
+        match d {
+            Deviation::Oadev => &self.oadev,
+            Deviation::Mdev => &self.mdev,
+            Deviation::Ohdev => &self.ohdev,
+            Deviation::Tdev => &self.tdev,
+            Deviation::Totdev => &self.totdev,
+        }
+    }
+}
+
+/// Phase from rate samples: `x_0 = 0`, `x_{k+1} = x_k + (y_k − ȳ) τ0`.
+/// The mean is removed first (a linear phase term, to which every
+/// deviation here is blind) so the running sum keeps its precision.
+pub fn phase_from_rate(y: &[f64], tau0: f64) -> Vec<f64> {
+    phase_from_rate_with(y.len(), tau0, |i| y[i])
+}
+
+/// As [`phase_from_rate`] with the rate samples `y(0), …, y(n−1)` read
+/// twice through a function (e.g. straight from a memory-mapped file, so
+/// the phase is the only copy of the data).
+pub fn phase_from_rate_with(n: usize, tau0: f64, y: impl Fn(usize) -> f64) -> Vec<f64> {
+    let mut mean = 0.0;
+    for i in 0..n {
+        mean += y(i);
+    }
+    if n > 0 {
+        mean /= n as f64;
+    }
+    let mut x = Vec::with_capacity(n + 1);
+    let mut acc = 0.0;
+    x.push(0.0);
+    for i in 0..n {
+        acc += (y(i) - mean) * tau0;
+        x.push(acc);
+    }
+    x
+}
+
+fn push(s: &mut DevSeries, v: Option<(f64, usize)>, edf: Option<f64>, p: f64) {
+    let (val, n) = match v {
+        Some((var, n)) if var.is_finite() && var >= 0.0 => (Some(var.sqrt()), n),
+        Some((_, n)) => (None, n),
+        None => (None, 0),
+    };
+    let b = match (val, edf) {
+        (Some(d), Some(e)) => edf::chi2_bounds(d, e, p),
+        _ => None,
+    };
+    s.value.push(val);
+    s.lo.push(b.map(|b| b.0));
+    s.hi.push(b.map(|b| b.1));
+    s.edf.push(edf.filter(|e| e.is_finite()));
+    s.n.push(n);
+}
+
+/// Every deviation of phase record `x` at every τ of the grid, with the
+/// noise identified per τ, Greenhall & Riley EDF and χ² bounds.
+/// Fails on fewer than 5 points, a non-finite sample, τ0 ≤ 0 or a
+/// confidence outside (0, 1).
+pub fn stability(x: &[f64], opts: &StabilityOptions) -> Result<Stability> {
+    stability_with_progress(x, opts, &|_| {})
+}
+
+/// As [`stability`], calling `tick(k)` after the k-th τ (for a progress
+/// bar).
+pub fn stability_with_progress(
+    x: &[f64],
+    opts: &StabilityOptions,
+    tick: &(dyn Fn(usize) + Sync),
+) -> Result<Stability> {
+    if x.len() < 5 {
+        return Err(Error::Unsupported(format!(
+            "noise: {} samples; at least 5 are needed for one τ",
+            x.len()
+        )));
+    }
+    if !(opts.tau0_s > 0.0 && opts.tau0_s.is_finite()) {
+        return Err(Error::InvalidValue {
+            what: "sample interval tau0 (s)".into(),
+            value: opts.tau0_s.to_string(),
+        });
+    }
+    if !(opts.confidence > 0.0 && opts.confidence < 1.0) {
+        return Err(Error::InvalidValue {
+            what: "confidence".into(),
+            value: opts.confidence.to_string(),
+        });
+    }
+    if let Some(k) = x.iter().position(|v| !v.is_finite()) {
+        return Err(Error::InvalidValue {
+            what: format!("sample {}", k + 1),
+            value: x[k].to_string(),
+        });
+    }
+    let ms = opts.grid.factors(x.len());
+    let n = x.len();
+    let (t0, p, par) = (opts.tau0_s, opts.confidence, opts.parallel);
+    let mut st = Stability {
+        m: ms.clone(),
+        taus_s: ms.iter().map(|&m| m as f64 * t0).collect(),
+        alpha: Vec::new(),
+        alpha_hadamard: Vec::new(),
+        oadev: DevSeries::default(),
+        mdev: DevSeries::default(),
+        ohdev: DevSeries::default(),
+        tdev: DevSeries::default(),
+        totdev: DevSeries::default(),
+    };
+    // Identification per τ is independent of the others: in parallel.
+    let ids: Vec<Option<id::NoiseId>> = if par {
+        use rayon::prelude::*;
+        ms.par_iter().map(|&m| id::identify(x, m)).collect()
+    } else {
+        ms.iter().map(|&m| id::identify(x, m)).collect()
+    };
+    let oas = dev::oavar_many(x, &ms, t0, par);
+    let ohs = dev::ohvar_many(x, &ms, t0, par);
+    let mut last: Option<id::NoiseId> = None;
+    for (k, &m) in ms.iter().enumerate() {
+        let nid = ids[k].or(last);
+        last = nid;
+        let (aa, ah) = (nid.map(|n| n.alpha_allan), nid.map(|n| n.alpha_hadamard));
+        st.alpha.push(aa);
+        st.alpha_hadamard.push(ah);
+        let pair = |v: Option<dev::VarN>| v.map(|v| (v.var, v.n));
+        let oa = oas[k];
+        push(
+            &mut st.oadev,
+            pair(oa),
+            aa.and_then(|a| edf::greenhall(a, 2, m, n, true, false)),
+            p,
+        );
+        let mv = dev::mvar(x, m, t0, par);
+        let medf = aa.and_then(|a| edf::greenhall(a, 2, m, n, true, true));
+        push(&mut st.mdev, pair(mv), medf, p);
+        let tau = m as f64 * t0;
+        push(
+            &mut st.tdev,
+            mv.map(|v| (dev::tvar(v.var, tau), v.n)),
+            medf,
+            p,
+        );
+        let oh = ohs[k];
+        push(
+            &mut st.ohdev,
+            pair(oh),
+            ah.and_then(|a| edf::greenhall(a, 3, m, n, true, false)),
+            p,
+        );
+        let tv = dev::totvar(x, m, t0, par);
+        push(
+            &mut st.totdev,
+            pair(tv),
+            aa.and_then(|a| edf::totdev(a, m, n)),
+            p,
+        );
+        tick(k + 1);
+    }
+    Ok(st)
+}
