@@ -451,3 +451,52 @@ fn json_with_a_bom_is_read_everywhere() {
         "39.9",
     ]));
 }
+
+#[test]
+fn misalign_warns_when_angles_are_too_large_for_the_linear_model() {
+    let f = tmp("acc_big.csv");
+    ok(&run(&[
+        "simulate",
+        "misalign",
+        "accel",
+        "--dtheta-y2-arcsec",
+        "7200",
+        "-o",
+        p(&f),
+    ]));
+    let out = ok(&run(&[
+        "misalign",
+        "accel",
+        "--input",
+        p(&f),
+        "--scale-factor",
+        "1.299",
+        "--json",
+    ]));
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let w = v["warnings"].as_array().unwrap();
+    assert!(
+        w.iter()
+            .any(|w| w["code"] == "model-range"
+                && w["message"].as_str().unwrap().contains("dtheta_y2")),
+        "{w:?}"
+    );
+    // The paper's angles (arcseconds) stay silent.
+    let f = tmp("acc_small.csv");
+    ok(&run(&["simulate", "misalign", "accel", "-o", p(&f)]));
+    let out = ok(&run(&[
+        "misalign",
+        "accel",
+        "--input",
+        p(&f),
+        "--scale-factor",
+        "1.299",
+        "--json",
+    ]));
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|w| w["code"] != "model-range"));
+}

@@ -151,6 +151,7 @@ pub fn calibrate(obs: &[AccelObservation], opts: &AccelOptions) -> Result<AccelR
     if let (Some(g), Some(u)) = (angles.value(GAMMA), angles.u(GAMMA)) {
         warnings.extend(small_gamma_warning(g, u));
     }
+    warnings.extend(super::large_angle_warning(&angles));
     Ok(AccelResult {
         angles,
         azimuth: az,

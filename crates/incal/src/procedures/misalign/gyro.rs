@@ -315,6 +315,7 @@ pub fn calibrate(obs: &[GyroObservation], opts: &GyroOptions) -> Result<GyroResu
     if let (Some(g), Some(u)) = (angles.value(super::GAMMA), angles.u(super::GAMMA)) {
         warnings.extend(small_gamma_warning(g, u));
     }
+    warnings.extend(super::large_angle_warning(&angles));
     Ok(GyroResult {
         angles,
         azimuth: az,

@@ -107,6 +107,34 @@ pub fn small_gamma_warning(gamma: f64, u_gamma: f64) -> Option<crate::Warning> {
     }
 }
 
+/// Largest misalignment angle (rad, 0.02 ≈ 1.15°) for which the
+/// linearised model holds to 1 %: its neglected terms (cos θ − 1 ≈ −θ²/2
+/// and the products of two angles) are about θ/2 of the first-order terms.
+pub const LINEAR_ANGLE_LIMIT_RAD: f64 = 0.02;
+
+/// A `model-range` warning naming every fitted angle beyond
+/// [`LINEAR_ANGLE_LIMIT_RAD`]: the linearised model (seed 003 after eq. 3)
+/// then biases the estimates by more than 1 % of their size.
+pub fn large_angle_warning(angles: &crate::estimation::Estimates) -> Option<crate::Warning> {
+    let big: Vec<String> = angles
+        .names()
+        .iter()
+        .zip(angles.values().iter())
+        .filter(|(_, v)| v.abs() > LINEAR_ANGLE_LIMIT_RAD)
+        .map(|(n, v)| format!("{n} = {:.2} deg", v.to_degrees()))
+        .collect();
+    (!big.is_empty()).then(|| {
+        crate::Warning::new(
+            crate::WarningCode::ModelRange,
+            format!(
+                "{} beyond {:.2} deg: the linearised model neglects second-order terms of about half the angle's relative size (over 1 %); re-mount closer to nominal or treat these angles as approximate",
+                big.join(", "),
+                LINEAR_ANGLE_LIMIT_RAD.to_degrees()
+            ),
+        )
+    })
+}
+
 /// Grouping key of an angle: micro-degrees in [0, 360°).
 pub(crate) fn angle_key(angle_rad: f64) -> i64 {
     let d = angle_rad.to_degrees().rem_euclid(360.0);
