@@ -271,6 +271,8 @@ pub struct Solver {
     /// (3 × 4N: K0_j, Ks_j): calibration errors are systematic, so their
     /// effect on ω grows linearly, not as a random walk.
     j_cal: DMatrix<f64>,
+    /// `Q` of the last sample (ω̇ rows of `P G`; zero in direct mode).
+    q_last: Matrix3<f64>,
     /// Variances of the calibration parameters (4N).
     u2_cal: DVector<f64>,
     omega0: Vector3<f64>,
@@ -420,6 +422,7 @@ impl Solver {
             prev: None,
             sigma_omega: Matrix3::zeros(),
             j_cal: DMatrix::zeros(3, 4 * n),
+            q_last: Matrix3::zeros(),
             u2_cal: DVector::from_iterator(
                 4 * n,
                 cal.iter()
@@ -530,27 +533,64 @@ impl Solver {
         };
         // Calibration: the sensitivity of x to every K0_j, Ks_j at the
         // specific force f_j of each accelerometer, ∂x/∂K0_j = −P_:j,
-        // ∂x/∂Ks_ja = −P_:j f_ja.
-        let mut d_cal = DMatrix::zeros(p, 4 * n);
-        for j in 0..n {
-            let r = &self.r[j];
-            let fj = f0 + (wd.cross(r) + w.cross(&w.cross(r))) / self.g;
-            for i in 0..p {
-                let pij = self.pinv[(i, j)];
-                d_cal[(i, 4 * j)] = -pij;
-                for a in 0..3 {
-                    d_cal[(i, 4 * j + 1 + a)] = -pij * fj[a];
+        // ∂x/∂Ks_ja = −P_:j f_ja. Every column for accelerometer j is a
+        // multiple of P_:j, so D U Dᵀ = Σ_j v_j P_:j P_:jᵀ with
+        // v_j = u²(K0_j) + Σ_a f_ja² u²(Ks_ja).
+        let cwd_noise = Matrix3::from_fn(|i, j| cov[(3 + i, 3 + j)]);
+        let has_cal = self.u2_cal.iter().any(|v| *v > 0.0);
+        let mut sigma_cal = Matrix3::zeros();
+        if has_cal {
+            let fd = (dt > 0.0).then(|| {
+                if feedback {
+                    Matrix3::identity() - self.q_last * dt
+                } else {
+                    Matrix3::identity()
+                }
+            });
+            for j in 0..n {
+                let r = &self.r[j];
+                let fj = f0 + (wd.cross(r) + w.cross(&w.cross(r))) / self.g;
+                let u2 = &self.u2_cal;
+                let vj = u2[4 * j]
+                    + (0..3)
+                        .map(|a| fj[a] * fj[a] * u2[4 * j + 1 + a])
+                        .sum::<f64>();
+                for a in 0..p {
+                    let pa = self.pinv[(a, j)] * vj;
+                    for b in 0..p {
+                        cov[(a, b)] += pa * self.pinv[(b, j)];
+                    }
+                }
+                // J_k = F J_{k−1} + Δt ∂ω̇/∂cal (columns of accelerometer j).
+                if let Some(fm) = fd {
+                    let pw = Vector3::new(self.pinv[(3, j)], self.pinv[(4, j)], self.pinv[(5, j)]);
+                    for c in 0..4 {
+                        let col = 4 * j + c;
+                        let prev = Vector3::new(
+                            self.j_cal[(0, col)],
+                            self.j_cal[(1, col)],
+                            self.j_cal[(2, col)],
+                        );
+                        let scale = if c == 0 { -1.0 } else { -fj[c - 1] };
+                        let next = fm * prev + pw * (scale * dt);
+                        for i in 0..3 {
+                            self.j_cal[(i, col)] = next[i];
+                        }
+                    }
+                }
+                for c in 0..4 {
+                    let col = 4 * j + c;
+                    let v = Vector3::new(
+                        self.j_cal[(0, col)],
+                        self.j_cal[(1, col)],
+                        self.j_cal[(2, col)],
+                    );
+                    sigma_cal += v * v.transpose() * u2[col];
                 }
             }
         }
-        let cov_noise_only = cov.clone();
-        if self.u2_cal.iter().any(|v| *v > 0.0) {
-            let du = DMatrix::from_fn(p, 4 * n, |i, k| d_cal[(i, k)] * self.u2_cal[k]);
-            cov += du * d_cal.transpose();
-        }
-        // ω error: sample noise as a random walk (Σ), calibration as a
-        // systematic sensitivity (J), both through F = I − QΔt.
-        let (pg, f) = if feedback {
+        // ω error from the sample noise: a random walk through F = I − QΔt.
+        let pg = if feedback {
             let gmat = DMatrix::from_fn(n, 3, |j, a| {
                 let s = &self.cal[j].ks;
                 let r = &self.r[j];
@@ -558,24 +598,19 @@ impl Solver {
                 grad[a] / self.g
             });
             let pg = &self.pinv * &gmat; // p × 3
-            let q = Matrix3::from_fn(|i, j| pg[(3 + i, j)]);
-            (Some(pg), Matrix3::identity() - q * dt)
+            self.q_last = Matrix3::from_fn(|i, j| pg[(3 + i, j)]);
+            Some(pg)
         } else {
-            (None, Matrix3::identity())
+            None
         };
         if dt > 0.0 {
-            let cwd = Matrix3::from_fn(|i, j| cov_noise_only[(3 + i, 3 + j)]);
-            self.sigma_omega = f * self.sigma_omega * f.transpose() + cwd * (dt * dt);
-            let fd = DMatrix::from_fn(3, 3, |i, j| f[(i, j)]);
-            let dwd = d_cal.rows(3, 3).into_owned();
-            self.j_cal = &fd * &self.j_cal + dwd * dt;
+            let f = Matrix3::identity() - self.q_last * dt;
+            self.sigma_omega = f * self.sigma_omega * f.transpose() + cwd_noise * (dt * dt);
         }
-        let ju = DMatrix::from_fn(3, 4 * n, |i, k| self.j_cal[(i, k)] * self.u2_cal[k]);
-        let sigma_cal = &ju * self.j_cal.transpose();
-        let sigma_total =
-            DMatrix::from_fn(3, 3, |i, j| self.sigma_omega[(i, j)] + sigma_cal[(i, j)]);
+        let sigma_total = self.sigma_omega + sigma_cal;
         if let Some(pg) = &pg {
-            cov += pg * &sigma_total * pg.transpose();
+            let st = DMatrix::from_fn(3, 3, |i, j| sigma_total[(i, j)]);
+            cov += pg * st * pg.transpose();
         }
         let u_omega = Vector3::from_fn(|i, _| sigma_total[(i, i)].max(0.0).sqrt());
         if self.report_u && self.warned_at.is_none() && u_omega.amax() > self.omega_u_limit {
