@@ -531,6 +531,21 @@ impl Solver {
             }
             None => DMatrix::zeros(p, p),
         };
+        // The centripetal gradient at this sample: Q = ω̇ rows of P G, and
+        // F = I − QΔt carries both ω error parts below.
+        let pg = if feedback {
+            let gmat = DMatrix::from_fn(n, 3, |j, a| {
+                let s = &self.cal[j].ks;
+                let r = &self.r[j];
+                let grad = s * w.dot(r) + r * s.dot(&w) - w * (2.0 * s.dot(r));
+                grad[a] / self.g
+            });
+            let pg = &self.pinv * &gmat; // p × 3
+            self.q_last = Matrix3::from_fn(|i, j| pg[(3 + i, j)]);
+            Some(pg)
+        } else {
+            None
+        };
         // Calibration: the sensitivity of x to every K0_j, Ks_j at the
         // specific force f_j of each accelerometer, ∂x/∂K0_j = −P_:j,
         // ∂x/∂Ks_ja = −P_:j f_ja. Every column for accelerometer j is a
@@ -589,20 +604,7 @@ impl Solver {
                 }
             }
         }
-        // ω error from the sample noise: a random walk through F = I − QΔt.
-        let pg = if feedback {
-            let gmat = DMatrix::from_fn(n, 3, |j, a| {
-                let s = &self.cal[j].ks;
-                let r = &self.r[j];
-                let grad = s * w.dot(r) + r * s.dot(&w) - w * (2.0 * s.dot(r));
-                grad[a] / self.g
-            });
-            let pg = &self.pinv * &gmat; // p × 3
-            self.q_last = Matrix3::from_fn(|i, j| pg[(3 + i, j)]);
-            Some(pg)
-        } else {
-            None
-        };
+        // ω error from the sample noise: a random walk through F.
         if dt > 0.0 {
             let f = Matrix3::identity() - self.q_last * dt;
             self.sigma_omega = f * self.sigma_omega * f.transpose() + cwd_noise * (dt * dt);
