@@ -81,6 +81,8 @@ enum PlanCommand {
     Tumble(commands::tumble::PlanArgs),
     /// Misalignment plan: predicted u of each angle for a configuration set.
     Misalign(commands::misalign::PlanArgs),
+    /// Gyro-free unit calibration plan: predicted u of every accelerometer's K0 and Ks, and the geometry's conditioning.
+    Gfimu(commands::gfimu::PlanArgs),
     /// Gyro rate-transfer plan: predicted u of K1, B, K2, K3 and the asymmetry for a set of table rates.
     GyroRate(commands::gyro::PlanRateArgs),
     /// Gyro multi-position plan: predicted u of every drift term for head angles and azimuths.
@@ -127,6 +129,7 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Gyro(commands::gyro::Command::Rate(a)) => commands::gyro::run_rate(&a),
         Command::Gyro(commands::gyro::Command::Positions(a)) => commands::gyro::run_positions(&a),
         Command::Plan(PlanCommand::GyroRate(a)) => commands::gyro::plan_rate(&a),
+        Command::Plan(PlanCommand::Gfimu(a)) => commands::gfimu::plan(&a),
         Command::Plan(PlanCommand::GyroPositions(a)) => commands::gyro::plan_positions(&a),
         Command::Simulate(SimulateCommand::GyroRate(a)) => commands::gyro::simulate_rate_cmd(&a),
         Command::Simulate(SimulateCommand::GyroPositions(a)) => {

@@ -500,3 +500,45 @@ fn misalign_warns_when_angles_are_too_large_for_the_linear_model() {
         .iter()
         .all(|w| w["code"] != "model-range"));
 }
+
+#[test]
+fn plan_gfimu_predicts_and_refuses() {
+    let out = ok(&run(&[
+        "plan",
+        "gfimu",
+        "--noise",
+        "2e-4",
+        "--samples",
+        "50",
+        "--json",
+    ]));
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["plan"], "gfimu");
+    let u = v["predicted_u"]["a"]["K0"].as_f64().unwrap();
+    // σ/√(6·50) for the six-position test.
+    assert!((u - 2e-4 / 300f64.sqrt()).abs() < 1e-9, "{u}");
+    assert_eq!(v["motion"]["rank"], 6);
+    assert_eq!(v["motion"]["mode"], "feedback");
+    refused(
+        &run(&[
+            "plan",
+            "gfimu",
+            "--noise",
+            "2e-4",
+            "--positions",
+            "+x,-x,+q",
+        ]),
+        &["--positions", "+q"],
+    );
+    refused(
+        &run(&[
+            "plan",
+            "gfimu",
+            "--noise",
+            "2e-4",
+            "--positions",
+            "+x,-x,+y,-y",
+        ]),
+        &["positions", "need at least 6"],
+    );
+}

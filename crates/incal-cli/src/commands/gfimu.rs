@@ -782,3 +782,141 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
     }
     write_text(a.output.as_deref(), &text)
 }
+
+/// Options of `incal plan gfimu`.
+#[derive(clap::Args, Debug)]
+pub struct PlanArgs {
+    #[command(flatten)]
+    pub geometry: GeometryArgs,
+    /// Static positions, comma separated, from +x, -x, +y, -y, +z, -z (default: the six-position test).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub positions: Option<Vec<String>>,
+    /// Samples per position.
+    #[arg(long, default_value_t = 1)]
+    pub samples: usize,
+    /// Standard deviation of one output sample (output units).
+    #[arg(long)]
+    pub noise: f64,
+    /// Nominal scale factor of every accelerometer (output/g).
+    #[arg(long, default_value_t = 1.0)]
+    pub k1: f64,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Write to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+/// `incal plan gfimu`: predicted u of every K0 and Ks, and the geometry's
+/// conditioning for the motion solution.
+pub fn plan(a: &PlanArgs) -> CliResult<()> {
+    if !(a.noise.is_finite() && a.noise > 0.0) {
+        return Err(usage(format!(
+            "--noise must be a positive number, got {}",
+            crate::output::num(a.noise)
+        )));
+    }
+    if a.samples == 0 || a.samples > 100_000_000 {
+        return Err(usage("--samples must be within 1..100000000"));
+    }
+    if !(a.k1.is_finite() && a.k1 != 0.0 && a.k1.abs() <= 1e9) {
+        return Err(usage("--k1 must be non-zero and at most 1e9 in magnitude"));
+    }
+    let (g, label) = a.geometry.load()?;
+    let positions: Vec<Vector3<f64>> = match &a.positions {
+        None => six_positions(),
+        Some(list) => list
+            .iter()
+            .map(|p| {
+                parse_position(p.trim()).ok_or_else(|| {
+                    usage(format!(
+                        "--positions: '{}' is not one of +x, -x, +y, -y, +z, -z",
+                        crate::output::clip(p)
+                    ))
+                })
+            })
+            .collect::<CliResult<_>>()?,
+    };
+    let cal = incal::procedures::gfimu::calibrate::plan(&g, &positions, a.samples, a.noise, a.k1)
+        .map_err(|e| usage(format!("{label}: {e}")))?;
+    let d = g.check().map_err(core)?;
+    let mode = incal::procedures::gfimu::solve::solve_mode(
+        &g,
+        &g.accelerometers()
+            .iter()
+            .map(|x| x.direction)
+            .collect::<Vec<_>>(),
+        STANDARD_GRAVITY_M_S2,
+    )
+    .map_err(core)?;
+    let rows: Vec<(String, [f64; 4])> = cal
+        .accelerometers
+        .iter()
+        .map(|acc| {
+            let l = &acc.linear;
+            (
+                acc.name.clone(),
+                [l.u_at(0), l.u_at(1), l.u_at(2), l.u_at(3)],
+            )
+        })
+        .collect();
+    if a.json {
+        let mut u = serde_json::Map::new();
+        for (n, v) in &rows {
+            u.insert(n.clone(), json!({"K0": v[0], "Ks": [v[1], v[2], v[3]]}));
+        }
+        let doc = json!({
+            "plan": "gfimu",
+            "geometry": label,
+            "positions": positions.iter().map(|f| [f.x, f.y, f.z]).collect::<Vec<_>>(),
+            "samples": a.samples,
+            "noise": a.noise,
+            "k1": a.k1,
+            "predicted_u": Value::Object(u),
+            "units": {"K0": "output", "Ks": "output/g"},
+            "motion": {
+                "rank": d.rank,
+                "condition_number": d.condition.is_finite().then_some(d.condition),
+                "mode": mode.name(),
+            },
+            "warnings": cal.warnings,
+        });
+        return write_text(a.output.as_deref(), &json_text(&doc));
+    }
+    let mut s = format!(
+        "Gyro-free unit calibration plan: {label}, {} positions x {} samples, noise {:e} per sample, K1 = {} output/g\n",
+        positions.len(),
+        a.samples,
+        a.noise,
+        a.k1
+    );
+    let body: Vec<Vec<String>> = rows
+        .iter()
+        .map(|(n, v)| {
+            let mut r = vec![n.clone()];
+            r.extend(v.iter().map(|x| crate::output::sig(*x, 3)));
+            r
+        })
+        .collect();
+    s.push_str(&crate::output::table(
+        &[
+            "accelerometer",
+            "u_K0 (output)",
+            "u_Ks_x (output/g)",
+            "u_Ks_y (output/g)",
+            "u_Ks_z (output/g)",
+        ],
+        &body,
+    ));
+    s.push_str(&format!(
+        "motion solution: rank {} of 6, condition number {:.3}, mode {}\n",
+        d.rank,
+        d.condition,
+        mode.name()
+    ));
+    for w in &cal.warnings {
+        s.push_str(&format!("warning [{}]: {}\n", w.code, w.message));
+    }
+    write_text(a.output.as_deref(), &s)
+}

@@ -397,3 +397,59 @@ pub fn calibrate(
         warnings,
     })
 }
+
+/// Test design for the calibration: the standard uncertainty every
+/// accelerometer's K0 and Ks *will* have for a plan of static positions
+/// (specific force, g), `samples` per position and a known output noise
+/// σ (output) per sample, at nominal sensitivity `k1_out_per_g` along each
+/// nominal direction. It is [`calibrate`] itself run on noise-free samples
+/// with the noise known, so the plan and the reduction cannot disagree;
+/// a plan that cannot separate K0 and Ks is refused with the same message.
+pub fn plan(
+    geometry: &Geometry,
+    positions: &[Vector3<f64>],
+    samples: usize,
+    noise: f64,
+    k1_out_per_g: f64,
+) -> Result<GfimuCalibration> {
+    if samples == 0 {
+        return Err(Error::TooFew {
+            what: "samples per position".into(),
+            needed: 1,
+            got: 0,
+        });
+    }
+    if !(noise.is_finite() && noise > 0.0) {
+        return Err(Error::InvalidValue {
+            what: "noise (must be > 0)".into(),
+            value: noise.to_string(),
+        });
+    }
+    if !(k1_out_per_g.is_finite() && k1_out_per_g != 0.0) {
+        return Err(Error::InvalidValue {
+            what: "nominal K1 (must be finite and non-zero)".into(),
+            value: k1_out_per_g.to_string(),
+        });
+    }
+    let mut data = Vec::with_capacity(positions.len() * samples);
+    for f in positions {
+        let outputs: Vec<f64> = geometry
+            .accelerometers()
+            .iter()
+            .map(|a| k1_out_per_g * a.direction.dot(f))
+            .collect();
+        for _ in 0..samples {
+            data.push(StaticSample {
+                specific_force_g: *f,
+                outputs: outputs.clone(),
+            });
+        }
+    }
+    calibrate(
+        geometry,
+        &data,
+        &CalibrateOptions {
+            noise: Noise::Known { sigma: noise },
+        },
+    )
+}
