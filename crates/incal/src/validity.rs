@@ -36,3 +36,29 @@ pub fn require_varying(outputs: impl IntoIterator<Item = f64>, what: &str) -> Re
     }
     Ok(())
 }
+
+/// The inputs every test plan needs, checked once for all plans: at least
+/// one sample per position, a positive finite noise per sample, and a
+/// finite non-zero nominal scale factor (`k1_what` names its unit).
+pub fn require_plan_inputs(samples: usize, noise: f64, k1: f64, k1_what: &str) -> Result<()> {
+    if samples == 0 {
+        return Err(Error::TooFew {
+            what: "samples per position".into(),
+            needed: 1,
+            got: 0,
+        });
+    }
+    if !(noise.is_finite() && noise > 0.0) {
+        return Err(Error::InvalidValue {
+            what: "noise (must be > 0)".into(),
+            value: noise.to_string(),
+        });
+    }
+    if !(k1.is_finite() && k1 != 0.0) {
+        return Err(Error::InvalidValue {
+            what: format!("{k1_what} (must be finite and non-zero)"),
+            value: k1.to_string(),
+        });
+    }
+    Ok(())
+}

@@ -68,17 +68,6 @@ impl From<AxialArg> for Axial {
     }
 }
 
-fn latitude(deg: f64) -> CliResult<f64> {
-    if deg.is_finite() && deg.abs() <= 90.0 {
-        Ok(deg.to_radians())
-    } else {
-        Err(usage(format!(
-            "--latitude-deg must be within -90..90, got {}",
-            num(deg)
-        )))
-    }
-}
-
 fn finite(name: &str, x: f64) -> CliResult<f64> {
     if x.is_finite() {
         Ok(x)
@@ -170,7 +159,8 @@ fn read_rate(path: &Path) -> CliResult<(Table, Vec<RateObservation>)> {
 
 /// `incal gyro rate`.
 pub fn run_rate(a: &RateArgs) -> CliResult<()> {
-    let lat = latitude(a.latitude_deg)?;
+    // In range: --latitude-deg goes through options::latitude_deg.
+    let lat = a.latitude_deg.to_radians();
     let noise = noise_option(a.noise)?;
     let terms = rate_terms(&a.terms)?;
     if !(a.rate_uncertainty_ppm.is_finite() && (0.0..=1e5).contains(&a.rate_uncertainty_ppm)) {
@@ -371,7 +361,8 @@ fn scale_factor(a: &PositionsArgs) -> CliResult<ScaleChoice> {
 
 /// `incal gyro positions`.
 pub fn run_positions(a: &PositionsArgs) -> CliResult<()> {
-    let lat = latitude(a.latitude_deg)?;
+    // In range: --latitude-deg goes through options::latitude_deg.
+    let lat = a.latitude_deg.to_radians();
     let noise = noise_option(a.noise)?;
     let axial: Axial = a.axial.into();
     let terms = drift_terms(&a.terms, axial)?;
@@ -496,7 +487,8 @@ fn emit_plan(
 /// `incal plan gyro-rate`.
 pub fn plan_rate(a: &PlanRateArgs) -> CliResult<()> {
     check_plan_noise(a.noise, a.samples)?;
-    let lat = latitude(a.latitude_deg)?;
+    // In range: --latitude-deg goes through options::latitude_deg.
+    let lat = a.latitude_deg.to_radians();
     for r in &a.rates_deg_s {
         if !(r.is_finite() && r.abs() <= 1e5) {
             return Err(usage(format!(
@@ -604,11 +596,8 @@ fn check_angles(flag: &str, v: &[f64]) -> CliResult<()> {
     if v.is_empty() {
         return Err(usage(format!("{flag}: give at least one angle")));
     }
-    if let Some(x) = v.iter().find(|x| !(x.is_finite() && x.abs() <= 1e4)) {
-        return Err(usage(format!(
-            "{flag}: {} is not an angle (|angle| <= 1e4 deg)",
-            num(*x)
-        )));
+    for x in v {
+        crate::options::angle_deg(flag, *x)?;
     }
     Ok(())
 }
@@ -616,7 +605,8 @@ fn check_angles(flag: &str, v: &[f64]) -> CliResult<()> {
 /// `incal plan gyro-positions`.
 pub fn plan_positions(a: &PlanPositionsArgs) -> CliResult<()> {
     check_plan_noise(a.noise, a.samples)?;
-    let lat = latitude(a.latitude_deg)?;
+    // In range: --latitude-deg goes through options::latitude_deg.
+    let lat = a.latitude_deg.to_radians();
     let angles = a.angles_deg.clone().unwrap_or_else(default_angles);
     check_angles("--angles-deg", &angles)?;
     check_angles("--azimuths-deg", &a.azimuths_deg)?;
@@ -767,7 +757,8 @@ pub fn simulate_rate_cmd(a: &SimRateArgs) -> CliResult<()> {
             "--b-deg-h (<= 1e7), --k2 and --k3 (<= 1) out of range",
         ));
     }
-    let lat = latitude(a.latitude_deg)?;
+    // In range: --latitude-deg goes through options::latitude_deg.
+    let lat = a.latitude_deg.to_radians();
     if a.samples == 0 || a.runs == 0 {
         return Err(usage("--samples and --runs must be at least 1"));
     }
@@ -913,7 +904,8 @@ pub fn simulate_positions_cmd(a: &SimPositionsArgs) -> CliResult<()> {
     if a.k1 == 0.0 || a.k1.abs() > 1e9 {
         return Err(usage("--k1 must be non-zero and at most 1e9 in magnitude"));
     }
-    let lat = latitude(a.latitude_deg)?;
+    // In range: --latitude-deg goes through options::latitude_deg.
+    let lat = a.latitude_deg.to_radians();
     let angles = a.angles_deg.clone().unwrap_or_else(default_angles);
     check_angles("--angles-deg", &angles)?;
     check_angles("--azimuths-deg", &a.azimuths_deg)?;

@@ -412,25 +412,7 @@ pub fn plan(
     noise: f64,
     k1_out_per_g: f64,
 ) -> Result<GfimuCalibration> {
-    if samples == 0 {
-        return Err(Error::TooFew {
-            what: "samples per position".into(),
-            needed: 1,
-            got: 0,
-        });
-    }
-    if !(noise.is_finite() && noise > 0.0) {
-        return Err(Error::InvalidValue {
-            what: "noise (must be > 0)".into(),
-            value: noise.to_string(),
-        });
-    }
-    if !(k1_out_per_g.is_finite() && k1_out_per_g != 0.0) {
-        return Err(Error::InvalidValue {
-            what: "nominal K1 (must be finite and non-zero)".into(),
-            value: k1_out_per_g.to_string(),
-        });
-    }
+    crate::validity::require_plan_inputs(samples, noise, k1_out_per_g, "nominal K1")?;
     let mut data = Vec::with_capacity(positions.len() * samples);
     for f in positions {
         let outputs: Vec<f64> = geometry

@@ -434,25 +434,7 @@ pub fn plan(
     k1_nominal: f64,
     opts: &PositionsOptions,
 ) -> Result<PositionsResult> {
-    if samples == 0 {
-        return Err(Error::TooFew {
-            what: "samples per position".into(),
-            needed: 1,
-            got: 0,
-        });
-    }
-    if !(noise.is_finite() && noise > 0.0) {
-        return Err(Error::InvalidValue {
-            what: "noise (must be > 0)".into(),
-            value: noise.to_string(),
-        });
-    }
-    if !(k1_nominal.is_finite() && k1_nominal != 0.0) {
-        return Err(Error::InvalidValue {
-            what: "nominal K1 (must be finite and non-zero)".into(),
-            value: k1_nominal.to_string(),
-        });
-    }
+    crate::validity::require_plan_inputs(samples, noise, k1_nominal, "nominal K1")?;
     let mut obs = Vec::new();
     for &z in azimuths_rad {
         for &a in angles_rad {

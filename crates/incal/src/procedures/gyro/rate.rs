@@ -565,25 +565,7 @@ pub fn plan(
     k1: f64,
     opts: &RateOptions,
 ) -> Result<RateResult> {
-    if samples == 0 {
-        return Err(Error::TooFew {
-            what: "samples per rate".into(),
-            needed: 1,
-            got: 0,
-        });
-    }
-    if !(noise.is_finite() && noise > 0.0) {
-        return Err(Error::InvalidValue {
-            what: "noise (must be > 0)".into(),
-            value: noise.to_string(),
-        });
-    }
-    if !(k1.is_finite() && k1 != 0.0) {
-        return Err(Error::InvalidValue {
-            what: "nominal K1 (must be finite and non-zero)".into(),
-            value: k1.to_string(),
-        });
-    }
+    crate::validity::require_plan_inputs(samples, noise, k1, "nominal K1")?;
     // Noise-free means: each rate gets `samples` identical samples.
     let obs: Vec<RateObservation> = rates_deg_s
         .iter()
