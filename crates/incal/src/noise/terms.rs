@@ -155,7 +155,11 @@ fn fit_active(
             }
             last = Some((f, w));
         }
-        let (f, w) = last.expect("at least one iteration");
+        // The loop always runs; an error rather than a panic keeps input
+        // from ever aborting the process.
+        let (f, w) = last.ok_or_else(|| {
+            crate::error::Error::Unsupported("noise-term fit: no iteration ran".into())
+        })?;
         // Sandwich covariance of the weighted estimator under the
         // correlated covariance V of the σ̂²: C = B V Bᵀ, B = (AᵀWA)⁻¹AᵀW.
         let sd: Vec<f64> = obs
