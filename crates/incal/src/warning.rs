@@ -48,6 +48,11 @@ pub enum WarningCode {
     NoiseTermNotIdentified,
     /// The record is too short for a requested averaging time.
     ShortRecord,
+    /// A result whose signs say the data follow another convention than the
+    /// options (e.g. a rotation in the opposite sense to `--rotation-deg`,
+    /// or gravity of the other sign): the numbers are right for the options
+    /// given, but probably not what was meant.
+    SignConvention,
 }
 
 impl WarningCode {
@@ -67,6 +72,7 @@ impl WarningCode {
             WarningCode::ModelRange => "model-range",
             WarningCode::NoiseTermNotIdentified => "noise-term-not-identified",
             WarningCode::ShortRecord => "short-record",
+            WarningCode::SignConvention => "sign-convention",
         }
     }
 }

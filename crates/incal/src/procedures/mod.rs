@@ -4,5 +4,6 @@
 pub mod centrifuge;
 pub mod gfimu;
 pub mod gyro;
+pub mod imu;
 pub mod misalign;
 pub mod tumble;

@@ -1,0 +1,145 @@
+//! IMU triad calibration: three accelerometers and three gyros in one
+//! package.
+//!
+//! * [`ferraris`]: the six-position + three-rotation method of Ferraris et
+//!   al. (1995) with imucal's conventions and JSON keys, plus the
+//!   uncertainty of every matrix element.
+//! * [`multipos`]: least squares over any set of known orientations.
+//! * [`autocal`]: calibration without a fixture (Tedaldi et al., ICRA 2014),
+//!   in imu_tk's exact steps (`tedaldi`) or incal's weighted form with
+//!   covariance.
+//! * [`detect`]: the moving-variance static detector.
+//!
+//! # Frames and units
+//! The IMU frame is the frame the positions and rotations are given in;
+//! `f` is the specific force (`+g` along the axis that points up), `ω` the
+//! angular rate (right-handed: counter-clockwise seen from the tip of the
+//! axis is positive). Raw outputs are in any unit (counts or physical).
+
+pub mod autocal;
+pub mod detect;
+pub mod ferraris;
+pub mod multipos;
+
+use nalgebra::{Matrix3, Vector3};
+
+use crate::error::{Error, Result};
+
+/// A 3-vector (one triad sample, a mean, a direction).
+pub type V3 = Vector3<f64>;
+/// A 3×3 matrix.
+pub type M3 = Matrix3<f64>;
+
+/// Axis letters, in the order of vector components.
+pub const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// Mean and sample covariance (n − 1) of a set of 6-vectors (accelerometer
+/// x, y, z then gyro x, y, z; a missing triad is zero).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SectionStats {
+    /// Samples.
+    pub n: usize,
+    /// Mean of each of the six channels.
+    pub mean: [f64; 6],
+    /// Sample covariance (n − 1 denominator), row-major 6×6.
+    pub cov: [[f64; 6]; 6],
+    /// Sum of each channel (for integrals).
+    pub sum: [f64; 6],
+}
+
+impl SectionStats {
+    /// Statistics of `samples` (two-pass: mean, then centred products).
+    pub fn of(samples: &[[f64; 6]]) -> Result<SectionStats> {
+        let n = samples.len();
+        if n == 0 {
+            return Err(Error::TooFew {
+                what: "samples in a section".into(),
+                needed: 1,
+                got: 0,
+            });
+        }
+        let mut sum = [0.0; 6];
+        for s in samples {
+            for k in 0..6 {
+                sum[k] += s[k];
+            }
+        }
+        let mut mean = [0.0; 6];
+        for k in 0..6 {
+            mean[k] = sum[k] / n as f64;
+        }
+        let mut cov = [[0.0; 6]; 6];
+        if n > 1 {
+            for s in samples {
+                let d: Vec<f64> = (0..6).map(|k| s[k] - mean[k]).collect();
+                for j in 0..6 {
+                    for k in j..6 {
+                        cov[j][k] += d[j] * d[k];
+                    }
+                }
+            }
+            for j in 0..6 {
+                for k in j..6 {
+                    cov[j][k] /= (n - 1) as f64;
+                    cov[k][j] = cov[j][k];
+                }
+            }
+        }
+        Ok(SectionStats { n, mean, cov, sum })
+    }
+
+    /// Accelerometer mean.
+    pub fn acc(&self) -> V3 {
+        V3::new(self.mean[0], self.mean[1], self.mean[2])
+    }
+
+    /// Gyro mean.
+    pub fn gyr(&self) -> V3 {
+        V3::new(self.mean[3], self.mean[4], self.mean[5])
+    }
+
+    /// Standard deviation of channel `k`.
+    pub fn std(&self, k: usize) -> f64 {
+        self.cov[k][k].max(0.0).sqrt()
+    }
+}
+
+/// Check a gravity value: finite, non-zero, |g| ≤ 100 (m/s² or any unit a
+/// lab uses for 1 g). A negative value flips imucal's sign convention.
+pub fn check_gravity(g: f64) -> Result<()> {
+    if g.is_finite() && g != 0.0 && g.abs() <= 100.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidValue {
+            what: "gravity (must be finite, non-zero and |g| <= 100)".into(),
+            value: g.to_string(),
+        })
+    }
+}
+
+/// Check a sample rate (Hz): finite, positive, at most 1 MHz.
+pub fn check_rate_hz(rate_hz: f64) -> Result<()> {
+    if rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= 1e6 {
+        Ok(())
+    } else {
+        Err(Error::InvalidValue {
+            what: "sample rate (must be > 0 and <= 1e6 Hz)".into(),
+            value: rate_hz.to_string(),
+        })
+    }
+}
+
+/// Rows of a 3×3 matrix as nested vectors (the JSON "list of rows").
+pub fn rows(m: &M3) -> Vec<Vec<f64>> {
+    (0..3).map(|i| (0..3).map(|j| m[(i, j)]).collect()).collect()
+}
+
+/// Name of matrix element `(i, j)`: `NAME.xy`.
+pub fn element_name(name: &str, i: usize, j: usize) -> String {
+    format!("{name}.{}{}", AXES[i], AXES[j])
+}
+
+/// Name of vector element `i`: `NAME.x`.
+pub fn component_name(name: &str, i: usize) -> String {
+    format!("{name}.{}", AXES[i])
+}
