@@ -8,6 +8,7 @@ pub mod centrifuge;
 pub mod demo;
 pub mod gfimu;
 pub mod gyro;
+pub mod imu;
 pub mod misalign;
 pub mod noise;
 pub mod tumble;
