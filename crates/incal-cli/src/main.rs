@@ -65,6 +65,9 @@ enum Command {
     Record(commands::record::Command),
     /// Noise and stability of long static records: OADEV, MDEV, OHDEV, TDEV, TOTDEV with confidence bounds, IEEE 952 noise terms, bias stability.
     Noise(commands::noise::Args),
+    /// IMU triad calibration: Ferraris (imucal), least squares over known orientations, autocalibration (Tedaldi / imu_tk), apply.
+    #[command(subcommand)]
+    Imu(commands::imu::Command),
 }
 
 #[derive(Subcommand, Debug)]
@@ -136,6 +139,7 @@ fn run(cli: Cli) -> CliResult<()> {
             commands::gyro::simulate_positions_cmd(&a)
         }
         Command::Noise(a) => commands::noise::run(&a),
+        Command::Imu(commands::imu::Command::Ferraris(a)) => commands::imu::run_ferraris(&a),
         Command::Simulate(SimulateCommand::Noise(a)) => commands::noise::simulate(&a),
     }
 }

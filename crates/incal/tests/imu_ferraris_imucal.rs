@@ -35,9 +35,15 @@ fn reproduces_imucal_example_calibration() {
     for q in QUANTITIES {
         let e = &expected[q];
         let got: Vec<f64> = match r.matrices.matrix(q) {
-            Some(m) => (0..3).flat_map(|i| (0..3).map(move |j| m[(i, j)])).collect(),
+            Some(m) => (0..3)
+                .flat_map(|i| (0..3).map(move |j| m[(i, j)]))
+                .collect(),
             None => {
-                let b = if q == "b_a" { r.matrices.b_a } else { r.matrices.b_g };
+                let b = if q == "b_a" {
+                    r.matrices.b_a
+                } else {
+                    r.matrices.b_g
+                };
                 b.iter().copied().collect()
             }
         };
@@ -48,11 +54,19 @@ fn reproduces_imucal_example_calibration() {
                 .flat_map(|row| row.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()))
                 .collect()
         } else {
-            e.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect()
+            e.as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect()
         };
         assert_eq!(got.len(), want.len(), "{q}");
         for (g, w) in got.iter().zip(&want) {
-            let rel = if *w == 0.0 { g.abs() } else { ((g - w) / w).abs() };
+            let rel = if *w == 0.0 {
+                g.abs()
+            } else {
+                ((g - w) / w).abs()
+            };
             worst = worst.max(rel);
             assert!(rel < 1e-9, "{q}: incal {g}, imucal {w}, relative {rel:e}");
             checked += 1;

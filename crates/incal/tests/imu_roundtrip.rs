@@ -75,7 +75,11 @@ fn ferraris_u95_covers_the_truth() {
     let hits = monte_carlo(11, SEEDS, |seed| {
         let truth = ImuTruth::random_around_mems(trial_seed(seed, 1));
         let want = truth.ferraris().to_vec();
-        let r = ferraris(&ferraris_session(truth, seed), &FerrarisOptions::imucal(100.0)).unwrap();
+        let r = ferraris(
+            &ferraris_session(truth, seed),
+            &FerrarisOptions::imucal(100.0),
+        )
+        .unwrap();
         let k95 = r.estimates.coverage_factor(0.95);
         keep.iter()
             .map(|&k| (r.estimates.values()[k] - want[k]).abs() <= k95 * r.estimates.u_at(k))

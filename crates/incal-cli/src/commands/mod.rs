@@ -5,6 +5,7 @@ pub mod compare;
 pub mod demo;
 pub mod gfimu;
 pub mod gyro;
+pub mod imu;
 pub mod misalign;
 pub mod noise;
 pub mod record;

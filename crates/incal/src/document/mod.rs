@@ -29,6 +29,7 @@
 pub mod centrifuge;
 pub mod gfimu;
 pub mod gyro;
+pub mod imu;
 pub mod limits;
 pub mod misalign;
 pub mod noise;
@@ -69,6 +70,12 @@ pub enum Procedure {
     GyroPositions,
     /// Noise and stability: Allan family, IEEE Std 952 terms, bias stability.
     Noise,
+    /// IMU triad, Ferraris six-position + three-rotation method (imucal).
+    ImuFerraris,
+    /// IMU triad, least squares over known orientations.
+    ImuMultipos,
+    /// IMU triad, autocalibration without a fixture (Tedaldi et al. 2014).
+    ImuAutocal,
 }
 
 impl Procedure {
@@ -83,6 +90,9 @@ impl Procedure {
             Procedure::GyroRate => "gyro-rate",
             Procedure::GyroPositions => "gyro-positions",
             Procedure::Noise => "noise",
+            Procedure::ImuFerraris => "imu-ferraris",
+            Procedure::ImuMultipos => "imu-multipos",
+            Procedure::ImuAutocal => "imu-autocal",
         }
     }
 }

@@ -148,7 +148,9 @@ impl ImuTruth {
             scale: [1.0 / 955.5, 1.0 / 927.5, 1.0 / 931.2],
             bias: [1.96, -4.47, -3.65],
         };
-        let k_ga = M3::new(0.002, 0.014, -0.009, -0.016, 0.005, 0.008, 0.018, -0.009, -0.004);
+        let k_ga = M3::new(
+            0.002, 0.014, -0.009, -0.016, 0.005, 0.008, 0.018, -0.009, -0.004,
+        );
         ImuTruth::from_imu_tk(&acc, &gyr, k_ga).expect("invertible")
     }
 
@@ -178,11 +180,7 @@ impl ImuTruth {
 
 /// `A = K R` with `K = diag(‖row_i(A)‖)` and unit-norm rows in R.
 fn scale_rows(a: &M3) -> (M3, M3) {
-    let k = M3::from_diagonal(&V3::new(
-        a.row(0).norm(),
-        a.row(1).norm(),
-        a.row(2).norm(),
-    ));
+    let k = M3::from_diagonal(&V3::new(a.row(0).norm(), a.row(1).norm(), a.row(2).norm()));
     let r = M3::from_fn(|i, j| a[(i, j)] / k[(i, i)]);
     (k, r)
 }
@@ -320,11 +318,12 @@ pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
             normal(r, cfg.noise_acc),
             normal(r, cfg.noise_acc),
         );
-        let gyr = gy + V3::new(
-            normal(r, cfg.noise_gyr),
-            normal(r, cfg.noise_gyr),
-            normal(r, cfg.noise_gyr),
-        );
+        let gyr = gy
+            + V3::new(
+                normal(r, cfg.noise_gyr),
+                normal(r, cfg.noise_gyr),
+                normal(r, cfg.noise_gyr),
+            );
         let t = out.len() as f64 * dt;
         out.push(ImuSample {
             time_s: t,
@@ -338,7 +337,14 @@ pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
     // A rotation of `angle` about IMU axis `axis` from attitude `c0`.
     let rotate = |out: &mut Vec<ImuSample>,
                   r: &mut rand::rngs::ChaCha8Rng,
-                  push: &mut dyn FnMut(&mut Vec<ImuSample>, &mut rand::rngs::ChaCha8Rng, &str, &M3, &V3, bool),
+                  push: &mut dyn FnMut(
+        &mut Vec<ImuSample>,
+        &mut rand::rngs::ChaCha8Rng,
+        &str,
+        &M3,
+        &V3,
+        bool,
+    ),
                   part: &str,
                   c0: &M3,
                   axis: &V3,
@@ -349,7 +355,8 @@ pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
         let tm = n as f64 * dt;
         for i in 0..n {
             let tau = i as f64 * dt / tm;
-            let th = angle * (tau - (2.0 * std::f64::consts::PI * tau).sin() / (2.0 * std::f64::consts::PI));
+            let th = angle
+                * (tau - (2.0 * std::f64::consts::PI * tau).sin() / (2.0 * std::f64::consts::PI));
             let rate = angle / tm * (1.0 - (2.0 * std::f64::consts::PI * tau).cos());
             let c = c0 * rotation(axis, th);
             push(out, r, part, &c, &(axis * rate), false);
@@ -408,7 +415,11 @@ pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
                 .map_err(|e| Error::Unsupported(e.to_string()))?;
             for _ in 0..*positions {
                 let up = c.row(2).transpose();
-                let v = V3::new(normal(&mut r, 1.0), normal(&mut r, 1.0), normal(&mut r, 1.0));
+                let v = V3::new(
+                    normal(&mut r, 1.0),
+                    normal(&mut r, 1.0),
+                    normal(&mut r, 1.0),
+                );
                 let axis = up.cross(&v).normalize();
                 let angle = ang.sample(&mut r);
                 c = rotate(&mut out, &mut r, &mut push, "", &c, &axis, angle, *move_s);

@@ -242,7 +242,9 @@ fn map(x: &[f64], counts: &[usize; 9], opts: &FerrarisOptions) -> Option<Ferrari
 pub fn ferraris(sections: &[Vec<[f64; 6]>; 9], opts: &FerrarisOptions) -> Result<FerrarisResult> {
     check_rate_hz(opts.rate_hz)?;
     check_gravity(opts.gravity)?;
-    if !opts.rotation_deg.is_finite() || opts.rotation_deg == 0.0 || opts.rotation_deg.abs() > 36000.0
+    if !opts.rotation_deg.is_finite()
+        || opts.rotation_deg == 0.0
+        || opts.rotation_deg.abs() > 36000.0
     {
         return Err(Error::InvalidValue {
             what: "rotation angle (must be non-zero, |A| <= 36000 deg)".into(),
@@ -347,11 +349,19 @@ pub fn ferraris(sections: &[Vec<[f64; 6]>; 9], opts: &FerrarisOptions) -> Result
             "the uncertainty of the Ferraris map is not finite (check the section labels)".into(),
         ));
     }
-    let dof = counts.iter().map(|&n| (n - 1) as f64).fold(f64::INFINITY, f64::min);
+    let dof = counts
+        .iter()
+        .map(|&n| (n - 1) as f64)
+        .fold(f64::INFINITY, f64::min);
     let estimates = Estimates::new(element_names(), DVector::from_vec(values), cov, dof)?;
 
     let mut warnings = Vec::new();
-    let neg = |m: &M3| (0..3).filter(|&i| m[(i, i)] < 0.0).map(|i| super::AXES[i]).collect::<Vec<_>>();
+    let neg = |m: &M3| {
+        (0..3)
+            .filter(|&i| m[(i, i)] < 0.0)
+            .map(|i| super::AXES[i])
+            .collect::<Vec<_>>()
+    };
     let na = neg(&matrices.r_a);
     if !na.is_empty() {
         warnings.push(Warning::new(

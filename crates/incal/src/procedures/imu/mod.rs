@@ -131,7 +131,9 @@ pub fn check_rate_hz(rate_hz: f64) -> Result<()> {
 
 /// Rows of a 3×3 matrix as nested vectors (the JSON "list of rows").
 pub fn rows(m: &M3) -> Vec<Vec<f64>> {
-    (0..3).map(|i| (0..3).map(|j| m[(i, j)]).collect()).collect()
+    (0..3)
+        .map(|i| (0..3).map(|j| m[(i, j)]).collect())
+        .collect()
 }
 
 /// Name of matrix element `(i, j)`: `NAME.xy`.
