@@ -88,3 +88,111 @@ fn ferraris_u95_covers_the_truth() {
     let kept: Vec<String> = keep.iter().map(|&k| names[k].clone()).collect();
     check_coverage("ferraris", &kept, &hits);
 }
+
+mod autocal {
+    use super::*;
+    use incal::procedures::imu::autocal::{autocal, AutocalOptions, Method};
+    use incal::procedures::imu::M3;
+
+    /// A random-orientation session from a truth without g-sensitivity
+    /// (outside the autocalibration model).
+    /// Truth, time, raw accelerometer and gyro samples.
+    pub type Session = (ImuTruth, Vec<f64>, Vec<[f64; 3]>, Vec<[f64; 3]>);
+
+    pub fn session(seed: u64) -> Session {
+        let mut truth = ImuTruth::random_around_mems(trial_seed(seed, 2));
+        truth.gyr_k_ga = M3::zeros();
+        let s = simulate(&ImuSim {
+            truth: truth.clone(),
+            sequence: Sequence::Random {
+                positions: 30,
+                init_s: 10.0,
+                move_s: 1.5,
+            },
+            rate_hz: 100.0,
+            static_s: 2.5,
+            gravity: 9.81,
+            noise_acc: 3.0,
+            noise_gyr: 2.0,
+            latitude_deg: None,
+            seed,
+        })
+        .unwrap();
+        let time = s.iter().map(|x| x.time_s).collect();
+        let acc = s.iter().map(|x| [x.acc[0], x.acc[1], x.acc[2]]).collect();
+        let gyr = s.iter().map(|x| [x.gyr[0], x.gyr[1], x.gyr[2]]).collect();
+        (truth, time, acc, gyr)
+    }
+
+    pub fn truth_vector(t: &ImuTruth) -> Vec<f64> {
+        let (a, g) = t.imu_tk().unwrap();
+        let mut v: Vec<f64> = a.mis[..3].to_vec();
+        v.extend(a.scale);
+        v.extend(a.bias);
+        v.extend(g.mis);
+        v.extend(g.scale);
+        v.extend(g.bias);
+        v
+    }
+
+    #[test]
+    fn one_session_recovers_the_truth() {
+        for method in [Method::Incal, Method::Tedaldi] {
+            let (truth, time, acc, gyr) = session(5);
+            let r = autocal(
+                &time,
+                &acc,
+                Some(&gyr),
+                &AutocalOptions::new(method, 9.81, 10.0),
+            )
+            .unwrap();
+            let want = truth_vector(&truth);
+            for (k, name) in r.estimates.names().iter().enumerate() {
+                let (x, u) = (r.estimates.values()[k], r.estimates.u_at(k));
+                eprintln!(
+                    "{:?} {name}: {x:.6e} truth {:.6e} u {u:.2e} z {:.2}",
+                    method,
+                    want[k],
+                    (x - want[k]) / u
+                );
+            }
+            eprintln!(
+                "k {} intervals {} orientations {}",
+                r.k,
+                r.intervals.len(),
+                r.orientations
+            );
+            for (k, name) in r.estimates.names().iter().enumerate() {
+                let (x, u) = (r.estimates.values()[k], r.estimates.u_at(k));
+                assert!((x - want[k]).abs() < 6.0 * u, "{method:?} {name}");
+            }
+        }
+    }
+}
+
+#[test]
+fn autocal_incal_u95_covers_the_truth() {
+    use incal::procedures::imu::autocal::{autocal as run, AutocalOptions, Method};
+    let mut names = Vec::new();
+    let hits = monte_carlo(23, 400, |seed| {
+        let (truth, time, acc, gyr) = autocal::session(seed);
+        let r = run(
+            &time,
+            &acc,
+            Some(&gyr),
+            &AutocalOptions::new(Method::Incal, 9.81, 10.0),
+        )
+        .unwrap();
+        let want = autocal::truth_vector(&truth);
+        let k95 = r.estimates.coverage_factor(0.95);
+        (
+            r.estimates.names().to_vec(),
+            (0..want.len())
+                .map(|k| (r.estimates.values()[k] - want[k]).abs() <= k95 * r.estimates.u_at(k))
+                .collect::<Vec<bool>>(),
+        )
+    });
+    names.extend(hits[0].0.iter().cloned());
+    let h: Vec<Vec<bool>> = hits.into_iter().map(|x| x.1).collect();
+    check_coverage("autocal incal", &names, &h);
+}

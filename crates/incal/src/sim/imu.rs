@@ -293,84 +293,21 @@ pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
     crate::procedures::imu::check_gravity(cfg.gravity)?;
     let mut r = rng(cfg.seed);
     let g = cfg.gravity;
-    let earth = |c: &M3| -> V3 {
-        match cfg.latitude_deg {
-            Some(lat) => {
-                let p = lat.to_radians();
-                c.transpose() * V3::new(0.0, p.cos(), p.sin()) * EARTH_RATE_RAD_S
-            }
-            None => V3::zeros(),
-        }
-    };
-    let mut out = Vec::new();
-    let dt = 1.0 / cfg.rate_hz;
     let n_static = (cfg.static_s * cfg.rate_hz).round().max(1.0) as usize;
-    let mut push = |out: &mut Vec<ImuSample>,
-                    r: &mut rand::rngs::ChaCha8Rng,
-                    part: &str,
-                    c: &M3,
-                    w: &V3,
-                    still: bool| {
-        let f = c.transpose() * V3::new(0.0, 0.0, g);
-        let (a, gy) = cfg.truth.raw(&f, &(w + earth(c)));
-        let acc = a + V3::new(
-            normal(r, cfg.noise_acc),
-            normal(r, cfg.noise_acc),
-            normal(r, cfg.noise_acc),
-        );
-        let gyr = gy
-            + V3::new(
-                normal(r, cfg.noise_gyr),
-                normal(r, cfg.noise_gyr),
-                normal(r, cfg.noise_gyr),
-            );
-        let t = out.len() as f64 * dt;
-        out.push(ImuSample {
-            time_s: t,
-            part: part.to_string(),
-            acc,
-            gyr,
-            up: still.then(|| c.row(2).transpose() * g.signum()),
-            north: still.then(|| c.row(1).transpose()),
-        });
-    };
-    // A rotation of `angle` about IMU axis `axis` from attitude `c0`.
-    let rotate = |out: &mut Vec<ImuSample>,
-                  r: &mut rand::rngs::ChaCha8Rng,
-                  push: &mut dyn FnMut(
-        &mut Vec<ImuSample>,
-        &mut rand::rngs::ChaCha8Rng,
-        &str,
-        &M3,
-        &V3,
-        bool,
-    ),
-                  part: &str,
-                  c0: &M3,
-                  axis: &V3,
-                  angle: f64,
-                  dur: f64|
-     -> M3 {
-        let n = (dur * cfg.rate_hz).round().max(2.0) as usize;
-        let tm = n as f64 * dt;
-        for i in 0..n {
-            let tau = i as f64 * dt / tm;
-            let th = angle
-                * (tau - (2.0 * std::f64::consts::PI * tau).sin() / (2.0 * std::f64::consts::PI));
-            let rate = angle / tm * (1.0 - (2.0 * std::f64::consts::PI * tau).cos());
-            let c = c0 * rotation(axis, th);
-            push(out, r, part, &c, &(axis * rate), false);
-        }
-        c0 * rotation(axis, angle)
+    let mut w = Writer {
+        cfg,
+        r: &mut r,
+        out: Vec::new(),
+        dt: 1.0 / cfg.rate_hz,
     };
     match &cfg.sequence {
         Sequence::Ferraris {
             rotation_deg,
             rotation_s,
         } => {
-            if !(rotation_deg.is_finite() && rotation_deg.abs() <= 36000.0)
-                || !(rotation_s.is_finite() && *rotation_s > 0.0)
-            {
+            let ok_angle = rotation_deg.is_finite() && rotation_deg.abs() <= 36000.0;
+            let ok_time = rotation_s.is_finite() && *rotation_s > 0.0;
+            if !ok_angle || !ok_time {
                 return Err(bad("rotation (deg, s)", *rotation_deg));
             }
             let labels = ["x_p", "x_a", "y_p", "y_a", "z_p", "z_a"];
@@ -379,23 +316,14 @@ pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
                 up[k / 2] = if k % 2 == 0 { 1.0 } else { -1.0 };
                 let c = attitude_up(&(up * g.signum()));
                 for _ in 0..n_static {
-                    push(&mut out, &mut r, l, &c, &V3::zeros(), true);
+                    w.push(l, &c, &V3::zeros(), true);
                 }
             }
             for (k, l) in ["x_rot", "y_rot", "z_rot"].iter().enumerate() {
                 let mut up = V3::zeros();
                 up[k] = 1.0;
                 let c = attitude_up(&(up * g.signum()));
-                rotate(
-                    &mut out,
-                    &mut r,
-                    &mut push,
-                    l,
-                    &c,
-                    &up,
-                    rotation_deg.to_radians(),
-                    *rotation_s,
-                );
+                w.rotate(l, &c, &up, rotation_deg.to_radians(), *rotation_s);
             }
         }
         Sequence::Random {
@@ -409,22 +337,18 @@ pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
             let mut c = attitude_up(&V3::new(0.0, 0.0, 1.0));
             let n_init = (init_s * cfg.rate_hz).round().max(1.0) as usize;
             for _ in 0..n_init {
-                push(&mut out, &mut r, "", &c, &V3::zeros(), true);
+                w.push("", &c, &V3::zeros(), true);
             }
             let ang = Uniform::new(45f64.to_radians(), 135f64.to_radians())
                 .map_err(|e| Error::Unsupported(e.to_string()))?;
             for _ in 0..*positions {
                 let up = c.row(2).transpose();
-                let v = V3::new(
-                    normal(&mut r, 1.0),
-                    normal(&mut r, 1.0),
-                    normal(&mut r, 1.0),
-                );
+                let v = V3::new(normal(w.r, 1.0), normal(w.r, 1.0), normal(w.r, 1.0));
                 let axis = up.cross(&v).normalize();
-                let angle = ang.sample(&mut r);
-                c = rotate(&mut out, &mut r, &mut push, "", &c, &axis, angle, *move_s);
+                let angle = ang.sample(w.r);
+                c = w.rotate("", &c, &axis, angle, *move_s);
                 for _ in 0..n_static {
-                    push(&mut out, &mut r, "", &c, &V3::zeros(), true);
+                    w.push("", &c, &V3::zeros(), true);
                 }
             }
         }
@@ -436,12 +360,74 @@ pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
                 let c = attitude_up(&(u.normalize() * g.signum()));
                 let label = format!("p{}", k + 1);
                 for _ in 0..n_static {
-                    push(&mut out, &mut r, &label, &c, &V3::zeros(), true);
+                    w.push(&label, &c, &V3::zeros(), true);
                 }
             }
         }
     }
-    Ok(out)
+    Ok(w.out)
+}
+
+/// The session being written: one sample at a time, or a rotation.
+struct Writer<'a> {
+    cfg: &'a ImuSim,
+    r: &'a mut rand::rngs::ChaCha8Rng,
+    out: Vec<ImuSample>,
+    dt: f64,
+}
+
+impl Writer<'_> {
+    /// One sample at attitude `c` (IMU → nav) with body rate `w`.
+    fn push(&mut self, part: &str, c: &M3, w: &V3, still: bool) {
+        let cfg = self.cfg;
+        let g = cfg.gravity;
+        let earth = match cfg.latitude_deg {
+            Some(lat) => {
+                let p = lat.to_radians();
+                c.transpose() * V3::new(0.0, p.cos(), p.sin()) * EARTH_RATE_RAD_S
+            }
+            None => V3::zeros(),
+        };
+        let f = c.transpose() * V3::new(0.0, 0.0, g);
+        let (a, gy) = cfg.truth.raw(&f, &(w + earth));
+        let r = &mut *self.r;
+        let acc = a + V3::new(
+            normal(r, cfg.noise_acc),
+            normal(r, cfg.noise_acc),
+            normal(r, cfg.noise_acc),
+        );
+        let gyr = gy
+            + V3::new(
+                normal(r, cfg.noise_gyr),
+                normal(r, cfg.noise_gyr),
+                normal(r, cfg.noise_gyr),
+            );
+        let t = self.out.len() as f64 * self.dt;
+        self.out.push(ImuSample {
+            time_s: t,
+            part: part.to_string(),
+            acc,
+            gyr,
+            up: still.then(|| c.row(2).transpose() * g.signum()),
+            north: still.then(|| c.row(1).transpose()),
+        });
+    }
+
+    /// A rotation of `angle` (rad) about the IMU axis `axis` from attitude
+    /// `c0`, lasting `dur` seconds; returns the final attitude.
+    fn rotate(&mut self, part: &str, c0: &M3, axis: &V3, angle: f64, dur: f64) -> M3 {
+        use std::f64::consts::TAU;
+        let n = (dur * self.cfg.rate_hz).round().max(2.0) as usize;
+        let tm = n as f64 * self.dt;
+        for i in 0..n {
+            let tau = i as f64 * self.dt / tm;
+            let th = angle * (tau - (TAU * tau).sin() / TAU);
+            let rate = angle / tm * (1.0 - (TAU * tau).cos());
+            let c = c0 * rotation(axis, th);
+            self.push(part, &c, &(axis * rate), false);
+        }
+        c0 * rotation(axis, angle)
+    }
 }
 
 #[cfg(test)]

@@ -1,1 +1,963 @@
-//! (in progress)
+//! Autocalibration of an IMU triad without a fixture (Tedaldi, Pretto &
+//! Menegatti, ICRA 2014), in imu_tk's conventions.
+//!
+//! # Model
+//! `calibrated = T K (raw − b)`, `K = diag(s_x, s_y, s_z)`,
+//! `T = [[1, −m_yz, m_zy], [m_xz, 1, −m_zx], [−m_xy, m_yx, 1]]`; the
+//! accelerometer defines the IMU frame (`m_xz = m_xy = m_yx = 0`), so its
+//! calibrated output is in the unit of g (m/s²); the gyro's is rad/s.
+//!
+//! # Accelerometer (Tedaldi eq. 10)
+//! In every still interval the calibrated specific force has magnitude g:
+//! minimise `Σ (g − ‖T K (a − b)‖)²` over the nine parameters
+//! (`m_yz, m_zy, m_zx, s, b`) by Gauss–Newton with an analytic Jacobian
+//! (a step-halving line search keeps it descending from a far start).
+//!
+//! # Gyro (Tedaldi eq. 15)
+//! Between consecutive still intervals the calibrated rates, integrated
+//! with imu_tk's RK4 quaternion step (`q̇ = ½ Ω(ω) q`), rotate the gravity
+//! direction of the first interval into that of the second:
+//! residual `R(q)ᵀ ĝ₀ − ĝ₁`; nine parameters (six misalignments, three
+//! scales); the bias is the mean over the initial still interval.
+//!
+//! # Methods
+//! * [`Method::Tedaldi`] reproduces imu_tk's `MultiPosCalibration` step
+//!   by step: thresholds `k·‖var(initial interval)‖` for k = 2…10 (window
+//!   101 samples), intervals of at least 100 samples of which the first
+//!   100 enter the accelerometer fit (unweighted), a k with fewer than 12
+//!   intervals skipped, the k of the smallest cost ½Σr² kept; gravity
+//!   directions from the means of whole intervals; gyro residuals of three
+//!   components, unweighted. Its covariance is the plain least-squares one
+//!   (`s²(JᵀJ)⁻¹`, s² from the residuals).
+//! * [`Method::Incal`]: the k giving the most usable intervals (the
+//!   smallest such k on a tie); every sample of each interval with
+//!   `settle_s` trimmed from both ends; the accelerometer fitted on the
+//!   interval means weighted by `n / σ²` (σ the scatter of the interval's
+//!   residual about its mean), with the prior variance kept unless the
+//!   residuals show lack of fit (χ², 5 %); the gyro residual projected on
+//!   the two directions normal to ĝ₁ (the third component carries no
+//!   information); the gyro parameters' covariance includes the
+//!   propagated accelerometer and gyro-bias uncertainty
+//!   (`A C Aᵀ` with `A = −(JᵀJ)⁻¹ Jᵀ ∂r/∂θ`).
+
+use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
+
+use super::detect::{self, Interval};
+use super::{check_gravity, M3, V3};
+use crate::error::{Error, Result};
+use crate::estimation::{fit, propagate, Design, Estimates, Fit, FitOptions, Variance};
+use crate::sim::imu::TriadParams;
+use crate::warning::{Warning, WarningCode};
+
+/// Which autocalibration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Method {
+    /// incal's weighted form with full covariance (default).
+    Incal,
+    /// imu_tk's exact steps, for comparison.
+    Tedaldi,
+}
+
+impl Method {
+    /// `incal` or `tedaldi`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Incal => "incal",
+            Method::Tedaldi => "tedaldi",
+        }
+    }
+}
+
+/// Options of [`autocal`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AutocalOptions {
+    /// Gravity magnitude (m/s²).
+    pub gravity: f64,
+    /// Duration of the initial still interval (s; imu_tk's default 50… the
+    /// app sets 50, the library 30).
+    pub init_static_s: f64,
+    /// Method.
+    pub method: Method,
+    /// Variance window (samples, odd, ≥ 11).
+    pub window: usize,
+    /// Samples an interval needs (imu_tk: 100).
+    pub min_samples: usize,
+    /// Intervals a threshold needs (imu_tk: 12).
+    pub min_intervals: usize,
+    /// Time trimmed from both ends of each interval (incal method, s).
+    pub settle_s: f64,
+}
+
+impl AutocalOptions {
+    /// imu_tk's settings (method tedaldi) or incal's, with an initial
+    /// still interval of `init_static_s`.
+    pub fn new(method: Method, gravity: f64, init_static_s: f64) -> Self {
+        Self {
+            gravity,
+            init_static_s,
+            method,
+            window: 101,
+            min_samples: 100,
+            min_intervals: 12,
+            settle_s: if method == Method::Incal { 0.1 } else { 0.0 },
+        }
+    }
+}
+
+/// Names of the accelerometer parameters.
+pub const ACC_PARAMS: [&str; 9] = [
+    "m_yz", "m_zy", "m_zx", "s_x", "s_y", "s_z", "b_x", "b_y", "b_z",
+];
+/// Names of the gyro parameters fitted (the bias comes from the start).
+pub const GYR_PARAMS: [&str; 9] = [
+    "m_yz", "m_zy", "m_zx", "m_xz", "m_xy", "m_yx", "s_x", "s_y", "s_z",
+];
+
+/// One still interval used.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IntervalReport {
+    /// Detected interval (sample indices).
+    pub interval: Interval,
+    /// Start and end time (s).
+    pub start_s: f64,
+    /// End time (s).
+    pub end_s: f64,
+    /// Samples entering the accelerometer fit.
+    pub used: usize,
+    /// Raw accelerometer mean over the used samples.
+    pub mean: [f64; 3],
+    /// Raw accelerometer standard deviation over the used samples.
+    pub std: [f64; 3],
+}
+
+/// One threshold tried.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ThresholdTrial {
+    /// Multiplier k.
+    pub k: f64,
+    /// Usable intervals found.
+    pub intervals: usize,
+    /// Final cost ½Σr² of the accelerometer fit (None when skipped).
+    pub cost: Option<f64>,
+}
+
+/// Result of [`autocal`].
+#[derive(Debug, Clone)]
+pub struct AutocalResult {
+    /// Accelerometer parameters.
+    pub acc: TriadParams,
+    /// Gyro parameters (bias from the initial interval), when gyro data.
+    pub gyr: Option<TriadParams>,
+    /// `acc.*` and `gyr.*` with their joint covariance.
+    pub estimates: Estimates,
+    /// Accelerometer fit at the solution.
+    pub acc_fit: Fit,
+    /// Gyro fit at the solution.
+    pub gyr_fit: Option<Fit>,
+    /// Intervals used.
+    pub intervals: Vec<IntervalReport>,
+    /// Every threshold tried.
+    pub trials: Vec<ThresholdTrial>,
+    /// Threshold multiplier kept.
+    pub k: f64,
+    /// Threshold (variance norm) kept.
+    pub threshold: f64,
+    /// Initial still interval.
+    pub init: Interval,
+    /// Distinct orientations (gravity directions more than 10° apart).
+    pub orientations: usize,
+    /// Warnings.
+    pub warnings: Vec<Warning>,
+    /// Options used.
+    pub options: AutocalOptions,
+}
+
+/// Minimise `½ Σ w r(x)²` by Gauss–Newton with step halving; `jac` is
+/// `∂r/∂x`. Returns `x̂`.
+fn minimize(
+    names: &[String],
+    res: &dyn Fn(&DVector<f64>) -> DVector<f64>,
+    jac: &dyn Fn(&DVector<f64>) -> DMatrix<f64>,
+    x0: DVector<f64>,
+    weights: Option<&DVector<f64>>,
+) -> Result<DVector<f64>> {
+    let cost = |r: &DVector<f64>| match weights {
+        Some(w) => r.iter().zip(w.iter()).map(|(a, b)| a * a * b).sum::<f64>(),
+        None => r.norm_squared(),
+    };
+    let mut x = x0;
+    let mut r = res(&x);
+    let mut c = cost(&r);
+    if !c.is_finite() {
+        return Err(Error::Unsupported(
+            "the starting point gives a non-finite residual".into(),
+        ));
+    }
+    let opts = FitOptions {
+        weights: weights.cloned(),
+        ..FitOptions::default()
+    };
+    for _ in 0..200 {
+        let design = Design::new(names.to_vec(), jac(&x))?;
+        let step = fit(&design, &(-&r), &opts)?;
+        let delta = step.estimates.values().clone();
+        let mut alpha = 1.0;
+        let mut accepted = false;
+        for _ in 0..40 {
+            let xn = &x + &delta * alpha;
+            let rn = res(&xn);
+            let cn = cost(&rn);
+            if cn.is_finite() && cn <= c {
+                let tiny = (0..x.len()).all(|j| {
+                    (delta[j] * alpha).abs() <= 1e-10 * step.estimates.u_at(j)
+                        || (delta[j] * alpha).abs() <= 1e-15 * x[j].abs()
+                });
+                x = xn;
+                r = rn;
+                let done = tiny || c - cn <= 1e-15 * c;
+                c = cn;
+                if done {
+                    return Ok(x);
+                }
+                accepted = true;
+                break;
+            }
+            alpha *= 0.5;
+        }
+        if !accepted {
+            // No descent left at machine precision: the minimum.
+            return Ok(x);
+        }
+    }
+    Err(Error::Unsupported(
+        "autocalibration: Gauss-Newton did not converge in 200 iterations".into(),
+    ))
+}
+
+fn acc_params(x: &DVector<f64>) -> TriadParams {
+    TriadParams {
+        mis: [x[0], x[1], x[2], 0.0, 0.0, 0.0],
+        scale: [x[3], x[4], x[5]],
+        bias: [x[6], x[7], x[8]],
+    }
+}
+
+fn gyr_params(x: &DVector<f64>, bias: [f64; 3]) -> TriadParams {
+    TriadParams {
+        mis: [x[0], x[1], x[2], x[3], x[4], x[5]],
+        scale: [x[6], x[7], x[8]],
+        bias,
+    }
+}
+
+/// Residuals `g − ‖T K (a − b)‖` of the samples `a`.
+fn acc_residuals(x: &DVector<f64>, samples: &[[f64; 3]], g: f64) -> DVector<f64> {
+    let p = acc_params(x);
+    let tk = p.t() * p.k();
+    let b = V3::from(p.bias);
+    DVector::from_iterator(
+        samples.len(),
+        samples.iter().map(|a| g - (tk * (V3::from(*a) - b)).norm()),
+    )
+}
+
+/// `∂r/∂x` of [`acc_residuals`] (analytic).
+fn acc_jacobian(x: &DVector<f64>, samples: &[[f64; 3]]) -> DMatrix<f64> {
+    let p = acc_params(x);
+    let t = p.t();
+    let s = p.scale;
+    let b = V3::from(p.bias);
+    let mut j = DMatrix::zeros(samples.len(), 9);
+    for (i, a) in samples.iter().enumerate() {
+        let v = V3::from(*a) - b;
+        let c = t * V3::new(s[0] * v[0], s[1] * v[1], s[2] * v[2]);
+        let n = c.norm();
+        if n == 0.0 {
+            continue;
+        }
+        let ch = c / n;
+        let dc: [V3; 9] = [
+            V3::new(-s[1] * v[1], 0.0, 0.0),
+            V3::new(s[2] * v[2], 0.0, 0.0),
+            V3::new(0.0, -s[2] * v[2], 0.0),
+            t.column(0) * v[0],
+            t.column(1) * v[1],
+            t.column(2) * v[2],
+            -t.column(0) * s[0],
+            -t.column(1) * s[1],
+            -t.column(2) * s[2],
+        ];
+        for k in 0..9 {
+            j[(i, k)] = -ch.dot(&dc[k]);
+        }
+    }
+    j
+}
+
+/// imu_tk's `Ω(ω)` of the quaternion derivative `q̇ = ½ Ω(ω) q`, q = (w, x, y, z).
+fn omega_skew(w: &V3) -> Matrix4<f64> {
+    Matrix4::new(
+        0.0, -w[0], -w[1], -w[2], //
+        w[0], 0.0, w[2], -w[1], //
+        w[1], -w[2], 0.0, w[0], //
+        w[2], w[1], -w[0], 0.0,
+    )
+}
+
+/// One RK4 quaternion step from rate `w0` to `w1` over `dt` (imu_tk's
+/// `quatIntegrationStepRK4`), normalised.
+pub fn rk4_step(q: &Vector4<f64>, w0: &V3, w1: &V3, dt: f64) -> Vector4<f64> {
+    let w01 = (w0 + w1) * 0.5;
+    let k1 = omega_skew(w0) * q * 0.5;
+    let k2 = omega_skew(&w01) * (q + k1 * (0.5 * dt)) * 0.5;
+    let k3 = omega_skew(&w01) * (q + k2 * (0.5 * dt)) * 0.5;
+    let k4 = omega_skew(w1) * (q + k3 * dt) * 0.5;
+    let r = q + (k1 / 6.0 + k2 / 3.0 + k3 / 3.0 + k4 / 6.0) * dt;
+    r / r.norm()
+}
+
+/// Rotation matrix of a unit quaternion (w, x, y, z) (ceres'
+/// `QuaternionToRotation`).
+pub fn quat_to_rotation(q: &Vector4<f64>) -> M3 {
+    let (a, b, c, d) = (q[0], q[1], q[2], q[3]);
+    let s = 1.0 / (a * a + b * b + c * c + d * d);
+    M3::new(
+        a * a + b * b - c * c - d * d,
+        2.0 * (b * c - a * d),
+        2.0 * (a * c + b * d),
+        2.0 * (a * d + b * c),
+        a * a - b * b + c * c - d * d,
+        2.0 * (c * d - a * b),
+        2.0 * (b * d - a * c),
+        2.0 * (a * b + c * d),
+        a * a - b * b - c * c + d * d,
+    ) * s
+}
+
+/// One motion between still intervals: the raw gyro samples (bias not yet
+/// removed), their time steps, and the gravity directions before and after.
+struct Motion {
+    gyr: Vec<V3>,
+    dt: Vec<f64>,
+    g0: V3,
+    g1: V3,
+    /// Two unit vectors normal to g1 (incal's projection).
+    basis: [V3; 2],
+}
+
+/// Integrate the calibrated rates of a motion: `R(q)` from the start.
+fn integrate(m: &Motion, tk: &M3, bias: &V3) -> M3 {
+    let mut q = Vector4::new(1.0, 0.0, 0.0, 0.0);
+    let mut w_prev = tk * (m.gyr[0] - bias);
+    for i in 0..m.dt.len() {
+        let w_next = tk * (m.gyr[i + 1] - bias);
+        q = rk4_step(&q, &w_prev, &w_next, m.dt[i]);
+        w_prev = w_next;
+    }
+    quat_to_rotation(&q)
+}
+
+fn gyro_residuals(x: &DVector<f64>, bias: &V3, motions: &[Motion], project: bool) -> DVector<f64> {
+    let p = gyr_params(x, [0.0; 3]);
+    let tk = p.t() * p.k();
+    let per = if project { 2 } else { 3 };
+    let mut r = DVector::zeros(per * motions.len());
+    for (k, m) in motions.iter().enumerate() {
+        let rot = integrate(m, &tk, bias);
+        let d = rot.transpose() * m.g0 - m.g1;
+        if project {
+            r[2 * k] = m.basis[0].dot(&d);
+            r[2 * k + 1] = m.basis[1].dot(&d);
+        } else {
+            r[3 * k] = d[0];
+            r[3 * k + 1] = d[1];
+            r[3 * k + 2] = d[2];
+        }
+    }
+    r
+}
+
+fn central_jacobian(
+    f: &dyn Fn(&DVector<f64>) -> DVector<f64>,
+    x: &DVector<f64>,
+    scale: &[f64],
+) -> DMatrix<f64> {
+    let steps: Vec<f64> = (0..x.len())
+        .map(|k| 1e-6 * x[k].abs().max(scale[k]))
+        .collect();
+    crate::estimation::numeric_jacobian(&f, x, &steps)
+}
+
+fn unit_basis(g: &V3) -> [V3; 2] {
+    let k = (0..3)
+        .min_by(|&a, &b| g[a].abs().total_cmp(&g[b].abs()))
+        .unwrap_or(0);
+    let mut e = V3::zeros();
+    e[k] = 1.0;
+    let u = (e - g * g.dot(&e)).normalize();
+    [u, g.cross(&u)]
+}
+
+/// Count gravity directions more than 10° apart (greedy clustering).
+fn distinct_orientations(dirs: &[V3]) -> usize {
+    let mut reps: Vec<V3> = Vec::new();
+    for d in dirs {
+        if !reps.iter().any(|r| r.dot(d) > 10f64.to_radians().cos()) {
+            reps.push(*d);
+        }
+    }
+    reps.len()
+}
+
+/// Autocalibrate from a record: `time` (s, increasing), raw accelerometer
+/// samples and, optionally, raw gyro samples of the same instants.
+pub fn autocal(
+    time: &[f64],
+    acc: &[[f64; 3]],
+    gyr: Option<&[[f64; 3]]>,
+    opts: &AutocalOptions,
+) -> Result<AutocalResult> {
+    check_gravity(opts.gravity)?;
+    let g = opts.gravity.abs();
+    if !(opts.init_static_s.is_finite() && opts.init_static_s > 0.0) {
+        return Err(Error::InvalidValue {
+            what: "initial still duration (s, > 0)".into(),
+            value: opts.init_static_s.to_string(),
+        });
+    }
+    if time.len() != acc.len() || gyr.is_some_and(|v| v.len() != acc.len()) {
+        return Err(Error::Unsupported(
+            "time and triads differ in length".into(),
+        ));
+    }
+    if acc.len() < opts.window.max(11) + 1 {
+        return Err(Error::TooFew {
+            what: format!("samples for a {}-sample variance window", opts.window),
+            needed: opts.window.max(11) + 1,
+            got: acc.len(),
+        });
+    }
+    let init = detect::initial_interval(time, opts.init_static_s);
+    if init.len() < 3 {
+        return Err(Error::TooFew {
+            what: "samples in the initial still interval (--init-static-s)".into(),
+            needed: 3,
+            got: init.len(),
+        });
+    }
+    let norm_th = detect::norm3(detect::variance(acc, init));
+    if norm_th.is_nan() || norm_th <= 0.0 {
+        return Err(Error::Unsupported(
+            "the initial still interval has zero accelerometer variance: the threshold k*||var|| is 0 and nothing is still (a noise-free or saturated record?)".into(),
+        ));
+    }
+    let norms = detect::variance_norms(acc, opts.window);
+    let dt_mean = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
+    let trim = if opts.method == Method::Incal {
+        (opts.settle_s / dt_mean).round() as usize
+    } else {
+        0
+    };
+    // The samples an interval contributes (tedaldi: its first
+    // `min_samples`; incal: all, trimmed by the settle time).
+    let used = |iv: &Interval| -> Option<Interval> {
+        if iv.len() < opts.min_samples {
+            return None;
+        }
+        match opts.method {
+            Method::Tedaldi => Some(Interval {
+                start: iv.start,
+                end: iv.start + opts.min_samples - 1,
+            }),
+            Method::Incal => (iv.len() >= opts.min_samples + 2 * trim).then_some(Interval {
+                start: iv.start + trim,
+                end: iv.end - trim,
+            }),
+        }
+    };
+    let g_est = {
+        // Starting scale: g over the typical magnitude of interval means.
+        let iv = detect::intervals_from_norms(&norms, 2.0 * norm_th);
+        let mut mags: Vec<f64> = iv
+            .iter()
+            .filter(|i| i.len() >= 3)
+            .map(|i| detect::norm3(detect::mean(acc, *i)))
+            .collect();
+        mags.sort_by(f64::total_cmp);
+        if mags.is_empty() {
+            detect::norm3(detect::mean(acc, init))
+        } else {
+            mags[mags.len() / 2]
+        }
+    };
+    let s0 = if g_est > 0.0 { g / g_est } else { 1.0 };
+    let x0 = DVector::from_vec(vec![0.0, 0.0, 0.0, s0, s0, s0, 0.0, 0.0, 0.0]);
+    let acc_names: Vec<String> = ACC_PARAMS.iter().map(|n| format!("acc.{n}")).collect();
+
+    struct Candidate {
+        k: f64,
+        intervals: Vec<Interval>,
+        x: DVector<f64>,
+        cost: f64,
+    }
+    let mut trials = Vec::new();
+    let mut best: Option<Candidate> = None;
+    let mut most_found = 0;
+    for k in 2..=10 {
+        let k = k as f64;
+        let ivs: Vec<Interval> = detect::intervals_from_norms(&norms, k * norm_th)
+            .into_iter()
+            .filter(|iv| used(iv).is_some())
+            .collect();
+        most_found = most_found.max(ivs.len());
+        let needed = match opts.method {
+            Method::Tedaldi => opts.min_intervals,
+            Method::Incal => 9,
+        };
+        if ivs.len() < needed {
+            trials.push(ThresholdTrial {
+                k,
+                intervals: ivs.len(),
+                cost: None,
+            });
+            continue;
+        }
+        if opts.method == Method::Incal {
+            // Most intervals wins, the smallest k on a tie: fit only when
+            // this k beats the best so far.
+            if best
+                .as_ref()
+                .is_some_and(|b| b.intervals.len() >= ivs.len())
+            {
+                trials.push(ThresholdTrial {
+                    k,
+                    intervals: ivs.len(),
+                    cost: None,
+                });
+                continue;
+            }
+        }
+        let (samples, weights) = acc_observations(acc, &ivs, &used, opts, None)?;
+        let x = minimize(
+            &acc_names,
+            &|x| acc_residuals(x, &samples, g),
+            &|x| acc_jacobian(x, &samples),
+            x0.clone(),
+            weights.as_ref(),
+        )?;
+        let r = acc_residuals(&x, &samples, g);
+        let cost = 0.5 * r.norm_squared();
+        trials.push(ThresholdTrial {
+            k,
+            intervals: ivs.len(),
+            cost: Some(cost),
+        });
+        let better = match (&best, opts.method) {
+            (None, _) => true,
+            (Some(b), Method::Tedaldi) => cost < b.cost,
+            (Some(b), Method::Incal) => ivs.len() > b.intervals.len(),
+        };
+        if better {
+            best = Some(Candidate {
+                k,
+                intervals: ivs,
+                x,
+                cost,
+            });
+        }
+    }
+    let needed = match opts.method {
+        Method::Tedaldi => opts.min_intervals,
+        Method::Incal => 9,
+    };
+    let Some(best) = best else {
+        return Err(Error::TooFew {
+            what: format!(
+                "still intervals of at least {} samples (thresholds k = 2..10 times the initial variance norm {:.3e}; the most found was {most_found}): record more orientations, hold each longer, or check --init-static-s covers a still start",
+                opts.min_samples + 2 * trim,
+                norm_th
+            ),
+            needed,
+            got: most_found,
+        });
+    };
+
+    // Final accelerometer fit with its covariance.
+    let (x_acc, acc_fit, samples_info) = {
+        let (samples, mut weights) = acc_observations(acc, &best.intervals, &used, opts, None)?;
+        let mut x = best.x.clone();
+        if opts.method == Method::Incal {
+            // Weights from each interval's residual scatter at the solution.
+            let (s2, w) = acc_observations(acc, &best.intervals, &used, opts, Some(&x))?;
+            weights = w;
+            x = minimize(
+                &acc_names,
+                &|x| acc_residuals(x, &s2, g),
+                &|x| acc_jacobian(x, &s2),
+                x,
+                weights.as_ref(),
+            )?;
+        }
+        let variance = match opts.method {
+            Method::Tedaldi => Variance::FromResiduals,
+            Method::Incal => Variance::AtLeast {
+                dof: best
+                    .intervals
+                    .iter()
+                    .filter_map(&used)
+                    .map(|u| (u.len() - 1) as f64)
+                    .sum(),
+            },
+        };
+        let r = acc_residuals(&x, &samples, g);
+        let j = acc_jacobian(&x, &samples);
+        let design = Design::new(acc_names.clone(), j)?;
+        let f = fit(
+            &design,
+            &(-&r),
+            &FitOptions {
+                weights,
+                variance,
+                ..FitOptions::default()
+            },
+        )?;
+        (x, f, samples.len())
+    };
+    let _ = samples_info;
+    let acc_p = acc_params(&x_acc);
+    let acc_cov = acc_fit.estimates.covariance().clone();
+
+    let mut reports = Vec::new();
+    let mut dirs = Vec::new();
+    for iv in &best.intervals {
+        let u = used(iv).unwrap_or(*iv);
+        let m = detect::mean(acc, u);
+        let v = detect::variance(acc, u);
+        dirs.push(acc_p.apply(&V3::from(m)).normalize());
+        reports.push(IntervalReport {
+            interval: *iv,
+            start_s: time[iv.start],
+            end_s: time[iv.end],
+            used: u.len(),
+            mean: m,
+            std: v.map(|a| a.max(0.0).sqrt()),
+        });
+    }
+    let orientations = distinct_orientations(&dirs);
+    let mut warnings = acc_fit.quality_warnings(
+        "the sensor is not still in some intervals, or the model (scale, three misalignments, bias) does not hold",
+    );
+
+    // Gyro.
+    let mut names = acc_names.clone();
+    let mut values: Vec<f64> = x_acc.iter().copied().collect();
+    let (gyr_p, gyr_fit, cov) = match gyr {
+        None => (None, None, acc_cov.clone()),
+        Some(gy) => {
+            let gi = detect::mean(gy, init);
+            let gv = detect::variance(gy, init);
+            let bias = V3::from(gi);
+            let n_init = init.len() as f64;
+            // Gravity directions: calibrated means of whole intervals
+            // (tedaldi) or of the used samples (incal).
+            let gdir = |xa: &DVector<f64>, iv: &Interval| -> V3 {
+                let p = acc_params(xa);
+                let span = match opts.method {
+                    Method::Tedaldi => *iv,
+                    Method::Incal => used(iv).unwrap_or(*iv),
+                };
+                let m = detect::mean(acc, span);
+                p.apply(&V3::from(m)).normalize()
+            };
+            let build = |xa: &DVector<f64>| -> Vec<Motion> {
+                best.intervals
+                    .windows(2)
+                    .map(|w| {
+                        let (i0, i1) = (w[0].end, w[1].start - 1);
+                        let g0 = gdir(xa, &w[0]);
+                        let g1 = gdir(xa, &w[1]);
+                        Motion {
+                            gyr: (i0..=i1).map(|i| V3::from(gy[i])).collect(),
+                            dt: (i0..i1).map(|i| time[i + 1] - time[i]).collect(),
+                            g0,
+                            g1,
+                            basis: unit_basis(&g1),
+                        }
+                    })
+                    .collect()
+            };
+            let motions = build(&x_acc);
+            let project = opts.method == Method::Incal;
+            // Starting scale: the gravity turn over the raw integral.
+            let mut ratios: Vec<f64> = motions
+                .iter()
+                .filter_map(|m| {
+                    let mut s = V3::zeros();
+                    for i in 0..m.dt.len() {
+                        s += (m.gyr[i] + m.gyr[i + 1] - 2.0 * bias) * 0.5 * m.dt[i];
+                    }
+                    let angle = m.g0.dot(&m.g1).clamp(-1.0, 1.0).acos();
+                    (s.norm() > 0.0 && angle > 0.05).then(|| angle / s.norm())
+                })
+                .collect();
+            ratios.sort_by(f64::total_cmp);
+            let sg = ratios.get(ratios.len() / 2).copied().unwrap_or(1.0);
+            let xg0 = DVector::from_vec(vec![0.0, 0.0, 0.0, 0.0, 0.0, 0.0, sg, sg, sg]);
+            let gnames: Vec<String> = GYR_PARAMS.iter().map(|n| format!("gyr.{n}")).collect();
+            let scale: Vec<f64> = (0..9)
+                .map(|k| if k < 6 { 1e-3 } else { sg.abs() })
+                .collect();
+            let res = |x: &DVector<f64>| gyro_residuals(x, &bias, &motions, project);
+            let jac = |x: &DVector<f64>| central_jacobian(&res, x, &scale);
+            let mut xg = minimize(&gnames, &res, &jac, xg0, None)?;
+            let n_a = 9;
+            let mut c = DMatrix::zeros(21, 21);
+            c.view_mut((0, 0), (n_a, n_a)).copy_from(&acc_cov);
+            let mut cb = DMatrix::zeros(3, 3);
+            if init.len() > 1 {
+                for k in 0..3 {
+                    cb[(k, k)] = gv[k] / n_init;
+                }
+            }
+            c.view_mut((18, 18), (3, 3)).copy_from(&cb);
+            let (gf, cg) = if project {
+                // incal: generalised least squares. The residual covariance
+                // V = D + B_a C_a B_aᵀ + B_b C_b B_bᵀ holds the random part D
+                // (gyro white noise integrated over each motion, noise of
+                // the two gravity directions) and the systematic parts
+                // shared by every motion (accelerometer parameters through
+                // the gravity directions, the gyro bias from the start).
+                let acc_tk = acc_p.t() * acc_p.k();
+                let spans: Vec<(V3, f64)> = best
+                    .intervals
+                    .iter()
+                    .map(|iv| {
+                        let u = used(iv).unwrap_or(*iv);
+                        (V3::from(detect::variance(acc, u)), u.len() as f64)
+                    })
+                    .collect();
+                let gdir_cov = |k: usize| -> M3 {
+                    let (v, n) = spans[k];
+                    acc_tk * M3::from_diagonal(&(v / n)) * acc_tk.transpose() / (g * g)
+                };
+                let p = gyr_params(&xg, [0.0; 3]);
+                let tk = p.t() * p.k();
+                let cw = tk * M3::from_diagonal(&V3::from(gv)) * tk.transpose();
+                let nr = 2 * motions.len();
+                let mut v = DMatrix::zeros(nr, nr);
+                for (k, m) in motions.iter().enumerate() {
+                    let dt2: f64 = m.dt.iter().map(|d| d * d).sum();
+                    let c_phi = cw * dt2;
+                    let rot = integrate(m, &tk, &bias);
+                    let c0 = rot.transpose() * gdir_cov(k) * rot;
+                    let c1 = gdir_cov(k + 1);
+                    for a in 0..2 {
+                        let e = m.basis[a];
+                        let vv = e.cross(&m.g1);
+                        let var =
+                            (vv.transpose() * c_phi * vv)[0] + (e.transpose() * (c0 + c1) * e)[0];
+                        if !(var > 0.0 && var.is_finite()) {
+                            return Err(Error::Unsupported(
+                                "the initial still interval has no gyro scatter: the weights of the gyro fit are undefined (a noise-free or clipped record?)".into(),
+                            ));
+                        }
+                        v[(2 * k + a, 2 * k + a)] = var;
+                    }
+                }
+                // ∂r/∂θ_a (gravity directions rebuilt, projection basis
+                // kept) and ∂r/∂b.
+                let ra = |xa: &DVector<f64>| {
+                    let m = build(xa);
+                    let mut out = DVector::zeros(nr);
+                    for (k, (mm, m0)) in m.iter().zip(&motions).enumerate() {
+                        let d = quat_free_diff(&xg, &bias, mm);
+                        out[2 * k] = m0.basis[0].dot(&d);
+                        out[2 * k + 1] = m0.basis[1].dot(&d);
+                    }
+                    out
+                };
+                let ascale: Vec<f64> = (0..9)
+                    .map(|k| acc_fit.estimates.u_at(k).max(1e-12))
+                    .collect();
+                let ja = central_jacobian(&ra, &x_acc, &ascale);
+                let rb = |b: &DVector<f64>| {
+                    gyro_residuals(&xg, &V3::new(b[0], b[1], b[2]), &motions, true)
+                };
+                let bvec = DVector::from_vec(gi.to_vec());
+                let bscale: Vec<f64> = (0..3).map(|k| cb[(k, k)].sqrt().max(1e-12)).collect();
+                let jb = central_jacobian(&rb, &bvec, &bscale);
+                v += propagate(&acc_cov, &ja) + propagate(&cb, &jb);
+                let Some(chol) = v.clone().cholesky() else {
+                    return Err(Error::Unsupported(
+                        "gyro fit: the residual covariance is not positive definite".into(),
+                    ));
+                };
+                let l_inv = chol
+                    .l()
+                    .solve_lower_triangular(&DMatrix::identity(nr, nr))
+                    .ok_or_else(|| Error::Unsupported("gyro fit: singular whitening".into()))?;
+                let res_w = |x: &DVector<f64>| &l_inv * res(x);
+                let jac_w = |x: &DVector<f64>| &l_inv * jac(x);
+                xg = minimize(&gnames, &res_w, &jac_w, xg, None)?;
+                let jw = jac_w(&xg);
+                let gf = fit(
+                    &Design::new(gnames.clone(), jw.clone())?,
+                    &(-res_w(&xg)),
+                    &FitOptions {
+                        variance: Variance::AtLeast {
+                            dof: (init.len() - 1) as f64,
+                        },
+                        ..FitOptions::default()
+                    },
+                )?;
+                // Cross-covariances: θ̂_g − θ_g = −(J'ᵀJ')⁻¹ J'ᵀ L⁻¹ (… + B δθ).
+                let Some(inv) = (jw.transpose() * &jw).try_inverse() else {
+                    return Err(Error::Unsupported(
+                        "gyro fit: singular normal matrix".into(),
+                    ));
+                };
+                let pinv = inv * jw.transpose() * &l_inv;
+                let cga = -(&pinv * &ja) * &acc_cov;
+                let cgb = -(&pinv * &jb) * &cb;
+                c.view_mut((n_a, 0), (9, 9)).copy_from(&cga);
+                c.view_mut((0, n_a), (9, 9)).copy_from(&cga.transpose());
+                c.view_mut((n_a, 18), (9, 3)).copy_from(&cgb);
+                c.view_mut((18, n_a), (3, 9)).copy_from(&cgb.transpose());
+                let cg = gf.estimates.covariance().clone();
+                (gf, cg)
+            } else {
+                let gf = fit(
+                    &Design::new(gnames.clone(), jac(&xg))?,
+                    &(-res(&xg)),
+                    &FitOptions::default(),
+                )?;
+                let cg = gf.estimates.covariance().clone();
+                (gf, cg)
+            };
+            warnings.extend(gf.quality_warnings(
+                "the sensor moves in the still intervals, rotates too fast for the sample rate, or the gyro model (scale, six misalignments, bias from the start) does not hold",
+            ));
+            let gp = gyr_params(&xg, [gi[0], gi[1], gi[2]]);
+            names.extend(gnames.iter().cloned());
+            names.extend(["gyr.b_x", "gyr.b_y", "gyr.b_z"].map(String::from));
+            values.extend(xg.iter().copied());
+            values.extend(gi);
+            c.view_mut((n_a, n_a), (9, 9)).copy_from(&cg);
+            (Some(gp), Some(gf), c)
+        }
+    };
+    let dof = match &gyr_fit {
+        Some(gf) => acc_fit.estimates.dof().min(gf.estimates.dof()),
+        None => acc_fit.estimates.dof(),
+    };
+    if cov.iter().any(|v| !v.is_finite()) || values.iter().any(|v| !v.is_finite()) {
+        return Err(Error::Unsupported(
+            "autocalibration gave a non-finite result".into(),
+        ));
+    }
+    let estimates = Estimates::new(names, DVector::from_vec(values), cov, dof)?;
+    if orientations < 9 {
+        warnings.push(Warning::new(
+            WarningCode::WeakConditioning,
+            format!(
+                "only {orientations} distinct orientations (gravity directions more than 10 deg apart) among {} intervals: the scale and misalignment terms rest on few directions",
+                best.intervals.len()
+            ),
+        ));
+    }
+    Ok(AutocalResult {
+        acc: acc_p,
+        gyr: gyr_p,
+        estimates,
+        acc_fit,
+        gyr_fit,
+        intervals: reports,
+        trials,
+        k: best.k,
+        threshold: best.k * norm_th,
+        init,
+        orientations,
+        warnings,
+        options: *opts,
+    })
+}
+
+/// `R(q)ᵀ ĝ₀ − ĝ₁` of one motion (unprojected).
+fn quat_free_diff(x: &DVector<f64>, bias: &V3, m: &Motion) -> V3 {
+    let p = gyr_params(x, [0.0; 3]);
+    let rot = integrate(m, &(p.t() * p.k()), bias);
+    rot.transpose() * m.g0 - m.g1
+}
+
+/// Accelerometer observations and their weights.
+type AccObservations = (Vec<[f64; 3]>, Option<DVector<f64>>);
+
+/// The accelerometer observations: tedaldi, the used samples (no
+/// weights); incal, the interval means with weights `n/σ²` where σ is the
+/// scatter of the interval's residuals at `at` (equal weights before).
+fn acc_observations(
+    acc: &[[f64; 3]],
+    ivs: &[Interval],
+    used: &dyn Fn(&Interval) -> Option<Interval>,
+    opts: &AutocalOptions,
+    at: Option<&DVector<f64>>,
+) -> Result<AccObservations> {
+    match opts.method {
+        Method::Tedaldi => {
+            let mut s = Vec::new();
+            for iv in ivs {
+                if let Some(u) = used(iv) {
+                    s.extend_from_slice(&acc[u.start..=u.end]);
+                }
+            }
+            Ok((s, None))
+        }
+        Method::Incal => {
+            let mut means = Vec::new();
+            let mut w = Vec::new();
+            for iv in ivs {
+                let Some(u) = used(iv) else { continue };
+                means.push(detect::mean(acc, u));
+                let n = u.len() as f64;
+                match at {
+                    None => w.push(n),
+                    Some(x) => {
+                        let r = acc_residuals(x, &acc[u.start..=u.end], opts.gravity.abs());
+                        let m = r.mean();
+                        let var = r.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (n - 1.0);
+                        if var.is_nan() || var <= 0.0 {
+                            return Err(Error::Unsupported(format!(
+                                "still interval at samples {}..{} has no scatter: its weight is undefined (a noise-free or clipped record?)",
+                                u.start, u.end
+                            )));
+                        }
+                        w.push(n / var);
+                    }
+                }
+            }
+            Ok((means, Some(DVector::from_vec(w))))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rk4_integrates_a_constant_rate() {
+        let w = V3::new(0.0, 0.0, 1.0);
+        let mut q = Vector4::new(1.0, 0.0, 0.0, 0.0);
+        for _ in 0..100 {
+            q = rk4_step(&q, &w, &w, 0.01);
+        }
+        let r = quat_to_rotation(&q);
+        // One radian about z: body x turns towards y.
+        assert!(
+            (r[(0, 0)] - 1f64.cos()).abs() < 1e-9,
+            "{}",
+            r[(0, 0)] - 1f64.cos()
+        );
+        assert!((r[(1, 0)] - 1f64.sin()).abs() < 1e-9);
+    }
+}

@@ -278,9 +278,9 @@ pub fn ferraris(sections: &[Vec<[f64; 6]>; 9], opts: &FerrarisOptions) -> Result
     let mut pooled_dof = 0.0;
     for st in &stats[..6] {
         let w = (st.n - 1) as f64;
-        for j in 0..3 {
-            for k in 0..3 {
-                pooled[j][k] += w * st.cov[3 + j][3 + k];
+        for (j, row) in pooled.iter_mut().enumerate() {
+            for (k, v) in row.iter_mut().enumerate() {
+                *v += w * st.cov[3 + j][3 + k];
             }
         }
         pooled_dof += w;

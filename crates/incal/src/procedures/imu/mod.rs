@@ -71,17 +71,16 @@ impl SectionStats {
         let mut cov = [[0.0; 6]; 6];
         if n > 1 {
             for s in samples {
-                let d: Vec<f64> = (0..6).map(|k| s[k] - mean[k]).collect();
-                for j in 0..6 {
-                    for k in j..6 {
-                        cov[j][k] += d[j] * d[k];
+                let d: [f64; 6] = std::array::from_fn(|k| s[k] - mean[k]);
+                for (row, dj) in cov.iter_mut().zip(d) {
+                    for (c, dk) in row.iter_mut().zip(d) {
+                        *c += dj * dk;
                     }
                 }
             }
-            for j in 0..6 {
-                for k in j..6 {
-                    cov[j][k] /= (n - 1) as f64;
-                    cov[k][j] = cov[j][k];
+            for row in cov.iter_mut() {
+                for c in row.iter_mut() {
+                    *c /= (n - 1) as f64;
                 }
             }
         }
