@@ -192,7 +192,9 @@ fn reference(time: &[f64], acc: &[V], gyr: &[V], g: f64, init_s: f64) -> Referen
         .collect();
     mags.sort_by(f64::total_cmp);
     let s0 = g / mags[mags.len() / 2];
-    let mut best: Option<(f64, Vec<f64>, Vec<(usize, usize)>)> = None;
+    // (cost, parameters, intervals) of the best threshold so far.
+    type Best = (f64, Vec<f64>, Vec<(usize, usize)>);
+    let mut best: Option<Best> = None;
     for k in 2..=10 {
         let ivs: Vec<(usize, usize)> = detect(acc, k as f64 * th0)
             .into_iter()
