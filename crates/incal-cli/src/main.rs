@@ -109,6 +109,8 @@ enum SimulateCommand {
     GyroPositions(commands::gyro::SimPositionsArgs),
     /// Rate-noise record (gyro) with IEEE 952 terms: quantization, white, flicker, random walk, ramp.
     Noise(commands::noise::SimArgs),
+    /// IMU session (three accelerometers, three gyros): Ferraris sequence, random orientations or static positions.
+    Imu(commands::imu::SimArgs),
 }
 
 fn run(cli: Cli) -> CliResult<()> {
@@ -140,6 +142,8 @@ fn run(cli: Cli) -> CliResult<()> {
         }
         Command::Noise(a) => commands::noise::run(&a),
         Command::Imu(commands::imu::Command::Ferraris(a)) => commands::imu::run_ferraris(&a),
+        Command::Imu(commands::imu::Command::Autocal(a)) => commands::imu::run_autocal(&a),
+        Command::Simulate(SimulateCommand::Imu(a)) => commands::imu::simulate(&a),
         Command::Simulate(SimulateCommand::Noise(a)) => commands::noise::simulate(&a),
     }
 }

@@ -2,7 +2,7 @@
 
 use serde_json::json;
 
-use super::{Cell, DocumentBuilder, Procedure, ResultDocument, Table};
+use super::{Cell, DocumentBuilder, FitSummary, Procedure, ResultDocument, Table};
 use crate::error::Result;
 use crate::procedures::imu::ferraris::{FerrarisResult, QUANTITIES, SECTIONS};
 use crate::procedures::imu::rows;
@@ -86,6 +86,131 @@ impl FerrarisResult {
         b.extra("cal_type", json!("Ferraris"))?;
         b.warnings(self.warnings.iter().cloned());
         b.table(section_table(&SECTIONS, &self.sections)?);
+        Ok(b.finish())
+    }
+}
+
+/// Unit of an autocalibration parameter (`acc.s_x` → `(m/s^2)/output`).
+pub fn autocal_unit(name: &str) -> Result<Unit> {
+    let (triad, p) = name.split_once('.').unwrap_or(("", name));
+    Ok(Unit::Other(
+        match (triad, p.split('_').next().unwrap_or("")) {
+            (_, "m") => "1",
+            ("acc", "s") => "(m/s^2)/output",
+            ("gyr", "s") => "(rad/s)/output",
+            _ => "output",
+        }
+        .into(),
+    ))
+}
+
+fn triad_json(p: &crate::sim::imu::TriadParams) -> serde_json::Value {
+    json!({
+        "T": rows(&p.t()),
+        "K": rows(&p.k()),
+        "b": p.bias,
+    })
+}
+
+impl crate::procedures::imu::autocal::AutocalResult {
+    /// The result document: `acc.m_yz … acc.b_z` (and `gyr.*`) in
+    /// `coefficients` with their joint covariance; top-level `acc` and
+    /// `gyr` as `{"T", "K", "b"}` in imu_tk's convention
+    /// (`calibrated = T K (raw − b)`), `intervals` (`start_s`, `end_s` of
+    /// every still interval used), the threshold kept and the number of
+    /// distinct orientations; tables of the intervals and the thresholds.
+    pub fn document(&self) -> Result<ResultDocument> {
+        let o = &self.options;
+        let mut b = DocumentBuilder::new(
+            Procedure::ImuAutocal,
+            format!(
+                "IMU autocalibration, method {} ({} still intervals, {} orientations{})",
+                o.method.name(),
+                self.intervals.len(),
+                self.orientations,
+                if self.gyr.is_some() {
+                    ", accelerometer and gyro"
+                } else {
+                    ", accelerometer"
+                }
+            ),
+        );
+        b.estimates(&self.estimates, "", autocal_unit)?;
+        b.fit(FitSummary::of(
+            "acc",
+            &self.acc_fit,
+            Unit::Other("m/s^2".into()),
+        ));
+        if let Some(gf) = &self.gyr_fit {
+            b.fit(FitSummary::of("gyr", gf, Unit::One));
+        }
+        b.option("method", json!(o.method.name()));
+        b.option("gravity_m_s2", json!(o.gravity));
+        b.option("init_static_s", json!(o.init_static_s));
+        b.option("window_samples", json!(o.window));
+        b.option("min_samples", json!(o.min_samples));
+        b.option("settle_s", json!(o.settle_s));
+        b.extra("acc", triad_json(&self.acc))?;
+        if let Some(g) = &self.gyr {
+            b.extra("gyr", triad_json(g))?;
+        }
+        b.extra(
+            "intervals",
+            json!(self
+                .intervals
+                .iter()
+                .map(|i| json!({"start_s": i.start_s, "end_s": i.end_s}))
+                .collect::<Vec<_>>()),
+        )?;
+        b.extra(
+            "threshold",
+            json!({"k": self.k, "variance_norm": self.threshold}),
+        )?;
+        b.extra("orientations", json!(self.orientations))?;
+        b.warnings(self.warnings.iter().cloned());
+        let mut t = Table::new(
+            "intervals",
+            "Still intervals used: time span, samples, raw accelerometer mean and standard deviation",
+            &[
+                ("start_s", Some(Unit::Other("s".into()))),
+                ("end_s", Some(Unit::Other("s".into()))),
+                ("samples", None),
+                ("acc_x_mean", Some(Unit::Output)),
+                ("acc_y_mean", Some(Unit::Output)),
+                ("acc_z_mean", Some(Unit::Output)),
+                ("acc_x_std", Some(Unit::Output)),
+                ("acc_y_std", Some(Unit::Output)),
+                ("acc_z_std", Some(Unit::Output)),
+            ],
+        );
+        for i in &self.intervals {
+            let mut row = vec![
+                Cell::num(i.start_s),
+                Cell::num(i.end_s),
+                Cell::num(i.used as f64),
+            ];
+            row.extend(i.mean.iter().map(|v| Cell::num(*v)));
+            row.extend(i.std.iter().map(|v| Cell::num(*v)));
+            t.push(row)?;
+        }
+        b.table(t);
+        let mut th = Table::new(
+            "thresholds",
+            "Thresholds tried: k times the variance norm of the initial still interval",
+            &[
+                ("k", None),
+                ("intervals", None),
+                ("cost", Some(Unit::Other("(m/s^2)^2".into()))),
+            ],
+        );
+        for tr in &self.trials {
+            th.push(vec![
+                Cell::num(tr.k),
+                Cell::num(tr.intervals as f64),
+                Cell::opt(tr.cost),
+            ])?;
+        }
+        b.table(th);
         Ok(b.finish())
     }
 }
