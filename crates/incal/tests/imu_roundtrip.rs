@@ -196,3 +196,166 @@ fn autocal_incal_u95_covers_the_truth() {
     let h: Vec<Vec<bool>> = hits.into_iter().map(|x| x.1).collect();
     check_coverage("autocal incal", &names, &h);
 }
+
+mod multipos {
+    use super::*;
+    use incal::procedures::imu::multipos::{
+        multipos, MatrixForm, MultiposOptions, RotationSection, StaticPosition,
+    };
+    use incal::procedures::imu::{SectionStats, M3, V3};
+
+    /// Faces and edges of a cube: 18 up directions.
+    pub fn cube18() -> Vec<V3> {
+        let mut v = Vec::new();
+        for k in 0..3 {
+            for s in [1.0, -1.0] {
+                let mut e = V3::zeros();
+                e[k] = s;
+                v.push(e);
+            }
+        }
+        for (a, b) in [(0, 1), (0, 2), (1, 2)] {
+            for (sa, sb) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+                let mut e = V3::zeros();
+                e[a] = sa;
+                e[b] = sb;
+                v.push(e.normalize());
+            }
+        }
+        v
+    }
+
+    pub fn run(
+        truth: &ImuTruth,
+        up: Vec<V3>,
+        rotations: bool,
+        matrix: MatrixForm,
+        seed: u64,
+    ) -> incal::Result<incal::procedures::imu::multipos::MultiposResult> {
+        let s = simulate(&ImuSim {
+            truth: truth.clone(),
+            sequence: Sequence::Positions {
+                up: up.clone(),
+                rotations: rotations.then_some((-360.0, 4.0)),
+            },
+            rate_hz: 100.0,
+            static_s: 2.0,
+            gravity: 9.81,
+            noise_acc: 3.0,
+            noise_gyr: 2.0,
+            latitude_deg: None,
+            seed,
+        })
+        .unwrap();
+        let mut statics = Vec::new();
+        let mut rots = Vec::new();
+        let mut k = 0;
+        while k < s.len() {
+            let label = s[k].part.clone();
+            let mut block = Vec::new();
+            let first = k;
+            while k < s.len() && s[k].part == label {
+                let x = &s[k];
+                block.push([x.acc[0], x.acc[1], x.acc[2], x.gyr[0], x.gyr[1], x.gyr[2]]);
+                k += 1;
+            }
+            let stats = SectionStats::of(&block).unwrap();
+            if let Some(axis) = ["x_rot", "y_rot", "z_rot"].iter().position(|l| *l == label) {
+                rots.push(RotationSection { label, axis, stats });
+            } else {
+                statics.push(StaticPosition {
+                    label,
+                    up: s[first].up.unwrap() / 9.81f64.signum(),
+                    north: None,
+                    stats,
+                });
+            }
+        }
+        multipos(
+            &statics,
+            &rots,
+            &MultiposOptions {
+                gravity: 9.81,
+                matrix,
+                rate_hz: 100.0,
+                latitude_deg: None,
+                rotation_deg: -360.0,
+                gyro: true,
+            },
+        )
+    }
+
+    /// The truth of every multipos parameter, by name.
+    pub fn truth_of(t: &ImuTruth, name: &str) -> f64 {
+        let ax = |c: u8| (c - b'x') as usize;
+        let b = name.as_bytes();
+        let (tri, rest) = name.split_once('.').unwrap();
+        let a_g = t.gyr_a * std::f64::consts::PI / 180.0; // output/(deg/s)
+        let m = |tri: &str| if tri == "acc" { t.acc_a } else { a_g };
+        match &rest[..2] {
+            "b_" => {
+                let v = if tri == "acc" { t.acc_b } else { t.gyr_b };
+                v[ax(b[b.len() - 1])]
+            }
+            "A_" => m(tri)[(ax(b[b.len() - 2]), ax(b[b.len() - 1]))],
+            "G_" => t.gyr_k_ga[(ax(b[b.len() - 2]), ax(b[b.len() - 1]))],
+            "S_" => {
+                let j = ax(b[b.len() - 1]);
+                m(tri)[(j, j)]
+            }
+            "M_" => {
+                let (j, k) = (ax(b[b.len() - 2]), ax(b[b.len() - 1]));
+                m(tri)[(j, k)] / m(tri)[(j, j)]
+            }
+            _ => panic!("{name}"),
+        }
+    }
+
+    #[test]
+    fn poor_position_set_is_refused_by_name() {
+        // Every position about the z axis (up always in the x-y plane):
+        // the z terms cannot be separated from the biases.
+        let up: Vec<V3> = (0..8)
+            .map(|k| {
+                let a = k as f64 * std::f64::consts::PI / 4.0;
+                V3::new(a.cos(), a.sin(), 0.0)
+            })
+            .collect();
+        let e = run(&ImuTruth::mems_counts(), up, false, MatrixForm::Full, 1).unwrap_err();
+        let msg = e.to_string();
+        assert!(msg.contains("acc.A_xz") || msg.contains("acc.b_x"), "{msg}");
+        let _ = M3::zeros();
+    }
+}
+
+#[test]
+fn multipos_u95_covers_the_truth() {
+    use incal::procedures::imu::multipos::MatrixForm;
+    for (matrix, rotations) in [(MatrixForm::Full, true), (MatrixForm::Upper, false)] {
+        let mut names: Vec<String> = Vec::new();
+        let trials = monte_carlo(31, SEEDS, |seed| {
+            let mut truth = ImuTruth::random_around_mems(trial_seed(seed, 3));
+            if matrix == MatrixForm::Upper {
+                // An upper-triangular accelerometer matrix.
+                for (j, k) in [(1, 0), (2, 0), (2, 1)] {
+                    truth.acc_a[(j, k)] = 0.0;
+                }
+            }
+            let r = multipos::run(&truth, multipos::cube18(), rotations, matrix, seed).unwrap();
+            let k95 = r.estimates.coverage_factor(0.95);
+            let names = r.estimates.names().to_vec();
+            let hits: Vec<bool> = names
+                .iter()
+                .enumerate()
+                .map(|(k, n)| {
+                    (r.estimates.values()[k] - multipos::truth_of(&truth, n)).abs()
+                        <= k95 * r.estimates.u_at(k)
+                })
+                .collect();
+            (names, hits)
+        });
+        names.extend(trials[0].0.iter().cloned());
+        let h: Vec<Vec<bool>> = trials.into_iter().map(|x| x.1).collect();
+        check_coverage(&format!("multipos {}", matrix.name()), &names, &h);
+    }
+}

@@ -335,7 +335,10 @@ pub struct SimArgs {
         default_value = "x_p,x_a,y_p,y_a,z_p,z_a,x_p+y_p,x_p+y_a,x_a+y_p,x_a+y_a,x_p+z_p,x_p+z_a,x_a+z_p,x_a+z_a,y_p+z_p,y_p+z_a,y_a+z_p,y_a+z_a"
     )]
     pub positions: Vec<String>,
-    /// Ferraris: angle of each rotation (deg; imucal's sign: -360 is clockwise seen from the tip).
+    /// Positions: append the rotations x_rot, y_rot, z_rot (--rotation-deg, --rotation-s) for the gyro scale.
+    #[arg(long)]
+    pub rotations: bool,
+    /// Ferraris and positions: angle of each rotation (deg; imucal's sign: -360 is clockwise seen from the tip).
     #[arg(long, default_value_t = -360.0, allow_hyphen_values = true)]
     pub rotation_deg: f64,
     /// Ferraris: duration of each rotation (s).
@@ -485,7 +488,10 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
                 "positions x --static-s x --rate-hz",
                 a.positions.len() as f64 * a.static_s * rate,
             )])?;
-            Sequence::Positions { up }
+            Sequence::Positions {
+                up,
+                rotations: a.rotations.then_some((a.rotation_deg, a.rotation_s)),
+            }
         }
     };
     let mut truth = if a.truth_seed == 0 {
@@ -529,9 +535,20 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
             }
             SequenceArg::Random => {}
             SequenceArg::Positions => {
-                let k: usize = s.part.trim_start_matches('p').parse().unwrap_or(1);
-                let label = &a.positions[k - 1];
-                let up = s.up.unwrap_or_else(V3::zeros);
+                let (label, up) = match s.part.as_str() {
+                    r @ ("x_rot" | "y_rot" | "z_rot") => {
+                        let mut up = V3::zeros();
+                        up[["x_rot", "y_rot", "z_rot"]
+                            .iter()
+                            .position(|q| q == &r)
+                            .unwrap_or(0)] = 1.0;
+                        (r.to_string(), up)
+                    }
+                    p => {
+                        let k: usize = p.trim_start_matches('p').parse().unwrap_or(1);
+                        (a.positions[k - 1].clone(), s.up.unwrap_or_else(V3::zeros))
+                    }
+                };
                 let _ = write!(text, ",{label},{},{},{}", up[0], up[1], up[2]);
                 if with_north {
                     let n = s.north.unwrap_or_else(V3::zeros);

@@ -231,6 +231,9 @@ pub enum Sequence {
     Positions {
         /// Up direction of each position.
         up: Vec<V3>,
+        /// Then rotations `x_rot, y_rot, z_rot` of this angle (deg) and
+        /// duration (s), as in the Ferraris sequence.
+        rotations: Option<(f64, f64)>,
     },
 }
 
@@ -352,7 +355,7 @@ pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
                 }
             }
         }
-        Sequence::Positions { up } => {
+        Sequence::Positions { up, rotations } => {
             for (k, u) in up.iter().enumerate() {
                 if !(u.iter().all(|v| v.is_finite()) && u.norm() > 0.0) {
                     return Err(bad("position up direction", k as f64));
@@ -361,6 +364,17 @@ pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
                 let label = format!("p{}", k + 1);
                 for _ in 0..n_static {
                     w.push(&label, &c, &V3::zeros(), true);
+                }
+            }
+            if let Some((deg, dur)) = rotations {
+                if !(deg.is_finite() && dur.is_finite() && *dur > 0.0) {
+                    return Err(bad("rotation (deg, s)", *deg));
+                }
+                for (k, l) in ["x_rot", "y_rot", "z_rot"].iter().enumerate() {
+                    let mut axis = V3::zeros();
+                    axis[k] = 1.0;
+                    let c = attitude_up(&(axis * g.signum()));
+                    w.rotate(l, &c, &axis, deg.to_radians(), *dur);
                 }
             }
         }

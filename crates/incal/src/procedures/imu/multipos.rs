@@ -1,1 +1,363 @@
-//! (in progress)
+//! IMU triad calibration by least squares over known orientations (a
+//! dividing head, a cube on a surface plate: 6, 12, 18, 24… positions),
+//! with rotations of a known angle for the gyro scale.
+//!
+//! # Model (per axis j, on position means)
+//! Accelerometer: `ā_j = b_j + Σ_k A_jk f_k`, `f = g·û` (û the known up
+//! direction in the IMU frame). `--matrix full`: all nine `A_jk`;
+//! `upper`: `A` upper-triangular (the IMU frame is the accelerometers'
+//! own: x along the x accelerometer, y in the x–y accelerometer plane).
+//! The scale factors are `S_j = A_jj` and the misalignments (cross-axis
+//! sensitivities, rad) `M_jk = A_jk / A_jj`.
+//!
+//! Gyro: `ω̄_j = b_j + Σ_k G_jk f_k + Σ_k A_jk ω_k` with `ω` in deg/s:
+//! the Earth rate `Ω (cos φ n̂ + sin φ û)` in a static position when the
+//! latitude and the north direction n̂ are given, and `A/T · ê_axis` in a
+//! rotation section (`x_rot`, `y_rot`, `z_rot`: one rotation of the known
+//! angle A about that axis, pointing up, taking T = n/F_s seconds). `b`
+//! and the g-sensitivity `G` always; `A` (scale `S_j = A_jj`,
+//! misalignment `M_jk = A_jk/A_jj`) only when rotations or the Earth rate
+//! make it observable.
+//!
+//! Means are weighted by `n / s²` with s² the pooled within-position
+//! variance of the static positions, kept unless the residuals show lack of
+//! fit (χ², 5 %); a position set that cannot separate a term is refused
+//! naming the term (the core's alias analysis).
+
+use nalgebra::{DMatrix, DVector};
+
+use super::{check_gravity, check_rate_hz, SectionStats, AXES, V3};
+use crate::error::{Error, Result};
+use crate::estimation::{fit, numeric_jacobian, Design, Estimates, Fit, FitOptions, Variance};
+use crate::units::EARTH_RATE_RAD_S;
+use crate::warning::Warning;
+
+/// Accelerometer matrix convention.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MatrixForm {
+    /// Nine elements.
+    Full,
+    /// Upper-triangular (six elements).
+    Upper,
+}
+
+impl MatrixForm {
+    /// `full` or `upper`.
+    pub fn name(self) -> &'static str {
+        match self {
+            MatrixForm::Full => "full",
+            MatrixForm::Upper => "upper",
+        }
+    }
+}
+
+/// One static position.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StaticPosition {
+    /// Label (as in the file, or the fx,fy,fz triple).
+    pub label: String,
+    /// Up direction in the IMU frame (unit vector: the specific force's).
+    pub up: V3,
+    /// North direction in the IMU frame, when known.
+    pub north: Option<V3>,
+    /// Samples (accelerometer then gyro channels; a missing triad is 0).
+    pub stats: SectionStats,
+}
+
+/// One rotation section.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RotationSection {
+    /// Label (`x_rot`, `y_rot`, `z_rot`).
+    pub label: String,
+    /// IMU axis of the rotation (0, 1, 2), pointing up.
+    pub axis: usize,
+    /// Samples.
+    pub stats: SectionStats,
+}
+
+/// Options of [`multipos`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MultiposOptions {
+    /// Gravity (m/s²).
+    pub gravity: f64,
+    /// Accelerometer matrix convention.
+    pub matrix: MatrixForm,
+    /// Sample rate (Hz).
+    pub rate_hz: f64,
+    /// Latitude (deg) for the Earth rate (needs the north direction).
+    pub latitude_deg: Option<f64>,
+    /// Rotation angle of each rotation section (deg).
+    pub rotation_deg: f64,
+    /// Whether the session has gyro channels.
+    pub gyro: bool,
+}
+
+/// Result of [`multipos`].
+#[derive(Debug, Clone)]
+pub struct MultiposResult {
+    /// Every parameter (`acc.b_x`, `acc.A_xy`, `acc.S_x`, `acc.M_xy`,
+    /// `gyr.b_x`, `gyr.G_xy`, `gyr.A_xy`, `gyr.S_x`, `gyr.M_xy`).
+    pub estimates: Estimates,
+    /// The six (or three) axis fits: `acc.x`, …, `gyr.z`.
+    pub fits: Vec<(String, Fit)>,
+    /// The positions used.
+    pub statics: Vec<StaticPosition>,
+    /// The rotations used.
+    pub rotations: Vec<RotationSection>,
+    /// Whether the gyro scale and misalignment were estimated.
+    pub gyro_scale: bool,
+    /// Warnings.
+    pub warnings: Vec<Warning>,
+    /// Options.
+    pub options: MultiposOptions,
+}
+
+fn pooled(statics: &[StaticPosition], ch: usize) -> (f64, f64) {
+    let mut s = 0.0;
+    let mut d = 0.0;
+    for p in statics {
+        let w = (p.stats.n - 1) as f64;
+        s += w * p.stats.cov[ch][ch];
+        d += w;
+    }
+    (if d > 0.0 { s / d } else { 0.0 }, d)
+}
+
+/// Fit one axis: rows `x`, means `y`, counts `n`, channel `ch` (for the
+/// pooled variance); names of the columns.
+fn axis_fit(
+    names: Vec<String>,
+    rows: &[Vec<f64>],
+    y: &[f64],
+    n: &[f64],
+    statics: &[StaticPosition],
+    ch: usize,
+) -> Result<Fit> {
+    let design = Design::from_rows(names, rows)?;
+    let (s2, dof) = pooled(statics, ch);
+    let (w, variance) = if s2 > 0.0 && dof > 0.0 {
+        (
+            DVector::from_iterator(n.len(), n.iter().map(|k| k / s2)),
+            Variance::AtLeast { dof },
+        )
+    } else {
+        (
+            DVector::from_iterator(n.len(), n.iter().copied()),
+            Variance::FromResiduals,
+        )
+    };
+    fit(
+        &design,
+        &DVector::from_vec(y.to_vec()),
+        &FitOptions {
+            weights: Some(w),
+            variance,
+            ..FitOptions::default()
+        },
+    )
+}
+
+/// Block-diagonal concatenation of estimates.
+fn concat(parts: &[Estimates]) -> Result<Estimates> {
+    let n: usize = parts.iter().map(|e| e.len()).sum();
+    let mut names = Vec::with_capacity(n);
+    let mut v = DVector::zeros(n);
+    let mut c = DMatrix::zeros(n, n);
+    let mut at = 0;
+    let mut dof = f64::INFINITY;
+    for e in parts {
+        let m = e.len();
+        names.extend(e.names().iter().cloned());
+        v.rows_mut(at, m).copy_from(e.values());
+        c.view_mut((at, at), (m, m)).copy_from(e.covariance());
+        dof = dof.min(e.dof());
+        at += m;
+    }
+    Estimates::new(names, v, c, dof)
+}
+
+/// Least-squares calibration over known orientations.
+pub fn multipos(
+    statics: &[StaticPosition],
+    rotations: &[RotationSection],
+    opts: &MultiposOptions,
+) -> Result<MultiposResult> {
+    check_gravity(opts.gravity)?;
+    check_rate_hz(opts.rate_hz)?;
+    let g = opts.gravity;
+    for p in statics {
+        if p.stats.n < 2 {
+            return Err(Error::TooFew {
+                what: format!("samples in position {}", p.label),
+                needed: 2,
+                got: p.stats.n,
+            });
+        }
+        if (p.up.norm() - 1.0).abs() > 1e-3 {
+            return Err(Error::InvalidValue {
+                what: format!(
+                    "up direction of position {} (must be a unit vector)",
+                    p.label
+                ),
+                value: format!("norm {}", p.up.norm()),
+            });
+        }
+    }
+    let mut warnings = Vec::new();
+    // Accelerometer, one fit per axis.
+    let mut fits = Vec::new();
+    let mut parts = Vec::new();
+    for j in 0..3 {
+        let ks: Vec<usize> = match opts.matrix {
+            MatrixForm::Full => vec![0, 1, 2],
+            MatrixForm::Upper => (j..3).collect(),
+        };
+        let mut names = vec![format!("acc.b_{}", AXES[j])];
+        names.extend(ks.iter().map(|&k| format!("acc.A_{}{}", AXES[j], AXES[k])));
+        let rows: Vec<Vec<f64>> = statics
+            .iter()
+            .map(|p| {
+                let mut r = vec![1.0];
+                r.extend(ks.iter().map(|&k| g * p.up[k]));
+                r
+            })
+            .collect();
+        let y: Vec<f64> = statics.iter().map(|p| p.stats.mean[j]).collect();
+        let n: Vec<f64> = statics.iter().map(|p| p.stats.n as f64).collect();
+        let f = axis_fit(names, &rows, &y, &n, statics, j)?;
+        warnings.extend(
+            f.quality_warnings("the positions are not where the labels say, or the sensor moved"),
+        );
+        parts.push(f.estimates.clone());
+        fits.push((format!("acc.{}", AXES[j]), f));
+    }
+    // Gyro.
+    let omega_e = |p: &StaticPosition| -> V3 {
+        match (opts.latitude_deg, p.north) {
+            (Some(lat), Some(n)) => {
+                let phi = lat.to_radians();
+                (n * phi.cos() + p.up * phi.sin()) * EARTH_RATE_RAD_S.to_degrees()
+            }
+            _ => V3::zeros(),
+        }
+    };
+    let earth = opts.latitude_deg.is_some() && statics.iter().all(|p| p.north.is_some());
+    let gyro_scale = opts.gyro && (!rotations.is_empty() || earth);
+    if opts.gyro {
+        for j in 0..3 {
+            let mut names = vec![format!("gyr.b_{}", AXES[j])];
+            names.extend((0..3).map(|k| format!("gyr.G_{}{}", AXES[j], AXES[k])));
+            if gyro_scale {
+                names.extend((0..3).map(|k| format!("gyr.A_{}{}", AXES[j], AXES[k])));
+            }
+            let mut rows = Vec::new();
+            let mut y = Vec::new();
+            let mut n = Vec::new();
+            for p in statics {
+                let mut r = vec![1.0];
+                r.extend((0..3).map(|k| g * p.up[k]));
+                if gyro_scale {
+                    let w = omega_e(p);
+                    r.extend((0..3).map(|k| w[k]));
+                } else {
+                    // The Earth rate is left in the bias when the scale is
+                    // not estimated (it is below MEMS resolution).
+                }
+                rows.push(r);
+                y.push(p.stats.mean[3 + j]);
+                n.push(p.stats.n as f64);
+            }
+            for r in rotations {
+                let t = r.stats.n as f64 / opts.rate_hz;
+                let mut up = V3::zeros();
+                up[r.axis] = 1.0;
+                let mut row = vec![1.0];
+                row.extend((0..3).map(|k| g * up[k]));
+                row.extend((0..3).map(|k| {
+                    if k == r.axis {
+                        opts.rotation_deg / t
+                    } else {
+                        0.0
+                    }
+                }));
+                rows.push(row);
+                y.push(r.stats.mean[3 + j]);
+                n.push(r.stats.n as f64);
+            }
+            let f = axis_fit(names, &rows, &y, &n, statics, 3 + j)?;
+            warnings.extend(f.quality_warnings(
+                "the positions are not where the labels say, the sensor moved, or a rotation was not of the stated angle",
+            ));
+            parts.push(f.estimates.clone());
+            fits.push((format!("gyr.{}", AXES[j]), f));
+        }
+    }
+    let base = concat(&parts)?;
+    // Derived scale factors and misalignments.
+    let idx = |name: &str| base.index(name);
+    let mut derived_names = Vec::new();
+    let mut derived: Vec<(usize, Option<usize>)> = Vec::new(); // (A_jj, Some(A_jk)) or (A_jj, None) = S
+    for (t, on) in [("acc", true), ("gyr", gyro_scale)] {
+        if !on {
+            continue;
+        }
+        for j in 0..3 {
+            let Some(jj) = idx(&format!("{t}.A_{}{}", AXES[j], AXES[j])) else {
+                continue;
+            };
+            derived_names.push(format!("{t}.S_{}", AXES[j]));
+            derived.push((jj, None));
+        }
+        for j in 0..3 {
+            for k in 0..3 {
+                if j == k {
+                    continue;
+                }
+                let (Some(jj), Some(jk)) = (
+                    idx(&format!("{t}.A_{}{}", AXES[j], AXES[j])),
+                    idx(&format!("{t}.A_{}{}", AXES[j], AXES[k])),
+                ) else {
+                    continue;
+                };
+                derived_names.push(format!("{t}.M_{}{}", AXES[j], AXES[k]));
+                derived.push((jj, Some(jk)));
+            }
+        }
+    }
+    let gfun = |x: &DVector<f64>| {
+        DVector::from_iterator(
+            derived.len(),
+            derived.iter().map(|&(jj, jk)| match jk {
+                None => x[jj],
+                Some(jk) => x[jk] / x[jj],
+            }),
+        )
+    };
+    for &(jj, _) in &derived {
+        if base.values()[jj] == 0.0 {
+            return Err(Error::Unsupported(format!(
+                "{} is zero: no scale factor (check the positions' directions)",
+                base.names()[jj]
+            )));
+        }
+    }
+    let steps: Vec<f64> = (0..base.len())
+        .map(|k| 1e-6 * base.values()[k].abs().max(base.u_at(k)).max(1e-12))
+        .collect();
+    let jac = numeric_jacobian(&gfun, base.values(), &steps);
+    let estimates = base.augment(derived_names, gfun, |_| jac.clone())?;
+    if estimates.values().iter().any(|v| !v.is_finite()) {
+        return Err(Error::Unsupported(
+            "multi-position fit gave a non-finite result".into(),
+        ));
+    }
+    Ok(MultiposResult {
+        estimates,
+        fits,
+        statics: statics.to_vec(),
+        rotations: rotations.to_vec(),
+        gyro_scale,
+        warnings,
+        options: *opts,
+    })
+}
