@@ -177,6 +177,8 @@ fn concat(parts: &[Estimates]) -> Result<Estimates> {
 }
 
 /// Least-squares calibration over known orientations.
+// Axis indices j, k address vectors, matrices and names alike.
+#[allow(clippy::needless_range_loop)]
 pub fn multipos(
     statics: &[StaticPosition],
     rotations: &[RotationSection],
