@@ -143,6 +143,8 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Noise(a) => commands::noise::run(&a),
         Command::Imu(commands::imu::Command::Ferraris(a)) => commands::imu::run_ferraris(&a),
         Command::Imu(commands::imu::Command::Autocal(a)) => commands::imu::run_autocal(&a),
+        Command::Imu(commands::imu::Command::Multipos(a)) => commands::imu::run_multipos(&a),
+        Command::Imu(commands::imu::Command::Apply(a)) => commands::imu::run_apply(&a),
         Command::Simulate(SimulateCommand::Imu(a)) => commands::imu::simulate(&a),
         Command::Simulate(SimulateCommand::Noise(a)) => commands::noise::simulate(&a),
     }

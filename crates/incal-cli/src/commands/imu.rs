@@ -17,6 +17,10 @@ pub enum Command {
     Ferraris(FerrarisArgs),
     /// Autocalibration without a fixture (Tedaldi et al. 2014): still intervals found automatically, accelerometer and gyro triads in imu_tk's convention.
     Autocal(AutocalArgs),
+    /// Least squares over known orientations (dividing head, cube): bias, scale and misalignment of both triads, gyro g-sensitivity; rotations of a known angle for the gyro scale.
+    Multipos(MultiposArgs),
+    /// Apply a calibration (any of the three) to a raw series, row by row: calibrated accelerometer (m/s^2) and gyro.
+    Apply(ApplyArgs),
 }
 
 /// Accelerometer columns of a session.
@@ -592,5 +596,526 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         });
         crate::output::write_text(Some(p), &format!("{}\n", crate::output::json_text(&v)))?;
     }
+    Ok(())
+}
+
+/// Accelerometer matrix convention of `incal imu multipos`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MatrixArg {
+    /// All nine elements (the fixture defines the IMU frame).
+    Full,
+    /// Upper-triangular (the accelerometers define the IMU frame).
+    Upper,
+}
+
+/// Options of `incal imu multipos`.
+#[derive(clap::Args, Debug)]
+pub struct MultiposArgs {
+    /// Session CSV: position (a label: x_p, x_a, … or 2-3 of them joined by '+'; x_rot, y_rot, z_rot for rotations; empty between positions) and/or fx,fy,fz (unit up direction in the IMU frame), optional nx,ny,nz (north), acc_x,acc_y,acc_z[,gyr_x,gyr_y,gyr_z]; consecutive rows of one position are its samples; - reads standard input.
+    #[arg(long)]
+    pub input: PathBuf,
+    /// Sample rate (Hz): times the rotations.
+    #[arg(long)]
+    pub rate_hz: f64,
+    /// Gravity (m/s^2).
+    #[arg(long, default_value_t = 9.81)]
+    pub gravity_m_s2: f64,
+    /// Accelerometer matrix: full or upper (triangular).
+    #[arg(long, value_enum, default_value = "full")]
+    pub matrix: MatrixArg,
+    /// Latitude (deg): the Earth rate becomes a known gyro input (needs nx,ny,nz).
+    #[arg(long, value_parser = crate::options::latitude_deg)]
+    pub latitude_deg: Option<f64>,
+    /// Angle of each rotation section (deg; -360 is clockwise seen from the axis tip).
+    #[arg(long, default_value_t = -360.0, allow_hyphen_values = true)]
+    pub rotation_deg: f64,
+    #[command(flatten)]
+    pub result: ResultArgs,
+}
+
+/// `incal imu multipos`.
+pub fn run_multipos(a: &MultiposArgs) -> CliResult<()> {
+    use incal::procedures::imu::multipos::{
+        multipos, MatrixForm, MultiposOptions, RotationSection, StaticPosition,
+    };
+    use incal::procedures::imu::{SectionStats, V3};
+    let rate = positive("--rate-hz", a.rate_hz, 1e6)?;
+    if !(a.gravity_m_s2.is_finite() && a.gravity_m_s2 > 0.0 && a.gravity_m_s2 <= 100.0) {
+        return Err(usage(format!(
+            "--gravity-m-s2 must be > 0 and <= 100, got {}",
+            num(a.gravity_m_s2)
+        )));
+    }
+    if !(a.rotation_deg.is_finite() && a.rotation_deg != 0.0 && a.rotation_deg.abs() <= 36000.0) {
+        return Err(usage(format!(
+            "--rotation-deg must be non-zero with |A| <= 36000, got {}",
+            num(a.rotation_deg)
+        )));
+    }
+    let s = read_session(&a.input, true, false)?;
+    let t = &s.table;
+    let Some(acc) = s.acc.as_ref() else {
+        return Err(usage("the accelerometer columns are required".to_string()));
+    };
+    let cpos = t.opt_column("position");
+    let cf: Option<[usize; 3]> = match (t.opt_column("fx"), t.opt_column("fy"), t.opt_column("fz"))
+    {
+        (Some(x), Some(y), Some(z)) => Some([x, y, z]),
+        (None, None, None) => None,
+        _ => {
+            for c in ["fx", "fy", "fz"] {
+                t.column(c)?;
+            }
+            None
+        }
+    };
+    if cpos.is_none() && cf.is_none() {
+        t.column("position")?;
+    }
+    let cn: Option<[usize; 3]> = match (t.opt_column("nx"), t.opt_column("ny"), t.opt_column("nz"))
+    {
+        (Some(x), Some(y), Some(z)) => Some([x, y, z]),
+        _ => None,
+    };
+    if a.latitude_deg.is_some() && cn.is_none() {
+        t.column("nx")?;
+    }
+    // Key and direction of every row.
+    enum Row {
+        Skip,
+        Static(String, V3, Option<V3>),
+        Rotation(String, usize),
+    }
+    let mut rows = Vec::with_capacity(t.row_count());
+    for row in 0..t.row_count() {
+        let label = cpos.map(|c| t.text(row, c).trim().to_string());
+        if let Some(l) = &label {
+            if let Some(axis) = ["x_rot", "y_rot", "z_rot"].iter().position(|r| r == l) {
+                rows.push(Row::Rotation(l.clone(), axis));
+                continue;
+            }
+            if l.is_empty() && cf.is_none() {
+                rows.push(Row::Skip);
+                continue;
+            }
+        }
+        let from_label = match &label {
+            Some(l) if !l.is_empty() => Some(V3::from(
+                position_direction(l).map_err(|e| t.error_at(row, e))?,
+            )),
+            _ => None,
+        };
+        let from_f = match cf {
+            Some(c) => {
+                let v = V3::new(t.f64(row, c[0])?, t.f64(row, c[1])?, t.f64(row, c[2])?);
+                let n = v.norm();
+                if (n - 1.0).abs() > 1e-3 {
+                    return Err(t.error_at(
+                        row,
+                        format!("fx,fy,fz must be a unit vector, its norm is {}", num(n)),
+                    ));
+                }
+                Some(v / n)
+            }
+            None => None,
+        };
+        let up = match (from_label, from_f) {
+            (Some(l), Some(f)) => {
+                if (l - f).norm() > 1e-3 {
+                    return Err(t.error_at(
+                        row,
+                        format!(
+                            "position '{}' points ({}, {}, {}) but fx,fy,fz say ({}, {}, {})",
+                            crate::output::clip(label.as_deref().unwrap_or("")),
+                            num(l[0]),
+                            num(l[1]),
+                            num(l[2]),
+                            num(f[0]),
+                            num(f[1]),
+                            num(f[2])
+                        ),
+                    ));
+                }
+                f
+            }
+            (Some(l), None) => l,
+            (None, Some(f)) => f,
+            (None, None) => {
+                rows.push(Row::Skip);
+                continue;
+            }
+        };
+        let north = match cn {
+            Some(c) => {
+                let v = V3::new(t.f64(row, c[0])?, t.f64(row, c[1])?, t.f64(row, c[2])?);
+                if (v.norm() - 1.0).abs() > 1e-3 || v.dot(&up).abs() > 1e-3 {
+                    return Err(t.error_at(
+                        row,
+                        "nx,ny,nz must be a unit vector normal to the up direction".to_string(),
+                    ));
+                }
+                Some(v)
+            }
+            None => None,
+        };
+        let key = label
+            .filter(|l| !l.is_empty())
+            .unwrap_or_else(|| format!("({}, {}, {})", num(up[0]), num(up[1]), num(up[2])));
+        rows.push(Row::Static(key, up, north));
+    }
+    let zero3 = [0.0; 3];
+    let sample = |i: usize| -> [f64; 6] {
+        let a3 = acc[i];
+        let g3 = s.gyr.as_ref().map_or(zero3, |g| g[i]);
+        [a3[0], a3[1], a3[2], g3[0], g3[1], g3[2]]
+    };
+    let mut statics = Vec::new();
+    let mut rotations = Vec::new();
+    let mut i = 0;
+    while i < rows.len() {
+        let start = i;
+        let mut block = vec![sample(i)];
+        i += 1;
+        let same = |x: &Row, y: &Row| match (x, y) {
+            (Row::Static(a, _, _), Row::Static(b, _, _)) => a == b,
+            (Row::Rotation(a, _), Row::Rotation(b, _)) => a == b,
+            (Row::Skip, Row::Skip) => true,
+            _ => false,
+        };
+        while i < rows.len() && same(&rows[i], &rows[start]) {
+            block.push(sample(i));
+            i += 1;
+        }
+        let stats = || SectionStats::of(&block).map_err(|e| in_file(&t.path, e));
+        match &rows[start] {
+            Row::Skip => {}
+            Row::Static(key, up, north) => {
+                if block.len() < 2 {
+                    return Err(t.error_at(
+                        start,
+                        format!("position {key} has a single sample (at least 2 are needed)"),
+                    ));
+                }
+                statics.push(StaticPosition {
+                    label: key.clone(),
+                    up: *up,
+                    north: *north,
+                    stats: stats()?,
+                });
+            }
+            Row::Rotation(label, axis) => {
+                if s.gyr.is_none() {
+                    return Err(t.error_at(start, format!("rotation {label} without gyro columns")));
+                }
+                rotations.push(RotationSection {
+                    label: label.clone(),
+                    axis: *axis,
+                    stats: stats()?,
+                });
+            }
+        }
+    }
+    let r = multipos(
+        &statics,
+        &rotations,
+        &MultiposOptions {
+            gravity: a.gravity_m_s2,
+            matrix: match a.matrix {
+                MatrixArg::Full => MatrixForm::Full,
+                MatrixArg::Upper => MatrixForm::Upper,
+            },
+            rate_hz: rate,
+            latitude_deg: a.latitude_deg,
+            rotation_deg: a.rotation_deg,
+            gyro: s.gyr.is_some(),
+        },
+    )
+    .map_err(|e| in_file(&t.path, e))?;
+    let mut doc = r.document().map_err(|e| in_file(&t.path, e))?;
+    doc.inputs.push(t.input_file("input"));
+    a.result.emit(doc)
+}
+
+/// Options of `incal imu apply`.
+#[derive(clap::Args, Debug)]
+pub struct ApplyArgs {
+    /// Calibration: a result of incal imu ferraris, multipos or autocal (JSON).
+    #[arg(long)]
+    pub calibration: PathBuf,
+    /// Raw CSV: acc_x,acc_y,acc_z[,gyr_x,gyr_y,gyr_z], optional time_s (copied); read and written row by row (any length); - reads standard input.
+    #[arg(long)]
+    pub input: PathBuf,
+    /// Write the calibrated CSV here instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+/// A calibration ready to apply: `f = M_a (a − b_a)`,
+/// `ω = M_g (g − b_g − G f)`.
+struct Applier {
+    m_a: incal::procedures::imu::M3,
+    b_a: incal::procedures::imu::V3,
+    gyro: Option<(
+        incal::procedures::imu::M3,
+        incal::procedures::imu::V3,
+        incal::procedures::imu::M3,
+    )>,
+    gyr_unit: &'static str,
+}
+
+fn json_m3(v: &serde_json::Value, path: &str) -> Result<incal::procedures::imu::M3, String> {
+    let rows = v
+        .as_array()
+        .filter(|r| r.len() == 3)
+        .ok_or_else(|| format!("{path}: expected a list of 3 rows"))?;
+    let mut m = incal::procedures::imu::M3::zeros();
+    for (i, r) in rows.iter().enumerate() {
+        let r = r
+            .as_array()
+            .filter(|r| r.len() == 3)
+            .ok_or_else(|| format!("{path}[{i}]: expected 3 numbers"))?;
+        for (j, x) in r.iter().enumerate() {
+            m[(i, j)] = x
+                .as_f64()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| format!("{path}[{i}][{j}]: not a finite number"))?;
+        }
+    }
+    Ok(m)
+}
+
+fn json_v3(v: &serde_json::Value, path: &str) -> Result<incal::procedures::imu::V3, String> {
+    let r = v
+        .as_array()
+        .filter(|r| r.len() == 3)
+        .ok_or_else(|| format!("{path}: expected 3 numbers"))?;
+    let mut out = incal::procedures::imu::V3::zeros();
+    for (j, x) in r.iter().enumerate() {
+        out[j] = x
+            .as_f64()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| format!("{path}[{j}]: not a finite number"))?;
+    }
+    Ok(out)
+}
+
+fn inverse(
+    m: incal::procedures::imu::M3,
+    what: &str,
+) -> Result<incal::procedures::imu::M3, String> {
+    m.try_inverse()
+        .filter(|i| i.iter().all(|v| v.is_finite()))
+        .ok_or_else(|| format!("{what} is singular"))
+}
+
+impl Applier {
+    fn from_document(doc: &incal::document::ResultDocument) -> Result<Applier, String> {
+        use incal::document::Procedure;
+        use incal::procedures::imu::M3;
+        let x = &doc.extra;
+        let get = |k: &str| x.get(k).ok_or_else(|| format!("$.{k}: missing"));
+        match doc.procedure {
+            Procedure::ImuFerraris => {
+                let k_a = json_m3(get("K_a")?, "$.K_a")?;
+                let r_a = json_m3(get("R_a")?, "$.R_a")?;
+                let k_g = json_m3(get("K_g")?, "$.K_g")?;
+                let r_g = json_m3(get("R_g")?, "$.R_g")?;
+                Ok(Applier {
+                    m_a: inverse(k_a * r_a, "K_a R_a")?,
+                    b_a: json_v3(get("b_a")?, "$.b_a")?,
+                    gyro: Some((
+                        inverse(k_g * r_g, "K_g R_g")?,
+                        json_v3(get("b_g")?, "$.b_g")?,
+                        json_m3(get("K_ga")?, "$.K_ga")?,
+                    )),
+                    gyr_unit: "deg_s",
+                })
+            }
+            Procedure::ImuAutocal => {
+                let acc = get("acc")?;
+                let tk = |v: &serde_json::Value, p: &str| -> Result<(M3, incal::procedures::imu::V3), String> {
+                    let t = json_m3(&v["T"], &format!("{p}.T"))?;
+                    let k = json_m3(&v["K"], &format!("{p}.K"))?;
+                    Ok((t * k, json_v3(&v["b"], &format!("{p}.b"))?))
+                };
+                let (m_a, b_a) = tk(acc, "$.acc")?;
+                let gyro = match x.get("gyr") {
+                    Some(g) => {
+                        let (m, b) = tk(g, "$.gyr")?;
+                        Some((m, b, M3::zeros()))
+                    }
+                    None => None,
+                };
+                Ok(Applier {
+                    m_a,
+                    b_a,
+                    gyro,
+                    gyr_unit: "rad_s",
+                })
+            }
+            Procedure::ImuMultipos => {
+                let acc = get("acc")?;
+                let m_a = inverse(json_m3(&acc["A"], "$.acc.A")?, "$.acc.A")?;
+                let b_a = json_v3(&acc["b"], "$.acc.b")?;
+                let gyro = match x.get("gyr") {
+                    Some(g) if g.get("A").is_some() => Some((
+                        inverse(json_m3(&g["A"], "$.gyr.A")?, "$.gyr.A")?,
+                        json_v3(&g["b"], "$.gyr.b")?,
+                        json_m3(&g["G"], "$.gyr.G")?,
+                    )),
+                    _ => None,
+                };
+                Ok(Applier {
+                    m_a,
+                    b_a,
+                    gyro,
+                    gyr_unit: "deg_s",
+                })
+            }
+            other => Err(format!(
+                "$.procedure: '{other}' is not an IMU calibration (imu-ferraris, imu-multipos or imu-autocal)"
+            )),
+        }
+    }
+}
+
+/// `incal imu apply`.
+pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
+    use crate::error::CliError;
+    use incal::procedures::imu::V3;
+    use std::io::{BufRead, BufReader, Write};
+    let (cal_name, _, doc) = crate::documents::read_document(&a.calibration)?;
+    let cal =
+        Applier::from_document(&doc).map_err(|e| CliError::Input(format!("{cal_name}: {e}")))?;
+    let name = crate::io::display_name(&a.input);
+    let input: Box<dyn std::io::Read> = if crate::io::is_dash(&a.input) {
+        Box::new(std::io::stdin().lock())
+    } else {
+        Box::new(
+            std::fs::File::open(&a.input)
+                .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?,
+        )
+    };
+    let mut reader = BufReader::with_capacity(1 << 16, input);
+    if reader
+        .fill_buf()
+        .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?
+        .starts_with(b"\xEF\xBB\xBF")
+    {
+        reader.consume(3);
+    }
+    let mut csv = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .comment(Some(b'#'))
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(reader);
+    let out: Box<dyn Write> = match &a.output {
+        Some(p) if !crate::io::is_dash(p) => Box::new(
+            std::fs::File::create(p)
+                .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", p.display()))?,
+        ),
+        _ => Box::new(std::io::stdout().lock()),
+    };
+    let mut w = std::io::BufWriter::with_capacity(1 << 16, out);
+    let wfail = |e: std::io::Error| CliError::Failure(anyhow::anyhow!("cannot write: {e}"));
+    let mut rec = csv::ByteRecord::new();
+    // (time column, acc columns, gyro columns, width)
+    let mut cols: Option<(Option<usize>, [usize; 3], Option<[usize; 3]>, usize)> = None;
+    let mut fmt = ryu::Buffer::new();
+    let mut line_buf = String::with_capacity(256);
+    let mut rows = 0u64;
+    loop {
+        let more = csv.read_byte_record(&mut rec).map_err(|e| {
+            let line = e.position().map_or(0, |p| p.line());
+            CliError::Input(format!("{name}:{line}: not valid CSV"))
+        })?;
+        if !more {
+            break;
+        }
+        let line = rec.position().map_or(0, |p| p.line());
+        if rec.iter().all(|f| f.is_empty()) {
+            continue;
+        }
+        let Some((ct, ca, cg, width)) = cols else {
+            let headers: Vec<String> = rec
+                .iter()
+                .map(|h| String::from_utf8_lossy(h).to_string())
+                .collect();
+            let find = |n: &str| headers.iter().position(|h| h == n);
+            let need = |n: &str| {
+                find(n).ok_or_else(|| {
+                    CliError::Input(format!(
+                        "{name}: missing column '{n}' (columns: {})",
+                        crate::output::clip(&headers.join(", "))
+                    ))
+                })
+            };
+            let ca = [need("acc_x")?, need("acc_y")?, need("acc_z")?];
+            let cg = match (find("gyr_x"), cal.gyro.is_some()) {
+                (Some(_), true) => Some([need("gyr_x")?, need("gyr_y")?, need("gyr_z")?]),
+                _ => None,
+            };
+            let ct = find("time_s");
+            cols = Some((ct, ca, cg, headers.len()));
+            let mut head = String::new();
+            if ct.is_some() {
+                head.push_str("time_s,");
+            }
+            head.push_str("acc_x_m_s2,acc_y_m_s2,acc_z_m_s2");
+            if cg.is_some() {
+                let u = cal.gyr_unit;
+                head.push_str(&format!(",gyr_x_{u},gyr_y_{u},gyr_z_{u}"));
+            }
+            head.push('\n');
+            w.write_all(head.as_bytes()).map_err(wfail)?;
+            continue;
+        };
+        if rec.len() != width {
+            return Err(CliError::Input(format!(
+                "{name}:{line}: {} fields, but the header has {width}",
+                rec.len()
+            )));
+        }
+        let num = |k: usize| -> CliResult<f64> {
+            let text = std::str::from_utf8(&rec[k]).unwrap_or("");
+            match text.parse::<f64>() {
+                Ok(v) if v.is_finite() && v.abs() <= crate::input::MAX_ABS_VALUE => Ok(v),
+                _ => Err(CliError::Input(format!(
+                    "{name}:{line}: field {}: '{}' is not a finite number within 1e15",
+                    k + 1,
+                    crate::output::clip(&String::from_utf8_lossy(&rec[k]))
+                ))),
+            }
+        };
+        line_buf.clear();
+        if let Some(c) = ct {
+            line_buf.push_str(fmt.format(num(c)?));
+            line_buf.push(',');
+        }
+        let raw_a = V3::new(num(ca[0])?, num(ca[1])?, num(ca[2])?);
+        let f = cal.m_a * (raw_a - cal.b_a);
+        for k in 0..3 {
+            if k > 0 {
+                line_buf.push(',');
+            }
+            line_buf.push_str(fmt.format(f[k]));
+        }
+        if let (Some(c), Some((m, b, gs))) = (cg, cal.gyro.as_ref()) {
+            let raw_g = V3::new(num(c[0])?, num(c[1])?, num(c[2])?);
+            let wv = m * (raw_g - b - gs * f);
+            for k in 0..3 {
+                line_buf.push(',');
+                line_buf.push_str(fmt.format(wv[k]));
+            }
+        }
+        line_buf.push('\n');
+        w.write_all(line_buf.as_bytes()).map_err(wfail)?;
+        rows += 1;
+    }
+    if cols.is_none() || rows == 0 {
+        return Err(CliError::Input(format!("{name}: no data rows")));
+    }
+    w.flush().map_err(wfail)?;
     Ok(())
 }

@@ -214,3 +214,140 @@ impl crate::procedures::imu::autocal::AutocalResult {
         Ok(b.finish())
     }
 }
+
+/// Unit of a multi-position parameter (`acc.A_xy` → `output/(m/s^2)`).
+pub fn multipos_unit(name: &str) -> Result<Unit> {
+    let (triad, p) = name.split_once('.').unwrap_or(("", name));
+    Ok(Unit::Other(
+        match (triad, p.split('_').next().unwrap_or("")) {
+            (_, "b") => "output",
+            (_, "M") => "rad",
+            (_, "G") => "output/(m/s^2)",
+            ("acc", _) => "output/(m/s^2)",
+            _ => "output/(deg/s)",
+        }
+        .into(),
+    ))
+}
+
+impl crate::procedures::imu::multipos::MultiposResult {
+    /// The result document: every parameter in `coefficients`; top-level
+    /// `acc` (`A`, `b`, `S`, `M`) and `gyr` (`b`, `G`, and `A`, `S`, `M`
+    /// when estimated) with matrices as lists of rows (zero where the
+    /// convention fixes an element, 1 on the diagonal of M); per-position
+    /// and per-axis-fit tables.
+    pub fn document(&self) -> Result<ResultDocument> {
+        use crate::procedures::imu::AXES;
+        let o = &self.options;
+        let mut b = DocumentBuilder::new(
+            Procedure::ImuMultipos,
+            format!(
+                "IMU multi-position calibration ({} positions, {} rotations, accelerometer matrix {})",
+                self.statics.len(),
+                self.rotations.len(),
+                o.matrix.name()
+            ),
+        );
+        // Each axis is its own fit: its coefficients (and the scale and
+        // misalignments derived from them) carry that fit's dof.
+        let dof_of = |name: &str| -> f64 {
+            let (triad, p) = name.split_once('.').unwrap_or(("", name));
+            let axis = p.split_once('_').map_or("", |(_, r)| &r[..1.min(r.len())]);
+            let label = format!("{triad}.{axis}");
+            self.fits
+                .iter()
+                .find(|(l, _)| *l == label)
+                .map_or(self.estimates.dof(), |(_, f)| f.estimates.dof())
+        };
+        b.estimates_dof(&self.estimates, "", multipos_unit, dof_of)?;
+        for (label, f) in &self.fits {
+            b.fit(FitSummary::of(label, f, Unit::Output));
+        }
+        b.option("gravity_m_s2", json!(o.gravity));
+        b.option("matrix", json!(o.matrix.name()));
+        b.option("rate_hz", json!(o.rate_hz));
+        b.option("latitude_deg", json!(o.latitude_deg));
+        b.option("rotation_deg", json!(o.rotation_deg));
+        let e = &self.estimates;
+        let get = |n: String| e.value(&n).unwrap_or(0.0);
+        let mat = |t: &str, m: &str, diag: f64| -> serde_json::Value {
+            json!((0..3)
+                .map(|j| (0..3)
+                    .map(|k| if m == "M" && j == k {
+                        diag
+                    } else {
+                        get(format!("{t}.{m}_{}{}", AXES[j], AXES[k]))
+                    })
+                    .collect::<Vec<f64>>())
+                .collect::<Vec<_>>())
+        };
+        let vec3 = |t: &str, m: &str| -> serde_json::Value {
+            json!((0..3)
+                .map(|j| get(format!("{t}.{m}_{}", AXES[j])))
+                .collect::<Vec<f64>>())
+        };
+        b.extra(
+            "acc",
+            json!({"A": mat("acc", "A", 0.0), "b": vec3("acc", "b"), "S": vec3("acc", "S"), "M": mat("acc", "M", 1.0)}),
+        )?;
+        if o.gyro {
+            let mut g = serde_json::Map::new();
+            g.insert("b".into(), vec3("gyr", "b"));
+            g.insert("G".into(), mat("gyr", "G", 0.0));
+            if self.gyro_scale {
+                g.insert("A".into(), mat("gyr", "A", 0.0));
+                g.insert("S".into(), vec3("gyr", "S"));
+                g.insert("M".into(), mat("gyr", "M", 1.0));
+            }
+            b.extra("gyr", serde_json::Value::Object(g))?;
+        }
+        b.warnings(self.warnings.iter().cloned());
+        let mut t = Table::new(
+            "positions",
+            "Positions: up direction in the IMU frame, samples, channel means",
+            &[
+                ("position", None),
+                ("up_x", None),
+                ("up_y", None),
+                ("up_z", None),
+                ("samples", None),
+                ("acc_x_mean", Some(Unit::Output)),
+                ("acc_y_mean", Some(Unit::Output)),
+                ("acc_z_mean", Some(Unit::Output)),
+                ("gyr_x_mean", Some(Unit::Output)),
+                ("gyr_y_mean", Some(Unit::Output)),
+                ("gyr_z_mean", Some(Unit::Output)),
+            ],
+        );
+        for p in &self.statics {
+            let mut row = vec![
+                Cell::text(p.label.clone()),
+                Cell::num(p.up[0]),
+                Cell::num(p.up[1]),
+                Cell::num(p.up[2]),
+                Cell::num(p.stats.n as f64),
+            ];
+            row.extend((0..6).map(|k| {
+                if k >= 3 && !o.gyro {
+                    Cell::Null
+                } else {
+                    Cell::num(p.stats.mean[k])
+                }
+            }));
+            t.push(row)?;
+        }
+        for r in &self.rotations {
+            let mut row = vec![
+                Cell::text(r.label.clone()),
+                Cell::Null,
+                Cell::Null,
+                Cell::Null,
+                Cell::num(r.stats.n as f64),
+            ];
+            row.extend((0..6).map(|k| Cell::num(r.stats.mean[k])));
+            t.push(row)?;
+        }
+        b.table(t);
+        Ok(b.finish())
+    }
+}
