@@ -1,0 +1,480 @@
+//! `incal imu ferraris|autocal|multipos|apply` and `incal simulate imu`:
+//! the real binary on files. Contract keys (imucal's and imu_tk's), imucal's
+//! own example to 1e-9, round trips, and bad input refused with exit 2 and
+//! one line.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_incal"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("incal_imu_{}_{name}", std::process::id()))
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().unwrap()
+}
+
+fn json_of(o: &Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+fn refused(o: &Output, needles: &[&str]) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    for n in needles {
+        assert!(err.contains(n), "{n:?} not in {err}");
+    }
+}
+
+const FIX: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../incal/tests/fixtures/imucal/"
+);
+
+fn flat(v: &serde_json::Value) -> Vec<f64> {
+    match v {
+        serde_json::Value::Array(a) => a.iter().flat_map(flat).collect(),
+        x => vec![x.as_f64().unwrap()],
+    }
+}
+
+#[test]
+fn ferraris_reproduces_imucal_with_its_keys() {
+    let session = format!("{FIX}annotated_session.csv");
+    let v = json_of(&run(&[
+        "imu",
+        "ferraris",
+        "--input",
+        &session,
+        "--rate-hz",
+        "204.8",
+        "--json",
+    ]));
+    let want: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{FIX}example_cal.json")).unwrap())
+            .unwrap();
+    assert_eq!(v["procedure"], "imu-ferraris");
+    for k in ["K_a", "R_a", "b_a", "K_g", "R_g", "K_ga", "b_g"] {
+        let (g, w) = (flat(&v[k]), flat(&want[k]));
+        assert_eq!(g.len(), w.len(), "{k}");
+        for (a, b) in g.iter().zip(&w) {
+            assert!((a - b).abs() <= 1e-9 * b.abs(), "{k}: {a} vs imucal {b}");
+        }
+    }
+    for name in [
+        "K_a.xx", "R_a.xy", "b_a.x", "K_g.zz", "R_g.yz", "K_ga.zx", "b_g.y",
+    ] {
+        let c = &v["coefficients"][name];
+        assert!(c["u"].as_f64().unwrap() > 0.0, "{name}");
+        assert!(c["U95"].as_f64().is_some(), "{name}");
+    }
+    assert_eq!(v["coefficients"]["K_a.xx"]["unit"], "output/(m/s^2)");
+    assert_eq!(v["coefficients"]["K_g.xx"]["unit"], "output/(deg/s)");
+    assert_eq!(v["warnings"][0]["code"], "sign-convention");
+}
+
+#[test]
+fn ferraris_refuses_bad_sections() {
+    let bad = tmp("bad_part.csv");
+    std::fs::write(
+        &bad,
+        "part,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\nx_p,1,2,3,4,5,6\nx_q,1,2,3,4,5,6\n",
+    )
+    .unwrap();
+    refused(
+        &run(&[
+            "imu",
+            "ferraris",
+            "--input",
+            bad.to_str().unwrap(),
+            "--rate-hz",
+            "100",
+        ]),
+        &["bad_part.csv:3", "'x_q' is not a Ferraris section"],
+    );
+    let short = tmp("short.csv");
+    std::fs::write(
+        &short,
+        "part,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\nx_p,1,2,3,4,5,6\nx_p,1,2,3,4,5,6\n",
+    )
+    .unwrap();
+    refused(
+        &run(&[
+            "imu",
+            "ferraris",
+            "--input",
+            short.to_str().unwrap(),
+            "--rate-hz",
+            "100",
+        ]),
+        &[
+            "short.csv",
+            "missing or too short: x_a, y_p, y_a, z_p, z_a, x_rot, y_rot, z_rot",
+        ],
+    );
+    let nogyr = tmp("nogyr.csv");
+    std::fs::write(&nogyr, "part,acc_x,acc_y,acc_z\nx_p,1,2,3\n").unwrap();
+    refused(
+        &run(&[
+            "imu",
+            "ferraris",
+            "--input",
+            nogyr.to_str().unwrap(),
+            "--rate-hz",
+            "100",
+        ]),
+        &["nogyr.csv", "missing column 'gyr_x'"],
+    );
+    let session = format!("{FIX}annotated_session.csv");
+    refused(
+        &run(&["imu", "ferraris", "--input", &session, "--rate-hz", "0"]),
+        &["--rate-hz"],
+    );
+    refused(
+        &run(&[
+            "imu",
+            "ferraris",
+            "--input",
+            &session,
+            "--rate-hz",
+            "100",
+            "--gravity-m-s2",
+            "0",
+        ]),
+        &["--gravity-m-s2"],
+    );
+}
+
+#[test]
+fn ferraris_round_trip_from_the_simulator() {
+    let csv = tmp("fe.csv");
+    let truth = tmp("fe_truth.json");
+    let o = run(&[
+        "simulate",
+        "imu",
+        "--sequence",
+        "ferraris",
+        "--truth-seed",
+        "4",
+        "-o",
+        csv.to_str().unwrap(),
+        "--truth-out",
+        truth.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v = json_of(&run(&[
+        "imu",
+        "ferraris",
+        "--input",
+        csv.to_str().unwrap(),
+        "--rate-hz",
+        "100",
+        "--json",
+    ]));
+    let t: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    for (k, name) in [
+        ("K_a", "K_a.yy"),
+        ("R_a", "R_a.xz"),
+        ("K_g", "K_g.zz"),
+        ("R_g", "R_g.yx"),
+    ] {
+        let (i, j) = (
+            (name.as_bytes()[name.len() - 2] - b'x') as usize,
+            (name.as_bytes()[name.len() - 1] - b'x') as usize,
+        );
+        let want = t["imucal"][k][i][j].as_f64().unwrap();
+        let c = &v["coefficients"][name];
+        let (x, u95) = (c["value"].as_f64().unwrap(), c["U95"].as_f64().unwrap());
+        assert!(
+            (x - want).abs() < 2.0 * u95,
+            "{name}: {x} vs truth {want} (U95 {u95})"
+        );
+    }
+}
+
+#[test]
+fn autocal_contract_keys_and_round_trip() {
+    let csv = tmp("ac.csv");
+    let truth = tmp("ac_truth.json");
+    let o = run(&[
+        "simulate",
+        "imu",
+        "--sequence",
+        "random",
+        "--orientations",
+        "24",
+        "--init-static-s",
+        "10",
+        "--no-g-sensitivity",
+        "-o",
+        csv.to_str().unwrap(),
+        "--truth-out",
+        truth.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let t: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    for method in ["incal", "tedaldi"] {
+        let v = json_of(&run(&[
+            "imu",
+            "autocal",
+            "--input",
+            csv.to_str().unwrap(),
+            "--rate-hz",
+            "100",
+            "--init-static-s",
+            "10",
+            "--method",
+            method,
+            "--json",
+        ]));
+        assert_eq!(v["procedure"], "imu-autocal");
+        assert_eq!(v["options"]["method"], method);
+        for tri in ["acc", "gyr"] {
+            assert_eq!(flat(&v[tri]["T"]).len(), 9);
+            assert_eq!(flat(&v[tri]["K"]).len(), 9);
+            assert_eq!(flat(&v[tri]["b"]).len(), 3);
+        }
+        let iv = v["intervals"].as_array().unwrap();
+        assert_eq!(iv.len(), 25, "{method}: still start + 24 orientations");
+        assert!(iv[1]["start_s"].as_f64().unwrap() < iv[1]["end_s"].as_f64().unwrap());
+        for (name, tri, m, i, j) in [
+            ("acc.s_x", "acc", "K", 0, 0),
+            ("acc.m_yz", "acc", "T", 0, 1),
+            ("gyr.s_z", "gyr", "K", 2, 2),
+            ("gyr.m_xz", "gyr", "T", 1, 0),
+        ] {
+            let c = &v["coefficients"][name];
+            let (x, u95) = (c["value"].as_f64().unwrap(), c["U95"].as_f64().unwrap());
+            let mut want = t["imu_tk"][tri][m][i][j].as_f64().unwrap();
+            if name == "acc.m_yz" {
+                want = -want; // T_xy = -m_yz
+            }
+            assert!(u95 > 0.0);
+            assert!(
+                (x - want).abs() < 3.0 * u95,
+                "{method} {name}: {x} vs truth {want} (U95 {u95})"
+            );
+        }
+        assert_eq!(v["coefficients"]["acc.b_x"]["unit"], "output");
+    }
+}
+
+#[test]
+fn autocal_says_how_many_intervals_it_found() {
+    let csv = tmp("few.csv");
+    let o = run(&[
+        "simulate",
+        "imu",
+        "--sequence",
+        "random",
+        "--orientations",
+        "5",
+        "--init-static-s",
+        "10",
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    refused(
+        &run(&[
+            "imu",
+            "autocal",
+            "--input",
+            csv.to_str().unwrap(),
+            "--rate-hz",
+            "100",
+            "--init-static-s",
+            "10",
+            "--method",
+            "tedaldi",
+        ]),
+        &["few.csv", "the most found was 6", "need at least 12"],
+    );
+}
+
+#[test]
+fn multipos_labels_or_directions_and_apply() {
+    let csv = tmp("mp.csv");
+    let o = run(&[
+        "simulate",
+        "imu",
+        "--sequence",
+        "positions",
+        "--rotations",
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let cal = tmp("mp.json");
+    let o = run(&[
+        "imu",
+        "multipos",
+        "--input",
+        csv.to_str().unwrap(),
+        "--rate-hz",
+        "100",
+        "--json",
+        "-o",
+        cal.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&cal).unwrap()).unwrap();
+    assert_eq!(v["procedure"], "imu-multipos");
+    for k in [
+        "acc.S_x", "acc.M_xy", "acc.b_z", "gyr.G_xy", "gyr.S_z", "gyr.M_zy",
+    ] {
+        assert!(v["coefficients"][k]["u"].as_f64().unwrap() > 0.0, "{k}");
+    }
+    // fx,fy,fz alone give the same fit for the static positions (rotations
+    // need their labels).
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let dirs: String = text
+        .lines()
+        .filter(|l| !l.contains("_rot"))
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            let mut g = vec![f[0]];
+            g.extend(&f[2..]);
+            g.join(",") + "\n"
+        })
+        .collect();
+    let dcsv = tmp("mp_dirs.csv");
+    std::fs::write(&dcsv, dirs).unwrap();
+    let d = json_of(&run(&[
+        "imu",
+        "multipos",
+        "--input",
+        dcsv.to_str().unwrap(),
+        "--rate-hz",
+        "100",
+        "--json",
+    ]));
+    let (a, b) = (
+        d["coefficients"]["acc.A_xy"]["value"].as_f64().unwrap(),
+        v["coefficients"]["acc.A_xy"]["value"].as_f64().unwrap(),
+    );
+    assert!((a - b).abs() < 1e-9 * b.abs().max(1.0));
+    // Apply: every static sample calibrates to |f| = g within the noise.
+    let o = run(&[
+        "imu",
+        "apply",
+        "--calibration",
+        cal.to_str().unwrap(),
+        "--input",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8(o.stdout).unwrap();
+    let mut lines = out.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "time_s,acc_x_m_s2,acc_y_m_s2,acc_z_m_s2,gyr_x_deg_s,gyr_y_deg_s,gyr_z_deg_s"
+    );
+    let mut mean_norm = 0.0;
+    let mut n = 0.0;
+    for l in lines.take(300) {
+        let f: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+        mean_norm += (f[1] * f[1] + f[2] * f[2] + f[3] * f[3]).sqrt();
+        n += 1.0;
+    }
+    assert!((mean_norm / n - 9.81).abs() < 0.01, "{}", mean_norm / n);
+}
+
+#[test]
+fn multipos_refusals_name_line_and_term() {
+    let contra = tmp("contra.csv");
+    std::fs::write(
+        &contra,
+        "position,fx,fy,fz,acc_x,acc_y,acc_z\nx_p,1,0,0,1,2,3\nx_p,0,1,0,1,2,3\n",
+    )
+    .unwrap();
+    refused(
+        &run(&[
+            "imu",
+            "multipos",
+            "--input",
+            contra.to_str().unwrap(),
+            "--rate-hz",
+            "100",
+        ]),
+        &["contra.csv:3", "position 'x_p' points"],
+    );
+    let badlabel = tmp("badlabel.csv");
+    std::fs::write(&badlabel, "position,acc_x,acc_y,acc_z\nx_p+x_a,1,2,3\n").unwrap();
+    refused(
+        &run(&[
+            "imu",
+            "multipos",
+            "--input",
+            badlabel.to_str().unwrap(),
+            "--rate-hz",
+            "100",
+        ]),
+        &["badlabel.csv:2", "names the x axis twice"],
+    );
+    // Every position about the z axis: the z terms are not separable.
+    let csv = tmp("plane.csv");
+    let o = run(&[
+        "simulate",
+        "imu",
+        "--sequence",
+        "positions",
+        "--positions",
+        "x_p,x_a,y_p,y_a,x_p+y_p,x_a+y_a,x_p+y_a,x_a+y_p",
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    refused(
+        &run(&[
+            "imu",
+            "multipos",
+            "--input",
+            csv.to_str().unwrap(),
+            "--rate-hz",
+            "100",
+        ]),
+        &["plane.csv", "cannot separate", "acc.A_xz"],
+    );
+}
+
+#[test]
+fn apply_refuses_a_calibration_of_another_procedure() {
+    let cal = tmp("notimu.json");
+    let tumble = tmp("tumble.csv");
+    let o = run(&["simulate", "tumble", "-o", tumble.to_str().unwrap()]);
+    assert!(o.status.success());
+    let o = run(&[
+        "tumble",
+        "--mount",
+        "pendulum",
+        "--input",
+        tumble.to_str().unwrap(),
+        "--json",
+        "-o",
+        cal.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let raw = tmp("raw.csv");
+    std::fs::write(&raw, "acc_x,acc_y,acc_z\n1,2,3\n").unwrap();
+    refused(
+        &run(&[
+            "imu",
+            "apply",
+            "--calibration",
+            cal.to_str().unwrap(),
+            "--input",
+            raw.to_str().unwrap(),
+        ]),
+        &["notimu.json", "$.procedure", "not an IMU calibration"],
+    );
+}
