@@ -1021,7 +1021,8 @@ pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
     let wfail = |e: std::io::Error| CliError::Failure(anyhow::anyhow!("cannot write: {e}"));
     let mut rec = csv::ByteRecord::new();
     // (time column, acc columns, gyro columns, width)
-    let mut cols: Option<(Option<usize>, [usize; 3], Option<[usize; 3]>, usize)> = None;
+    type Columns = (Option<usize>, [usize; 3], Option<[usize; 3]>, usize);
+    let mut cols: Option<Columns> = None;
     let mut fmt = ryu::Buffer::new();
     let mut line_buf = String::with_capacity(256);
     let mut rows = 0u64;
