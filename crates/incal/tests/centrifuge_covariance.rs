@@ -45,6 +45,7 @@ fn k0_k1_covariance_enters_the_tilt_exactly() {
                 alignment_tolerance_rad: 0.0,
                 noise: Noise::Auto,
                 terms: None,
+                u_omega_ppm: 0.0,
             },
         )
         .unwrap()

@@ -92,6 +92,7 @@ fn options(k1: f64) -> CentrifugeOptions {
         alignment_tolerance_rad: 0.0,
         noise: Noise::Auto,
         terms: Some(vec![Term::K2]),
+        u_omega_ppm: 0.0,
     }
 }
 

@@ -78,6 +78,7 @@ fn options(order: usize) -> CentrifugeOptions {
         alignment_tolerance_rad: 0.0,
         noise: Noise::Auto,
         terms: None,
+        u_omega_ppm: 0.0,
     }
 }
 

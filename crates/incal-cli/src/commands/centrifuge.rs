@@ -63,6 +63,9 @@ pub struct Args {
     /// Coefficients required, comma separated (default: every one the data supports).
     #[arg(long, value_delimiter = ',')]
     pub terms: Option<Vec<String>>,
+    /// Relative standard uncertainty of the table rate (ppm): a type-B input of the static (eq. 6) radius, u(R)/R = 2 u(omega)/omega.
+    #[arg(long, default_value_t = 0.0)]
+    pub u_omega_ppm: f64,
     #[command(flatten)]
     pub result: ResultArgs,
 }
@@ -202,6 +205,12 @@ fn scale_inputs(a: &Args) -> CliResult<ScaleInputs> {
 /// `incal centrifuge`.
 pub fn run(a: &Args) -> CliResult<()> {
     let noise = noise_option(a.noise)?;
+    if !(a.u_omega_ppm.is_finite() && (0.0..=1e5).contains(&a.u_omega_ppm)) {
+        return Err(usage(format!(
+            "--u-omega-ppm must be within 0..1e5, got {}",
+            crate::output::num(a.u_omega_ppm)
+        )));
+    }
     let terms = match &a.terms {
         None => None,
         Some(v) => Some(
@@ -223,6 +232,7 @@ pub fn run(a: &Args) -> CliResult<()> {
         alignment_tolerance_rad: a.alignment_tolerance_deg.to_radians(),
         noise,
         terms,
+        u_omega_ppm: a.u_omega_ppm,
     };
     let (table, obs) = read_observations(&a.input)?;
     let r = calibrate(&obs, &opts).map_err(|e| in_file(&table.path, e))?;
@@ -249,6 +259,8 @@ pub fn run(a: &Args) -> CliResult<()> {
     }
     doc.warnings.splice(0..0, si.warnings);
     doc.options.insert("noise".into(), json!(a.noise));
+    doc.options
+        .insert("u_omega_ppm".into(), json!(a.u_omega_ppm));
     a.result.emit(doc)
 }
 

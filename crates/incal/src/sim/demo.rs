@@ -409,6 +409,7 @@ fn centrifuge(seed: u64) -> Result<DemoSection> {
         alignment_tolerance_rad: 0.0,
         noise: Noise::Auto,
         terms: None,
+        u_omega_ppm: 0.0,
     };
     let r = calibrate(&obs, &opts)?;
     let mut t: BTreeMap<String, f64> = CENTRIFUGE_TERMS

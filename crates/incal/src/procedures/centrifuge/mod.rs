@@ -120,6 +120,9 @@ pub struct CentrifugeOptions {
     pub noise: Noise,
     /// Coefficients required (`None`: every one the data supports).
     pub terms: Option<Vec<Term>>,
+    /// Relative standard uncertainty of the table rate (ppm): a type-B
+    /// input of the static (eq. 6) radius, `u(R)/R = 2 u(ω)/ω`.
+    pub u_omega_ppm: f64,
 }
 
 /// ECM radius and alignment error of one polarity at a station.
@@ -489,6 +492,7 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
         latitude_rad: opts.latitude_rad,
         g_local_m_s2: opts.g_local_m_s2,
         opposite_sense: opts.opposite_sense,
+        u_omega_rel: opts.u_omega_ppm * 1e-6,
     };
     let nominal = Centrifuge {
         r_plus_m: opts.radius0_m,
@@ -974,8 +978,11 @@ struct RadiusMap {
     g_local_m_s2: f64,
     /// Per polarity (+, −): regression inputs.
     regression: [Option<RegressionAt>; 2],
-    /// Per polarity: index of E_a and rate² (rad²/s²) of the static speed.
-    static_point: [Option<(usize, f64)>; 2],
+    /// Per polarity: indices of E_a and of the static speed ω (rad/s).
+    static_point: [Option<(usize, usize)>; 2],
+    /// Latitude (rad) and sense of the table, for the rate² of ω.
+    latitude_rad: f64,
+    opposite_sense: bool,
 }
 
 impl RadiusMap {
@@ -996,9 +1003,14 @@ impl RadiusMap {
             out.push(("R_minus_m", v));
         }
         for (k, name, sign) in [(0, "R_plus_static_m", 1.0), (1, "R_minus_static_m", -1.0)] {
-            let (Some((k0, e0)), Some((ea, rate2))) = (self.k0_e0, self.static_point[k]) else {
+            let (Some((k0, e0)), Some((ea, jw))) = (self.k0_e0, self.static_point[k]) else {
                 continue;
             };
+            let rate2 = crate::rigs::centrifuge::centripetal_rate_squared(
+                x[jw],
+                self.latitude_rad,
+                self.opposite_sense,
+            );
             let g = self.g_local_m_s2;
             let r6 = radius::eq6_radius(x[k0], k1, x[ea], x[e0], rate2, sign, g);
             let v = match &self.regression[k] {
@@ -1192,7 +1204,7 @@ fn estimate(
         None => None,
     };
     let mut reg_at: [Option<RegressionAt>; 2] = [None, None];
-    let mut static_at: [Option<(usize, f64)>; 2] = [None, None];
+    let mut static_at: [Option<(usize, usize)>; 2] = [None, None];
     for (k, sign) in [(0usize, "+"), (1, "-")] {
         if let (Some(_), Some((ea, w))) = (k0_e0, radii.static_point[k]) {
             let j = inp.push_block(
@@ -1202,12 +1214,16 @@ fn estimate(
                 DMatrix::from_element(1, 1, radius::sem(&ea).powi(2)),
                 f64::INFINITY,
             );
-            let rate2 = crate::rigs::centrifuge::centripetal_rate_squared(
-                w,
-                opts.latitude_rad,
-                opts.opposite_sense,
+            // The static speed, a type-B input (--u-omega-ppm): the eq. 6
+            // radius goes as 1/ω².
+            let jw = inp.push_block(
+                None,
+                UncertaintyType::B,
+                vec![(format!("omega_static({sign})"), w)],
+                DMatrix::from_element(1, 1, (opts.u_omega_ppm * 1e-6 * w).powi(2)),
+                f64::INFINITY,
             );
-            static_at[k] = Some((j, rate2));
+            static_at[k] = Some((j, jw));
         }
         if let Some(f) = radii.regression[k] {
             let e = &f.fit.estimates;
@@ -1242,6 +1258,8 @@ fn estimate(
         g_local_m_s2: opts.g_local_m_s2,
         regression: reg_at,
         static_point: static_at,
+        latitude_rad: opts.latitude_rad,
+        opposite_sense: opts.opposite_sense,
     };
     let radius_first = k1_idx + 1;
     let radius_end = inp.names.len();

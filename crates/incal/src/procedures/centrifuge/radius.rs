@@ -69,6 +69,9 @@ pub struct RadiusContext {
     pub g_local_m_s2: f64,
     /// Table spins opposite to Earth's sense.
     pub opposite_sense: bool,
+    /// Relative standard uncertainty of the table rate ω (e.g. 1e-4 for
+    /// 100 ppm): a type-B input of the static radius, which goes as 1/ω².
+    pub u_omega_rel: f64,
 }
 
 /// Static tilt `λ = E0/K1 − K0` (rad; seed 001 eq. 4, small angle), with
@@ -163,7 +166,8 @@ pub fn static_radius(
 ) -> Result<ValueU> {
     let a = PositionStats::of(e_a)?;
     let z = PositionStats::of(e0)?;
-    let rate2 = centripetal_rate_squared(omega_rad_s, ctx.latitude_rad, ctx.opposite_sense);
+    let (lat, opposite) = (ctx.latitude_rad, ctx.opposite_sense);
+    let rate2 = centripetal_rate_squared(omega_rad_s, lat, opposite);
     if rate2 <= 0.0 {
         return Err(Error::InvalidValue {
             what: "rate for the static radius".into(),
@@ -172,17 +176,31 @@ pub fn static_radius(
     }
     let g = ctx.g_local_m_s2;
     let inputs = Estimates::new(
-        vec!["K0".into(), "K1".into(), "E_a".into(), "E0".into()],
-        DVector::from_vec(vec![ctx.k0_g.value, ctx.k1.value, a.mean, z.mean]),
+        vec![
+            "K0".into(),
+            "K1".into(),
+            "E_a".into(),
+            "E0".into(),
+            "omega".into(),
+        ],
+        DVector::from_vec(vec![
+            ctx.k0_g.value,
+            ctx.k1.value,
+            a.mean,
+            z.mean,
+            omega_rad_s,
+        ]),
         DMatrix::from_diagonal(&DVector::from_vec(vec![
             ctx.k0_g.u.powi(2),
             ctx.k1.u.powi(2),
             sem(&a).powi(2),
             sem(&z).powi(2),
+            (ctx.u_omega_rel * omega_rad_s).powi(2),
         ])),
         f64::INFINITY,
     )?;
     let f = move |x: &DVector<f64>| {
+        let rate2 = centripetal_rate_squared(x[4], lat, opposite);
         DVector::from_element(1, eq6_radius(x[0], x[1], x[2], x[3], rate2, polarity, g))
     };
     let r = inputs.map_numeric(vec!["R".into()], f)?;
@@ -413,6 +431,7 @@ mod tests {
             latitude_rad: 39.9f64.to_radians(),
             g_local_m_s2: G,
             opposite_sense: false,
+            u_omega_rel: 0.0,
         }
     }
 
@@ -488,5 +507,22 @@ mod tests {
                 .sqrt();
         assert_eq!(t.value, st.mean / 1.3 - 1.2e-4);
         assert!((t.u / expect - 1.0).abs() < 1e-12);
+    }
+
+    /// u(ω) enters the static radius as u(R)/R = 2 u(ω)/ω (R ∝ 1/ω²).
+    #[test]
+    fn rate_uncertainty_enters_the_static_radius() {
+        let mut c = ctx(0.0);
+        let omega = 3.7;
+        let e0 = vec![1.3 * 1.2e-4; 4];
+        let ea = vec![1.3 * (1.2e-4 + 1.0); 4];
+        let r0 = static_radius(&ea, &e0, omega, 1.0, &c).unwrap();
+        assert!(r0.u < 1e-12 * r0.value);
+        c.u_omega_rel = 100e-6;
+        let r1 = static_radius(&ea, &e0, omega, 1.0, &c).unwrap();
+        assert!((r1.value - r0.value).abs() < 1e-12);
+        // The Earth-rate term makes the rate slightly more than ω itself.
+        let rel = r1.u / r1.value;
+        assert!((rel / 200e-6 - 1.0).abs() < 1e-3, "{rel}");
     }
 }
