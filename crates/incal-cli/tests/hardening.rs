@@ -542,3 +542,29 @@ fn plan_gfimu_predicts_and_refuses() {
         &["positions", "need at least 6"],
     );
 }
+
+/// Issue "hardening", item 6: the centrifuge static radius includes u(ω).
+#[test]
+fn centrifuge_static_radius_carries_the_rate_uncertainty() {
+    let csv = tmp("cf_uomega.csv");
+    ok(&run(&["simulate", "centrifuge", "--seed", "1", "-o", p(&csv)]));
+    let base = [
+        "centrifuge", "--input", p(&csv), "--k1", "1.3", "--k0", "1e-4", "--radius-m", "0.71",
+        "--latitude-deg", "39.9", "--json",
+    ];
+    let static_u = |extra: &[&str]| -> (f64, f64) {
+        let mut a = base.to_vec();
+        a.extend_from_slice(extra);
+        let v: serde_json::Value = serde_json::from_str(&ok(&run(&a))).unwrap();
+        let r = &v["radius"]["static"]["R_plus_m"];
+        (r["value"].as_f64().unwrap(), r["u"].as_f64().unwrap())
+    };
+    let (r0, u0) = static_u(&[]);
+    let (r1, u1) = static_u(&["--u-omega-ppm", "100"]);
+    assert_eq!(r0, r1);
+    let added = (u1 * u1 - u0 * u0).sqrt() / r1;
+    assert!((added / 200e-6 - 1.0).abs() < 1e-3, "{added}");
+    let mut a = base.to_vec();
+    a.extend_from_slice(&["--u-omega-ppm", "-5"]);
+    refused(&run(&a), &["--u-omega-ppm"]);
+}
