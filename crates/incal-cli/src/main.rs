@@ -84,6 +84,8 @@ enum PlanCommand {
     Tumble(commands::tumble::PlanArgs),
     /// Misalignment plan: predicted u of each angle for a configuration set.
     Misalign(commands::misalign::PlanArgs),
+    /// Centrifuge plan: predicted u of the radius quantities and of every coefficient for a station/speed plan.
+    Centrifuge(commands::centrifuge::PlanArgs),
     /// Gyro-free unit calibration plan: predicted u of every accelerometer's K0 and Ks, and the geometry's conditioning.
     Gfimu(commands::gfimu::PlanArgs),
     /// Gyro rate-transfer plan: predicted u of K1, B, K2, K3 and the asymmetry for a set of table rates.
@@ -135,6 +137,7 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Gyro(commands::gyro::Command::Positions(a)) => commands::gyro::run_positions(&a),
         Command::Plan(PlanCommand::GyroRate(a)) => commands::gyro::plan_rate(&a),
         Command::Plan(PlanCommand::Gfimu(a)) => commands::gfimu::plan(&a),
+        Command::Plan(PlanCommand::Centrifuge(a)) => commands::centrifuge::plan(&a),
         Command::Plan(PlanCommand::GyroPositions(a)) => commands::gyro::plan_positions(&a),
         Command::Simulate(SimulateCommand::GyroRate(a)) => commands::gyro::simulate_rate_cmd(&a),
         Command::Simulate(SimulateCommand::GyroPositions(a)) => {

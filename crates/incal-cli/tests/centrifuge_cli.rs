@@ -226,3 +226,39 @@ fn unknown_option_exits_2() {
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(err.contains("--frobnicate"), "{err}");
 }
+
+/// `incal plan centrifuge`: predicted u of every coefficient and radius,
+/// and u that shrink as 1/sqrt(samples).
+#[test]
+fn plan_centrifuge_predicts_u_that_scale_with_samples() {
+    let u = |samples: &str| -> serde_json::Value {
+        let o = Command::new(env!("CARGO_BIN_EXE_incal"))
+            .args(["plan", "centrifuge", "--samples", samples, "--json"])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["plan"], "centrifuge");
+        v["predicted_u"].clone()
+    };
+    let (a, b) = (u("4"), u("16"));
+    for k in [
+        "K2",
+        "K3",
+        "K_ip",
+        "K_oq",
+        "R_plus_m",
+        "R_minus_static_m",
+        "tilt_rad",
+    ] {
+        let (ua, ub) = (a[k].as_f64().unwrap(), b[k].as_f64().unwrap());
+        assert!(ua > 0.0, "{k}");
+        assert!((ua / ub - 2.0).abs() < 0.02, "{k}: {ua} / {ub}");
+    }
+    let o = Command::new(env!("CARGO_BIN_EXE_incal"))
+        .args(["plan", "centrifuge", "--samples", "1"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--samples"));
+}

@@ -547,10 +547,27 @@ fn plan_gfimu_predicts_and_refuses() {
 #[test]
 fn centrifuge_static_radius_carries_the_rate_uncertainty() {
     let csv = tmp("cf_uomega.csv");
-    ok(&run(&["simulate", "centrifuge", "--seed", "1", "-o", p(&csv)]));
+    ok(&run(&[
+        "simulate",
+        "centrifuge",
+        "--seed",
+        "1",
+        "-o",
+        p(&csv),
+    ]));
     let base = [
-        "centrifuge", "--input", p(&csv), "--k1", "1.3", "--k0", "1e-4", "--radius-m", "0.71",
-        "--latitude-deg", "39.9", "--json",
+        "centrifuge",
+        "--input",
+        p(&csv),
+        "--k1",
+        "1.3",
+        "--k0",
+        "1e-4",
+        "--radius-m",
+        "0.71",
+        "--latitude-deg",
+        "39.9",
+        "--json",
     ];
     let static_u = |extra: &[&str]| -> (f64, f64) {
         let mut a = base.to_vec();

@@ -428,3 +428,39 @@ fn joint_static_radius_is_correct_static_radius() {
         assert!((st.u / c.u - 1.0).abs() < 1e-4, "{st:?} {c:?}");
     }
 }
+
+/// `plan` (the reduction on noise-free outputs with an exact scatter)
+/// predicts the Monte Carlo standard deviation of every coefficient and of
+/// the radii within 20 % (300 trials: the standard deviation itself is
+/// known to ±4 %).
+#[test]
+fn plan_predicts_the_monte_carlo_scatter() {
+    let p = incal::sim::centrifuge::plan(&sim(0, standard_positions()), &options(3)).unwrap();
+    let trials = 300;
+    let runs = monte_carlo(17, trials, |s| {
+        let r = calibrate(&simulate(&sim(s, standard_positions())), &options(3)).unwrap();
+        let mut v: Vec<f64> = r.coefficients.values().iter().copied().collect();
+        v.extend(r.joint.values().iter().copied());
+        v
+    });
+    let mut names: Vec<String> = p.coefficients.names().to_vec();
+    names.extend(p.joint.names().iter().cloned());
+    let mut predicted: Vec<f64> = (0..p.coefficients.len())
+        .map(|k| p.coefficients.u_at(k))
+        .collect();
+    predicted.extend((0..p.joint.len()).map(|k| p.joint.u_at(k)));
+    for (k, name) in names.iter().enumerate() {
+        let m = runs.iter().map(|r| r[k]).sum::<f64>() / trials as f64;
+        let sd =
+            (runs.iter().map(|r| (r[k] - m).powi(2)).sum::<f64>() / (trials - 1) as f64).sqrt();
+        let ratio = predicted[k] / sd;
+        eprintln!(
+            "{name}: plan u {:.3e}, Monte Carlo sd {sd:.3e}, ratio {ratio:.3}",
+            predicted[k]
+        );
+        assert!(
+            (0.8..1.25).contains(&ratio),
+            "{name}: plan u / MC sd = {ratio}"
+        );
+    }
+}

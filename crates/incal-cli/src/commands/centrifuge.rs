@@ -338,6 +338,19 @@ impl TruthArgs {
 pub struct SimArgs {
     #[command(flatten)]
     pub truth: TruthArgs,
+    #[command(flatten)]
+    pub rig: RigArgs,
+    /// Random seed (same seed, same file).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Write the CSV here instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+/// The rig and the test plan (shared by `simulate centrifuge` and `plan centrifuge`).
+#[derive(clap::Args, Debug)]
+pub struct RigArgs {
     /// True ECM radius with IA radial, polarity + (m).
     #[arg(long, default_value_t = 0.714775)]
     pub r_plus_m: f64,
@@ -382,12 +395,6 @@ pub struct SimArgs {
     /// Output noise of one sample (output units).
     #[arg(long, default_value_t = 2e-6)]
     pub noise: f64,
-    /// Random seed (same seed, same file).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Write the CSV here instead of standard output.
-    #[arg(long, short = 'o', value_name = "FILE")]
-    pub output: Option<PathBuf>,
 }
 
 fn parse_positions(list: &[String], single: bool) -> CliResult<Vec<Position>> {
@@ -415,8 +422,8 @@ fn parse_positions(list: &[String], single: bool) -> CliResult<Vec<Position>> {
     Ok(out)
 }
 
-/// `incal simulate centrifuge`.
-pub fn simulate(a: &SimArgs) -> CliResult<()> {
+/// The simulated test of `truth` on the rig and plan `a` (checked).
+fn sim_config(truth: &TruthArgs, a: &RigArgs, seed: u64) -> CliResult<CentrifugeSim> {
     if a.samples == 0 {
         return Err(usage("--samples must be at least 1"));
     }
@@ -456,7 +463,7 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         )));
     }
     let cfg = CentrifugeSim {
-        truth: a.truth.model()?,
+        truth: truth.model()?,
         rig: Centrifuge {
             r_plus_m: a.r_plus_m,
             r_minus_m: a.r_minus_m,
@@ -469,13 +476,19 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         rates_rad_s: rates_for_levels(&a.levels_g, a.radius_m, a.g_local),
         samples: a.samples,
         noise: a.noise,
-        seed: a.seed,
+        seed,
     };
     crate::options::sim_size(&[
         ("positions", cfg.positions.len() as f64),
         ("--levels-g", cfg.rates_rad_s.len() as f64),
         ("--samples", a.samples as f64),
     ])?;
+    Ok(cfg)
+}
+
+/// `incal simulate centrifuge`.
+pub fn simulate(a: &SimArgs) -> CliResult<()> {
+    let cfg = sim_config(&a.truth, &a.rig, a.seed)?;
     let mut text = String::from("plane,phi_deg,polarity,omega_rad_s,output\n");
     for o in sim_centrifuge(&cfg) {
         crate::options::finite_output(o.output)?;
@@ -489,4 +502,155 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         ));
     }
     write_text(a.output.as_deref(), &text)
+}
+
+/// Options of `incal plan centrifuge`.
+#[derive(clap::Args, Debug)]
+pub struct PlanArgs {
+    /// The instrument expected (its K0 and K1 matter most; the other terms barely change the prediction).
+    #[command(flatten)]
+    pub truth: TruthArgs,
+    #[command(flatten)]
+    pub rig: RigArgs,
+    /// Standard uncertainty of K0 from the 1 g calibration (g).
+    #[arg(long = "u-k0", visible_alias = "u-k0-g", default_value_t = 0.0)]
+    pub u_k0: f64,
+    /// Standard uncertainty of K1 from the 1 g calibration (output/g).
+    #[arg(long, default_value_t = 0.0)]
+    pub u_k1: f64,
+    /// Model order of the radius regression and station fits, 2 or 3.
+    #[arg(long, default_value_t = 3)]
+    pub order: usize,
+    /// Bound of the fixture angle error (deg), for the type-B delta-c2.
+    #[arg(long, default_value_t = 0.0)]
+    pub alignment_tolerance_deg: f64,
+    /// Relative standard uncertainty of the table rate (ppm).
+    #[arg(long, default_value_t = 0.0)]
+    pub u_omega_ppm: f64,
+    /// Print the plan as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Write to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+/// `incal plan centrifuge`: the predicted u of every coefficient and radius
+/// quantity for a station/speed plan (the reduction run on noise-free
+/// outputs with an exact scatter of `--noise`, `incal::sim::centrifuge::plan`).
+pub fn plan(a: &PlanArgs) -> CliResult<()> {
+    use crate::output::{json_text, sig, table};
+    if a.rig.samples < 2 {
+        return Err(usage(
+            "--samples must be at least 2 (the plan needs a scatter)",
+        ));
+    }
+    if !(a.rig.noise.is_finite() && a.rig.noise > 0.0) {
+        return Err(usage(format!(
+            "--noise must be a positive number, got {}",
+            crate::output::num(a.rig.noise)
+        )));
+    }
+    for (n, v) in [
+        ("--u-k0", a.u_k0),
+        ("--u-k1", a.u_k1),
+        ("--alignment-tolerance-deg", a.alignment_tolerance_deg),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(usage(format!(
+                "{n} must be a non-negative number, got {}",
+                crate::output::num(v)
+            )));
+        }
+    }
+    if !(a.u_omega_ppm.is_finite() && (0.0..=1e5).contains(&a.u_omega_ppm)) {
+        return Err(usage(format!(
+            "--u-omega-ppm must be within 0..1e5, got {}",
+            crate::output::num(a.u_omega_ppm)
+        )));
+    }
+    let cfg = sim_config(&a.truth, &a.rig, 0)?;
+    let t = &cfg.truth;
+    let opts = CentrifugeOptions {
+        k0_g: ValueU {
+            value: t.k0_g,
+            u: a.u_k0,
+        },
+        k1: ValueU {
+            value: t.k1_out_per_g,
+            u: a.u_k1,
+        },
+        cov_k0_k1: 0.0,
+        radius0_m: a.rig.radius_m,
+        latitude_rad: a.rig.latitude_deg.to_radians(),
+        g_local_m_s2: a.rig.g_local,
+        opposite_sense: a.rig.opposite_sense,
+        order: a.order,
+        alignment_tolerance_rad: a.alignment_tolerance_deg.to_radians(),
+        noise: incal::estimation::Noise::Known { sigma: a.rig.noise },
+        terms: None,
+        u_omega_ppm: a.u_omega_ppm,
+    };
+    let r = incal::sim::centrifuge::plan(&cfg, &opts).map_err(crate::error::core)?;
+    let unit = |n: &str| -> String {
+        match n {
+            "tilt_rad" => "rad".into(),
+            n if n.ends_with("_m") => "m".into(),
+            n => Term::parse(n).map_or("g/g^2".to_string(), |t| t.unit().as_str().to_string()),
+        }
+    };
+    let mut rows: Vec<(String, f64, String)> = Vec::new();
+    for e in [&r.coefficients, &r.joint] {
+        for (k, n) in e.names().iter().enumerate() {
+            if rows.iter().any(|(m, _, _)| m == n) {
+                continue;
+            }
+            rows.push((n.clone(), e.u_at(k), unit(n)));
+        }
+    }
+    if a.json {
+        let mut u = serde_json::Map::new();
+        let mut units = serde_json::Map::new();
+        for (n, v, un) in &rows {
+            u.insert(n.clone(), json!(v));
+            units.insert(n.clone(), json!(un));
+        }
+        let doc = json!({
+            "plan": "centrifuge",
+            "positions": a.rig.positions,
+            "single_polarity": a.rig.single_polarity,
+            "levels_g": a.rig.levels_g,
+            "radius_m": a.rig.radius_m,
+            "samples": a.rig.samples,
+            "noise": a.rig.noise,
+            "k0": t.k0_g,
+            "k1": t.k1_out_per_g,
+            "u_k0": a.u_k0,
+            "u_k1": a.u_k1,
+            "order": a.order,
+            "u_omega_ppm": a.u_omega_ppm,
+            "latitude_deg": a.rig.latitude_deg,
+            "predicted_u": u,
+            "units": units,
+            "warnings": r.warnings,
+        });
+        return write_text(a.output.as_deref(), &json_text(&doc));
+    }
+    let mut s = format!(
+        "Centrifuge plan: {} positions x {} levels, {} samples per point, noise {:e} per sample, K1 = {}\n",
+        cfg.positions.len(),
+        a.rig.levels_g.len(),
+        a.rig.samples,
+        a.rig.noise,
+        t.k1_out_per_g
+    );
+    let body: Vec<Vec<String>> = rows
+        .iter()
+        .map(|(n, v, un)| vec![n.clone(), sig(*v, 3), un.clone()])
+        .collect();
+    s.push_str(&table(&["term", "predicted u", "unit"], &body));
+    for w in &r.warnings {
+        s.push_str(&format!("warning [{}]: {}\n", w.code, w.message));
+    }
+    write_text(a.output.as_deref(), &s)
 }

@@ -85,3 +85,36 @@ pub fn simulate(cfg: &CentrifugeSim) -> Vec<Observation> {
     }
     out
 }
+
+/// The plan of a centrifuge test: the reduction itself run on noise-free
+/// outputs with a deterministic scatter of exactly `cfg.noise` (sample
+/// standard deviation) at every point, the output noise known to the fits.
+/// The u it reports are the predicted standard uncertainties of the plan
+/// (every fit's u scales with the noise; the static radius and tilt take
+/// the scatter of the samples, which is exactly σ here). Needs at least 2
+/// samples per point.
+pub fn plan(
+    cfg: &CentrifugeSim,
+    opts: &crate::procedures::centrifuge::CentrifugeOptions,
+) -> crate::error::Result<crate::procedures::centrifuge::CentrifugeResult> {
+    let n = cfg.samples;
+    if n < 2 || !(cfg.noise.is_finite() && cfg.noise > 0.0) {
+        return Err(crate::error::Error::InvalidValue {
+            what: "plan: samples per point (>= 2) and noise (> 0)".into(),
+            value: format!("{n}, {}", cfg.noise),
+        });
+    }
+    // z_i: zero mean, sample standard deviation exactly 1.
+    let c = (n as f64 - 1.0) / 2.0;
+    let ss: f64 = (0..n).map(|i| (i as f64 - c).powi(2)).sum();
+    let scale = ((n as f64 - 1.0) / ss).sqrt();
+    let mut quiet = cfg.clone();
+    quiet.noise = 0.0;
+    let mut obs = simulate(&quiet);
+    for (k, o) in obs.iter_mut().enumerate() {
+        o.output += cfg.noise * (k % n) as f64 * scale - cfg.noise * c * scale;
+    }
+    let mut o = opts.clone();
+    o.noise = crate::estimation::Noise::Known { sigma: cfg.noise };
+    crate::procedures::centrifuge::calibrate(&obs, &o)
+}

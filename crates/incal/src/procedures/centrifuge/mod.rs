@@ -493,6 +493,10 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
         g_local_m_s2: opts.g_local_m_s2,
         opposite_sense: opts.opposite_sense,
         u_omega_rel: opts.u_omega_ppm * 1e-6,
+        known_sigma: match opts.noise {
+            Noise::Known { sigma } => Some(sigma),
+            Noise::Auto => None,
+        },
     };
     let nominal = Centrifuge {
         r_plus_m: opts.radius0_m,
@@ -1158,6 +1162,10 @@ fn estimate(
         })
     };
 
+    let known_sigma = match opts.noise {
+        Noise::Known { sigma } => Some(sigma),
+        Noise::Auto => None,
+    };
     // Inputs: K1, then per station c2 (with q, c3 at the IA station), dc2.
     let mut inp = Inputs {
         names: Vec::new(),
@@ -1196,7 +1204,7 @@ fn estimate(
                 None,
                 UncertaintyType::A,
                 vec![("E0".into(), e0.mean)],
-                DMatrix::from_element(1, 1, radius::sem(&e0).powi(2)),
+                DMatrix::from_element(1, 1, radius::sem(&e0, known_sigma).powi(2)),
                 f64::INFINITY,
             );
             Some((k0, e))
@@ -1211,7 +1219,7 @@ fn estimate(
                 None,
                 UncertaintyType::A,
                 vec![(format!("E_a({sign})"), ea.mean)],
-                DMatrix::from_element(1, 1, radius::sem(&ea).powi(2)),
+                DMatrix::from_element(1, 1, radius::sem(&ea, known_sigma).powi(2)),
                 f64::INFINITY,
             );
             // The static speed, a type-B input (--u-omega-ppm): the eq. 6

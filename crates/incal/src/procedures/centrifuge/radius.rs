@@ -72,6 +72,9 @@ pub struct RadiusContext {
     /// Relative standard uncertainty of the table rate ω (e.g. 1e-4 for
     /// 100 ppm): a type-B input of the static radius, which goes as 1/ω².
     pub u_omega_rel: f64,
+    /// Known output noise σ of one sample (output units), when given:
+    /// the u of a mean is σ/√n instead of its sample scatter.
+    pub known_sigma: Option<f64>,
 }
 
 /// Static tilt `λ = E0/K1 − K0` (rad; seed 001 eq. 4, small angle), with
@@ -80,9 +83,13 @@ pub fn tilt_at(k0_g: f64, k1: f64, e0: f64) -> f64 {
     e0 / k1 - k0_g
 }
 
-/// Standard uncertainty of a mean of `s.n` samples, `s/√n` (0 for one
-/// sample: no scatter is known).
-pub(crate) fn sem(s: &PositionStats) -> f64 {
+/// Standard uncertainty of a mean of `s.n` samples: `σ/√n` with the known
+/// output noise σ (`--noise`), else `s/√n` (0 for one sample: no scatter is
+/// known).
+pub(crate) fn sem(s: &PositionStats, known_sigma: Option<f64>) -> f64 {
+    if let Some(sigma) = known_sigma {
+        return sigma / (s.n as f64).sqrt();
+    }
     if s.n > 1 {
         s.std / (s.n as f64).sqrt()
     } else {
@@ -103,7 +110,7 @@ pub fn static_tilt(samples: &[f64], ctx: &RadiusContext) -> Result<ValueU> {
         DMatrix::from_diagonal(&DVector::from_vec(vec![
             ctx.k0_g.u.powi(2),
             ctx.k1.u.powi(2),
-            sem(&st).powi(2),
+            sem(&st, ctx.known_sigma).powi(2),
         ])),
         f64::INFINITY,
     )?;
@@ -193,8 +200,8 @@ pub fn static_radius(
         DMatrix::from_diagonal(&DVector::from_vec(vec![
             ctx.k0_g.u.powi(2),
             ctx.k1.u.powi(2),
-            sem(&a).powi(2),
-            sem(&z).powi(2),
+            sem(&a, ctx.known_sigma).powi(2),
+            sem(&z, ctx.known_sigma).powi(2),
             (ctx.u_omega_rel * omega_rad_s).powi(2),
         ])),
         f64::INFINITY,
@@ -432,6 +439,7 @@ mod tests {
             g_local_m_s2: G,
             opposite_sense: false,
             u_omega_rel: 0.0,
+            known_sigma: None,
         }
     }
 
