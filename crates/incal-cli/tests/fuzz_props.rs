@@ -1,0 +1,95 @@
+//! The fuzz targets (`incal_cli::fuzz`) as a quick property-based pass:
+//! each target's valid seed input, then mutations of it (bytes flipped,
+//! cut, duplicated, or replaced by the tokens that break readers: NaN,
+//! inf, 1e308, empty fields, separators, a BOM, text), must never panic
+//! and must exit 0 with valid JSON or exit 2. The long runs are
+//! `cargo fuzz` (README "Development").
+
+use incal_cli::fuzz::{check, seed, TARGETS};
+use proptest::prelude::*;
+
+const TOKENS: &[&str] = &[
+    "nan", "NaN", "inf", "-inf", "1e308", "-1e308", "1e-320", "", ",", "\n", "\r\n", "\u{feff}",
+    "abc", "0", "-0", "99999999999999999999", "\"", "#", " ", "x_p", "x_rot", "[", "]", "{", "}",
+    "=", "1e15", "-1", "0.0", "9.81",
+];
+
+#[derive(Debug, Clone)]
+enum Mutation {
+    Flip(usize, u8),
+    Cut(usize),
+    Token(usize, usize, usize),
+    Duplicate(usize, usize),
+}
+
+fn apply(base: &[u8], muts: &[Mutation]) -> Vec<u8> {
+    let mut v = base.to_vec();
+    for m in muts {
+        let n = v.len().max(1);
+        match *m {
+            Mutation::Flip(at, b) => {
+                if !v.is_empty() {
+                    v[at % n] ^= b;
+                }
+            }
+            Mutation::Cut(at) => v.truncate(at % (n + 1)),
+            Mutation::Token(at, len, t) => {
+                let s = (at % n).min(v.len());
+                let e = (s + len % 8).min(v.len());
+                v.splice(s..e, TOKENS[t % TOKENS.len()].bytes());
+            }
+            Mutation::Duplicate(at, len) => {
+                let s = (at % n).min(v.len());
+                let e = (s + len % 200).min(v.len());
+                let piece = v[s..e].to_vec();
+                v.splice(s..s, piece);
+            }
+        }
+    }
+    v
+}
+
+fn mutation() -> impl Strategy<Value = Mutation> {
+    prop_oneof![
+        (any::<usize>(), 1u8..=255).prop_map(|(a, b)| Mutation::Flip(a, b)),
+        any::<usize>().prop_map(Mutation::Cut),
+        (any::<usize>(), any::<usize>(), any::<usize>()).prop_map(|(a, l, t)| Mutation::Token(a, l, t)),
+        (any::<usize>(), any::<usize>()).prop_map(|(a, l)| Mutation::Duplicate(a, l)),
+    ]
+}
+
+#[test]
+fn every_seed_is_valid_and_accepted() {
+    for (t, _) in TARGETS {
+        let s = seed(t);
+        assert!(!s.is_empty(), "{t}: empty seed");
+        let (code, _) = incal_cli::fuzz::run(t, &s);
+        assert_eq!(code, 0, "{t}: the valid seed is refused");
+        check(t, &s).unwrap();
+        // The empty input is refused, not a panic.
+        check(t, b"").unwrap();
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 96, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn mutated_inputs_never_panic(target in 0..TARGETS.len(), muts in prop::collection::vec(mutation(), 1..6)) {
+        let t = TARGETS[target].0;
+        let data = apply(&seed(t), &muts);
+        let r = std::panic::catch_unwind(|| check(t, &data));
+        match r {
+            Ok(Ok(())) => {}
+            Ok(Err(e)) => prop_assert!(false, "{t}: {e}"),
+            Err(_) => prop_assert!(false, "{t}: panicked"),
+        }
+    }
+
+    #[test]
+    fn arbitrary_bytes_never_panic(target in 0..TARGETS.len(), data in prop::collection::vec(any::<u8>(), 0..400)) {
+        let t = TARGETS[target].0;
+        let r = std::panic::catch_unwind(|| check(t, &data));
+        prop_assert!(matches!(r, Ok(Ok(()))), "{t}: {r:?}");
+    }
+}
