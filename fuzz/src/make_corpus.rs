@@ -1,0 +1,13 @@
+//! Write every target's seed (a valid input from the simulators) to
+//! `fuzz/corpus/<target>/seed`, the starting corpus of `cargo fuzz run`.
+
+fn main() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus");
+    for (t, what) in incal_cli::fuzz::TARGETS {
+        let dir = root.join(t.replace('-', "_"));
+        std::fs::create_dir_all(&dir).expect("corpus directory");
+        std::fs::write(dir.join("seed"), incal_cli::fuzz::seed(t)).expect("seed file");
+        println!("{t}: {what}");
+    }
+    incal_cli::fuzz::cleanup();
+}
