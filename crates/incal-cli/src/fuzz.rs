@@ -26,14 +26,20 @@ pub const TARGETS: &[(&str, &str)] = &[
     ("gfimu-calibrate", "gyro-free unit static CSV"),
     ("gfimu-geometry", "gyro-free unit geometry TOML"),
     ("gfimu-solve", "gyro-free unit motion CSV"),
-    ("gfimu-calibration", "gyro-free unit calibration JSON (gfimu solve --calibration)"),
+    (
+        "gfimu-calibration",
+        "gyro-free unit calibration JSON (gfimu solve --calibration)",
+    ),
     ("gyro-rate", "gyro rate-transfer CSV"),
     ("gyro-positions", "gyro multi-position CSV"),
     ("noise", "noise CSV"),
     ("imu-ferraris", "IMU Ferraris session CSV"),
     ("imu-multipos", "IMU multi-position CSV"),
     ("imu-autocal", "IMU autocalibration CSV"),
-    ("imu-calibration", "IMU calibration JSON (imu apply --calibration)"),
+    (
+        "imu-calibration",
+        "IMU calibration JSON (imu apply --calibration)",
+    ),
     ("result", "result document JSON (compare)"),
     ("limits", "limits TOML (--limits)"),
 ];
@@ -91,24 +97,59 @@ fn make_seeds() -> Vec<(String, Vec<u8>)> {
     let tumble = sim(&["simulate", "tumble", "--seed", "3"], "tumble.csv");
     let gfimu_static = sim(&["simulate", "gfimu", "--seed", "3"], "gfimu.csv");
     let gfimu_motion = sim(
-        &["simulate", "gfimu", "--kind", "motion", "--duration-s", "0.2", "--seed", "3"],
+        &[
+            "simulate",
+            "gfimu",
+            "--kind",
+            "motion",
+            "--duration-s",
+            "0.2",
+            "--seed",
+            "3",
+        ],
         "motion.csv",
     );
     let gfimu_cal = {
         let p = file("gfimu_static.csv", &gfimu_static);
-        sim(&["gfimu", "calibrate", "--input", &p, "--json"], "gfimu_cal.json")
+        sim(
+            &["gfimu", "calibrate", "--input", &p, "--json"],
+            "gfimu_cal.json",
+        )
     };
     let ferraris = sim(
-        &["simulate", "imu", "--sequence", "ferraris", "--static-s", "0.5", "--rotation-s", "1"],
+        &[
+            "simulate",
+            "imu",
+            "--sequence",
+            "ferraris",
+            "--static-s",
+            "0.5",
+            "--rotation-s",
+            "1",
+        ],
         "ferraris.csv",
     );
     let imu_cal = {
         let p = file("ferraris_in.csv", &ferraris);
-        sim(&["imu", "ferraris", "--input", &p, "--rate-hz", "100", "--json"], "imu_cal.json")
+        sim(
+            &[
+                "imu",
+                "ferraris",
+                "--input",
+                &p,
+                "--rate-hz",
+                "100",
+                "--json",
+            ],
+            "imu_cal.json",
+        )
     };
     let result = {
         let p = file("tumble_in.csv", &tumble);
-        sim(&["tumble", "--mount", "pendulum", "--input", &p, "--json"], "result.json")
+        sim(
+            &["tumble", "--mount", "pendulum", "--input", &p, "--json"],
+            "result.json",
+        )
     };
     let seeds = vec![
         ("tumble".to_string(), tumble),
@@ -168,37 +209,183 @@ pub fn run(target: &str, data: &[u8]) -> (u8, Option<Vec<u8>>) {
     let o = out.to_string_lossy().to_string();
     let fixed = |t: &str, name: &str| file(name, &seed(t));
     let args: Vec<String> = match target {
-        "tumble" => vec!["tumble", "--mount", "pendulum", "--input", &input, "--json"].into_iter().map(String::from).collect(),
-        "centrifuge" => ["centrifuge", "--input", &input, "--k1", "1.3", "--k0", "1.2e-4", "--radius-m", "0.71", "--latitude-deg", "39.9", "--json"].map(String::from).to_vec(),
-        "misalign-gyro" => ["misalign", "gyro", "--input", &input, "--scale-factor", "-2.9222", "--json"].map(String::from).to_vec(),
-        "misalign-accel" => ["misalign", "accel", "--input", &input, "--scale-factor", "1.299", "--json"].map(String::from).to_vec(),
-        "gfimu-calibrate" => ["gfimu", "calibrate", "--input", &input, "--json"].map(String::from).to_vec(),
+        "tumble" => vec!["tumble", "--mount", "pendulum", "--input", &input, "--json"]
+            .into_iter()
+            .map(String::from)
+            .collect(),
+        "centrifuge" => [
+            "centrifuge",
+            "--input",
+            &input,
+            "--k1",
+            "1.3",
+            "--k0",
+            "1.2e-4",
+            "--radius-m",
+            "0.71",
+            "--latitude-deg",
+            "39.9",
+            "--json",
+        ]
+        .map(String::from)
+        .to_vec(),
+        "misalign-gyro" => [
+            "misalign",
+            "gyro",
+            "--input",
+            &input,
+            "--scale-factor",
+            "-2.9222",
+            "--json",
+        ]
+        .map(String::from)
+        .to_vec(),
+        "misalign-accel" => [
+            "misalign",
+            "accel",
+            "--input",
+            &input,
+            "--scale-factor",
+            "1.299",
+            "--json",
+        ]
+        .map(String::from)
+        .to_vec(),
+        "gfimu-calibrate" => ["gfimu", "calibrate", "--input", &input, "--json"]
+            .map(String::from)
+            .to_vec(),
         "gfimu-geometry" => {
             let csv = fixed("gfimu-calibrate", "static.csv");
-            ["gfimu", "calibrate", "--geometry", &input, "--input", &csv, "--json"].map(String::from).to_vec()
+            [
+                "gfimu",
+                "calibrate",
+                "--geometry",
+                &input,
+                "--input",
+                &csv,
+                "--json",
+            ]
+            .map(String::from)
+            .to_vec()
         }
         "gfimu-solve" => {
             let cal = fixed("gfimu-calibration", "cal.json");
-            ["gfimu", "solve", "--calibration", &cal, "--input", &input, "--json"].map(String::from).to_vec()
+            [
+                "gfimu",
+                "solve",
+                "--calibration",
+                &cal,
+                "--input",
+                &input,
+                "--json",
+            ]
+            .map(String::from)
+            .to_vec()
         }
         "gfimu-calibration" => {
             let motion = fixed("gfimu-solve", "motion.csv");
-            ["gfimu", "solve", "--calibration", &input, "--input", &motion, "--json"].map(String::from).to_vec()
+            [
+                "gfimu",
+                "solve",
+                "--calibration",
+                &input,
+                "--input",
+                &motion,
+                "--json",
+            ]
+            .map(String::from)
+            .to_vec()
         }
-        "gyro-rate" => ["gyro", "rate", "--input", &input, "--latitude-deg", "45", "--json"].map(String::from).to_vec(),
-        "gyro-positions" => ["gyro", "positions", "--input", &input, "--latitude-deg", "45", "--azimuth-deg", "90", "--k1", "0.02", "--axial", "sa", "--json"].map(String::from).to_vec(),
-        "noise" => ["noise", "--input", &input, "--rate-hz", "100", "--quiet", "--json"].map(String::from).to_vec(),
-        "imu-ferraris" => ["imu", "ferraris", "--input", &input, "--rate-hz", "100", "--json"].map(String::from).to_vec(),
-        "imu-multipos" => ["imu", "multipos", "--input", &input, "--rate-hz", "100", "--json"].map(String::from).to_vec(),
-        "imu-autocal" => ["imu", "autocal", "--input", &input, "--rate-hz", "100", "--init-static-s", "3", "--json"].map(String::from).to_vec(),
+        "gyro-rate" => [
+            "gyro",
+            "rate",
+            "--input",
+            &input,
+            "--latitude-deg",
+            "45",
+            "--json",
+        ]
+        .map(String::from)
+        .to_vec(),
+        "gyro-positions" => [
+            "gyro",
+            "positions",
+            "--input",
+            &input,
+            "--latitude-deg",
+            "45",
+            "--azimuth-deg",
+            "90",
+            "--k1",
+            "0.02",
+            "--axial",
+            "sa",
+            "--json",
+        ]
+        .map(String::from)
+        .to_vec(),
+        "noise" => [
+            "noise",
+            "--input",
+            &input,
+            "--rate-hz",
+            "100",
+            "--quiet",
+            "--json",
+        ]
+        .map(String::from)
+        .to_vec(),
+        "imu-ferraris" => [
+            "imu",
+            "ferraris",
+            "--input",
+            &input,
+            "--rate-hz",
+            "100",
+            "--json",
+        ]
+        .map(String::from)
+        .to_vec(),
+        "imu-multipos" => [
+            "imu",
+            "multipos",
+            "--input",
+            &input,
+            "--rate-hz",
+            "100",
+            "--json",
+        ]
+        .map(String::from)
+        .to_vec(),
+        "imu-autocal" => [
+            "imu",
+            "autocal",
+            "--input",
+            &input,
+            "--rate-hz",
+            "100",
+            "--init-static-s",
+            "3",
+            "--json",
+        ]
+        .map(String::from)
+        .to_vec(),
         "imu-calibration" => {
             let raw = fixed("imu-ferraris", "raw.csv");
-            ["imu", "apply", "--calibration", &input, "--input", &raw].map(String::from).to_vec()
+            ["imu", "apply", "--calibration", &input, "--input", &raw]
+                .map(String::from)
+                .to_vec()
         }
-        "result" => ["compare", &input, &input, "--json"].map(String::from).to_vec(),
+        "result" => ["compare", &input, &input, "--json"]
+            .map(String::from)
+            .to_vec(),
         "limits" => {
             let csv = fixed("tumble", "t.csv");
-            ["tumble", "--mount", "pendulum", "--input", &csv, "--limits", &input, "--json"].map(String::from).to_vec()
+            [
+                "tumble", "--mount", "pendulum", "--input", &csv, "--limits", &input, "--json",
+            ]
+            .map(String::from)
+            .to_vec()
         }
         other => panic!("unknown fuzz target {other}"),
     };

@@ -21,11 +21,27 @@ pub struct Table {
     headers: Vec<String>,
     index: HashMap<String, usize>,
     /// File line of each data row.
-    lines: Vec<usize>,
+    lines: Vec<u32>,
     /// Every cell's text, row after row.
     text: String,
     /// End offset in `text` of every cell (`row * width + col`).
-    ends: Vec<usize>,
+    ends: Vec<u32>,
+}
+
+/// A reader that hashes every byte it passes on (SHA-256), so a file is
+/// hashed while it is parsed, without a second copy of it in memory.
+struct Hashing<R> {
+    inner: R,
+    hasher: sha2::Sha256,
+}
+
+impl<R: std::io::Read> std::io::Read for Hashing<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        use sha2::Digest;
+        let n = self.inner.read(buf)?;
+        self.hasher.update(&buf[..n]);
+        Ok(n)
+    }
 }
 
 impl Table {
@@ -33,15 +49,55 @@ impl Table {
     /// leading UTF-8 byte-order mark is skipped). Fails (exit 2) when it
     /// cannot be read, is empty, has no data rows, repeats a column name or
     /// has a row of the wrong width.
+    ///
+    /// The file is parsed as it is read (and hashed on the way): memory is
+    /// the cells' text plus 4 bytes per cell and per row, not two copies of
+    /// the file.
     pub fn read(path: &Path) -> CliResult<Table> {
-        let (name, bytes, sha) = io::read_hashed(path)?;
-        let mut t = Self::parse(&name, &bytes)?;
-        t.sha256 = sha;
+        use sha2::Digest;
+        let name = io::display_name(path);
+        let cannot = |e: std::io::Error| CliError::Input(format!("{name}: cannot read: {e}"));
+        let (inner, size): (Box<dyn std::io::Read>, usize) = if io::is_dash(path) {
+            (Box::new(std::io::stdin().lock()), 0)
+        } else {
+            let f = std::fs::File::open(path).map_err(cannot)?;
+            let size = f.metadata().map_or(0, |m| m.len() as usize);
+            (Box::new(f), size)
+        };
+        let mut hashing = Hashing {
+            inner,
+            hasher: sha2::Sha256::new(),
+        };
+        let mut t = Self::from_reader(&name, &mut hashing, size)?;
+        // Hash whatever the CSV reader left unread (nothing, normally).
+        std::io::copy(&mut hashing, &mut std::io::sink()).map_err(cannot)?;
+        let d = hashing.hasher.finalize();
+        t.sha256 = d.iter().map(|b| format!("{b:02x}")).collect();
         Ok(t)
     }
 
     /// Parse CSV text (see [`Table::read`]).
+    #[cfg(test)]
     pub fn parse(name: &str, text: &[u8]) -> CliResult<Table> {
+        let mut t = Self::from_reader(name, text, text.len())?;
+        t.sha256 = crate::output::sha256_hex(text);
+        Ok(t)
+    }
+
+    /// Parse CSV from `source` (`size_hint`: its length in bytes when
+    /// known, to size the text buffer once). The SHA-256 is left empty.
+    fn from_reader(name: &str, source: impl std::io::Read, size_hint: usize) -> CliResult<Table> {
+        use std::io::BufRead;
+        let mut buffered = std::io::BufReader::with_capacity(1 << 16, source);
+        // A UTF-8 byte-order mark (spreadsheet exports) is skipped.
+        if buffered
+            .fill_buf()
+            .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?
+            .starts_with(b"\xEF\xBB\xBF")
+        {
+            buffered.consume(3);
+        }
+        let text = buffered;
         let err = |line: Option<usize>, msg: String| {
             CliError::Input(match line {
                 Some(l) => format!("{name}:{l}: {msg}"),
@@ -84,9 +140,16 @@ impl Table {
             }
         }
         let width = headers.len();
-        let mut lines = Vec::new();
-        let mut cells = String::new();
-        let mut ends = Vec::new();
+        let mut lines: Vec<u32> = Vec::new();
+        // The cells are at most the file: one allocation, no regrowth.
+        let mut cells = String::with_capacity(size_hint);
+        let mut ends: Vec<u32> = Vec::new();
+        let too_big = || {
+            err(
+                None,
+                "too large for one table (at most 4 GB of cells and 4e9 lines)".into(),
+            )
+        };
         let mut rec = csv::ByteRecord::new();
         loop {
             let more = reader.read_byte_record(&mut rec).map_err(|e| {
@@ -110,16 +173,25 @@ impl Table {
                 let t =
                     std::str::from_utf8(f).map_err(|_| err(Some(line), "invalid UTF-8".into()))?;
                 cells.push_str(t);
-                ends.push(cells.len());
+                ends.push(u32::try_from(cells.len()).map_err(|_| too_big())?);
             }
-            lines.push(line);
+            lines.push(u32::try_from(line).map_err(|_| too_big())?);
+            if lines.len() == 256 && size_hint > 0 {
+                // Size the row and cell indexes from the first rows' length
+                // (plus 10 %), instead of doubling (which holds up to three
+                // times the final size while it copies).
+                let per_row = (cells.len() as f64 / 256.0).max(1.0);
+                let rows = (size_hint as f64 / per_row * 1.1) as usize;
+                lines.reserve(rows.saturating_sub(lines.len()));
+                ends.reserve((rows * width).saturating_sub(ends.len()));
+            }
         }
         if lines.is_empty() {
             return Err(err(None, "no data rows after the header".into()));
         }
         Ok(Table {
             path: name.to_string(),
-            sha256: crate::output::sha256_hex(text),
+            sha256: String::new(),
             headers,
             index,
             lines,
@@ -162,14 +234,14 @@ impl Table {
 
     /// File line of data row `row`.
     pub fn line(&self, row: usize) -> usize {
-        self.lines[row]
+        self.lines[row] as usize
     }
 
     /// Raw text of a cell.
     pub fn text(&self, row: usize, col: usize) -> &str {
         let k = row * self.headers.len() + col;
-        let start = if k == 0 { 0 } else { self.ends[k - 1] };
-        &self.text[start..self.ends[k]]
+        let start = if k == 0 { 0 } else { self.ends[k - 1] as usize };
+        &self.text[start..self.ends[k] as usize]
     }
 
     /// A finite number from a cell, or an error naming file, line, column.

@@ -9,9 +9,36 @@ use incal_cli::fuzz::{check, seed, TARGETS};
 use proptest::prelude::*;
 
 const TOKENS: &[&str] = &[
-    "nan", "NaN", "inf", "-inf", "1e308", "-1e308", "1e-320", "", ",", "\n", "\r\n", "\u{feff}",
-    "abc", "0", "-0", "99999999999999999999", "\"", "#", " ", "x_p", "x_rot", "[", "]", "{", "}",
-    "=", "1e15", "-1", "0.0", "9.81",
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "1e308",
+    "-1e308",
+    "1e-320",
+    "",
+    ",",
+    "\n",
+    "\r\n",
+    "\u{feff}",
+    "abc",
+    "0",
+    "-0",
+    "99999999999999999999",
+    "\"",
+    "#",
+    " ",
+    "x_p",
+    "x_rot",
+    "[",
+    "]",
+    "{",
+    "}",
+    "=",
+    "1e15",
+    "-1",
+    "0.0",
+    "9.81",
 ];
 
 #[derive(Debug, Clone)]
@@ -53,7 +80,8 @@ fn mutation() -> impl Strategy<Value = Mutation> {
     prop_oneof![
         (any::<usize>(), 1u8..=255).prop_map(|(a, b)| Mutation::Flip(a, b)),
         any::<usize>().prop_map(Mutation::Cut),
-        (any::<usize>(), any::<usize>(), any::<usize>()).prop_map(|(a, l, t)| Mutation::Token(a, l, t)),
+        (any::<usize>(), any::<usize>(), any::<usize>())
+            .prop_map(|(a, l, t)| Mutation::Token(a, l, t)),
         (any::<usize>(), any::<usize>()).prop_map(|(a, l)| Mutation::Duplicate(a, l)),
     ]
 }
