@@ -12,7 +12,6 @@ use incal::units::{arcsec_to_rad, rad_to_deg};
 use serde_json::{json, Map, Value};
 
 use crate::error::{core, in_file, usage, CliResult};
-use crate::input::Table;
 use crate::options::noise_option;
 use crate::output::{json_text, sig, table, write_text, ResultArgs};
 
@@ -63,35 +62,47 @@ fn parse_terms(list: &Option<Vec<String>>, mount: Mount) -> CliResult<Vec<Term>>
     }
 }
 
-fn read_observations(path: &std::path::Path) -> CliResult<(Table, Vec<Observation>)> {
-    let t = Table::read(path)?;
-    let ca = t.column("angle_deg")?;
-    let co = t.column("output")?;
-    let cp = t.opt_column("pass");
-    let mut obs = Vec::with_capacity(t.row_count());
-    for row in 0..t.row_count() {
-        let angle = t.f64(row, ca)?;
-        let output = t.f64(row, co)?;
-        let pass = match cp {
-            Some(c) => {
-                let label = t.text(row, c).trim();
-                if label.is_empty() {
-                    return Err(t.error_at(
-                        row,
-                        "column 'pass': empty label (label every row of a multi-pass file)".into(),
-                    ));
+/// Read a tumble CSV row by row into observations (the file itself is
+/// never held in memory: a 720 000-row file costs its observations only).
+fn read_observations(
+    path: &std::path::Path,
+) -> CliResult<(crate::input::Streamed, Vec<Observation>)> {
+    let mut obs = Vec::new();
+    let streamed = crate::input::stream_file(
+        path,
+        |h| {
+            Ok((
+                h.column("angle_deg")?,
+                h.column("output")?,
+                h.opt_column("pass"),
+            ))
+        },
+        |&(ca, co, cp), row| {
+            let angle = row.f64(ca)?;
+            let output = row.f64(co)?;
+            let pass = match cp {
+                Some(c) => {
+                    let label = row.text(c).trim();
+                    if label.is_empty() {
+                        return Err(row.error(
+                            "column 'pass': empty label (label every row of a multi-pass file)"
+                                .into(),
+                        ));
+                    }
+                    Some(label.to_string())
                 }
-                Some(label.to_string())
-            }
-            None => None,
-        };
-        obs.push(Observation {
-            angle_rad: angle.to_radians(),
-            output,
-            pass,
-        });
-    }
-    Ok((t, obs))
+                None => None,
+            };
+            obs.push(Observation {
+                angle_rad: angle.to_radians(),
+                output,
+                pass,
+            });
+            Ok(())
+        },
+    )?;
+    obs.shrink_to_fit();
+    Ok((streamed, obs))
 }
 
 /// `incal tumble`.
