@@ -373,3 +373,97 @@ fn the_report_draws_the_allan_plot() {
     assert!(svg.matches("<polyline").count() >= 8, "bars and lines");
     assert!(html.contains("OADEV with 68.3 % bounds"));
 }
+
+/// `simulate noise --quantity accel`: terms in accelerometer units (g
+/// samples), recovered by `noise --quantity accel --unit g` within their
+/// U95; a gyro term option with accel (and the reverse) is refused.
+#[test]
+fn accelerometer_records_round_trip() {
+    let p = dir().join("accel.bin");
+    ok(&incal(&[
+        "simulate",
+        "noise",
+        "--quantity",
+        "accel",
+        "--vrw-ug-rthz",
+        "50",
+        "--bias-instability-ug",
+        "20",
+        "--rate-hz",
+        "100",
+        "--duration-s",
+        "20000",
+        "--seed",
+        "3",
+        "--format",
+        "f64le",
+        "--output",
+        p.to_str().unwrap(),
+    ]));
+    let out = ok(&incal(&[
+        "noise",
+        "--input",
+        p.to_str().unwrap(),
+        "--format",
+        "f64le",
+        "--channels",
+        "1",
+        "--rate-hz",
+        "100",
+        "--quantity",
+        "accel",
+        "--unit",
+        "g",
+        "--json",
+    ]));
+    let v: Value = serde_json::from_str(&out).unwrap();
+    let c = &v["coefficients"];
+    assert_eq!(c["ch1.VRW"]["unit"], "ug/sqrt(Hz)");
+    for (name, truth) in [("ch1.VRW", 50.0), ("ch1.bias_instability", 20.0)] {
+        let (x, u95) = (
+            c[name]["value"].as_f64().unwrap(),
+            c[name]["U95"].as_f64().unwrap(),
+        );
+        assert!(
+            (x - truth).abs() <= u95,
+            "{name}: {x} vs {truth} (U95 {u95})"
+        );
+    }
+    let q = dir().join("x.csv");
+    bad(
+        &incal(&[
+            "simulate",
+            "noise",
+            "--quantity",
+            "accel",
+            "--arw-deg-rth",
+            "1",
+            "--rate-hz",
+            "10",
+            "--duration-s",
+            "10",
+            "--seed",
+            "1",
+            "--output",
+            q.to_str().unwrap(),
+        ]),
+        "--arw-deg-rth is not a term of --quantity accel",
+    );
+    bad(
+        &incal(&[
+            "simulate",
+            "noise",
+            "--vrw-ug-rthz",
+            "1",
+            "--rate-hz",
+            "10",
+            "--duration-s",
+            "10",
+            "--seed",
+            "1",
+            "--output",
+            q.to_str().unwrap(),
+        ]),
+        "--vrw-ug-rthz is not a term of --quantity gyro",
+    );
+}

@@ -473,9 +473,24 @@ pub fn run(a: &Args) -> CliResult<()> {
 /// `incal simulate noise`.
 #[derive(clap::Args, Debug)]
 pub struct SimArgs {
-    /// What to simulate (gyro: the term options below in their gyro units).
+    /// What to simulate: gyro (rate in deg/s, the --arw-deg-rth ... options) or accel (in g, the --vrw-ug-rthz ... options).
     #[arg(long, value_enum, default_value = "gyro")]
     pub quantity: QuantityArg,
+    /// Accelerometer: velocity random walk N, ug/sqrt(Hz).
+    #[arg(long, default_value_t = 0.0)]
+    pub vrw_ug_rthz: f64,
+    /// Accelerometer: bias instability B, ug (flicker, Kasdin & Walter).
+    #[arg(long, default_value_t = 0.0)]
+    pub bias_instability_ug: f64,
+    /// Accelerometer: acceleration random walk K, ug/sqrt(s).
+    #[arg(long, default_value_t = 0.0)]
+    pub accel_rw_ug_rts: f64,
+    /// Accelerometer: velocity quantization Q, m/s.
+    #[arg(long, default_value_t = 0.0)]
+    pub quantization_m_s: f64,
+    /// Accelerometer: acceleration ramp R, ug/s.
+    #[arg(long, default_value_t = 0.0)]
+    pub accel_ramp_ug_s: f64,
     /// Angle random walk N, deg/sqrt(h).
     #[arg(long, default_value_t = 0.0)]
     pub arw_deg_rth: f64,
@@ -511,25 +526,42 @@ pub struct SimArgs {
     pub output: PathBuf,
 }
 
-/// `incal simulate noise`: rate samples in deg/s.
+/// `incal simulate noise`: rate samples in deg/s (gyro) or g (accel).
 pub fn simulate(a: &SimArgs) -> CliResult<()> {
-    if a.quantity != QuantityArg::Gyro {
-        return Err(usage(
-            "simulate noise: only --quantity gyro is simulated (terms in gyro units)",
-        ));
-    }
-    for (n, v) in [
+    let gyro_opts = [
         ("--arw-deg-rth", a.arw_deg_rth),
         ("--bias-instability-deg-h", a.bias_instability_deg_h),
         ("--rrw-deg-h-rth", a.rrw_deg_h_rth),
         ("--quantization-arcsec", a.quantization_arcsec),
-    ] {
-        if !(v.is_finite() && v >= 0.0) {
+        ("--rate-ramp-deg-h2", a.rate_ramp_deg_h2),
+    ];
+    let accel_opts = [
+        ("--vrw-ug-rthz", a.vrw_ug_rthz),
+        ("--bias-instability-ug", a.bias_instability_ug),
+        ("--accel-rw-ug-rts", a.accel_rw_ug_rts),
+        ("--quantization-m-s", a.quantization_m_s),
+        ("--accel-ramp-ug-s", a.accel_ramp_ug_s),
+    ];
+    // One option, one meaning: a term option of the other quantity is refused.
+    let (mine, other, what) = match a.quantity {
+        QuantityArg::Gyro => (&gyro_opts, &accel_opts, "gyro"),
+        QuantityArg::Accel => (&accel_opts, &gyro_opts, "accel"),
+        QuantityArg::Generic => {
+            return Err(usage(
+                "simulate noise: --quantity gyro or accel (a generic quantity has no term units to simulate)",
+            ))
+        }
+    };
+    if let Some((n, _)) = other.iter().find(|(_, v)| *v != 0.0) {
+        return Err(usage(format!("{n} is not a term of --quantity {what}")));
+    }
+    for (n, v) in mine.iter().take(4) {
+        if !(v.is_finite() && *v >= 0.0) {
             return Err(usage(format!("{n} must be a non-negative number")));
         }
     }
-    if !a.rate_ramp_deg_h2.is_finite() {
-        return Err(usage("--rate-ramp-deg-h2 must be a finite number"));
+    if !mine[4].1.is_finite() {
+        return Err(usage(format!("{} must be a finite number", mine[4].0)));
     }
     if !(a.rate_hz.is_finite() && a.rate_hz > 0.0) {
         return Err(usage("--rate-hz must be a positive number"));
@@ -545,13 +577,23 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
     }
     let n = n.round() as usize;
     let tau0 = 1.0 / a.rate_hz;
-    // Gyro units to the deg/s base of the simulator.
-    let truth = NoiseTruth {
-        q: a.quantization_arcsec / 3600.0,
-        n: a.arw_deg_rth / 60.0,
-        b: a.bias_instability_deg_h / 3600.0,
-        k: a.rrw_deg_h_rth / 216_000.0,
-        r: a.rate_ramp_deg_h2 / (3600.0 * 3600.0),
+    let truth = match a.quantity {
+        // Gyro units to the deg/s base of the simulator.
+        QuantityArg::Gyro => NoiseTruth {
+            q: a.quantization_arcsec / 3600.0,
+            n: a.arw_deg_rth / 60.0,
+            b: a.bias_instability_deg_h / 3600.0,
+            k: a.rrw_deg_h_rth / 216_000.0,
+            r: a.rate_ramp_deg_h2 / (3600.0 * 3600.0),
+        },
+        // Accelerometer units to the g base (ug/sqrt(Hz) = 1e-6 g*sqrt(s)).
+        _ => NoiseTruth {
+            q: a.quantization_m_s / incal::units::STANDARD_GRAVITY_M_S2,
+            n: a.vrw_ug_rthz * 1e-6,
+            b: a.bias_instability_ug * 1e-6,
+            k: a.accel_rw_ug_rts * 1e-6,
+            r: a.accel_ramp_ug_s * 1e-6,
+        },
     };
     let chans: Vec<Vec<f64>> = (0..a.channels)
         .into_par_iter()
