@@ -362,3 +362,99 @@ direction = [0.0, 1.0, 0.0]
         &[ns, "not valid JSON"],
     );
 }
+
+/// The twelve-accelerometer layout solves each sample directly; the three
+/// outputs (CSV, JSON, JSON lines) carry the same numbers, and u covers
+/// the simulated truth of f0.
+#[test]
+fn twelve_layout_outputs_agree() {
+    let st = temp(
+        "s12.csv",
+        &simulate(&["--layout", "twelve", "--seed", "11", "--samples", "20"]),
+    );
+    let o = incal(&[
+        "gfimu",
+        "calibrate",
+        "--layout",
+        "twelve",
+        "--input",
+        st.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let cal = temp("c12.json", &stdout(&o));
+    let mo = temp(
+        "m12.csv",
+        &simulate(&["--layout", "twelve", "--kind", "motion", "--seed", "12"]),
+    );
+    let run = |extra: &str| {
+        let mut args = vec![
+            "gfimu",
+            "solve",
+            "--layout",
+            "twelve",
+            "--calibration",
+            cal.to_str().unwrap(),
+            "--input",
+            mo.to_str().unwrap(),
+        ];
+        if !extra.is_empty() {
+            args.push(extra);
+        }
+        let o = incal(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stdout(&o)
+    };
+    // serde_json parses floats to within an ulp, not exactly.
+    let same =
+        |a: f64, b: f64| assert!((a - b).abs() <= 1e-15 * a.abs().max(b.abs()), "{a} vs {b}");
+    let doc: Value = serde_json::from_str(&run("--json")).unwrap();
+    assert_eq!(doc["mode"], "direct");
+    let samples = doc["samples"].as_array().unwrap();
+    let us = doc["uncertainty"].as_array().unwrap();
+    assert_eq!(samples.len(), 201);
+    assert_eq!(us.len(), 201);
+    let lines: Vec<Value> = run("--jsonl")
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 202);
+    assert_eq!(lines[201]["summary"]["mode"], "direct");
+    let csv = run("");
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("time_s"))
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 201);
+    for (k, ((s, u), (l, r))) in samples
+        .iter()
+        .zip(us)
+        .zip(lines.iter().zip(&rows))
+        .enumerate()
+    {
+        let keys = ["f0_g", "omega_dot_rad_s2", "omega_rad_s"];
+        for (i, key) in keys.iter().enumerate() {
+            for a in 0..3 {
+                let v = s[key][a].as_f64().unwrap();
+                same(v, l[key][a].as_f64().unwrap());
+                same(v, r[1 + 3 * i + a]);
+                let uk = format!("u_{key}");
+                let uv = u[&uk][a].as_f64().unwrap();
+                same(uv, l[&uk][a].as_f64().unwrap());
+                same(uv, r[10 + 3 * i + a]);
+                // u(ω) is 0 at the first sample: ω0 is given.
+                assert!(uv.is_finite() && (uv > 0.0 || (i == 2 && k == 0)));
+            }
+        }
+        // f0 truth (0.05, 0, 1) g within 4 u on every axis.
+        let truth = [0.05, 0.0, 1.0];
+        for a in 0..3 {
+            let e = s["f0_g"][a].as_f64().unwrap() - truth[a];
+            assert!(
+                e.abs() < 4.0 * u["u_f0_g"][a].as_f64().unwrap(),
+                "sample {k} axis {a}: {e}"
+            );
+        }
+    }
+}

@@ -8,8 +8,7 @@ use incal::document::InputFile;
 use incal::models::gfimu::{ArrayAccelerometer, Geometry};
 use incal::procedures::gfimu::solve::Solver;
 use incal::procedures::gfimu::{
-    calibrate, solve, CalibrateOptions, CalibratedAccelerometer, MotionSolution, SolveOptions,
-    StaticSample,
+    calibrate, CalibrateOptions, CalibratedAccelerometer, SolveOptions, StaticSample,
 };
 use incal::sim::gfimu::{
     simulate_motion, simulate_static, six_positions, GfimuTruth, MotionProfile,
@@ -29,9 +28,21 @@ pub struct GeometryArgs {
     /// Array geometry file (TOML, [[accelerometer]] tables with name, position_m, direction).
     #[arg(long, conflicts_with = "lever_arm_m")]
     pub geometry: Option<PathBuf>,
-    /// Lever arm L (m) of the built-in paper layout (a, b at ±L on x sensing z; c, d on y sensing x; e, f on z sensing y).
+    /// Lever arm L (m) of the built-in layout.
     #[arg(long)]
     pub lever_arm_m: Option<f64>,
+    /// Built-in layout: paper (six: a, b at ±L on x sensing z; c, d on y sensing x; e, f on z sensing y) or twelve (two across each of ±L on x, y, z: px_y, px_z, mx_y, …; solves the centripetal products directly).
+    #[arg(long, value_enum, default_value = "paper", conflicts_with = "geometry")]
+    pub layout: Layout,
+}
+
+/// Built-in gyro-free layouts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Layout {
+    /// The paper's six accelerometers (seed 004).
+    Paper,
+    /// Twelve accelerometers, two across each lever arm.
+    Twelve,
 }
 
 /// Default lever arm of the built-in layout (m).
@@ -115,9 +126,13 @@ impl GeometryArgs {
                         crate::output::num(l)
                     )));
                 }
+                let (g, what) = match self.layout {
+                    Layout::Paper => (Geometry::paper(l), "paper"),
+                    Layout::Twelve => (Geometry::twelve(l), "twelve-accelerometer"),
+                };
                 (
-                    Geometry::paper(l).map_err(|e| usage(format!("--lever-arm-m: {e}")))?,
-                    format!("paper layout, lever arm {l} m"),
+                    g.map_err(|e| usage(format!("--lever-arm-m: {e}")))?,
+                    format!("{what} layout, lever arm {l} m"),
                     None,
                 )
             }
@@ -168,9 +183,12 @@ pub struct SolveArgs {
     /// Predicted u of the integrated angular rate (rad/s) beyond which a warning is given.
     #[arg(long, default_value_t = 0.01)]
     pub omega_u_limit_rad_s: f64,
-    /// Print one JSON object instead of CSV (held in memory; the CSV output streams).
-    #[arg(long)]
+    /// Print one JSON object instead of CSV (streamed, like the CSV).
+    #[arg(long, conflicts_with = "jsonl")]
     pub json: bool,
+    /// Print JSON lines: one object per sample, then one summary object.
+    #[arg(long)]
+    pub jsonl: bool,
     /// Write to this file instead of standard output.
     #[arg(long, short = 'o', value_name = "FILE")]
     pub output: Option<PathBuf>,
@@ -429,37 +447,6 @@ fn read_calibration(
     Ok((name, out))
 }
 
-/// A time series: `(time_s, outputs in geometry order)` per sample.
-type Series = Vec<(f64, Vec<f64>)>;
-
-fn read_series(path: &Path, g: &Geometry) -> CliResult<(String, Series)> {
-    let t = Table::read(path)?;
-    let ct = t.column("time_s")?;
-    let cols: Vec<usize> = g
-        .names()
-        .iter()
-        .map(|n| t.column(n))
-        .collect::<CliResult<_>>()?;
-    let mut out: Vec<(f64, Vec<f64>)> = Vec::with_capacity(t.row_count());
-    for row in 0..t.row_count() {
-        let time = t.f64(row, ct)?;
-        if let Some((prev, _)) = out.last() {
-            if time <= *prev {
-                return Err(t.error_at(
-                    row,
-                    format!("column 'time_s': {time} is not after the previous sample ({prev})"),
-                ));
-            }
-        }
-        let e = cols
-            .iter()
-            .map(|&c| t.f64(row, c))
-            .collect::<CliResult<_>>()?;
-        out.push((time, e));
-    }
-    Ok((t.path.clone(), out))
-}
-
 /// `incal gfimu solve`.
 pub fn run_solve(a: &SolveArgs) -> CliResult<()> {
     let omega0 = vec3("--omega0-rad-s", &a.omega0_rad_s)?;
@@ -486,28 +473,45 @@ pub fn run_solve(a: &SolveArgs) -> CliResult<()> {
         ),
         e => in_file(&cal_file, e),
     })?;
-    if a.json {
-        let (file, series) = read_series(&a.input, &g)?;
-        let sol = solve(&g, &cal, &series, &opts).map_err(|e| in_file(&file, e))?;
-        return write_text(a.output.as_deref(), &json_text(&solution_json(&file, &sol)));
-    }
-    stream_solve(a, &g, solver)
+    let kind = if a.json {
+        OutKind::Json
+    } else if a.jsonl {
+        OutKind::JsonLines
+    } else {
+        OutKind::Csv
+    };
+    stream_solve(a, &g, solver, kind)
 }
 
-/// `gfimu solve` to CSV, one row in, one row out: constant memory.
-fn stream_solve(a: &SolveArgs, g: &Geometry, mut solver: Solver) -> CliResult<()> {
-    use std::io::{BufRead, BufReader, Read, Write};
-    let name = crate::io::display_name(&a.input);
-    let input: Box<dyn Read> = if crate::io::is_dash(&a.input) {
-        Box::new(std::io::stdin().lock())
+/// Rows parsed per batch handed from the reader thread to the solver.
+const BATCH_ROWS: usize = 4096;
+
+/// One batch of parsed rows: line numbers and `[t, e_1 … e_N]` per row.
+struct Batch {
+    lines: Vec<u64>,
+    values: Vec<f64>,
+}
+
+/// What the reader thread sends: a batch, or the error that stopped it
+/// (after every good row before it).
+enum Parsed {
+    Rows(Batch),
+    Failed(CliError),
+}
+
+/// Open the series input (a file or `-`), skipping a UTF-8 byte-order mark.
+fn series_reader(path: &Path) -> CliResult<csv::Reader<Box<dyn std::io::Read + Send>>> {
+    use std::io::{BufRead, BufReader, Read};
+    let name = crate::io::display_name(path);
+    let input: Box<dyn Read + Send> = if crate::io::is_dash(path) {
+        Box::new(std::io::stdin())
     } else {
         Box::new(
-            std::fs::File::open(&a.input)
+            std::fs::File::open(path)
                 .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?,
         )
     };
     let mut reader = BufReader::with_capacity(1 << 16, input);
-    // Skip a UTF-8 byte-order mark.
     if reader
         .fill_buf()
         .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?
@@ -515,12 +519,382 @@ fn stream_solve(a: &SolveArgs, g: &Geometry, mut solver: Solver) -> CliResult<()
     {
         reader.consume(3);
     }
-    let mut csv = csv::ReaderBuilder::new()
+    let boxed: Box<dyn Read + Send> = Box::new(reader);
+    Ok(csv::ReaderBuilder::new()
         .has_headers(false)
         .comment(Some(b'#'))
         .flexible(true)
-        .trim(csv::Trim::All)
-        .from_reader(reader);
+        // Fields are trimmed where they are read (a number, a header
+        // name): csv's own trim copies every record.
+        .from_reader(boxed))
+}
+
+/// Read the header of the series: the column of `time_s` and of every
+/// accelerometer (geometry order), and the header's width.
+fn series_header(
+    name: &str,
+    csv: &mut csv::Reader<Box<dyn std::io::Read + Send>>,
+    g: &Geometry,
+) -> CliResult<(Vec<usize>, usize)> {
+    let mut rec = csv::ByteRecord::new();
+    loop {
+        let more = csv.read_byte_record(&mut rec).map_err(|e| {
+            let line = e.position().map_or(0, |p| p.line());
+            CliError::Input(format!("{name}:{line}: not valid CSV"))
+        })?;
+        if !more {
+            return Err(CliError::Input(format!(
+                "{name}: empty file (expected a header row)"
+            )));
+        }
+        if rec.iter().all(|f| f.trim_ascii().is_empty()) {
+            continue;
+        }
+        let headers: Vec<String> = rec
+            .iter()
+            .map(|h| String::from_utf8_lossy(h.trim_ascii()).to_string())
+            .collect();
+        let find = |n: &str| {
+            headers.iter().position(|h| h == n).ok_or_else(|| {
+                CliError::Input(format!(
+                    "{name}: missing column '{n}' (columns: {})",
+                    crate::output::clip(&headers.join(", "))
+                ))
+            })
+        };
+        let mut cols = vec![find("time_s")?];
+        for n in g.names() {
+            cols.push(find(&n)?);
+        }
+        return Ok((cols, headers.len()));
+    }
+}
+
+/// The reader thread: parse every data row into batches of numbers, in
+/// order; stop at the first bad row and send its error. A row is checked
+/// here (width, numbers, increasing time) so the solver sees only clean
+/// samples; the line numbers travel with the rows for the solver's errors.
+fn parse_series(
+    name: &str,
+    mut csv: csv::Reader<Box<dyn std::io::Read + Send>>,
+    cols: &[usize],
+    names: &[String],
+    width: usize,
+    tx: &std::sync::mpsc::SyncSender<Parsed>,
+    recycled: &std::sync::mpsc::Receiver<Batch>,
+) {
+    let mut rec = csv::ByteRecord::new();
+    let mut prev_t: Option<f64> = None;
+    let mut batch = Batch {
+        lines: Vec::with_capacity(BATCH_ROWS),
+        values: Vec::with_capacity(BATCH_ROWS * cols.len()),
+    };
+    let result = (|| -> CliResult<()> {
+        loop {
+            let more = csv.read_byte_record(&mut rec).map_err(|e| {
+                let line = e.position().map_or(0, |p| p.line());
+                CliError::Input(format!("{name}:{line}: not valid CSV"))
+            })?;
+            if !more {
+                return Ok(());
+            }
+            let line = rec.position().map_or(0, |p| p.line());
+            // A blank row (first field empty, then all) is skipped.
+            if rec.get(0).is_none_or(|f| f.trim_ascii().is_empty())
+                && rec.iter().all(|f| f.trim_ascii().is_empty())
+            {
+                continue;
+            }
+            if rec.len() != width {
+                return Err(CliError::Input(format!(
+                    "{name}:{line}: {} fields, but the header has {width}",
+                    rec.len()
+                )));
+            }
+            // One UTF-8 check per row; fields split at ASCII delimiters
+            // are then valid on their own.
+            let text = std::str::from_utf8(rec.as_slice()).ok();
+            for (i, &k) in cols.iter().enumerate() {
+                let field = text.and_then(|t| t.get(rec.range(k).unwrap_or(0..0)));
+                let v = match field.map(|f| f.trim_ascii().parse::<f64>()) {
+                    Some(Ok(v)) if v.is_finite() && v.abs() <= crate::input::MAX_ABS_VALUE => v,
+                    _ => {
+                        let what = if i == 0 { "time_s" } else { &names[i - 1] };
+                        return Err(CliError::Input(format!(
+                            "{name}:{line}: column '{what}': '{}' is not a finite number within 1e15",
+                            crate::output::clip(&String::from_utf8_lossy(rec[k].trim_ascii()))
+                        )));
+                    }
+                };
+                if i == 0 {
+                    if let Some(prev) = prev_t {
+                        if v <= prev {
+                            return Err(CliError::Input(format!(
+                                "{name}:{line}: column 'time_s': {v} is not after the previous sample ({prev})"
+                            )));
+                        }
+                    }
+                    prev_t = Some(v);
+                }
+                batch.values.push(v);
+            }
+            batch.lines.push(line);
+            if batch.lines.len() == BATCH_ROWS {
+                // Reuse a batch the solver is done with (no allocation and
+                // no fresh pages per batch).
+                let next = match recycled.try_recv() {
+                    Ok(mut b) => {
+                        b.lines.clear();
+                        b.values.clear();
+                        b
+                    }
+                    Err(_) => Batch {
+                        lines: Vec::with_capacity(BATCH_ROWS),
+                        values: Vec::with_capacity(BATCH_ROWS * cols.len()),
+                    },
+                };
+                let full = std::mem::replace(&mut batch, next);
+                if tx.send(Parsed::Rows(full)).is_err() {
+                    // The solver stopped (its own error): nothing to add.
+                    return Ok(());
+                }
+            }
+        }
+    })();
+    if !batch.lines.is_empty() {
+        let _ = tx.send(Parsed::Rows(batch));
+    }
+    if let Err(e) = result {
+        let _ = tx.send(Parsed::Failed(e));
+    }
+}
+
+/// Output of `gfimu solve`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum OutKind {
+    Csv,
+    Json,
+    JsonLines,
+}
+
+/// CSV header of the solution.
+const SOLUTION_CSV_HEADER: &str = "time_s,f0_x_g,f0_y_g,f0_z_g,omega_dot_x_rad_s2,omega_dot_y_rad_s2,omega_dot_z_rad_s2,omega_x_rad_s,omega_y_rad_s,omega_z_rad_s,u_f0_x_g,u_f0_y_g,u_f0_z_g,u_omega_dot_x_rad_s2,u_omega_dot_y_rad_s2,u_omega_dot_z_rad_s2,u_omega_x_rad_s,u_omega_y_rad_s,u_omega_z_rad_s\n";
+
+/// Units of the solution's quantities (JSON).
+fn solution_units() -> Value {
+    json!({"time_s": "s", "f0_g": "g", "omega_dot_rad_s2": "rad/s^2", "omega_rad_s": "rad/s",
+        "u_f0_g": "g", "u_omega_dot_rad_s2": "rad/s^2", "u_omega_rad_s": "rad/s"})
+}
+
+/// What comes before the first sample: the CSV header, or the JSON
+/// object's opening up to its `samples` array.
+fn solution_head(file: &str, kind: OutKind, d: &incal::estimation::Diagnostics) -> String {
+    match kind {
+        OutKind::Csv => SOLUTION_CSV_HEADER.to_string(),
+        OutKind::JsonLines => String::new(),
+        OutKind::Json => {
+            let geometry = json!({
+                "rank": d.rank,
+                "condition_number": d.condition.is_finite().then_some(d.condition),
+            });
+            format!(
+                "{{\n  \"procedure\": \"gfimu-solve\",\n  \"input\": {},\n  \"units\": {},\n  \"geometry\": {},\n  \"samples\": [\n",
+                json!(file),
+                solution_units(),
+                geometry
+            )
+        }
+    }
+}
+
+/// What comes after the last sample: the CSV trailer comments, the JSON
+/// object's mode and warnings, or the JSON-lines summary line.
+fn solution_tail(kind: OutKind, solver: &Solver) -> String {
+    match kind {
+        OutKind::Csv => {
+            let mut t = format!("# mode: {}\n", solver.mode().name());
+            for x in solver.warnings() {
+                t.push_str(&format!("# warning: {x}\n"));
+            }
+            t
+        }
+        OutKind::Json => format!(
+            ",\n  \"mode\": {},\n  \"warnings\": {}\n}}\n",
+            json!(solver.mode().name()),
+            json!(solver.warnings())
+        ),
+        OutKind::JsonLines => {
+            let d = solver.diagnostics();
+            format!(
+                "{}\n",
+                json!({
+                    "summary": {
+                        "procedure": "gfimu-solve",
+                        "units": solution_units(),
+                        "geometry": {
+                            "rank": d.rank,
+                            "condition_number": d.condition.is_finite().then_some(d.condition),
+                        },
+                        "mode": solver.mode().name(),
+                        "warnings": solver.warnings(),
+                    }
+                })
+            )
+        }
+    }
+}
+
+/// Write one solved sample into `buf` (cleared first) in the output's
+/// form, every number as its shortest round-trip decimal (ryu: formatting
+/// dominated the run at 10⁶ rows). False when a number is not finite.
+fn sample_line(
+    buf: &mut String,
+    fmt: &mut ryu::Buffer,
+    m: &incal::procedures::gfimu::solve::MotionSample,
+    kind: OutKind,
+    first: bool,
+) -> bool {
+    let values = [m.f0_g, m.omega_dot_rad_s2, m.omega_rad_s];
+    let us = [m.u_f0_g, m.u_omega_dot_rad_s2, m.u_omega_rad_s];
+    let finite = m.time_s.is_finite()
+        && values.iter().all(|v| v.iter().all(|x| x.is_finite()))
+        && us.iter().flatten().all(|v| v.iter().all(|x| x.is_finite()));
+    if !finite {
+        return false;
+    }
+    buf.clear();
+    match kind {
+        OutKind::Csv => {
+            buf.push_str(fmt.format(m.time_s));
+            for v in values {
+                for x in v.iter() {
+                    buf.push(',');
+                    buf.push_str(fmt.format(*x));
+                }
+            }
+            for u in us {
+                match u {
+                    Some(v) => {
+                        for x in v.iter() {
+                            buf.push(',');
+                            buf.push_str(fmt.format(*x));
+                        }
+                    }
+                    None => buf.push_str(",,,"),
+                }
+            }
+            buf.push('\n');
+        }
+        OutKind::Json | OutKind::JsonLines => {
+            if kind == OutKind::Json {
+                buf.push_str(if first { "    " } else { ",\n    " });
+            }
+            buf.push_str("{\"time_s\":");
+            buf.push_str(fmt.format(m.time_s));
+            let value_keys = ["f0_g", "omega_dot_rad_s2", "omega_rad_s"];
+            for (key, v) in value_keys.iter().zip(values) {
+                push_json_vec(buf, fmt, key, Some(v));
+            }
+            // The JSON document keeps the contract's shape (u in its own
+            // "uncertainty" array, written by `u_line`); JSON lines carry
+            // u inside each sample.
+            if kind == OutKind::JsonLines {
+                for (key, v) in U_KEYS.iter().zip(us) {
+                    push_json_vec(buf, fmt, key, v);
+                }
+            }
+            buf.push('}');
+            if kind == OutKind::JsonLines {
+                buf.push('\n');
+            }
+        }
+    }
+    true
+}
+
+const U_KEYS: [&str; 3] = ["u_f0_g", "u_omega_dot_rad_s2", "u_omega_rad_s"];
+
+/// `,"key":[x,y,z]` (or `null`) appended to `buf`.
+fn push_json_vec(buf: &mut String, fmt: &mut ryu::Buffer, key: &str, v: Option<Vector3<f64>>) {
+    buf.push_str(",\"");
+    buf.push_str(key);
+    buf.push_str("\":");
+    match v {
+        Some(v) => {
+            for (i, x) in v.iter().enumerate() {
+                buf.push(if i == 0 { '[' } else { ',' });
+                buf.push_str(fmt.format(*x));
+            }
+            buf.push(']');
+        }
+        None => buf.push_str("null"),
+    }
+}
+
+/// One element of the JSON document's `"uncertainty"` array, or false when
+/// this sample has no u (the array is then `null`, as for a calibration
+/// without noise).
+fn u_line(
+    buf: &mut String,
+    fmt: &mut ryu::Buffer,
+    m: &incal::procedures::gfimu::solve::MotionSample,
+    first: bool,
+) -> bool {
+    let us = [m.u_f0_g, m.u_omega_dot_rad_s2, m.u_omega_rad_s];
+    if us.iter().any(|u| u.is_none()) {
+        return false;
+    }
+    buf.clear();
+    buf.push_str(if first { "    {" } else { ",\n    {" });
+    let mut tmp = String::new();
+    for (key, v) in U_KEYS.iter().zip(us) {
+        push_json_vec(&mut tmp, fmt, key, v);
+    }
+    // Drop the leading comma of the first key.
+    buf.push_str(&tmp[1..]);
+    buf.push('}');
+    true
+}
+
+/// A temporary file holding the JSON document's `"uncertainty"` array
+/// while the samples stream out (it follows them in the document), so a
+/// long series needs no memory for it; removed when dropped.
+struct Spill {
+    path: std::path::PathBuf,
+    w: Option<std::io::BufWriter<std::fs::File>>,
+}
+
+impl Spill {
+    fn new() -> CliResult<Spill> {
+        static COUNT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let n = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let path =
+            std::env::temp_dir().join(format!("incal-gfimu-u-{}-{n}.json", std::process::id()));
+        let f = std::fs::File::create(&path).map_err(|e| {
+            CliError::Failure(anyhow::anyhow!("{}: cannot write: {e}", path.display()))
+        })?;
+        Ok(Spill {
+            path,
+            w: Some(std::io::BufWriter::with_capacity(1 << 16, f)),
+        })
+    }
+}
+
+impl Drop for Spill {
+    fn drop(&mut self) {
+        self.w = None;
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// `gfimu solve` to CSV, one row in, one row out: constant memory. The
+/// input is parsed on a second thread, a few thousand rows ahead of the
+/// solver; the output is the same bytes as a serial run.
+fn stream_solve(a: &SolveArgs, g: &Geometry, mut solver: Solver, kind: OutKind) -> CliResult<()> {
+    use std::io::Write;
+    let name = crate::io::display_name(&a.input);
+    let mut csv = series_reader(&a.input)?;
+    let (cols, width) = series_header(&name, &mut csv, g)?;
     let out: Box<dyn Write> = match &a.output {
         Some(p) if !crate::io::is_dash(p) => Box::new(
             std::fs::File::create(p)
@@ -531,174 +905,89 @@ fn stream_solve(a: &SolveArgs, g: &Geometry, mut solver: Solver) -> CliResult<()
     let mut w = std::io::BufWriter::with_capacity(1 << 16, out);
     let wfail =
         |e: std::io::Error| CliError::Failure(anyhow::anyhow!("cannot write the solution: {e}"));
-    let mut rec = csv::ByteRecord::new();
-    let mut cols: Option<(usize, Vec<usize>, usize)> = None;
+    w.write_all(solution_head(&name, kind, solver.diagnostics()).as_bytes())
+        .map_err(wfail)?;
+    let names = g.names();
+    let stride = cols.len();
     let mut rows = 0u64;
-    let mut prev_t: Option<f64> = None;
     let mut fmt = ryu::Buffer::new();
     let mut line_buf = String::with_capacity(512);
-    loop {
-        let more = csv.read_byte_record(&mut rec).map_err(|e| {
-            let line = e.position().map_or(0, |p| p.line());
-            CliError::Input(format!("{name}:{line}: not valid CSV"))
-        })?;
-        if !more {
-            break;
-        }
-        let line = rec.position().map_or(0, |p| p.line());
-        if rec.iter().all(|f| f.is_empty()) {
-            continue;
-        }
-        let Some((ct, ref acc, width)) = cols else {
-            let headers: Vec<String> = rec
-                .iter()
-                .map(|h| String::from_utf8_lossy(h).to_string())
-                .collect();
-            let find = |n: &str| {
-                headers.iter().position(|h| h == n).ok_or_else(|| {
-                    CliError::Input(format!(
-                        "{name}: missing column '{n}' (columns: {})",
-                        crate::output::clip(&headers.join(", "))
-                    ))
-                })
+    let mut spill = match kind {
+        OutKind::Json => Some(Spill::new()?),
+        _ => None,
+    };
+    std::thread::scope(|scope| -> CliResult<()> {
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Parsed>(8);
+        let (back_tx, back_rx) = std::sync::mpsc::sync_channel::<Batch>(8);
+        let (name_r, cols_r, names_r) = (&name, &cols, &names);
+        scope.spawn(move || parse_series(name_r, csv, cols_r, names_r, width, &tx, &back_rx));
+        for msg in rx.iter() {
+            let batch = match msg {
+                Parsed::Rows(b) => b,
+                Parsed::Failed(e) => {
+                    w.flush().map_err(wfail)?;
+                    return Err(e);
+                }
             };
-            let ct = find("time_s")?;
-            let acc = g
-                .names()
-                .iter()
-                .map(|n| find(n))
-                .collect::<CliResult<Vec<usize>>>()?;
-            cols = Some((ct, acc, headers.len()));
-            let mut head = String::from(
-                "time_s,f0_x_g,f0_y_g,f0_z_g,omega_dot_x_rad_s2,omega_dot_y_rad_s2,omega_dot_z_rad_s2,omega_x_rad_s,omega_y_rad_s,omega_z_rad_s",
-            );
-            head.push_str(",u_f0_x_g,u_f0_y_g,u_f0_z_g,u_omega_dot_x_rad_s2,u_omega_dot_y_rad_s2,u_omega_dot_z_rad_s2,u_omega_x_rad_s,u_omega_y_rad_s,u_omega_z_rad_s\n");
-            w.write_all(head.as_bytes()).map_err(wfail)?;
-            continue;
-        };
-        if rec.len() != width {
-            return Err(CliError::Input(format!(
-                "{name}:{line}: {} fields, but the header has {width}",
-                rec.len()
-            )));
-        }
-        let num = |k: usize, what: &str| -> CliResult<f64> {
-            let text = std::str::from_utf8(&rec[k]).unwrap_or("");
-            match text.parse::<f64>() {
-                Ok(v) if v.is_finite() && v.abs() <= crate::input::MAX_ABS_VALUE => Ok(v),
-                _ => Err(CliError::Input(format!(
-                    "{name}:{line}: column '{what}': '{}' is not a finite number within 1e15",
-                    crate::output::clip(&String::from_utf8_lossy(&rec[k]))
-                ))),
-            }
-        };
-        let t = num(ct, "time_s")?;
-        if let Some(prev) = prev_t {
-            if t <= prev {
-                return Err(CliError::Input(format!(
-                    "{name}:{line}: column 'time_s': {t} is not after the previous sample ({prev})"
-                )));
-            }
-        }
-        prev_t = Some(t);
-        let mut e = Vec::with_capacity(acc.len());
-        for (k, n) in acc.iter().zip(g.names()) {
-            e.push(num(*k, &n)?);
-        }
-        let m = solver
-            .step(t, &e)
-            .map_err(|err| CliError::Input(format!("{name}:{line}: {err}")))?;
-        rows += 1;
-        // Shortest round-trip decimal of every number (ryu), into one
-        // reused buffer: formatting dominated the run at 10⁶ rows.
-        line_buf.clear();
-        line_buf.push_str(fmt.format(m.time_s));
-        for v in [m.f0_g, m.omega_dot_rad_s2, m.omega_rad_s] {
-            for x in v.iter() {
-                line_buf.push(',');
-                line_buf.push_str(fmt.format(*x));
-            }
-        }
-        for u in [m.u_f0_g, m.u_omega_dot_rad_s2, m.u_omega_rad_s] {
-            match u {
-                Some(v) => {
-                    for x in v.iter() {
-                        line_buf.push(',');
-                        line_buf.push_str(fmt.format(*x));
+            for (line, row) in batch.lines.iter().zip(batch.values.chunks_exact(stride)) {
+                let m = match solver.step(row[0], &row[1..]) {
+                    Ok(m) => m,
+                    Err(err) => {
+                        w.flush().map_err(wfail)?;
+                        // Dropping the receiver stops the reader.
+                        drop(rx);
+                        return Err(CliError::Input(format!("{name}:{line}: {err}")));
+                    }
+                };
+                rows += 1;
+                if !sample_line(&mut line_buf, &mut fmt, &m, kind, rows == 1) {
+                    w.flush().map_err(wfail)?;
+                    drop(rx);
+                    return Err(CliError::Input(format!(
+                        "{name}:{line}: the solution is not finite at this sample (t = {} s)",
+                        m.time_s
+                    )));
+                }
+                w.write_all(line_buf.as_bytes()).map_err(wfail)?;
+                if let Some(sp) = spill.as_mut() {
+                    if u_line(&mut line_buf, &mut fmt, &m, rows == 1) {
+                        if let Some(sw) = sp.w.as_mut() {
+                            sw.write_all(line_buf.as_bytes()).map_err(wfail)?;
+                        }
+                    } else {
+                        spill = None;
                     }
                 }
-                None => line_buf.push_str(",,,"),
             }
+            // Full or gone: either way the reader allocates instead.
+            let _ = back_tx.try_send(batch);
         }
-        line_buf.push('\n');
-        w.write_all(line_buf.as_bytes()).map_err(wfail)?;
-    }
-    if cols.is_none() {
-        return Err(CliError::Input(format!(
-            "{name}: empty file (expected a header row)"
-        )));
-    }
+        Ok(())
+    })?;
     if rows == 0 {
         return Err(CliError::Input(format!(
             "{name}: no data rows after the header"
         )));
     }
-    writeln!(w, "# mode: {}", solver.mode().name()).map_err(wfail)?;
-    for x in solver.warnings() {
-        writeln!(w, "# warning: {x}").map_err(wfail)?;
+    if kind == OutKind::Json {
+        w.write_all(b"\n  ],\n  \"uncertainty\": ").map_err(wfail)?;
+        match spill.as_mut() {
+            Some(sp) => {
+                if let Some(mut sw) = sp.w.take() {
+                    sw.flush().map_err(wfail)?;
+                }
+                w.write_all(b"[\n").map_err(wfail)?;
+                let mut f = std::fs::File::open(&sp.path).map_err(wfail)?;
+                std::io::copy(&mut f, &mut w).map_err(wfail)?;
+                w.write_all(b"\n  ]").map_err(wfail)?;
+            }
+            None => w.write_all(b"null").map_err(wfail)?,
+        }
     }
+    w.write_all(solution_tail(kind, &solver).as_bytes())
+        .map_err(wfail)?;
     w.flush().map_err(wfail)?;
     Ok(())
-}
-
-fn vec_json(v: &Vector3<f64>) -> Value {
-    json!([v.x, v.y, v.z])
-}
-
-/// The JSON document of a motion solution (contract: `samples[].{time_s,
-/// f0_g, omega_dot_rad_s2, omega_rad_s}`).
-pub fn solution_json(file: &str, s: &MotionSolution) -> Value {
-    let samples: Vec<Value> = s
-        .samples
-        .iter()
-        .map(|m| {
-            json!({
-                "time_s": m.time_s,
-                "f0_g": vec_json(&m.f0_g),
-                "omega_dot_rad_s2": vec_json(&m.omega_dot_rad_s2),
-                "omega_rad_s": vec_json(&m.omega_rad_s),
-            })
-        })
-        .collect();
-    let u: Value = if s.samples.iter().all(|m| m.u_f0_g.is_some()) {
-        Value::Array(
-            s.samples
-                .iter()
-                .map(|m| {
-                    json!({
-                        "u_f0_g": m.u_f0_g.as_ref().map(vec_json),
-                        "u_omega_dot_rad_s2": m.u_omega_dot_rad_s2.as_ref().map(vec_json),
-                        "u_omega_rad_s": m.u_omega_rad_s.as_ref().map(vec_json),
-                    })
-                })
-                .collect(),
-        )
-    } else {
-        Value::Null
-    };
-    json!({
-        "procedure": "gfimu-solve",
-        "input": file,
-        "units": {"time_s": "s", "f0_g": "g", "omega_dot_rad_s2": "rad/s^2", "omega_rad_s": "rad/s"},
-        "samples": samples,
-        "uncertainty": u,
-        "geometry": {
-            "rank": s.diagnostics.rank,
-            "condition_number": s.diagnostics.condition.is_finite().then_some(s.diagnostics.condition),
-        },
-        "mode": s.mode.name(),
-        "warnings": s.warnings,
-    })
 }
 
 fn position_label(f: &Vector3<f64>) -> String {

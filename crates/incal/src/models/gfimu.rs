@@ -141,6 +141,41 @@ impl Geometry {
         ])
     }
 
+    /// Twelve accelerometers that solve the centripetal products directly
+    /// (no ω feedback, issue 13): two at each of ±L on x, y and z, each
+    /// sensing one of the two directions across its lever arm. Named
+    /// `{p|m}{axis}_{sensed axis}`: `px_y` sits at +L on x and senses y.
+    ///
+    /// With sensing across the lever arm, only the cross products
+    /// `ω_xω_y, ω_xω_z, ω_yω_z` enter the outputs, and this layout separates
+    /// them from f0 and ω̇ (`solve_mode` says `direct`).
+    pub fn twelve(lever_arm_m: f64) -> Result<Self> {
+        if !(lever_arm_m.is_finite() && lever_arm_m > 0.0) {
+            return Err(Error::InvalidValue {
+                what: "lever arm (m, > 0)".into(),
+                value: lever_arm_m.to_string(),
+            });
+        }
+        let axes = ["x", "y", "z"];
+        let mut accs = Vec::with_capacity(12);
+        for a in 0..3 {
+            for (sign, tag) in [(1.0, "p"), (-1.0, "m")] {
+                for b in (0..3).filter(|b| *b != a) {
+                    let mut r = Vector3::zeros();
+                    r[a] = sign * lever_arm_m;
+                    let mut d = Vector3::zeros();
+                    d[b] = 1.0;
+                    accs.push(ArrayAccelerometer {
+                        name: format!("{tag}{}_{}", axes[a], axes[b]),
+                        position_m: r,
+                        direction: d,
+                    });
+                }
+            }
+        }
+        Self::new(accs)
+    }
+
     /// The accelerometers, in order.
     pub fn accelerometers(&self) -> &[ArrayAccelerometer] {
         &self.accelerometers

@@ -246,8 +246,13 @@ pub fn solve_mode(geometry: &Geometry, ks: &[Vector3<f64>], g: f64) -> Result<So
     Ok(SolveMode::Feedback { reason })
 }
 
+/// Largest number of unknowns per sample: f0, ω̇ and the six products.
+const MAX_P: usize = 12;
+
 /// A streaming motion solver: one call of [`Solver::step`] per sample, in
-/// time order, constant memory (module docs).
+/// time order, constant memory (module docs). A step allocates nothing:
+/// the pseudo-inverse and the constant covariance blocks are computed once
+/// in [`Solver::new`], the per-sample work is a few N×p products.
 #[derive(Debug, Clone)]
 pub struct Solver {
     r: Vec<Vector3<f64>>,
@@ -256,29 +261,56 @@ pub struct Solver {
     mode: SolveMode,
     /// Indices (into PRODUCTS) of the products solved directly.
     direct_products: Vec<usize>,
-    /// Weighted pseudo-inverse (p × N).
-    pinv: DMatrix<f64>,
-    /// `(AᵀWA)⁻¹` with W = 1/σ² (p × p), when σ is known.
-    cov_noise: Option<DMatrix<f64>>,
-    /// Design (N × p), for residual variance when σ is unknown.
-    design: DMatrix<f64>,
+    /// Unknowns per sample.
+    p: usize,
+    /// Weighted pseudo-inverse, row-major p × N.
+    pinv: Vec<f64>,
+    /// Design, row-major N × p, for the residual variance when σ is unknown.
+    design: Vec<f64>,
+    /// Diagonal of the per-sample noise covariance: `(AᵀWA)⁻¹` with
+    /// W = 1/σ², or `P Pᵀ` to be scaled by the residual variance.
+    noise_diag: [f64; MAX_P],
+    /// The ω̇ block of the same matrix.
+    noise_wd: Matrix3<f64>,
+    /// How the noise covariance is known (module docs).
+    noise: NoiseSource,
     report_u: bool,
     omega_u_limit: f64,
     warned_at: Option<f64>,
     prev: Option<(f64, Vector3<f64>, Vector3<f64>)>,
     sigma_omega: Matrix3<f64>,
     /// Sensitivity of the integrated ω to every calibration parameter
-    /// (3 × 4N: K0_j, Ks_j): calibration errors are systematic, so their
-    /// effect on ω grows linearly, not as a random walk.
-    j_cal: DMatrix<f64>,
+    /// (K0_j, Ks_j: 4N columns): calibration errors are systematic, so
+    /// their effect on ω grows linearly, not as a random walk.
+    j_cal: Vec<Vector3<f64>>,
+    /// Direct mode (F = I): column c of accelerometer j in `j_cal` is
+    /// `P_ω̇,j · s_jc` with `s_j0 = −Σ Δt`, `s_ja = −Σ f_ja Δt`, so only these
+    /// four integrals per accelerometer are kept.
+    cal_integrals: Vec<[f64; 4]>,
     /// `Q` of the last sample (ω̇ rows of `P G`; zero in direct mode).
     q_last: Matrix3<f64>,
     /// Variances of the calibration parameters (4N).
-    u2_cal: DVector<f64>,
+    u2_cal: Vec<f64>,
+    has_cal: bool,
     omega0: Vector3<f64>,
     diagnostics: Diagnostics,
     warnings: Vec<Warning>,
     count: u64,
+    /// Reduced outputs of the current sample (N).
+    y: Vec<f64>,
+    /// Centripetal gradient of the current sample (N), feedback only.
+    grad: Vec<Vector3<f64>>,
+}
+
+/// Where the per-sample noise covariance comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum NoiseSource {
+    /// Every accelerometer's σ is known: `(AᵀWA)⁻¹`.
+    Known,
+    /// From the residuals of each sample (N > p): `s² P Pᵀ`.
+    Residuals,
+    /// Neither: no u is reported.
+    None,
 }
 
 impl Solver {
@@ -405,33 +437,60 @@ impl Solver {
         // P = V S⁻¹ Uᵀ W^{1/2}
         let pinv_w = &v * &sinv * u.transpose();
         let pinv = DMatrix::from_fn(p, n, |i, j| pinv_w[(i, j)] * sw[j]);
-        let cov_unit = &v * &sinv * &sinv * v.transpose();
-        let report_u = sigmas.is_some() || n > p;
+        let noise = if sigmas.is_some() {
+            NoiseSource::Known
+        } else if n > p {
+            NoiseSource::Residuals
+        } else {
+            NoiseSource::None
+        };
+        let base_cov = match noise {
+            NoiseSource::Known => &v * &sinv * &sinv * v.transpose(),
+            NoiseSource::Residuals => &pinv * pinv.transpose(),
+            NoiseSource::None => DMatrix::zeros(p, p),
+        };
+        let mut noise_diag = [0.0; MAX_P];
+        for (a, d) in noise_diag.iter_mut().enumerate().take(p) {
+            *d = base_cov[(a, a)];
+        }
+        let u2_cal: Vec<f64> = cal
+            .iter()
+            .flat_map(|c| [c.u_k0, c.u_ks.x, c.u_ks.y, c.u_ks.z].map(|u| u * u))
+            .collect();
         Ok(Self {
             r,
             cal: cal.to_vec(),
             g,
             mode,
             direct_products,
-            pinv,
-            cov_noise: sigmas.is_some().then_some(cov_unit),
-            design,
-            report_u,
+            p,
+            pinv: (0..p)
+                .flat_map(|a| (0..n).map(move |j| (a, j)))
+                .map(|(a, j)| pinv[(a, j)])
+                .collect(),
+            design: (0..n)
+                .flat_map(|j| (0..p).map(move |a| (j, a)))
+                .map(|(j, a)| design[(j, a)])
+                .collect(),
+            noise_diag,
+            noise_wd: Matrix3::from_fn(|i, j| base_cov[(3 + i, 3 + j)]),
+            noise,
+            report_u: noise != NoiseSource::None,
             omega_u_limit: opts.omega_u_limit_rad_s,
             warned_at: None,
             prev: None,
             sigma_omega: Matrix3::zeros(),
-            j_cal: DMatrix::zeros(3, 4 * n),
+            j_cal: vec![Vector3::zeros(); 4 * n],
+            cal_integrals: vec![[0.0; 4]; n],
             q_last: Matrix3::zeros(),
-            u2_cal: DVector::from_iterator(
-                4 * n,
-                cal.iter()
-                    .flat_map(|c| [c.u_k0, c.u_ks.x, c.u_ks.y, c.u_ks.z].map(|u| u * u)),
-            ),
+            has_cal: u2_cal.iter().any(|v| *v > 0.0),
+            u2_cal,
             omega0: opts.omega0_rad_s,
             diagnostics,
             warnings,
             count: 0,
+            y: vec![0.0; n],
+            grad: vec![Vector3::zeros(); n],
         })
     }
 
@@ -450,22 +509,36 @@ impl Solver {
         &self.warnings
     }
 
-    /// Outputs minus bias and, in feedback mode, the centripetal term at ω.
-    fn reduced(&self, e: &[f64], w: &Vector3<f64>) -> DVector<f64> {
-        DVector::from_fn(e.len(), |j, _| {
-            let c = &self.cal[j];
-            let cent = if self.direct_products.is_empty() {
+    /// `self.y` ← the outputs minus bias and, in feedback mode, the
+    /// centripetal term at ω.
+    fn reduce(&mut self, e: &[f64], w: &Vector3<f64>) {
+        let feedback = self.direct_products.is_empty();
+        for (j, (yj, c)) in self.y.iter_mut().zip(&self.cal).enumerate() {
+            let cent = if feedback {
                 centripetal(&c.ks, &self.r[j], w) / self.g
             } else {
                 0.0
             };
-            e[j] - c.k0 - cent
-        })
+            *yj = e[j] - c.k0 - cent;
+        }
+    }
+
+    /// `x = P y` for the reduced outputs at ω.
+    fn solve_at(&mut self, e: &[f64], w: &Vector3<f64>) -> [f64; MAX_P] {
+        self.reduce(e, w);
+        let n = self.y.len();
+        let mut x = [0.0; MAX_P];
+        for (a, xa) in x.iter_mut().enumerate().take(self.p) {
+            let row = &self.pinv[a * n..(a + 1) * n];
+            *xa = row.iter().zip(&self.y).map(|(p, y)| p * y).sum();
+        }
+        x
     }
 
     /// Solve one sample (time strictly after the previous one).
     pub fn step(&mut self, t: f64, e: &[f64]) -> Result<MotionSample> {
         let n = self.cal.len();
+        let p = self.p;
         self.count += 1;
         let k = self.count;
         if e.len() != n {
@@ -484,7 +557,7 @@ impl Solver {
         let (x, w, dt) = match self.prev {
             None => {
                 let w = self.omega0;
-                (&self.pinv * self.reduced(e, &w), w, 0.0)
+                (self.solve_at(e, &w), w, 0.0)
             }
             Some((tp, wp, wdp)) => {
                 if t <= tp {
@@ -495,13 +568,13 @@ impl Solver {
                 }
                 let dt = t - tp;
                 let mut w = wp + wdp * dt;
-                let mut x = &self.pinv * self.reduced(e, &w);
+                let mut x = self.solve_at(e, &w);
                 let passes = if feedback { 2 } else { 1 };
                 for _ in 0..passes {
                     let wd = Vector3::new(x[3], x[4], x[5]);
                     w = wp + (wdp + wd) * (0.5 * dt);
                     if feedback {
-                        x = &self.pinv * self.reduced(e, &w);
+                        x = self.solve_at(e, &w);
                     }
                 }
                 let wd = Vector3::new(x[3], x[4], x[5]);
@@ -518,89 +591,98 @@ impl Solver {
             )));
         }
 
-        // Uncertainty (module docs).
-        let p = self.pinv.nrows();
-        let mut cov = match &self.cov_noise {
-            Some(c) => c.clone(),
-            None if n > p => {
-                let y = self.reduced(e, &w);
-                let res = &y - &self.design * &x;
-                let s2 = res.norm_squared() / (n - p) as f64;
-                let v = self.pinv.clone();
-                &v * v.transpose() * s2
+        // Uncertainty (module docs); only the diagonal is reported, so
+        // only the diagonal of the p × p covariance is formed.
+        let noise_scale = match self.noise {
+            NoiseSource::Known => 1.0,
+            NoiseSource::Residuals => {
+                // Residuals of the last solve, at the final ω.
+                self.reduce(e, &w);
+                let mut ss = 0.0;
+                for (j, yj) in self.y.iter().enumerate() {
+                    let row = &self.design[j * p..(j + 1) * p];
+                    let fit: f64 = row.iter().zip(&x[..p]).map(|(a, b)| a * b).sum();
+                    ss += (yj - fit) * (yj - fit);
+                }
+                ss / (n - p) as f64
             }
-            None => DMatrix::zeros(p, p),
+            NoiseSource::None => 0.0,
         };
+        let mut diag = [0.0; MAX_P];
+        for (d, nd) in diag.iter_mut().zip(&self.noise_diag[..p]) {
+            *d = nd * noise_scale;
+        }
+        let cwd_noise = self.noise_wd * noise_scale;
         // The centripetal gradient at this sample: Q = ω̇ rows of P G, and
         // F = I − QΔt carries both ω error parts below.
-        let pg = if feedback {
-            let gmat = DMatrix::from_fn(n, 3, |j, a| {
+        let mut pg = [Vector3::zeros(); MAX_P];
+        if feedback {
+            for j in 0..n {
                 let s = &self.cal[j].ks;
                 let r = &self.r[j];
-                let grad = s * w.dot(r) + r * s.dot(&w) - w * (2.0 * s.dot(r));
-                grad[a] / self.g
-            });
-            let pg = &self.pinv * &gmat; // p × 3
-            self.q_last = Matrix3::from_fn(|i, j| pg[(3 + i, j)]);
-            Some(pg)
-        } else {
-            None
-        };
+                self.grad[j] = (s * w.dot(r) + r * s.dot(&w) - w * (2.0 * s.dot(r))) / self.g;
+            }
+            for (a, pga) in pg.iter_mut().enumerate().take(p) {
+                let row = &self.pinv[a * n..(a + 1) * n];
+                *pga = row
+                    .iter()
+                    .zip(&self.grad)
+                    .fold(Vector3::zeros(), |acc, (pj, gj)| acc + gj * *pj);
+            }
+            self.q_last =
+                Matrix3::from_rows(&[pg[3].transpose(), pg[4].transpose(), pg[5].transpose()]);
+        }
         // Calibration: the sensitivity of x to every K0_j, Ks_j at the
         // specific force f_j of each accelerometer, ∂x/∂K0_j = −P_:j,
         // ∂x/∂Ks_ja = −P_:j f_ja. Every column for accelerometer j is a
         // multiple of P_:j, so D U Dᵀ = Σ_j v_j P_:j P_:jᵀ with
         // v_j = u²(K0_j) + Σ_a f_ja² u²(Ks_ja).
-        let cwd_noise = Matrix3::from_fn(|i, j| cov[(3 + i, 3 + j)]);
-        let has_cal = self.u2_cal.iter().any(|v| *v > 0.0);
         let mut sigma_cal = Matrix3::zeros();
-        if has_cal {
-            let fd = (dt > 0.0).then(|| {
-                if feedback {
-                    Matrix3::identity() - self.q_last * dt
-                } else {
-                    Matrix3::identity()
-                }
-            });
+        if self.has_cal {
+            let fm = if feedback {
+                Matrix3::identity() - self.q_last * dt
+            } else {
+                Matrix3::identity()
+            };
             for j in 0..n {
                 let r = &self.r[j];
                 let fj = f0 + (wd.cross(r) + w.cross(&w.cross(r))) / self.g;
-                let u2 = &self.u2_cal;
-                let vj = u2[4 * j]
-                    + (0..3)
-                        .map(|a| fj[a] * fj[a] * u2[4 * j + 1 + a])
-                        .sum::<f64>();
-                for a in 0..p {
-                    let pa = self.pinv[(a, j)] * vj;
-                    for b in 0..p {
-                        cov[(a, b)] += pa * self.pinv[(b, j)];
-                    }
+                let u2 = &self.u2_cal[4 * j..4 * j + 4];
+                let vj = u2[0] + (0..3).map(|a| fj[a] * fj[a] * u2[1 + a]).sum::<f64>();
+                for (a, d) in diag.iter_mut().enumerate().take(p) {
+                    let pa = self.pinv[a * n + j];
+                    *d += pa * vj * pa;
                 }
                 // J_k = F J_{k−1} + Δt ∂ω̇/∂cal (columns of accelerometer j).
-                if let Some(fm) = fd {
-                    let pw = Vector3::new(self.pinv[(3, j)], self.pinv[(4, j)], self.pinv[(5, j)]);
+                let pw = Vector3::new(
+                    self.pinv[3 * n + j],
+                    self.pinv[4 * n + j],
+                    self.pinv[5 * n + j],
+                );
+                if feedback {
                     for c in 0..4 {
                         let col = 4 * j + c;
-                        let prev = Vector3::new(
-                            self.j_cal[(0, col)],
-                            self.j_cal[(1, col)],
-                            self.j_cal[(2, col)],
-                        );
-                        let scale = if c == 0 { -1.0 } else { -fj[c - 1] };
-                        let next = fm * prev + pw * (scale * dt);
-                        for i in 0..3 {
-                            self.j_cal[(i, col)] = next[i];
+                        if dt > 0.0 {
+                            let scale = if c == 0 { -1.0 } else { -fj[c - 1] };
+                            self.j_cal[col] = fm * self.j_cal[col] + pw * (scale * dt);
+                        }
+                        let v = self.j_cal[col];
+                        sigma_cal += v * v.transpose() * u2[c];
+                    }
+                } else {
+                    // F = I: the columns are P_ω̇,j times running integrals,
+                    // and only the diagonal of Σ is used.
+                    let s = &mut self.cal_integrals[j];
+                    if dt > 0.0 {
+                        s[0] -= dt;
+                        for a in 0..3 {
+                            s[1 + a] -= fj[a] * dt;
                         }
                     }
-                }
-                for c in 0..4 {
-                    let col = 4 * j + c;
-                    let v = Vector3::new(
-                        self.j_cal[(0, col)],
-                        self.j_cal[(1, col)],
-                        self.j_cal[(2, col)],
-                    );
-                    sigma_cal += v * v.transpose() * u2[col];
+                    let w2: f64 = (0..4).map(|c| s[c] * s[c] * u2[c]).sum();
+                    for i in 0..3 {
+                        sigma_cal[(i, i)] += pw[i] * pw[i] * w2;
+                    }
                 }
             }
         }
@@ -610,9 +692,10 @@ impl Solver {
             self.sigma_omega = f * self.sigma_omega * f.transpose() + cwd_noise * (dt * dt);
         }
         let sigma_total = self.sigma_omega + sigma_cal;
-        if let Some(pg) = &pg {
-            let st = DMatrix::from_fn(3, 3, |i, j| sigma_total[(i, j)]);
-            cov += pg * st * pg.transpose();
+        if feedback {
+            for (a, d) in diag.iter_mut().enumerate().take(p) {
+                *d += pg[a].dot(&(sigma_total * pg[a]));
+            }
         }
         let u_omega = Vector3::from_fn(|i, _| sigma_total[(i, i)].max(0.0).sqrt());
         if self.report_u && self.warned_at.is_none() && u_omega.amax() > self.omega_u_limit {
@@ -626,7 +709,7 @@ impl Solver {
                 ),
             ));
         }
-        let u = |k0: usize| Vector3::from_fn(|i, _| cov[(k0 + i, k0 + i)].max(0.0).sqrt());
+        let u = |k0: usize| Vector3::from_fn(|i, _| diag[k0 + i].max(0.0).sqrt());
         self.prev = Some((t, w, wd));
         Ok(MotionSample {
             time_s: t,
