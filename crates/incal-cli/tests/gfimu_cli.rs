@@ -458,3 +458,60 @@ fn twelve_layout_outputs_agree() {
         }
     }
 }
+
+/// The motion simulator turns gravity through the unit (`--f0-frame
+/// table`) and oscillates the rate; bad values of those options are
+/// refused by name.
+#[test]
+fn simulate_motion_turning_gravity_and_oscillation() {
+    let base = ["--kind", "motion", "--seed", "5", "--axis", "1,0,0"];
+    let plain = simulate(&base);
+    let mut args = base.to_vec();
+    args.extend(["--f0-g", "0,0,1", "--f0-frame", "table"]);
+    args.extend([
+        "--oscillation-amplitude-rad-s",
+        "0.3",
+        "--oscillation-hz",
+        "2",
+    ]);
+    let turned = simulate(&args);
+    assert_ne!(plain, turned);
+    assert!(turned.contains("# f0 frame: table"));
+    refused(
+        &[
+            "simulate",
+            "gfimu",
+            "--kind",
+            "motion",
+            "--oscillation-amplitude-rad-s",
+            "0.3",
+            "--oscillation-hz",
+            "50",
+        ],
+        &["--oscillation-hz", "half of --rate-hz"],
+    );
+    refused(
+        &[
+            "simulate",
+            "gfimu",
+            "--kind",
+            "motion",
+            "--oscillation-amplitude-rad-s",
+            "0.3",
+        ],
+        &["--oscillation-hz > 0"],
+    );
+    refused(
+        &[
+            "simulate",
+            "gfimu",
+            "--kind",
+            "motion",
+            "--f0-frame",
+            "table",
+            "--omega0-rad-s",
+            "1,0,0",
+        ],
+        &["--omega0-rad-s must lie along --axis"],
+    );
+}

@@ -128,6 +128,7 @@ fn profile() -> MotionProfile {
         duration_s: 2.0,
         rate_hz: 100.0,
         gravity_m_s2: STANDARD_GRAVITY_M_S2,
+        ..MotionProfile::rate_table()
     }
 }
 

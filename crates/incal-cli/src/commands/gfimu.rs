@@ -11,7 +11,7 @@ use incal::procedures::gfimu::{
     calibrate, CalibrateOptions, CalibratedAccelerometer, SolveOptions, StaticSample,
 };
 use incal::sim::gfimu::{
-    simulate_motion, simulate_static, six_positions, GfimuTruth, MotionProfile,
+    simulate_motion, simulate_static, six_positions, F0Frame, GfimuTruth, MotionProfile,
 };
 use incal::units::STANDARD_GRAVITY_M_S2;
 use nalgebra::Vector3;
@@ -256,6 +256,15 @@ pub struct SimArgs {
         default_value = "0.05,0,1"
     )]
     pub f0_g: Vec<f64>,
+    /// Motion: the frame --f0-g is fixed in: unit (does not turn) or table (given at t = 0, turns through the unit as it rotates).
+    #[arg(long, value_enum, default_value = "unit")]
+    pub f0_frame: F0FrameArg,
+    /// Motion: amplitude of a sinusoidal rate oscillation about the axis (rad/s).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub oscillation_amplitude_rad_s: f64,
+    /// Motion: frequency of the rate oscillation (Hz, below half the sample rate).
+    #[arg(long, default_value_t = 0.0)]
+    pub oscillation_hz: f64,
     /// Local gravity that defines the g unit (m/s^2).
     #[arg(long, visible_alias = "g-local", default_value_t = STANDARD_GRAVITY_M_S2)]
     pub gravity_m_s2: f64,
@@ -265,6 +274,13 @@ pub struct SimArgs {
     /// Write the CSV here instead of standard output.
     #[arg(long, short = 'o', value_name = "FILE")]
     pub output: Option<PathBuf>,
+}
+
+/// `--f0-frame`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum F0FrameArg {
+    Unit,
+    Table,
 }
 
 fn vec3(opt: &str, v: &[f64]) -> CliResult<Vector3<f64>> {
@@ -1042,6 +1058,12 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
                 spin_up_s: a.spin_up_s,
                 omega0_rad_s: vec3("--omega0-rad-s", &a.omega0_rad_s)?,
                 f0_g: vec3("--f0-g", &a.f0_g)?,
+                f0_frame: match a.f0_frame {
+                    F0FrameArg::Unit => F0Frame::Unit,
+                    F0FrameArg::Table => F0Frame::Table,
+                },
+                oscillation_amplitude_rad_s: a.oscillation_amplitude_rad_s,
+                oscillation_hz: a.oscillation_hz,
                 duration_s: a.duration_s,
                 rate_hz: a.rate_hz,
                 gravity_m_s2: a.gravity_m_s2,
@@ -1057,11 +1079,49 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
                     "--angular-accel-rad-s2 and --spin-up-s must be finite (spin-up >= 0)",
                 ));
             }
+            if !(m.oscillation_hz.is_finite()
+                && m.oscillation_hz >= 0.0
+                && m.oscillation_hz < m.rate_hz / 2.0)
+            {
+                return Err(usage(format!(
+                    "--oscillation-hz must be at least 0 and below half of --rate-hz ({} Hz), got {}",
+                    m.rate_hz / 2.0,
+                    m.oscillation_hz
+                )));
+            }
+            if !m.oscillation_amplitude_rad_s.is_finite()
+                || (m.oscillation_amplitude_rad_s != 0.0 && m.oscillation_hz == 0.0)
+            {
+                return Err(usage(
+                    "--oscillation-amplitude-rad-s must be finite, with --oscillation-hz > 0 when it is not 0",
+                ));
+            }
+            if m.f0_frame == F0Frame::Table {
+                let n = m.axis.normalize();
+                let w0 = m.omega0_rad_s;
+                if (w0 - n * n.dot(&w0)).norm() > 1e-12 * w0.norm().max(1.0) {
+                    return Err(usage(
+                        "--f0-frame table: --omega0-rad-s must lie along --axis (the unit turns about that one axis)",
+                    ));
+                }
+            }
             let series = simulate_motion(&g, &truth, &m, a.noise, a.seed).map_err(core)?;
             text.push_str(&format!(
                 "# motion: axis {:?}, {} rad/s^2 for {} s, f0 {:?} g, omega0 {:?} rad/s\n",
                 a.axis, a.angular_accel_rad_s2, a.spin_up_s, a.f0_g, a.omega0_rad_s
             ));
+            if m.f0_frame == F0Frame::Table || m.oscillation_amplitude_rad_s != 0.0 {
+                text.push_str(&format!(
+                    "# f0 frame: {}; rate oscillation {} rad/s at {} Hz\n",
+                    if m.f0_frame == F0Frame::Table {
+                        "table (turns with the rotation)"
+                    } else {
+                        "unit"
+                    },
+                    m.oscillation_amplitude_rad_s,
+                    m.oscillation_hz
+                ));
+            }
             text.push_str(&format!("time_s,{}\n", names.join(",")));
             for (t, e) in &series {
                 let v: Vec<String> = e.iter().map(|x| x.to_string()).collect();

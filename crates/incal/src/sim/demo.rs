@@ -171,6 +171,7 @@ fn gfimu(seed: u64) -> Result<DemoSection> {
         duration_s: 3.0,
         rate_hz: 100.0,
         gravity_m_s2: STANDARD_GRAVITY_M_S2,
+        ..MotionProfile::rate_table()
     };
     let series = simulate_motion(&g, &truth, &m, noise, seed.wrapping_add(1))?;
     let sol = solve(&g, &cal.calibrated(), &series, &SolveOptions::default())?;

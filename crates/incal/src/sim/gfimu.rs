@@ -101,11 +101,26 @@ pub fn simulate_static(
     Ok(out)
 }
 
-/// A rate-table motion: rotation about a fixed axis with constant angular
-/// acceleration for `spin_up_s`, then constant rate, and a constant
-/// specific force at the origin in the unit frame (gravity along the
-/// rotation axis plus a constant acceleration, so f0 does not turn with the
-/// unit).
+/// Which frame the specific force at the origin `f0_g` is fixed in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum F0Frame {
+    /// Fixed in the unit frame: f0 does not turn with the unit (gravity
+    /// along the rotation axis, the paper's rate-table case).
+    #[default]
+    Unit,
+    /// Fixed in the table (local-level) frame, given at t = 0: as the unit
+    /// turns by θ(t) about the axis n, f0 appears in the unit frame as
+    /// `R(−θ) f0 = f0 cos θ − (n × f0) sin θ + n (n·f0)(1 − cos θ)`
+    /// (Rodrigues), so gravity off the axis rotates through the unit.
+    Table,
+}
+
+/// A rate-table motion: rotation about a fixed axis n with a rate along n
+/// of `α·min(t, T_s) + A sin(2π f_o t)` (spin-up with constant angular
+/// acceleration α for `spin_up_s`, then constant rate, plus an optional
+/// sinusoidal oscillation of amplitude A at f_o), on top of
+/// `omega0_rad_s`, and a specific force at the origin fixed in the unit or
+/// the table frame ([`F0Frame`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MotionProfile {
     /// Rotation axis (unit frame; normalised).
@@ -114,10 +129,17 @@ pub struct MotionProfile {
     pub angular_accel_rad_s2: f64,
     /// Spin-up duration (s).
     pub spin_up_s: f64,
-    /// Rate at t = 0 (rad/s, unit frame).
+    /// Rate at t = 0 (rad/s, unit frame); along the axis for
+    /// [`F0Frame::Table`].
     pub omega0_rad_s: Vector3<f64>,
-    /// Specific force at the origin (g, unit frame).
+    /// Specific force at the origin (g; unit frame, or table frame at t = 0).
     pub f0_g: Vector3<f64>,
+    /// Frame `f0_g` is fixed in.
+    pub f0_frame: F0Frame,
+    /// Amplitude A of the sinusoidal rate oscillation about the axis (rad/s).
+    pub oscillation_amplitude_rad_s: f64,
+    /// Frequency f_o of the oscillation (Hz); 0 with A = 0.
+    pub oscillation_hz: f64,
     /// Record length (s).
     pub duration_s: f64,
     /// Sample rate (Hz).
@@ -126,17 +148,128 @@ pub struct MotionProfile {
     pub gravity_m_s2: f64,
 }
 
-/// Truth of the motion at time t: `(f0 [g], ω̇ [rad/s²], ω [rad/s])`.
-/// ω̇ switches off at `t > spin_up_s`.
+impl MotionProfile {
+    /// A spin-up about z at 2 rad/s² for 1.005 s (ends halfway between
+    /// samples at 100 Hz, where the trapezoid integration of a step in ω̇
+    /// is exact), f0 = (0.05, 0, 1) g in the unit frame, 2 s at 100 Hz: the
+    /// defaults of `incal simulate gfimu --kind motion`.
+    pub fn rate_table() -> Self {
+        MotionProfile {
+            axis: Vector3::z(),
+            angular_accel_rad_s2: 2.0,
+            spin_up_s: 1.005,
+            omega0_rad_s: Vector3::zeros(),
+            f0_g: Vector3::new(0.05, 0.0, 1.0),
+            f0_frame: F0Frame::Unit,
+            oscillation_amplitude_rad_s: 0.0,
+            oscillation_hz: 0.0,
+            duration_s: 2.0,
+            rate_hz: 100.0,
+            gravity_m_s2: crate::units::STANDARD_GRAVITY_M_S2,
+        }
+    }
+
+    /// Refuse a profile the simulator cannot represent, naming the field.
+    pub fn check(&self) -> Result<()> {
+        let bad = |what: &str, v: f64| {
+            Err(Error::InvalidValue {
+                what: what.into(),
+                value: v.to_string(),
+            })
+        };
+        for (what, v) in [
+            ("sample rate (Hz)", self.rate_hz),
+            ("duration (s)", self.duration_s),
+            ("gravity (m/s^2)", self.gravity_m_s2),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(what, v);
+            }
+        }
+        if !(self.axis.iter().all(|x| x.is_finite()) && self.axis.norm() > 0.0) {
+            return bad("rotation axis (a non-zero finite vector)", self.axis.norm());
+        }
+        for (what, v) in [
+            ("angular acceleration (rad/s^2)", self.angular_accel_rad_s2),
+            (
+                "oscillation amplitude (rad/s)",
+                self.oscillation_amplitude_rad_s,
+            ),
+        ] {
+            if !v.is_finite() {
+                return bad(what, v);
+            }
+        }
+        if !(self.spin_up_s.is_finite() && self.spin_up_s >= 0.0) {
+            return bad("spin-up time (s, >= 0)", self.spin_up_s);
+        }
+        let f = self.oscillation_hz;
+        if !(f.is_finite() && f >= 0.0 && f < self.rate_hz / 2.0) {
+            return bad("oscillation frequency (Hz, 0 <= f < rate/2)", f);
+        }
+        if self.oscillation_amplitude_rad_s != 0.0 && f == 0.0 {
+            return bad("oscillation frequency (Hz, > 0 with an amplitude)", f);
+        }
+        if self.omega0_rad_s.iter().any(|x| !x.is_finite()) {
+            return bad("initial angular rate (rad/s)", self.omega0_rad_s.norm());
+        }
+        if self.f0_g.iter().any(|x| !x.is_finite()) {
+            return bad("specific force at the origin (g)", self.f0_g.norm());
+        }
+        if self.f0_frame == F0Frame::Table {
+            let n = self.axis.normalize();
+            let w0 = self.omega0_rad_s;
+            let across = (w0 - n * n.dot(&w0)).norm();
+            if across > 1e-12 * w0.norm().max(1.0) {
+                return bad(
+                    "initial angular rate across the axis (rad/s; a table-frame f0 needs the rate along the axis)",
+                    across,
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Truth of the motion at time t: `(f0 [g], ω̇ [rad/s²], ω [rad/s])`, all
+/// in the unit frame. With α the spin-up acceleration, A and f_o the
+/// oscillation, w_o = 2π f_o:
+/// `ω = ω0 + n (α min(t, T_s) + A sin(w_o t))`,
+/// `ω̇ = n (α [t ≤ T_s] + A w_o cos(w_o t))`, and the angle turned about n
+/// `θ = (n·ω0) t + α (t ≤ T_s ? t²/2 : T_s²/2 + T_s (t − T_s)) + A (1 − cos(w_o t))/w_o`
+/// rotates a table-frame f0 into the unit frame ([`F0Frame::Table`]).
 pub fn motion_truth(m: &MotionProfile, t: f64) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
     let n = m.axis.try_normalize(0.0).unwrap_or_else(Vector3::z);
-    let wd = if t <= m.spin_up_s {
-        n * m.angular_accel_rad_s2
+    let alpha = m.angular_accel_rad_s2;
+    let wo = 2.0 * std::f64::consts::PI * m.oscillation_hz;
+    let amp = m.oscillation_amplitude_rad_s;
+    let (osc_rate, osc_accel, osc_angle) = if wo > 0.0 {
+        (
+            amp * (wo * t).sin(),
+            amp * wo * (wo * t).cos(),
+            amp * (1.0 - (wo * t).cos()) / wo,
+        )
     } else {
-        Vector3::zeros()
+        (0.0, 0.0, 0.0)
     };
-    let w = m.omega0_rad_s + n * (m.angular_accel_rad_s2 * t.min(m.spin_up_s));
-    (m.f0_g, wd, w)
+    let wd = n * (if t <= m.spin_up_s { alpha } else { 0.0 } + osc_accel);
+    let w = m.omega0_rad_s + n * (alpha * t.min(m.spin_up_s) + osc_rate);
+    let f0 = match m.f0_frame {
+        F0Frame::Unit => m.f0_g,
+        F0Frame::Table => {
+            let ts = m.spin_up_s;
+            let spin = if t <= ts {
+                0.5 * alpha * t * t
+            } else {
+                alpha * ts * (0.5 * ts + (t - ts))
+            };
+            let theta = n.dot(&m.omega0_rad_s) * t + spin + osc_angle;
+            let v = m.f0_g;
+            let (s, c) = theta.sin_cos();
+            v * c - n.cross(&v) * s + n * (n.dot(&v) * (1.0 - c))
+        }
+    };
+    (f0, wd, w)
 }
 
 /// Simulated motion record: times `t_k = k / rate_hz` and every output.
@@ -148,18 +281,7 @@ pub fn simulate_motion(
     seed: u64,
 ) -> Result<Vec<(f64, Vec<f64>)>> {
     truth.check(geometry)?;
-    for (what, v) in [
-        ("sample rate (Hz)", m.rate_hz),
-        ("duration (s)", m.duration_s),
-        ("gravity (m/s^2)", m.gravity_m_s2),
-    ] {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(Error::InvalidValue {
-                what: what.into(),
-                value: v.to_string(),
-            });
-        }
-    }
+    m.check()?;
     let count = (m.duration_s * m.rate_hz).floor() as usize + 1;
     if count > 10_000_000 {
         return Err(Error::InvalidValue {
@@ -188,4 +310,53 @@ pub fn simulate_motion(
         out.push((t, e));
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A table-frame f0 seen from the turning unit keeps its length and
+    /// its component along the axis, and obeys ḟ = −ω × f (a vector fixed
+    /// outside, seen from a rotating frame); ω̇ is the derivative of ω.
+    #[test]
+    fn table_frame_f0_turns_with_the_unit() {
+        let m = MotionProfile {
+            axis: Vector3::new(0.3, -0.2, 1.0),
+            omega0_rad_s: Vector3::new(0.3, -0.2, 1.0) * 0.1,
+            f0_g: Vector3::new(0.1, 0.2, 1.0),
+            f0_frame: F0Frame::Table,
+            oscillation_amplitude_rad_s: 0.4,
+            oscillation_hz: 0.7,
+            ..MotionProfile::rate_table()
+        };
+        m.check().unwrap();
+        let n = m.axis.normalize();
+        let h = 1e-6;
+        for k in 0..40 {
+            let t = 0.05 + k as f64 * 0.1;
+            let (f, wd, w) = motion_truth(&m, t);
+            assert!((f.norm() - m.f0_g.norm()).abs() < 1e-12);
+            assert!((f.dot(&n) - m.f0_g.dot(&n)).abs() < 1e-12);
+            let (fp, _, wp) = motion_truth(&m, t + h);
+            let (fm, _, wm) = motion_truth(&m, t - h);
+            let fdot = (fp - fm) / (2.0 * h);
+            assert!((fdot + w.cross(&f)).norm() < 1e-7, "t = {t}: {fdot:?}");
+            if (t - m.spin_up_s).abs() > 2.0 * h {
+                assert!(((wp - wm) / (2.0 * h) - wd).norm() < 1e-6, "t = {t}");
+            }
+        }
+        // A rate across the axis cannot turn a table-frame f0: refused.
+        let bad = MotionProfile {
+            omega0_rad_s: Vector3::x(),
+            ..m
+        };
+        assert!(bad.check().is_err());
+        // An oscillation at or above Nyquist is refused.
+        let bad = MotionProfile {
+            oscillation_hz: 50.0,
+            ..m
+        };
+        assert!(bad.check().is_err());
+    }
 }
