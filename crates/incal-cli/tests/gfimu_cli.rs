@@ -515,3 +515,75 @@ fn simulate_motion_turning_gravity_and_oscillation() {
         &["--omega0-rad-s must lie along --axis"],
     );
 }
+
+/// The calibration JSON read by `gfimu solve` is strict: a wrong type, an
+/// extra array element, an unknown field or an accelerometer the geometry
+/// lacks is refused at its JSON path; a UTF-8 BOM is read.
+#[test]
+fn solve_calibration_is_read_strictly() {
+    let st = temp("static.csv", &simulate(&["--seed", "9", "--samples", "20"]));
+    let o = incal(&[
+        "gfimu",
+        "calibrate",
+        "--input",
+        st.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success());
+    let good: Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let mo = temp(
+        "motion.csv",
+        &simulate(&["--kind", "motion", "--seed", "9"]),
+    );
+    let solve = |cal: &PathBuf| {
+        vec![
+            "gfimu".to_string(),
+            "solve".into(),
+            "--calibration".into(),
+            cal.to_str().unwrap().into(),
+            "--input".into(),
+            mo.to_str().unwrap().into(),
+        ]
+    };
+    let cases: [(&dyn Fn(&mut Value), &str); 6] = [
+        (
+            &|d| d["accelerometers"]["a"]["Ks"]["value"] = serde_json::json!([1, 0, 0, 99]),
+            "$.accelerometers.a.Ks.value: must be an array of exactly three numbers",
+        ),
+        (
+            &|d| d["accelerometers"]["b"]["K0"]["value"] = Value::from("x"),
+            "$.accelerometers.b.K0.value: missing or not a number",
+        ),
+        (
+            &|d| d["accelerometers"]["c"]["bogus"] = Value::from(1),
+            "$.accelerometers.c.bogus: unknown field",
+        ),
+        (
+            &|d| d["accelerometers"]["zz"] = d["accelerometers"]["a"].clone(),
+            "$.accelerometers.zz: not an accelerometer of the geometry",
+        ),
+        (
+            &|d| d["accelerometers"]["d"]["noise_output"] = Value::from(0),
+            "$.accelerometers.d.noise_output: must be a positive number or null",
+        ),
+        (
+            &|d| {
+                d["accelerometers"].as_object_mut().unwrap().remove("e");
+            },
+            "$.accelerometers.e: missing",
+        ),
+    ];
+    for (edit, msg) in cases {
+        let mut d = good.clone();
+        edit(&mut d);
+        let cal = temp("cal.json", &d.to_string());
+        let args = solve(&cal);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        refused(&args, &[cal.to_str().unwrap(), msg]);
+    }
+    let cal = temp("bom.json", &format!("\u{feff}{good}"));
+    let args = solve(&cal);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let o = incal(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

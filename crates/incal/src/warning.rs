@@ -85,6 +85,7 @@ impl std::fmt::Display for WarningCode {
 
 /// A warning: a stable code and a one-line message.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct Warning {
     /// Stable code.
     pub code: WarningCode,

@@ -405,31 +405,64 @@ fn read_calibration(
     let accs = doc
         .get("accelerometers")
         .and_then(Value::as_object)
-        .ok_or_else(|| CliError::Input(format!("{name}: no \"accelerometers\" object")))?;
-    let mut out = Vec::new();
-    for n in g.names() {
-        let a = accs.get(&n).ok_or_else(|| {
+        .ok_or_else(|| {
             CliError::Input(format!(
-                "{name}: accelerometer '{n}' of the geometry is missing from \"accelerometers\""
+                "{name}: $.accelerometers: missing or not an object (expected the JSON of 'incal gfimu calibrate --json')"
             ))
         })?;
-        let bad = |what: &str| CliError::Input(format!("{name}: accelerometer '{n}': {what}"));
+    let names = g.names();
+    // An accelerometer the geometry does not have: a calibration of
+    // another array.
+    if let Some(extra) = accs.keys().find(|k| !names.contains(k)) {
+        return Err(CliError::Input(format!(
+            "{name}: $.accelerometers.{}: not an accelerometer of the geometry ({})",
+            crate::output::clip(extra),
+            names.join(", ")
+        )));
+    }
+    const KNOWN: [&str; 5] = [
+        "K0",
+        "Ks",
+        "k0_consistency",
+        "noise_output",
+        "nominal_direction",
+    ];
+    let mut out = Vec::new();
+    for n in names {
+        let a = accs.get(&n).ok_or_else(|| {
+            CliError::Input(format!(
+                "{name}: $.accelerometers.{n}: missing: accelerometer '{n}' of the geometry is not calibrated in this file"
+            ))
+        })?;
+        let obj = a.as_object().ok_or_else(|| {
+            CliError::Input(format!("{name}: $.accelerometers.{n}: not an object"))
+        })?;
+        if let Some(k) = obj.keys().find(|k| !KNOWN.contains(&k.as_str())) {
+            return Err(CliError::Input(format!(
+                "{name}: $.accelerometers.{n}.{}: unknown field (expected {})",
+                crate::output::clip(k),
+                KNOWN.join(", ")
+            )));
+        }
+        let bad = |path: &str, what: &str| {
+            CliError::Input(format!("{name}: $.accelerometers.{n}.{path}: {what}"))
+        };
         let k0 = a
             .pointer("/K0/value")
             .and_then(Value::as_f64)
-            .ok_or_else(|| bad("K0.value missing or not a number"))?;
+            .ok_or_else(|| bad("K0.value", "missing or not a number"))?;
         let ks: Vec<f64> = a
             .pointer("/Ks/value")
             .and_then(Value::as_array)
             .filter(|v| v.len() == 3)
             .and_then(|v| v.iter().map(Value::as_f64).collect::<Option<Vec<f64>>>())
-            .ok_or_else(|| bad("Ks.value must be an array of three numbers"))?;
+            .ok_or_else(|| bad("Ks.value", "must be an array of exactly three numbers"))?;
         let noise_output = match a.get("noise_output") {
             None | Some(Value::Null) => None,
             Some(v) => Some(
                 v.as_f64()
                     .filter(|s| s.is_finite() && *s > 0.0)
-                    .ok_or_else(|| bad("noise_output must be a positive number or null"))?,
+                    .ok_or_else(|| bad("noise_output", "must be a positive number or null"))?,
             ),
         };
         // The calibration's u (optional: a hand-made file may omit it).
@@ -438,7 +471,7 @@ fn read_calibration(
             Some(v) => v
                 .as_f64()
                 .filter(|u| u.is_finite() && *u >= 0.0)
-                .ok_or_else(|| bad("K0.u must be a non-negative number"))?,
+                .ok_or_else(|| bad("K0.u", "must be a non-negative number"))?,
         };
         let u_ks = match a.pointer("/Ks/u") {
             None | Some(Value::Null) => Vector3::zeros(),
@@ -448,7 +481,7 @@ fn read_calibration(
                     .filter(|v| v.len() == 3)
                     .and_then(|v| v.iter().map(Value::as_f64).collect::<Option<Vec<f64>>>())
                     .filter(|u| u.iter().all(|x| x.is_finite() && *x >= 0.0))
-                    .ok_or_else(|| bad("Ks.u must be an array of three non-negative numbers"))?;
+                    .ok_or_else(|| bad("Ks.u", "must be an array of three non-negative numbers"))?;
                 Vector3::new(u[0], u[1], u[2])
             }
         };

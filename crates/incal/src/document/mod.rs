@@ -119,6 +119,7 @@ pub struct Instrument {
 /// One input file: the path as given and the SHA-256 of its bytes, so a
 /// result can be traced to its raw data.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct InputFile {
     /// What the file is to the procedure (`input`, `calibration`,
     /// `geometry`, `from`).
@@ -133,6 +134,7 @@ pub struct InputFile {
 
 /// One estimated coefficient.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct Coefficient {
     /// Estimate.
     pub value: f64,
@@ -270,6 +272,7 @@ impl JsonSchema for Coefficients {
 
 /// Correlation matrix `ρ_jk = C_jk/(u_j u_k)` of the coefficients.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct Correlation {
     /// Coefficient names, in the order of the rows and columns.
     pub names: Vec<String>,
@@ -279,6 +282,7 @@ pub struct Correlation {
 
 /// Diagnostics of one least-squares fit.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct FitSummary {
     /// Which fit (`main`, a station, an accelerometer, …).
     pub label: String,
@@ -368,6 +372,7 @@ impl Cell {
 
 /// A column of a [`Table`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct Column {
     /// Column name (snake case, units not in the name: see `unit`).
     pub name: String,
@@ -378,6 +383,7 @@ pub struct Column {
 /// A procedure's table as data (positions and residuals, stations,
 /// budgets, per-accelerometer blocks, …).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct Table {
     /// Stable identifier (`positions`, `stations`, `budget.K_ip`, …).
     pub id: String,
@@ -472,6 +478,7 @@ pub enum DecisionCode {
 
 /// A decision the tool made, with its reason.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct Decision {
     /// Stable code.
     pub code: DecisionCode,
@@ -816,5 +823,29 @@ mod tests {
         assert!(ResultDocument::from_json(r#"{"schema": "x/2"}"#)
             .unwrap_err()
             .contains("x/2"));
+    }
+
+    /// Strict reading: an unknown key inside a coefficient, a fit or a
+    /// warning is refused at its JSON path; the top level keeps
+    /// procedure-specific objects.
+    #[test]
+    fn unknown_fields_are_refused_at_their_path() {
+        let mut b = DocumentBuilder::new(Procedure::Tumble, "t");
+        b.estimates(&block(), "", term_unit).unwrap();
+        b.warnings([Warning::new(crate::WarningCode::ModelRange, "w")]);
+        let text = b.finish().to_json();
+        let v: Value = serde_json::from_str(&text).unwrap();
+        let edit = |f: &dyn Fn(&mut Value)| {
+            let mut w = v.clone();
+            f(&mut w);
+            ResultDocument::from_json(&w.to_string())
+        };
+        let e = edit(&|w| w["coefficients"]["K1"]["bogus"] = Value::from(1)).unwrap_err();
+        assert!(e.starts_with("$.coefficients.K1.bogus: "), "{e}");
+        let e = edit(&|w| w["warnings"][0]["extra"] = Value::from("x")).unwrap_err();
+        assert!(e.starts_with("$.warnings[0].extra: "), "{e}");
+        let e = edit(&|w| w["coefficients"]["K0"]["u"] = Value::from("x")).unwrap_err();
+        assert!(e.starts_with("$.coefficients.K0.u: "), "{e}");
+        assert!(edit(&|w| w["radius"] = Value::from(1.0)).is_ok());
     }
 }
