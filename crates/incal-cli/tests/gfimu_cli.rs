@@ -545,7 +545,8 @@ fn solve_calibration_is_read_strictly() {
             mo.to_str().unwrap().into(),
         ]
     };
-    let cases: [(&dyn Fn(&mut Value), &str); 6] = [
+    type Edit<'a> = &'a dyn Fn(&mut Value);
+    let cases: [(Edit, &str); 6] = [
         (
             &|d| d["accelerometers"]["a"]["Ks"]["value"] = serde_json::json!([1, 0, 0, 99]),
             "$.accelerometers.a.Ks.value: must be an array of exactly three numbers",
