@@ -74,6 +74,18 @@ pub fn read_text(path: &Path) -> CliResult<(String, String)> {
 /// Write `text` to the file `path`, or to standard output when `path` is
 /// `None` or `-`. Any write or flush error is a failure (exit 1) with one
 /// line: `stdout: ...` or `PATH: cannot write: ...`.
+/// A buffered writer to FILE, or to standard output for none or `-`
+/// (for outputs streamed row by row).
+pub fn open_output(path: Option<&Path>) -> CliResult<std::io::BufWriter<Box<dyn Write>>> {
+    let out: Box<dyn Write> = match path {
+        Some(p) if !is_dash(p) => Box::new(std::fs::File::create(p).map_err(|e| {
+            CliError::Failure(anyhow::anyhow!("{}: cannot write: {e}", p.display()))
+        })?),
+        _ => Box::new(std::io::stdout().lock()),
+    };
+    Ok(std::io::BufWriter::with_capacity(1 << 16, out))
+}
+
 pub fn write_text(path: Option<&Path>, text: &str) -> CliResult<()> {
     match path {
         Some(p) if !is_dash(p) => {

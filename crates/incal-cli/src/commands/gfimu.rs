@@ -11,7 +11,7 @@ use incal::procedures::gfimu::{
     calibrate, CalibrateOptions, CalibratedAccelerometer, SolveOptions, StaticSample,
 };
 use incal::sim::gfimu::{
-    simulate_motion, simulate_static, six_positions, F0Frame, GfimuTruth, MotionProfile,
+    motion_samples, simulate_static, six_positions, F0Frame, GfimuTruth, MotionProfile,
 };
 use incal::units::STANDARD_GRAVITY_M_S2;
 use nalgebra::Vector3;
@@ -1138,7 +1138,7 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
                     ));
                 }
             }
-            let series = simulate_motion(&g, &truth, &m, a.noise, a.seed).map_err(core)?;
+            let series = motion_samples(&g, &truth, &m, a.noise, a.seed).map_err(core)?;
             text.push_str(&format!(
                 "# motion: axis {:?}, {} rad/s^2 for {} s, f0 {:?} g, omega0 {:?} rad/s\n",
                 a.axis, a.angular_accel_rad_s2, a.spin_up_s, a.f0_g, a.omega0_rad_s
@@ -1156,10 +1156,25 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
                 ));
             }
             text.push_str(&format!("time_s,{}\n", names.join(",")));
-            for (t, e) in &series {
-                let v: Vec<String> = e.iter().map(|x| x.to_string()).collect();
-                text.push_str(&format!("{t},{}\n", v.join(",")));
+            // Streamed row by row: 10⁶ samples need no memory for the file.
+            use std::fmt::Write as _;
+            use std::io::Write as _;
+            let mut w = crate::io::open_output(a.output.as_deref())?;
+            let fail = |e: std::io::Error| {
+                CliError::Failure(anyhow::anyhow!("cannot write the series: {e}"))
+            };
+            w.write_all(text.as_bytes()).map_err(fail)?;
+            let mut row = String::with_capacity(512);
+            for (t, e) in series {
+                row.clear();
+                let _ = write!(row, "{t}");
+                for x in &e {
+                    let _ = write!(row, ",{x}");
+                }
+                row.push('\n');
+                w.write_all(row.as_bytes()).map_err(fail)?;
             }
+            return w.flush().map_err(fail);
         }
     }
     write_text(a.output.as_deref(), &text)

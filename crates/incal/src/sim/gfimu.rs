@@ -273,6 +273,7 @@ pub fn motion_truth(m: &MotionProfile, t: f64) -> (Vector3<f64>, Vector3<f64>, V
 }
 
 /// Simulated motion record: times `t_k = k / rate_hz` and every output.
+/// The whole record in memory; [`motion_samples`] streams it.
 pub fn simulate_motion(
     geometry: &Geometry,
     truth: &GfimuTruth,
@@ -280,21 +281,71 @@ pub fn simulate_motion(
     noise: f64,
     seed: u64,
 ) -> Result<Vec<(f64, Vec<f64>)>> {
+    Ok(motion_samples(geometry, truth, m, noise, seed)?.collect())
+}
+
+/// Most samples one simulated motion may have (duration × rate): 10⁷.
+pub const MAX_MOTION_SAMPLES: usize = 10_000_000;
+
+/// The simulated motion record one sample at a time (constant memory;
+/// the same numbers, in the same order, as [`simulate_motion`]).
+pub fn motion_samples<'a>(
+    geometry: &'a Geometry,
+    truth: &'a GfimuTruth,
+    m: &'a MotionProfile,
+    noise: f64,
+    seed: u64,
+) -> Result<MotionSamples<'a>> {
     truth.check(geometry)?;
     m.check()?;
-    let count = (m.duration_s * m.rate_hz).floor() as usize + 1;
-    if count > 10_000_000 {
+    if !(noise.is_finite() && noise >= 0.0) {
+        return Err(Error::InvalidValue {
+            what: "output noise (>= 0)".into(),
+            value: noise.to_string(),
+        });
+    }
+    let count = (m.duration_s * m.rate_hz).floor() + 1.0;
+    if count > MAX_MOTION_SAMPLES as f64 {
         return Err(Error::InvalidValue {
             what: "number of samples (duration x rate, at most 1e7)".into(),
             value: count.to_string(),
         });
     }
-    let mut r = rng(seed);
-    let mut out = Vec::with_capacity(count);
-    for k in 0..count {
-        let t = k as f64 / m.rate_hz;
+    Ok(MotionSamples {
+        geometry,
+        truth,
+        m,
+        noise,
+        r: rng(seed),
+        k: 0,
+        count: count as usize,
+    })
+}
+
+/// Iterator of [`motion_samples`]: `(t_k, outputs)`.
+pub struct MotionSamples<'a> {
+    geometry: &'a Geometry,
+    truth: &'a GfimuTruth,
+    m: &'a MotionProfile,
+    noise: f64,
+    r: rand::rngs::ChaCha8Rng,
+    k: usize,
+    count: usize,
+}
+
+impl Iterator for MotionSamples<'_> {
+    type Item = (f64, Vec<f64>);
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.k >= self.count {
+            return None;
+        }
+        let m = self.m;
+        let t = self.k as f64 / m.rate_hz;
+        self.k += 1;
         let (f0, wd, w) = motion_truth(m, t);
-        let forces: Vec<Vector3<f64>> = geometry
+        let forces: Vec<Vector3<f64>> = self
+            .geometry
             .accelerometers()
             .iter()
             .map(|a| {
@@ -302,14 +353,21 @@ pub fn simulate_motion(
                 f0 + (wd.cross(&p) + w.cross(&w.cross(&p))) / m.gravity_m_s2
             })
             .collect();
-        let e = truth
+        let r = &mut self.r;
+        let noise = self.noise;
+        let e = self
+            .truth
             .outputs(&forces)
             .into_iter()
-            .map(|e| e + normal(&mut r, noise))
+            .map(|e| e + normal(r, noise))
             .collect();
-        out.push((t, e));
+        Some((t, e))
     }
-    Ok(out)
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let n = self.count - self.k;
+        (n, Some(n))
+    }
 }
 
 #[cfg(test)]
