@@ -15,7 +15,7 @@ use incal::sim::trial_seed;
 use rayon::prelude::*;
 
 use crate::error::{usage, CliError, CliResult};
-use crate::output::{input_file, sha256_hex, ResultArgs};
+use crate::output::{input_file, ResultArgs};
 
 /// What the channels measure.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -145,7 +145,41 @@ enum Samples {
     },
 }
 
+/// Bytes of a mapped file read between two releases of its pages
+/// ([`Samples::release`]).
+const WINDOW_BYTES: usize = 16 << 20;
+
 impl Samples {
+    /// Rows per release window of a mapped file (every row for columns).
+    fn window_rows(&self) -> usize {
+        match self {
+            Samples::Columns(_) => usize::MAX,
+            Samples::Mapped {
+                channels, f64le, ..
+            } => (WINDOW_BYTES / (channels * if *f64le { 8 } else { 4 })).max(1),
+        }
+    }
+
+    /// Give the pages of rows `[from, to)` of a mapped file back to the
+    /// kernel once they are read, so a record is never resident twice (the
+    /// map and the phase built from it): peak memory stays near one copy.
+    /// A page read again is faulted in from the file; columns: nothing.
+    fn release(&self, from: usize, to: usize) {
+        if let Samples::Mapped {
+            map,
+            channels,
+            f64le,
+            ..
+        } = self
+        {
+            release_bytes(
+                map,
+                from * channels * if *f64le { 8 } else { 4 },
+                to * channels * if *f64le { 8 } else { 4 },
+            );
+        }
+    }
+
     /// Sample `r` of selected channel `k`.
     fn get(&self, k: usize, r: usize) -> f64 {
         match self {
@@ -165,6 +199,22 @@ impl Samples {
                 }
             }
         }
+    }
+}
+
+/// `madvise(MADV_DONTNEED)` on bytes `[a, b)` of a read-only file map.
+fn release_bytes(map: &memmap2::Mmap, a: usize, b: usize) {
+    let b = b.min(map.len());
+    if b <= a {
+        return;
+    }
+    #[cfg(unix)]
+    {
+        // SAFETY: the map is a private, read-only mapping of a file that
+        // is never written through it; dropping its pages only makes the
+        // next read fault them in again from the file (same bytes). Any
+        // slice borrowed from the map stays valid (the mapping remains).
+        let _ = unsafe { map.unchecked_advise_range(memmap2::UncheckedAdvice::DontNeed, a, b - a) };
     }
 }
 
@@ -298,7 +348,22 @@ fn read_binary(
             })
             .collect::<CliResult<_>>()?
     };
-    let sha = sha256_hex(&map);
+    // Hashed window by window, each released after (one copy resident).
+    let sha = {
+        use sha2::{Digest, Sha256};
+        let mut h = Sha256::new();
+        let mut at = 0;
+        while at < map.len() {
+            let end = (at + WINDOW_BYTES).min(map.len());
+            h.update(&map[at..end]);
+            release_bytes(&map, at, end);
+            at = end;
+        }
+        h.finalize()
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect::<String>()
+    };
     let data = Samples::Mapped {
         map,
         channels,
@@ -306,8 +371,16 @@ fn read_binary(
         index: pick.clone(),
     };
     // Refuse a non-finite sample before any arithmetic (one pass, no copy).
+    let win = data.window_rows();
     for (k, &c) in pick.iter().enumerate() {
-        if let Some(r) = (0..rows).find(|&r| !data.get(k, r).is_finite()) {
+        let bad = (0..rows).find(|&r| {
+            if r > 0 && r % win == 0 {
+                data.release(r - win, r);
+            }
+            !data.get(k, r).is_finite()
+        });
+        data.release(0, rows);
+        if let Some(r) = bad {
             return Err(CliError::Input(format!(
                 "{name}: sample {} of {}: not a finite number",
                 r + 1,
@@ -397,10 +470,20 @@ pub fn run(a: &Args) -> CliResult<()> {
     };
     let one = |k: usize| -> CliResult<ChannelResult> {
         let d = &rec.data;
-        let x: Vec<f64> = match a.data {
-            DataArg::Rate => phase_from_rate_with(rec.rows, tau0, |r| d.get(k, r) * factor),
-            DataArg::Angle => (0..rec.rows).map(|r| d.get(k, r) * factor).collect(),
+        let win = d.window_rows();
+        // Read in windows, each released once read: the phase is the only
+        // resident copy of the channel.
+        let get = |r: usize| {
+            if r > 0 && r % win == 0 {
+                d.release(r - win, r);
+            }
+            d.get(k, r) * factor
         };
+        let x: Vec<f64> = match a.data {
+            DataArg::Rate => phase_from_rate_with(rec.rows, tau0, get),
+            DataArg::Angle => (0..rec.rows).map(get).collect(),
+        };
+        d.release(0, rec.rows);
         let tick = |_: usize| {
             if let Some(b) = &bar {
                 b.inc(1);
