@@ -588,3 +588,73 @@ fn solve_calibration_is_read_strictly() {
     let o = incal(&args);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// A run stopped by a bad row keeps the rows before it and closes its
+/// output with the reason: the JSON document stays valid, the exit code
+/// is still 2 with one stderr line naming the line.
+#[test]
+fn solve_stopped_midway_closes_its_output() {
+    let st = temp("static.csv", &simulate(&["--seed", "6", "--samples", "20"]));
+    let o = incal(&[
+        "gfimu",
+        "calibrate",
+        "--input",
+        st.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success());
+    let cal = temp("cal.json", &stdout(&o));
+    let mut text = String::new();
+    let mut data_rows = 0;
+    for l in simulate(&["--kind", "motion", "--seed", "7"]).lines() {
+        if !l.starts_with('#') && !l.starts_with("time_s") {
+            data_rows += 1;
+            if data_rows == 51 {
+                let mut f: Vec<&str> = l.split(',').collect();
+                f[2] = "abc";
+                text.push_str(&f.join(","));
+                text.push('\n');
+                continue;
+            }
+        }
+        text.push_str(l);
+        text.push('\n');
+    }
+    let bad_line = text.lines().position(|l| l.contains("abc")).unwrap() + 1;
+    let mo = temp("motion_bad.csv", &text);
+    for out in ["--json", "--jsonl", ""] {
+        let mut args = vec![
+            "gfimu",
+            "solve",
+            "--calibration",
+            cal.to_str().unwrap(),
+            "--input",
+            mo.to_str().unwrap(),
+        ];
+        if !out.is_empty() {
+            args.push(out);
+        }
+        let o = incal(&args);
+        assert_eq!(o.status.code(), Some(2), "{out}");
+        let err = stderr(&o);
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        let at = format!("{}:{bad_line}:", mo.display());
+        assert!(err.contains(&at), "{err}");
+        let text = stdout(&o);
+        match out {
+            "--json" => {
+                let d: Value = serde_json::from_str(&text).unwrap();
+                assert_eq!(d["samples"].as_array().unwrap().len(), 50);
+                assert!(d["error"].as_str().unwrap().contains(&at));
+            }
+            "--jsonl" => {
+                let last: Value = serde_json::from_str(text.lines().last().unwrap()).unwrap();
+                assert!(last["summary"]["error"].as_str().unwrap().contains(&at));
+                assert_eq!(text.lines().count(), 51);
+            }
+            _ => assert!(text
+                .lines()
+                .any(|l| l.starts_with("# error: ") && l.contains(&at))),
+        }
+    }
+}

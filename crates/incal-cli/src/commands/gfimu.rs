@@ -757,38 +757,48 @@ fn solution_head(file: &str, kind: OutKind, d: &incal::estimation::Diagnostics) 
 }
 
 /// What comes after the last sample: the CSV trailer comments, the JSON
-/// object's mode and warnings, or the JSON-lines summary line.
-fn solution_tail(kind: OutKind, solver: &Solver) -> String {
+/// object's mode and warnings, or the JSON-lines summary line; with
+/// `error`, the reason the run stopped early (`# error:`, `"error"`).
+fn solution_tail(kind: OutKind, solver: &Solver, error: Option<&str>) -> String {
     match kind {
         OutKind::Csv => {
             let mut t = format!("# mode: {}\n", solver.mode().name());
             for x in solver.warnings() {
                 t.push_str(&format!("# warning: {x}\n"));
             }
+            if let Some(e) = error {
+                t.push_str(&format!("# error: {e}\n"));
+            }
             t
         }
-        OutKind::Json => format!(
-            ",\n  \"mode\": {},\n  \"warnings\": {}\n}}\n",
-            json!(solver.mode().name()),
-            json!(solver.warnings())
-        ),
+        OutKind::Json => {
+            let mut t = format!(
+                ",\n  \"mode\": {},\n  \"warnings\": {}",
+                json!(solver.mode().name()),
+                json!(solver.warnings())
+            );
+            if let Some(e) = error {
+                t.push_str(&format!(",\n  \"error\": {}", json!(e)));
+            }
+            t.push_str("\n}\n");
+            t
+        }
         OutKind::JsonLines => {
             let d = solver.diagnostics();
-            format!(
-                "{}\n",
-                json!({
-                    "summary": {
-                        "procedure": "gfimu-solve",
-                        "units": solution_units(),
-                        "geometry": {
-                            "rank": d.rank,
-                            "condition_number": d.condition.is_finite().then_some(d.condition),
-                        },
-                        "mode": solver.mode().name(),
-                        "warnings": solver.warnings(),
-                    }
-                })
-            )
+            let mut summary = json!({
+                "procedure": "gfimu-solve",
+                "units": solution_units(),
+                "geometry": {
+                    "rank": d.rank,
+                    "condition_number": d.condition.is_finite().then_some(d.condition),
+                },
+                "mode": solver.mode().name(),
+                "warnings": solver.warnings(),
+            });
+            if let Some(e) = error {
+                summary["error"] = json!(e);
+            }
+            format!("{}\n", json!({ "summary": summary }))
         }
     }
 }
@@ -965,7 +975,7 @@ fn stream_solve(a: &SolveArgs, g: &Geometry, mut solver: Solver, kind: OutKind) 
         OutKind::Json => Some(Spill::new()?),
         _ => None,
     };
-    std::thread::scope(|scope| -> CliResult<()> {
+    let outcome = std::thread::scope(|scope| -> CliResult<()> {
         let (tx, rx) = std::sync::mpsc::sync_channel::<Parsed>(8);
         let (back_tx, back_rx) = std::sync::mpsc::sync_channel::<Batch>(8);
         let (name_r, cols_r, names_r) = (&name, &cols, &names);
@@ -1012,12 +1022,22 @@ fn stream_solve(a: &SolveArgs, g: &Geometry, mut solver: Solver, kind: OutKind) 
             let _ = back_tx.try_send(batch);
         }
         Ok(())
-    })?;
-    if rows == 0 {
-        return Err(CliError::Input(format!(
+    });
+    let outcome = match outcome {
+        Ok(()) if rows == 0 => Err(CliError::Input(format!(
             "{name}: no data rows after the header"
-        )));
-    }
+        ))),
+        // A write failure: nothing more can be written.
+        Err(CliError::Failure(e)) => return Err(CliError::Failure(e)),
+        o => o,
+    };
+    // Stopped by the input (a bad row, a diverged solution): the rows
+    // before it stay, and the output is closed with the reason, so a JSON
+    // document stays valid; the exit code still says it failed.
+    let error = match &outcome {
+        Err(CliError::Input(msg)) => Some(msg.as_str()),
+        _ => None,
+    };
     if kind == OutKind::Json {
         w.write_all(b"\n  ],\n  \"uncertainty\": ").map_err(wfail)?;
         match spill.as_mut() {
@@ -1033,10 +1053,10 @@ fn stream_solve(a: &SolveArgs, g: &Geometry, mut solver: Solver, kind: OutKind) 
             None => w.write_all(b"null").map_err(wfail)?,
         }
     }
-    w.write_all(solution_tail(kind, &solver).as_bytes())
+    w.write_all(solution_tail(kind, &solver, error).as_bytes())
         .map_err(wfail)?;
     w.flush().map_err(wfail)?;
-    Ok(())
+    outcome
 }
 
 fn position_label(f: &Vector3<f64>) -> String {
