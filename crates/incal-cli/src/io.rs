@@ -71,11 +71,34 @@ pub fn read_text(path: &Path) -> CliResult<(String, String)> {
     }
 }
 
-/// Write `text` to the file `path`, or to standard output when `path` is
-/// `None` or `-`. Any write or flush error is a failure (exit 1) with one
-/// line: `stdout: ...` or `PATH: cannot write: ...`.
-/// A buffered writer to FILE, or to standard output for none or `-`
-/// (for outputs streamed row by row).
+/// A reader of the file `path` (or standard input for `-`) for inputs read
+/// row by row, buffered, past a UTF-8 byte-order mark; with its display
+/// name. Fails (exit 2) with `NAME: cannot read: ...`.
+pub fn open_input(path: &Path) -> CliResult<(String, std::io::BufReader<Box<dyn Read + Send>>)> {
+    use std::io::BufRead;
+    let name = display_name(path);
+    let input: Box<dyn Read + Send> = if is_dash(path) {
+        Box::new(std::io::stdin())
+    } else {
+        Box::new(
+            std::fs::File::open(path)
+                .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?,
+        )
+    };
+    let mut reader = std::io::BufReader::with_capacity(1 << 16, input);
+    if reader
+        .fill_buf()
+        .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?
+        .starts_with(BOM)
+    {
+        reader.consume(BOM.len());
+    }
+    Ok((name, reader))
+}
+
+/// A buffered writer to the file `path`, or to standard output when `path`
+/// is `None` or `-` (for outputs streamed row by row). A file that cannot
+/// be created is a failure (exit 1): `PATH: cannot write: ...`.
 pub fn open_output(path: Option<&Path>) -> CliResult<std::io::BufWriter<Box<dyn Write>>> {
     let out: Box<dyn Write> = match path {
         Some(p) if !is_dash(p) => Box::new(std::fs::File::create(p).map_err(|e| {
@@ -86,6 +109,9 @@ pub fn open_output(path: Option<&Path>) -> CliResult<std::io::BufWriter<Box<dyn 
     Ok(std::io::BufWriter::with_capacity(1 << 16, out))
 }
 
+/// Write `text` to the file `path`, or to standard output when `path` is
+/// `None` or `-`. Any write or flush error is a failure (exit 1) with one
+/// line: `stdout: ...` or `PATH: cannot write: ...`.
 pub fn write_text(path: Option<&Path>, text: &str) -> CliResult<()> {
     match path {
         Some(p) if !is_dash(p) => {

@@ -548,27 +548,11 @@ enum Parsed {
     Failed(CliError),
 }
 
-/// Open the series input (a file or `-`), skipping a UTF-8 byte-order mark.
+/// Open the series input (a file or `-`, past a UTF-8 byte-order mark) as
+/// a CSV reader of byte records.
 fn series_reader(path: &Path) -> CliResult<csv::Reader<Box<dyn std::io::Read + Send>>> {
-    use std::io::{BufRead, BufReader, Read};
-    let name = crate::io::display_name(path);
-    let input: Box<dyn Read + Send> = if crate::io::is_dash(path) {
-        Box::new(std::io::stdin())
-    } else {
-        Box::new(
-            std::fs::File::open(path)
-                .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?,
-        )
-    };
-    let mut reader = BufReader::with_capacity(1 << 16, input);
-    if reader
-        .fill_buf()
-        .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?
-        .starts_with(b"\xEF\xBB\xBF")
-    {
-        reader.consume(3);
-    }
-    let boxed: Box<dyn Read + Send> = Box::new(reader);
+    let (_, reader) = crate::io::open_input(path)?;
+    let boxed: Box<dyn std::io::Read + Send> = Box::new(reader);
     Ok(csv::ReaderBuilder::new()
         .has_headers(false)
         .comment(Some(b'#'))
@@ -576,6 +560,19 @@ fn series_reader(path: &Path) -> CliResult<csv::Reader<Box<dyn std::io::Read + S
         // Fields are trimmed where they are read (a number, a header
         // name): csv's own trim copies every record.
         .from_reader(boxed))
+}
+
+/// The next record of the series, false at its end; a CSV error names
+/// its line.
+fn next_record(
+    name: &str,
+    csv: &mut csv::Reader<Box<dyn std::io::Read + Send>>,
+    rec: &mut csv::ByteRecord,
+) -> CliResult<bool> {
+    csv.read_byte_record(rec).map_err(|e| {
+        let line = e.position().map_or(0, |p| p.line());
+        CliError::Input(format!("{name}:{line}: not valid CSV"))
+    })
 }
 
 /// Read the header of the series: the column of `time_s` and of every
@@ -587,11 +584,7 @@ fn series_header(
 ) -> CliResult<(Vec<usize>, usize)> {
     let mut rec = csv::ByteRecord::new();
     loop {
-        let more = csv.read_byte_record(&mut rec).map_err(|e| {
-            let line = e.position().map_or(0, |p| p.line());
-            CliError::Input(format!("{name}:{line}: not valid CSV"))
-        })?;
-        if !more {
+        if !next_record(name, csv, &mut rec)? {
             return Err(CliError::Input(format!(
                 "{name}: empty file (expected a header row)"
             )));
@@ -640,11 +633,7 @@ fn parse_series(
     };
     let result = (|| -> CliResult<()> {
         loop {
-            let more = csv.read_byte_record(&mut rec).map_err(|e| {
-                let line = e.position().map_or(0, |p| p.line());
-                CliError::Input(format!("{name}:{line}: not valid CSV"))
-            })?;
-            if !more {
+            if !next_record(name, &mut csv, &mut rec)? {
                 return Ok(());
             }
             let line = rec.position().map_or(0, |p| p.line());
@@ -735,6 +724,15 @@ fn solution_units() -> Value {
         "u_f0_g": "g", "u_omega_dot_rad_s2": "rad/s^2", "u_omega_rad_s": "rad/s"})
 }
 
+/// The `geometry` object of the JSON outputs: rank and condition number
+/// of the motion system (null when infinite).
+fn geometry_json(d: &incal::estimation::Diagnostics) -> Value {
+    json!({
+        "rank": d.rank,
+        "condition_number": d.condition.is_finite().then_some(d.condition),
+    })
+}
+
 /// What comes before the first sample: the CSV header, or the JSON
 /// object's opening up to its `samples` array.
 fn solution_head(file: &str, kind: OutKind, d: &incal::estimation::Diagnostics) -> String {
@@ -742,15 +740,11 @@ fn solution_head(file: &str, kind: OutKind, d: &incal::estimation::Diagnostics) 
         OutKind::Csv => SOLUTION_CSV_HEADER.to_string(),
         OutKind::JsonLines => String::new(),
         OutKind::Json => {
-            let geometry = json!({
-                "rank": d.rank,
-                "condition_number": d.condition.is_finite().then_some(d.condition),
-            });
             format!(
                 "{{\n  \"procedure\": \"gfimu-solve\",\n  \"input\": {},\n  \"units\": {},\n  \"geometry\": {},\n  \"samples\": [\n",
                 json!(file),
                 solution_units(),
-                geometry
+                geometry_json(d)
             )
         }
     }
@@ -784,14 +778,10 @@ fn solution_tail(kind: OutKind, solver: &Solver, error: Option<&str>) -> String 
             t
         }
         OutKind::JsonLines => {
-            let d = solver.diagnostics();
             let mut summary = json!({
                 "procedure": "gfimu-solve",
                 "units": solution_units(),
-                "geometry": {
-                    "rank": d.rank,
-                    "condition_number": d.condition.is_finite().then_some(d.condition),
-                },
+                "geometry": geometry_json(solver.diagnostics()),
                 "mode": solver.mode().name(),
                 "warnings": solver.warnings(),
             });
@@ -852,14 +842,14 @@ fn sample_line(
             buf.push_str(fmt.format(m.time_s));
             let value_keys = ["f0_g", "omega_dot_rad_s2", "omega_rad_s"];
             for (key, v) in value_keys.iter().zip(values) {
-                push_json_vec(buf, fmt, key, Some(v));
+                push_json_vec(buf, fmt, ',', key, Some(v));
             }
             // The JSON document keeps the contract's shape (u in its own
             // "uncertainty" array, written by `u_line`); JSON lines carry
             // u inside each sample.
             if kind == OutKind::JsonLines {
                 for (key, v) in U_KEYS.iter().zip(us) {
-                    push_json_vec(buf, fmt, key, v);
+                    push_json_vec(buf, fmt, ',', key, v);
                 }
             }
             buf.push('}');
@@ -873,9 +863,16 @@ fn sample_line(
 
 const U_KEYS: [&str; 3] = ["u_f0_g", "u_omega_dot_rad_s2", "u_omega_rad_s"];
 
-/// `,"key":[x,y,z]` (or `null`) appended to `buf`.
-fn push_json_vec(buf: &mut String, fmt: &mut ryu::Buffer, key: &str, v: Option<Vector3<f64>>) {
-    buf.push_str(",\"");
+/// `{sep}"key":[x,y,z]` (or `null`) appended to `buf`.
+fn push_json_vec(
+    buf: &mut String,
+    fmt: &mut ryu::Buffer,
+    sep: char,
+    key: &str,
+    v: Option<Vector3<f64>>,
+) {
+    buf.push(sep);
+    buf.push('"');
     buf.push_str(key);
     buf.push_str("\":");
     match v {
@@ -904,13 +901,10 @@ fn u_line(
         return false;
     }
     buf.clear();
-    buf.push_str(if first { "    {" } else { ",\n    {" });
-    let mut tmp = String::new();
-    for (key, v) in U_KEYS.iter().zip(us) {
-        push_json_vec(&mut tmp, fmt, key, v);
+    buf.push_str(if first { "    " } else { ",\n    " });
+    for (i, (key, v)) in U_KEYS.iter().zip(us).enumerate() {
+        push_json_vec(buf, fmt, if i == 0 { '{' } else { ',' }, key, v);
     }
-    // Drop the leading comma of the first key.
-    buf.push_str(&tmp[1..]);
     buf.push('}');
     true
 }
@@ -946,22 +940,15 @@ impl Drop for Spill {
     }
 }
 
-/// `gfimu solve` to CSV, one row in, one row out: constant memory. The
-/// input is parsed on a second thread, a few thousand rows ahead of the
-/// solver; the output is the same bytes as a serial run.
+/// `gfimu solve`, one row in, one row out (CSV, JSON or JSON lines):
+/// constant memory. The input is parsed on a second thread, a few thousand
+/// rows ahead of the solver; the output is the same bytes as a serial run.
 fn stream_solve(a: &SolveArgs, g: &Geometry, mut solver: Solver, kind: OutKind) -> CliResult<()> {
     use std::io::Write;
     let name = crate::io::display_name(&a.input);
     let mut csv = series_reader(&a.input)?;
     let (cols, width) = series_header(&name, &mut csv, g)?;
-    let out: Box<dyn Write> = match &a.output {
-        Some(p) if !crate::io::is_dash(p) => Box::new(
-            std::fs::File::create(p)
-                .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", p.display()))?,
-        ),
-        _ => Box::new(std::io::stdout().lock()),
-    };
-    let mut w = std::io::BufWriter::with_capacity(1 << 16, out);
+    let mut w = crate::io::open_output(a.output.as_deref())?;
     let wfail =
         |e: std::io::Error| CliError::Failure(anyhow::anyhow!("cannot write the solution: {e}"));
     w.write_all(solution_head(&name, kind, solver.diagnostics()).as_bytes())
@@ -1149,14 +1136,10 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
                     "--oscillation-amplitude-rad-s must be finite, with --oscillation-hz > 0 when it is not 0",
                 ));
             }
-            if m.f0_frame == F0Frame::Table {
-                let n = m.axis.normalize();
-                let w0 = m.omega0_rad_s;
-                if (w0 - n * n.dot(&w0)).norm() > 1e-12 * w0.norm().max(1.0) {
-                    return Err(usage(
-                        "--f0-frame table: --omega0-rad-s must lie along --axis (the unit turns about that one axis)",
-                    ));
-                }
+            if m.f0_frame == F0Frame::Table && !m.omega0_along_axis() {
+                return Err(usage(
+                    "--f0-frame table: --omega0-rad-s must lie along --axis (the unit turns about that one axis)",
+                ));
             }
             let series = motion_samples(&g, &truth, &m, a.noise, a.seed).map_err(core)?;
             text.push_str(&format!(

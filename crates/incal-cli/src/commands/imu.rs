@@ -983,41 +983,18 @@ impl Applier {
 pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
     use crate::error::CliError;
     use incal::procedures::imu::V3;
-    use std::io::{BufRead, BufReader, Write};
+    use std::io::Write;
     let (cal_name, _, doc) = crate::documents::read_document(&a.calibration)?;
     let cal =
         Applier::from_document(&doc).map_err(|e| CliError::Input(format!("{cal_name}: {e}")))?;
-    let name = crate::io::display_name(&a.input);
-    let input: Box<dyn std::io::Read> = if crate::io::is_dash(&a.input) {
-        Box::new(std::io::stdin().lock())
-    } else {
-        Box::new(
-            std::fs::File::open(&a.input)
-                .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?,
-        )
-    };
-    let mut reader = BufReader::with_capacity(1 << 16, input);
-    if reader
-        .fill_buf()
-        .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?
-        .starts_with(b"\xEF\xBB\xBF")
-    {
-        reader.consume(3);
-    }
+    let (name, reader) = crate::io::open_input(&a.input)?;
     let mut csv = csv::ReaderBuilder::new()
         .has_headers(false)
         .comment(Some(b'#'))
         .flexible(true)
         .trim(csv::Trim::All)
         .from_reader(reader);
-    let out: Box<dyn Write> = match &a.output {
-        Some(p) if !crate::io::is_dash(p) => Box::new(
-            std::fs::File::create(p)
-                .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", p.display()))?,
-        ),
-        _ => Box::new(std::io::stdout().lock()),
-    };
-    let mut w = std::io::BufWriter::with_capacity(1 << 16, out);
+    let mut w = crate::io::open_output(a.output.as_deref())?;
     let wfail = |e: std::io::Error| CliError::Failure(anyhow::anyhow!("cannot write: {e}"));
     let mut rec = csv::ByteRecord::new();
     // (time column, acc columns, gyro columns, width)

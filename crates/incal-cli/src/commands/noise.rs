@@ -172,12 +172,19 @@ impl Samples {
             ..
         } = self
         {
-            release_bytes(
-                map,
-                from * channels * if *f64le { 8 } else { 4 },
-                to * channels * if *f64le { 8 } else { 4 },
-            );
+            let frame = channels * if *f64le { 8 } else { 4 };
+            release_bytes(map, from * frame, to * frame);
         }
+    }
+
+    /// Sample `r` of selected channel `k`, read in order from row 0: at
+    /// each window boundary the window before is released
+    /// ([`Samples::release`]). Call `release(0, rows)` after the last row.
+    fn get_streamed(&self, k: usize, r: usize, window: usize) -> f64 {
+        if r > 0 && r % window == 0 {
+            self.release(r - window, r);
+        }
+        self.get(k, r)
     }
 
     /// Sample `r` of selected channel `k`.
@@ -359,10 +366,7 @@ fn read_binary(
             release_bytes(&map, at, end);
             at = end;
         }
-        h.finalize()
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect::<String>()
+        crate::output::hex(&h.finalize())
     };
     let data = Samples::Mapped {
         map,
@@ -373,12 +377,7 @@ fn read_binary(
     // Refuse a non-finite sample before any arithmetic (one pass, no copy).
     let win = data.window_rows();
     for (k, &c) in pick.iter().enumerate() {
-        let bad = (0..rows).find(|&r| {
-            if r > 0 && r % win == 0 {
-                data.release(r - win, r);
-            }
-            !data.get(k, r).is_finite()
-        });
+        let bad = (0..rows).find(|&r| !data.get_streamed(k, r, win).is_finite());
         data.release(0, rows);
         if let Some(r) = bad {
             return Err(CliError::Input(format!(
@@ -473,12 +472,7 @@ pub fn run(a: &Args) -> CliResult<()> {
         let win = d.window_rows();
         // Read in windows, each released once read: the phase is the only
         // resident copy of the channel.
-        let get = |r: usize| {
-            if r > 0 && r % win == 0 {
-                d.release(r - win, r);
-            }
-            d.get(k, r) * factor
-        };
+        let get = |r: usize| d.get_streamed(k, r, win) * factor;
         let x: Vec<f64> = match a.data {
             DataArg::Rate => phase_from_rate_with(rec.rows, tau0, get),
             DataArg::Angle => (0..rec.rows).map(get).collect(),

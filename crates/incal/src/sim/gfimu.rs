@@ -10,7 +10,7 @@ use nalgebra::Vector3;
 use super::{normal, rng};
 use crate::error::{Error, Result};
 use crate::models::gfimu::{cross_axes, Geometry};
-use crate::procedures::gfimu::StaticSample;
+use crate::procedures::gfimu::{CalibratedAccelerometer, StaticSample};
 
 /// Truth of every accelerometer, geometry order.
 #[derive(Debug, Clone, PartialEq)]
@@ -49,6 +49,16 @@ impl GfimuTruth {
             )));
         }
         Ok(())
+    }
+
+    /// The truth as an exact calibration (u = 0) with a known output
+    /// noise σ per sample, for solving motions with the true coefficients.
+    pub fn calibration(&self, noise_output: Option<f64>) -> Vec<CalibratedAccelerometer> {
+        self.k0
+            .iter()
+            .zip(&self.ks)
+            .map(|(k0, ks)| CalibratedAccelerometer::new(*k0, *ks, noise_output))
+            .collect()
     }
 
     /// Noise-free outputs at the specific forces `f_j` (g) of every
@@ -216,18 +226,27 @@ impl MotionProfile {
         if self.f0_g.iter().any(|x| !x.is_finite()) {
             return bad("specific force at the origin (g)", self.f0_g.norm());
         }
-        if self.f0_frame == F0Frame::Table {
-            let n = self.axis.normalize();
-            let w0 = self.omega0_rad_s;
-            let across = (w0 - n * n.dot(&w0)).norm();
-            if across > 1e-12 * w0.norm().max(1.0) {
-                return bad(
-                    "initial angular rate across the axis (rad/s; a table-frame f0 needs the rate along the axis)",
-                    across,
-                );
-            }
+        if self.f0_frame == F0Frame::Table && !self.omega0_along_axis() {
+            return bad(
+                "initial angular rate across the axis (rad/s; a table-frame f0 needs the rate along the axis)",
+                self.omega0_across_axis_rad_s(),
+            );
         }
         Ok(())
+    }
+
+    /// `|ω0 − n (n·ω0)|` (rad/s): the part of the initial rate across the
+    /// rotation axis n.
+    pub fn omega0_across_axis_rad_s(&self) -> f64 {
+        let n = self.axis.try_normalize(0.0).unwrap_or_else(Vector3::z);
+        let w0 = self.omega0_rad_s;
+        (w0 - n * n.dot(&w0)).norm()
+    }
+
+    /// True when the initial rate lies along the axis (to round-off), so
+    /// the unit turns about that one axis, as a table-frame f0 needs.
+    pub fn omega0_along_axis(&self) -> bool {
+        self.omega0_across_axis_rad_s() <= 1e-12 * self.omega0_rad_s.norm().max(1.0)
     }
 }
 

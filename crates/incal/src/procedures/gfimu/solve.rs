@@ -274,7 +274,6 @@ pub struct Solver {
     noise_wd: Matrix3<f64>,
     /// How the noise covariance is known (module docs).
     noise: NoiseSource,
-    report_u: bool,
     omega_u_limit: f64,
     warned_at: Option<f64>,
     prev: Option<(f64, Vector3<f64>, Vector3<f64>)>,
@@ -475,7 +474,6 @@ impl Solver {
             noise_diag,
             noise_wd: Matrix3::from_fn(|i, j| base_cov[(3 + i, 3 + j)]),
             noise,
-            report_u: noise != NoiseSource::None,
             omega_u_limit: opts.omega_u_limit_rad_s,
             warned_at: None,
             prev: None,
@@ -698,7 +696,8 @@ impl Solver {
             }
         }
         let u_omega = Vector3::from_fn(|i, _| sigma_total[(i, i)].max(0.0).sqrt());
-        if self.report_u && self.warned_at.is_none() && u_omega.amax() > self.omega_u_limit {
+        let report_u = self.noise != NoiseSource::None;
+        if report_u && self.warned_at.is_none() && u_omega.amax() > self.omega_u_limit {
             self.warned_at = Some(t);
             self.warnings.push(Warning::new(
                 WarningCode::ModelRange,
@@ -716,9 +715,9 @@ impl Solver {
             f0_g: f0,
             omega_dot_rad_s2: wd,
             omega_rad_s: w,
-            u_f0_g: self.report_u.then(|| u(0)),
-            u_omega_dot_rad_s2: self.report_u.then(|| u(3)),
-            u_omega_rad_s: self.report_u.then_some(u_omega),
+            u_f0_g: report_u.then(|| u(0)),
+            u_omega_dot_rad_s2: report_u.then(|| u(3)),
+            u_omega_rad_s: report_u.then_some(u_omega),
         })
     }
 
