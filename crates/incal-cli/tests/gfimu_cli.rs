@@ -56,6 +56,28 @@ fn calibrate_json(path: &str) -> Value {
     serde_json::from_str(&stdout(&o)).unwrap()
 }
 
+/// Simulate a static test with `seed` (20 samples per position) on the
+/// built-in `layout`, calibrate it, and keep the calibration JSON in a
+/// temporary file: `(path, JSON text)`.
+fn calibration(layout: &str, seed: &str) -> (PathBuf, String) {
+    let st = temp(
+        "static.csv",
+        &simulate(&["--layout", layout, "--seed", seed, "--samples", "20"]),
+    );
+    let o = incal(&[
+        "gfimu",
+        "calibrate",
+        "--layout",
+        layout,
+        "--input",
+        st.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    (temp("cal.json", &text), text)
+}
+
 #[test]
 fn calibrate_gives_contract_json() {
     let csv = temp("static.csv", &simulate(&["--seed", "5"]));
@@ -129,16 +151,7 @@ fn arbitrary_orientations_by_force_columns() {
 
 #[test]
 fn solve_gives_contract_json_and_recovers_motion() {
-    let st = temp("static.csv", &simulate(&["--seed", "6", "--samples", "20"]));
-    let o = incal(&[
-        "gfimu",
-        "calibrate",
-        "--input",
-        st.to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(o.status.success());
-    let cal = temp("cal.json", &stdout(&o));
+    let (cal, _) = calibration("paper", "6");
     let mo = temp(
         "motion.csv",
         &simulate(&["--kind", "motion", "--seed", "7", "--duration-s", "1.5"]),
@@ -368,21 +381,7 @@ direction = [0.0, 1.0, 0.0]
 /// the simulated truth of f0.
 #[test]
 fn twelve_layout_outputs_agree() {
-    let st = temp(
-        "s12.csv",
-        &simulate(&["--layout", "twelve", "--seed", "11", "--samples", "20"]),
-    );
-    let o = incal(&[
-        "gfimu",
-        "calibrate",
-        "--layout",
-        "twelve",
-        "--input",
-        st.to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let cal = temp("c12.json", &stdout(&o));
+    let (cal, _) = calibration("twelve", "11");
     let mo = temp(
         "m12.csv",
         &simulate(&["--layout", "twelve", "--kind", "motion", "--seed", "12"]),
@@ -521,16 +520,8 @@ fn simulate_motion_turning_gravity_and_oscillation() {
 /// lacks is refused at its JSON path; a UTF-8 BOM is read.
 #[test]
 fn solve_calibration_is_read_strictly() {
-    let st = temp("static.csv", &simulate(&["--seed", "9", "--samples", "20"]));
-    let o = incal(&[
-        "gfimu",
-        "calibrate",
-        "--input",
-        st.to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(o.status.success());
-    let good: Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let (_, text) = calibration("paper", "9");
+    let good: Value = serde_json::from_str(&text).unwrap();
     let mo = temp(
         "motion.csv",
         &simulate(&["--kind", "motion", "--seed", "9"]),
@@ -594,16 +585,7 @@ fn solve_calibration_is_read_strictly() {
 /// is still 2 with one stderr line naming the line.
 #[test]
 fn solve_stopped_midway_closes_its_output() {
-    let st = temp("static.csv", &simulate(&["--seed", "6", "--samples", "20"]));
-    let o = incal(&[
-        "gfimu",
-        "calibrate",
-        "--input",
-        st.to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(o.status.success());
-    let cal = temp("cal.json", &stdout(&o));
+    let (cal, _) = calibration("paper", "6");
     let mut text = String::new();
     let mut data_rows = 0;
     for l in simulate(&["--kind", "motion", "--seed", "7"]).lines() {

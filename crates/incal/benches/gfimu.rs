@@ -5,7 +5,7 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use incal::models::gfimu::Geometry;
 use incal::procedures::gfimu::solve::Solver;
-use incal::procedures::gfimu::{CalibratedAccelerometer, SolveOptions};
+use incal::procedures::gfimu::SolveOptions;
 use incal::sim::gfimu::{simulate_motion, GfimuTruth, MotionProfile};
 use std::hint::black_box;
 
@@ -24,9 +24,7 @@ fn bench_solve(c: &mut Criterion) {
         };
         let noise = 1e-5;
         let series = simulate_motion(&g, &t, &m, noise, 1).unwrap();
-        let cal: Vec<CalibratedAccelerometer> = (0..g.len())
-            .map(|j| CalibratedAccelerometer::new(t.k0[j], t.ks[j], Some(noise)))
-            .collect();
+        let cal = t.calibration(Some(noise));
         group.throughput(Throughput::Elements(series.len() as u64));
         group.bench_function(format!("{label}, 10^4 samples"), |b| {
             b.iter(|| {

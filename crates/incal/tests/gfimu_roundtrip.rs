@@ -143,9 +143,7 @@ fn motion_solution_recovers_f0_and_omega_dot() {
     let m = profile();
     let noise = 2e-4;
     let series = simulate_motion(&g, &t, &m, noise, 5).unwrap();
-    let cal: Vec<CalibratedAccelerometer> = (0..6)
-        .map(|j| CalibratedAccelerometer::new(t.k0[j], t.ks[j], Some(noise)))
-        .collect();
+    let cal = t.calibration(Some(noise));
     let sol = solve(&g, &cal, &series, &SolveOptions::default()).unwrap();
     assert_eq!(sol.samples.len(), 201);
     let (mut z2, mut n, mut inside) = (0.0, 0.0, 0.0);

@@ -6,11 +6,9 @@
 //! turning through a unit rotating off the vertical, and a rate that
 //! oscillates, are solved within u.
 
-use incal::models::gfimu::{ArrayAccelerometer, Geometry};
+use incal::models::gfimu::Geometry;
 use incal::procedures::gfimu::solve::{solve_mode, SolveMode, Solver};
-use incal::procedures::gfimu::{
-    calibrate, solve, CalibrateOptions, CalibratedAccelerometer, SolveOptions,
-};
+use incal::procedures::gfimu::{calibrate, solve, CalibrateOptions, SolveOptions};
 use incal::sim::gfimu::{
     motion_truth, simulate_motion, simulate_static, six_positions, F0Frame, GfimuTruth,
     MotionProfile,
@@ -22,22 +20,7 @@ use nalgebra::Vector3;
 /// Twelve accelerometers: at ±L on each axis, each sensing the two
 /// directions across its lever arm.
 fn twelve(l: f64) -> Geometry {
-    let e = [Vector3::x(), Vector3::y(), Vector3::z()];
-    let mut accs = Vec::new();
-    for a in 0..3 {
-        for sign in [1.0, -1.0] {
-            for b in 0..3 {
-                if a != b {
-                    accs.push(ArrayAccelerometer {
-                        name: format!("a{a}{}s{b}", if sign > 0.0 { "p" } else { "m" }),
-                        position_m: e[a] * (sign * l),
-                        direction: e[b],
-                    });
-                }
-            }
-        }
-    }
-    Geometry::new(accs).unwrap()
+    Geometry::twelve(l).unwrap()
 }
 
 fn motion(duration_s: f64, rate_hz: f64) -> MotionProfile {
@@ -85,9 +68,7 @@ fn twelve_accelerometers_keep_omega_within_its_u() {
     let t = GfimuTruth::typical(&g, 1.0);
     let m = motion(20.0, 200.0);
     let noise = 2e-4;
-    let cal: Vec<CalibratedAccelerometer> = (0..g.len())
-        .map(|j| CalibratedAccelerometer::new(t.k0[j], t.ks[j], Some(noise)))
-        .collect();
+    let cal = t.calibration(Some(noise));
     let runs = monte_carlo(31, 200, |seed| {
         let series = simulate_motion(&g, &t, &m, noise, seed).unwrap();
         let sol = solve(&g, &cal, &series, &SolveOptions::default()).unwrap();
@@ -206,9 +187,7 @@ fn turning_gravity_and_oscillating_rate_solved_within_u() {
         "{f_end:?}"
     );
     let noise = 2e-4;
-    let cal: Vec<CalibratedAccelerometer> = (0..g.len())
-        .map(|j| CalibratedAccelerometer::new(t.k0[j], t.ks[j], Some(noise)))
-        .collect();
+    let cal = t.calibration(Some(noise));
     let runs = monte_carlo(53, 100, |seed| {
         let series = simulate_motion(&g, &t, &m, noise, seed).unwrap();
         let sol = solve(&g, &cal, &series, &SolveOptions::default()).unwrap();
