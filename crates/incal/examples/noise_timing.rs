@@ -55,6 +55,14 @@ fn main() {
             .sum()
     });
     println!("ohdev_fused {t:.6}");
+    let t = best(&mut || {
+        dev::mvar_many(&x, &ms, 1.0, true)
+            .iter()
+            .flatten()
+            .map(|v| v.var)
+            .sum()
+    });
+    println!("mdev_fused {t:.6}");
     for (name, k) in kernels {
         let t = best(&mut || {
             ms.iter()

@@ -37,6 +37,9 @@ fn raw_phase(y: &[f64]) -> Vec<f64> {
 fn devs_at(x: &[f64], m: usize) -> [f64; 5] {
     let oa = dev::oavar(x, m, 1.0, true).unwrap().var.sqrt();
     let md = dev::mvar(x, m, 1.0, true).unwrap().var;
+    // The prefix-sum MDEV the command uses gives the same value.
+    let many = dev::mvar_many(x, &[m], 1.0, true)[0].unwrap().var;
+    assert!(((many - md) / md).abs() < 1e-12, "m {m}: {many} vs {md}");
     let oh = dev::ohvar(x, m, 1.0, true).unwrap().var.sqrt();
     let tot = dev::totvar(x, m, 1.0, true).unwrap().var.sqrt();
     [oa, md.sqrt(), oh, dev::tvar(md, m as f64).sqrt(), tot]

@@ -311,6 +311,7 @@ pub fn stability_with_progress(
     };
     let oas = dev::oavar_many(x, &ms, t0, par);
     let ohs = dev::ohvar_many(x, &ms, t0, par);
+    let mvs = dev::mvar_many(x, &ms, t0, par);
     let mut last: Option<id::NoiseId> = None;
     for (k, &m) in ms.iter().enumerate() {
         let nid = ids[k].or(last);
@@ -326,7 +327,7 @@ pub fn stability_with_progress(
             aa.and_then(|a| edf::greenhall(a, 2, m, n, true, false)),
             p,
         );
-        let mv = dev::mvar(x, m, t0, par);
+        let mv = mvs[k];
         let medf = aa.and_then(|a| edf::greenhall(a, 2, m, n, true, true));
         push(&mut st.mdev, pair(mv), medf, p);
         let tau = m as f64 * t0;
