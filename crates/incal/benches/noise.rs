@@ -33,6 +33,15 @@ fn kernels(c: &mut Criterion) {
                     .sum::<f64>()
             })
         });
+        g.bench_with_input(BenchmarkId::new("mdev_many", n), &x, |b, x| {
+            b.iter(|| {
+                dev::mvar_many(x, &ms, 1.0, true)
+                    .iter()
+                    .flatten()
+                    .map(|v| v.var)
+                    .sum::<f64>()
+            })
+        });
         g.bench_with_input(BenchmarkId::new("ohdev", n), &x, |b, x| {
             b.iter(|| {
                 ms.iter()
@@ -72,6 +81,15 @@ fn kernels(c: &mut Criterion) {
         b.iter(|| {
             ms.iter()
                 .map(|&m| dev::mvar(&x, m, 1.0, true).unwrap().var)
+                .sum::<f64>()
+        })
+    });
+    g.bench_function("mdev_many_1e5", |b| {
+        b.iter(|| {
+            dev::mvar_many(&x, &ms, 1.0, true)
+                .iter()
+                .flatten()
+                .map(|v| v.var)
                 .sum::<f64>()
         })
     });
