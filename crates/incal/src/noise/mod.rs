@@ -7,6 +7,7 @@
 //! follows NIST SP 1065 (Riley 2008) and Stable32 exactly. A deviation is in
 //! the rate unit (x unit per second); TDEV is in the x unit.
 
+pub mod corr;
 pub mod dev;
 pub mod edf;
 pub mod id;
