@@ -45,7 +45,7 @@ for name in ["oadev", "mdev", "ohdev", "totdev"]:
     mmax = (n - 1) // 4
     taus = [2**k for k in range(64) if 2**k <= mmax] if grid == "octave" else list(range(1, mmax + 1))
     if grid == "all" and name == "totdev":
-        print(f"{len(y):>10} {grid:>6} {name:>7}  allantools skipped (hours)  incal {float(inc[name]):9.4f} s")
+        print(f"{len(y):>10} {grid:>6} {name:>7}  allantools skipped (hours)  incal {float(inc.get(name + '_fused', inc[name])):9.4f} s")
         continue
     t = time.perf_counter()
     fn(y, rate=1.0, data_type="freq", taus=np.array(taus, dtype=float))

@@ -63,6 +63,16 @@ fn main() {
             .sum()
     });
     println!("mdev_fused {t:.6}");
+    // TOTDEV with its interior from the OADEV sums (OADEV's work included).
+    let t = best(&mut || {
+        dev::oavar_totvar_many(&x, &ms, 1.0, true)
+            .1
+            .iter()
+            .flatten()
+            .map(|v| v.var)
+            .sum()
+    });
+    println!("totdev_fused {t:.6}");
     for (name, k) in kernels {
         let t = best(&mut || {
             ms.iter()

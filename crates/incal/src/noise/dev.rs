@@ -839,6 +839,86 @@ pub fn tvar(mvar: f64, tau: f64) -> f64 {
 /// `Tot σ²(τ) = Σ_{i=1}^{N−2} (x*_{i−m} − 2x*_i + x*_{i+m})² / (2 m² τ0² (N − 2))`.
 /// Defined for `m ≤ N − 2`.
 pub fn totvar(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> {
+    totvar_with(x, m, tau0, |lo, len| {
+        comb_sum(
+            [
+                &x[lo + m..lo + m + len],
+                &x[lo..lo + len],
+                &x[lo - m..lo - m + len],
+            ],
+            [1.0, -2.0, 1.0],
+            parallel,
+        )
+    })
+}
+
+/// [`oavar_many`] and [`totvar`] at every factor of `ms`. The centres of
+/// TOTDEV with both neighbours inside the record (`m ≤ i ≤ N−1−m`) are the
+/// N − 2m terms of the OADEV sum, the same terms in the same blocks, so
+/// TOTDEV only adds its 2(m − 1) reflected edge terms to the OADEV sum
+/// (O(m) per factor instead of O(N)).
+pub fn oavar_totvar_many(
+    x: &[f64],
+    ms: &[usize],
+    tau0: f64,
+    parallel: bool,
+) -> (Vec<Option<VarN>>, Vec<Option<VarN>>) {
+    let sums = many_sums(x, ms, Kind::Allan, parallel);
+    let oa = sums
+        .iter()
+        .zip(ms)
+        .map(|(r, &m)| {
+            r.map(|(s, n)| {
+                let mt = m as f64 * tau0;
+                VarN {
+                    var: s / (2.0 * mt * mt * n as f64),
+                    n,
+                }
+            })
+        })
+        .collect();
+    let one = |(r, &m): (&Option<(f64, usize)>, &usize)| match r {
+        Some((s, n)) => totvar_with(x, m, tau0, |lo, len| {
+            debug_assert!(lo == m && len == *n);
+            *s
+        }),
+        None => totvar(x, m, tau0, parallel),
+    };
+    // Factors independent: in parallel on dense grids (same numbers).
+    let tot = if parallel {
+        sums.par_iter().zip(ms.par_iter()).map(one).collect()
+    } else {
+        sums.iter().zip(ms).map(one).collect()
+    };
+    (oa, tot)
+}
+
+/// `Σ_{i=a}^{b−1} f(i)` in eight lane accumulators, lanes added in a
+/// fixed order.
+#[inline]
+fn lanes(a: usize, b: usize, f: impl Fn(usize) -> f64) -> f64 {
+    let mut acc = [0.0f64; 8];
+    let mut i = a;
+    while i + 8 <= b {
+        for (l, al) in acc.iter_mut().enumerate() {
+            *al += f(i + l);
+        }
+        i += 8;
+    }
+    for (l, al) in acc.iter_mut().enumerate().take(b.saturating_sub(i)) {
+        *al += f(i + l);
+    }
+    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]))
+}
+
+/// [`totvar`] with the sum over the interior centres `lo..lo+len` (both
+/// neighbours inside the record) given by `interior(lo, len)`.
+fn totvar_with(
+    x: &[f64],
+    m: usize,
+    tau0: f64,
+    interior: impl FnOnce(usize, usize) -> f64,
+) -> Option<VarN> {
     let nx = x.len();
     if m == 0 || nx < 3 || m > nx - 2 {
         return None;
@@ -866,22 +946,20 @@ pub fn totvar(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> {
     let (lo, hi) = (m.max(1), (nx - 1 - m).min(nx - 2));
     let mut s = 0.0;
     if lo <= hi {
-        for i in 1..lo {
-            s += term(i);
-        }
-        let len = hi - lo + 1;
-        s += comb_sum(
-            [
-                &x[lo + m..lo + m + len],
-                &x[lo..lo + len],
-                &x[lo - m..lo - m + len],
-            ],
-            [1.0, -2.0, 1.0],
-            parallel,
-        );
-        for i in hi + 1..=nx - 2 {
-            s += term(i);
-        }
+        // Left edge, i < m: x*_{i−m} = 2x_0 − x_{m−i}; right edge,
+        // i > N−1−m: x*_{i+m} = 2x_{N−1} − x_{2(N−1)−i−m}. Straight
+        // loops (no reflection test per term), eight lanes.
+        let left = |i: usize| {
+            let v = (2.0 * x[0] - x[m - i]) - 2.0 * x[i] + x[i + m];
+            v * v
+        };
+        let right = |i: usize| {
+            let v = x[i - m] - 2.0 * x[i] + (2.0 * x[last] - x[2 * last - i - m]);
+            v * v
+        };
+        s += lanes(1, lo, left);
+        s += interior(lo, hi - lo + 1);
+        s += lanes(hi + 1, nx - 1, right);
     } else {
         for i in 1..=nx - 2 {
             s += term(i);
@@ -993,6 +1071,16 @@ mod tests {
                 assert!(((a.var - b.var) / b.var).abs() < 1e-11, "n {n} m {m}");
             }
             let many = oavar_many(&x, &ms, 1.0, true);
+            // TOTDEV from the OADEV sums: the same bits as alone.
+            let (oa2, tot) = oavar_totvar_many(&x, &ms, 1.0, true);
+            assert_eq!(oa2, many);
+            for (k, &m) in ms.iter().enumerate() {
+                assert_eq!(
+                    tot[k].map(|v| v.var.to_bits()),
+                    totvar(&x, m, 1.0, false).map(|v| v.var.to_bits()),
+                    "n {n} m {m}"
+                );
+            }
             let hmany = ohvar_many(&x, &ms, 1.0, true);
             for (k, &m) in ms.iter().enumerate() {
                 assert_eq!(
@@ -1122,6 +1210,15 @@ mod tests {
             refused > 0,
             "random-walk FM at short τ goes to the direct sums"
         );
+        // TOTDEV on a dense grid (its interior the OADEV sums by FFT).
+        for x in [&xw, &xr] {
+            let ms: Vec<usize> = (1..=x.len() / 4).collect();
+            let (_, tot) = oavar_totvar_many(x, &ms, 1.0, true);
+            for (k, &m) in ms.iter().enumerate() {
+                let (g, w) = (tot[k].unwrap().var, totvar(x, m, 1.0, false).unwrap().var);
+                assert!(((g - w) / w).abs() <= 2.0 * DENSE_TOL, "TOTDEV m {m}");
+            }
+        }
         // MDEV on a dense grid (Hadamard sums of the prefix sums by FFT,
         // the refused factors by the superblocks) against the slides.
         for (x, name) in [

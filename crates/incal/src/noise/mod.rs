@@ -310,7 +310,7 @@ pub fn stability_with_progress(
     } else {
         ms.iter().map(|&m| id::identify(x, m)).collect()
     };
-    let oas = dev::oavar_many(x, &ms, t0, par);
+    let (oas, tots) = dev::oavar_totvar_many(x, &ms, t0, par);
     let ohs = dev::ohvar_many(x, &ms, t0, par);
     let mvs = dev::mvar_many(x, &ms, t0, par);
     let mut last: Option<id::NoiseId> = None;
@@ -345,7 +345,7 @@ pub fn stability_with_progress(
             ah.and_then(|a| edf::greenhall(a, 3, m, n, true, false)),
             p,
         );
-        let tv = dev::totvar(x, m, t0, par);
+        let tv = tots[k];
         push(
             &mut st.totdev,
             pair(tv),
