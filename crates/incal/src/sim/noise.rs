@@ -37,82 +37,51 @@ pub struct NoiseTruth {
     pub r: f64,
 }
 
-/// In-place radix-2 FFT of `(re, im)` (length a power of two); `inverse`
-/// without the 1/n scale.
-fn fft(re: &mut [f64], im: &mut [f64], inverse: bool) {
-    let n = re.len();
-    let mut j = 0;
-    for i in 1..n {
-        let mut bit = n >> 1;
-        while j & bit != 0 {
-            j ^= bit;
-            bit >>= 1;
-        }
-        j |= bit;
-        if i < j {
-            re.swap(i, j);
-            im.swap(i, j);
-        }
-    }
-    let sign = if inverse { 1.0 } else { -1.0 };
-    // The twiddles e^{±2πik/n}, k < n/2, computed once: a sin_cos per
-    // butterfly took minutes at 10⁸ samples. Stage `len` uses every
-    // (n/len)-th one.
-    let base = sign * 2.0 * std::f64::consts::PI / n as f64;
-    let tw: Vec<(f64, f64)> = (0..n / 2).map(|k| (base * k as f64).sin_cos()).collect();
-    let mut len = 2;
-    while len <= n {
-        let half = len / 2;
-        let stride = n / len;
-        for start in (0..n).step_by(len) {
-            for k in 0..half {
-                let (s, c) = tw[k * stride];
-                let (a, b) = (start + k, start + k + half);
-                let tr = re[b] * c - im[b] * s;
-                let ti = re[b] * s + im[b] * c;
-                re[b] = re[a] - tr;
-                im[b] = im[a] - ti;
-                re[a] += tr;
-                im[a] += ti;
-            }
-        }
-        len <<= 1;
-    }
-}
-
 /// Flicker (1/f) noise of `n` samples by Kasdin & Walter: white noise of
 /// standard deviation `sigma` convolved with the α = 1 power-law filter
-/// (linear convolution through zero-padded FFTs).
+/// (linear convolution through zero-padded real FFTs, `realfft`).
 pub fn flicker(n: usize, sigma: f64, seed: u64) -> Vec<f64> {
+    use realfft::num_complex::Complex64;
+    use realfft::RealFftPlanner;
     if n == 0 || sigma <= 0.0 {
         return vec![0.0; n];
     }
     let len = (2 * n).next_power_of_two();
+    let mut planner = RealFftPlanner::<f64>::new();
+    let (fwd, inv) = (planner.plan_fft_forward(len), planner.plan_fft_inverse(len));
+    // The filter's spectrum first; its real buffer is freed before the
+    // noise's is made (at 10⁸ samples each buffer is 2 GB).
+    let hs: Vec<Complex64> = {
+        let mut h = vec![0.0; len];
+        h[0] = 1.0;
+        for k in 1..n {
+            h[k] = h[k - 1] * (k as f64 - 0.5) / k as f64;
+        }
+        let mut hs = fwd.make_output_vec();
+        fwd.process(&mut h, &mut hs).expect("sizes from the plan");
+        hs
+    };
     let mut r = rng(seed);
-    let mut hr = vec![0.0; len];
-    let mut hi = vec![0.0; len];
-    let mut wr = vec![0.0; len];
-    let mut wi = vec![0.0; len];
-    hr[0] = 1.0;
-    for k in 1..n {
-        hr[k] = hr[k - 1] * (k as f64 - 0.5) / k as f64;
+    let mut w = vec![0.0; len];
+    for v in w.iter_mut().take(n) {
+        *v = normal(&mut r, sigma);
     }
-    for w in wr.iter_mut().take(n) {
-        *w = normal(&mut r, sigma);
+    let mut ws = fwd.make_output_vec();
+    fwd.process(&mut w, &mut ws).expect("sizes from the plan");
+    let scale = 1.0 / len as f64;
+    for (a, b) in ws.iter_mut().zip(&hs) {
+        *a *= b * scale;
     }
-    fft(&mut hr, &mut hi, false);
-    fft(&mut wr, &mut wi, false);
-    for k in 0..len {
-        let (a, b) = (hr[k] * wr[k] - hi[k] * wi[k], hr[k] * wi[k] + hi[k] * wr[k]);
-        wr[k] = a;
-        wi[k] = b;
+    drop(hs);
+    // Real signals: the spectrum is real at 0 and len/2 but for round-off.
+    ws[0].im = 0.0;
+    if let Some(last) = ws.last_mut() {
+        last.im = 0.0;
     }
-    fft(&mut wr, &mut wi, true);
-    wr.truncate(n);
-    for v in &mut wr {
-        *v /= len as f64;
-    }
-    wr
+    inv.process(&mut ws, &mut w).expect("real spectrum");
+    w.truncate(n);
+    w.shrink_to_fit();
+    w
 }
 
 /// `n` rate samples at spacing `tau0_s` with the terms of `truth` (module
