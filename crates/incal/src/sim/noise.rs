@@ -47,38 +47,44 @@ pub fn flicker(n: usize, sigma: f64, seed: u64) -> Vec<f64> {
         return vec![0.0; n];
     }
     let len = (2 * n).next_power_of_two();
-    let mut planner = RealFftPlanner::<f64>::new();
-    let (fwd, inv) = (planner.plan_fft_forward(len), planner.plan_fft_inverse(len));
-    // The filter's spectrum first; its real buffer is freed before the
-    // noise's is made (at 10⁸ samples each buffer is 2 GB).
-    let hs: Vec<Complex64> = {
-        let mut h = vec![0.0; len];
-        h[0] = 1.0;
-        for k in 1..n {
-            h[k] = h[k - 1] * (k as f64 - 0.5) / k as f64;
-        }
-        let mut hs = fwd.make_output_vec();
-        fwd.process(&mut h, &mut hs).expect("sizes from the plan");
-        hs
-    };
-    let mut r = rng(seed);
+    // The forward plan (its twiddles are gigabytes at 10⁸ samples) is
+    // dropped before the inverse is planned.
+    let fwd = RealFftPlanner::<f64>::new().plan_fft_forward(len);
+    // One real buffer and one scratch serve every transform (at 10⁸
+    // samples each buffer is 2 GB): the filter's spectrum first, then the
+    // same buffer holds the noise.
+    let mut scratch = vec![Complex64::new(0.0, 0.0); fwd.get_scratch_len()];
     let mut w = vec![0.0; len];
+    w[0] = 1.0;
+    for k in 1..n {
+        w[k] = w[k - 1] * (k as f64 - 0.5) / k as f64;
+    }
+    let mut hs = fwd.make_output_vec();
+    fwd.process_with_scratch(&mut w, &mut hs, &mut scratch)
+        .expect("sizes from the plan");
+    let mut r = rng(seed);
+    w.fill(0.0);
     for v in w.iter_mut().take(n) {
         *v = normal(&mut r, sigma);
     }
     let mut ws = fwd.make_output_vec();
-    fwd.process(&mut w, &mut ws).expect("sizes from the plan");
+    fwd.process_with_scratch(&mut w, &mut ws, &mut scratch)
+        .expect("sizes from the plan");
     let scale = 1.0 / len as f64;
     for (a, b) in ws.iter_mut().zip(&hs) {
         *a *= b * scale;
     }
-    drop(hs);
+    drop((hs, fwd));
+    let inv = RealFftPlanner::<f64>::new().plan_fft_inverse(len);
+    scratch.resize(inv.get_scratch_len(), Complex64::new(0.0, 0.0));
     // Real signals: the spectrum is real at 0 and len/2 but for round-off.
     ws[0].im = 0.0;
     if let Some(last) = ws.last_mut() {
         last.im = 0.0;
     }
-    inv.process(&mut ws, &mut w).expect("real spectrum");
+    inv.process_with_scratch(&mut ws, &mut w, &mut scratch)
+        .expect("real spectrum");
+    drop((ws, scratch));
     w.truncate(n);
     w.shrink_to_fit();
     w
