@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 use clap::ValueEnum;
 use incal::document::noise::{document, ChannelResult, Quantity};
 use incal::noise::{
-    phase_from_rate_with, stability_with_progress, terms, StabilityOptions, TauGrid,
+    phase_from_rate_sum, phase_from_rate_with, stability_with_progress, terms, StabilityOptions,
+    TauGrid,
 };
 use incal::sim::noise::{rate_record, NoiseTruth};
 use incal::sim::trial_seed;
@@ -131,6 +132,9 @@ struct Record {
     data: Samples,
     sha256: String,
     rows: usize,
+    /// Per selected channel `Σ y·factor` in row order, when the reading
+    /// pass already summed it (mapped files).
+    sums: Option<Vec<f64>>,
 }
 
 /// Where the samples are: parsed columns (CSV), or the memory map of a
@@ -185,6 +189,22 @@ impl Samples {
             self.release(r - window, r);
         }
         self.get(k, r)
+    }
+
+    /// The bytes of rows `[from, to)` of a mapped file (empty for columns).
+    fn bytes(&self, from: usize, to: usize) -> &[u8] {
+        match self {
+            Samples::Columns(_) => &[],
+            Samples::Mapped {
+                map,
+                channels,
+                f64le,
+                ..
+            } => {
+                let frame = channels * if *f64le { 8 } else { 4 };
+                &map[from * frame..to * frame]
+            }
+        }
     }
 
     /// Sample `r` of selected channel `k`.
@@ -302,6 +322,7 @@ fn read_csv(path: &Path, columns: &[String]) -> CliResult<(String, Record)> {
             names: pick.iter().map(|&k| head[k].clone()).collect(),
             data: Samples::Columns(data),
             sha256: sha,
+            sums: None,
             rows,
         },
     ))
@@ -314,6 +335,8 @@ fn read_binary(
     channels: usize,
     f64le: bool,
     columns: &[String],
+    factor: f64,
+    parallel: bool,
 ) -> CliResult<(String, Record)> {
     let name = path.display().to_string();
     if path.as_os_str() == "-" {
@@ -355,31 +378,53 @@ fn read_binary(
             })
             .collect::<CliResult<_>>()?
     };
-    // Hashed window by window, each released after (one copy resident).
-    let sha = {
-        use sha2::{Digest, Sha256};
-        let mut h = Sha256::new();
-        let mut at = 0;
-        while at < map.len() {
-            let end = (at + WINDOW_BYTES).min(map.len());
-            h.update(&map[at..end]);
-            release_bytes(&map, at, end);
-            at = end;
-        }
-        crate::output::hex(&h.finalize())
-    };
     let data = Samples::Mapped {
         map,
         channels,
         f64le,
         index: pick.clone(),
     };
-    // Refuse a non-finite sample before any arithmetic (one pass, no copy).
+    // One pass, window by window, each released after (one copy
+    // resident): the hash of the bytes, and per channel the first
+    // non-finite sample (refused before any arithmetic) and the sum the
+    // phase integration needs (so it reads the file once more, not twice).
     let win = data.window_rows();
+    let mut h = <sha2::Sha256 as sha2::Digest>::new();
+    let mut bad: Vec<Option<usize>> = vec![None; pick.len()];
+    let mut sums = vec![0.0; pick.len()];
+    let mut r0 = 0;
+    while r0 < rows {
+        let r1 = (r0 + win).min(rows);
+        let mut hash = || sha2::Digest::update(&mut h, data.bytes(r0, r1));
+        let mut check = || {
+            for (k, (b, s)) in bad.iter_mut().zip(&mut sums).enumerate() {
+                if b.is_some() {
+                    continue;
+                }
+                for r in r0..r1 {
+                    let v = data.get(k, r);
+                    if !v.is_finite() {
+                        *b = Some(r);
+                        break;
+                    }
+                    *s += v * factor;
+                }
+            }
+        };
+        // The hash and the checks of one window on the two cores (one
+        // thread with --sequential; the same results either way).
+        if parallel {
+            rayon::join(hash, check);
+        } else {
+            hash();
+            check();
+        }
+        data.release(r0, r1);
+        r0 = r1;
+    }
+    let sha = crate::output::hex(&sha2::Digest::finalize(h));
     for (k, &c) in pick.iter().enumerate() {
-        let bad = (0..rows).find(|&r| !data.get_streamed(k, r, win).is_finite());
-        data.release(0, rows);
-        if let Some(r) = bad {
+        if let Some(r) = bad[k] {
             return Err(CliError::Input(format!(
                 "{name}: sample {} of {}: not a finite number",
                 r + 1,
@@ -394,6 +439,7 @@ fn read_binary(
             data,
             sha256: sha,
             rows,
+            sums: Some(sums),
         },
     ))
 }
@@ -436,7 +482,14 @@ pub fn run(a: &Args) -> CliResult<()> {
             if ch == 0 {
                 return Err(usage("--channels must be at least 1"));
             }
-            read_binary(&a.input, ch, a.format == FormatArg::F64le, &a.columns)?
+            read_binary(
+                &a.input,
+                ch,
+                a.format == FormatArg::F64le,
+                &a.columns,
+                factor,
+                !a.sequential,
+            )?
         }
     };
     let tau0 = 1.0 / a.rate_hz;
@@ -474,7 +527,10 @@ pub fn run(a: &Args) -> CliResult<()> {
         // resident copy of the channel.
         let get = |r: usize| d.get_streamed(k, r, win) * factor;
         let x: Vec<f64> = match a.data {
-            DataArg::Rate => phase_from_rate_with(rec.rows, tau0, get),
+            DataArg::Rate => match &rec.sums {
+                Some(s) => phase_from_rate_sum(rec.rows, tau0, s[k], get),
+                None => phase_from_rate_with(rec.rows, tau0, get),
+            },
             DataArg::Angle => (0..rec.rows).map(get).collect(),
         };
         d.release(0, rec.rows);

@@ -216,13 +216,18 @@ pub fn phase_from_rate(y: &[f64], tau0: f64) -> Vec<f64> {
 /// twice through a function (e.g. straight from a memory-mapped file, so
 /// the phase is the only copy of the data).
 pub fn phase_from_rate_with(n: usize, tau0: f64, y: impl Fn(usize) -> f64) -> Vec<f64> {
-    let mut mean = 0.0;
+    let mut sum = 0.0;
     for i in 0..n {
-        mean += y(i);
+        sum += y(i);
     }
-    if n > 0 {
-        mean /= n as f64;
-    }
+    phase_from_rate_sum(n, tau0, sum, y)
+}
+
+/// As [`phase_from_rate_with`] with `Σ y(i)` already summed in order
+/// (e.g. in the pass that hashes and checks a mapped file), so the samples
+/// are read once more, not twice; the same bits.
+pub fn phase_from_rate_sum(n: usize, tau0: f64, sum: f64, y: impl Fn(usize) -> f64) -> Vec<f64> {
+    let mean = if n > 0 { sum / n as f64 } else { sum };
     let mut x = Vec::with_capacity(n + 1);
     let mut acc = 0.0;
     x.push(0.0);
