@@ -10,6 +10,9 @@ use incal::noise::{dev, phase_from_rate, TauGrid};
 /// A deviation kernel of `incal::noise::dev`.
 type Kernel = fn(&[f64], usize, f64, bool) -> Option<dev::VarN>;
 
+/// A kernel of `incal::noise::dev` over a whole grid of factors.
+type Many = fn(&[f64], &[usize], f64, bool) -> Vec<Option<dev::VarN>>;
+
 fn best(f: &mut dyn FnMut() -> f64) -> f64 {
     let mut t = f64::INFINITY;
     let mut sink = 0.0;
@@ -39,40 +42,20 @@ fn main() {
         ("ohdev", dev::ohvar),
         ("totdev", dev::totvar),
     ];
-    let t = best(&mut || {
-        dev::oavar_many(&x, &ms, 1.0, true)
-            .iter()
-            .flatten()
-            .map(|v| v.var)
-            .sum()
-    });
-    println!("oadev_fused {t:.6}");
-    let t = best(&mut || {
-        dev::ohvar_many(&x, &ms, 1.0, true)
-            .iter()
-            .flatten()
-            .map(|v| v.var)
-            .sum()
-    });
-    println!("ohdev_fused {t:.6}");
-    let t = best(&mut || {
-        dev::mvar_many(&x, &ms, 1.0, true)
-            .iter()
-            .flatten()
-            .map(|v| v.var)
-            .sum()
-    });
-    println!("mdev_fused {t:.6}");
-    // TOTDEV with its interior from the OADEV sums (OADEV's work included).
-    let t = best(&mut || {
-        dev::oavar_totvar_many(&x, &ms, 1.0, true)
-            .1
-            .iter()
-            .flatten()
-            .map(|v| v.var)
-            .sum()
-    });
-    println!("totdev_fused {t:.6}");
+    // The kernels over the whole grid at once; TOTDEV with its interior
+    // from the OADEV sums (OADEV's work included).
+    let fused: [(&str, Many); 4] = [
+        ("oadev_fused", dev::oavar_many),
+        ("ohdev_fused", dev::ohvar_many),
+        ("mdev_fused", dev::mvar_many),
+        ("totdev_fused", |x, ms, t, p| {
+            dev::oavar_totvar_many(x, ms, t, p).1
+        }),
+    ];
+    for (name, f) in fused {
+        let t = best(&mut || f(&x, &ms, 1.0, true).iter().flatten().map(|v| v.var).sum());
+        println!("{name} {t:.6}");
+    }
     for (name, k) in kernels {
         let t = best(&mut || {
             ms.iter()

@@ -142,31 +142,24 @@ fn comb_many<const K: usize>(
 /// would cost more than the transforms, the lagged products by FFT
 /// ([`dense_sums`]).
 pub fn oavar_many(x: &[f64], ms: &[usize], tau0: f64, parallel: bool) -> Vec<Option<VarN>> {
-    many_sums(x, ms, Kind::Allan, parallel)
-        .into_iter()
-        .zip(ms)
-        .map(|(r, &m)| {
-            r.map(|(s, n)| {
-                let mt = m as f64 * tau0;
-                VarN {
-                    var: s / (2.0 * mt * mt * n as f64),
-                    n,
-                }
-            })
-        })
-        .collect()
+    variances(&many_sums(x, ms, Kind::Allan, parallel), ms, tau0, 2.0)
 }
 
 /// [`ohvar`] at every factor of `ms`, as [`oavar_many`].
 pub fn ohvar_many(x: &[f64], ms: &[usize], tau0: f64, parallel: bool) -> Vec<Option<VarN>> {
-    many_sums(x, ms, Kind::Hadamard, parallel)
-        .into_iter()
+    variances(&many_sums(x, ms, Kind::Hadamard, parallel), ms, tau0, 6.0)
+}
+
+/// `σ² = S / (c·m²τ0²·n)` from the sums `(S, n)` of each factor
+/// (c = 2 Allan, 6 Hadamard).
+fn variances(sums: &[Option<(f64, usize)>], ms: &[usize], tau0: f64, c: f64) -> Vec<Option<VarN>> {
+    sums.iter()
         .zip(ms)
         .map(|(r, &m)| {
             r.map(|(s, n)| {
                 let mt = m as f64 * tau0;
                 VarN {
-                    var: s / (6.0 * mt * mt * n as f64),
+                    var: s / (c * mt * mt * n as f64),
                     n,
                 }
             })
@@ -864,19 +857,7 @@ pub fn oavar_totvar_many(
     parallel: bool,
 ) -> (Vec<Option<VarN>>, Vec<Option<VarN>>) {
     let sums = many_sums(x, ms, Kind::Allan, parallel);
-    let oa = sums
-        .iter()
-        .zip(ms)
-        .map(|(r, &m)| {
-            r.map(|(s, n)| {
-                let mt = m as f64 * tau0;
-                VarN {
-                    var: s / (2.0 * mt * mt * n as f64),
-                    n,
-                }
-            })
-        })
-        .collect();
+    let oa = variances(&sums, ms, tau0, 2.0);
     let one = |(r, &m): (&Option<(f64, usize)>, &usize)| match r {
         Some((s, n)) => totvar_with(x, m, tau0, |lo, len| {
             debug_assert!(lo == m && len == *n);
@@ -976,16 +957,23 @@ fn totvar_with(
 mod tests {
     use super::*;
 
-    fn data(n: usize) -> Vec<f64> {
-        // A deterministic random walk with a trend.
-        let mut x = vec![0.0];
-        let mut s = 12345u64;
-        for i in 1..n {
+    /// Deterministic uniform numbers in [−½, ½) (a 64-bit LCG).
+    fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut s = seed;
+        move || {
             s = s
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
-            let u = (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
-            x.push(x[i - 1] + u + 0.01);
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
+    fn data(n: usize) -> Vec<f64> {
+        // A deterministic random walk with a trend.
+        let mut u = uniform(12345);
+        let mut x = vec![0.0];
+        for i in 1..n {
+            x.push(x[i - 1] + u() + 0.01);
         }
         x
     }
@@ -1106,13 +1094,7 @@ mod tests {
     /// too large the factor is slid (so the numbers agree everywhere).
     #[test]
     fn mvar_prefix_round_off_is_estimated_and_refused_past_the_tolerance() {
-        let mut s = 99u64;
-        let mut u = move || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut u = uniform(99);
         let n = 1usize << 18;
         let (mut y, mut xw, mut xr) = (0.0, vec![0.0], vec![0.0]);
         for i in 0..n {
@@ -1153,13 +1135,7 @@ mod tests {
     /// below the error, refused factors summed directly.
     #[test]
     fn dense_sums_equal_the_direct_sums_within_their_estimate() {
-        let mut s = 7u64;
-        let mut u = move || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut u = uniform(7);
         let n = 20_000usize;
         let (mut y, mut xw, mut xr) = (0.0, vec![0.0], vec![0.0]);
         for i in 0..n {
