@@ -605,27 +605,29 @@ pub(crate) fn mvar_many_tol(
             None => rest.push(k),
         }
     }
-    let level = |g: usize| (MVAR_GROUPS[g], groups[g].iter().map(|&k| ms[k]).collect());
-    let passes = [(vec![level(2), level(1), level(0)], vec![2, 1, 0])];
-    for (levels, gs) in passes {
-        for (res, g) in mvar_levels(x, &levels, parallel).into_iter().zip(gs) {
-            for (&k, (s, prms)) in groups[g].iter().zip(res) {
-                let m = ms[k];
-                let n = terms(m).unwrap_or(0);
-                let (mf, nf) = (m as f64, n as f64);
-                let rms = (s / nf).sqrt();
-                let d = f64::EPSILON * prms * ((2.0 * mf).sqrt() + 4.0) / rms;
-                let rel = 20.0 * d * (3.0 * mf / nf).min(1.0).sqrt() + d * d;
-                out[k] = if rel.is_finite() && rel <= tol {
-                    Some(VarN {
-                        var: s / (2.0 * mf.powi(4) * tau0 * tau0 * nf),
-                        n,
-                    })
-                } else {
-                    slid[k] = true;
-                    mvar(x, m, tau0, parallel)
-                };
-            }
+    // Every group in one pass, the largest superblocks outermost.
+    let order = [2, 1, 0];
+    let levels: Vec<(usize, Vec<usize>)> = order
+        .iter()
+        .map(|&g| (MVAR_GROUPS[g], groups[g].iter().map(|&k| ms[k]).collect()))
+        .collect();
+    for (res, g) in mvar_levels(x, &levels, parallel).into_iter().zip(order) {
+        for (&k, (s, prms)) in groups[g].iter().zip(res) {
+            let m = ms[k];
+            let n = terms(m).unwrap_or(0);
+            let (mf, nf) = (m as f64, n as f64);
+            let rms = (s / nf).sqrt();
+            let d = f64::EPSILON * prms * ((2.0 * mf).sqrt() + 4.0) / rms;
+            let rel = 20.0 * d * (3.0 * mf / nf).min(1.0).sqrt() + d * d;
+            out[k] = if rel.is_finite() && rel <= tol {
+                Some(VarN {
+                    var: s / (2.0 * mf.powi(4) * tau0 * tau0 * nf),
+                    n,
+                })
+            } else {
+                slid[k] = true;
+                mvar(x, m, tau0, parallel)
+            };
         }
     }
     for k in rest {
