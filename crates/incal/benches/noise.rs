@@ -57,7 +57,7 @@ fn kernels(c: &mut Criterion) {
             })
         });
         g.bench_with_input(BenchmarkId::new("noise_id", n), &x, |b, x| {
-            b.iter(|| ms.iter().filter_map(|&m| id::identify(x, m)).count())
+            b.iter(|| id::identify_many(x, &ms, true).iter().flatten().count())
         });
         g.bench_with_input(
             BenchmarkId::new("stability_all_deviations_with_ci", n),

@@ -20,176 +20,525 @@ pub struct NoiseId {
     pub alpha_hadamard: i32,
 }
 
-/// Running sums of one differenced series for its lag-1 autocorrelation.
-#[derive(Clone, Copy, Default)]
-struct Acf {
-    n: f64,
-    sum: f64,
-    sum2: f64,
-    lag: f64,
-    first: f64,
-    last: f64,
-    prev: Option<f64>,
-}
-
-impl Acf {
-    fn push(&mut self, z: f64) {
-        match self.prev {
-            None => self.first = z,
-            Some(p) => self.lag += p * z,
+/// Call an `#[inline(always)]` kernel through a copy compiled for AVX2
+/// when the CPU has it (the same operations in the same order, no FMA
+/// contraction: the same bits, only wider registers).
+macro_rules! avx2_or_not {
+    ($f:ident($($a:expr),*)) => {{
+        #[cfg(target_arch = "x86_64")]
+        {
+            #[target_feature(enable = "avx2")]
+            fn wide<R>(f: impl FnOnce() -> R) -> R {
+                f()
+            }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports AVX2 (checked just above).
+                unsafe { wide(|| $f($($a),*)) }
+            } else {
+                $f($($a),*)
+            }
         }
-        self.n += 1.0;
-        self.sum += z;
-        self.sum2 += z * z;
-        self.last = z;
-        self.prev = Some(z);
-    }
-    /// `Σ (z_i − μ)(z_{i+1} − μ) / Σ (z_i − μ)²` (Riley & Greenhall eq. 2)
-    /// from the sums.
-    fn r1(&self) -> f64 {
-        let mu = self.sum / self.n;
-        let num = self.lag - mu * (self.sum - self.last) - mu * (self.sum - self.first)
-            + (self.n - 1.0) * mu * mu;
-        let den = self.sum2 - self.n * mu * mu;
-        if den > 0.0 {
-            num / den
-        } else {
-            0.0
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            $f($($a),*)
         }
+    }};
+}
+
+/// Samples of `x` per segment: the fixed partition the segments' sums are
+/// added over, in order, so a parallel run gives a serial run's bits.
+const SEG: usize = if cfg!(test) { 1 << 13 } else { 1 << 22 };
+/// Samples of `x` per chunk: every factor below it takes its points of a
+/// chunk while the chunk is in cache, so the record is read from memory
+/// once per pass, not once per factor.
+const CHUNK: usize = if cfg!(test) { 1 << 9 } else { 1 << 15 };
+/// Decimated points per block of the vectorised loops. (The unit tests
+/// use small sizes so that short records cross every boundary.)
+const BLK: usize = if cfg!(test) { 1 << 6 } else { 1 << 11 };
+
+/// One averaging factor: the record decimated by `m` has `n` points at
+/// scaled times `t_i = (i − c)/c` (on [−1, 1], which keeps the normal
+/// equations well conditioned).
+#[derive(Clone, Copy)]
+struct Level {
+    m: usize,
+    n: usize,
+    c: f64,
+    sc: f64,
+}
+
+impl Level {
+    fn new(len: usize, m: usize) -> Option<Level> {
+        let m = m.max(1);
+        let n = (len.checked_sub(1)?) / m + 1;
+        let c = (n as f64 - 1.0) / 2.0;
+        (n >= MIN_POINTS).then_some(Level {
+            m,
+            n,
+            c,
+            sc: 1.0 / c,
+        })
     }
-}
-
-/// The sums of [`Acf`] over a run of a series that continues one whose
-/// last value is known (no first-value bookkeeping per sample).
-#[derive(Clone, Copy, Default)]
-struct Run {
-    n: f64,
-    sum: f64,
-    sum2: f64,
-    lag: f64,
-    last: Option<f64>,
-    first: f64,
-}
-
-impl Run {
+    /// Decimated indices whose samples lie in `x[a..b]`.
+    fn range(&self, a: usize, b: usize) -> (usize, usize) {
+        (
+            a.div_ceil(self.m).min(self.n),
+            b.div_ceil(self.m).min(self.n),
+        )
+    }
+    /// The decimated points `i0..i1`: the record itself for m = 1,
+    /// gathered into `buf` otherwise.
+    fn points<'a>(&self, x: &'a [f64], i0: usize, i1: usize, buf: &'a mut Vec<f64>) -> &'a [f64] {
+        if self.m == 1 {
+            return &x[i0..i1];
+        }
+        buf.clear();
+        buf.extend((i0..i1).map(|i| x[i * self.m]));
+        buf
+    }
+    /// Residual of a point from the fitted quadratic `c0 + c1 t + c2 t²`.
+    /// `fi` is the index as f64 (exact), so every caller gets the same bits.
     #[inline(always)]
-    fn push(&mut self, z: f64) {
-        if let Some(p) = self.last {
-            self.lag += p * z;
-        } else {
-            self.first = z;
-        }
-        self.n += 1.0;
-        self.sum += z;
-        self.sum2 += z * z;
-        self.last = Some(z);
+    fn resid(&self, coef: &[f64; 3], fi: f64, v: f64) -> f64 {
+        let t = (fi - self.c) * self.sc;
+        v - (coef[0] + coef[1] * t + coef[2] * t * t)
     }
 }
 
-impl Acf {
-    /// Append a run that follows this series.
-    fn merge(&mut self, r: Run) {
-        let Some(last) = r.last else { return };
-        match self.prev {
-            None => self.first = r.first,
-            Some(p) => self.lag += p * r.first,
+#[inline(always)]
+/// `Σ v, Σ t v, Σ t² v` over decimated points starting at index `i0`,
+/// four lanes (the loop vectorises), lanes added in a fixed order.
+fn poly_sums(lv: &Level, v: &[f64], i0: usize) -> [f64; 3] {
+    let mut a = [[0.0f64; 4]; 3];
+    let mut base = i0 as f64;
+    let quads = v.chunks_exact(4);
+    let rest = quads.remainder();
+    for q in quads {
+        for l in 0..4 {
+            let t = (base + l as f64 - lv.c) * lv.sc;
+            a[0][l] += q[l];
+            a[1][l] += t * q[l];
+            a[2][l] += t * t * q[l];
         }
-        self.n += r.n;
-        self.sum += r.sum;
-        self.sum2 += r.sum2;
-        self.lag += r.lag;
-        self.last = last;
-        self.prev = Some(last);
+        base += 4.0;
     }
+    for (l, &y) in rest.iter().enumerate() {
+        let t = (base + l as f64 - lv.c) * lv.sc;
+        a[0][l] += y;
+        a[1][l] += t * y;
+        a[2][l] += t * t * y;
+    }
+    a.map(|s| (s[0] + s[1]) + (s[2] + s[3]))
 }
 
-/// Identify the noise at averaging factor `m` of phase data `x`; `None`
-/// when the decimated record has fewer than [`MIN_POINTS`] points.
-///
-/// Two passes over the decimated samples and no copy: the first fits the
-/// quadratic, the second forms the residuals and their first three
-/// differences on the fly with the sums of each series' lag-1
-/// autocorrelation.
-pub fn identify(x: &[f64], m: usize) -> Option<NoiseId> {
-    let m = m.max(1);
-    if x.is_empty() {
-        return None;
-    }
-    let n = (x.len() - 1) / m + 1;
-    if n < MIN_POINTS {
-        return None;
-    }
-    // t scaled to [−1, 1] keeps the normal equations well conditioned.
-    // On the symmetric grid t_i = (i − c)/c the odd power sums vanish and
-    // the even ones have closed forms: Σt² = n(n²−1)/(12c²),
-    // Σt⁴ = n(n²−1)(3n²−7)/(240c⁴).
-    let c = (n as f64 - 1.0) / 2.0;
-    let sc = 1.0 / c;
-    let nf = n as f64;
-    let s2 = nf * (nf * nf - 1.0) / 12.0 * sc * sc;
-    let s4 = nf * (nf * nf - 1.0) * (3.0 * nf * nf - 7.0) / 240.0 * sc.powi(4);
-    let a = Matrix3::new(nf, 0.0, s2, 0.0, s2, 0.0, s2, 0.0, s4);
-    // Σ p_k(t) x: four lanes of the three sums (the loads stride by m).
-    let mut b4 = [[0.0f64; 3]; 4];
-    for i in 0..n {
-        let t = (i as f64 - c) * sc;
-        let v = x[i * m];
-        let l = &mut b4[i % 4];
-        l[0] += v;
-        l[1] += t * v;
-        l[2] += t * t * v;
-    }
-    let b = Vector3::from_fn(|k, _| (b4[0][k] + b4[1][k]) + (b4[2][k] + b4[3][k]));
-    let coef = a
-        .try_inverse()
-        .map(|ai| ai * b)
-        .unwrap_or_else(Vector3::zeros);
-    let resid = |i: usize| {
-        let t = (i as f64 - c) * sc;
-        x[i * m] - (coef[0] + coef[1] * t + coef[2] * t * t)
+#[inline(always)]
+/// `Σ z, Σ z², Σ z_{j−1} z_j` of a run of one series (`prev` the value
+/// before the run, if any), four lanes, lanes added in a fixed order.
+fn acf_sums(z: &[f64], prev: Option<f64>) -> [f64; 3] {
+    let Some((&last, head)) = z.split_last() else {
+        return [0.0; 3];
     };
-    let mut acf = [Acf::default(); 4];
-    // The first three residuals start the differenced series; after them
-    // every residual extends all four (no branch per sample).
-    let mut hist = [0.0f64; 3];
-    for i in 0..3 {
-        let mut z = resid(i);
-        acf[0].push(z);
-        for d in 0..i {
-            let p = std::mem::replace(&mut hist[d], z);
-            z -= p;
-            acf[d + 1].push(z);
-        }
-        hist[i] = z;
-    }
-    let mut run = [Run::default(); 4];
-    for i in 3..n {
-        let z0 = resid(i);
-        let z1 = z0 - hist[0];
-        let z2 = z1 - hist[1];
-        let z3 = z2 - hist[2];
-        hist = [z0, z1, z2];
-        for (r, z) in run.iter_mut().zip([z0, z1, z2, z3]) {
-            r.push(z);
+    let (mut s, mut s2, mut lag) = ([0.0f64; 4], [0.0f64; 4], [0.0f64; 4]);
+    let (a, b) = (head.chunks_exact(4), z[1..].chunks_exact(4));
+    let (ra, rb) = (a.remainder(), b.remainder());
+    for (p, q) in a.zip(b) {
+        for l in 0..4 {
+            s[l] += p[l];
+            s2[l] += p[l] * p[l];
+            lag[l] += p[l] * q[l];
         }
     }
-    for (a, r) in acf.iter_mut().zip(run) {
-        a.merge(r);
+    for (l, (&p, &q)) in ra.iter().zip(rb).enumerate() {
+        s[l] += p;
+        s2[l] += p * p;
+        lag[l] += p * q;
     }
+    let sum = |v: [f64; 4]| (v[0] + v[1]) + (v[2] + v[3]);
+    [
+        sum(s) + last,
+        sum(s2) + last * last,
+        sum(lag) + prev.map_or(0.0, |p| p * z[0]),
+    ]
+}
+
+/// `Δ^d` of four consecutive values for d = 0..3, in place as the blocks
+/// difference them: after d differences element k follows the k-th value
+/// by d places.
+fn differences(r: [f64; 4]) -> [[f64; 4]; 4] {
+    let mut out = [r; 4];
+    for d in 1..4 {
+        for k in 0..4 - d {
+            out[d][k] = out[d - 1][k + 1] - out[d - 1][k];
+        }
+    }
+    out
+}
+
+/// Pass-2 state of one factor inside a segment: the last (up to four)
+/// residuals before the next block, the sums of the four series.
+struct Acf4<'a> {
+    lv: &'a Level,
+    coef: [f64; 3],
+    tail: Vec<f64>,
+    sums: [[f64; 3]; 4],
+}
+
+impl Acf4<'_> {
+    /// Start at decimated index `i0`: the residuals of up to four
+    /// points before it, recomputed from the record (the same bits the
+    /// previous segment computed).
+    fn start(&mut self, x: &[f64], i0: usize) {
+        self.tail.clear();
+        let lv = self.lv;
+        for i in i0.saturating_sub(4)..i0 {
+            self.tail.push(lv.resid(&self.coef, i as f64, x[i * lv.m]));
+        }
+    }
+    /// Add the points `i0..i1` (following the tail) to the four series.
+    fn block(&mut self, v: &[f64], i0: usize, bufs: &mut [Vec<f64>; 4]) {
+        let s = avx2_or_not!(block_sums(self.lv, &self.coef, &self.tail, v, i0, bufs));
+        for (acc, s) in self.sums.iter_mut().zip(s) {
+            for (a, b) in acc.iter_mut().zip(s) {
+                *a += b;
+            }
+        }
+        let e = &bufs[0];
+        let keep = e.len().min(4);
+        self.tail.clear();
+        self.tail.extend_from_slice(&e[e.len() - keep..]);
+    }
+}
+
+/// The four series' sums of one block: `bufs[0]` gets the tail and the
+/// block's residuals, `bufs[d]` their d-th differences (element k of
+/// series d is index `i0 − h + d + k`, h the tail's length; the block's
+/// points start at k = h − d, or at 0 near the record's start, where
+/// series d begins at index d).
+#[inline(always)]
+fn block_sums(
+    lv: &Level,
+    coef: &[f64; 3],
+    tail: &[f64],
+    v: &[f64],
+    i0: usize,
+    bufs: &mut [Vec<f64>; 4],
+) -> [[f64; 3]; 4] {
+    let h = tail.len();
+    let e = &mut bufs[0];
+    e.clear();
+    e.extend_from_slice(tail);
+    e.resize(h + v.len(), 0.0);
+    let mut base = i0 as f64;
+    let (out, rest) = e[h..].split_at_mut(v.len() / 4 * 4);
+    for (o, q) in out.chunks_exact_mut(4).zip(v.chunks_exact(4)) {
+        for l in 0..4 {
+            o[l] = lv.resid(coef, base + l as f64, q[l]);
+        }
+        base += 4.0;
+    }
+    for (l, (o, &y)) in rest.iter_mut().zip(&v[v.len() / 4 * 4..]).enumerate() {
+        *o = lv.resid(coef, base + l as f64, y);
+    }
+    for d in 1..4 {
+        let (lo, hi) = bufs.split_at_mut(d);
+        let (src, dst) = (&lo[d - 1], &mut hi[0]);
+        dst.clear();
+        dst.extend(src.iter().skip(1).zip(src.iter()).map(|(b, a)| b - a));
+    }
+    std::array::from_fn(|d| {
+        let z = &bufs[d];
+        let ks = h.saturating_sub(d);
+        if ks >= z.len() {
+            return [0.0; 3];
+        }
+        acf_sums(&z[ks..], ks.checked_sub(1).map(|k| z[k]))
+    })
+}
+
+/// Run `f(level index, i0, i1)` over the decimated points of every level
+/// in `x[lo..hi]`, in blocks of at most [`BLK`] points: factors below
+/// [`CHUNK`] chunk by chunk (all of them while a chunk is in cache),
+/// larger ones (at most one point per chunk) straight through.
+fn sweep(levels: &[Level], lo: usize, hi: usize, mut f: impl FnMut(usize, usize, usize)) {
+    let mut blocks = |k: usize, a: usize, b: usize| {
+        let (mut i, i1) = levels[k].range(a, b);
+        while i < i1 {
+            let j = (i + BLK).min(i1);
+            f(k, i, j);
+            i = j;
+        }
+    };
+    let mut a = lo;
+    while a < hi {
+        let b = (a + CHUNK).min(hi);
+        for (k, lv) in levels.iter().enumerate() {
+            if lv.m < CHUNK {
+                blocks(k, a, b);
+            }
+        }
+        a = b;
+    }
+    for (k, lv) in levels.iter().enumerate() {
+        if lv.m >= CHUNK {
+            blocks(k, lo, hi);
+        }
+    }
+}
+
+/// Per segment of the fixed partition, in segment order (in parallel
+/// when asked; the same values either way).
+fn per_segment<T: Send>(
+    len: usize,
+    parallel: bool,
+    f: impl Fn(usize, usize) -> T + Sync,
+) -> Vec<T> {
+    let nseg = len.div_ceil(SEG).max(1);
+    let seg = |s: usize| f(s * SEG, ((s + 1) * SEG).min(len));
+    if parallel && nseg > 1 {
+        use rayon::prelude::*;
+        (0..nseg).into_par_iter().map(seg).collect()
+    } else {
+        (0..nseg).map(seg).collect()
+    }
+}
+
+/// Lag-1 autocorrelations `r1` of the quadratic-detrended decimated record
+/// and of its first three differences (Riley & Greenhall eq. 2,
+/// `Σ (z_i − μ)(z_{i+1} − μ) / Σ (z_i − μ)²`), at every factor of `ms`;
+/// `None` where the decimated record has fewer than [`MIN_POINTS`] points.
+///
+/// Two sweeps over the record for all factors together: the first sums
+/// the quadratic's normal equations, the second forms the residuals and
+/// their differences block by block with the sums of each series.
+fn lag1_many(x: &[f64], ms: &[usize], parallel: bool) -> Vec<Option<[f64; 4]>> {
+    let all: Vec<Option<Level>> = ms.iter().map(|&m| Level::new(x.len(), m)).collect();
+    let levels: Vec<Level> = all.iter().flatten().copied().collect();
+    if levels.is_empty() {
+        return vec![None; ms.len()];
+    }
+    let parts = per_segment(x.len(), parallel, |lo, hi| {
+        let mut out = vec![[0.0f64; 3]; levels.len()];
+        let mut buf = Vec::with_capacity(BLK);
+        sweep(&levels, lo, hi, |k, i0, i1| {
+            let lv = &levels[k];
+            let v = lv.points(x, i0, i1, &mut buf);
+            let p = avx2_or_not!(poly_sums(lv, v, i0));
+            for (a, b) in out[k].iter_mut().zip(p) {
+                *a += b;
+            }
+        });
+        out
+    });
+    // On the symmetric grid the odd power sums vanish and the even ones
+    // have closed forms: Σt² = n(n²−1)/(12c²), Σt⁴ = n(n²−1)(3n²−7)/(240c⁴).
+    let coefs: Vec<[f64; 3]> = levels
+        .iter()
+        .enumerate()
+        .map(|(k, lv)| {
+            let nf = lv.n as f64;
+            let s2 = nf * (nf * nf - 1.0) / 12.0 * lv.sc * lv.sc;
+            let s4 = nf * (nf * nf - 1.0) * (3.0 * nf * nf - 7.0) / 240.0 * lv.sc.powi(4);
+            let a = Matrix3::new(nf, 0.0, s2, 0.0, s2, 0.0, s2, 0.0, s4);
+            let mut b = [0.0f64; 3];
+            for p in &parts {
+                for (s, v) in b.iter_mut().zip(p[k]) {
+                    *s += v;
+                }
+            }
+            a.try_inverse()
+                .map(|ai| ai * Vector3::from(b))
+                .map_or([0.0; 3], |c| [c[0], c[1], c[2]])
+        })
+        .collect();
+    let parts = per_segment(x.len(), parallel, |lo, hi| {
+        let mut st: Vec<Acf4> = levels
+            .iter()
+            .zip(&coefs)
+            .map(|(lv, &coef)| Acf4 {
+                lv,
+                coef,
+                tail: Vec::with_capacity(4),
+                sums: [[0.0; 3]; 4],
+            })
+            .collect();
+        for (s, lv) in st.iter_mut().zip(&levels) {
+            s.start(x, lv.range(lo, hi).0);
+        }
+        let mut buf = Vec::new();
+        let mut bufs: [Vec<f64>; 4] = Default::default();
+        sweep(&levels, lo, hi, |k, i0, i1| {
+            let v = levels[k].points(x, i0, i1, &mut buf);
+            st[k].block(v, i0, &mut bufs);
+        });
+        st.into_iter().map(|s| s.sums).collect::<Vec<_>>()
+    });
+    let mut r1s = levels.iter().enumerate().map(|(k, lv)| {
+        let coef = &coefs[k];
+        let r = |i: usize| lv.resid(coef, i as f64, x[i * lv.m]);
+        let first = differences([r(0), r(1), r(2), r(3)]);
+        let n = lv.n;
+        let last = differences([r(n - 4), r(n - 3), r(n - 2), r(n - 1)]);
+        std::array::from_fn(|d| {
+            let mut s = [0.0f64; 3];
+            for p in &parts {
+                for (a, b) in s.iter_mut().zip(p[k][d]) {
+                    *a += b;
+                }
+            }
+            let [sum, sum2, lag] = s;
+            let (first, last) = (first[d][0], last[d][3 - d]);
+            let nd = (n - d) as f64;
+            let mu = sum / nd;
+            let num = lag - mu * (sum - last) - mu * (sum - first) + (nd - 1.0) * mu * mu;
+            let den = sum2 - nd * mu * mu;
+            if den > 0.0 {
+                num / den
+            } else {
+                0.0
+            }
+        })
+    });
+    all.iter().map(|l| l.and_then(|_| r1s.next())).collect()
+}
+
+/// α from the four lag-1 autocorrelations: the first series (difference
+/// order d) with `δ = r1/(1 + r1) < 0.25`, or the last allowed, gives
+/// `α = 2 − 2d − round(2δ)`.
+fn classify(r1: [f64; 4]) -> NoiseId {
     let mut allan = None;
-    for (d, s) in acf.iter().enumerate() {
-        let r1 = s.r1();
-        let delta = r1 / (1.0 + r1);
+    for (d, &r) in r1.iter().enumerate() {
+        let delta = r / (1.0 + r);
         let alpha = 2 - 2 * d as i32 - (2.0 * delta).round_ties_even() as i32;
         if allan.is_none() && (delta < 0.25 || d >= 2) {
             allan = Some(alpha);
         }
         if delta < 0.25 || d >= 3 {
-            return Some(NoiseId {
+            return NoiseId {
                 alpha_allan: allan.unwrap_or(alpha),
                 alpha_hadamard: alpha,
-            });
+            };
         }
     }
-    None
+    unreachable!("d = 3 always returns")
+}
+
+/// Identify the noise at every averaging factor of `ms` in phase data `x`
+/// (`None` where the decimated record has fewer than [`MIN_POINTS`]
+/// points): the lag-1 autocorrelation method of Riley & Greenhall with
+/// at most two differences for the Allan family and three for Hadamard.
+/// Two sweeps over the record for all factors; the same values serial or
+/// parallel.
+pub fn identify_many(x: &[f64], ms: &[usize], parallel: bool) -> Vec<Option<NoiseId>> {
+    lag1_many(x, ms, parallel)
+        .into_iter()
+        .map(|r| r.map(classify))
+        .collect()
+}
+
+/// [`identify_many`] at one factor.
+pub fn identify(x: &[f64], m: usize) -> Option<NoiseId> {
+    identify_many(x, &[m], false).pop().flatten()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::{noise::flicker, normal, rng};
+
+    /// Riley & Greenhall's method written out: decimate, fit the quadratic
+    /// by its full normal equations, difference, mean-centred r1.
+    fn reference(x: &[f64], m: usize) -> Option<[f64; 4]> {
+        let v: Vec<f64> = x.iter().step_by(m).copied().collect();
+        let n = v.len();
+        if n < MIN_POINTS {
+            return None;
+        }
+        let t: Vec<f64> = (0..n)
+            .map(|i| i as f64 / (n - 1) as f64 * 2.0 - 1.0)
+            .collect();
+        let mut a = Matrix3::zeros();
+        let mut b = Vector3::zeros();
+        for (&ti, &vi) in t.iter().zip(&v) {
+            let p = Vector3::new(1.0, ti, ti * ti);
+            a += p * p.transpose();
+            b += p * vi;
+        }
+        let c = a.try_inverse().unwrap() * b;
+        let mut z: Vec<f64> = t
+            .iter()
+            .zip(&v)
+            .map(|(&ti, &vi)| vi - (c[0] + c[1] * ti + c[2] * ti * ti))
+            .collect();
+        Some(std::array::from_fn(|d| {
+            if d > 0 {
+                z = z.windows(2).map(|w| w[1] - w[0]).collect();
+            }
+            let mu = z.iter().sum::<f64>() / z.len() as f64;
+            let num: f64 = z.windows(2).map(|w| (w[0] - mu) * (w[1] - mu)).sum();
+            let den: f64 = z.iter().map(|v| (v - mu) * (v - mu)).sum();
+            num / den
+        }))
+    }
+
+    fn cumsum(v: Vec<f64>) -> Vec<f64> {
+        let mut s = 0.0;
+        v.into_iter()
+            .map(|y| {
+                s += y;
+                s
+            })
+            .collect()
+    }
+
+    fn white(n: usize, seed: u64) -> Vec<f64> {
+        let mut r = rng(seed);
+        (0..n).map(|_| normal(&mut r, 1.0)).collect()
+    }
+
+    #[test]
+    fn every_factor_matches_the_method_written_out_and_parallel_equals_serial() {
+        let n = 40_000;
+        // (phase data, α expected at the shortest τ)
+        let cases = [
+            (white(n, 1), 2),
+            (flicker(n, 1.0, 2), 1),
+            (cumsum(white(n, 3)), 0),
+            (cumsum(flicker(n, 1.0, 4)), -1),
+            (cumsum(cumsum(white(n, 5))), -2),
+        ];
+        // Octaves, a dense run of small factors and factors past a chunk.
+        let mut ms: Vec<usize> = (0..12).map(|k| 1 << k).collect();
+        ms.extend([3, 5, 7, 600, 700, 1333, 2000]);
+        for (x, alpha) in &cases {
+            let got = lag1_many(x, &ms, false);
+            assert_eq!(got, lag1_many(x, &ms, true));
+            for (&m, g) in ms.iter().zip(&got) {
+                let want = reference(x, m);
+                assert_eq!(g.is_some(), want.is_some(), "m = {m}");
+                if let (Some(g), Some(w)) = (g, want) {
+                    for d in 0..4 {
+                        assert!(
+                            (g[d] - w[d]).abs() < 1e-9,
+                            "m = {m}, d = {d}: {} vs {}",
+                            g[d],
+                            w[d]
+                        );
+                    }
+                    assert_eq!(classify(*g), classify(w));
+                }
+            }
+            let id = identify(x, 1).unwrap();
+            assert_eq!(id.alpha_hadamard, *alpha);
+            assert_eq!(id.alpha_allan, *alpha);
+        }
+    }
+
+    #[test]
+    fn a_record_too_short_for_a_factor_is_not_identified() {
+        let x = cumsum(white(100, 9));
+        let got = identify_many(&x, &[1, 3, 4, 50], false);
+        assert!(got[0].is_some() && got[1].is_some());
+        assert!(got[2].is_none() && got[3].is_none());
+        assert!(identify_many(&[], &[1], false)[0].is_none());
+    }
 }

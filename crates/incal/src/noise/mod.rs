@@ -308,13 +308,7 @@ pub fn stability_with_progress(
         tdev: DevSeries::default(),
         totdev: DevSeries::default(),
     };
-    // Identification per τ is independent of the others: in parallel.
-    let ids: Vec<Option<id::NoiseId>> = if par {
-        use rayon::prelude::*;
-        ms.par_iter().map(|&m| id::identify(x, m)).collect()
-    } else {
-        ms.iter().map(|&m| id::identify(x, m)).collect()
-    };
+    let ids = id::identify_many(x, &ms, par);
     let (oas, tots) = dev::oavar_totvar_many(x, &ms, t0, par);
     let ohs = dev::ohvar_many(x, &ms, t0, par);
     let mvs = dev::mvar_many(x, &ms, t0, par);
