@@ -1,7 +1,8 @@
 //! The deviation kernels on phase data `x` (time-error or angle samples at
 //! spacing τ0); σ(τ) for τ = m·τ0.
 //!
-//! Every kernel sums its squared terms in fixed blocks of [`BLOCK`] terms,
+//! Every kernel sums its squared terms in fixed blocks ([`COMB_BLOCK`],
+//! [`BLOCK`] terms),
 //! each block with eight lane accumulators (so the loop vectorizes), and
 //! adds the block sums in block order. The blocks run on rayon; the fixed
 //! partition and the ordered reduction make a parallel run bit-for-bit a
@@ -13,8 +14,13 @@
 
 use rayon::prelude::*;
 
-/// Terms per block of the blocked sums.
+/// Terms per block of the blocked sums of MDEV.
 pub const BLOCK: usize = 1 << 14;
+
+/// Terms per block of the OADEV and OHDEV sums (a window of about fifty
+/// of them stays in the caches in [`comb_many`]; the unit tests use short
+/// blocks so that short records cross every band).
+pub const COMB_BLOCK: usize = if cfg!(test) { 1 << 8 } else { 1 << 11 };
 
 /// `Σ_i (Σ_k w_k s_k[i])²` over one block of equal-length slices, eight
 /// lane accumulators (the loop vectorizes), lanes added in a fixed order.
@@ -46,12 +52,48 @@ fn comb_sq<const K: usize>(s: [&[f64]; K], w: [f64; K]) -> f64 {
     ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]))
 }
 
-/// [`comb_sq`] compiled for AVX2 (same operations in the same order, so
-/// the same bits; only wider registers).
+/// [`comb_sq`] in AVX2 registers: each lane does the same multiplies and
+/// adds in the same order (no FMA), so the same bits; two registers hold
+/// the eight accumulators.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn comb_sq_avx2<const K: usize>(s: [&[f64]; K], w: [f64; K]) -> f64 {
-    comb_sq(s, w)
+    use std::arch::x86_64::*;
+    let n = s[0].len();
+    let s = s.map(|v| &v[..n]);
+    let full = n / 8 * 8;
+    let wv = w.map(|c| _mm256_set1_pd(c));
+    let (mut a0, mut a1) = (_mm256_setzero_pd(), _mm256_setzero_pd());
+    let mut i = 0;
+    while i < full {
+        // SAFETY: i + 8 <= full <= n = every slice's length.
+        unsafe {
+            let mut v0 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(s[0].as_ptr().add(i)));
+            let mut v1 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(s[0].as_ptr().add(i + 4)));
+            for k in 1..K {
+                let p = s[k].as_ptr();
+                v0 = _mm256_add_pd(v0, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p.add(i))));
+                v1 = _mm256_add_pd(v1, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p.add(i + 4))));
+            }
+            a0 = _mm256_add_pd(a0, _mm256_mul_pd(v0, v0));
+            a1 = _mm256_add_pd(a1, _mm256_mul_pd(v1, v1));
+        }
+        i += 8;
+    }
+    let mut acc = [0.0f64; 8];
+    // SAFETY: acc holds eight f64.
+    unsafe {
+        _mm256_storeu_pd(acc.as_mut_ptr(), a0);
+        _mm256_storeu_pd(acc.as_mut_ptr().add(4), a1);
+    }
+    for (l, a) in acc.iter_mut().enumerate().take(n - full) {
+        let mut v = w[0] * s[0][full + l];
+        for k in 1..K {
+            v += w[k] * s[k][full + l];
+        }
+        *a += v * v;
+    }
+    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]))
 }
 
 fn comb_block<const K: usize>(s: [&[f64]; K], w: [f64; K]) -> f64 {
@@ -66,13 +108,13 @@ fn comb_block<const K: usize>(s: [&[f64]; K], w: [f64; K]) -> f64 {
 }
 
 /// `Σ_i (Σ_k w_k s_k[i])²` over slices of equal length in fixed blocks
-/// of [`BLOCK`] terms, block sums added in order; parallel over blocks
+/// of [`COMB_BLOCK`] terms, block sums added in order; parallel over blocks
 /// when `parallel` (same bits either way).
 fn comb_sum<const K: usize>(s: [&[f64]; K], w: [f64; K], parallel: bool) -> f64 {
     let n = s[0].len();
-    let nb = n.div_ceil(BLOCK);
+    let nb = n.div_ceil(COMB_BLOCK);
     let block = |b: usize| {
-        let (lo, hi) = (b * BLOCK, ((b + 1) * BLOCK).min(n));
+        let (lo, hi) = (b * COMB_BLOCK, ((b + 1) * COMB_BLOCK).min(n));
         comb_block(s.map(|v| &v[lo..hi]), w)
     };
     let sums: Vec<f64> = if parallel && nb > 1 {
@@ -83,12 +125,27 @@ fn comb_sum<const K: usize>(s: [&[f64]; K], w: [f64; K], parallel: bool) -> f64 
     sums.iter().sum()
 }
 
-/// [`comb_sum`] for many averaging factors at once, block-major: for each
-/// block index every m takes its block of terms while the data near the
-/// block are in cache (the windows at offsets 0, m, 2m of small m overlap).
-/// The slices of factor m start at `mult[k]·m` and hold `len − span·m`
-/// terms. Each m's blocks and their ordered sum are exactly those of
-/// [`comb_sum`], so the numbers are the same bits.
+/// Octaves of factor per band of [`comb_many`]'s sweep.
+const BAND: usize = 16;
+/// Blocks of the sweep's order per task (a task warms its window of
+/// blocks once, so tasks are long).
+const TASK: usize = 1024;
+
+/// [`comb_sum`] for many averaging factors at once, with the record read
+/// from memory a few times in all, not a few times per factor.
+///
+/// Block b of factor m reads the windows of [`COMB_BLOCK`] samples at
+/// `b + k·q` blocks (`q = m/COMB_BLOCK`, k = 0..span), so a window is
+/// read again by the same factor q blocks later and by the factors 2m,
+/// 4m, … Factors go in bands of [`BAND`] octaves of q: band k (stride
+/// `s = BAND^k` blocks, `s ≤ q < BAND·s`; band 0 also takes m below a
+/// block) visits its blocks in residue order (`r, r + s, r + 2s, …` for
+/// r = 0..s), so every window a block needs was read at most
+/// `span·BAND` visits before, a window of about 50 blocks (800 kB) that
+/// stays in the caches, and the band reads the record about once.
+/// Each factor's blocks and their ordered sum are exactly those of
+/// [`comb_sum`], so the numbers are the same bits; in parallel the visit
+/// order is cut into tasks of [`TASK`] visits.
 fn comb_many<const K: usize>(
     x: &[f64],
     ms: &[usize],
@@ -107,33 +164,87 @@ fn comb_many<const K: usize>(
             }
         })
         .collect();
-    let nb = terms.iter().map(|n| n.div_ceil(BLOCK)).max().unwrap_or(0);
-    let block = |b: usize| -> Vec<f64> {
-        ms.iter()
-            .zip(&terms)
-            .map(|(&m, &n)| {
-                let lo = b * BLOCK;
-                if lo >= n {
-                    return 0.0;
+    // Stride (blocks) of each factor's band.
+    let stride = |m: usize| {
+        let mut s = 1;
+        while m / COMB_BLOCK >= BAND * s {
+            s *= BAND;
+        }
+        s
+    };
+    let mut bands: Vec<(usize, Vec<usize>)> = Vec::new();
+    for (j, &m) in ms.iter().enumerate().filter(|&(j, _)| terms[j] > 0) {
+        let s = stride(m);
+        match bands.iter_mut().find(|(t, _)| *t == s) {
+            Some((_, v)) => v.push(j),
+            None => bands.push((s, vec![j])),
+        }
+    }
+    // Tasks: (band, first visit, end visit) over each band's visit order.
+    let mut tasks = Vec::new();
+    for (bi, (_, js)) in bands.iter().enumerate() {
+        let nb = js
+            .iter()
+            .map(|&j| terms[j].div_ceil(COMB_BLOCK))
+            .max()
+            .unwrap_or(0);
+        let mut v = 0;
+        while v < nb {
+            tasks.push((bi, v, (v + TASK).min(nb)));
+            v += TASK;
+        }
+    }
+    let task = |&(bi, v0, v1): &(usize, usize, usize)| -> Vec<(usize, usize, f64)> {
+        let (s, js) = (&bands[bi].0, &bands[bi].1);
+        let nb = js
+            .iter()
+            .map(|&j| terms[j].div_ceil(COMB_BLOCK))
+            .max()
+            .unwrap_or(0);
+        // Visits in residue order: residue r takes ceil((nb − r)/s)
+        // visits, blocks r, r + s, r + 2s, …
+        let mut out = Vec::with_capacity((v1 - v0) * js.len());
+        let (per, extra) = (nb / s, nb % s);
+        for v in v0..v1 {
+            // Residues below `extra` have per + 1 visits, the rest per.
+            let big = extra * (per + 1);
+            let (r, i) = if v < big {
+                (v / (per + 1), v % (per + 1))
+            } else {
+                (extra + (v - big) / per.max(1), (v - big) % per.max(1))
+            };
+            let b = r + i * s;
+            for &j in js {
+                let (m, n) = (ms[j], terms[j]);
+                let lo = b * COMB_BLOCK;
+                if lo < n {
+                    let hi = (lo + COMB_BLOCK).min(n);
+                    out.push((
+                        j,
+                        b,
+                        comb_block(mult.map(|k| &x[k * m + lo..k * m + hi]), w),
+                    ));
                 }
-                let hi = ((b + 1) * BLOCK).min(n);
-                comb_block(mult.map(|k| &x[k * m + lo..k * m + hi]), w)
-            })
-            .collect()
+            }
+        }
+        out
     };
-    let parts: Vec<Vec<f64>> = if parallel && nb > 1 {
-        (0..nb).into_par_iter().map(block).collect()
+    let parts: Vec<Vec<(usize, usize, f64)>> = if parallel && tasks.len() > 1 {
+        tasks.par_iter().map(task).collect()
     } else {
-        (0..nb).map(block).collect()
+        tasks.iter().map(task).collect()
     };
-    (0..ms.len())
-        .map(|j| {
-            let n = terms[j];
-            (n > 0).then(|| {
-                let s: f64 = parts.iter().take(n.div_ceil(BLOCK)).map(|p| p[j]).sum();
-                (s, n)
-            })
-        })
+    let mut table: Vec<Vec<f64>> = terms
+        .iter()
+        .map(|n| vec![0.0; n.div_ceil(COMB_BLOCK)])
+        .collect();
+    for (j, b, v) in parts.into_iter().flatten() {
+        table[j][b] = v;
+    }
+    table
+        .iter()
+        .zip(&terms)
+        .map(|(t, &n)| (n > 0).then(|| (t.iter().sum(), n)))
         .collect()
 }
 
@@ -419,15 +530,14 @@ pub fn ohvar(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> {
 ///
 /// The inner sums slide (`W_{j+1} = W_j + d_{j+1}`,
 /// `d_j = x_{j+3m−1} − 3x_{j+2m−1} + 3x_{j+m−1} − x_{j−1}`) inside blocks
-/// of at least 4m terms; each block runs eight independent slides over
-/// eight segments (the add chain of one slide is the bound otherwise), and
-/// every slide starts from a direct sum, so round-off cannot build up
-/// along the record and the blocks are independent.
+/// of at least 8m terms, eight slides in vector lanes per block
+/// ([`mvar_block`]); every block starts from a direct sum, so round-off
+/// cannot build up along the record and the blocks are independent.
 pub fn mvar(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> {
     let nt = (x.len() + 1)
         .checked_sub(3 * m)
         .filter(|&n| n > 0 && m > 0)?;
-    let blen = BLOCK.max(4 * m);
+    let blen = BLOCK.max(8 * m);
     let nb = nt.div_ceil(blen);
     let block = |b: usize| -> f64 {
         let lo = b * blen;
@@ -448,63 +558,76 @@ pub fn mvar(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> {
 
 /// `Σ_{j=lo}^{hi−1} W_j²`, `W_j = Σ_{i=j}^{j+m−1} (x_{i+2m} − 2x_{i+m} + x_i)`
 /// (the MDEV inner sums, [`mvar`]).
+///
+/// One direct sum starts the block; then the steps `d_j` of a chunk of
+/// [`MVAR_CHUNK`] positions go to a buffer (four streams, vectorised) and
+/// the chunk's slide runs as eight shorter slides in lanes (one slide's
+/// add chain would bound the loop): lane l slides `loc` from zero,
+/// `W = off_l + loc`, keeping `Σ loc` and `Σ loc²`, so its
+/// `Σ W² = n·off_l² + 2·off_l·Σ loc + Σ loc²` once `off_l` (the previous
+/// lane's last W plus one step) is known. A lane is short against m, so
+/// W hardly moves along it and the expansion loses nothing to
+/// cancellation (checked against the direct sums in the tests).
 fn mvar_block(x: &[f64], m: usize, lo: usize, hi: usize) -> f64 {
     const L: usize = 8;
-    const CHUNK: usize = 256;
+    const R: usize = MVAR_CHUNK / L;
     let s = |i: usize| x[i + 2 * m] - 2.0 * x[i + m] + x[i];
-    let direct = |j: usize| (j..j + m).map(s).sum::<f64>();
-    let d = |j: usize| x[j + 3 * m - 1] - 3.0 * x[j + 2 * m - 1] + 3.0 * x[j + m - 1] - x[j - 1];
-    // One slide over [a, b).
-    let serial = |a: usize, b: usize| -> f64 {
-        if a >= b {
-            return 0.0;
-        }
-        let mut w = direct(a);
-        let mut acc = w * w;
-        for j in a + 1..b {
-            w += d(j);
-            acc += w * w;
-        }
-        acc
-    };
-    let len = hi - lo;
-    let seg = len / L;
-    // Eight direct starts cost 8m terms: worth it on long segments only
-    // (at large m one slide, whose loads stream, is as fast).
-    if seg < 2 * m || seg < 2 {
-        return serial(lo, hi);
-    }
-    // The eight direct starts, as eight independent sums.
-    let mut w = [0.0f64; L];
-    for i in 0..m {
-        for (l, wl) in w.iter_mut().enumerate() {
-            *wl += s(lo + l * seg + i);
+    // The direct start, in eight lanes (it streams, it does not chain).
+    let mut st = [0.0f64; L];
+    let full = m / L * L;
+    for i in (0..full).step_by(L) {
+        for (l, v) in st.iter_mut().enumerate() {
+            *v += s(lo + i + l);
         }
     }
-    let mut acc = w.map(|v| v * v);
-    // d in a transposed buffer (row t holds the eight segments' d at
-    // offset t), so the slides run as one vector of eight lanes.
-    let mut buf = [[0.0f64; L]; CHUNK];
-    let mut t0 = 1;
-    while t0 < seg {
-        let tn = (t0 + CHUNK).min(seg);
-        for l in 0..L {
-            let base = lo + l * seg;
-            for (row, t) in buf.iter_mut().zip(t0..tn) {
-                row[l] = d(base + t);
-            }
-        }
-        for row in &buf[..tn - t0] {
+    for (l, i) in (full..m).enumerate() {
+        st[l] += s(lo + i);
+    }
+    let mut w = ((st[0] + st[4]) + (st[1] + st[5])) + ((st[2] + st[6]) + (st[3] + st[7]));
+    let mut acc = w * w;
+    // Row t holds the eight lanes' steps at offset t (lane l: positions
+    // l·R.. of the chunk), so the lanes' slides run as one vector.
+    let mut buf = [[0.0f64; L]; R];
+    // Positions lo+1.. step from the previous W by d_j.
+    let mut j0 = lo + 1;
+    while j0 < hi {
+        let n = (hi - j0).min(MVAR_CHUNK);
+        let st = |k: usize| &x[j0 + k * m - 1..j0 + k * m - 1 + n];
+        let (a, b, c, e) = (st(0), st(1), st(2), st(3));
+        let step = |k: usize| e[k] - 3.0 * c[k] + 3.0 * b[k] - a[k];
+        if n == MVAR_CHUNK {
             for l in 0..L {
-                w[l] += row[l];
-                acc[l] += w[l] * w[l];
+                for (t, row) in buf.iter_mut().enumerate() {
+                    row[l] = step(l * R + t);
+                }
+            }
+            let (mut loc, mut s1, mut s2) = ([0.0f64; L], [0.0f64; L], [0.0f64; L]);
+            for row in &buf {
+                for l in 0..L {
+                    loc[l] += row[l];
+                    s1[l] += loc[l];
+                    s2[l] += loc[l] * loc[l];
+                }
+            }
+            // Lane l's first W is the last W plus its first step, which
+            // its own loc already holds: off_l is the W before the lane.
+            for l in 0..L {
+                acc += R as f64 * w * w + 2.0 * w * s1[l] + s2[l];
+                w += loc[l];
+            }
+        } else {
+            for k in 0..n {
+                w += step(k);
+                acc += w * w;
             }
         }
-        t0 = tn;
+        j0 += n;
     }
-    let lanes = ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]));
-    lanes + serial(lo + L * seg, hi)
+    acc
 }
+
+/// Positions per chunk of [`mvar_block`]'s slides.
+const MVAR_CHUNK: usize = 2048;
 
 /// Superblock sizes (terms) of [`mvar_many`], smallest first; factor m
 /// goes to the first with `3m ≤ R`. Small m take short superblocks, whose
@@ -630,9 +753,18 @@ pub(crate) fn mvar_many_tol(
             };
         }
     }
-    for k in rest {
+    // The largest factors have few blocks each: in parallel over factors
+    // too (each factor's numbers are the same either way).
+    let slides: Vec<Option<VarN>> = if parallel {
+        rest.par_iter()
+            .map(|&k| mvar(x, ms[k], tau0, true))
+            .collect()
+    } else {
+        rest.iter().map(|&k| mvar(x, ms[k], tau0, false)).collect()
+    };
+    for (k, v) in rest.into_iter().zip(slides) {
         slid[k] = true;
-        out[k] = mvar(x, ms[k], tau0, parallel);
+        out[k] = v;
     }
     (out, slid)
 }
@@ -1009,6 +1141,29 @@ mod tests {
             .sum::<f64>()
             / (2.0 * (m * m) as f64 * (n - 2) as f64);
         [oa, oh, md, tot]
+    }
+
+    /// The AVX2 kernel is the portable one in wider registers: same bits.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn the_avx2_kernel_gives_the_portable_kernels_bits() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let mut u = uniform(7);
+        let v: Vec<f64> = (0..1010).map(|_| u() * 1e3).collect();
+        for n in [0, 1, 7, 8, 9, 15, 1000] {
+            let s3 = [&v[2..2 + n], &v[1..1 + n], &v[..n]];
+            let w3 = [1.0, -2.0, 1.0];
+            // SAFETY: the CPU supports AVX2 (checked above).
+            let wide = unsafe { comb_sq_avx2(s3, w3) };
+            assert_eq!(comb_sq(s3, w3).to_bits(), wide.to_bits(), "n {n}");
+            let s4 = [&v[9..9 + n], &v[6..6 + n], &v[3..3 + n], &v[..n]];
+            let w4 = [1.0, -3.0, 3.0, -1.0];
+            // SAFETY: as above.
+            let wide = unsafe { comb_sq_avx2(s4, w4) };
+            assert_eq!(comb_sq(s4, w4).to_bits(), wide.to_bits(), "n {n}");
+        }
     }
 
     #[test]

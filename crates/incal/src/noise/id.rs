@@ -245,14 +245,16 @@ fn block_sums(
         dst.clear();
         dst.extend(src.iter().skip(1).zip(src.iter()).map(|(b, a)| b - a));
     }
-    std::array::from_fn(|d| {
+    // A plain loop, not `array::from_fn`, so it stays inside the AVX2 copy.
+    let mut out = [[0.0; 3]; 4];
+    for (d, o) in out.iter_mut().enumerate() {
         let z = &bufs[d];
         let ks = h.saturating_sub(d);
-        if ks >= z.len() {
-            return [0.0; 3];
+        if ks < z.len() {
+            *o = acf_sums(&z[ks..], ks.checked_sub(1).map(|k| z[k]));
         }
-        acf_sums(&z[ks..], ks.checked_sub(1).map(|k| z[k]))
-    })
+    }
+    out
 }
 
 /// Run `f(level index, i0, i1)` over the decimated points of every level
