@@ -3,6 +3,7 @@
 //! `incal simulate noise`: seeded records with known terms.
 
 use std::io::IsTerminal;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use clap::ValueEnum;
@@ -728,47 +729,56 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
             r: a.accel_ramp_ug_s * 1e-6,
         },
     };
+    let binary = matches!(a.format, FormatArg::F32le | FormatArg::F64le);
+    if binary && a.output.as_os_str() == "-" {
+        return Err(usage(
+            "--format f32le/f64le writes a file, not standard output",
+        ));
+    }
+    // The output is opened before the (possibly long) simulation, so a
+    // path that cannot be written fails at once.
+    let cannot = |e: std::io::Error| {
+        CliError::Failure(anyhow::anyhow!("{}: cannot write: {e}", a.output.display()))
+    };
+    let file = if a.output.as_os_str() == "-" {
+        None
+    } else {
+        Some(std::fs::File::create(&a.output).map_err(cannot)?)
+    };
     let chans: Vec<Vec<f64>> = (0..a.channels)
         .into_par_iter()
         .map(|c| rate_record(&truth, tau0, n, trial_seed(a.seed, c as u64)))
         .collect();
-    match a.format {
-        FormatArg::Csv => {
-            let mut text = String::with_capacity(n * 24 * a.channels);
-            text.push_str("time_s");
-            for c in 1..=a.channels {
-                text.push_str(&format!(",ch{c}"));
+    if a.format == FormatArg::Csv {
+        let mut text = String::with_capacity(n * 24 * a.channels);
+        text.push_str("time_s");
+        for c in 1..=a.channels {
+            text.push_str(&format!(",ch{c}"));
+        }
+        text.push('\n');
+        for i in 0..n {
+            text.push_str(&format!("{}", i as f64 * tau0));
+            for ch in &chans {
+                text.push_str(&format!(",{}", ch[i]));
             }
             text.push('\n');
-            for i in 0..n {
-                text.push_str(&format!("{}", i as f64 * tau0));
-                for ch in &chans {
-                    text.push_str(&format!(",{}", ch[i]));
-                }
-                text.push('\n');
-            }
-            crate::io::write_text(Some(&a.output), &text)
         }
-        FormatArg::F32le | FormatArg::F64le => {
-            if a.output.as_os_str() == "-" {
-                return Err(usage(
-                    "--format f32le/f64le writes a file, not standard output",
-                ));
+        return match file {
+            Some(mut f) => f.write_all(text.as_bytes()).map_err(cannot),
+            None => crate::io::write_text(Some(&a.output), &text),
+        };
+    }
+    // Binary: streamed through a buffer (no second copy of the record).
+    let mut out = std::io::BufWriter::with_capacity(1 << 20, file.expect("checked above"));
+    for i in 0..n {
+        for ch in &chans {
+            if a.format == FormatArg::F64le {
+                out.write_all(&ch[i].to_le_bytes())
+            } else {
+                out.write_all(&(ch[i] as f32).to_le_bytes())
             }
-            let w = if a.format == FormatArg::F64le { 8 } else { 4 };
-            let mut bytes = Vec::with_capacity(n * w * a.channels);
-            for i in 0..n {
-                for ch in &chans {
-                    if w == 8 {
-                        bytes.extend_from_slice(&ch[i].to_le_bytes());
-                    } else {
-                        bytes.extend_from_slice(&(ch[i] as f32).to_le_bytes());
-                    }
-                }
-            }
-            std::fs::write(&a.output, bytes).map_err(|e| {
-                CliError::Failure(anyhow::anyhow!("{}: cannot write: {e}", a.output.display()))
-            })
+            .map_err(cannot)?;
         }
     }
+    out.flush().map_err(cannot)
 }

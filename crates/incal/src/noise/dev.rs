@@ -107,6 +107,74 @@ fn comb_block<const K: usize>(s: [&[f64]; K], w: [f64; K]) -> f64 {
     comb_sq(s, w)
 }
 
+/// OADEV and OHDEV terms of one block at once from the four windows
+/// `s = [x_{3m+j}, x_{2m+j}, x_{m+j}, x_j]`: `(Σ(s₁ − 2s₂ + s₃)², Σ(s₀ −
+/// 3s₁ + 3s₂ − s₃)²)`, each with exactly the operations of [`comb_sq`]
+/// (the same bits as two calls), the windows loaded once.
+fn comb2_block(s: [&[f64]; 4]) -> (f64, f64) {
+    const WA: [f64; 3] = [1.0, -2.0, 1.0];
+    const WH: [f64; 4] = [1.0, -3.0, 3.0, -1.0];
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            return unsafe { comb2_sq_avx2(s, WA, WH) };
+        }
+    }
+    (comb_sq([s[1], s[2], s[3]], WA), comb_sq(s, WH))
+}
+
+/// [`comb2_block`] in AVX2 registers (per lane the operations of
+/// [`comb_sq`], no FMA: the same bits).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn comb2_sq_avx2(s: [&[f64]; 4], wa: [f64; 3], wh: [f64; 4]) -> (f64, f64) {
+    use std::arch::x86_64::*;
+    let n = s[0].len();
+    let s = s.map(|v| &v[..n]);
+    let full = n / 8 * 8;
+    let a = wa.map(|c| _mm256_set1_pd(c));
+    let h = wh.map(|c| _mm256_set1_pd(c));
+    let z = _mm256_setzero_pd();
+    let (mut a0, mut a1, mut h0, mut h1) = (z, z, z, z);
+    let mut i = 0;
+    while i < full {
+        // SAFETY: i + 8 <= full <= n = every slice's length.
+        unsafe {
+            for (half, (acc_a, acc_h)) in [(0, (&mut a0, &mut h0)), (4, (&mut a1, &mut h1))] {
+                let c = s.map(|v| _mm256_loadu_pd(v.as_ptr().add(i + half)));
+                let mut va = _mm256_mul_pd(a[0], c[1]);
+                va = _mm256_add_pd(va, _mm256_mul_pd(a[1], c[2]));
+                va = _mm256_add_pd(va, _mm256_mul_pd(a[2], c[3]));
+                let mut vh = _mm256_mul_pd(h[0], c[0]);
+                vh = _mm256_add_pd(vh, _mm256_mul_pd(h[1], c[1]));
+                vh = _mm256_add_pd(vh, _mm256_mul_pd(h[2], c[2]));
+                vh = _mm256_add_pd(vh, _mm256_mul_pd(h[3], c[3]));
+                *acc_a = _mm256_add_pd(*acc_a, _mm256_mul_pd(va, va));
+                *acc_h = _mm256_add_pd(*acc_h, _mm256_mul_pd(vh, vh));
+            }
+        }
+        i += 8;
+    }
+    let (mut ea, mut eh) = ([0.0f64; 8], [0.0f64; 8]);
+    // SAFETY: ea and eh hold eight f64 each.
+    unsafe {
+        _mm256_storeu_pd(ea.as_mut_ptr(), a0);
+        _mm256_storeu_pd(ea.as_mut_ptr().add(4), a1);
+        _mm256_storeu_pd(eh.as_mut_ptr(), h0);
+        _mm256_storeu_pd(eh.as_mut_ptr().add(4), h1);
+    }
+    for l in 0..n - full {
+        let c = s.map(|v| v[full + l]);
+        let va = wa[0] * c[1] + wa[1] * c[2] + wa[2] * c[3];
+        let vh = wh[0] * c[0] + wh[1] * c[1] + wh[2] * c[2] + wh[3] * c[3];
+        ea[l] += va * va;
+        eh[l] += vh * vh;
+    }
+    let add = |e: [f64; 8]| ((e[0] + e[4]) + (e[1] + e[5])) + ((e[2] + e[6]) + (e[3] + e[7]));
+    (add(ea), add(eh))
+}
+
 /// `Σ_i (Σ_k w_k s_k[i])²` over slices of equal length in fixed blocks
 /// of [`COMB_BLOCK`] terms, block sums added in order; parallel over blocks
 /// when `parallel` (same bits either way).
@@ -131,39 +199,43 @@ const BAND: usize = 16;
 /// blocks once, so tasks are long).
 const TASK: usize = 1024;
 
-/// [`comb_sum`] for many averaging factors at once, with the record read
-/// from memory a few times in all, not a few times per factor.
+/// [`comb_sum`] for many averaging factors at once, OADEV's (`want[0]`,
+/// `x_{j+2m} − 2x_{j+m} + x_j`) and OHDEV's (`want[1]`, the third
+/// difference) sums, with the record read from memory a few times in
+/// all, not a few times per factor and deviation.
 ///
 /// Block b of factor m reads the windows of [`COMB_BLOCK`] samples at
-/// `b + k·q` blocks (`q = m/COMB_BLOCK`, k = 0..span), so a window is
+/// `b + k·q` blocks (`q = m/COMB_BLOCK`, k = 0..3; both deviations from
+/// the same loads, [`comb2_block`]), so a window is
 /// read again by the same factor q blocks later and by the factors 2m,
 /// 4m, … Factors go in bands of [`BAND`] octaves of q: band k (stride
 /// `s = BAND^k` blocks, `s ≤ q < BAND·s`; band 0 also takes m below a
 /// block) visits its blocks in residue order (`r, r + s, r + 2s, …` for
 /// r = 0..s), so every window a block needs was read at most
-/// `span·BAND` visits before, a window of about 50 blocks (800 kB) that
+/// `3·BAND` visits before, a window of about 50 blocks (800 kB) that
 /// stays in the caches, and the band reads the record about once.
 /// Each factor's blocks and their ordered sum are exactly those of
 /// [`comb_sum`], so the numbers are the same bits; in parallel the visit
 /// order is cut into tasks of [`TASK`] visits.
-fn comb_many<const K: usize>(
+fn comb_many(
     x: &[f64],
     ms: &[usize],
-    mult: [usize; K],
-    w: [f64; K],
-    span: usize,
+    want: [bool; 2],
     parallel: bool,
-) -> Vec<Option<(f64, usize)>> {
-    let terms: Vec<usize> = ms
-        .iter()
-        .map(|&m| {
-            if m == 0 {
-                0
-            } else {
-                x.len().saturating_sub(span * m)
-            }
-        })
-        .collect();
+) -> [Vec<Option<(f64, usize)>>; 2] {
+    // Terms of each factor: Allan L − 2m, Hadamard L − 3m (0 if unwanted).
+    let terms: [Vec<usize>; 2] = [2, 3].map(|span| {
+        ms.iter()
+            .map(|&m| {
+                if m == 0 || !want[span - 2] {
+                    0
+                } else {
+                    x.len().saturating_sub(span * m)
+                }
+            })
+            .collect()
+    });
+    let blocks = |j: usize| terms[0][j].max(terms[1][j]).div_ceil(COMB_BLOCK);
     // Stride (blocks) of each factor's band.
     let stride = |m: usize| {
         let mut s = 1;
@@ -173,7 +245,7 @@ fn comb_many<const K: usize>(
         s
     };
     let mut bands: Vec<(usize, Vec<usize>)> = Vec::new();
-    for (j, &m) in ms.iter().enumerate().filter(|&(j, _)| terms[j] > 0) {
+    for (j, &m) in ms.iter().enumerate().filter(|&(j, _)| blocks(j) > 0) {
         let s = stride(m);
         match bands.iter_mut().find(|(t, _)| *t == s) {
             Some((_, v)) => v.push(j),
@@ -183,30 +255,23 @@ fn comb_many<const K: usize>(
     // Tasks: (band, first visit, end visit) over each band's visit order.
     let mut tasks = Vec::new();
     for (bi, (_, js)) in bands.iter().enumerate() {
-        let nb = js
-            .iter()
-            .map(|&j| terms[j].div_ceil(COMB_BLOCK))
-            .max()
-            .unwrap_or(0);
+        let nb = js.iter().map(|&j| blocks(j)).max().unwrap_or(0);
         let mut v = 0;
         while v < nb {
             tasks.push((bi, v, (v + TASK).min(nb)));
             v += TASK;
         }
     }
-    let task = |&(bi, v0, v1): &(usize, usize, usize)| -> Vec<(usize, usize, f64)> {
-        let (s, js) = (&bands[bi].0, &bands[bi].1);
-        let nb = js
-            .iter()
-            .map(|&j| terms[j].div_ceil(COMB_BLOCK))
-            .max()
-            .unwrap_or(0);
-        // Visits in residue order: residue r takes ceil((nb − r)/s)
-        // visits, blocks r, r + s, r + 2s, …
+    type Part = Vec<(usize, usize, Option<f64>, Option<f64>)>;
+    let task = |&(bi, v0, v1): &(usize, usize, usize)| -> Part {
+        let (s, js) = (bands[bi].0, &bands[bi].1);
+        let nb = js.iter().map(|&j| blocks(j)).max().unwrap_or(0);
         let mut out = Vec::with_capacity((v1 - v0) * js.len());
+        // Visits in residue order: residue r takes ceil((nb − r)/s)
+        // visits, blocks r, r + s, r + 2s, …; residues below `extra` have
+        // per + 1 visits, the rest per.
         let (per, extra) = (nb / s, nb % s);
         for v in v0..v1 {
-            // Residues below `extra` have per + 1 visits, the rest per.
             let big = extra * (per + 1);
             let (r, i) = if v < big {
                 (v / (per + 1), v % (per + 1))
@@ -214,38 +279,59 @@ fn comb_many<const K: usize>(
                 (extra + (v - big) / per.max(1), (v - big) % per.max(1))
             };
             let b = r + i * s;
+            let lo = b * COMB_BLOCK;
             for &j in js {
-                let (m, n) = (ms[j], terms[j]);
-                let lo = b * COMB_BLOCK;
-                if lo < n {
-                    let hi = (lo + COMB_BLOCK).min(n);
-                    out.push((
-                        j,
-                        b,
-                        comb_block(mult.map(|k| &x[k * m + lo..k * m + hi]), w),
-                    ));
+                let m = ms[j];
+                let [ha, hh] = [0, 1].map(|k| (lo + COMB_BLOCK).min(terms[k][j]));
+                let w = |k: usize, hi: usize| &x[k * m + lo..k * m + hi];
+                let (va, vh) = if lo < ha && ha == hh {
+                    let (va, vh) = comb2_block([w(3, hh), w(2, hh), w(1, hh), w(0, hh)]);
+                    (Some(va), Some(vh))
+                } else {
+                    (
+                        (lo < ha)
+                            .then(|| comb_block([w(2, ha), w(1, ha), w(0, ha)], [1.0, -2.0, 1.0])),
+                        (lo < hh).then(|| {
+                            comb_block(
+                                [w(3, hh), w(2, hh), w(1, hh), w(0, hh)],
+                                [1.0, -3.0, 3.0, -1.0],
+                            )
+                        }),
+                    )
+                };
+                if va.is_some() || vh.is_some() {
+                    out.push((j, b, va, vh));
                 }
             }
         }
         out
     };
-    let parts: Vec<Vec<(usize, usize, f64)>> = if parallel && tasks.len() > 1 {
+    let parts: Vec<Part> = if parallel && tasks.len() > 1 {
         tasks.par_iter().map(task).collect()
     } else {
         tasks.iter().map(task).collect()
     };
-    let mut table: Vec<Vec<f64>> = terms
-        .iter()
-        .map(|n| vec![0.0; n.div_ceil(COMB_BLOCK)])
-        .collect();
-    for (j, b, v) in parts.into_iter().flatten() {
-        table[j][b] = v;
+    let mut table: [Vec<Vec<f64>>; 2] = [0, 1].map(|k| {
+        terms[k]
+            .iter()
+            .map(|n| vec![0.0; n.div_ceil(COMB_BLOCK)])
+            .collect()
+    });
+    for (j, b, va, vh) in parts.into_iter().flatten() {
+        if let Some(v) = va {
+            table[0][j][b] = v;
+        }
+        if let Some(v) = vh {
+            table[1][j][b] = v;
+        }
     }
-    table
-        .iter()
-        .zip(&terms)
-        .map(|(t, &n)| (n > 0).then(|| (t.iter().sum(), n)))
-        .collect()
+    [0, 1].map(|k| {
+        table[k]
+            .iter()
+            .zip(&terms[k])
+            .map(|(t, &n)| (n > 0).then(|| (t.iter().sum(), n)))
+            .collect()
+    })
 }
 
 /// [`oavar`] at every factor of `ms`: one block-major sweep (same bits as
@@ -303,8 +389,7 @@ fn many_sums(x: &[f64], ms: &[usize], kind: Kind, parallel: bool) -> Vec<Option<
         Kind::Hadamard => 3,
     };
     let l = x.len();
-    let direct: f64 = ms.iter().map(|&m| l.saturating_sub(span * m) as f64).sum();
-    if l > 1 && direct > DENSE_RATIO * l as f64 * (l as f64).log2() {
+    if dense(l, ms, span) {
         let (mut out, refused) = dense_sums(x, ms, kind, DENSE_TOL, parallel);
         let redo: Vec<usize> = (0..ms.len()).filter(|&k| refused[k]).collect();
         let rm: Vec<usize> = redo.iter().map(|&k| ms[k]).collect();
@@ -317,10 +402,23 @@ fn many_sums(x: &[f64], ms: &[usize], kind: Kind, parallel: bool) -> Vec<Option<
     }
 }
 
+/// Whether the direct sums (`L − span·m` terms per factor) would cost
+/// more than [`DENSE_RATIO`]`·L·log₂L`, where [`many_sums`] takes the FFT.
+fn dense(l: usize, ms: &[usize], span: usize) -> bool {
+    let direct: f64 = ms.iter().map(|&m| l.saturating_sub(span * m) as f64).sum();
+    l > 1 && direct > DENSE_RATIO * l as f64 * (l as f64).log2()
+}
+
 fn direct_sums(x: &[f64], ms: &[usize], kind: Kind, parallel: bool) -> Vec<Option<(f64, usize)>> {
+    let [a, h] = comb_many(
+        x,
+        ms,
+        [kind == Kind::Allan, kind == Kind::Hadamard],
+        parallel,
+    );
     match kind {
-        Kind::Allan => comb_many(x, ms, [2, 1, 0], [1.0, -2.0, 1.0], 2, parallel),
-        Kind::Hadamard => comb_many(x, ms, [3, 2, 1, 0], [1.0, -3.0, 3.0, -1.0], 3, parallel),
+        Kind::Allan => a,
+        Kind::Hadamard => h,
     }
 }
 
@@ -991,7 +1089,43 @@ pub fn oavar_totvar_many(
     parallel: bool,
 ) -> (Vec<Option<VarN>>, Vec<Option<VarN>>) {
     let sums = many_sums(x, ms, Kind::Allan, parallel);
-    let oa = variances(&sums, ms, tau0, 2.0);
+    let tot = totvar_from(x, ms, tau0, parallel, &sums);
+    (variances(&sums, ms, tau0, 2.0), tot)
+}
+
+/// [`oavar_many`], [`ohvar_many`] and [`totvar`] at every factor of
+/// `ms`: on a sparse grid OADEV's and OHDEV's sums in one sweep
+/// ([`comb_many`]; the same bits as apart), TOTDEV from the OADEV sums as
+/// in [`oavar_totvar_many`]. Returns `(OADEV, OHDEV, TOTDEV)`.
+#[allow(clippy::type_complexity)]
+pub fn oavar_ohvar_totvar_many(
+    x: &[f64],
+    ms: &[usize],
+    tau0: f64,
+    parallel: bool,
+) -> (Vec<Option<VarN>>, Vec<Option<VarN>>, Vec<Option<VarN>>) {
+    let [a, h] = if dense(x.len(), ms, 2) || dense(x.len(), ms, 3) {
+        [Kind::Allan, Kind::Hadamard].map(|k| many_sums(x, ms, k, parallel))
+    } else {
+        comb_many(x, ms, [true, true], parallel)
+    };
+    let tot = totvar_from(x, ms, tau0, parallel, &a);
+    (
+        variances(&a, ms, tau0, 2.0),
+        variances(&h, ms, tau0, 6.0),
+        tot,
+    )
+}
+
+/// TOTDEV at every factor from the OADEV sums `(S, n)` (its interior
+/// terms), adding the reflected edge terms.
+fn totvar_from(
+    x: &[f64],
+    ms: &[usize],
+    tau0: f64,
+    parallel: bool,
+    sums: &[Option<(f64, usize)>],
+) -> Vec<Option<VarN>> {
     let one = |(r, &m): (&Option<(f64, usize)>, &usize)| match r {
         Some((s, n)) => totvar_with(x, m, tau0, |lo, len| {
             debug_assert!(lo == m && len == *n);
@@ -1000,12 +1134,11 @@ pub fn oavar_totvar_many(
         None => totvar(x, m, tau0, parallel),
     };
     // Factors independent: in parallel on dense grids (same numbers).
-    let tot = if parallel {
+    if parallel {
         sums.par_iter().zip(ms.par_iter()).map(one).collect()
     } else {
         sums.iter().zip(ms).map(one).collect()
-    };
-    (oa, tot)
+    }
 }
 
 /// `Σ_{i=a}^{b−1} f(i)` in eight lane accumulators, lanes added in a
@@ -1227,6 +1360,12 @@ mod tests {
                 );
             }
             let hmany = ohvar_many(&x, &ms, 1.0, true);
+            // OADEV and OHDEV in one sweep: the same bits as apart, serial
+            // or parallel.
+            for par in [false, true] {
+                let (oa3, oh3, tot3) = oavar_ohvar_totvar_many(&x, &ms, 1.0, par);
+                assert_eq!((&oa3, &oh3, &tot3), (&many, &hmany, &tot));
+            }
             for (k, &m) in ms.iter().enumerate() {
                 assert_eq!(
                     many[k].map(|v| v.var.to_bits()),

@@ -309,8 +309,7 @@ pub fn stability_with_progress(
         totdev: DevSeries::default(),
     };
     let ids = id::identify_many(x, &ms, par);
-    let (oas, tots) = dev::oavar_totvar_many(x, &ms, t0, par);
-    let ohs = dev::ohvar_many(x, &ms, t0, par);
+    let (oas, ohs, tots) = dev::oavar_ohvar_totvar_many(x, &ms, t0, par);
     let mvs = dev::mvar_many(x, &ms, t0, par);
     let mut last: Option<id::NoiseId> = None;
     for (k, &m) in ms.iter().enumerate() {
