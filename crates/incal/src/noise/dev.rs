@@ -217,12 +217,7 @@ const TASK: usize = 1024;
 /// Each factor's blocks and their ordered sum are exactly those of
 /// [`comb_sum`], so the numbers are the same bits; in parallel the visit
 /// order is cut into tasks of [`TASK`] visits.
-fn comb_many(
-    x: &[f64],
-    ms: &[usize],
-    want: [bool; 2],
-    parallel: bool,
-) -> [Vec<Option<(f64, usize)>>; 2] {
+fn comb_many(x: &[f64], ms: &[usize], want: [bool; 2], mdev: &[bool], parallel: bool) -> Sweep {
     // Terms of each factor: Allan L − 2m, Hadamard L − 3m (0 if unwanted).
     let terms: [Vec<usize>; 2] = [2, 3].map(|span| {
         ms.iter()
@@ -262,7 +257,7 @@ fn comb_many(
             v += TASK;
         }
     }
-    type Part = Vec<(usize, usize, Option<f64>, Option<f64>)>;
+    type Part = Vec<(usize, usize, Option<f64>, Option<f64>, Option<[f64; 3]>)>;
     let task = |&(bi, v0, v1): &(usize, usize, usize)| -> Part {
         let (s, js) = (bands[bi].0, &bands[bi].1);
         let nb = js.iter().map(|&j| blocks(j)).max().unwrap_or(0);
@@ -299,8 +294,10 @@ fn comb_many(
                         }),
                     )
                 };
+                let md = (lo < hh && mdev.get(j) == Some(&true))
+                    .then(|| mdev_stats([w(3, hh), w(2, hh), w(1, hh), w(0, hh)]));
                 if va.is_some() || vh.is_some() {
-                    out.push((j, b, va, vh));
+                    out.push((j, b, va, vh, md));
                 }
             }
         }
@@ -317,21 +314,105 @@ fn comb_many(
             .map(|n| vec![0.0; n.div_ceil(COMB_BLOCK)])
             .collect()
     });
-    for (j, b, va, vh) in parts.into_iter().flatten() {
+    let mut mtable: Vec<Vec<[f64; 3]>> = (0..ms.len())
+        .map(|j| {
+            let n = if mdev.get(j) == Some(&true) {
+                terms[1][j]
+            } else {
+                0
+            };
+            vec![[0.0; 3]; n.div_ceil(COMB_BLOCK)]
+        })
+        .collect();
+    for (j, b, va, vh, md) in parts.into_iter().flatten() {
         if let Some(v) = va {
             table[0][j][b] = v;
         }
         if let Some(v) = vh {
             table[1][j][b] = v;
         }
+        if let Some(v) = md {
+            mtable[j][b] = v;
+        }
     }
-    [0, 1].map(|k| {
+    let sums = [0, 1].map(|k| {
         table[k]
             .iter()
             .zip(&terms[k])
             .map(|(t, &n)| (n > 0).then(|| (t.iter().sum(), n)))
             .collect()
-    })
+    });
+    // MDEV: W_0 by its direct sum, then block by block in order
+    // (`W_{j+1} = W_j + h_j`, the Hadamard terms h): the block adds
+    // `n·W² + 2W·S1 + S2` and moves W on by its total.
+    let modified = (0..ms.len())
+        .map(|j| {
+            let (m, nh) = (ms[j], terms[1][j]);
+            // n = L + 1 − 3m terms (W_0 alone when L = 3m).
+            (mdev.get(j) == Some(&true) && m > 0 && x.len() >= 3 * m).then(|| {
+                let mut w = lanes(0, m, |i| x[i + 2 * m] - 2.0 * x[i + m] + x[i]);
+                let mut acc = w * w;
+                for (b, &[t, s1, s2]) in mtable[j].iter().enumerate() {
+                    let n = (nh - b * COMB_BLOCK).min(COMB_BLOCK) as f64;
+                    acc += n * w * w + 2.0 * w * s1 + s2;
+                    w += t;
+                }
+                (acc, nh + 1)
+            })
+        })
+        .collect();
+    Sweep { sums, modified }
+}
+
+/// What [`comb_many`] returns: the OADEV and OHDEV sums `(S, n)` per
+/// factor, and the MDEV sums `(Σ W², n)` of the factors asked for.
+struct Sweep {
+    sums: [Vec<Option<(f64, usize)>>; 2],
+    modified: Vec<Option<(f64, usize)>>,
+}
+
+/// One block's part of the MDEV sums from its Hadamard windows `s` (as
+/// [`comb2_block`]): with `h_t` the block's terms (the MDEV slide's steps)
+/// and `loc_t = Σ_{u≤t} h_u`, returns `[Σ h, Σ loc, Σ loc²]`, so that the
+/// block adds `n·W² + 2W·Σloc + Σloc²` to `Σ W²` for W the inner sum
+/// before it. The running sum goes as eight shorter ones in lanes (one
+/// add chain would bound the loop); a block is short against m, so W hardly
+/// moves along it and the expansion loses nothing to cancellation
+/// (checked against the direct sums in the tests).
+fn mdev_stats(s: [&[f64]; 4]) -> [f64; 3] {
+    const L: usize = 8;
+    let n = s[0].len();
+    let h = |t: usize| s[0][t] - 3.0 * s[1][t] + 3.0 * s[2][t] - s[3][t];
+    let r = n / L;
+    debug_assert!(n <= COMB_BLOCK);
+    // The steps in lanes, transposed (lane l holds steps l·r .. (l+1)·r),
+    // so the running sums below go as vectors.
+    let mut buf = [[0.0f64; L]; COMB_BLOCK / L];
+    for (l, lane) in (0..L).map(|l| (l, l * r)) {
+        for (t, row) in buf[..r].iter_mut().enumerate() {
+            row[l] = h(lane + t);
+        }
+    }
+    let (mut loc, mut s1, mut s2) = ([0.0f64; L], [0.0f64; L], [0.0f64; L]);
+    for row in &buf[..r] {
+        for l in 0..L {
+            loc[l] += row[l];
+            s1[l] += loc[l];
+            s2[l] += loc[l] * loc[l];
+        }
+    }
+    let (mut o, mut a1, mut a2) = (0.0f64, 0.0f64, 0.0f64);
+    for l in 0..L {
+        a1 += r as f64 * o + s1[l];
+        a2 += r as f64 * o * o + 2.0 * o * s1[l] + s2[l];
+        o += loc[l];
+    }
+    for t in L * r..n {
+        o += h(t);
+        a1 += o;
+        a2 += o * o;
+    }
+    [o, a1, a2]
 }
 
 /// [`oavar`] at every factor of `ms`: one block-major sweep (same bits as
@@ -410,12 +491,8 @@ fn dense(l: usize, ms: &[usize], span: usize) -> bool {
 }
 
 fn direct_sums(x: &[f64], ms: &[usize], kind: Kind, parallel: bool) -> Vec<Option<(f64, usize)>> {
-    let [a, h] = comb_many(
-        x,
-        ms,
-        [kind == Kind::Allan, kind == Kind::Hadamard],
-        parallel,
-    );
+    let want = [kind == Kind::Allan, kind == Kind::Hadamard];
+    let [a, h] = comb_many(x, ms, want, &[], parallel).sums;
     match kind {
         Kind::Allan => a,
         Kind::Hadamard => h,
@@ -1093,28 +1170,64 @@ pub fn oavar_totvar_many(
     (variances(&sums, ms, tau0, 2.0), tot)
 }
 
-/// [`oavar_many`], [`ohvar_many`] and [`totvar`] at every factor of
-/// `ms`: on a sparse grid OADEV's and OHDEV's sums in one sweep
-/// ([`comb_many`]; the same bits as apart), TOTDEV from the OADEV sums as
-/// in [`oavar_totvar_many`]. Returns `(OADEV, OHDEV, TOTDEV)`.
-#[allow(clippy::type_complexity)]
-pub fn oavar_ohvar_totvar_many(
-    x: &[f64],
-    ms: &[usize],
-    tau0: f64,
-    parallel: bool,
-) -> (Vec<Option<VarN>>, Vec<Option<VarN>>, Vec<Option<VarN>>) {
-    let [a, h] = if dense(x.len(), ms, 2) || dense(x.len(), ms, 3) {
-        [Kind::Allan, Kind::Hadamard].map(|k| many_sums(x, ms, k, parallel))
+/// OADEV, OHDEV, TOTDEV and MDEV variances at every factor of `ms`, as
+/// [`oavar_many`], [`ohvar_many`], [`oavar_totvar_many`] and [`mvar_many`]
+/// give them, sharing the work: on a sparse grid one sweep
+/// ([`comb_many`]) gives OADEV's and OHDEV's sums (the same bits as apart)
+/// and the MDEV sums of the factors too large for [`mvar_many`]'s prefix
+/// superblocks, whose slide steps are exactly OHDEV's terms (instead of
+/// [`mvar`]'s slides, four more streams over the record per factor);
+/// TOTDEV from the OADEV sums. Same numbers serial or parallel.
+pub fn stability_vars(x: &[f64], ms: &[usize], tau0: f64, parallel: bool) -> StabilityVars {
+    let big = |m: usize| 3 * m > MVAR_GROUPS[MVAR_GROUPS.len() - 1];
+    let (a, h, mdev) = if dense(x.len(), ms, 2) || dense(x.len(), ms, 3) {
+        let [a, h] = [Kind::Allan, Kind::Hadamard].map(|k| many_sums(x, ms, k, parallel));
+        (a, h, mvar_many(x, ms, tau0, parallel))
     } else {
-        comb_many(x, ms, [true, true], parallel)
+        let want: Vec<bool> = ms.iter().map(|&m| big(m)).collect();
+        let sw = comb_many(x, ms, [true, true], &want, parallel);
+        let small: Vec<usize> = ms.iter().copied().filter(|&m| !big(m)).collect();
+        let mut rest = mvar_many_tol(x, &small, tau0, parallel, MVAR_TOL)
+            .0
+            .into_iter();
+        let mdev = ms
+            .iter()
+            .zip(&sw.modified)
+            .map(|(&m, v)| {
+                if !big(m) {
+                    return rest.next().flatten();
+                }
+                v.map(|(s, n)| {
+                    let mf = m as f64;
+                    VarN {
+                        var: s / (2.0 * mf.powi(4) * tau0 * tau0 * n as f64),
+                        n,
+                    }
+                })
+            })
+            .collect();
+        let [a, h] = sw.sums;
+        (a, h, mdev)
     };
-    let tot = totvar_from(x, ms, tau0, parallel, &a);
-    (
-        variances(&a, ms, tau0, 2.0),
-        variances(&h, ms, tau0, 6.0),
-        tot,
-    )
+    StabilityVars {
+        tot: totvar_from(x, ms, tau0, parallel, &a),
+        oa: variances(&a, ms, tau0, 2.0),
+        oh: variances(&h, ms, tau0, 6.0),
+        md: mdev,
+    }
+}
+
+/// The variances of [`stability_vars`], per factor.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StabilityVars {
+    /// Overlapping Allan.
+    pub oa: Vec<Option<VarN>>,
+    /// Overlapping Hadamard.
+    pub oh: Vec<Option<VarN>>,
+    /// Total.
+    pub tot: Vec<Option<VarN>>,
+    /// Modified Allan.
+    pub md: Vec<Option<VarN>>,
 }
 
 /// TOTDEV at every factor from the OADEV sums `(S, n)` (its interior
@@ -1363,8 +1476,9 @@ mod tests {
             // OADEV and OHDEV in one sweep: the same bits as apart, serial
             // or parallel.
             for par in [false, true] {
-                let (oa3, oh3, tot3) = oavar_ohvar_totvar_many(&x, &ms, 1.0, par);
-                assert_eq!((&oa3, &oh3, &tot3), (&many, &hmany, &tot));
+                let v = stability_vars(&x, &ms, 1.0, par);
+                assert_eq!((&v.oa, &v.oh, &v.tot), (&many, &hmany, &tot));
+                assert_eq!(v.md, md);
             }
             for (k, &m) in ms.iter().enumerate() {
                 assert_eq!(
@@ -1379,6 +1493,40 @@ mod tests {
             // TOTDEV beyond N/2 (all centres reflected).
             if n > 10 {
                 assert!(totvar(&x, n - 3, 1.0, false).unwrap().var.is_finite());
+            }
+        }
+    }
+
+    /// MDEV of the factors past the prefix superblocks, from the OHDEV
+    /// sweep's terms: the slides' values to round-off (white FM and
+    /// random-walk FM), the same bits serial or parallel.
+    #[test]
+    fn mdev_from_the_sweep_equals_the_slides() {
+        let n = (1usize << 18) + 12_345;
+        let mut u = uniform(5);
+        let mut white = vec![0.0];
+        let mut rw = vec![0.0];
+        let (mut y, mut z) = (0.0, 0.0);
+        for _ in 1..n {
+            y += u();
+            z += y + u();
+            white.push(y);
+            rw.push(z);
+        }
+        let mut ms: Vec<usize> = (0..17).map(|k| 1usize << k).collect();
+        ms.extend([50_000, 60_001, 87_000, n / 3]);
+        for x in [&white, &rw] {
+            let v = stability_vars(x, &ms, 1.0, true);
+            assert_eq!(v, stability_vars(x, &ms, 1.0, false));
+            for (k, &m) in ms.iter().enumerate() {
+                let (a, b) = (v.md[k].unwrap(), mvar(x, m, 1.0, false).unwrap());
+                assert_eq!(a.n, b.n, "m {m}");
+                assert!(
+                    ((a.var - b.var) / b.var).abs() < 1e-10,
+                    "m {m}: {} vs {}",
+                    a.var,
+                    b.var
+                );
             }
         }
     }

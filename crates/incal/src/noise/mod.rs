@@ -309,8 +309,12 @@ pub fn stability_with_progress(
         totdev: DevSeries::default(),
     };
     let ids = id::identify_many(x, &ms, par);
-    let (oas, ohs, tots) = dev::oavar_ohvar_totvar_many(x, &ms, t0, par);
-    let mvs = dev::mvar_many(x, &ms, t0, par);
+    let dev::StabilityVars {
+        oa: oas,
+        oh: ohs,
+        tot: tots,
+        md: mvs,
+    } = dev::stability_vars(x, &ms, t0, par);
     let mut last: Option<id::NoiseId> = None;
     for (k, &m) in ms.iter().enumerate() {
         let nid = ids[k].or(last);
