@@ -295,7 +295,7 @@ fn comb_many(x: &[f64], ms: &[usize], want: [bool; 2], mdev: &[bool], parallel: 
                     )
                 };
                 let md = (lo < hh && mdev.get(j) == Some(&true))
-                    .then(|| mdev_stats([w(3, hh), w(2, hh), w(1, hh), w(0, hh)]));
+                    .then(|| avx2_or_not!(mdev_stats([w(3, hh), w(2, hh), w(1, hh), w(0, hh)])));
                 if va.is_some() || vh.is_some() {
                     out.push((j, b, va, vh, md));
                 }
@@ -379,6 +379,7 @@ struct Sweep {
 /// add chain would bound the loop); a block is short against m, so W hardly
 /// moves along it and the expansion loses nothing to cancellation
 /// (checked against the direct sums in the tests).
+#[inline(always)]
 fn mdev_stats(s: [&[f64]; 4]) -> [f64; 3] {
     const L: usize = 8;
     let n = s[0].len();
@@ -1409,6 +1410,15 @@ mod tests {
             // SAFETY: as above.
             let wide = unsafe { comb_sq_avx2(s4, w4) };
             assert_eq!(comb_sq(s4, w4).to_bits(), wide.to_bits(), "n {n}");
+        }
+        // The MDEV block statistics through the AVX2 copy: the same bits,
+        // block lengths across the eight lanes' split.
+        let v: Vec<f64> = (0..COMB_BLOCK + 9).map(|_| u() * 1e3).collect();
+        for n in [0, 1, 7, 8, 9, 17, 100, COMB_BLOCK - 1, COMB_BLOCK] {
+            let s4 = [&v[9..9 + n], &v[6..6 + n], &v[3..3 + n], &v[..n]];
+            let (a, b) = (mdev_stats(s4), avx2_or_not!(mdev_stats(s4)));
+            assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "n {n}");
+            assert!(a.iter().all(|s| s.is_finite()));
         }
     }
 

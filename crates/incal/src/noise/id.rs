@@ -20,31 +20,6 @@ pub struct NoiseId {
     pub alpha_hadamard: i32,
 }
 
-/// Call an `#[inline(always)]` kernel through a copy compiled for AVX2
-/// when the CPU has it (the same operations in the same order, no FMA
-/// contraction: the same bits, only wider registers).
-macro_rules! avx2_or_not {
-    ($f:ident($($a:expr),*)) => {{
-        #[cfg(target_arch = "x86_64")]
-        {
-            #[target_feature(enable = "avx2")]
-            fn wide<R>(f: impl FnOnce() -> R) -> R {
-                f()
-            }
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU supports AVX2 (checked just above).
-                unsafe { wide(|| $f($($a),*)) }
-            } else {
-                $f($($a),*)
-            }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        {
-            $f($($a),*)
-        }
-    }};
-}
-
 /// Samples of `x` per segment: the fixed partition the segments' sums are
 /// added over, in order, so a parallel run gives a serial run's bits.
 const SEG: usize = if cfg!(test) { 1 << 13 } else { 1 << 22 };

@@ -7,6 +7,32 @@
 //! follows NIST SP 1065 (Riley 2008) and Stable32 exactly. A deviation is in
 //! the rate unit (x unit per second); TDEV is in the x unit.
 
+// Before the modules, so that each of them can use it.
+/// Call an `#[inline(always)]` kernel through a copy compiled for AVX2
+/// when the CPU has it (the same operations in the same order, no FMA
+/// contraction: the same bits, only wider registers).
+macro_rules! avx2_or_not {
+    ($f:ident($($a:expr),*)) => {{
+        #[cfg(target_arch = "x86_64")]
+        {
+            #[target_feature(enable = "avx2")]
+            fn wide<R>(f: impl FnOnce() -> R) -> R {
+                f()
+            }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports AVX2 (checked just above).
+                unsafe { wide(|| $f($($a),*)) }
+            } else {
+                $f($($a),*)
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            $f($($a),*)
+        }
+    }};
+}
+
 pub mod corr;
 pub mod dev;
 pub mod edf;
