@@ -218,11 +218,14 @@ const TASK: usize = 1024;
 /// [`comb_sum`], so the numbers are the same bits; in parallel the visit
 /// order is cut into tasks of [`TASK`] visits.
 fn comb_many(x: &[f64], ms: &[usize], want: [bool; 2], mdev: &[bool], parallel: bool) -> Sweep {
-    // Terms of each factor: Allan L − 2m, Hadamard L − 3m (0 if unwanted).
+    // Terms of each factor: Allan L − 2m, Hadamard L − 3m (0 if unwanted;
+    // the Hadamard terms are also MDEV's slide steps).
+    let md = |j: usize| mdev.get(j) == Some(&true);
     let terms: [Vec<usize>; 2] = [2, 3].map(|span| {
-        ms.iter()
-            .map(|&m| {
-                if m == 0 || !want[span - 2] {
+        (0..ms.len())
+            .map(|j| {
+                let m = ms[j];
+                if m == 0 || !(want[span - 2] || (span == 3 && md(j))) {
                     0
                 } else {
                     x.len().saturating_sub(span * m)
@@ -279,14 +282,14 @@ fn comb_many(x: &[f64], ms: &[usize], want: [bool; 2], mdev: &[bool], parallel: 
                 let m = ms[j];
                 let [ha, hh] = [0, 1].map(|k| (lo + COMB_BLOCK).min(terms[k][j]));
                 let w = |k: usize, hi: usize| &x[k * m + lo..k * m + hi];
-                let (va, vh) = if lo < ha && ha == hh {
+                let (va, vh) = if want[1] && lo < ha && ha == hh {
                     let (va, vh) = comb2_block([w(3, hh), w(2, hh), w(1, hh), w(0, hh)]);
                     (Some(va), Some(vh))
                 } else {
                     (
                         (lo < ha)
                             .then(|| comb_block([w(2, ha), w(1, ha), w(0, ha)], [1.0, -2.0, 1.0])),
-                        (lo < hh).then(|| {
+                        (want[1] && lo < hh).then(|| {
                             comb_block(
                                 [w(3, hh), w(2, hh), w(1, hh), w(0, hh)],
                                 [1.0, -3.0, 3.0, -1.0],
@@ -294,9 +297,9 @@ fn comb_many(x: &[f64], ms: &[usize], want: [bool; 2], mdev: &[bool], parallel: 
                         }),
                     )
                 };
-                let md = (lo < hh && mdev.get(j) == Some(&true))
+                let md = (lo < hh && md(j))
                     .then(|| avx2_or_not!(mdev_stats([w(3, hh), w(2, hh), w(1, hh), w(0, hh)])));
-                if va.is_some() || vh.is_some() {
+                if va.is_some() || vh.is_some() || md.is_some() {
                     out.push((j, b, va, vh, md));
                 }
             }
@@ -316,11 +319,7 @@ fn comb_many(x: &[f64], ms: &[usize], want: [bool; 2], mdev: &[bool], parallel: 
     });
     let mut mtable: Vec<Vec<[f64; 3]>> = (0..ms.len())
         .map(|j| {
-            let n = if mdev.get(j) == Some(&true) {
-                terms[1][j]
-            } else {
-                0
-            };
+            let n = if md(j) { terms[1][j] } else { 0 };
             vec![[0.0; 3]; n.div_ceil(COMB_BLOCK)]
         })
         .collect();
@@ -339,7 +338,7 @@ fn comb_many(x: &[f64], ms: &[usize], want: [bool; 2], mdev: &[bool], parallel: 
         table[k]
             .iter()
             .zip(&terms[k])
-            .map(|(t, &n)| (n > 0).then(|| (t.iter().sum(), n)))
+            .map(|(t, &n)| (n > 0 && want[k]).then(|| (t.iter().sum(), n)))
             .collect()
     });
     // MDEV: W_0 by its direct sum, then block by block in order
@@ -349,7 +348,7 @@ fn comb_many(x: &[f64], ms: &[usize], want: [bool; 2], mdev: &[bool], parallel: 
         .map(|j| {
             let (m, nh) = (ms[j], terms[1][j]);
             // n = L + 1 − 3m terms (W_0 alone when L = 3m).
-            (mdev.get(j) == Some(&true) && m > 0 && x.len() >= 3 * m).then(|| {
+            (md(j) && m > 0 && x.len() >= 3 * m).then(|| {
                 let mut w = lanes(0, m, |i| x[i + 2 * m] - 2.0 * x[i + m] + x[i]);
                 let mut acc = w * w;
                 for (b, &[t, s1, s2]) in mtable[j].iter().enumerate() {
@@ -724,12 +723,7 @@ pub fn mvar(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> {
     } else {
         (0..nb).map(block).collect()
     };
-    let total: f64 = sums.iter().sum();
-    let mf = m as f64;
-    Some(VarN {
-        var: total / (2.0 * mf.powi(4) * tau0 * tau0 * nt as f64),
-        n: nt,
-    })
+    Some(mvar_of(sums.iter().sum(), nt, m, tau0))
 }
 
 /// `Σ_{j=lo}^{hi−1} W_j²`, `W_j = Σ_{i=j}^{j+m−1} (x_{i+2m} − 2x_{i+m} + x_i)`
@@ -842,7 +836,15 @@ pub fn mvar_many(x: &[f64], ms: &[usize], tau0: f64, parallel: bool) -> Vec<Opti
     let l = x.len() + 1;
     let direct: f64 = ms.iter().map(|&m| l.saturating_sub(3 * m) as f64).sum();
     if l < 3 || direct <= DENSE_RATIO * l as f64 * (l as f64).log2() {
-        return mvar_many_tol(x, ms, tau0, parallel, MVAR_TOL).0;
+        // A sparse grid: the factors past the prefix superblocks from the
+        // Hadamard sweep ([`comb_many`]: its terms are their slide steps),
+        // the others by the superblocks.
+        let big: Vec<bool> = ms.iter().map(|&m| past_superblocks(m)).collect();
+        if !big.contains(&true) {
+            return mvar_many_tol(x, ms, tau0, parallel, MVAR_TOL).0;
+        }
+        let sw = comb_many(x, ms, [false, false], &big, parallel);
+        return mvar_merge(x, ms, tau0, parallel, &big, &sw.modified);
     }
     // A dense grid: the Hadamard sums of P by FFT ([`dense_sums`]; the
     // whole P is one more copy of the record, which a grid this dense
@@ -870,13 +872,49 @@ pub fn mvar_many(x: &[f64], ms: &[usize], tau0: f64, parallel: bool) -> Vec<Opti
             if r {
                 return redo.next().flatten();
             }
-            v.map(|(s, n)| {
-                let mf = m as f64;
-                VarN {
-                    var: s / (2.0 * mf.powi(4) * tau0 * tau0 * n as f64),
-                    n,
-                }
-            })
+            v.map(|(s, n)| mvar_of(s, n, m, tau0))
+        })
+        .collect()
+}
+
+/// The MDEV variance from the sum `s = Σ W²` of `n` inner sums at factor
+/// m (SP 1065 eq. 14): `s / (2 m⁴ τ0² n)`.
+fn mvar_of(s: f64, n: usize, m: usize, tau0: f64) -> VarN {
+    let mf = m as f64;
+    VarN {
+        var: s / (2.0 * mf.powi(4) * tau0 * tau0 * n as f64),
+        n,
+    }
+}
+
+/// Whether factor m is too large for [`mvar_many_tol`]'s prefix
+/// superblocks (`3m` past the largest), so that its inner sum would slide.
+fn past_superblocks(m: usize) -> bool {
+    3 * m > MVAR_GROUPS[MVAR_GROUPS.len() - 1]
+}
+
+/// MDEV at every factor of `ms`: those marked `big` from the sums
+/// `modified` of a [`comb_many`] sweep, the others by
+/// [`mvar_many_tol`].
+fn mvar_merge(
+    x: &[f64],
+    ms: &[usize],
+    tau0: f64,
+    parallel: bool,
+    big: &[bool],
+    modified: &[Option<(f64, usize)>],
+) -> Vec<Option<VarN>> {
+    let small: Vec<usize> = (0..ms.len()).filter(|&j| !big[j]).map(|j| ms[j]).collect();
+    let mut rest = mvar_many_tol(x, &small, tau0, parallel, MVAR_TOL)
+        .0
+        .into_iter();
+    (0..ms.len())
+        .map(|j| {
+            if big[j] {
+                modified[j].map(|(s, n)| mvar_of(s, n, ms[j], tau0))
+            } else {
+                rest.next().flatten()
+            }
         })
         .collect()
 }
@@ -919,10 +957,7 @@ pub(crate) fn mvar_many_tol(
             let d = f64::EPSILON * prms * ((2.0 * mf).sqrt() + 4.0) / rms;
             let rel = 20.0 * d * (3.0 * mf / nf).min(1.0).sqrt() + d * d;
             out[k] = if rel.is_finite() && rel <= tol {
-                Some(VarN {
-                    var: s / (2.0 * mf.powi(4) * tau0 * tau0 * nf),
-                    n,
-                })
+                Some(mvar_of(s, n, m, tau0))
             } else {
                 slid[k] = true;
                 mvar(x, m, tau0, parallel)
@@ -1180,33 +1215,13 @@ pub fn oavar_totvar_many(
 /// [`mvar`]'s slides, four more streams over the record per factor);
 /// TOTDEV from the OADEV sums. Same numbers serial or parallel.
 pub fn stability_vars(x: &[f64], ms: &[usize], tau0: f64, parallel: bool) -> StabilityVars {
-    let big = |m: usize| 3 * m > MVAR_GROUPS[MVAR_GROUPS.len() - 1];
     let (a, h, mdev) = if dense(x.len(), ms, 2) || dense(x.len(), ms, 3) {
         let [a, h] = [Kind::Allan, Kind::Hadamard].map(|k| many_sums(x, ms, k, parallel));
         (a, h, mvar_many(x, ms, tau0, parallel))
     } else {
-        let want: Vec<bool> = ms.iter().map(|&m| big(m)).collect();
-        let sw = comb_many(x, ms, [true, true], &want, parallel);
-        let small: Vec<usize> = ms.iter().copied().filter(|&m| !big(m)).collect();
-        let mut rest = mvar_many_tol(x, &small, tau0, parallel, MVAR_TOL)
-            .0
-            .into_iter();
-        let mdev = ms
-            .iter()
-            .zip(&sw.modified)
-            .map(|(&m, v)| {
-                if !big(m) {
-                    return rest.next().flatten();
-                }
-                v.map(|(s, n)| {
-                    let mf = m as f64;
-                    VarN {
-                        var: s / (2.0 * mf.powi(4) * tau0 * tau0 * n as f64),
-                        n,
-                    }
-                })
-            })
-            .collect();
+        let big: Vec<bool> = ms.iter().map(|&m| past_superblocks(m)).collect();
+        let sw = comb_many(x, ms, [true, true], &big, parallel);
+        let mdev = mvar_merge(x, ms, tau0, parallel, &big, &sw.modified);
         let [a, h] = sw.sums;
         (a, h, mdev)
     };
@@ -1508,8 +1523,9 @@ mod tests {
     }
 
     /// MDEV of the factors past the prefix superblocks, from the OHDEV
-    /// sweep's terms: the slides' values to round-off (white FM and
-    /// random-walk FM), the same bits serial or parallel.
+    /// sweep's terms (with OADEV and OHDEV, or alone in [`mvar_many`]):
+    /// the slides' values to round-off (white FM and random-walk FM), the
+    /// same bits serial or parallel.
     #[test]
     fn mdev_from_the_sweep_equals_the_slides() {
         let n = (1usize << 18) + 12_345;
@@ -1528,6 +1544,10 @@ mod tests {
         for x in [&white, &rw] {
             let v = stability_vars(x, &ms, 1.0, true);
             assert_eq!(v, stability_vars(x, &ms, 1.0, false));
+            // MDEV alone takes the same sums from a sweep of its own.
+            for par in [false, true] {
+                assert_eq!(mvar_many(x, &ms, 1.0, par), v.md);
+            }
             for (k, &m) in ms.iter().enumerate() {
                 let (a, b) = (v.md[k].unwrap(), mvar(x, m, 1.0, false).unwrap());
                 assert_eq!(a.n, b.n, "m {m}");
