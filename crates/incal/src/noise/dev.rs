@@ -380,27 +380,11 @@ struct Sweep {
 /// (checked against the direct sums in the tests).
 #[inline(always)]
 fn mdev_stats(s: [&[f64]; 4]) -> [f64; 3] {
-    const L: usize = 8;
+    const L: usize = LANES;
     let n = s[0].len();
     let h = |t: usize| s[0][t] - 3.0 * s[1][t] + 3.0 * s[2][t] - s[3][t];
     let r = n / L;
-    debug_assert!(n <= COMB_BLOCK);
-    // The steps in lanes, transposed (lane l holds steps l·r .. (l+1)·r),
-    // so the running sums below go as vectors.
-    let mut buf = [[0.0f64; L]; COMB_BLOCK / L];
-    for (l, lane) in (0..L).map(|l| (l, l * r)) {
-        for (t, row) in buf[..r].iter_mut().enumerate() {
-            row[l] = h(lane + t);
-        }
-    }
-    let (mut loc, mut s1, mut s2) = ([0.0f64; L], [0.0f64; L], [0.0f64; L]);
-    for row in &buf[..r] {
-        for l in 0..L {
-            loc[l] += row[l];
-            s1[l] += loc[l];
-            s2[l] += loc[l] * loc[l];
-        }
-    }
+    let [loc, s1, s2] = lane_slides(r, h);
     let (mut o, mut a1, mut a2) = (0.0f64, 0.0f64, 0.0f64);
     for l in 0..L {
         a1 += r as f64 * o + s1[l];
@@ -739,25 +723,11 @@ pub fn mvar(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> {
 /// W hardly moves along it and the expansion loses nothing to
 /// cancellation (checked against the direct sums in the tests).
 fn mvar_block(x: &[f64], m: usize, lo: usize, hi: usize) -> f64 {
-    const L: usize = 8;
+    const L: usize = LANES;
     const R: usize = MVAR_CHUNK / L;
-    let s = |i: usize| x[i + 2 * m] - 2.0 * x[i + m] + x[i];
     // The direct start, in eight lanes (it streams, it does not chain).
-    let mut st = [0.0f64; L];
-    let full = m / L * L;
-    for i in (0..full).step_by(L) {
-        for (l, v) in st.iter_mut().enumerate() {
-            *v += s(lo + i + l);
-        }
-    }
-    for (l, i) in (full..m).enumerate() {
-        st[l] += s(lo + i);
-    }
-    let mut w = ((st[0] + st[4]) + (st[1] + st[5])) + ((st[2] + st[6]) + (st[3] + st[7]));
+    let mut w = lanes(lo, lo + m, |i| x[i + 2 * m] - 2.0 * x[i + m] + x[i]);
     let mut acc = w * w;
-    // Row t holds the eight lanes' steps at offset t (lane l: positions
-    // l·R.. of the chunk), so the lanes' slides run as one vector.
-    let mut buf = [[0.0f64; L]; R];
     // Positions lo+1.. step from the previous W by d_j.
     let mut j0 = lo + 1;
     while j0 < hi {
@@ -766,19 +736,8 @@ fn mvar_block(x: &[f64], m: usize, lo: usize, hi: usize) -> f64 {
         let (a, b, c, e) = (st(0), st(1), st(2), st(3));
         let step = |k: usize| e[k] - 3.0 * c[k] + 3.0 * b[k] - a[k];
         if n == MVAR_CHUNK {
-            for l in 0..L {
-                for (t, row) in buf.iter_mut().enumerate() {
-                    row[l] = step(l * R + t);
-                }
-            }
-            let (mut loc, mut s1, mut s2) = ([0.0f64; L], [0.0f64; L], [0.0f64; L]);
-            for row in &buf {
-                for l in 0..L {
-                    loc[l] += row[l];
-                    s1[l] += loc[l];
-                    s2[l] += loc[l] * loc[l];
-                }
-            }
+            // Lane l takes positions l·R.. of the chunk.
+            let [loc, s1, s2] = lane_slides(R, step);
             // Lane l's first W is the last W plus its first step, which
             // its own loc already holds: off_l is the W before the lane.
             for l in 0..L {
@@ -798,6 +757,37 @@ fn mvar_block(x: &[f64], m: usize, lo: usize, hi: usize) -> f64 {
 
 /// Positions per chunk of [`mvar_block`]'s slides.
 const MVAR_CHUNK: usize = 2048;
+
+/// Lanes of [`lane_slides`].
+const LANES: usize = 8;
+
+/// Eight running sums in lanes over the steps `step(0..8r)`: lane l
+/// slides `loc` from zero over steps `l·r .. (l+1)·r` and returns its
+/// `[loc, Σ loc, Σ loc²]` per lane ([`mvar_block`] and [`mdev_stats`]
+/// join the lanes). The steps go to a transposed buffer first (row t holds
+/// every lane's step t), so the slides run as one vector of eight lanes
+/// (one slide's add chain would bound the loop). `r ≤ MVAR_CHUNK / 8`.
+#[inline(always)]
+fn lane_slides(r: usize, step: impl Fn(usize) -> f64) -> [[f64; LANES]; 3] {
+    const L: usize = LANES;
+    const _: () = assert!(COMB_BLOCK <= MVAR_CHUNK);
+    debug_assert!(r <= MVAR_CHUNK / L);
+    let mut buf = [[0.0f64; L]; MVAR_CHUNK / L];
+    for l in 0..L {
+        for (t, row) in buf[..r].iter_mut().enumerate() {
+            row[l] = step(l * r + t);
+        }
+    }
+    let (mut loc, mut s1, mut s2) = ([0.0f64; L], [0.0f64; L], [0.0f64; L]);
+    for row in &buf[..r] {
+        for l in 0..L {
+            loc[l] += row[l];
+            s1[l] += loc[l];
+            s2[l] += loc[l] * loc[l];
+        }
+    }
+    [loc, s1, s2]
+}
 
 /// Superblock sizes (terms) of [`mvar_many`], smallest first; factor m
 /// goes to the first with `3m ≤ R`. Small m take short superblocks, whose
@@ -833,9 +823,9 @@ pub const MVAR_TOL: f64 = 1e-9;
 /// (random-walk FM dominating the short τ of a long record) is summed
 /// again by [`mvar`]. Same numbers serial or parallel.
 pub fn mvar_many(x: &[f64], ms: &[usize], tau0: f64, parallel: bool) -> Vec<Option<VarN>> {
+    // The Hadamard kernel runs on P, one value longer than x.
     let l = x.len() + 1;
-    let direct: f64 = ms.iter().map(|&m| l.saturating_sub(3 * m) as f64).sum();
-    if l < 3 || direct <= DENSE_RATIO * l as f64 * (l as f64).log2() {
+    if l < 3 || !dense(l, ms, 3) {
         // A sparse grid: the factors past the prefix superblocks from the
         // Hadamard sweep ([`comb_many`]: its terms are their slide steps),
         // the others by the superblocks.
