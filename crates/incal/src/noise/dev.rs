@@ -14,6 +14,8 @@
 
 use rayon::prelude::*;
 
+use super::ordered_map;
+
 /// Terms per block of the blocked sums of MDEV.
 pub const BLOCK: usize = 1 << 14;
 
@@ -185,12 +187,7 @@ fn comb_sum<const K: usize>(s: [&[f64]; K], w: [f64; K], parallel: bool) -> f64 
         let (lo, hi) = (b * COMB_BLOCK, ((b + 1) * COMB_BLOCK).min(n));
         comb_block(s.map(|v| &v[lo..hi]), w)
     };
-    let sums: Vec<f64> = if parallel && nb > 1 {
-        (0..nb).into_par_iter().map(block).collect()
-    } else {
-        (0..nb).map(block).collect()
-    };
-    sums.iter().sum()
+    ordered_map(nb, parallel, block).iter().sum()
 }
 
 /// Octaves of factor per band of [`comb_many`]'s sweep.
@@ -306,11 +303,7 @@ fn comb_many(x: &[f64], ms: &[usize], want: [bool; 2], mdev: &[bool], parallel: 
         }
         out
     };
-    let parts: Vec<Part> = if parallel && tasks.len() > 1 {
-        tasks.par_iter().map(task).collect()
-    } else {
-        tasks.iter().map(task).collect()
-    };
+    let parts: Vec<Part> = ordered_map(tasks.len(), parallel, |i| task(&tasks[i]));
     let mut table: [Vec<Vec<f64>>; 2] = [0, 1].map(|k| {
         terms[k]
             .iter()
@@ -549,11 +542,7 @@ fn dense_sums(
         jobs.push(Box::new(move || wedge(u, 1, 2, 2 * mmax)));
         jobs.push(Box::new(move || wedge(ur, 1, 2, 2 * mmax)));
     }
-    let res: Vec<Vec<f64>> = if parallel {
-        jobs.par_iter().map(|j| j()).collect()
-    } else {
-        jobs.iter().map(|j| j()).collect()
-    };
+    let res: Vec<Vec<f64>> = ordered_map(jobs.len(), parallel, |i| jobs[i]());
     let r = &res[0];
     let (g1, g1r) = (&res[1], &res[2]);
     // Prefix sums of u².
@@ -702,11 +691,7 @@ pub fn mvar(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> {
         let lo = b * blen;
         mvar_block(x, m, lo, (lo + blen).min(nt))
     };
-    let sums: Vec<f64> = if parallel && nb > 1 {
-        (0..nb).into_par_iter().map(block).collect()
-    } else {
-        (0..nb).map(block).collect()
-    };
+    let sums = ordered_map(nb, parallel, block);
     Some(mvar_of(sums.iter().sum(), nt, m, tau0))
 }
 
@@ -956,13 +941,9 @@ pub(crate) fn mvar_many_tol(
     }
     // The largest factors have few blocks each: in parallel over factors
     // too (each factor's numbers are the same either way).
-    let slides: Vec<Option<VarN>> = if parallel {
-        rest.par_iter()
-            .map(|&k| mvar(x, ms[k], tau0, true))
-            .collect()
-    } else {
-        rest.iter().map(|&k| mvar(x, ms[k], tau0, false)).collect()
-    };
+    let slides = ordered_map(rest.len(), parallel, |i| {
+        mvar(x, ms[rest[i]], tau0, parallel)
+    });
     for (k, v) in rest.into_iter().zip(slides) {
         slid[k] = true;
         out[k] = v;
@@ -1253,11 +1234,7 @@ fn totvar_from(
         None => totvar(x, m, tau0, parallel),
     };
     // Factors independent: in parallel on dense grids (same numbers).
-    if parallel {
-        sums.par_iter().zip(ms.par_iter()).map(one).collect()
-    } else {
-        sums.iter().zip(ms).map(one).collect()
-    }
+    ordered_map(ms.len(), parallel, |k| one((&sums[k], &ms[k])))
 }
 
 /// `Σ_{i=a}^{b−1} f(i)` in eight lane accumulators, lanes added in a

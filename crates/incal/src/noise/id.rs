@@ -270,13 +270,7 @@ fn per_segment<T: Send>(
     f: impl Fn(usize, usize) -> T + Sync,
 ) -> Vec<T> {
     let nseg = len.div_ceil(SEG).max(1);
-    let seg = |s: usize| f(s * SEG, ((s + 1) * SEG).min(len));
-    if parallel && nseg > 1 {
-        use rayon::prelude::*;
-        (0..nseg).into_par_iter().map(seg).collect()
-    } else {
-        (0..nseg).map(seg).collect()
-    }
+    super::ordered_map(nseg, parallel, |s| f(s * SEG, ((s + 1) * SEG).min(len)))
 }
 
 /// Lag-1 autocorrelations `r1` of the quadratic-detrended decimated record

@@ -33,6 +33,22 @@ macro_rules! avx2_or_not {
     }};
 }
 
+/// `f(0), …, f(n − 1)` in order, on rayon's threads when `parallel` and
+/// `n > 1`: the same values either way, the fixed partition by which
+/// every kernel here gives a parallel run a serial run's bits.
+pub(crate) fn ordered_map<T: Send>(
+    n: usize,
+    parallel: bool,
+    f: impl Fn(usize) -> T + Sync + Send,
+) -> Vec<T> {
+    use rayon::prelude::*;
+    if parallel && n > 1 {
+        (0..n).into_par_iter().map(f).collect()
+    } else {
+        (0..n).map(f).collect()
+    }
+}
+
 pub mod corr;
 pub mod dev;
 pub mod edf;
