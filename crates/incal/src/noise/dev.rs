@@ -247,10 +247,14 @@ fn comb_many(x: &[f64], ms: &[usize], want: [bool; 2], mdev: &[bool], parallel: 
             None => bands.push((s, vec![j])),
         }
     }
+    // Blocks of each band (its largest count).
+    let nbs: Vec<usize> = bands
+        .iter()
+        .map(|(_, js)| js.iter().map(|&j| blocks(j)).max().unwrap_or(0))
+        .collect();
     // Tasks: (band, first visit, end visit) over each band's visit order.
     let mut tasks = Vec::new();
-    for (bi, (_, js)) in bands.iter().enumerate() {
-        let nb = js.iter().map(|&j| blocks(j)).max().unwrap_or(0);
+    for (bi, &nb) in nbs.iter().enumerate() {
         let mut v = 0;
         while v < nb {
             tasks.push((bi, v, (v + TASK).min(nb)));
@@ -259,8 +263,7 @@ fn comb_many(x: &[f64], ms: &[usize], want: [bool; 2], mdev: &[bool], parallel: 
     }
     type Part = Vec<(usize, usize, Option<f64>, Option<f64>, Option<[f64; 3]>)>;
     let task = |&(bi, v0, v1): &(usize, usize, usize)| -> Part {
-        let (s, js) = (bands[bi].0, &bands[bi].1);
-        let nb = js.iter().map(|&j| blocks(j)).max().unwrap_or(0);
+        let (s, js, nb) = (bands[bi].0, &bands[bi].1, nbs[bi]);
         let mut out = Vec::with_capacity((v1 - v0) * js.len());
         // Visits in residue order: residue r takes ceil((nb − r)/s)
         // visits, blocks r, r + s, r + 2s, …; residues below `extra` have
