@@ -24,10 +24,28 @@ pub const BLOCK: usize = 1 << 14;
 /// blocks so that short records cross every band).
 pub const COMB_BLOCK: usize = if cfg!(test) { 1 << 8 } else { 1 << 11 };
 
-/// `Σ_i (Σ_k w_k s_k[i])²` over one block of equal-length slices, eight
-/// lane accumulators (the loop vectorizes), lanes added in a fixed order.
+/// The comb term of `K` samples `c`: for `K = 3` the second difference
+/// `c₀ − 2c₁ + c₂`, evaluated as `(c₀ + c₂) − 2c₁`; for `K = 4` the third
+/// difference `c₀ − 3c₁ + 3c₂ − c₃`, as `(c₀ − c₃) + 3(c₂ − c₁)`.
+/// Differences before products: fewer multiplies than the weighted sum
+/// (the multiplies bounded the kernels), and the large phase values
+/// cancel before they are scaled. Every kernel here evaluates it in this
+/// order (no FMA), so the portable and AVX2 kernels give the same bits.
 #[inline(always)]
-fn comb_sq<const K: usize>(s: [&[f64]; K], w: [f64; K]) -> f64 {
+fn comb_term<const K: usize>(c: [f64; K]) -> f64 {
+    const { assert!(K == 3 || K == 4) };
+    if K == 3 {
+        (c[0] + c[K - 1]) - 2.0 * c[1]
+    } else {
+        (c[0] - c[K - 1]) + 3.0 * (c[K - 2] - c[1])
+    }
+}
+
+/// `Σ_i t(s₀[i], …, s_{K−1}[i])²`, `t` the comb term ([`comb_term`]),
+/// over one block of equal-length slices, eight lane accumulators (the
+/// loop vectorizes), lanes added in a fixed order.
+#[inline(always)]
+fn comb_sq<const K: usize>(s: [&[f64]; K]) -> f64 {
     let n = s[0].len();
     let s = s.map(|v| &v[..n]);
     let full = n / 8 * 8;
@@ -36,47 +54,56 @@ fn comb_sq<const K: usize>(s: [&[f64]; K], w: [f64; K]) -> f64 {
     while i < full {
         let c: [&[f64]; K] = s.map(|v| &v[i..i + 8]);
         for (l, a) in acc.iter_mut().enumerate() {
-            let mut v = w[0] * c[0][l];
-            for k in 1..K {
-                v += w[k] * c[k][l];
-            }
+            let v = comb_term(c.map(|v| v[l]));
             *a += v * v;
         }
         i += 8;
     }
     for (l, a) in acc.iter_mut().enumerate().take(n - full) {
-        let mut v = w[0] * s[0][full + l];
-        for k in 1..K {
-            v += w[k] * s[k][full + l];
-        }
+        let v = comb_term(s.map(|v| v[full + l]));
         *a += v * v;
     }
     ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]))
 }
 
-/// [`comb_sq`] in AVX2 registers: each lane does the same multiplies and
-/// adds in the same order (no FMA), so the same bits; two registers hold
-/// the eight accumulators.
+/// [`comb_term`] on four lanes: the same operations in the same order.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn comb_sq_avx2<const K: usize>(s: [&[f64]; K], w: [f64; K]) -> f64 {
+#[inline]
+fn comb_term_avx2<const K: usize>(
+    c: [std::arch::x86_64::__m256d; K],
+) -> std::arch::x86_64::__m256d {
+    use std::arch::x86_64::*;
+    if K == 3 {
+        _mm256_sub_pd(
+            _mm256_add_pd(c[0], c[K - 1]),
+            _mm256_mul_pd(_mm256_set1_pd(2.0), c[1]),
+        )
+    } else {
+        _mm256_add_pd(
+            _mm256_sub_pd(c[0], c[K - 1]),
+            _mm256_mul_pd(_mm256_set1_pd(3.0), _mm256_sub_pd(c[K - 2], c[1])),
+        )
+    }
+}
+
+/// [`comb_sq`] in AVX2 registers: each lane does the same operations in
+/// the same order (no FMA), so the same bits; two registers hold the
+/// eight accumulators.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn comb_sq_avx2<const K: usize>(s: [&[f64]; K]) -> f64 {
     use std::arch::x86_64::*;
     let n = s[0].len();
     let s = s.map(|v| &v[..n]);
     let full = n / 8 * 8;
-    let wv = w.map(|c| _mm256_set1_pd(c));
     let (mut a0, mut a1) = (_mm256_setzero_pd(), _mm256_setzero_pd());
     let mut i = 0;
     while i < full {
         // SAFETY: i + 8 <= full <= n = every slice's length.
         unsafe {
-            let mut v0 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(s[0].as_ptr().add(i)));
-            let mut v1 = _mm256_mul_pd(wv[0], _mm256_loadu_pd(s[0].as_ptr().add(i + 4)));
-            for k in 1..K {
-                let p = s[k].as_ptr();
-                v0 = _mm256_add_pd(v0, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p.add(i))));
-                v1 = _mm256_add_pd(v1, _mm256_mul_pd(wv[k], _mm256_loadu_pd(p.add(i + 4))));
-            }
+            let v0 = comb_term_avx2(s.map(|v| _mm256_loadu_pd(v.as_ptr().add(i))));
+            let v1 = comb_term_avx2(s.map(|v| _mm256_loadu_pd(v.as_ptr().add(i + 4))));
             a0 = _mm256_add_pd(a0, _mm256_mul_pd(v0, v0));
             a1 = _mm256_add_pd(a1, _mm256_mul_pd(v1, v1));
         }
@@ -89,54 +116,47 @@ fn comb_sq_avx2<const K: usize>(s: [&[f64]; K], w: [f64; K]) -> f64 {
         _mm256_storeu_pd(acc.as_mut_ptr().add(4), a1);
     }
     for (l, a) in acc.iter_mut().enumerate().take(n - full) {
-        let mut v = w[0] * s[0][full + l];
-        for k in 1..K {
-            v += w[k] * s[k][full + l];
-        }
+        let v = comb_term(s.map(|v| v[full + l]));
         *a += v * v;
     }
     ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]))
 }
 
-fn comb_block<const K: usize>(s: [&[f64]; K], w: [f64; K]) -> f64 {
+fn comb_block<const K: usize>(s: [&[f64]; K]) -> f64 {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2 (checked just above).
-            return unsafe { comb_sq_avx2(s, w) };
+            return unsafe { comb_sq_avx2(s) };
         }
     }
-    comb_sq(s, w)
+    comb_sq(s)
 }
 
 /// OADEV and OHDEV terms of one block at once from the four windows
-/// `s = [x_{3m+j}, x_{2m+j}, x_{m+j}, x_j]`: `(Σ(s₁ − 2s₂ + s₃)², Σ(s₀ −
-/// 3s₁ + 3s₂ − s₃)²)`, each with exactly the operations of [`comb_sq`]
-/// (the same bits as two calls), the windows loaded once.
+/// `s = [x_{3m+j}, x_{2m+j}, x_{m+j}, x_j]`: `(Σ t₃(s₁, s₂, s₃)², Σ
+/// t₄(s₀, …, s₃)²)` ([`comb_term`]), each with exactly the operations of
+/// [`comb_sq`] (the same bits as two calls), the windows loaded once.
 fn comb2_block(s: [&[f64]; 4]) -> (f64, f64) {
-    const WA: [f64; 3] = [1.0, -2.0, 1.0];
-    const WH: [f64; 4] = [1.0, -3.0, 3.0, -1.0];
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2 (checked just above).
-            return unsafe { comb2_sq_avx2(s, WA, WH) };
+            return unsafe { comb2_sq_avx2(s) };
         }
     }
-    (comb_sq([s[1], s[2], s[3]], WA), comb_sq(s, WH))
+    (comb_sq([s[1], s[2], s[3]]), comb_sq(s))
 }
 
 /// [`comb2_block`] in AVX2 registers (per lane the operations of
 /// [`comb_sq`], no FMA: the same bits).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn comb2_sq_avx2(s: [&[f64]; 4], wa: [f64; 3], wh: [f64; 4]) -> (f64, f64) {
+fn comb2_sq_avx2(s: [&[f64]; 4]) -> (f64, f64) {
     use std::arch::x86_64::*;
     let n = s[0].len();
     let s = s.map(|v| &v[..n]);
     let full = n / 8 * 8;
-    let a = wa.map(|c| _mm256_set1_pd(c));
-    let h = wh.map(|c| _mm256_set1_pd(c));
     let z = _mm256_setzero_pd();
     let (mut a0, mut a1, mut h0, mut h1) = (z, z, z, z);
     let mut i = 0;
@@ -145,13 +165,8 @@ fn comb2_sq_avx2(s: [&[f64]; 4], wa: [f64; 3], wh: [f64; 4]) -> (f64, f64) {
         unsafe {
             for (half, (acc_a, acc_h)) in [(0, (&mut a0, &mut h0)), (4, (&mut a1, &mut h1))] {
                 let c = s.map(|v| _mm256_loadu_pd(v.as_ptr().add(i + half)));
-                let mut va = _mm256_mul_pd(a[0], c[1]);
-                va = _mm256_add_pd(va, _mm256_mul_pd(a[1], c[2]));
-                va = _mm256_add_pd(va, _mm256_mul_pd(a[2], c[3]));
-                let mut vh = _mm256_mul_pd(h[0], c[0]);
-                vh = _mm256_add_pd(vh, _mm256_mul_pd(h[1], c[1]));
-                vh = _mm256_add_pd(vh, _mm256_mul_pd(h[2], c[2]));
-                vh = _mm256_add_pd(vh, _mm256_mul_pd(h[3], c[3]));
+                let va = comb_term_avx2([c[1], c[2], c[3]]);
+                let vh = comb_term_avx2(c);
                 *acc_a = _mm256_add_pd(*acc_a, _mm256_mul_pd(va, va));
                 *acc_h = _mm256_add_pd(*acc_h, _mm256_mul_pd(vh, vh));
             }
@@ -168,8 +183,8 @@ fn comb2_sq_avx2(s: [&[f64]; 4], wa: [f64; 3], wh: [f64; 4]) -> (f64, f64) {
     }
     for l in 0..n - full {
         let c = s.map(|v| v[full + l]);
-        let va = wa[0] * c[1] + wa[1] * c[2] + wa[2] * c[3];
-        let vh = wh[0] * c[0] + wh[1] * c[1] + wh[2] * c[2] + wh[3] * c[3];
+        let va = comb_term([c[1], c[2], c[3]]);
+        let vh = comb_term(c);
         ea[l] += va * va;
         eh[l] += vh * vh;
     }
@@ -177,15 +192,15 @@ fn comb2_sq_avx2(s: [&[f64]; 4], wa: [f64; 3], wh: [f64; 4]) -> (f64, f64) {
     (add(ea), add(eh))
 }
 
-/// `Σ_i (Σ_k w_k s_k[i])²` over slices of equal length in fixed blocks
+/// `Σ_i t(s₀[i], …)²` ([`comb_term`]) over slices of equal length in fixed blocks
 /// of [`COMB_BLOCK`] terms, block sums added in order; parallel over blocks
 /// when `parallel` (same bits either way).
-fn comb_sum<const K: usize>(s: [&[f64]; K], w: [f64; K], parallel: bool) -> f64 {
+fn comb_sum<const K: usize>(s: [&[f64]; K], parallel: bool) -> f64 {
     let n = s[0].len();
     let nb = n.div_ceil(COMB_BLOCK);
     let block = |b: usize| {
         let (lo, hi) = (b * COMB_BLOCK, ((b + 1) * COMB_BLOCK).min(n));
-        comb_block(s.map(|v| &v[lo..hi]), w)
+        comb_block(s.map(|v| &v[lo..hi]))
     };
     ordered_map(nb, parallel, block).iter().sum()
 }
@@ -287,14 +302,9 @@ fn comb_many(x: &[f64], ms: &[usize], want: [bool; 2], mdev: &[bool], parallel: 
                     (Some(va), Some(vh))
                 } else {
                     (
-                        (lo < ha)
-                            .then(|| comb_block([w(2, ha), w(1, ha), w(0, ha)], [1.0, -2.0, 1.0])),
-                        (want[1] && lo < hh).then(|| {
-                            comb_block(
-                                [w(3, hh), w(2, hh), w(1, hh), w(0, hh)],
-                                [1.0, -3.0, 3.0, -1.0],
-                            )
-                        }),
+                        (lo < ha).then(|| comb_block([w(2, ha), w(1, ha), w(0, ha)])),
+                        (want[1] && lo < hh)
+                            .then(|| comb_block([w(3, hh), w(2, hh), w(1, hh), w(0, hh)])),
                     )
                 };
                 let md = (lo < hh && md(j))
@@ -378,7 +388,7 @@ struct Sweep {
 fn mdev_stats(s: [&[f64]; 4]) -> [f64; 3] {
     const L: usize = LANES;
     let n = s[0].len();
-    let h = |t: usize| s[0][t] - 3.0 * s[1][t] + 3.0 * s[2][t] - s[3][t];
+    let h = |t: usize| comb_term(s.map(|v| v[t]));
     let r = n / L;
     let [loc, s1, s2] = lane_slides(r, h);
     let (mut o, mut a1, mut a2) = (0.0f64, 0.0f64, 0.0f64);
@@ -643,11 +653,7 @@ pub struct VarN {
 /// `None` when `N < 2m + 1`.
 pub fn oavar(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> {
     let n = x.len().checked_sub(2 * m).filter(|&n| n > 0 && m > 0)?;
-    let s = comb_sum(
-        [&x[2 * m..2 * m + n], &x[m..m + n], &x[..n]],
-        [1.0, -2.0, 1.0],
-        parallel,
-    );
+    let s = comb_sum([&x[2 * m..2 * m + n], &x[m..m + n], &x[..n]], parallel);
     let mt = m as f64 * tau0;
     Some(VarN {
         var: s / (2.0 * mt * mt * n as f64),
@@ -666,7 +672,6 @@ pub fn ohvar(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> {
             &x[m..m + n],
             &x[..n],
         ],
-        [1.0, -3.0, 3.0, -1.0],
         parallel,
     );
     let mt = m as f64 * tau0;
@@ -722,7 +727,7 @@ fn mvar_block(x: &[f64], m: usize, lo: usize, hi: usize) -> f64 {
         let n = (hi - j0).min(MVAR_CHUNK);
         let st = |k: usize| &x[j0 + k * m - 1..j0 + k * m - 1 + n];
         let (a, b, c, e) = (st(0), st(1), st(2), st(3));
-        let step = |k: usize| e[k] - 3.0 * c[k] + 3.0 * b[k] - a[k];
+        let step = |k: usize| comb_term([e[k], c[k], b[k], a[k]]);
         if n == MVAR_CHUNK {
             // Lane l takes positions l·R.. of the chunk.
             let [loc, s1, s2] = lane_slides(R, step);
@@ -760,6 +765,8 @@ fn lane_slides(r: usize, step: impl Fn(usize) -> f64) -> [[f64; LANES]; 3] {
     const L: usize = LANES;
     const _: () = assert!(COMB_BLOCK <= MVAR_CHUNK);
     debug_assert!(r <= MVAR_CHUNK / L);
+    // Not zeroed first (16 KB per call, a tenth of MDEV's sweep): rows
+    // below r are written whole before they are read.
     let mut buf = [[0.0f64; L]; MVAR_CHUNK / L];
     for l in 0..L {
         for (t, row) in buf[..r].iter_mut().enumerate() {
@@ -769,6 +776,7 @@ fn lane_slides(r: usize, step: impl Fn(usize) -> f64) -> [[f64; LANES]; 3] {
     let (mut loc, mut s1, mut s2) = ([0.0f64; L], [0.0f64; L], [0.0f64; L]);
     for row in &buf[..r] {
         for l in 0..L {
+            // SAFETY: every lane of the rows below r was written above.
             loc[l] += row[l];
             s1[l] += loc[l];
             s2[l] += loc[l] * loc[l];
@@ -1060,7 +1068,6 @@ fn superblock(
                 let (ja, jb) = (a - lo, hi - lo);
                 v.push(comb_block(
                     [3, 2, 1, 0].map(|k| &buf[ja + k * m..jb + k * m]),
-                    [1.0, -3.0, 3.0, -1.0],
                 ));
                 *pr = pr.max(prms);
             }
@@ -1075,8 +1082,12 @@ fn superblock(
 /// value would bound the loop), the quarters' offsets added after.
 fn local_prefix(v: &[f64], buf: &mut Vec<f64>) -> f64 {
     let n = v.len();
-    buf.clear();
-    buf.resize(n + 1, 0.0);
+    // Every value below n + 1 is written here: grow the buffer only when
+    // needed (zeroing it per superblock was 8% of MDEV's time).
+    if buf.len() < n + 1 {
+        buf.resize(n + 1, 0.0);
+    }
+    buf[0] = 0.0;
     if n == 0 {
         return 0.0;
     }
@@ -1158,7 +1169,6 @@ pub fn totvar(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> {
                 &x[lo..lo + len],
                 &x[lo - m..lo - m + len],
             ],
-            [1.0, -2.0, 1.0],
             parallel,
         )
     })
@@ -1386,15 +1396,17 @@ mod tests {
         let v: Vec<f64> = (0..1010).map(|_| u() * 1e3).collect();
         for n in [0, 1, 7, 8, 9, 15, 1000] {
             let s3 = [&v[2..2 + n], &v[1..1 + n], &v[..n]];
-            let w3 = [1.0, -2.0, 1.0];
             // SAFETY: the CPU supports AVX2 (checked above).
-            let wide = unsafe { comb_sq_avx2(s3, w3) };
-            assert_eq!(comb_sq(s3, w3).to_bits(), wide.to_bits(), "n {n}");
+            let wide = unsafe { comb_sq_avx2(s3) };
+            assert_eq!(comb_sq(s3).to_bits(), wide.to_bits(), "n {n}");
             let s4 = [&v[9..9 + n], &v[6..6 + n], &v[3..3 + n], &v[..n]];
-            let w4 = [1.0, -3.0, 3.0, -1.0];
             // SAFETY: as above.
-            let wide = unsafe { comb_sq_avx2(s4, w4) };
-            assert_eq!(comb_sq(s4, w4).to_bits(), wide.to_bits(), "n {n}");
+            let wide = unsafe { comb_sq_avx2(s4) };
+            assert_eq!(comb_sq(s4).to_bits(), wide.to_bits(), "n {n}");
+            // SAFETY: as above.
+            let (a, h) = unsafe { comb2_sq_avx2(s4) };
+            assert_eq!(a.to_bits(), comb_sq([s4[1], s4[2], s4[3]]).to_bits());
+            assert_eq!(h.to_bits(), comb_sq(s4).to_bits());
         }
         // The MDEV block statistics through the AVX2 copy: the same bits,
         // block lengths across the eight lanes' split.
