@@ -12,6 +12,8 @@
 //! eq. (15) MDEV, §5.2.6 eq. (17) TDEV, §5.2.9 eq. (22) OHDEV, §5.2.11
 //! eq. (25) TOTDEV.
 
+use std::mem::MaybeUninit;
+
 use rayon::prelude::*;
 
 use super::ordered_map;
@@ -765,19 +767,19 @@ fn lane_slides(r: usize, step: impl Fn(usize) -> f64) -> [[f64; LANES]; 3] {
     const L: usize = LANES;
     const _: () = assert!(COMB_BLOCK <= MVAR_CHUNK);
     debug_assert!(r <= MVAR_CHUNK / L);
-    // Not zeroed first (16 KB per call, a tenth of MDEV's sweep): rows
-    // below r are written whole before they are read.
-    let mut buf = [[0.0f64; L]; MVAR_CHUNK / L];
+    // Not zeroed first (16 kB per call, about 5 % of MDEV's time at
+    // 10⁷): rows below r are written whole before they are read.
+    let mut buf = [[MaybeUninit::<f64>::uninit(); L]; MVAR_CHUNK / L];
     for l in 0..L {
         for (t, row) in buf[..r].iter_mut().enumerate() {
-            row[l] = step(l * r + t);
+            row[l].write(step(l * r + t));
         }
     }
     let (mut loc, mut s1, mut s2) = ([0.0f64; L], [0.0f64; L], [0.0f64; L]);
     for row in &buf[..r] {
         for l in 0..L {
             // SAFETY: every lane of the rows below r was written above.
-            loc[l] += row[l];
+            loc[l] += unsafe { row[l].assume_init() };
             s1[l] += loc[l];
             s2[l] += loc[l] * loc[l];
         }
