@@ -12,7 +12,7 @@ static COUNTER: AtomicUsize = AtomicUsize::new(0);
 
 fn temp(name: &str) -> PathBuf {
     let k = COUNTER.fetch_add(1, Ordering::SeqCst);
-    std::env::temp_dir().join(format!(
+    std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
         "incal_centrifuge_cli_{}_{k}_{name}",
         std::process::id()
     ))

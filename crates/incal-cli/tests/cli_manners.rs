@@ -31,7 +31,8 @@ fn incal_with_stdin(args: &[&str], input: &[u8]) -> Output {
 
 /// A unique temp file with `content`.
 fn temp(name: &str, content: &[u8]) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("incal-cli-manners-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("incal-cli-manners-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let p = dir.join(name);
     std::fs::write(&p, content).unwrap();
@@ -262,7 +263,8 @@ fn a_leading_bom_is_accepted() {
 
 #[test]
 fn unreadable_input_is_bad_input_naming_the_file() {
-    let dir = std::env::temp_dir().join(format!("incal-cli-manners-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("incal-cli-manners-{}", std::process::id()));
     let missing = dir.join("no-such-file.csv");
     let o = incal(&[
         "tumble",

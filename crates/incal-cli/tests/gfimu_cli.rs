@@ -11,7 +11,8 @@ static COUNTER: AtomicUsize = AtomicUsize::new(0);
 
 fn temp(name: &str, content: &str) -> PathBuf {
     let k = COUNTER.fetch_add(1, Ordering::SeqCst);
-    let p = std::env::temp_dir().join(format!("incal_gfimu_{}_{k}_{name}", std::process::id()));
+    let p = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("incal_gfimu_{}_{k}_{name}", std::process::id()));
     std::fs::write(&p, content).unwrap();
     p
 }

@@ -10,7 +10,8 @@ fn bin() -> Command {
 }
 
 fn tmp(name: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("incal_hard_{}_{name}", std::process::id()))
+    std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("incal_hard_{}_{name}", std::process::id()))
 }
 
 fn write(name: &str, text: &str) -> PathBuf {

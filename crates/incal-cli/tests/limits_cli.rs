@@ -9,7 +9,8 @@ use std::process::{Command, Output};
 use serde_json::Value;
 
 fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("incal-limits-{}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("incal-limits-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
 }

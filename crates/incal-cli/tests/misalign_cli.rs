@@ -10,7 +10,8 @@ fn bin() -> Command {
 }
 
 fn tmp(name: &str, text: &str) -> PathBuf {
-    let p = std::env::temp_dir().join(format!("incal_misalign_{}_{name}", std::process::id()));
+    let p = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("incal_misalign_{}_{name}", std::process::id()));
     std::fs::write(&p, text).unwrap();
     p
 }

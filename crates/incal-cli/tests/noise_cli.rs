@@ -16,7 +16,8 @@ fn incal(args: &[&str]) -> Output {
 }
 
 fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("incal-noise-cli-{}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("incal-noise-cli-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
 }

@@ -12,7 +12,8 @@ use scraper::{Html, Selector};
 use serde_json::Value;
 
 fn workdir(test: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("incal-report-{}-{test}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("incal-report-{}-{test}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
 }
@@ -335,7 +336,8 @@ fn the_report_goes_to_stdout_without_o_and_a_non_result_is_refused() {
 /// more calibrations of the instrument.
 #[test]
 fn report_with_limits_and_history_from_the_store() {
-    let d = std::env::temp_dir().join(format!("incal-report-db-{}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("incal-report-db-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     let run = |args: &[&str]| {
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_incal"))

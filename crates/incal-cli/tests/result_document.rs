@@ -12,7 +12,8 @@ use serde_json::Value;
 /// A per-test working directory (inputs are given by relative path, so
 /// the outputs, which echo the path, are the same on every machine).
 fn workdir(test: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("incal-doc-{}-{test}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("incal-doc-{}-{test}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
 }
