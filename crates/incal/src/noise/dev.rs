@@ -357,7 +357,7 @@ fn comb_many(x: &[f64], ms: &[usize], want: [bool; 2], mdev: &[bool], parallel: 
             let (m, nh) = (ms[j], terms[1][j]);
             // n = L + 1 − 3m terms (W_0 alone when L = 3m).
             (md(j) && m > 0 && x.len() >= 3 * m).then(|| {
-                let mut w = lanes(0, m, |i| x[i + 2 * m] - 2.0 * x[i + m] + x[i]);
+                let mut w = lanes(0, m, |i| comb_term([x[i + 2 * m], x[i + m], x[i]]));
                 let mut acc = w * w;
                 for (b, &[t, s1, s2]) in mtable[j].iter().enumerate() {
                     let n = (nh - b * COMB_BLOCK).min(COMB_BLOCK) as f64;
@@ -721,7 +721,7 @@ fn mvar_block(x: &[f64], m: usize, lo: usize, hi: usize) -> f64 {
     const L: usize = LANES;
     const R: usize = MVAR_CHUNK / L;
     // The direct start, in eight lanes (it streams, it does not chain).
-    let mut w = lanes(lo, lo + m, |i| x[i + 2 * m] - 2.0 * x[i + m] + x[i]);
+    let mut w = lanes(lo, lo + m, |i| comb_term([x[i + 2 * m], x[i + m], x[i]]));
     let mut acc = w * w;
     // Positions lo+1.. step from the previous W by d_j.
     let mut j0 = lo + 1;
@@ -1392,12 +1392,13 @@ fn totvar_with(
         // Left edge, i < m: x*_{i−m} = 2x_0 − x_{m−i}; right edge,
         // i > N−1−m: x*_{i+m} = 2x_{N−1} − x_{2(N−1)−i−m}. Straight
         // loops (no reflection test per term), eight lanes.
+        // The comb term in the interior's order ([`comb_term`]).
         let left = |i: usize| {
-            let v = (2.0 * x[0] - x[m - i]) - 2.0 * x[i] + x[i + m];
+            let v = comb_term([x[i + m], x[i], 2.0 * x[0] - x[m - i]]);
             v * v
         };
         let right = |i: usize| {
-            let v = x[i - m] - 2.0 * x[i] + (2.0 * x[last] - x[2 * last - i - m]);
+            let v = comb_term([2.0 * x[last] - x[2 * last - i - m], x[i], x[i - m]]);
             v * v
         };
         s += lanes(1, lo, left);
@@ -1420,6 +1421,22 @@ mod tests {
     use super::*;
 
     /// Deterministic uniform numbers in [−½, ½) (a 64-bit LCG).
+    /// White FM (x a random walk, with `trend` added per step) and
+    /// random-walk FM (x the double sum of white noise, plus white phase
+    /// noise of amplitude `jitter` when not zero) phases of n + 1 samples,
+    /// the draws of each step in that order.
+    fn fm_phases(seed: u64, n: usize, trend: f64, jitter: f64) -> (Vec<f64>, Vec<f64>) {
+        let mut u = uniform(seed);
+        let (mut y, mut xw, mut xr) = (0.0, vec![0.0], vec![0.0]);
+        for i in 0..n {
+            y += u();
+            let j = if jitter != 0.0 { jitter * u() } else { 0.0 };
+            xr.push(xr[i] + y + j);
+            xw.push(xw[i] + u() + trend);
+        }
+        (xw, xr)
+    }
+
     fn uniform(seed: u64) -> impl FnMut() -> f64 {
         let mut s = seed;
         move || {
@@ -1636,14 +1653,7 @@ mod tests {
     /// too large the factor is slid (so the numbers agree everywhere).
     #[test]
     fn mvar_prefix_round_off_is_estimated_and_refused_past_the_tolerance() {
-        let mut u = uniform(99);
-        let n = 1usize << 18;
-        let (mut y, mut xw, mut xr) = (0.0, vec![0.0], vec![0.0]);
-        for i in 0..n {
-            y += u();
-            xr.push(xr[i] + y);
-            xw.push(xw[i] + u());
-        }
+        let (xw, xr) = fm_phases(99, 1 << 18, 0.0, 0.0);
         let ms: Vec<usize> = (0..15).map(|k| 1usize << k).collect();
         let mut slid_any = false;
         for (x, name) in [(&xw, "white FM"), (&xr, "random-walk FM")] {
@@ -1677,14 +1687,7 @@ mod tests {
     /// serial; what they refuse is flagged, not returned.
     #[test]
     fn dense_blocks_take_the_short_factors_within_tolerance() {
-        let mut u = uniform(11);
-        let n = 60_000usize;
-        let (mut y, mut xw, mut xr) = (0.0, vec![0.0], vec![0.0]);
-        for i in 0..n {
-            y += u();
-            xr.push(xr[i] + y + 0.2 * u());
-            xw.push(xw[i] + u() + 0.3);
-        }
+        let (xw, xr) = fm_phases(11, 60_000, 0.3, 0.2);
         for (x, name) in [(&xw, "white FM"), (&xr, "random-walk FM")] {
             let mut p = vec![0.0];
             for v in x.iter() {
@@ -1726,14 +1729,7 @@ mod tests {
     /// below the error, refused factors summed directly.
     #[test]
     fn dense_sums_equal_the_direct_sums_within_their_estimate() {
-        let mut u = uniform(7);
-        let n = 20_000usize;
-        let (mut y, mut xw, mut xr) = (0.0, vec![0.0], vec![0.0]);
-        for i in 0..n {
-            y += u();
-            xr.push(xr[i] + y);
-            xw.push(xw[i] + u() + 0.3);
-        }
+        let (xw, xr) = fm_phases(7, 20_000, 0.3, 0.0);
         let short = data(700);
         let mut refused = 0;
         for (x, name) in [
