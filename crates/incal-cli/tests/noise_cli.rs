@@ -468,3 +468,112 @@ fn accelerometer_records_round_trip() {
         "--vrw-ug-rthz is not a term of --quantity gyro",
     );
 }
+
+#[test]
+fn binary_samples_that_are_not_finite_or_overflow_are_named() {
+    let d = dir();
+    // Interleaved little-endian frames of `ch` channels, value(row, channel).
+    let write = |n: &str, rows: usize, ch: usize, f64le: bool, v: &dyn Fn(usize, usize) -> f64| {
+        let mut b = Vec::new();
+        for r in 0..rows {
+            for c in 0..ch {
+                let x = v(r, c);
+                if f64le {
+                    b.extend_from_slice(&x.to_le_bytes());
+                } else {
+                    b.extend_from_slice(&(x as f32).to_le_bytes());
+                }
+            }
+        }
+        let p = d.join(n);
+        std::fs::write(&p, b).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let wiggle = |r: usize, c: usize| ((r * 7919 + c * 31) % 101) as f64 / 50.0 - 1.0;
+    let run = |p: &str, fmt: &str, ch: &str, extra: &[&str]| {
+        let mut a = vec![
+            "noise",
+            "--input",
+            p,
+            "--rate-hz",
+            "1",
+            "--format",
+            fmt,
+            "--channels",
+            ch,
+        ];
+        a.extend_from_slice(extra);
+        incal(&a)
+    };
+    // f64, every channel: the arrays are built in the reading pass.
+    let nan = write("nan.f64", 200, 3, true, &|r, c| {
+        if (r, c) == (7, 1) {
+            f64::NAN
+        } else {
+            wiggle(r, c)
+        }
+    });
+    bad(
+        &run(&nan, "f64le", "3", &[]),
+        "sample 8 of ch2: not a finite number",
+    );
+    bad(
+        &run(&nan, "f64le", "3", &["--data", "angle", "--sequential"]),
+        "sample 8 of ch2: not a finite number",
+    );
+    // The other channels alone are fine.
+    ok(&run(
+        &nan,
+        "f64le",
+        "3",
+        &["--columns", "ch1,ch3", "--json"],
+    ));
+    // f32, four channels: the arrays (f64) would outgrow the file, so they
+    // are built per channel after the checks.
+    let inf = write("inf.f32", 300, 4, false, &|r, c| {
+        if (r, c) == (250, 2) {
+            f64::INFINITY
+        } else {
+            wiggle(r, c)
+        }
+    });
+    bad(
+        &run(&inf, "f32le", "4", &[]),
+        "sample 251 of ch3: not a finite number",
+    );
+    // Finite samples whose running sum (the phase) overflows.
+    let huge = write("huge.f64", 100, 1, true, &|r, _| {
+        if r < 50 {
+            1.7e308
+        } else {
+            -1.7e308
+        }
+    });
+    let o = run(&huge, "f64le", "1", &[]);
+    bad(&o, "huge.f64");
+    bad(&o, "overflows");
+    // As angle data the same samples are read (no running sum), but their
+    // differences overflow: no deviation or stability is a number, and
+    // none is written as one.
+    let v: Value = serde_json::from_str(&ok(&run(
+        &huge,
+        "f64le",
+        "1",
+        &["--data", "angle", "--json"],
+    )))
+    .unwrap();
+    let c = &v["channels"]["ch1"];
+    assert!(
+        c["oadev"]["value"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(Value::is_null),
+        "{c}"
+    );
+    assert!(
+        v["coefficients"].as_object().unwrap().is_empty(),
+        "{}",
+        v["coefficients"]
+    );
+}

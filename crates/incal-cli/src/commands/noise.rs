@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 use clap::ValueEnum;
 use incal::document::noise::{document, ChannelResult, Quantity};
 use incal::noise::{
-    phase_from_rate_sum, phase_from_rate_with, stability_with_progress, terms, StabilityOptions,
-    TauGrid,
+    phase_fill, phase_from_rate_with, phase_reference, stability_with_progress, terms,
+    StabilityOptions, TauGrid,
 };
 use incal::sim::noise::{rate_record, NoiseTruth};
 use incal::sim::trial_seed;
@@ -133,9 +133,54 @@ struct Record {
     data: Samples,
     sha256: String,
     rows: usize,
-    /// Per selected channel `Σ y·factor` in row order, when the reading
-    /// pass already summed it (mapped files).
-    sums: Option<Vec<f64>>,
+    /// Per selected channel the array the analysis runs on ([`Build`]),
+    /// when the reading pass already built it (mapped files whose arrays
+    /// all fit in the file's size).
+    built: Option<Vec<Vec<f64>>>,
+}
+
+/// The array each channel is analysed as: the phase of rate samples
+/// ([`phase_from_rate_with`]) or the angle samples themselves, times
+/// `factor` (input unit to internal unit).
+#[derive(Debug, Clone, Copy)]
+struct Build {
+    factor: f64,
+    tau0: f64,
+    rate: bool,
+}
+
+impl Build {
+    /// Length of the array for `rows` samples.
+    fn len(&self, rows: usize) -> usize {
+        rows + usize::from(self.rate)
+    }
+
+    /// The whole array from samples `get(r)` (already × factor): the same
+    /// bits as the windows of [`Build::window`].
+    fn whole(&self, rows: usize, get: impl Fn(usize) -> f64) -> Vec<f64> {
+        if self.rate {
+            phase_from_rate_with(rows, self.tau0, get)
+        } else {
+            (0..rows).map(get).collect()
+        }
+    }
+
+    /// Rows `r0..r0 + out.len()` of the array, `y(i)` the i-th of them
+    /// (already × factor); `acc`: the phase before them, returned moved on
+    /// (for angle data `acc + Σ 0·value`: 0 while every value is finite,
+    /// NaN for good after one that is not).
+    fn window(&self, out: &mut [f64], acc: f64, c: f64, y: impl Fn(usize) -> f64) -> f64 {
+        if self.rate {
+            phase_fill(out, acc, c, self.tau0, y)
+        } else {
+            let mut s = acc;
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = y(i);
+                s += 0.0 * *o;
+            }
+            s
+        }
+    }
 }
 
 /// Where the samples are: parsed columns (CSV), or the memory map of a
@@ -208,6 +253,14 @@ impl Samples {
         }
     }
 
+    /// Byte offset of selected channel `k` in a frame (0 for columns).
+    fn offset(&self, k: usize) -> usize {
+        match self {
+            Samples::Columns(_) => 0,
+            Samples::Mapped { f64le, index, .. } => index[k] * if *f64le { 8 } else { 4 },
+        }
+    }
+
     /// Sample `r` of selected channel `k`.
     fn get(&self, k: usize, r: usize) -> f64 {
         match self {
@@ -219,14 +272,19 @@ impl Samples {
                 index,
             } => {
                 let w = if *f64le { 8 } else { 4 };
-                let at = (r * channels + index[k]) * w;
-                if *f64le {
-                    f64::from_le_bytes(map[at..at + 8].try_into().unwrap_or([0; 8]))
-                } else {
-                    f32::from_le_bytes(map[at..at + 4].try_into().unwrap_or([0; 4])) as f64
-                }
+                decode(*f64le, map, (r * channels + index[k]) * w)
             }
         }
+    }
+}
+
+/// The little-endian float at byte `at` of `bytes` (f64 or f32).
+#[inline(always)]
+fn decode(f64le: bool, bytes: &[u8], at: usize) -> f64 {
+    if f64le {
+        f64::from_le_bytes(bytes[at..at + 8].try_into().unwrap_or([0; 8]))
+    } else {
+        f32::from_le_bytes(bytes[at..at + 4].try_into().unwrap_or([0; 4])) as f64
     }
 }
 
@@ -323,7 +381,7 @@ fn read_csv(path: &Path, columns: &[String]) -> CliResult<(String, Record)> {
             names: pick.iter().map(|&k| head[k].clone()).collect(),
             data: Samples::Columns(data),
             sha256: sha,
-            sums: None,
+            built: None,
             rows,
         },
     ))
@@ -336,7 +394,7 @@ fn read_binary(
     channels: usize,
     f64le: bool,
     columns: &[String],
-    factor: f64,
+    build: Build,
     parallel: bool,
 ) -> CliResult<(String, Record)> {
     let name = path.display().to_string();
@@ -386,33 +444,61 @@ fn read_binary(
         index: pick.clone(),
     };
     // One pass, window by window, each released after (one copy
-    // resident): the hash of the bytes, and per channel the first
-    // non-finite sample (refused before any arithmetic) and the sum the
-    // phase integration needs (so it reads the file once more, not twice).
+    // resident): the hash of the bytes on one core and, on the other, per
+    // channel the first non-finite sample (refused before any result) and,
+    // when the selected channels' arrays take no more memory than the file,
+    // the arrays themselves (so the file is read once in all).
+    let fused = pick.len() * 8 <= frame;
     let win = data.window_rows();
+    let f = build.factor;
+    let refs: Vec<f64> = (0..pick.len())
+        .map(|k| match fused && build.rate {
+            true => phase_reference(rows, |r| data.get(k, r) * f),
+            false => 0.0,
+        })
+        .collect();
+    let mut built: Vec<Vec<f64>> = (0..if fused { pick.len() } else { 0 })
+        .map(|_| vec![0.0; build.len(rows)])
+        .collect();
+    let mut accs = vec![0.0; pick.len()];
     let mut h = <sha2::Sha256 as sha2::Digest>::new();
-    let mut bad: Vec<Option<usize>> = vec![None; pick.len()];
-    let mut sums = vec![0.0; pick.len()];
+    // Per channel the first bad row: a non-finite sample (true) or, with
+    // finite samples, the phase overflowing (false).
+    let mut bad: Vec<Option<(usize, bool)>> = vec![None; pick.len()];
     let mut r0 = 0;
     while r0 < rows {
         let r1 = (r0 + win).min(rows);
         let mut hash = || sha2::Digest::update(&mut h, data.bytes(r0, r1));
         let mut check = || {
-            for (k, (b, s)) in bad.iter_mut().zip(&mut sums).enumerate() {
+            let bytes = data.bytes(r0, r1);
+            for (k, b) in bad.iter_mut().enumerate() {
                 if b.is_some() {
                     continue;
                 }
-                for r in r0..r1 {
-                    let v = data.get(k, r);
-                    if !v.is_finite() {
-                        *b = Some(r);
-                        break;
+                let off = data.offset(k);
+                let y = |i: usize| decode(f64le, bytes, i * frame + off) * f;
+                let first_bad = || (0..r1 - r0).find(|&i| !y(i).is_finite());
+                if fused {
+                    let at = usize::from(build.rate) + r0;
+                    let out = &mut built[k][at..at + (r1 - r0)];
+                    accs[k] = build.window(out, accs[k], refs[k], y);
+                    // A non-finite sample makes the running sum non-finite
+                    // for good: look for it only then.
+                    if !accs[k].is_finite() {
+                        *b = Some(match first_bad() {
+                            Some(i) => (r0 + i, true),
+                            None => (
+                                r0 + out.iter().position(|v| !v.is_finite()).unwrap_or(0),
+                                false,
+                            ),
+                        });
                     }
-                    *s += v * factor;
+                } else if let Some(i) = first_bad() {
+                    *b = Some((r0 + i, true));
                 }
             }
         };
-        // The hash and the checks of one window on the two cores (one
+        // The hash and the rest of one window on the two cores (one
         // thread with --sequential; the same results either way).
         if parallel {
             rayon::join(hash, check);
@@ -425,12 +511,22 @@ fn read_binary(
     }
     let sha = crate::output::hex(&sha2::Digest::finalize(h));
     for (k, &c) in pick.iter().enumerate() {
-        if let Some(r) = bad[k] {
-            return Err(CliError::Input(format!(
-                "{name}: sample {} of {}: not a finite number",
-                r + 1,
-                all[c]
-            )));
+        match bad[k] {
+            Some((r, true)) => {
+                return Err(CliError::Input(format!(
+                    "{name}: sample {} of {}: not a finite number",
+                    r + 1,
+                    all[c]
+                )))
+            }
+            Some((r, false)) => {
+                return Err(CliError::Input(format!(
+                    "{name}: sample {} of {}: the running sum (phase) of the samples overflows",
+                    r + 1,
+                    all[c]
+                )))
+            }
+            None => {}
         }
     }
     Ok((
@@ -440,7 +536,7 @@ fn read_binary(
             data,
             sha256: sha,
             rows,
-            sums: Some(sums),
+            built: fused.then_some(built),
         },
     ))
 }
@@ -469,6 +565,12 @@ pub fn run(a: &Args) -> CliResult<()> {
         )));
     }
     let (quantity, unit, factor) = unit_of(a.quantity, a.unit.as_deref())?;
+    let tau0 = 1.0 / a.rate_hz;
+    let build = Build {
+        factor,
+        tau0,
+        rate: a.data == DataArg::Rate,
+    };
     let (name, rec) = match a.format {
         FormatArg::Csv => {
             if a.channels.is_some() {
@@ -488,12 +590,11 @@ pub fn run(a: &Args) -> CliResult<()> {
                 ch,
                 a.format == FormatArg::F64le,
                 &a.columns,
-                factor,
+                build,
                 !a.sequential,
             )?
         }
     };
-    let tau0 = 1.0 / a.rate_hz;
     let min = if a.data == DataArg::Rate { 4 } else { 5 };
     if rec.rows < min {
         return Err(CliError::Input(format!(
@@ -527,20 +628,21 @@ pub fn run(a: &Args) -> CliResult<()> {
         // Read in windows, each released once read: the phase is the only
         // resident copy of the channel.
         let get = |r: usize| d.get_streamed(k, r, win) * factor;
-        let x: Vec<f64> = match a.data {
-            DataArg::Rate => match &rec.sums {
-                Some(s) => phase_from_rate_sum(rec.rows, tau0, s[k], get),
-                None => phase_from_rate_with(rec.rows, tau0, get),
-            },
-            DataArg::Angle => (0..rec.rows).map(get).collect(),
+        let whole;
+        let x: &[f64] = match &rec.built {
+            Some(b) => &b[k],
+            None => {
+                whole = build.whole(rec.rows, get);
+                d.release(0, rec.rows);
+                &whole
+            }
         };
-        d.release(0, rec.rows);
         let tick = |_: usize| {
             if let Some(b) = &bar {
                 b.inc(1);
             }
         };
-        let st = stability_with_progress(&x, &opts, &tick)
+        let st = stability_with_progress(x, &opts, &tick)
             .map_err(|e| CliError::Input(format!("{name}: channel {}: {e}", rec.names[k])))?;
         let fit = terms::fit_terms(&st.taus_s, &st.oadev, &st.alpha, tau0)
             .map_err(|e| CliError::Input(format!("{name}: channel {}: {e}", rec.names[k])))?;
@@ -548,7 +650,7 @@ pub fn run(a: &Args) -> CliResult<()> {
         let bias_stability = a
             .stability_tau_s
             .iter()
-            .map(|&t| (t, terms::bias_stability(&x, tau0, t)))
+            .map(|&t| (t, terms::bias_stability(x, tau0, t)))
             .collect();
         Ok(ChannelResult {
             name: rec.names[k].clone(),

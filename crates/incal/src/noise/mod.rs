@@ -247,37 +247,66 @@ impl Stability {
     }
 }
 
-/// Phase from rate samples: `x_0 = 0`, `x_{k+1} = x_k + (y_k − ȳ) τ0`.
-/// The mean is removed first (a linear phase term, to which every
-/// deviation here is blind) so the running sum keeps its precision.
+/// Rate samples whose mean is the constant [`phase_from_rate`] removes:
+/// the first `PHASE_REF_SAMPLES` (or all, if fewer).
+pub const PHASE_REF_SAMPLES: usize = 1 << 16;
+
+/// The constant `c` removed from every rate sample before the running sum:
+/// the mean of the first [`PHASE_REF_SAMPLES`] samples `y(0), …`, summed in
+/// order (0 for no samples).
+///
+/// Any constant only adds the linear phase `(ȳ − c)·t` to `x`, to which
+/// every deviation here (second and third differences, TOTDEV's inverted
+/// reflection), the noise identification (quadratic detrend) and bias
+/// stability (standard deviation of τ-averages) are blind. A constant near
+/// the mean keeps that line, and so the running sum's round-off, small;
+/// taking it from the start of the record (not the whole-record mean) lets
+/// the phase be built in the one pass that reads the record.
+pub fn phase_reference(n: usize, y: impl Fn(usize) -> f64) -> f64 {
+    let k = n.min(PHASE_REF_SAMPLES);
+    if k == 0 {
+        return 0.0;
+    }
+    let mut sum = 0.0;
+    for i in 0..k {
+        sum += y(i);
+    }
+    sum / k as f64
+}
+
+/// Phase from rate samples (NIST SP 1065 §5.2, frequency to phase):
+/// `x_0 = 0`, `x_{k+1} = x_k + (y_k − c) τ0`, `c` from [`phase_reference`]
+/// (n + 1 points, in the rate unit × s).
 pub fn phase_from_rate(y: &[f64], tau0: f64) -> Vec<f64> {
     phase_from_rate_with(y.len(), tau0, |i| y[i])
 }
 
 /// As [`phase_from_rate`] with the rate samples `y(0), …, y(n−1)` read
-/// twice through a function (e.g. straight from a memory-mapped file, so
-/// the phase is the only copy of the data).
+/// through a function, once (and the first [`PHASE_REF_SAMPLES`] once
+/// more for `c`), e.g. straight from a memory-mapped file.
 pub fn phase_from_rate_with(n: usize, tau0: f64, y: impl Fn(usize) -> f64) -> Vec<f64> {
-    let mut sum = 0.0;
-    for i in 0..n {
-        sum += y(i);
-    }
-    phase_from_rate_sum(n, tau0, sum, y)
+    let c = phase_reference(n, &y);
+    let mut x = vec![0.0; n + 1];
+    phase_fill(&mut x[1..], 0.0, c, tau0, y);
+    x
 }
 
-/// As [`phase_from_rate_with`] with `Σ y(i)` already summed in order
-/// (e.g. in the pass that hashes and checks a mapped file), so the samples
-/// are read once more, not twice; the same bits.
-pub fn phase_from_rate_sum(n: usize, tau0: f64, sum: f64, y: impl Fn(usize) -> f64) -> Vec<f64> {
-    let mean = if n > 0 { sum / n as f64 } else { sum };
-    let mut x = Vec::with_capacity(n + 1);
-    let mut acc = 0.0;
-    x.push(0.0);
-    for i in 0..n {
-        acc += (y(i) - mean) * tau0;
-        x.push(acc);
+/// The running sum of [`phase_from_rate`] over one stretch of the record:
+/// `out[i] = acc + Σ_{j≤i} (y(j) − c) τ0` (`y(j)` the stretch's j-th
+/// sample); returns the sum at its end, the `acc` of the next stretch.
+/// Filled stretch by stretch, the phase has the same bits as in one pass.
+pub fn phase_fill(
+    out: &mut [f64],
+    mut acc: f64,
+    c: f64,
+    tau0: f64,
+    y: impl Fn(usize) -> f64,
+) -> f64 {
+    for (i, o) in out.iter_mut().enumerate() {
+        acc += (y(i) - c) * tau0;
+        *o = acc;
     }
-    x
+    acc
 }
 
 fn push(s: &mut DevSeries, v: Option<(f64, usize)>, edf: Option<f64>, p: f64) {
@@ -399,4 +428,47 @@ pub fn stability_with_progress(
         tick(k + 1);
     }
     Ok(st)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_phase_filled_stretch_by_stretch_has_the_one_pass_bits() {
+        // Longer than the reference stretch, with a large offset and a drift,
+        // so c is not the whole-record mean.
+        let n = PHASE_REF_SAMPLES + 12_345;
+        let y: Vec<f64> = (0..n)
+            .map(|i| 1e3 + 1e-4 * i as f64 + ((i * 7919) % 101) as f64 / 50.0)
+            .collect();
+        let tau0 = 0.01;
+        let x = phase_from_rate(&y, tau0);
+        assert_eq!(x.len(), n + 1);
+        assert_eq!(x[0], 0.0);
+        let c = phase_reference(n, |i| y[i]);
+        let first: f64 = y[..PHASE_REF_SAMPLES].iter().sum::<f64>() / PHASE_REF_SAMPLES as f64;
+        assert_eq!(c, first);
+        // Stretches of uneven lengths, as a reader's windows.
+        let mut z = vec![0.0; n + 1];
+        let (mut at, mut acc) = (0, 0.0);
+        for len in [1, 999, 4096, 70_000].iter().cycle() {
+            if at == n {
+                break;
+            }
+            let b = (at + len).min(n);
+            acc = phase_fill(&mut z[1 + at..1 + b], acc, c, tau0, |i| y[at + i]);
+            at = b;
+        }
+        assert_eq!(x, z);
+        // The definition, x_{k+1} = x_k + (y_k − c)τ0, written out.
+        let mut s = 0.0;
+        for k in 0..n {
+            s += (y[k] - c) * tau0;
+            assert_eq!(x[k + 1], s);
+        }
+        // A short record takes every sample's mean.
+        assert_eq!(phase_reference(3, |i| [1.0, 2.0, 6.0][i]), 3.0);
+        assert_eq!(phase_reference(0, |_| f64::NAN), 0.0);
+    }
 }

@@ -373,7 +373,7 @@ pub fn slope_readings(taus: &[f64], oadev: &DevSeries) -> [Option<f64>; 5] {
 /// seconds, from phase `x` at spacing τ0 (window means are
 /// `(x_{(j+1)k} − x_{jk})/(kτ0)`, k = round(τ/τ0)), with
 /// `u = s/√(2(n−1))` and n − 1 degrees of freedom. `None` with fewer than
-/// two windows.
+/// two windows, or when the differences overflow.
 pub fn bias_stability(x: &[f64], tau0: f64, tau: f64) -> Option<Term> {
     let k = (tau / tau0).round() as usize;
     if k == 0 {
@@ -387,7 +387,8 @@ pub fn bias_stability(x: &[f64], tau0: f64, tau: f64) -> Option<Term> {
     let means: Vec<f64> = (0..n).map(|j| (x[(j + 1) * k] - x[j * k]) / kt).collect();
     let mu = means.iter().sum::<f64>() / n as f64;
     let s = (means.iter().map(|m| (m - mu) * (m - mu)).sum::<f64>() / (n - 1) as f64).sqrt();
-    Some(Term {
+    // Samples near the f64 limit can overflow the differences: no number.
+    s.is_finite().then_some(Term {
         value: s,
         u: s / (2.0 * (n - 1) as f64).sqrt(),
         dof: (n - 1) as f64,
