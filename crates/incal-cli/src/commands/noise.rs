@@ -452,9 +452,12 @@ fn read_binary(
     let win = data.window_rows();
     let f = build.factor;
     let refs: Vec<f64> = (0..pick.len())
-        .map(|k| match fused && build.rate {
-            true => phase_reference(rows, |r| data.get(k, r) * f),
-            false => 0.0,
+        .map(|k| {
+            if fused && build.rate {
+                phase_reference(rows, |r| data.get(k, r) * f)
+            } else {
+                0.0
+            }
         })
         .collect();
     let mut built: Vec<Vec<f64>> = (0..if fused { pick.len() } else { 0 })
