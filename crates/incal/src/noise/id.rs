@@ -106,6 +106,61 @@ fn poly_sums(lv: &Level, v: &[f64], i0: usize) -> [f64; 3] {
     a.map(|s| (s[0] + s[1]) + (s[2] + s[3]))
 }
 
+/// [`poly_sums`], in AVX2 registers when the CPU has them (the same bits).
+fn normal_sums(lv: &Level, v: &[f64], i0: usize) -> [f64; 3] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            return unsafe { poly_sums_avx2(lv, v, i0) };
+        }
+    }
+    poly_sums(lv, v, i0)
+}
+
+/// [`poly_sums`] in AVX2 registers: lane l takes the points k ≡ l
+/// (mod 4), with `t = (i − c)·sc` and the products `t·v`, `(t·t)·v`, as
+/// there (no FMA: the same bits).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn poly_sums_avx2(lv: &Level, v: &[f64], i0: usize) -> [f64; 3] {
+    use std::arch::x86_64::*;
+    let n = v.len();
+    let full = n / 4 * 4;
+    let (c, sc) = (_mm256_set1_pd(lv.c), _mm256_set1_pd(lv.sc));
+    let step = _mm256_set1_pd(4.0);
+    let b = i0 as f64;
+    let mut fi = _mm256_setr_pd(b, b + 1.0, b + 2.0, b + 3.0);
+    let zero = _mm256_setzero_pd();
+    let (mut a0, mut a1, mut a2) = (zero, zero, zero);
+    let mut k = 0;
+    while k < full {
+        // SAFETY: k + 4 <= full <= v.len().
+        let y = unsafe { _mm256_loadu_pd(v.as_ptr().add(k)) };
+        let t = _mm256_mul_pd(_mm256_sub_pd(fi, c), sc);
+        a0 = _mm256_add_pd(a0, y);
+        a1 = _mm256_add_pd(a1, _mm256_mul_pd(t, y));
+        a2 = _mm256_add_pd(a2, _mm256_mul_pd(_mm256_mul_pd(t, t), y));
+        fi = _mm256_add_pd(fi, step);
+        k += 4;
+    }
+    let mut a = [[0.0f64; 4]; 3];
+    // SAFETY: each row of a holds four f64.
+    unsafe {
+        _mm256_storeu_pd(a[0].as_mut_ptr(), a0);
+        _mm256_storeu_pd(a[1].as_mut_ptr(), a1);
+        _mm256_storeu_pd(a[2].as_mut_ptr(), a2);
+    }
+    let base = (i0 + full) as f64;
+    for (l, &y) in v[full..].iter().enumerate() {
+        let t = (base + l as f64 - lv.c) * lv.sc;
+        a[0][l] += y;
+        a[1][l] += t * y;
+        a[2][l] += t * t * y;
+    }
+    a.map(|s| (s[0] + s[1]) + (s[2] + s[3]))
+}
+
 #[inline(always)]
 /// `Σ z, Σ z², Σ z_{j−1} z_j` of a run of one series (`prev` the value
 /// before the run, if any), four lanes, lanes added in a fixed order.
@@ -133,6 +188,120 @@ fn acf_sums(z: &[f64], prev: Option<f64>) -> [f64; 3] {
         sum(s) + last,
         sum(s2) + last * last,
         sum(lag) + prev.map_or(0.0, |p| p * z[0]),
+    ]
+}
+
+/// `out[k]` = the residual ([`Level::resid`]) of decimated point `i0 + k`,
+/// value `v[k]`: four lanes at a time, in AVX2 registers when the CPU has
+/// them (the same operations in the same order: the same bits).
+#[inline(always)]
+fn residuals(lv: &Level, coef: &[f64; 3], v: &[f64], i0: usize, out: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            return unsafe { residuals_avx2(lv, coef, v, i0, out) };
+        }
+    }
+    residuals_portable(lv, coef, v, i0, out)
+}
+
+fn residuals_portable(lv: &Level, coef: &[f64; 3], v: &[f64], i0: usize, out: &mut [f64]) {
+    for (k, (o, &y)) in out.iter_mut().zip(v).enumerate() {
+        *o = lv.resid(coef, (i0 + k) as f64, y);
+    }
+}
+
+/// [`residuals_portable`] in AVX2 registers: per lane `t = (i − c)·sc`,
+/// `y − ((c₀ + c₁t) + (c₂t)t)`, as [`Level::resid`] (no FMA).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn residuals_avx2(lv: &Level, coef: &[f64; 3], v: &[f64], i0: usize, out: &mut [f64]) {
+    use std::arch::x86_64::*;
+    let n = v.len().min(out.len());
+    let full = n / 4 * 4;
+    let (c, sc) = (_mm256_set1_pd(lv.c), _mm256_set1_pd(lv.sc));
+    let [c0, c1, c2] = coef.map(|a| _mm256_set1_pd(a));
+    let step = _mm256_set1_pd(4.0);
+    // Indices below 2^53: exact in f64, and so is every `+ 4`.
+    let b = i0 as f64;
+    let mut fi = _mm256_setr_pd(b, b + 1.0, b + 2.0, b + 3.0);
+    let mut k = 0;
+    while k < full {
+        // SAFETY: k + 4 <= full <= n <= both lengths.
+        unsafe {
+            let y = _mm256_loadu_pd(v.as_ptr().add(k));
+            let t = _mm256_mul_pd(_mm256_sub_pd(fi, c), sc);
+            let p = _mm256_add_pd(
+                _mm256_add_pd(c0, _mm256_mul_pd(c1, t)),
+                _mm256_mul_pd(_mm256_mul_pd(c2, t), t),
+            );
+            _mm256_storeu_pd(out.as_mut_ptr().add(k), _mm256_sub_pd(y, p));
+        }
+        fi = _mm256_add_pd(fi, step);
+        k += 4;
+    }
+    residuals_portable(lv, coef, &v[full..n], i0 + full, &mut out[full..n]);
+}
+
+/// `Σ z, Σ z², Σ z_{j−1} z_j` of a run of one series (`prev` the value
+/// before the run, if any), four lanes, lanes added in a fixed order; in
+/// AVX2 registers when the CPU has them (the same bits).
+#[inline(always)]
+fn lag1_sums(z: &[f64], prev: Option<f64>) -> [f64; 3] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            return unsafe { acf_sums_avx2(z, prev) };
+        }
+    }
+    acf_sums(z, prev)
+}
+
+/// [`acf_sums`] in AVX2 registers: lane l takes the pairs `(z_k, z_{k+1})`
+/// with k ≡ l (mod 4), as there (no FMA: the same bits).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn acf_sums_avx2(z: &[f64], prev: Option<f64>) -> [f64; 3] {
+    use std::arch::x86_64::*;
+    let Some((&last, head)) = z.split_last() else {
+        return [0.0; 3];
+    };
+    let n = head.len();
+    let full = n / 4 * 4;
+    let zero = _mm256_setzero_pd();
+    let (mut s, mut s2, mut lag) = (zero, zero, zero);
+    let mut k = 0;
+    while k < full {
+        // SAFETY: k + 4 <= n = z.len() − 1, so z[k + 1..k + 5] is in z.
+        unsafe {
+            let p = _mm256_loadu_pd(z.as_ptr().add(k));
+            let q = _mm256_loadu_pd(z.as_ptr().add(k + 1));
+            s = _mm256_add_pd(s, p);
+            s2 = _mm256_add_pd(s2, _mm256_mul_pd(p, p));
+            lag = _mm256_add_pd(lag, _mm256_mul_pd(p, q));
+        }
+        k += 4;
+    }
+    let mut a = [[0.0f64; 4]; 3];
+    // SAFETY: each row of a holds four f64.
+    unsafe {
+        _mm256_storeu_pd(a[0].as_mut_ptr(), s);
+        _mm256_storeu_pd(a[1].as_mut_ptr(), s2);
+        _mm256_storeu_pd(a[2].as_mut_ptr(), lag);
+    }
+    for l in 0..n - full {
+        let (p, q) = (z[full + l], z[full + l + 1]);
+        a[0][l] += p;
+        a[1][l] += p * p;
+        a[2][l] += p * q;
+    }
+    let sum = |v: [f64; 4]| (v[0] + v[1]) + (v[2] + v[3]);
+    [
+        sum(a[0]) + last,
+        sum(a[1]) + last * last,
+        sum(a[2]) + prev.map_or(0.0, |p| p * z[0]),
     ]
 }
 
@@ -203,17 +372,7 @@ fn block_sums(
     e.clear();
     e.extend_from_slice(tail);
     e.resize(h + v.len(), 0.0);
-    let mut base = i0 as f64;
-    let (out, rest) = e[h..].split_at_mut(v.len() / 4 * 4);
-    for (o, q) in out.chunks_exact_mut(4).zip(v.chunks_exact(4)) {
-        for l in 0..4 {
-            o[l] = lv.resid(coef, base + l as f64, q[l]);
-        }
-        base += 4.0;
-    }
-    for (l, (o, &y)) in rest.iter_mut().zip(&v[v.len() / 4 * 4..]).enumerate() {
-        *o = lv.resid(coef, base + l as f64, y);
-    }
+    residuals(lv, coef, v, i0, &mut e[h..]);
     for d in 1..4 {
         let (lo, hi) = bufs.split_at_mut(d);
         let (src, dst) = (&lo[d - 1], &mut hi[0]);
@@ -226,7 +385,7 @@ fn block_sums(
         let z = &bufs[d];
         let ks = h.saturating_sub(d);
         if ks < z.len() {
-            *o = acf_sums(&z[ks..], ks.checked_sub(1).map(|k| z[k]));
+            *o = lag1_sums(&z[ks..], ks.checked_sub(1).map(|k| z[k]));
         }
     }
     out
@@ -293,7 +452,7 @@ fn lag1_many(x: &[f64], ms: &[usize], parallel: bool) -> Vec<Option<[f64; 4]>> {
         sweep(&levels, lo, hi, |k, i0, i1| {
             let lv = &levels[k];
             let v = lv.points(x, i0, i1, &mut buf);
-            let p = avx2_or_not!(poly_sums(lv, v, i0));
+            let p = normal_sums(lv, v, i0);
             for (a, b) in out[k].iter_mut().zip(p) {
                 *a += b;
             }
@@ -501,6 +660,38 @@ mod tests {
             let id = identify(x, 1).unwrap();
             assert_eq!(id.alpha_hadamard, *alpha);
             assert_eq!(id.alpha_allan, *alpha);
+        }
+    }
+
+    /// The AVX2 kernels are the portable ones in wider registers: the same
+    /// bits, at every length around the four lanes.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn the_avx2_kernels_give_the_portable_kernels_bits() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let x = cumsum(white(5000, 11));
+        let lv = Level::new(x.len(), 3).unwrap();
+        let coef = [0.3, -1.7, 2.9];
+        let bits = |a: &[f64]| a.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        for n in [0, 1, 3, 4, 5, 8, 9, 31, 1000] {
+            for i0 in [0, 7, 1001] {
+                let v = &x[i0..i0 + n];
+                let (mut p, mut w) = (vec![0.0; n], vec![0.0; n]);
+                residuals_portable(&lv, &coef, v, i0, &mut p);
+                // SAFETY: the CPU supports AVX2 (checked above).
+                unsafe { residuals_avx2(&lv, &coef, v, i0, &mut w) };
+                assert_eq!(bits(&p), bits(&w), "n {n}, i0 {i0}");
+                // SAFETY: as above.
+                let wide = unsafe { poly_sums_avx2(&lv, v, i0) };
+                assert_eq!(bits(&poly_sums(&lv, v, i0)), bits(&wide), "n {n}");
+                for prev in [None, Some(0.25)] {
+                    // SAFETY: as above.
+                    let wide = unsafe { acf_sums_avx2(v, prev) };
+                    assert_eq!(bits(&acf_sums(v, prev)), bits(&wide), "n {n}");
+                }
+            }
         }
     }
 
