@@ -396,6 +396,7 @@ fn read_binary(
     columns: &[String],
     build: Build,
     parallel: bool,
+    bar: Option<&indicatif::ProgressBar>,
 ) -> CliResult<(String, Record)> {
     let name = path.display().to_string();
     if path.as_os_str() == "-" {
@@ -422,6 +423,9 @@ fn read_binary(
         )));
     }
     let rows = map.len() / frame;
+    if let Some(b) = bar {
+        b.set_length(rows as u64);
+    }
     let all: Vec<String> = (1..=channels).map(|k| format!("ch{k}")).collect();
     let pick: Vec<usize> = if columns.is_empty() {
         (0..channels).collect()
@@ -510,6 +514,9 @@ fn read_binary(
             check();
         }
         data.release(r0, r1);
+        if let Some(b) = bar {
+            b.set_position(r1 as u64);
+        }
         r0 = r1;
     }
     let sha = crate::output::hex(&sha2::Digest::finalize(h));
@@ -588,14 +595,32 @@ pub fn run(a: &Args) -> CliResult<()> {
             if ch == 0 {
                 return Err(usage("--channels must be at least 1"));
             }
-            read_binary(
+            // The reading pass (about a second per 10^8 samples) shows
+            // its own bar, as the averaging times do after it.
+            let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
+                let b = indicatif::ProgressBar::new(0);
+                b.set_style(
+                    indicatif::ProgressStyle::with_template(
+                        "{msg} [{bar:40}] {pos}/{len} rows read {elapsed}",
+                    )
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+                );
+                b.set_message("incal noise");
+                b
+            });
+            let read = read_binary(
                 &a.input,
                 ch,
                 a.format == FormatArg::F64le,
                 &a.columns,
                 build,
                 !a.sequential,
-            )?
+                bar.as_ref(),
+            );
+            if let Some(b) = bar {
+                b.finish_and_clear();
+            }
+            read?
         }
     };
     let min = if a.data == DataArg::Rate { 4 } else { 5 };
