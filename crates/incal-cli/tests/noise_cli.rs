@@ -490,6 +490,10 @@ fn binary_samples_that_are_not_finite_or_overflow_are_named() {
         p.to_str().unwrap().to_string()
     };
     let wiggle = |r: usize, c: usize| ((r * 7919 + c * 31) % 101) as f64 / 50.0 - 1.0;
+    // The wiggle with one sample, at (row, channel), replaced by `v`.
+    let spiked = |at: (usize, usize), v: f64| {
+        move |r: usize, c: usize| if (r, c) == at { v } else { wiggle(r, c) }
+    };
     let run = |p: &str, fmt: &str, ch: &str, extra: &[&str]| {
         let mut a = vec![
             "noise",
@@ -506,13 +510,7 @@ fn binary_samples_that_are_not_finite_or_overflow_are_named() {
         incal(&a)
     };
     // f64, every channel: the arrays are built in the reading pass.
-    let nan = write("nan.f64", 200, 3, true, &|r, c| {
-        if (r, c) == (7, 1) {
-            f64::NAN
-        } else {
-            wiggle(r, c)
-        }
-    });
+    let nan = write("nan.f64", 200, 3, true, &spiked((7, 1), f64::NAN));
     bad(
         &run(&nan, "f64le", "3", &[]),
         "sample 8 of ch2: not a finite number",
@@ -530,13 +528,7 @@ fn binary_samples_that_are_not_finite_or_overflow_are_named() {
     ));
     // f32, four channels: the arrays (f64) would outgrow the file, so they
     // are built per channel after the checks.
-    let inf = write("inf.f32", 300, 4, false, &|r, c| {
-        if (r, c) == (250, 2) {
-            f64::INFINITY
-        } else {
-            wiggle(r, c)
-        }
-    });
+    let inf = write("inf.f32", 300, 4, false, &spiked((250, 2), f64::INFINITY));
     bad(
         &run(&inf, "f32le", "4", &[]),
         "sample 251 of ch3: not a finite number",

@@ -200,13 +200,33 @@ enum Samples {
 const WINDOW_BYTES: usize = 16 << 20;
 
 impl Samples {
+    /// Bytes per sample of a mapped file (0 for columns).
+    fn width(&self) -> usize {
+        match self {
+            Samples::Columns(_) => 0,
+            Samples::Mapped { f64le, .. } => {
+                if *f64le {
+                    8
+                } else {
+                    4
+                }
+            }
+        }
+    }
+
+    /// Bytes per row (frame) of a mapped file (0 for columns).
+    fn frame(&self) -> usize {
+        match self {
+            Samples::Columns(_) => 0,
+            Samples::Mapped { channels, .. } => channels * self.width(),
+        }
+    }
+
     /// Rows per release window of a mapped file (every row for columns).
     fn window_rows(&self) -> usize {
         match self {
             Samples::Columns(_) => usize::MAX,
-            Samples::Mapped {
-                channels, f64le, ..
-            } => (WINDOW_BYTES / (channels * if *f64le { 8 } else { 4 })).max(1),
+            Samples::Mapped { .. } => (WINDOW_BYTES / self.frame()).max(1),
         }
     }
 
@@ -215,14 +235,8 @@ impl Samples {
     /// map and the phase built from it): peak memory stays near one copy.
     /// A page read again is faulted in from the file; columns: nothing.
     fn release(&self, from: usize, to: usize) {
-        if let Samples::Mapped {
-            map,
-            channels,
-            f64le,
-            ..
-        } = self
-        {
-            let frame = channels * if *f64le { 8 } else { 4 };
+        if let Samples::Mapped { map, .. } = self {
+            let frame = self.frame();
             release_bytes(map, from * frame, to * frame);
         }
     }
@@ -241,13 +255,8 @@ impl Samples {
     fn bytes(&self, from: usize, to: usize) -> &[u8] {
         match self {
             Samples::Columns(_) => &[],
-            Samples::Mapped {
-                map,
-                channels,
-                f64le,
-                ..
-            } => {
-                let frame = channels * if *f64le { 8 } else { 4 };
+            Samples::Mapped { map, .. } => {
+                let frame = self.frame();
                 &map[from * frame..to * frame]
             }
         }
@@ -257,7 +266,7 @@ impl Samples {
     fn offset(&self, k: usize) -> usize {
         match self {
             Samples::Columns(_) => 0,
-            Samples::Mapped { f64le, index, .. } => index[k] * if *f64le { 8 } else { 4 },
+            Samples::Mapped { index, .. } => index[k] * self.width(),
         }
     }
 
@@ -265,14 +274,8 @@ impl Samples {
     fn get(&self, k: usize, r: usize) -> f64 {
         match self {
             Samples::Columns(c) => c[k][r],
-            Samples::Mapped {
-                map,
-                channels,
-                f64le,
-                index,
-            } => {
-                let w = if *f64le { 8 } else { 4 };
-                decode(*f64le, map, (r * channels + index[k]) * w)
+            Samples::Mapped { map, f64le, .. } => {
+                decode(*f64le, map, r * self.frame() + self.offset(k))
             }
         }
     }
@@ -521,22 +524,17 @@ fn read_binary(
     }
     let sha = crate::output::hex(&sha2::Digest::finalize(h));
     for (k, &c) in pick.iter().enumerate() {
-        match bad[k] {
-            Some((r, true)) => {
-                return Err(CliError::Input(format!(
-                    "{name}: sample {} of {}: not a finite number",
-                    r + 1,
-                    all[c]
-                )))
-            }
-            Some((r, false)) => {
-                return Err(CliError::Input(format!(
-                    "{name}: sample {} of {}: the running sum (phase) of the samples overflows",
-                    r + 1,
-                    all[c]
-                )))
-            }
-            None => {}
+        if let Some((r, sample)) = bad[k] {
+            let what = if sample {
+                "not a finite number"
+            } else {
+                "the running sum (phase) of the samples overflows"
+            };
+            return Err(CliError::Input(format!(
+                "{name}: sample {} of {}: {what}",
+                r + 1,
+                all[c]
+            )));
         }
     }
     Ok((
@@ -549,6 +547,22 @@ fn read_binary(
             built: fused.then_some(built),
         },
     ))
+}
+
+/// A progress bar of `len` steps counted as `what` on stderr, when it is a
+/// terminal and not `--quiet` (none otherwise).
+fn progress(quiet: bool, len: u64, what: &str) -> Option<indicatif::ProgressBar> {
+    (!quiet && std::io::stderr().is_terminal()).then(|| {
+        let b = indicatif::ProgressBar::new(len);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(&format!(
+                "{{msg}} [{{bar:40}}] {{pos}}/{{len}} {what} {{elapsed}}"
+            ))
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b.set_message("incal noise");
+        b
+    })
 }
 
 /// `incal noise`.
@@ -597,17 +611,7 @@ pub fn run(a: &Args) -> CliResult<()> {
             }
             // The reading pass (about a second per 10^8 samples) shows
             // its own bar, as the averaging times do after it.
-            let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
-                let b = indicatif::ProgressBar::new(0);
-                b.set_style(
-                    indicatif::ProgressStyle::with_template(
-                        "{msg} [{bar:40}] {pos}/{len} rows read {elapsed}",
-                    )
-                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-                );
-                b.set_message("incal noise");
-                b
-            });
+            let bar = progress(a.quiet, 0, "rows read");
             let read = read_binary(
                 &a.input,
                 ch,
@@ -637,19 +641,7 @@ pub fn run(a: &Args) -> CliResult<()> {
         parallel: !a.sequential,
     };
     let total = (grid.factors(rec.rows + 1).len() * rec.names.len()) as u64;
-    let bar = if !a.quiet && std::io::stderr().is_terminal() {
-        let b = indicatif::ProgressBar::new(total);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{msg} [{bar:40}] {pos}/{len} averaging times {elapsed}",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b.set_message("incal noise");
-        Some(b)
-    } else {
-        None
-    };
+    let bar = progress(a.quiet, total, "averaging times");
     let one = |k: usize| -> CliResult<ChannelResult> {
         let d = &rec.data;
         let win = d.window_rows();

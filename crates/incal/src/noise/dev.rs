@@ -125,14 +125,7 @@ fn comb_sq_avx2<const K: usize>(s: [&[f64]; K]) -> f64 {
 }
 
 fn comb_block<const K: usize>(s: [&[f64]; K]) -> f64 {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above).
-            return unsafe { comb_sq_avx2(s) };
-        }
-    }
-    comb_sq(s)
+    avx2_kernel!(comb_sq_avx2(s), comb_sq(s))
 }
 
 /// OADEV and OHDEV terms of one block at once from the four windows
@@ -140,14 +133,7 @@ fn comb_block<const K: usize>(s: [&[f64]; K]) -> f64 {
 /// t₄(s₀, …, s₃)²)` ([`comb_term`]), each with exactly the operations of
 /// [`comb_sq`] (the same bits as two calls), the windows loaded once.
 fn comb2_block(s: [&[f64]; 4]) -> (f64, f64) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above).
-            return unsafe { comb2_sq_avx2(s) };
-        }
-    }
-    (comb_sq([s[1], s[2], s[3]]), comb_sq(s))
+    avx2_kernel!(comb2_sq_avx2(s), (comb_sq([s[1], s[2], s[3]]), comb_sq(s)))
 }
 
 /// [`comb2_block`] in AVX2 registers (per lane the operations of

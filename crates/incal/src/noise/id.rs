@@ -108,14 +108,19 @@ fn poly_sums(lv: &Level, v: &[f64], i0: usize) -> [f64; 3] {
 
 /// [`poly_sums`], in AVX2 registers when the CPU has them (the same bits).
 fn normal_sums(lv: &Level, v: &[f64], i0: usize) -> [f64; 3] {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above).
-            return unsafe { poly_sums_avx2(lv, v, i0) };
-        }
+    avx2_kernel!(poly_sums_avx2(lv, v, i0), poly_sums(lv, v, i0))
+}
+
+/// The four lanes of each of three AVX2 accumulators.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn lanes3(v: [std::arch::x86_64::__m256d; 3]) -> [[f64; 4]; 3] {
+    let mut a = [[0.0f64; 4]; 3];
+    for (row, r) in a.iter_mut().zip(v) {
+        // SAFETY: each row holds four f64.
+        unsafe { std::arch::x86_64::_mm256_storeu_pd(row.as_mut_ptr(), r) };
     }
-    poly_sums(lv, v, i0)
+    a
 }
 
 /// [`poly_sums`] in AVX2 registers: lane l takes the points k ≡ l
@@ -144,13 +149,7 @@ fn poly_sums_avx2(lv: &Level, v: &[f64], i0: usize) -> [f64; 3] {
         fi = _mm256_add_pd(fi, step);
         k += 4;
     }
-    let mut a = [[0.0f64; 4]; 3];
-    // SAFETY: each row of a holds four f64.
-    unsafe {
-        _mm256_storeu_pd(a[0].as_mut_ptr(), a0);
-        _mm256_storeu_pd(a[1].as_mut_ptr(), a1);
-        _mm256_storeu_pd(a[2].as_mut_ptr(), a2);
-    }
+    let mut a = lanes3([a0, a1, a2]);
     let base = (i0 + full) as f64;
     for (l, &y) in v[full..].iter().enumerate() {
         let t = (base + l as f64 - lv.c) * lv.sc;
@@ -196,14 +195,10 @@ fn acf_sums(z: &[f64], prev: Option<f64>) -> [f64; 3] {
 /// them (the same operations in the same order: the same bits).
 #[inline(always)]
 fn residuals(lv: &Level, coef: &[f64; 3], v: &[f64], i0: usize, out: &mut [f64]) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above).
-            return unsafe { residuals_avx2(lv, coef, v, i0, out) };
-        }
-    }
-    residuals_portable(lv, coef, v, i0, out)
+    avx2_kernel!(
+        residuals_avx2(lv, coef, v, i0, out),
+        residuals_portable(lv, coef, v, i0, out)
+    )
 }
 
 fn residuals_portable(lv: &Level, coef: &[f64; 3], v: &[f64], i0: usize, out: &mut [f64]) {
@@ -249,14 +244,7 @@ fn residuals_avx2(lv: &Level, coef: &[f64; 3], v: &[f64], i0: usize, out: &mut [
 /// AVX2 registers when the CPU has them (the same bits).
 #[inline(always)]
 fn lag1_sums(z: &[f64], prev: Option<f64>) -> [f64; 3] {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above).
-            return unsafe { acf_sums_avx2(z, prev) };
-        }
-    }
-    acf_sums(z, prev)
+    avx2_kernel!(acf_sums_avx2(z, prev), acf_sums(z, prev))
 }
 
 /// [`acf_sums`] in AVX2 registers: lane l takes the pairs `(z_k, z_{k+1})`
@@ -284,13 +272,7 @@ fn acf_sums_avx2(z: &[f64], prev: Option<f64>) -> [f64; 3] {
         }
         k += 4;
     }
-    let mut a = [[0.0f64; 4]; 3];
-    // SAFETY: each row of a holds four f64.
-    unsafe {
-        _mm256_storeu_pd(a[0].as_mut_ptr(), s);
-        _mm256_storeu_pd(a[1].as_mut_ptr(), s2);
-        _mm256_storeu_pd(a[2].as_mut_ptr(), lag);
-    }
+    let mut a = lanes3([s, s2, lag]);
     for l in 0..n - full {
         let (p, q) = (z[full + l], z[full + l + 1]);
         a[0][l] += p;

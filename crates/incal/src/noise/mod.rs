@@ -33,6 +33,27 @@ macro_rules! avx2_or_not {
     }};
 }
 
+/// `wide(args)`, a kernel written in AVX2 intrinsics with the portable
+/// loop's operations per lane, when the CPU has AVX2; `portable` otherwise
+/// (the same bits either way).
+macro_rules! avx2_kernel {
+    ($wide:ident($($a:expr),*), $portable:expr) => {{
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports AVX2 (checked just above).
+                unsafe { $wide($($a),*) }
+            } else {
+                $portable
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            $portable
+        }
+    }};
+}
+
 /// `f(0), …, f(n − 1)` in order, on rayon's threads when `parallel` and
 /// `n > 1`: the same values either way, the fixed partition by which
 /// every kernel here gives a parallel run a serial run's bits.
