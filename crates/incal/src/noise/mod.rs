@@ -33,15 +33,18 @@ macro_rules! avx2_or_not {
     }};
 }
 
-/// `wide(args)`, a kernel written in AVX2 intrinsics with the portable
-/// loop's operations per lane, when the CPU has AVX2; `portable` otherwise
-/// (the same bits either way).
+/// `wide(args)`, a kernel written in AVX2 intrinsics (FMA where the
+/// portable loop has a `mul_add`) with the portable loop's operations per
+/// lane, when the CPU has AVX2 and FMA; `portable` otherwise (the same bits
+/// either way).
 macro_rules! avx2_kernel {
     ($wide:ident($($a:expr),*), $portable:expr) => {{
         #[cfg(target_arch = "x86_64")]
         {
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU supports AVX2 (checked just above).
+            if std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma")
+            {
+                // SAFETY: the CPU supports AVX2 and FMA (checked just above).
                 unsafe { $wide($($a),*) }
             } else {
                 $portable
