@@ -171,24 +171,15 @@ impl Sha256 {
 fn hash_in_background(path: &Path, len: usize) -> std::thread::JoinHandle<CliResult<String>> {
     let path = path.to_path_buf();
     std::thread::spawn(move || {
-        use std::io::Read;
         let name = path.display().to_string();
         let err = |e: std::io::Error| CliError::Input(format!("{name}: cannot read: {e}"));
-        let mut f = std::fs::File::open(&path).map_err(err)?;
+        let f = std::fs::File::open(&path).map_err(err)?;
         let mut h = <sha2::Sha256 as sha2::Digest>::new();
-        let mut buf = vec![0u8; 1 << 20];
-        let mut total = 0usize;
-        loop {
-            let k = match f.read(&mut buf) {
-                Ok(0) => break,
-                Ok(k) => k,
-                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-                Err(e) => return Err(err(e)),
-            };
-            sha2::Digest::update(&mut h, &buf[..k]);
-            total += k;
-        }
-        if total != len {
+        // The hasher is an io::Write; copy reads through the BufReader's
+        // buffer, 1 MiB at a time.
+        let total = std::io::copy(&mut std::io::BufReader::with_capacity(1 << 20, f), &mut h)
+            .map_err(err)?;
+        if total != len as u64 {
             return Err(CliError::Input(format!(
                 "{name}: the file changed while it was read ({len} bytes mapped, {total} read)"
             )));
@@ -514,7 +505,7 @@ fn read_binary(
     // memory than the file, the arrays themselves; the hash of the bytes
     // on a thread of its own that runs on while the deviations start (in
     // this pass with --sequential: one thread).
-    let background = parallel.then(|| hash_in_background(path, data.bytes(0, rows).len()));
+    let background = parallel.then(|| hash_in_background(path, rows * frame));
     let fused = pick.len() * 8 <= frame;
     let win = data.window_rows();
     let f = build.factor;
@@ -538,11 +529,6 @@ fn read_binary(
     let mut r0 = 0;
     while r0 < rows {
         let r1 = (r0 + win).min(rows);
-        let mut hash = || {
-            if background.is_none() {
-                sha2::Digest::update(&mut h, data.bytes(r0, r1));
-            }
-        };
         let mut check = || {
             let bytes = data.bytes(r0, r1);
             for (k, b) in bad.iter_mut().enumerate() {
@@ -572,7 +558,9 @@ fn read_binary(
                 }
             }
         };
-        hash();
+        if background.is_none() {
+            sha2::Digest::update(&mut h, data.bytes(r0, r1));
+        }
         check();
         data.release(r0, r1);
         if let Some(b) = bar {
