@@ -15,6 +15,7 @@ mod input;
 mod io;
 mod options;
 mod output;
+mod run;
 
 use std::ffi::OsString;
 use std::io::Write;

@@ -95,6 +95,19 @@ pub enum Error {
         /// Its offending value, as text.
         value: String,
     },
+    /// A problem with an input file, from the input layer (file, line,
+    /// column, message).
+    #[error("{0}")]
+    Input(#[from] incal_io::InputError),
+    /// A problem found while reducing the data of a file: the file, then
+    /// the core's message.
+    #[error("{file}: {source}")]
+    InFile {
+        /// The file as the user named it.
+        file: String,
+        /// What is wrong.
+        source: Box<Error>,
+    },
     /// A requested term or option does not exist or does not apply.
     #[error("{0}")]
     Unsupported(String),
@@ -102,6 +115,20 @@ pub enum Error {
 
 /// Result alias of the core library.
 pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    /// This error as found in the data of `file` (an input-layer error
+    /// already names its file and is left as it is).
+    pub fn in_file(self, file: &str) -> Error {
+        match self {
+            Error::Input(_) | Error::InFile { .. } => self,
+            other => Error::InFile {
+                file: file.to_string(),
+                source: Box::new(other),
+            },
+        }
+    }
+}
 
 /// Return `Err(InvalidValue)` unless `x` is finite.
 pub fn finite(what: &str, x: f64) -> Result<f64> {

@@ -3,16 +3,18 @@
 use std::path::PathBuf;
 
 use clap::ValueEnum;
+use incal::estimation::Noise;
 use incal::models::{AccelerometerModel, Term};
 use incal::procedures::tumble::plan::{predict, TumblePlan};
-use incal::procedures::tumble::{calibrate, default_terms, Observation, TumbleOptions};
+use incal::procedures::tumble::{default_terms, Tumble, TumbleOptions};
+use incal::procedures::Silent;
 use incal::rigs::Mount;
 use incal::sim::tumble::{simulate as sim_tumble, TumbleSim};
 use incal::units::{arcsec_to_rad, rad_to_deg};
 use serde_json::{json, Map, Value};
 
-use crate::error::{core, in_file, usage, CliResult};
-use crate::options::noise_option;
+use crate::error::{core, usage, CliResult};
+use crate::input::ReadArgs;
 use crate::output::{json_text, sig, table, write_text, ResultArgs};
 
 /// Mount on the dividing head.
@@ -49,6 +51,8 @@ pub struct Args {
     #[arg(long)]
     pub noise: Option<f64>,
     #[command(flatten)]
+    pub read: ReadArgs,
+    #[command(flatten)]
     pub result: ResultArgs,
 }
 
@@ -62,70 +66,15 @@ fn parse_terms(list: &Option<Vec<String>>, mount: Mount) -> CliResult<Vec<Term>>
     }
 }
 
-/// Read a tumble CSV row by row into observations (the file itself is
-/// never held in memory: a 720 000-row file costs its observations only).
-fn read_observations(
-    path: &std::path::Path,
-) -> CliResult<(crate::input::Streamed, Vec<Observation>)> {
-    let mut obs = Vec::new();
-    let streamed = crate::input::stream_file(
-        path,
-        |h| {
-            Ok((
-                h.column("angle_deg")?,
-                h.column("output")?,
-                h.opt_column("pass"),
-            ))
-        },
-        |&(ca, co, cp), row| {
-            let angle = row.f64(ca)?;
-            let output = row.f64(co)?;
-            let pass = match cp {
-                Some(c) => {
-                    let label = row.text(c).trim();
-                    if label.is_empty() {
-                        return Err(row.error(
-                            "column 'pass': empty label (label every row of a multi-pass file)"
-                                .into(),
-                        ));
-                    }
-                    Some(label.to_string())
-                }
-                None => None,
-            };
-            obs.push(Observation {
-                angle_rad: angle.to_radians(),
-                output,
-                pass,
-            });
-            Ok(())
-        },
-    )?;
-    obs.shrink_to_fit();
-    Ok((streamed, obs))
-}
-
 /// `incal tumble`.
 pub fn run(a: &Args) -> CliResult<()> {
     let mount: Mount = a.mount.into();
-    let terms = parse_terms(&a.terms, mount)?;
-    let noise = noise_option(a.noise)?;
-    let (table, obs) = read_observations(&a.input)?;
-    let result = calibrate(
-        &obs,
-        &TumbleOptions {
-            mount,
-            terms,
-            noise,
-        },
-    )
-    .map_err(|e| in_file(&table.path, e))?;
-    let mut doc = result
-        .document(a.noise.is_some())
-        .map_err(|e| in_file(&table.path, e))?;
-    doc.inputs.push(table.input_file("input"));
-    doc.options.insert("noise".into(), json!(a.noise));
-    a.result.emit(doc)
+    let options = TumbleOptions {
+        mount,
+        terms: parse_terms(&a.terms, mount)?,
+        noise: Noise::from_option(a.noise).map_err(core)?,
+    };
+    crate::run::reduce::<Tumble>(&a.input, &a.read, &options, &a.result, &Silent)
 }
 
 /// Plan selection shared by `plan tumble` and `simulate tumble`.

@@ -2,7 +2,7 @@
 
 use serde_json::{json, Map, Value};
 
-use super::tumble::variance_decision;
+use super::variance_decision;
 use super::{Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure, ResultDocument, Table};
 use crate::error::Result;
 use crate::procedures::gfimu::GfimuCalibration;

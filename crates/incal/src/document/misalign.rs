@@ -3,7 +3,7 @@
 
 use serde_json::{json, Map, Value};
 
-use super::tumble::variance_decision;
+use super::variance_decision;
 use super::{
     position_stats, position_table, Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure,
     ResultDocument, Table,

@@ -33,7 +33,6 @@ pub mod imu;
 pub mod limits;
 pub mod misalign;
 pub mod noise;
-pub mod tumble;
 
 use std::collections::BTreeMap;
 
@@ -435,6 +434,24 @@ pub(crate) const POSITION_STATS: [(&str, Option<Unit>); 5] = [
     ("residual", Some(Unit::Output)),
     ("standardized_residual", Some(Unit::One)),
 ];
+
+/// Describe where the variance behind u came from.
+pub(crate) fn variance_decision(
+    source: crate::estimation::VarianceSource,
+    known_noise: bool,
+) -> &'static str {
+    match (source, known_noise) {
+        (crate::estimation::VarianceSource::Residuals, _) => {
+            "variance from the residuals (significant lack of fit, or no repeated samples)"
+        }
+        (crate::estimation::VarianceSource::Prior, true) => {
+            "variance from the known noise (--noise)"
+        }
+        (crate::estimation::VarianceSource::Prior, false) => {
+            "variance from the pooled scatter of repeated samples"
+        }
+    }
+}
 
 /// The cells of [`POSITION_STATS`] for one position.
 pub(crate) fn position_stats(

@@ -75,6 +75,39 @@ pub enum Noise {
     },
 }
 
+impl Noise {
+    /// Known noise from an option: `None` (from the data) or σ of one
+    /// sample, which must be a positive finite number.
+    pub fn from_option(sigma: Option<f64>) -> Result<Noise> {
+        let n = match sigma {
+            None => Noise::Auto,
+            Some(sigma) => Noise::Known { sigma },
+        };
+        n.validate()?;
+        Ok(n)
+    }
+
+    /// σ of one sample when known.
+    pub fn sigma(self) -> Option<f64> {
+        match self {
+            Noise::Auto => None,
+            Noise::Known { sigma } => Some(sigma),
+        }
+    }
+
+    /// Refuse a known σ that is not a positive finite number.
+    pub fn validate(self) -> Result<()> {
+        match self {
+            Noise::Auto => Ok(()),
+            Noise::Known { sigma } if sigma.is_finite() && sigma > 0.0 => Ok(()),
+            Noise::Known { sigma } => Err(Error::InvalidValue {
+                what: "noise (standard deviation of one output sample; a positive number)".into(),
+                value: sigma.to_string(),
+            }),
+        }
+    }
+}
+
 /// `σ²` of a known noise level, refusing a non-positive or non-finite σ.
 fn known_variance(sigma: f64) -> Result<f64> {
     if sigma.is_finite() && sigma > 0.0 {

@@ -1,5 +1,15 @@
 //! Calibration procedures: test plan + rig kinematics + linear(ised) model +
 //! map to physical coefficients, all on [`crate::estimation`].
+//!
+//! # One shape
+//! Every reducing procedure is one folder,
+//! `procedures/<name>/{mod,input,plan,sim,document}.rs` (model and map,
+//! columns/segmentation/checks, plan, simulator, result document), and
+//! implements [`Procedure`]: options validated once, rows read through the
+//! input layer ([`incal_io`]) into observations, observations reduced into
+//! the one result document. [`reduce_source`] runs the whole chain for any
+//! front end (the CLI, Python, fuzzing on bytes): a front end only turns
+//! its arguments into the procedure's options and renders the document.
 
 pub mod centrifuge;
 pub mod gfimu;
@@ -7,3 +17,102 @@ pub mod gyro;
 pub mod imu;
 pub mod misalign;
 pub mod tumble;
+
+use std::io::Read;
+
+use crate::document::{InputFile, ResultDocument};
+use crate::error::{Error, Result};
+
+/// Progress of a long reduction, rendered by the front end (a terminal
+/// bar, a notebook widget) or ignored ([`Silent`]). The core never draws.
+pub trait Progress: Sync {
+    /// A stage of `len` steps begins (`what` names it for people).
+    fn start(&self, _what: &str, _len: u64) {}
+    /// `n` more steps of the current stage are done.
+    fn advance(&self, _n: u64) {}
+    /// The current stage is over.
+    fn finish(&self) {}
+}
+
+/// No progress shown.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Silent;
+
+impl Progress for Silent {}
+
+/// One calibration procedure behind one shape (see the module docs).
+pub trait Procedure {
+    /// The procedure's id in result documents.
+    const ID: crate::document::Procedure;
+    /// The options of the reduction, validated by [`Procedure::validate`]
+    /// and serialised (snake_case keys) into the document's `options`.
+    type Options: serde::Serialize;
+    /// Observations as the input layer reads them from a recording.
+    type Input;
+
+    /// Check the options once, before anything is read; every range check
+    /// of the procedure lives here, not in a front end.
+    fn validate(options: &Self::Options) -> Result<()>;
+
+    /// Columns, segmentation and checks: the rows of one recording into
+    /// observations. Pure: the rows come from any source.
+    fn read<R: Read>(
+        rows: &mut incal_io::Reader<R>,
+        options: &Self::Options,
+    ) -> Result<Self::Input>;
+
+    /// The reduction: observations into the result document (its
+    /// `inputs` and `options` are filled by [`reduce_source`]).
+    fn reduce(
+        input: &Self::Input,
+        options: &Self::Options,
+        progress: &dyn Progress,
+    ) -> Result<ResultDocument>;
+}
+
+/// Read one recording (`src`, named `name` in messages and in the
+/// document's inputs; `<stdin>` is recorded as `-`) and reduce it: validate
+/// the options, read through the input layer, reduce, record the input's
+/// SHA-256 and row count and the options. Every error names the file (and
+/// the line and column when it has them).
+pub fn reduce_source<P: Procedure, R: Read>(
+    name: &str,
+    src: R,
+    read: &incal_io::ReadOptions,
+    options: &P::Options,
+    progress: &dyn Progress,
+) -> Result<ResultDocument> {
+    P::validate(options)?;
+    let mut rows = incal_io::Reader::new(name, src, read)?;
+    let input = P::read(&mut rows, options).map_err(|e| e.in_file(name))?;
+    let summary = rows.finish()?;
+    let mut doc = P::reduce(&input, options, progress).map_err(|e| e.in_file(name))?;
+    let path = if name == incal_io::source::STDIN_NAME {
+        "-"
+    } else {
+        name
+    };
+    doc.inputs.insert(
+        0,
+        InputFile {
+            role: "input".into(),
+            path: path.into(),
+            sha256: summary.sha256,
+            rows: Some(summary.rows as u64),
+        },
+    );
+    doc.options = options_map(options)?;
+    Ok(doc)
+}
+
+/// The options as the document's `options` object.
+pub fn options_map<T: serde::Serialize>(
+    options: &T,
+) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
+    match serde_json::to_value(options) {
+        Ok(serde_json::Value::Object(m)) => Ok(m.into_iter().collect()),
+        Ok(_) | Err(_) => Err(Error::Unsupported(
+            "options do not serialise to a JSON object".into(),
+        )),
+    }
+}

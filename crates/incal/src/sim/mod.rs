@@ -11,7 +11,8 @@ pub mod gyro;
 pub mod imu;
 pub mod misalign;
 pub mod noise;
-pub mod tumble;
+/// The tumble simulator (lives with its procedure).
+pub use crate::procedures::tumble::sim as tumble;
 
 use rand::rngs::ChaCha8Rng;
 use rand::SeedableRng;

@@ -34,7 +34,10 @@
 //! (e.g. with Kpp not modelled the reported K2 is `K2 − Kpp` and K0 is
 //! `K0 + Kpp`).
 
+pub mod document;
+pub mod input;
 pub mod plan;
+pub mod sim;
 
 use std::collections::BTreeMap;
 
@@ -82,7 +85,9 @@ pub fn default_terms(mount: Mount) -> Vec<Term> {
     }
 }
 
-/// Options of [`calibrate`].
+/// Options of [`calibrate`]. In the document: `{"mount": "pendulum",
+/// "noise": null, "terms": ["K0", …]}` (`noise`: the known standard
+/// deviation of one output sample, output units, or null for "from the data").
 #[derive(Debug, Clone, PartialEq)]
 pub struct TumbleOptions {
     /// Mount on the dividing head.
@@ -101,6 +106,53 @@ impl TumbleOptions {
             terms: default_terms(mount),
             noise: Noise::Auto,
         }
+    }
+}
+
+impl serde::Serialize for TumbleOptions {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(3))?;
+        m.serialize_entry("mount", self.mount.name())?;
+        m.serialize_entry("noise", &self.noise.sigma())?;
+        let terms: Vec<&str> = self.terms.iter().map(|t| t.name()).collect();
+        m.serialize_entry("terms", &terms)?;
+        m.end()
+    }
+}
+
+/// The tumble test as one [`super::Procedure`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Tumble;
+
+impl super::Procedure for Tumble {
+    const ID: crate::document::Procedure = crate::document::Procedure::Tumble;
+    type Options = TumbleOptions;
+    type Input = Vec<Observation>;
+
+    fn validate(o: &TumbleOptions) -> Result<()> {
+        o.noise.validate()?;
+        if !o.terms.contains(&Term::K1) {
+            return Err(Error::Unsupported(
+                "the term set must contain K1 (scale factor)".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    fn read<R: std::io::Read>(
+        rows: &mut incal_io::Reader<R>,
+        _: &TumbleOptions,
+    ) -> Result<Vec<Observation>> {
+        input::read(rows)
+    }
+
+    fn reduce(
+        obs: &Vec<Observation>,
+        o: &TumbleOptions,
+        _: &dyn super::Progress,
+    ) -> Result<crate::document::ResultDocument> {
+        calibrate(obs, o)?.document(o.noise.sigma().is_some())
     }
 }
 

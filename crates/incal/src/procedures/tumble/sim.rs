@@ -7,10 +7,10 @@
 //! visits the angles in reverse order (counter-clockwise) with fresh index
 //! errors, labelled `cw` and `ccw` as in seed 000 §2.2.
 
-use super::{normal, rng};
 use crate::models::AccelerometerModel;
 use crate::procedures::tumble::Observation;
 use crate::rigs::Mount;
+use crate::sim::{normal, rng};
 
 /// Configuration of a simulated tumble test.
 #[derive(Debug, Clone, PartialEq)]

@@ -2,12 +2,13 @@
 
 use serde_json::json;
 
-use super::{
+use crate::document::variance_decision;
+use crate::document::{
     position_stats, position_table, term_unit, Cell, DecisionCode, DocumentBuilder, FitSummary,
     Procedure, ResultDocument, Table, Warning, WarningCode,
 };
 use crate::error::Result;
-use crate::estimation::{Estimates, VarianceSource};
+use crate::estimation::Estimates;
 use crate::procedures::tumble::TumbleResult;
 use crate::units::{rad_to_arcsec, Unit};
 
@@ -37,17 +38,6 @@ fn term_table(id: &str, title: &str, e: &Estimates) -> Result<Table> {
         ])?;
     }
     Ok(t)
-}
-
-/// Describe where the variance behind u came from.
-pub(crate) fn variance_decision(source: VarianceSource, known_noise: bool) -> &'static str {
-    match (source, known_noise) {
-        (VarianceSource::Residuals, _) => {
-            "variance from the residuals (significant lack of fit, or no repeated samples)"
-        }
-        (VarianceSource::Prior, true) => "variance from the known noise (--noise)",
-        (VarianceSource::Prior, false) => "variance from the pooled scatter of repeated samples",
-    }
 }
 
 impl TumbleResult {

@@ -1,0 +1,27 @@
+//! The one runner of every reducing command: open the input, read and
+//! reduce it through the core's procedure shape, render or write the
+//! result (identity, limits, JSON or text).
+
+use std::path::Path;
+
+use incal::procedures::{reduce_source, Procedure, Progress};
+
+use crate::error::{core, CliResult};
+use crate::input::ReadArgs;
+use crate::output::ResultArgs;
+
+/// Read `input` (`-`: standard input) with `read`, reduce it by procedure
+/// `P` with `options`, and emit the result as `result` says.
+pub fn reduce<P: Procedure>(
+    input: &Path,
+    read: &ReadArgs,
+    options: &P::Options,
+    result: &ResultArgs,
+    progress: &dyn Progress,
+) -> CliResult<()> {
+    let read = read.options()?;
+    let src = incal_io::open(input)?;
+    let doc =
+        reduce_source::<P, _>(&src.name, src.reader, &read, options, progress).map_err(core)?;
+    result.emit(doc)
+}

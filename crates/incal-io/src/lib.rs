@@ -1,0 +1,36 @@
+//! # incal-io — the input layer of incal
+//!
+//! One tabular reader for every CSV input of every procedure and front end
+//! (CLI, Python, fuzzing), and one CSV writer. It knows no procedure: it
+//! turns bytes into a header and rows of cells, and every problem into one
+//! [`InputError`] naming the file, the line and the column.
+//!
+//! * [`Reader`]: row by row over any `impl Read`, bounded memory, SHA-256
+//!   of every byte while reading ([`Summary::sha256`]).
+//! * [`Table`]: the whole table in memory, for procedures that segment rows.
+//! * [`ColumnMap`]: `--columns` selection and renaming (`NAME=HEADER`).
+//! * [`CsvWriter`]: the writer of simulators and converters.
+//!
+//! The accepted format is described in [`reader`].
+
+#![warn(missing_docs)]
+
+pub mod columns;
+pub mod error;
+pub mod reader;
+pub mod source;
+pub mod table;
+pub mod writer;
+
+pub use columns::{ColumnEntry, ColumnMap};
+pub use error::{clip, InputError, Result};
+pub use reader::{
+    hex, parse_delimiter, parse_f64, Header, ReadOptions, Reader, Row, Summary, MAX_ABS_VALUE,
+    MAX_LINE_BYTES,
+};
+pub use source::{display_name, is_dash, open, read_hashed, read_table, stream, stream_table};
+pub use table::{Table, TableRow};
+pub use writer::{Cell, CsvWriter};
+
+#[cfg(test)]
+mod tests;

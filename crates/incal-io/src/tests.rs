@@ -1,0 +1,271 @@
+//! Unit tests of the reader, the table and the writer.
+
+use super::*;
+use proptest::prelude::*;
+
+fn table(bytes: &[u8]) -> Result<Table> {
+    Table::from_bytes("f.csv", bytes, &ReadOptions::default())
+}
+
+fn cells(t: &Table) -> Vec<Vec<String>> {
+    (0..t.row_count())
+        .map(|r| {
+            (0..t.header().width())
+                .map(|c| t.text(r, c).to_string())
+                .collect()
+        })
+        .collect()
+}
+
+/// A source that hands out at most `n` bytes per read, to cross every
+/// buffer boundary.
+struct Trickle<'a> {
+    data: &'a [u8],
+    n: usize,
+}
+
+impl std::io::Read for Trickle<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let k = self.n.min(buf.len()).min(self.data.len());
+        buf[..k].copy_from_slice(&self.data[..k]);
+        self.data = &self.data[k..];
+        Ok(k)
+    }
+}
+
+#[test]
+fn one_file_in_every_dress_reads_the_same() {
+    let plain = b"angle_deg,output\n0,1.5\n30,2.5\n";
+    let dressed = b"\xEF\xBB\xBF# a comment\r\n\r\nangle_deg;output\r\n# note\r\n0;1.5\r\n\r\n30 ; \"2.5\"\r\n";
+    let a = table(plain).unwrap();
+    let b = table(dressed).unwrap();
+    assert_eq!(cells(&a), cells(&b));
+    assert_eq!(b.header().delimiter(), b';');
+    assert_eq!(b.line(0), 5);
+    assert_eq!(b.line(1), 7);
+    assert_eq!(b.f64(1, 1).unwrap(), 2.5);
+    let tab = table(b"angle_deg\toutput\n0\t1.5\n30\t2.5\n").unwrap();
+    assert_eq!(cells(&a), cells(&tab));
+    let cr = table(b"angle_deg,output\r0,1.5\r30,2.5\r").unwrap();
+    assert_eq!(cells(&a), cells(&cr));
+}
+
+#[test]
+fn quoted_fields_hold_delimiters_quotes_and_line_breaks() {
+    let t =
+        table(b"label,x\n\"a, b\",1\n\"say \"\"hi\"\"\",2\n\"two\nlines\",3\n  \"padded\"  ,4\n")
+            .unwrap();
+    assert_eq!(t.text(0, 0), "a, b");
+    assert_eq!(t.text(1, 0), "say \"hi\"");
+    assert_eq!(t.text(2, 0), "two\nlines");
+    assert_eq!(t.line(2), 4);
+    assert_eq!(t.line(3), 6);
+    assert_eq!(t.text(3, 0), "padded");
+    let e = table(b"a,b\n\"open,1\n").unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "f.csv:2: quoted field not closed before the end of the file"
+    );
+    let e = table(b"a,b\n\"x\"y,1\n").unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("f.csv:2: text after a closing quote"),
+        "{e}"
+    );
+}
+
+#[test]
+fn decimal_comma_is_refused_saying_so() {
+    let t = table(b"a;b\n1,5;2\n").unwrap();
+    let e = t.f64(0, 0).unwrap_err().to_string();
+    assert!(
+        e.starts_with("f.csv:2: column 'a': '1,5' has a decimal comma"),
+        "{e}"
+    );
+    // With ',' as delimiter the comma splits the cell: the width is wrong.
+    let e = table(b"a,b\n1,5,2\n").unwrap_err().to_string();
+    assert_eq!(e, "f.csv:2: 3 fields, but the header has 2");
+}
+
+#[test]
+fn bad_files_name_file_line_and_column() {
+    let e = |b: &[u8]| table(b).unwrap_err().to_string();
+    assert_eq!(e(b""), "f.csv: empty file (expected a header row)");
+    assert_eq!(
+        e(b"# only\n\n"),
+        "f.csv: empty file (expected a header row)"
+    );
+    assert_eq!(e(b"a,b\n"), "f.csv: no data rows after the header");
+    assert_eq!(e(b"a,a\n1,2\n"), "f.csv:1: column 'a' appears twice");
+    assert_eq!(
+        e(b"a,,b\n1,2,3\n"),
+        "f.csv:1: empty column name in column 2"
+    );
+    assert_eq!(
+        e(b"a,b\n1,2\n3\n"),
+        "f.csv:3: 1 fields, but the header has 2"
+    );
+    assert_eq!(e(b"a,b\n1,2\n3,\xB0\n"), "f.csv:3: invalid UTF-8");
+    let t = table(b"a,b\n1,x\nNaN,1e16\n").unwrap();
+    assert_eq!(
+        t.f64(0, 1).unwrap_err().to_string(),
+        "f.csv:2: column 'b': 'x' is not a number"
+    );
+    assert_eq!(
+        t.f64(1, 0).unwrap_err().to_string(),
+        "f.csv:3: column 'a': 'NaN' is not a finite number"
+    );
+    assert_eq!(
+        t.f64(1, 1).unwrap_err().to_string(),
+        "f.csv:3: column 'b': 1e16 is out of range (|value| <= 1e15)"
+    );
+    assert_eq!(
+        t.column("c").unwrap_err().to_string(),
+        "f.csv: missing column 'c' (columns: a, b)"
+    );
+}
+
+#[test]
+fn rows_of_empty_cells_are_skipped() {
+    let t = table(b"a,b\n1,2\n,\n , \n3,4\n").unwrap();
+    assert_eq!(t.row_count(), 2);
+    assert_eq!(t.line(1), 5);
+}
+
+#[test]
+fn a_line_without_end_is_refused_within_the_cap() {
+    let opts = ReadOptions {
+        max_line_bytes: 1000,
+        ..ReadOptions::default()
+    };
+    let zeros = vec![0u8; 100_000];
+    let e = Table::read("zero", &zeros[..], &opts, 0)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "zero:1: line longer than 1000 bytes (is this a CSV text file?)"
+    );
+    let mut long = b"a\n".to_vec();
+    long.extend(std::iter::repeat_n(b'1', 5000));
+    long.push(b'\n');
+    let e = Table::read("long", &long[..], &opts, 0)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "long:2: line longer than 1000 bytes (is this a CSV text file?)"
+    );
+}
+
+#[test]
+fn columns_are_renamed_and_selected() {
+    let bytes = b"Time,Angle [deg],Out\n0,30,1.5\n";
+    let opts =
+        ReadOptions::with_columns(ColumnMap::parse("angle_deg=Angle [deg],output=Out").unwrap());
+    let t = Table::from_bytes("f.csv", bytes, &opts).unwrap();
+    assert_eq!(t.header().names(), ["Time", "angle_deg", "output"]);
+    assert_eq!(t.header().selected(), [1, 2]);
+    assert_eq!(t.f64(0, t.column("output").unwrap()).unwrap(), 1.5);
+    let opts = ReadOptions::with_columns(ColumnMap::parse("output=Nope").unwrap());
+    let e = Table::from_bytes("f.csv", bytes, &opts)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "f.csv:1: no column 'Nope' to read as 'output' (columns: Time, Angle [deg], Out)"
+    );
+    let opts = ReadOptions::with_columns(ColumnMap::parse("Time=Out").unwrap());
+    let e = Table::from_bytes("f.csv", bytes, &opts)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e, "f.csv:1: column 'Time' appears twice (after --columns)");
+}
+
+#[test]
+fn the_hash_is_of_every_byte_as_stored() {
+    use sha2::Digest;
+    let bytes = b"\xEF\xBB\xBFa,b\r\n1,2\r\n# trailing note\r\n";
+    let t = table(bytes).unwrap();
+    assert_eq!(t.sha256(), hex(&sha2::Sha256::digest(bytes)));
+    let one = Table::read(
+        "f.csv",
+        Trickle { data: bytes, n: 1 },
+        &ReadOptions::default(),
+        0,
+    )
+    .unwrap();
+    assert_eq!(one.header().names(), ["a", "b"]);
+    assert_eq!(one.sha256(), t.sha256());
+    assert_eq!(t.summary().bytes, bytes.len() as u64);
+}
+
+#[test]
+fn numbers_parse_as_std_does() {
+    for s in [
+        "0",
+        "-1.5",
+        "+2",
+        ".5",
+        "5.",
+        "1e-7",
+        "-3.25E+2",
+        "123456789.123456789",
+    ] {
+        assert_eq!(parse_f64(s.as_bytes()), s.parse::<f64>().ok(), "{s}");
+    }
+    for s in ["", "1.2.3", "0x10", "1_000", "1,5", "--1", "e5"] {
+        assert_eq!(parse_f64(s.as_bytes()), None, "{s}");
+    }
+}
+
+#[test]
+fn the_writer_quotes_what_needs_it_and_refuses_non_finite() {
+    let mut w = CsvWriter::new(Vec::new(), &["x", "label"]).unwrap();
+    w.row(&[Cell::Num(0.1), Cell::Text("a,b")]).unwrap();
+    w.row(&[Cell::Num(-2e-9), Cell::Text("#x")]).unwrap();
+    assert!(w.row(&[Cell::Num(f64::NAN), Cell::Text("")]).is_err());
+    let mut w = CsvWriter::new(Vec::new(), &["x"]).unwrap();
+    w.row(&[Cell::Num(1.0)]).unwrap();
+    assert_eq!(w.finish().unwrap(), b"x\n1\n");
+}
+
+proptest! {
+    /// Whatever a table holds, writing it and reading it back in chunks of
+    /// any size gives the same cells, numbers bit for bit.
+    #[test]
+    fn written_tables_read_back(
+        rows in proptest::collection::vec(
+            (any::<f64>().prop_filter("finite", |x| x.is_finite() && x.abs() <= 1e15),
+             "[ -~]{0,12}"),
+            1..40),
+        chunk in 1usize..64,
+    ) {
+        let mut w = CsvWriter::new(Vec::new(), &["x", "label", "y"]).unwrap();
+        for (x, s) in &rows {
+            w.row(&[Cell::Num(*x), Cell::Text(s), Cell::Num(1.0)]).unwrap();
+        }
+        let bytes = w.finish().unwrap();
+        let t = Table::read("p.csv", Trickle { data: &bytes, n: chunk }, &ReadOptions::default(), 0);
+        // A row whose label is empty or blank... is still a row (x and y are there).
+        let t = t.unwrap();
+        prop_assert_eq!(t.row_count(), rows.len());
+        for (r, (x, s)) in rows.iter().enumerate() {
+            prop_assert_eq!(t.f64(r, 0).unwrap().to_bits(), x.to_bits());
+            prop_assert_eq!(t.text(r, 1), s.trim_matches(|c| c == ' ' || c == '\t'));
+        }
+    }
+
+    /// Any bytes: an error or a table, never a panic.
+    #[test]
+    fn any_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..400), chunk in 1usize..32) {
+        let opts = ReadOptions { max_line_bytes: 128, ..ReadOptions::default() };
+        if let Ok(t) = Table::read("b", Trickle { data: &bytes, n: chunk }, &opts, 0) {
+            for r in 0..t.row_count() {
+                for c in 0..t.header().width() {
+                    let _ = t.f64(r, c);
+                }
+            }
+        }
+    }
+}
