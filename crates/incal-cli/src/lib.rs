@@ -52,7 +52,7 @@ enum Command {
     Misalign(commands::misalign::Command),
     /// Compare the coefficients of two result files: difference, per mille and En.
     Compare(commands::compare::Args),
-    /// Print the JSON Schema of the result document (incal.result/1).
+    /// Print the JSON Schema of the result document (incal.result/1), or with --plan of the plan document (incal.plan/1).
     Schema(commands::schema::Args),
     /// Write one self-contained HTML report (printable certificate) of a result file, with plots.
     Report(commands::report::Args),

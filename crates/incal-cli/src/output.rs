@@ -385,3 +385,71 @@ pub fn num(x: f64) -> String {
         s
     }
 }
+
+/// Options every plan command shares: output form and destination.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct PlanOut {
+    /// Print the plan document as one JSON object (schema incal.plan/1) instead of the readable plan.
+    #[arg(long)]
+    pub json: bool,
+    /// Write to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+impl PlanOut {
+    /// Render the plan document (JSON or text) and write it.
+    pub fn emit(&self, doc: &incal::document::plan::PlanDocument) -> CliResult<()> {
+        let text = if self.json {
+            json_text(&serde_json::to_value(doc).unwrap_or(serde_json::Value::Null))
+        } else {
+            render_plan(doc)
+        };
+        write_text(self.output.as_deref(), &text)
+    }
+}
+
+/// A plan value for people: numbers as typed, lists joined by commas,
+/// anything else as compact JSON.
+fn plan_value(v: &serde_json::Value) -> String {
+    use serde_json::Value;
+    match v {
+        Value::Null => "-".into(),
+        Value::String(s) => s.clone(),
+        Value::Number(n) => match n.as_f64() {
+            Some(x) if n.is_f64() => cell_number(x),
+            _ => n.to_string(),
+        },
+        Value::Bool(b) => b.to_string(),
+        Value::Array(a) if a.iter().all(|x| !x.is_object() && !x.is_array()) => {
+            a.iter().map(plan_value).collect::<Vec<_>>().join(", ")
+        }
+        other => other.to_string(),
+    }
+}
+
+/// The readable form of any plan document: title, the plan's own keys,
+/// the predicted standard uncertainty of every term in engineering units,
+/// notes.
+pub fn render_plan(doc: &incal::document::plan::PlanDocument) -> String {
+    let mut s = format!("{}\n", doc.title);
+    for (k, v) in &doc.plan {
+        s.push_str(&format!("{k}: {}\n", plan_value(v)));
+    }
+    if let (Some(u), Some(units)) = (&doc.predicted_u, &doc.units) {
+        s.push_str("\nPredicted standard uncertainty\n");
+        let rows: Vec<Vec<String>> = u
+            .iter()
+            .map(|(name, &u)| {
+                let unit = incal::units::Unit::parse(units.get(name).map_or("", |s| s.as_str()));
+                let (scale, label) = unit.engineering_for(u);
+                vec![name.clone(), sig(u * scale, 3), label.to_string()]
+            })
+            .collect();
+        s.push_str(&table(&["term", "predicted u", "unit"], &rows));
+    }
+    for n in &doc.notes {
+        s.push_str(&format!("note: {n}\n"));
+    }
+    s
+}

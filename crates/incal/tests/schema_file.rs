@@ -1,16 +1,15 @@
-//! The checked-in JSON Schema `schema/result.schema.json` is the schema of
-//! the result type: this test fails when the file is stale. Regenerate it
-//! with `INCAL_UPDATE_SCHEMA=1 cargo test -p incal --test schema_file`.
+//! The checked-in JSON Schemas `schema/result.schema.json` and
+//! `schema/plan.schema.json` are the schemas of the result and plan types:
+//! this test fails when a file is stale. Regenerate them with
+//! `INCAL_UPDATE_SCHEMA=1 cargo test -p incal --test schema_file`.
 
 use std::path::PathBuf;
 
-#[test]
-fn schema_file_is_current() {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../schema/result.schema.json");
-    let want = format!(
-        "{}\n",
-        serde_json::to_string_pretty(&incal::document::json_schema()).unwrap()
-    );
+fn check(file: &str, schema: serde_json::Value) {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../schema")
+        .join(file);
+    let want = format!("{}\n", serde_json::to_string_pretty(&schema).unwrap());
     if std::env::var_os("INCAL_UPDATE_SCHEMA").is_some() {
         std::fs::write(&path, &want).unwrap();
     }
@@ -19,5 +18,18 @@ fn schema_file_is_current() {
         have == want,
         "{} is stale: run INCAL_UPDATE_SCHEMA=1 cargo test -p incal --test schema_file",
         path.display()
+    );
+}
+
+#[test]
+fn result_schema_file_is_current() {
+    check("result.schema.json", incal::document::json_schema());
+}
+
+#[test]
+fn plan_schema_file_is_current() {
+    check(
+        "plan.schema.json",
+        incal::document::plan::plan_json_schema(),
     );
 }

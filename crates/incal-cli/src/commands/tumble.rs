@@ -5,17 +5,16 @@ use std::path::PathBuf;
 use clap::ValueEnum;
 use incal::estimation::Noise;
 use incal::models::{AccelerometerModel, Term};
-use incal::procedures::tumble::plan::{predict, TumblePlan};
+use incal::procedures::tumble::plan::{plan_document, TumblePlan, TumblePlanOptions};
 use incal::procedures::tumble::{default_terms, Tumble, TumbleOptions};
 use incal::procedures::Silent;
 use incal::rigs::Mount;
 use incal::sim::tumble::{simulate as sim_tumble, TumbleSim};
 use incal::units::{arcsec_to_rad, rad_to_deg};
-use serde_json::{json, Map, Value};
 
 use crate::error::{core, usage, CliResult};
 use crate::input::ReadArgs;
-use crate::output::{json_text, sig, table, write_text, ResultArgs};
+use crate::output::{write_text, PlanOut, ResultArgs};
 
 /// Mount on the dividing head.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -107,27 +106,11 @@ impl PlanChoice {
         } else if let Some(n) = self.points {
             TumblePlan::n_point(n)
         } else if let Some(angles) = &self.angles_deg {
-            if let Some(x) = angles.iter().find(|x| !x.is_finite()) {
-                return Err(usage(format!("--angles-deg: {x} is not a finite angle")));
-            }
-            Ok(TumblePlan {
-                kind: incal::procedures::tumble::plan::PlanKind::NPoint { n: angles.len() },
-                step_deg: f64::NAN,
-                angles_deg: angles.clone(),
-            })
+            TumblePlan::explicit(angles)
         } else {
             Ok(TumblePlan::gjb12())
         };
         p.map_err(core)
-    }
-}
-
-fn plan_name(p: &TumblePlan) -> &'static str {
-    use incal::procedures::tumble::plan::PlanKind;
-    match p.kind {
-        PlanKind::Gjb12 => "gjb12",
-        PlanKind::SmallAngle { .. } => "small-angle",
-        PlanKind::NPoint { .. } => "n-point",
     }
 }
 
@@ -154,116 +137,23 @@ pub struct PlanArgs {
     /// Standard deviation of the head's index-angle error (arcsec), added as output noise K1·cosθ·ε.
     #[arg(long, default_value_t = 0.0)]
     pub index_error_arcsec: f64,
-    /// Print one JSON object.
-    #[arg(long)]
-    pub json: bool,
-    /// Write to this file instead of standard output.
-    #[arg(long, short = 'o', value_name = "FILE")]
-    pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub out: PlanOut,
 }
 
 /// `incal plan tumble`.
 pub fn plan(a: &PlanArgs) -> CliResult<()> {
-    let plan = a.plan.plan()?;
     let mount: Mount = a.mount.into();
-    let terms = parse_terms(&a.terms, mount)?;
-    if a.samples == 0 {
-        return Err(usage("--samples must be at least 1"));
-    }
-    let prediction = match (a.k1, a.noise) {
-        (Some(k1), Some(noise)) => {
-            if !(noise.is_finite() && noise > 0.0) {
-                return Err(usage(format!(
-                    "--noise must be a positive number, got {noise}"
-                )));
-            }
-            Some(
-                predict(
-                    mount,
-                    &terms,
-                    &plan.angles_rad(),
-                    k1,
-                    noise / (a.samples as f64).sqrt(),
-                    arcsec_to_rad(a.index_error_arcsec),
-                )
-                .map_err(core)?,
-            )
-        }
-        (None, None) => None,
-        _ => {
-            return Err(usage(
-                "--k1 and --noise go together (both are needed for a prediction)",
-            ))
-        }
+    let options = TumblePlanOptions {
+        mount,
+        terms: parse_terms(&a.terms, mount)?,
+        k1: a.k1,
+        noise: a.noise,
+        samples: a.samples,
+        index_error_arcsec: a.index_error_arcsec,
     };
-    if a.json {
-        let mut doc = json!({
-            "plan": plan_name(&plan),
-            "step_deg": plan.step_deg.is_finite().then_some(plan.step_deg),
-            "angles_deg": plan.angles_deg,
-            "max_input_g": plan.max_input_g(),
-            "mount": mount.name(),
-        });
-        if let Some(p) = &prediction {
-            let mut u = Map::new();
-            let mut units = Map::new();
-            for (k, n) in p.names().iter().enumerate() {
-                u.insert(n.clone(), json!(p.u_at(k)));
-                let unit = Term::parse(n).map_err(core)?.unit();
-                units.insert(n.clone(), json!(unit.as_str()));
-            }
-            doc["predicted_u"] = Value::Object(u);
-            doc["units"] = Value::Object(units);
-            doc["k1"] = json!(a.k1);
-            doc["noise"] = json!(a.noise);
-            doc["samples"] = json!(a.samples);
-            doc["index_error_arcsec"] = json!(a.index_error_arcsec);
-        }
-        return write_text(a.output.as_deref(), &json_text(&doc));
-    }
-    let mut s = format!(
-        "Tumble plan: {} (step {} deg), {} positions, largest input {:.3} g\n",
-        plan_name(&plan),
-        if plan.step_deg.is_finite() {
-            plan.step_deg.to_string()
-        } else {
-            "-".to_string()
-        },
-        plan.angles_deg.len(),
-        plan.max_input_g()
-    );
-    s.push_str(&format!(
-        "angles (deg): {}\n",
-        plan.angles_deg
-            .iter()
-            .map(|x| format!("{x}"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    ));
-    if let (Some(p), Some(k1), Some(noise)) = (prediction, a.k1, a.noise) {
-        s.push_str(&format!(
-            "\nPredicted standard uncertainty ({} mount, K1 = {}, noise {:e} per sample, samples per position {}, index error {} arcsec):\n",
-            mount.name(),
-            k1,
-            noise,
-            a.samples,
-            a.index_error_arcsec
-        ));
-        let mut rows = Vec::new();
-        for (k, n) in p.names().iter().enumerate() {
-            let unit = Term::parse(n).map_err(core)?.unit();
-            let (scale, label) = unit.engineering();
-            rows.push(vec![
-                n.clone(),
-                sig(p.u_at(k) * scale, 3),
-                label.to_string(),
-            ]);
-        }
-        s.push_str(&table(&["term", "predicted u", "unit"], &rows));
-    } else {
-        s.push_str("(give --k1 and --noise for the predicted uncertainty of every coefficient)\n");
-    }
-    write_text(a.output.as_deref(), &s)
+    let doc = plan_document(&a.plan.plan()?, &options).map_err(core)?;
+    a.out.emit(&doc)
 }
 
 /// Truth coefficients for simulators (default: the seed 000 instrument).

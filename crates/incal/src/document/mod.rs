@@ -33,6 +33,7 @@ pub mod imu;
 pub mod limits;
 pub mod misalign;
 pub mod noise;
+pub mod plan;
 
 use std::collections::BTreeMap;
 

@@ -200,3 +200,161 @@ pub fn predict(
     )?;
     to_physical(&linear, terms)
 }
+
+impl TumblePlan {
+    /// An explicit list of head angles (deg), in test order; each finite.
+    pub fn explicit(angles_deg: &[f64]) -> Result<Self> {
+        if let Some(x) = angles_deg
+            .iter()
+            .find(|x| !(x.is_finite() && x.abs() <= 1e4))
+        {
+            return Err(Error::InvalidValue {
+                what: "angles_deg (a finite angle within 1e4 deg)".into(),
+                value: x.to_string(),
+            });
+        }
+        Ok(Self {
+            kind: PlanKind::NPoint {
+                n: angles_deg.len(),
+            },
+            step_deg: f64::NAN,
+            angles_deg: angles_deg.to_vec(),
+        })
+    }
+}
+
+impl PlanKind {
+    /// The plan's name in documents: `gjb12`, `small-angle`, `n-point`.
+    pub fn name(self) -> &'static str {
+        match self {
+            PlanKind::Gjb12 => "gjb12",
+            PlanKind::SmallAngle { .. } => "small-angle",
+            PlanKind::NPoint { .. } => "n-point",
+        }
+    }
+}
+
+/// Options of a tumble plan's prediction. In the plan document's
+/// `options`: `mount`, `terms`, `k1` (output/g), `noise` (σ of one output
+/// sample, output units), `samples` (per position), `index_error_arcsec`
+/// (σ of the head's index error).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TumblePlanOptions {
+    /// Mount on the head.
+    pub mount: Mount,
+    /// Terms to predict.
+    pub terms: Vec<Term>,
+    /// Nominal scale factor K1 (output/g); with `noise`, needed for a prediction.
+    pub k1: Option<f64>,
+    /// σ of one output sample (output units); with `k1`, needed for a prediction.
+    pub noise: Option<f64>,
+    /// Samples averaged per position (≥ 1).
+    pub samples: usize,
+    /// σ of the head's index-angle error (arcsec, ≥ 0).
+    pub index_error_arcsec: f64,
+}
+
+impl serde::Serialize for TumblePlanOptions {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(6))?;
+        m.serialize_entry("index_error_arcsec", &self.index_error_arcsec)?;
+        m.serialize_entry("k1", &self.k1)?;
+        m.serialize_entry("mount", self.mount.name())?;
+        m.serialize_entry("noise", &self.noise)?;
+        m.serialize_entry("samples", &self.samples)?;
+        let terms: Vec<&str> = self.terms.iter().map(|t| t.name()).collect();
+        m.serialize_entry("terms", &terms)?;
+        m.end()
+    }
+}
+
+impl TumblePlanOptions {
+    /// Refuse options no prediction can use.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |what: &str, v: String| {
+            Err(Error::InvalidValue {
+                what: what.into(),
+                value: v,
+            })
+        };
+        if self.samples == 0 {
+            return bad("samples (at least 1 per position)", "0".into());
+        }
+        if !(self.index_error_arcsec.is_finite()
+            && (0.0..=3600.0).contains(&self.index_error_arcsec))
+        {
+            return bad(
+                "index_error_arcsec (within 0..3600)",
+                self.index_error_arcsec.to_string(),
+            );
+        }
+        match (self.k1, self.noise) {
+            (Some(k1), Some(noise)) => {
+                if !(k1.is_finite() && k1 != 0.0 && k1.abs() <= 1e12) {
+                    return bad("k1 (a finite, non-zero scale factor)", k1.to_string());
+                }
+                if !(noise.is_finite() && noise > 0.0) {
+                    return bad("noise (a positive number)", noise.to_string());
+                }
+                Ok(())
+            }
+            (None, None) => Ok(()),
+            _ => Err(Error::Unsupported(
+                "k1 and noise go together (both are needed for a prediction)".into(),
+            )),
+        }
+    }
+}
+
+/// The plan document of a tumble plan: the angles, the largest input, and
+/// with `k1` and `noise` the predicted u of every term.
+pub fn plan_document(
+    plan: &TumblePlan,
+    o: &TumblePlanOptions,
+) -> Result<crate::document::plan::PlanDocument> {
+    use serde_json::json;
+    o.validate()?;
+    let mut d = crate::document::plan::PlanDocument::new(
+        crate::document::Procedure::Tumble,
+        format!(
+            "Tumble plan: {} ({} positions, largest input {:.3} g), {} mount",
+            plan.kind.name(),
+            plan.angles_deg.len(),
+            plan.max_input_g(),
+            o.mount.name()
+        ),
+    );
+    d.with_options(o)?;
+    d.set("plan", json!(plan.kind.name()))?;
+    d.set(
+        "step_deg",
+        json!(plan.step_deg.is_finite().then_some(plan.step_deg)),
+    )?;
+    d.set("angles_deg", json!(plan.angles_deg))?;
+    d.set("max_input_g", json!(plan.max_input_g()))?;
+    d.set("mount", json!(o.mount.name()))?;
+    match (o.k1, o.noise) {
+        (Some(k1), Some(noise)) => {
+            let p = predict(
+                o.mount,
+                &o.terms,
+                &plan.angles_rad(),
+                k1,
+                noise / (o.samples as f64).sqrt(),
+                crate::units::arcsec_to_rad(o.index_error_arcsec),
+            )?;
+            for (k, n) in p.names().iter().enumerate() {
+                d.predict(n, p.u_at(k), Term::parse(n)?.unit().as_str())?;
+            }
+            d.set("k1", json!(k1))?;
+            d.set("noise", json!(noise))?;
+            d.set("samples", json!(o.samples))?;
+            d.set("index_error_arcsec", json!(o.index_error_arcsec))?;
+        }
+        _ => {
+            d.note("give k1 and noise for the predicted uncertainty of every coefficient");
+        }
+    }
+    Ok(d)
+}
