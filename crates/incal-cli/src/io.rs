@@ -133,6 +133,24 @@ pub fn write_text(path: Option<&Path>, text: &str) -> CliResult<()> {
     }
 }
 
+/// Stream an output through `write` to the file `path`, or to standard
+/// output when `path` is `None` or `-`: the writer is buffered and flushed
+/// here. Any failure, opening, writing (a full disk) or a value the
+/// writer refuses, is a failure (exit 1) with one line naming the output.
+pub fn write_stream<W>(path: Option<&Path>, write: W) -> CliResult<()>
+where
+    W: FnOnce(&mut dyn Write) -> std::io::Result<()>,
+{
+    let name = match path {
+        Some(p) if !is_dash(p) => p.display().to_string(),
+        _ => "stdout".to_string(),
+    };
+    let mut out = open_output(path)?;
+    write(&mut out)
+        .and_then(|()| out.flush())
+        .map_err(|e| CliError::Failure(anyhow::anyhow!("{name}: cannot write: {e}")))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

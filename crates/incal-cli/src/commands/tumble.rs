@@ -10,11 +10,11 @@ use incal::procedures::tumble::{default_terms, Tumble, TumbleOptions};
 use incal::procedures::Silent;
 use incal::rigs::Mount;
 use incal::sim::tumble::{simulate as sim_tumble, TumbleSim};
-use incal::units::{arcsec_to_rad, rad_to_deg};
+use incal::units::arcsec_to_rad;
 
 use crate::error::{core, usage, CliResult};
 use crate::input::ReadArgs;
-use crate::output::{write_text, PlanOut, ResultArgs};
+use crate::output::{PlanOut, ResultArgs};
 
 /// Mount on the dividing head.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -252,18 +252,6 @@ pub struct SimArgs {
 
 /// `incal simulate tumble`.
 pub fn simulate(a: &SimArgs) -> CliResult<()> {
-    if a.samples == 0 {
-        return Err(usage("--samples must be at least 1"));
-    }
-    if !(1..=2).contains(&a.passes) {
-        return Err(usage("--passes must be 1 or 2"));
-    }
-    if !(a.noise.is_finite() && a.noise >= 0.0) {
-        return Err(usage("--noise must be a non-negative number"));
-    }
-    if !(a.index_error_arcsec.is_finite() && a.index_error_arcsec >= 0.0) {
-        return Err(usage("--index-error-arcsec must be a non-negative number"));
-    }
     let cfg = TumbleSim {
         truth: a.truth.model()?,
         mount: a.mount.into(),
@@ -274,20 +262,9 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         passes: a.passes,
         seed: a.seed,
     };
+    cfg.validate().map_err(core)?;
     let obs = sim_tumble(&cfg);
-    let mut text = String::from(if a.passes > 1 {
-        "angle_deg,output,pass\n"
-    } else {
-        "angle_deg,output\n"
-    });
-    for o in &obs {
-        let angle = rad_to_deg(o.angle_rad);
-        // Round-trip exact: the angle is printed to 1e-9 deg, the output in full.
-        let angle = (angle * 1e9).round() / 1e9;
-        match &o.pass {
-            Some(p) => text.push_str(&format!("{angle},{},{p}\n", o.output)),
-            None => text.push_str(&format!("{angle},{}\n", o.output)),
-        }
-    }
-    write_text(a.output.as_deref(), &text)
+    crate::io::write_stream(a.output.as_deref(), |out| {
+        incal::procedures::tumble::input::write(&obs, out).map(|_| ())
+    })
 }

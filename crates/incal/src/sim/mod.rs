@@ -19,6 +19,24 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
 
+/// Largest number of rows (or samples) a simulator writes.
+pub const MAX_SIM_ROWS: u64 = 10_000_000;
+
+/// Refuse a simulation whose size (`factors`, named, multiplied) exceeds
+/// [`MAX_SIM_ROWS`]; the message names the factors and the limit.
+pub fn check_rows(factors: &[(&str, f64)]) -> crate::Result<()> {
+    let total: f64 = factors.iter().map(|f| f.1.max(0.0)).product();
+    if total.is_finite() && total <= MAX_SIM_ROWS as f64 {
+        Ok(())
+    } else {
+        let names: Vec<&str> = factors.iter().map(|f| f.0).collect();
+        Err(crate::Error::Unsupported(format!(
+            "the simulation would write {total:.3e} rows ({}); the limit is {MAX_SIM_ROWS}",
+            names.join(" x ")
+        )))
+    }
+}
+
 /// A seeded ChaCha8 stream.
 pub fn rng(seed: u64) -> ChaCha8Rng {
     ChaCha8Rng::seed_from_u64(seed)

@@ -42,3 +42,27 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>) -> Result<Vec<Observation>>
     obs.shrink_to_fit();
     Ok(obs)
 }
+
+/// Write observations in the tumble input format (`angle_deg,output` and
+/// `pass` when any observation has one). The angle is written to 1e-9 deg
+/// (the head's angle as set), the output in full (shortest round-trip).
+pub fn write<W: std::io::Write>(obs: &[Observation], out: W) -> std::io::Result<W> {
+    use incal_io::{Cell, CsvWriter};
+    let passes = obs.iter().any(|o| o.pass.is_some());
+    let header: &[&str] = if passes {
+        &["angle_deg", "output", "pass"]
+    } else {
+        &["angle_deg", "output"]
+    };
+    let mut w = CsvWriter::new(out, header)?;
+    for o in obs {
+        let angle = (o.angle_rad.to_degrees() * 1e9).round() / 1e9;
+        w.cell(Cell::Num(angle))?;
+        w.cell(Cell::Num(o.output))?;
+        if passes {
+            w.cell(Cell::Text(o.pass.as_deref().unwrap_or("")))?;
+        }
+        w.end_row()?;
+    }
+    w.finish()
+}

@@ -7,6 +7,7 @@
 //! visits the angles in reverse order (counter-clockwise) with fresh index
 //! errors, labelled `cw` and `ccw` as in seed 000 §2.2.
 
+use crate::error::{Error, Result};
 use crate::models::AccelerometerModel;
 use crate::procedures::tumble::Observation;
 use crate::rigs::Mount;
@@ -31,6 +32,54 @@ pub struct TumbleSim {
     pub passes: usize,
     /// Random seed.
     pub seed: u64,
+}
+
+impl TumbleSim {
+    /// Refuse a configuration that cannot be simulated: no samples, a pass
+    /// count other than 1 or 2, a negative or non-finite noise or index
+    /// error, more than [`crate::sim::MAX_SIM_ROWS`] rows, or a truth whose
+    /// output is not finite at some angle.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |what: &str, v: String| {
+            Err(Error::InvalidValue {
+                what: what.into(),
+                value: v,
+            })
+        };
+        if self.samples == 0 {
+            return bad("samples (at least 1 per position)", "0".into());
+        }
+        if !(1..=2).contains(&self.passes) {
+            return bad("passes (1 or 2)", self.passes.to_string());
+        }
+        if !(self.noise.is_finite() && self.noise >= 0.0) {
+            return bad("noise (a non-negative number)", self.noise.to_string());
+        }
+        if !(self.index_error_rad.is_finite() && self.index_error_rad >= 0.0) {
+            return bad(
+                "index error (a non-negative number)",
+                self.index_error_rad.to_string(),
+            );
+        }
+        if self.angles_deg.is_empty() {
+            return bad("angles (at least one)", "none".into());
+        }
+        crate::sim::check_rows(&[
+            ("samples", self.samples as f64),
+            ("angles", self.angles_deg.len() as f64),
+            ("passes", self.passes as f64),
+        ])?;
+        self.truth.validate()?;
+        for a in &self.angles_deg {
+            let e = self
+                .truth
+                .output(&self.mount.specific_force(a.to_radians()));
+            if !e.is_finite() {
+                return bad("truth (its output is not finite)", format!("at {a} deg"));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Simulate the observations (deterministic for a given seed).
