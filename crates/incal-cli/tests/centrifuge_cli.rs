@@ -2,35 +2,20 @@
 //! binary: the JSON contract, bad input (exit 2, one line naming file and
 //! line), and reproducible simulation.
 
+mod common;
+use common::*;
+
 use std::path::PathBuf;
-use std::process::{Command, Output};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::process::Command;
 
 use serde_json::Value;
 
-static COUNTER: AtomicUsize = AtomicUsize::new(0);
-
-fn temp(name: &str) -> PathBuf {
-    let k = COUNTER.fetch_add(1, Ordering::SeqCst);
-    std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
-        "incal_centrifuge_cli_{}_{k}_{name}",
-        std::process::id()
-    ))
-}
-
-fn incal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_incal"))
-        .args(args)
-        .output()
-        .expect("runs")
-}
-
 fn simulate(extra: &[&str]) -> PathBuf {
-    let path = temp("sim.csv");
+    let path = unique("sim.csv");
     let p = path.to_str().unwrap();
     let mut args = vec!["simulate", "centrifuge", "--seed", "3", "--output", p];
     args.extend_from_slice(extra);
-    let out = incal(&args);
+    let out = run(&args);
     assert!(
         out.status.success(),
         "{}",
@@ -59,12 +44,6 @@ fn calibrate_args(path: &str) -> Vec<&str> {
     ]
 }
 
-fn keys(v: &Value) -> Vec<String> {
-    let mut k: Vec<String> = v.as_object().expect("object").keys().cloned().collect();
-    k.sort();
-    k
-}
-
 fn assert_value_u(v: &Value) {
     assert_eq!(keys(v), ["u", "value"], "{v}");
     assert!(v["value"].is_f64() && v["u"].is_f64(), "{v}");
@@ -76,7 +55,7 @@ fn good_input_gives_the_contract_json() {
     let p = path.to_str().unwrap();
     let mut args = calibrate_args(p);
     args.push("--json");
-    let out = incal(&args);
+    let out = run(&args);
     assert!(
         out.status.success(),
         "{}",
@@ -138,7 +117,7 @@ fn good_input_gives_the_contract_json() {
     let r = doc["alignment"]["ecm_offset_m"]["value"].as_f64().unwrap();
     assert!((r - 4.49e-3).abs() < 1e-5, "{r}");
     // The readable report runs too.
-    let out = incal(&calibrate_args(p));
+    let out = run(&calibrate_args(p));
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("Uncertainty budget of K_ip"));
     let _ = std::fs::remove_file(&path);
@@ -146,9 +125,9 @@ fn good_input_gives_the_contract_json() {
 
 #[test]
 fn simulate_is_reproducible() {
-    let a = incal(&["simulate", "centrifuge", "--seed", "9"]);
-    let b = incal(&["simulate", "centrifuge", "--seed", "9"]);
-    let c = incal(&["simulate", "centrifuge", "--seed", "10"]);
+    let a = run(&["simulate", "centrifuge", "--seed", "9"]);
+    let b = run(&["simulate", "centrifuge", "--seed", "9"]);
+    let c = run(&["simulate", "centrifuge", "--seed", "10"]);
     assert!(a.status.success());
     assert_eq!(a.stdout, b.stdout);
     assert_ne!(a.stdout, c.stdout);
@@ -159,12 +138,12 @@ fn simulate_is_reproducible() {
 /// Run the calibration on `text`; expect exit 2 and one stderr line that
 /// contains every needle.
 fn refused(text: &str, extra: &[&str], needles: &[&str]) {
-    let path = temp("bad.csv");
+    let path = unique("bad.csv");
     std::fs::write(&path, text).unwrap();
     let p = path.to_str().unwrap();
     let mut args = calibrate_args(p);
     args.extend_from_slice(extra);
-    let out = incal(&args);
+    let out = run(&args);
     let err = String::from_utf8_lossy(&out.stderr).to_string();
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
@@ -220,7 +199,7 @@ fn unseparable_plan_is_refused_by_name() {
 
 #[test]
 fn unknown_option_exits_2() {
-    let out = incal(&["centrifuge", "--frobnicate"]);
+    let out = run(&["centrifuge", "--frobnicate"]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");

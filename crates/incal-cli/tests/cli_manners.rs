@@ -2,46 +2,11 @@
 //! usage or input), exactly one stderr line naming the option or file, no
 //! panics, `-` for standard input, a UTF-8 byte-order mark accepted.
 
-use std::io::Write;
+mod common;
+use common::*;
+
 use std::path::PathBuf;
 use std::process::{Command, Output, Stdio};
-
-fn incal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_incal"))
-        .args(args)
-        .stdin(Stdio::null())
-        .output()
-        .expect("runs incal")
-}
-
-/// `incal ARGS` with `input` on standard input.
-fn incal_with_stdin(args: &[&str], input: &[u8]) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_incal"))
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("runs incal");
-    let mut stdin = child.stdin.take().unwrap();
-    stdin.write_all(input).unwrap();
-    drop(stdin);
-    child.wait_with_output().unwrap()
-}
-
-/// A unique temp file with `content`.
-fn temp(name: &str, content: &[u8]) -> PathBuf {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("incal-cli-manners-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join(name);
-    std::fs::write(&p, content).unwrap();
-    p
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).to_string()
-}
 
 /// The single stderr line of `o` (fails unless there is exactly one).
 fn stderr_line(o: &Output) -> String {
@@ -53,7 +18,7 @@ fn stderr_line(o: &Output) -> String {
 }
 
 fn simulated_tumble_csv() -> Vec<u8> {
-    let o = incal(&["simulate", "tumble", "--seed", "7"]);
+    let o = run(&["simulate", "tumble", "--seed", "7"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(o.stdout.starts_with(b"angle_deg,output\n"));
     o.stdout
@@ -61,7 +26,7 @@ fn simulated_tumble_csv() -> Vec<u8> {
 
 #[test]
 fn bare_incal_is_bad_usage_with_the_usage_on_stderr() {
-    let o = incal(&[]);
+    let o = run(&[]);
     assert_eq!(o.status.code(), Some(2));
     assert!(o.stdout.is_empty(), "nothing on stdout");
     let e = stderr(&o);
@@ -72,13 +37,13 @@ fn bare_incal_is_bad_usage_with_the_usage_on_stderr() {
 #[test]
 fn a_command_group_without_its_subcommand_is_bad_usage() {
     for group in ["plan", "misalign", "simulate", "gfimu"] {
-        let o = incal(&[group]);
+        let o = run(&[group]);
         assert_eq!(o.status.code(), Some(2), "incal {group}");
         assert!(o.stdout.is_empty(), "incal {group}: nothing on stdout");
         let e = stderr(&o);
         assert!(e.contains(&format!("Usage: incal {group}")), "{e}");
     }
-    let o = incal(&["simulate", "misalign"]);
+    let o = run(&["simulate", "misalign"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("Usage: incal simulate misalign"));
 }
@@ -91,7 +56,7 @@ fn help_and_version_are_success_on_stdout() {
         &["tumble", "--help"],
         &["help"],
     ] {
-        let o = incal(args);
+        let o = run(args);
         assert_eq!(o.status.code(), Some(0), "incal {args:?}");
         assert!(!o.stdout.is_empty(), "incal {args:?}: on stdout");
         assert!(o.stderr.is_empty(), "incal {args:?}: {}", stderr(&o));
@@ -114,13 +79,13 @@ fn help_to_a_full_stdout_is_a_quiet_failure() {
 
 #[test]
 fn missing_required_option_is_named() {
-    let o = incal(&["tumble", "--input", "x.csv"]);
+    let o = run(&["tumble", "--input", "x.csv"]);
     assert_eq!(o.status.code(), Some(2));
     assert_eq!(
         stderr_line(&o),
         "incal: missing required option --mount <MOUNT> (see 'incal tumble --help')"
     );
-    let o = incal(&["tumble"]);
+    let o = run(&["tumble"]);
     assert_eq!(o.status.code(), Some(2));
     let line = stderr_line(&o);
     assert!(
@@ -131,7 +96,7 @@ fn missing_required_option_is_named() {
 
 #[test]
 fn invalid_choice_lists_the_allowed_values() {
-    let o = incal(&["tumble", "--mount", "sideways", "--input", "x.csv"]);
+    let o = run(&["tumble", "--mount", "sideways", "--input", "x.csv"]);
     assert_eq!(o.status.code(), Some(2));
     assert_eq!(
         stderr_line(&o),
@@ -141,13 +106,13 @@ fn invalid_choice_lists_the_allowed_values() {
 
 #[test]
 fn unknown_option_is_named_with_a_suggestion() {
-    let o = incal(&["tumble", "--bogus"]);
+    let o = run(&["tumble", "--bogus"]);
     assert_eq!(o.status.code(), Some(2));
     let line = stderr_line(&o);
     assert!(line.contains("'--bogus'"), "{line}");
     assert!(line.contains("incal tumble --help"), "{line}");
 
-    let o = incal(&["tumble", "--mount", "gate", "--input", "x.csv", "--jsn"]);
+    let o = run(&["tumble", "--mount", "gate", "--input", "x.csv", "--jsn"]);
     assert_eq!(o.status.code(), Some(2));
     let line = stderr_line(&o);
     assert!(
@@ -155,7 +120,7 @@ fn unknown_option_is_named_with_a_suggestion() {
         "{line}"
     );
 
-    let o = incal(&["tumbel"]);
+    let o = run(&["tumbel"]);
     assert_eq!(o.status.code(), Some(2));
     let line = stderr_line(&o);
     assert!(
@@ -166,7 +131,7 @@ fn unknown_option_is_named_with_a_suggestion() {
 
 #[test]
 fn bad_number_is_one_line_naming_the_option() {
-    let o = incal(&["simulate", "tumble", "--seed", "abc"]);
+    let o = run(&["simulate", "tumble", "--seed", "abc"]);
     assert_eq!(o.status.code(), Some(2));
     let line = stderr_line(&o);
     assert!(line.contains("--seed") && line.contains("'abc'"), "{line}");
@@ -175,7 +140,7 @@ fn bad_number_is_one_line_naming_the_option() {
 #[test]
 #[cfg(target_os = "linux")]
 fn unwritable_output_file_is_a_failure() {
-    let o = incal(&["simulate", "tumble", "--output", "/dev/full"]);
+    let o = run(&["simulate", "tumble", "--output", "/dev/full"]);
     assert_eq!(o.status.code(), Some(1));
     let line = stderr_line(&o);
     assert!(line.contains("/dev/full"), "{line}");
@@ -216,12 +181,12 @@ fn dash_reads_standard_input_through_a_pipe() {
 
 #[test]
 fn bad_standard_input_is_named_stdin() {
-    let o = incal_with_stdin(&["tumble", "--mount", "pendulum", "--input", "-"], b"");
+    let o = run_with_stdin(&["tumble", "--mount", "pendulum", "--input", "-"], b"");
     assert_eq!(o.status.code(), Some(2));
     let line = stderr_line(&o);
     assert!(line.starts_with("incal: <stdin>: "), "{line}");
 
-    let o = incal_with_stdin(
+    let o = run_with_stdin(
         &["tumble", "--mount", "pendulum", "--input", "-"],
         b"angle_deg,output\n0,abc\n",
     );
@@ -232,12 +197,12 @@ fn bad_standard_input_is_named_stdin() {
 #[test]
 fn a_leading_bom_is_accepted() {
     let csv = simulated_tumble_csv();
-    let plain = temp("plain.csv", &csv);
+    let plain = write("plain.csv", &csv);
     let mut with_bom = b"\xEF\xBB\xBF".to_vec();
     with_bom.extend_from_slice(&csv);
-    let bom = temp("bom.csv", &with_bom);
+    let bom = write("bom.csv", &with_bom);
     let run = |p: &PathBuf| {
-        let o = incal(&[
+        let o = run(&[
             "tumble",
             "--mount",
             "pendulum",
@@ -254,7 +219,7 @@ fn a_leading_bom_is_accepted() {
     assert_eq!(a, run(&bom), "same coefficients with and without a BOM");
 
     // On standard input too.
-    let o = incal_with_stdin(
+    let o = run_with_stdin(
         &["tumble", "--mount", "pendulum", "--input", "-", "--json"],
         &with_bom,
     );
@@ -266,7 +231,7 @@ fn unreadable_input_is_bad_input_naming_the_file() {
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
         .join(format!("incal-cli-manners-{}", std::process::id()));
     let missing = dir.join("no-such-file.csv");
-    let o = incal(&[
+    let o = run(&[
         "tumble",
         "--mount",
         "pendulum",

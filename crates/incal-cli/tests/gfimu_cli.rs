@@ -1,58 +1,28 @@
 //! Integration tests of `incal gfimu ...` and `incal simulate gfimu`,
 //! running the real binary on temporary files.
 
+mod common;
+use common::*;
+
 use std::path::PathBuf;
-use std::process::{Command, Output};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use serde_json::Value;
-
-static COUNTER: AtomicUsize = AtomicUsize::new(0);
-
-fn temp(name: &str, content: &str) -> PathBuf {
-    let k = COUNTER.fetch_add(1, Ordering::SeqCst);
-    let p = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("incal_gfimu_{}_{k}_{name}", std::process::id()));
-    std::fs::write(&p, content).unwrap();
-    p
-}
-
-fn incal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_incal"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 fn simulate(extra: &[&str]) -> String {
     let mut args = vec!["simulate", "gfimu"];
     args.extend_from_slice(extra);
-    let o = incal(&args);
+    let o = run(&args);
     assert!(o.status.success(), "{}", stderr(&o));
     stdout(&o)
 }
 
 /// Bad input: exit code 2 and exactly one stderr line containing `parts`.
-fn refused(args: &[&str], parts: &[&str]) {
-    let o = incal(args);
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    for p in parts {
-        assert!(err.contains(p), "'{p}' not in: {err}");
-    }
+fn refuses(args: &[&str], parts: &[&str]) {
+    refused(&run(args), parts);
 }
 
 fn calibrate_json(path: &str) -> Value {
-    let o = incal(&["gfimu", "calibrate", "--input", path, "--json"]);
+    let o = run(&["gfimu", "calibrate", "--input", path, "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
     serde_json::from_str(&stdout(&o)).unwrap()
 }
@@ -61,11 +31,11 @@ fn calibrate_json(path: &str) -> Value {
 /// built-in `layout`, calibrate it, and keep the calibration JSON in a
 /// temporary file: `(path, JSON text)`.
 fn calibration(layout: &str, seed: &str) -> (PathBuf, String) {
-    let st = temp(
+    let st = write_unique(
         "static.csv",
         &simulate(&["--layout", layout, "--seed", seed, "--samples", "20"]),
     );
-    let o = incal(&[
+    let o = run(&[
         "gfimu",
         "calibrate",
         "--layout",
@@ -76,12 +46,12 @@ fn calibration(layout: &str, seed: &str) -> (PathBuf, String) {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = stdout(&o);
-    (temp("cal.json", &text), text)
+    (write_unique("cal.json", &text), text)
 }
 
 #[test]
 fn calibrate_gives_contract_json() {
-    let csv = temp("static.csv", &simulate(&["--seed", "5"]));
+    let csv = write_unique("static.csv", &simulate(&["--seed", "5"]));
     let doc = calibrate_json(csv.to_str().unwrap());
     let accs = doc["accelerometers"].as_object().unwrap();
     let mut names: Vec<&String> = accs.keys().collect();
@@ -143,7 +113,7 @@ fn arbitrary_orientations_by_force_columns() {
             .collect();
         text.push_str(&format!("{},{},{},{}\n", f[0], f[1], f[2], e.join(",")));
     }
-    let csv = temp("forces.csv", &text);
+    let csv = write_unique("forces.csv", &text);
     let doc = calibrate_json(csv.to_str().unwrap());
     let c = &doc["accelerometers"]["c"];
     assert!((c["K0"]["value"].as_f64().unwrap() - 0.02).abs() < 1e-6);
@@ -153,11 +123,11 @@ fn arbitrary_orientations_by_force_columns() {
 #[test]
 fn solve_gives_contract_json_and_recovers_motion() {
     let (cal, _) = calibration("paper", "6");
-    let mo = temp(
+    let mo = write_unique(
         "motion.csv",
         &simulate(&["--kind", "motion", "--seed", "7", "--duration-s", "1.5"]),
     );
-    let o = incal(&[
+    let o = run(&[
         "gfimu",
         "solve",
         "--calibration",
@@ -212,43 +182,43 @@ fn bad_calibration_inputs_are_refused() {
         })
         .collect::<Vec<_>>()
         .join("\n");
-    let p = temp("noc.csv", &no_c);
+    let p = write_unique("noc.csv", &no_c);
     let ps = p.to_str().unwrap();
-    refused(
+    refuses(
         &["gfimu", "calibrate", "--input", ps],
         &[ps, "missing column 'c'"],
     );
 
     // NaN and text in a number: file and line named.
-    let p = temp(
+    let p = write_unique(
         "nan.csv",
         "position,a,b,c,d,e,f\n+x,0,0,1,1,0,0\n-x,0,NaN,1,1,0,0\n",
     );
     let ps = p.to_str().unwrap();
-    refused(
+    refuses(
         &["gfimu", "calibrate", "--input", ps],
         &[&format!("{ps}:3"), "'b'"],
     );
-    let p = temp(
+    let p = write_unique(
         "text.csv",
         "position,a,b,c,d,e,f\n+x,0,0,1,1,0,0\n-x,0,0,abc,1,0,0\n",
     );
     let ps = p.to_str().unwrap();
-    refused(
+    refuses(
         &["gfimu", "calibrate", "--input", ps],
         &[&format!("{ps}:3"), "not a number"],
     );
-    let p = temp("pos.csv", "position,a,b,c,d,e,f\n+q,0,0,1,1,0,0\n");
+    let p = write_unique("pos.csv", "position,a,b,c,d,e,f\n+q,0,0,1,1,0,0\n");
     let ps = p.to_str().unwrap();
-    refused(
+    refuses(
         &["gfimu", "calibrate", "--input", ps],
         &[&format!("{ps}:2"), "'+q'"],
     );
 
     // Empty file.
-    let p = temp("empty.csv", "");
+    let p = write_unique("empty.csv", "");
     let ps = p.to_str().unwrap();
-    refused(&["gfimu", "calibrate", "--input", ps], &[ps, "empty"]);
+    refuses(&["gfimu", "calibrate", "--input", ps], &[ps, "empty"]);
 
     // Fewer than six positions (only ±x, ±y, +z).
     let five: String = good
@@ -256,9 +226,9 @@ fn bad_calibration_inputs_are_refused() {
         .filter(|l| !l.starts_with("-z"))
         .map(|l| format!("{l}\n"))
         .collect();
-    let p = temp("five.csv", &five);
+    let p = write_unique("five.csv", &five);
     let ps = p.to_str().unwrap();
-    refused(
+    refuses(
         &["gfimu", "calibrate", "--input", ps],
         &[ps, "need at least 6, got 5"],
     );
@@ -275,15 +245,15 @@ fn bad_calibration_inputs_are_refused() {
     ] {
         text.push_str(&format!("{fx},{fy},0,0.1,0.2,{fx},{fx},{fy},{fy}\n"));
     }
-    let p = temp("flat.csv", &text);
+    let p = write_unique("flat.csv", &text);
     let ps = p.to_str().unwrap();
-    refused(
+    refuses(
         &["gfimu", "calibrate", "--input", ps],
         &[ps, "cannot separate", "Ks_z"],
     );
 
     // Unknown option.
-    refused(
+    refuses(
         &["gfimu", "calibrate", "--input", ps, "--frobnicate"],
         &["--frobnicate"],
     );
@@ -292,7 +262,7 @@ fn bad_calibration_inputs_are_refused() {
 #[test]
 fn bad_geometry_and_solve_inputs_are_refused() {
     // Singular geometry: c and d at the same place.
-    let geo = temp(
+    let geo = write_unique(
         "geo.toml",
         r#"
 [[accelerometer]]
@@ -322,56 +292,56 @@ direction = [0.0, 1.0, 0.0]
 "#,
     );
     let gs = geo.to_str().unwrap();
-    let csv = temp("st.csv", &simulate(&["--seed", "9"]));
+    let csv = write_unique("st.csv", &simulate(&["--seed", "9"]));
     let cs = csv.to_str().unwrap();
-    refused(
+    refuses(
         &["gfimu", "calibrate", "--input", cs, "--geometry", gs],
         &[gs, "cannot", "omega_dot_z"],
     );
     // Malformed TOML names file and line.
-    let bad = temp(
+    let bad = write_unique(
         "bad.toml",
         "[[accelerometer]]\nname = \"a\"\nposition_m = [0.1, x]\n",
     );
     let bs = bad.to_str().unwrap();
-    refused(
+    refuses(
         &["gfimu", "calibrate", "--input", cs, "--geometry", bs],
         &[&format!("{bs}:3")],
     );
 
     // Solve: calibration missing an accelerometer; series with bad time.
-    let cal = temp(
+    let cal = write_unique(
         "cal.json",
         "{\"accelerometers\": {\"a\": {\"K0\": {\"value\": 0}, \"Ks\": {\"value\": [0,0,1]}}}}",
     );
     let cals = cal.to_str().unwrap();
-    let series = temp("series.csv", "time_s,a,b,c,d,e,f\n0,0,0,0,0,0,0\n");
+    let series = write_unique("series.csv", "time_s,a,b,c,d,e,f\n0,0,0,0,0,0,0\n");
     let ss = series.to_str().unwrap();
-    refused(
+    refuses(
         &["gfimu", "solve", "--calibration", cals, "--input", ss],
         &[cals, "'b'"],
     );
-    let o = incal(&["gfimu", "calibrate", "--input", cs, "--json"]);
-    let cal = temp("cal2.json", &stdout(&o));
+    let o = run(&["gfimu", "calibrate", "--input", cs, "--json"]);
+    let cal = write_unique("cal2.json", &stdout(&o));
     let cals = cal.to_str().unwrap();
-    let series = temp(
+    let series = write_unique(
         "series2.csv",
         "time_s,a,b,c,d,e,f\n0,0,0,0,0,0,1\n0,0,0,0,0,0,1\n",
     );
     let ss = series.to_str().unwrap();
-    refused(
+    refuses(
         &["gfimu", "solve", "--calibration", cals, "--input", ss],
         &[&format!("{ss}:3"), "time_s"],
     );
-    let series = temp("series3.csv", "time_s,a,b,c,d,e\n0,0,0,0,0,0\n");
+    let series = write_unique("series3.csv", "time_s,a,b,c,d,e\n0,0,0,0,0,0\n");
     let ss = series.to_str().unwrap();
-    refused(
+    refuses(
         &["gfimu", "solve", "--calibration", cals, "--input", ss],
         &[ss, "missing column 'f'"],
     );
-    let notjson = temp("not.json", "{\n \"accelerometers\": [1,\n");
+    let notjson = write_unique("not.json", "{\n \"accelerometers\": [1,\n");
     let ns = notjson.to_str().unwrap();
-    refused(
+    refuses(
         &["gfimu", "solve", "--calibration", ns, "--input", ss],
         &[ns, "not valid JSON"],
     );
@@ -383,7 +353,7 @@ direction = [0.0, 1.0, 0.0]
 #[test]
 fn twelve_layout_outputs_agree() {
     let (cal, _) = calibration("twelve", "11");
-    let mo = temp(
+    let mo = write_unique(
         "m12.csv",
         &simulate(&["--layout", "twelve", "--kind", "motion", "--seed", "12"]),
     );
@@ -401,7 +371,7 @@ fn twelve_layout_outputs_agree() {
         if !extra.is_empty() {
             args.push(extra);
         }
-        let o = incal(&args);
+        let o = run(&args);
         assert!(o.status.success(), "{}", stderr(&o));
         stdout(&o)
     };
@@ -477,7 +447,7 @@ fn simulate_motion_turning_gravity_and_oscillation() {
     let turned = simulate(&args);
     assert_ne!(plain, turned);
     assert!(turned.contains("# f0 frame: table"));
-    refused(
+    refuses(
         &[
             "simulate",
             "gfimu",
@@ -490,7 +460,7 @@ fn simulate_motion_turning_gravity_and_oscillation() {
         ],
         &["--oscillation-hz", "half of --rate-hz"],
     );
-    refused(
+    refuses(
         &[
             "simulate",
             "gfimu",
@@ -501,7 +471,7 @@ fn simulate_motion_turning_gravity_and_oscillation() {
         ],
         &["--oscillation-hz > 0"],
     );
-    refused(
+    refuses(
         &[
             "simulate",
             "gfimu",
@@ -523,7 +493,7 @@ fn simulate_motion_turning_gravity_and_oscillation() {
 fn solve_calibration_is_read_strictly() {
     let (_, text) = calibration("paper", "9");
     let good: Value = serde_json::from_str(&text).unwrap();
-    let mo = temp(
+    let mo = write_unique(
         "motion.csv",
         &simulate(&["--kind", "motion", "--seed", "9"]),
     );
@@ -569,15 +539,15 @@ fn solve_calibration_is_read_strictly() {
     for (edit, msg) in cases {
         let mut d = good.clone();
         edit(&mut d);
-        let cal = temp("cal.json", &d.to_string());
+        let cal = write_unique("cal.json", &d.to_string());
         let args = solve(&cal);
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        refused(&args, &[cal.to_str().unwrap(), msg]);
+        refuses(&args, &[cal.to_str().unwrap(), msg]);
     }
-    let cal = temp("bom.json", &format!("\u{feff}{good}"));
+    let cal = write_unique("bom.json", &format!("\u{feff}{good}"));
     let args = solve(&cal);
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    let o = incal(&args);
+    let o = run(&args);
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
@@ -604,7 +574,7 @@ fn solve_stopped_midway_closes_its_output() {
         text.push('\n');
     }
     let bad_line = text.lines().position(|l| l.contains("abc")).unwrap() + 1;
-    let mo = temp("motion_bad.csv", &text);
+    let mo = write_unique("motion_bad.csv", &text);
     for out in ["--json", "--jsonl", ""] {
         let mut args = vec![
             "gfimu",
@@ -617,7 +587,7 @@ fn solve_stopped_midway_closes_its_output() {
         if !out.is_empty() {
             args.push(out);
         }
-        let o = incal(&args);
+        let o = run(&args);
         assert_eq!(o.status.code(), Some(2), "{out}");
         let err = stderr(&o);
         assert_eq!(err.trim_end().lines().count(), 1, "{err}");

@@ -2,51 +2,10 @@
 //! with one line naming the file (and line) or the option, or gives a
 //! correct result. One test per defect, named after it.
 
+mod common;
+use common::*;
+
 use std::path::PathBuf;
-use std::process::{Command, Output};
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_incal"))
-}
-
-fn tmp(name: &str) -> PathBuf {
-    std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("incal_hard_{}_{name}", std::process::id()))
-}
-
-fn write(name: &str, text: &str) -> PathBuf {
-    let p = tmp(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
-
-fn run(args: &[&str]) -> Output {
-    bin().args(args).output().unwrap()
-}
-
-fn ok(o: &Output) -> String {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    String::from_utf8_lossy(&o.stdout).to_string()
-}
-
-/// Exit 2, exactly one stderr line, containing every `needle`, and short.
-fn refused(o: &Output, needles: &[&str]) {
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
-    assert!(
-        err.len() < 400,
-        "message too long ({} chars): {err}",
-        err.len()
-    );
-    for n in needles {
-        assert!(err.contains(n), "{n:?} not in {err}");
-    }
-}
-
-fn p(x: &std::path::Path) -> &str {
-    x.to_str().unwrap()
-}
 
 #[test]
 fn tumble_with_constant_output_is_refused() {

@@ -3,30 +3,17 @@
 //! overall verdict, the document still validates against the schema, and a
 //! limit that does not fit the result is refused with one line.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+use common::*;
+
+use std::path::PathBuf;
 
 use serde_json::Value;
-
-fn dir() -> PathBuf {
-    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("incal-limits-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn incal_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_incal"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("runs incal")
-}
 
 #[test]
 fn guard_band_and_simple_verdicts_through_the_binary() {
     let d = dir();
-    assert!(incal_in(
+    assert!(run_in(
         &d,
         &["simulate", "misalign", "accel", "--seed", "4", "-o", "a.csv"]
     )
@@ -41,7 +28,7 @@ fn guard_band_and_simple_verdicts_through_the_binary() {
         "1.299",
         "--json",
     ];
-    let plain: Value = serde_json::from_slice(&incal_in(&d, &base).stdout).unwrap();
+    let plain: Value = serde_json::from_slice(&run_in(&d, &base).stdout).unwrap();
     assert!(plain.get("verdicts").is_none() && plain.get("verdict").is_none());
     let c = &plain["coefficients"]["dtheta_z2"];
     let (x, u) = (c["value"].as_f64().unwrap(), c["U95"].as_f64().unwrap());
@@ -57,7 +44,7 @@ fn guard_band_and_simple_verdicts_through_the_binary() {
         std::fs::write(d.join("l.toml"), toml).unwrap();
         let mut args = base.to_vec();
         args.extend_from_slice(&["--limits", "l.toml"]);
-        let o = incal_in(&d, &args);
+        let o = run_in(&d, &args);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let v: Value = serde_json::from_slice(&o.stdout).unwrap();
         let got = &v["verdicts"]["dtheta_z2"];
@@ -82,7 +69,7 @@ fn guard_band_and_simple_verdicts_through_the_binary() {
     std::fs::write(d.join("s.toml"), toml).unwrap();
     let mut args = base.to_vec();
     args.extend_from_slice(&["--limits", "s.toml"]);
-    let v: Value = serde_json::from_slice(&incal_in(&d, &args).stdout).unwrap();
+    let v: Value = serde_json::from_slice(&run_in(&d, &args).stdout).unwrap();
     assert_eq!(v["verdicts"]["dtheta_z2"]["verdict"], "pass");
     assert_eq!(v["verdicts"]["gamma"]["verdict"], "fail");
     assert_eq!(v["verdict"], "fail");
@@ -111,7 +98,7 @@ fn guard_band_and_simple_verdicts_through_the_binary() {
         std::fs::write(d.join("l.toml"), toml).unwrap();
         let mut args = base.to_vec();
         args.extend_from_slice(&["--limits", "l.toml"]);
-        let o = incal_in(&d, &args);
+        let o = run_in(&d, &args);
         assert_eq!(o.status.code(), Some(2), "{toml}");
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(err.trim_end().lines().count(), 1, "{err}");

@@ -2,44 +2,8 @@
 //! real binary on temp files. Good input gives the contract JSON; bad input
 //! gives exit code 2 and one stderr line naming the file and the line.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_incal"))
-}
-
-fn tmp(name: &str, text: &str) -> PathBuf {
-    let p = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("incal_misalign_{}_{name}", std::process::id()));
-    std::fs::write(&p, text).unwrap();
-    p
-}
-
-fn run(args: &[&str]) -> Output {
-    bin().args(args).output().unwrap()
-}
-
-fn json_of(o: &Output) -> serde_json::Value {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    serde_json::from_slice(&o.stdout).unwrap()
-}
-
-/// Exit 2, exactly one stderr line, containing every `needle`.
-fn refused(o: &Output, needles: &[&str]) {
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
-    for n in needles {
-        assert!(err.contains(n), "{n:?} not in {err}");
-    }
-}
-
-fn keys(v: &serde_json::Value) -> Vec<String> {
-    let mut k: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
-    k.sort();
-    k
-}
+mod common;
+use common::*;
 
 const TABLE1_20: &str = "alpha_deg,beta_deg,rate,output
 0,0,20,-0.0614
@@ -56,7 +20,7 @@ const TABLE1_20: &str = "alpha_deg,beta_deg,rate,output
 
 #[test]
 fn gyro_json_has_contract_keys_and_paper_numbers() {
-    let f = tmp("t1.csv", TABLE1_20);
+    let f = write("t1.csv", TABLE1_20);
     let v = json_of(&run(&[
         "misalign",
         "gyro",
@@ -104,7 +68,7 @@ fn gyro_json_has_contract_keys_and_paper_numbers() {
 
 #[test]
 fn accel_json_has_contract_keys() {
-    let f = tmp(
+    let f = write(
         "t2.csv",
         "beta_deg,output\n0,-0.001845\n180,-0.001911\n90,-0.001912\n270,-0.002175\n",
     );
@@ -131,7 +95,7 @@ fn simulate_is_reproducible_and_round_trips() {
         assert!(a.status.success());
         assert_eq!(a.stdout, b.stdout, "{kind}: same seed, same bytes");
         assert_ne!(a.stdout, c.stdout);
-        let f = tmp(
+        let f = write(
             &format!("sim_{kind}.csv"),
             &String::from_utf8(a.stdout).unwrap(),
         );
@@ -176,7 +140,7 @@ fn raw_time_series_is_averaged_and_partial_turns_warned() {
         "--seed",
         "3",
     ]);
-    let f = tmp("raw.csv", &String::from_utf8(o.stdout).unwrap());
+    let f = write("raw.csv", &String::from_utf8(o.stdout).unwrap());
     let v = json_of(&run(&[
         "misalign",
         "gyro",
@@ -214,7 +178,7 @@ fn raw_time_series_is_averaged_and_partial_turns_warned() {
 fn bad_inputs_exit_2_with_file_and_line() {
     let k = ["--scale-factor", "-2.9222"];
     let check = |name: &str, text: &str, needles: &[&str]| {
-        let f = tmp(name, text);
+        let f = write(name, text);
         let p = f.to_str().unwrap().to_string();
         let o = run(&["misalign", "gyro", "--input", &p, k[0], k[1]]);
         let mut n: Vec<&str> = needles.to_vec();
@@ -245,7 +209,7 @@ fn bad_inputs_exit_2_with_file_and_line() {
         .collect();
     check("unsep.csv", &no_b90, &["cannot separate", "dtheta_x0"]);
     // Accelerometer at two angles only.
-    let f = tmp("acc2.csv", "beta_deg,output\n0,1\n180,2\n");
+    let f = write("acc2.csv", "beta_deg,output\n0,1\n180,2\n");
     refused(
         &run(&[
             "misalign",

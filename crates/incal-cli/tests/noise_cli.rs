@@ -2,46 +2,16 @@
 //! contract (options, JSON keys, coefficient names and units), parallel =
 //! sequential bit for bit, CSV = binary, and bad input → exit 2, one line.
 
+mod common;
+use common::*;
+
 use std::path::PathBuf;
-use std::process::{Command, Output, Stdio};
+use std::process::Output;
 
 use serde_json::Value;
 
-fn incal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_incal"))
-        .args(args)
-        .stdin(Stdio::null())
-        .output()
-        .expect("runs incal")
-}
-
-fn dir() -> PathBuf {
-    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("incal-noise-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn ok(o: &Output) -> String {
-    assert!(
-        o.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8(o.stdout.clone()).unwrap()
-}
-
 fn bad(o: &Output, needle: &str) {
-    assert_eq!(
-        o.status.code(),
-        Some(2),
-        "stdout {}",
-        String::from_utf8_lossy(&o.stdout)
-    );
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
-    assert!(e.contains(needle), "{e} lacks {needle}");
-    assert!(!e.contains("panicked"), "{e}");
+    refused(o, &[needle]);
 }
 
 fn simulate(name: &str, format: &str, extra: &[&str]) -> PathBuf {
@@ -69,14 +39,14 @@ fn simulate(name: &str, format: &str, extra: &[&str]) -> PathBuf {
         p.to_str().unwrap(),
     ];
     args.extend_from_slice(extra);
-    ok(&incal(&args));
+    ok(&run(&args));
     p
 }
 
 #[test]
 fn contract_keys_units_and_truth() {
     let p = simulate("g.csv", "csv", &["--channels", "2"]);
-    let out = ok(&incal(&[
+    let out = ok(&run(&[
         "noise",
         "--input",
         p.to_str().unwrap(),
@@ -148,7 +118,7 @@ fn parallel_equals_sequential_and_binary_equals_csv() {
             "--quiet",
         ];
         a.extend_from_slice(extra);
-        let v: Value = serde_json::from_str(&ok(&incal(&a))).unwrap();
+        let v: Value = serde_json::from_str(&ok(&run(&a))).unwrap();
         v
     };
     let par = run(&[], &csv);
@@ -192,7 +162,7 @@ fn angle_data_gives_the_rate_deviations() {
     std::fs::write(d.join("r.csv"), r).unwrap();
     std::fs::write(d.join("a.csv"), a).unwrap();
     let get = |f: &str, data: &str, col: &str| -> Vec<f64> {
-        let v: Value = serde_json::from_str(&ok(&incal(&[
+        let v: Value = serde_json::from_str(&ok(&run(&[
             "noise",
             "--input",
             d.join(f).to_str().unwrap(),
@@ -227,27 +197,27 @@ fn bad_input_is_one_line_and_exit_2() {
     };
     let text = w("t.csv", "time_s,gx\n0,1\n1,abc\n2,3\n3,4\n4,5\n");
     bad(
-        &incal(&["noise", "--input", &text, "--rate-hz", "1"]),
+        &run(&["noise", "--input", &text, "--rate-hz", "1"]),
         "t.csv:3",
     );
     let nan = w("nan.csv", "gx\n1\nNaN\n2\n3\n4\n");
     bad(
-        &incal(&["noise", "--input", &nan, "--rate-hz", "1"]),
+        &run(&["noise", "--input", &nan, "--rate-hz", "1"]),
         "nan.csv:3",
     );
     let empty = w("e.csv", "");
     bad(
-        &incal(&["noise", "--input", &empty, "--rate-hz", "1"]),
+        &run(&["noise", "--input", &empty, "--rate-hz", "1"]),
         "e.csv",
     );
     let short = w("s.csv", "gx\n1\n2\n");
     bad(
-        &incal(&["noise", "--input", &short, "--rate-hz", "1"]),
+        &run(&["noise", "--input", &short, "--rate-hz", "1"]),
         "s.csv",
     );
     let good = w("g.csv", "gx\n1\n2\n3\n4\n5\n6\n");
     bad(
-        &incal(&[
+        &run(&[
             "noise",
             "--input",
             &good,
@@ -259,11 +229,11 @@ fn bad_input_is_one_line_and_exit_2() {
         "gy",
     );
     bad(
-        &incal(&["noise", "--input", &good, "--rate-hz", "0"]),
+        &run(&["noise", "--input", &good, "--rate-hz", "0"]),
         "--rate-hz",
     );
     bad(
-        &incal(&[
+        &run(&[
             "noise",
             "--input",
             &good,
@@ -277,7 +247,7 @@ fn bad_input_is_one_line_and_exit_2() {
         "--unit",
     );
     bad(
-        &incal(&[
+        &run(&[
             "noise",
             "--input",
             &good,
@@ -289,7 +259,7 @@ fn bad_input_is_one_line_and_exit_2() {
         "--taus",
     );
     bad(
-        &incal(&[
+        &run(&[
             "noise",
             "--input",
             &good,
@@ -301,7 +271,7 @@ fn bad_input_is_one_line_and_exit_2() {
         "--confidence",
     );
     bad(
-        &incal(&[
+        &run(&[
             "noise",
             "--input",
             &good,
@@ -314,7 +284,7 @@ fn bad_input_is_one_line_and_exit_2() {
     );
     let odd = w("o.bin", "12345");
     bad(
-        &incal(&[
+        &run(&[
             "noise",
             "--input",
             &odd,
@@ -328,11 +298,11 @@ fn bad_input_is_one_line_and_exit_2() {
         "o.bin",
     );
     bad(
-        &incal(&["noise", "--input", "/nonexistent/x.csv", "--rate-hz", "1"]),
+        &run(&["noise", "--input", "/nonexistent/x.csv", "--rate-hz", "1"]),
         "x.csv",
     );
     bad(
-        &incal(&[
+        &run(&[
             "simulate",
             "noise",
             "--arw-deg-rth",
@@ -354,7 +324,7 @@ fn bad_input_is_one_line_and_exit_2() {
 fn the_report_draws_the_allan_plot() {
     let p = simulate("rep.csv", "csv", &[]);
     let json = dir().join("rep.json");
-    ok(&incal(&[
+    ok(&run(&[
         "noise",
         "--input",
         p.to_str().unwrap(),
@@ -366,7 +336,7 @@ fn the_report_draws_the_allan_plot() {
         "-o",
         json.to_str().unwrap(),
     ]));
-    let html = ok(&incal(&["report", json.to_str().unwrap()]));
+    let html = ok(&run(&["report", json.to_str().unwrap()]));
     let fig = html.find("data-plot=\"allan\"").expect("an Allan figure");
     let svg = &html[fig..html[fig..].find("</svg>").unwrap() + fig];
     // Dots for the deviations, lines for the bounds and the fitted terms.
@@ -381,7 +351,7 @@ fn the_report_draws_the_allan_plot() {
 #[test]
 fn accelerometer_records_round_trip() {
     let p = dir().join("accel.bin");
-    ok(&incal(&[
+    ok(&run(&[
         "simulate",
         "noise",
         "--quantity",
@@ -401,7 +371,7 @@ fn accelerometer_records_round_trip() {
         "--output",
         p.to_str().unwrap(),
     ]));
-    let out = ok(&incal(&[
+    let out = ok(&run(&[
         "noise",
         "--input",
         p.to_str().unwrap(),
@@ -432,7 +402,7 @@ fn accelerometer_records_round_trip() {
     }
     let q = dir().join("x.csv");
     bad(
-        &incal(&[
+        &run(&[
             "simulate",
             "noise",
             "--quantity",
@@ -451,7 +421,7 @@ fn accelerometer_records_round_trip() {
         "--arw-deg-rth is not a term of --quantity accel",
     );
     bad(
-        &incal(&[
+        &run(&[
             "simulate",
             "noise",
             "--vrw-ug-rthz",
@@ -507,7 +477,7 @@ fn binary_samples_that_are_not_finite_or_overflow_are_named() {
             ch,
         ];
         a.extend_from_slice(extra);
-        incal(&a)
+        run(&a)
     };
     // f64, every channel: the arrays are built in the reading pass.
     let nan = write("nan.f64", 200, 3, true, &spiked((7, 1), f64::NAN));

@@ -4,26 +4,20 @@
 //! bad input; a store file changed behind incal's back; concurrent writer
 //! processes; and `record add` killed at random moments.
 
+mod common;
+use common::*;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use incal::document::{Coefficient, DocumentBuilder, Procedure};
 use incal::units::Unit;
 use serde_json::Value;
 
-fn incal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_incal"))
-        .args(args)
-        .env_remove("INCAL_DB")
-        .stdin(Stdio::null())
-        .output()
-        .expect("runs incal")
-}
-
 /// `incal ARGS`, which must succeed; its standard output.
 fn ok(args: &[&str]) -> String {
-    let o = incal(args);
+    let o = run(args);
     assert!(
         o.status.success(),
         "incal {args:?}: {}",
@@ -39,7 +33,7 @@ fn ok_json(args: &[&str]) -> Value {
 /// `incal ARGS`, which must fail with `code` and exactly one stderr line,
 /// no panic; that line.
 fn fails(code: i32, args: &[&str]) -> String {
-    let o = incal(args);
+    let o = run(args);
     let err = String::from_utf8_lossy(&o.stderr).to_string();
     assert_eq!(o.status.code(), Some(code), "incal {args:?}: {err}");
     assert!(!err.contains("panicked"), "{err}");

@@ -5,36 +5,13 @@
 //! and that the instrument's identity is escaped. A file that is not an
 //! incal result is refused (exit 2).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+use common::*;
+
+use std::process::Command;
 
 use scraper::{Html, Selector};
 use serde_json::Value;
-
-fn workdir(test: &str) -> PathBuf {
-    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("incal-report-{}-{test}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn incal_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_incal"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("runs incal")
-}
-
-fn ok(o: &Output) -> String {
-    assert!(
-        o.status.success(),
-        "exit {:?}: {}",
-        o.status.code(),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8(o.stdout.clone()).unwrap()
-}
 
 fn sel(s: &str) -> Selector {
     Selector::parse(s).unwrap()
@@ -147,7 +124,7 @@ fn every_procedure_gets_a_complete_self_contained_report() {
         let mut args = vec!["simulate"];
         args.extend_from_slice(&sim);
         args.extend_from_slice(&["--output", file]);
-        ok(&incal_in(&dir, &args));
+        ok(&run_in(&dir, &args));
         let json = format!("{procedure}.json");
         let mut args = reduce.clone();
         args.extend_from_slice(&[
@@ -159,12 +136,12 @@ fn every_procedure_gets_a_complete_self_contained_report() {
             "-o",
             &json,
         ]);
-        ok(&incal_in(&dir, &args));
+        ok(&run_in(&dir, &args));
         let doc: Value =
             serde_json::from_str(&std::fs::read_to_string(dir.join(&json)).unwrap()).unwrap();
         let html_file = format!("{procedure}.html");
         assert_eq!(
-            ok(&incal_in(&dir, &["report", &json, "-o", &html_file])),
+            ok(&run_in(&dir, &["report", &json, "-o", &html_file])),
             "",
             "{procedure}: written to the file"
         );
@@ -267,13 +244,13 @@ fn every_procedure_gets_a_complete_self_contained_report() {
 #[test]
 fn the_report_goes_to_stdout_without_o_and_a_non_result_is_refused() {
     let dir = workdir("misc");
-    ok(&incal_in(
+    ok(&run_in(
         &dir,
         &[
             "simulate", "misalign", "accel", "--seed", "2", "-o", "a.csv",
         ],
     ));
-    let json = ok(&incal_in(
+    let json = ok(&run_in(
         &dir,
         &[
             "misalign",
@@ -286,7 +263,7 @@ fn the_report_goes_to_stdout_without_o_and_a_non_result_is_refused() {
         ],
     ));
     std::fs::write(dir.join("a.json"), &json).unwrap();
-    let html = ok(&incal_in(&dir, &["report", "a.json"]));
+    let html = ok(&run_in(&dir, &["report", "a.json"]));
     assert!(html.starts_with("<!DOCTYPE html>"));
     // Standard input, as everywhere.
     let mut child = Command::new(env!("CARGO_BIN_EXE_incal"))
@@ -319,14 +296,14 @@ fn the_report_goes_to_stdout_without_o_and_a_non_result_is_refused() {
         if !text.is_empty() || file == "empty.json" {
             std::fs::write(dir.join(file), text).unwrap();
         }
-        let o = incal_in(&dir, &["report", file, "-o", "x.html"]);
+        let o = run_in(&dir, &["report", file, "-o", "x.html"]);
         assert_eq!(o.status.code(), Some(2), "{file}");
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(err.trim_end().lines().count(), 1, "{err}");
         assert!(err.contains(message), "{file}: {err}");
         assert!(!dir.join("x.html").exists(), "{file}: no report written");
     }
-    let o = incal_in(&dir, &["report", "missing.json"]);
+    let o = run_in(&dir, &["report", "missing.json"]);
     assert_eq!(o.status.code(), Some(2));
     let _ = std::fs::remove_dir_all(&dir);
 }

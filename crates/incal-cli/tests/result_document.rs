@@ -4,37 +4,12 @@
 //! procedure. Snapshots (insta) pin every command's text and JSON output on
 //! fixed seeded inputs.
 
+mod common;
+use common::*;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use serde_json::Value;
-
-/// A per-test working directory (inputs are given by relative path, so
-/// the outputs, which echo the path, are the same on every machine).
-fn workdir(test: &str) -> PathBuf {
-    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("incal-doc-{}-{test}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn incal_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_incal"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("runs incal")
-}
-
-fn ok(o: &Output) -> String {
-    assert!(
-        o.status.success(),
-        "exit {:?}: {}",
-        o.status.code(),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8(o.stdout.clone()).unwrap()
-}
 
 fn schema() -> Value {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../schema/result.schema.json");
@@ -54,7 +29,7 @@ fn simulate(dir: &Path, file: &str, sim: &[&str]) {
     let mut args = vec!["simulate"];
     args.extend_from_slice(sim);
     args.extend_from_slice(&["--output", file]);
-    ok(&incal_in(dir, &args));
+    ok(&run_in(dir, &args));
 }
 
 /// One reducing command on simulated input: name, procedure id,
@@ -146,7 +121,7 @@ fn every_procedure_writes_a_valid_document_and_compares() {
         simulate(&dir, file, &sim);
         let mut args = reduce.clone();
         args.extend_from_slice(&["--json", "--serial", "SN-042", "--meta", "operator=lee"]);
-        let text = ok(&incal_in(&dir, &args));
+        let text = ok(&run_in(&dir, &args));
         let doc: Value = serde_json::from_str(&text).unwrap();
         let errors: Vec<String> = validator
             .iter_errors(&doc)
@@ -210,7 +185,7 @@ fn every_procedure_writes_a_valid_document_and_compares() {
         let out = format!("{name}.json");
         std::fs::write(dir.join(&out), &text).unwrap();
         let cmp: Value =
-            serde_json::from_str(&ok(&incal_in(&dir, &["compare", &out, &out, "--json"]))).unwrap();
+            serde_json::from_str(&ok(&run_in(&dir, &["compare", &out, &out, "--json"]))).unwrap();
         let comps = cmp["comparisons"].as_object().unwrap();
         assert_eq!(
             comps.len(),
@@ -226,14 +201,14 @@ fn every_procedure_writes_a_valid_document_and_compares() {
         }
     }
     // Two different procedures: refused with one line.
-    let o = incal_in(&dir, &["compare", "tumble.json", "centrifuge.json"]);
+    let o = run_in(&dir, &["compare", "tumble.json", "centrifuge.json"]);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(err.contains("same procedure"), "{err}");
     // Not an incal result: refused naming the path.
     std::fs::write(dir.join("other.json"), "{\"coefficients\": {}}").unwrap();
-    let o = incal_in(&dir, &["compare", "other.json", "tumble.json"]);
+    let o = run_in(&dir, &["compare", "other.json", "tumble.json"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("other.json: $.schema"));
     let _ = std::fs::remove_dir_all(&dir);
@@ -246,10 +221,10 @@ fn output_file_holds_what_stdout_would() {
     let base = [
         "tumble", "--mount", "pendulum", "--input", "t.csv", "--json",
     ];
-    let stdout = ok(&incal_in(&dir, &base));
+    let stdout = ok(&run_in(&dir, &base));
     let mut args = base.to_vec();
     args.extend_from_slice(&["--output", "r.json"]);
-    assert_eq!(ok(&incal_in(&dir, &args)), "");
+    assert_eq!(ok(&run_in(&dir, &args)), "");
     assert_eq!(std::fs::read_to_string(dir.join("r.json")).unwrap(), stdout);
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -276,11 +251,11 @@ fn snapshots_of_every_report() {
     let dir = workdir("snap");
     for (name, _, sim, file, reduce) in cases() {
         simulate(&dir, file, &sim);
-        let text = ok(&incal_in(&dir, &reduce));
+        let text = ok(&run_in(&dir, &reduce));
         insta::assert_snapshot!(format!("{name}_text"), text);
         let mut args = reduce.clone();
         args.push("--json");
-        let json: Value = serde_json::from_str(&ok(&incal_in(&dir, &args))).unwrap();
+        let json: Value = serde_json::from_str(&ok(&run_in(&dir, &args))).unwrap();
         // 9 significant digits: the last bits of a float may differ between
         // CPUs (vectorised kernels), the numbers a person reads do not.
         let json = serde_json::to_string_pretty(&rounded(json)).unwrap();
@@ -300,7 +275,7 @@ fn centrifuge_from_a_tumble_result() {
         "t.csv",
         &["tumble", "--k0", "1.2e-4", "--k1", "1.3", "--seed", "21"],
     );
-    let stdout = ok(&incal_in(
+    let stdout = ok(&run_in(
         &dir,
         &[
             "tumble", "--mount", "pendulum", "--input", "t.csv", "--json", "-o", "t.json",
@@ -322,7 +297,7 @@ fn centrifuge_from_a_tumble_result() {
     ];
     let mut from = common.to_vec();
     from.extend_from_slice(&["--from", "t.json"]);
-    let a: Value = serde_json::from_str(&ok(&incal_in(&dir, &from))).unwrap();
+    let a: Value = serde_json::from_str(&ok(&run_in(&dir, &from))).unwrap();
     let num = |v: &Value| v.as_f64().unwrap().to_string();
     let (k0, u0) = (
         num(&t["coefficients"]["K0"]["value"]),
@@ -334,7 +309,7 @@ fn centrifuge_from_a_tumble_result() {
     );
     let mut by_hand = common.to_vec();
     by_hand.extend_from_slice(&["--k0", &k0, "--u-k0", &u0, "--k1", &k1, "--u-k1", &u1]);
-    let b: Value = serde_json::from_str(&ok(&incal_in(&dir, &by_hand))).unwrap();
+    let b: Value = serde_json::from_str(&ok(&run_in(&dir, &by_hand))).unwrap();
     let (ca, cb) = (
         a["coefficients"].as_object().unwrap(),
         b["coefficients"].as_object().unwrap(),
@@ -371,7 +346,7 @@ fn centrifuge_from_a_tumble_result() {
     // Explicit values without their u: a warning, not a silent 0.
     let mut bare = common.to_vec();
     bare.extend_from_slice(&["--k0", &k0, "--k1", &k1]);
-    let c: Value = serde_json::from_str(&ok(&incal_in(&dir, &bare))).unwrap();
+    let c: Value = serde_json::from_str(&ok(&run_in(&dir, &bare))).unwrap();
     let missing: Vec<&Value> = c["warnings"]
         .as_array()
         .unwrap()
@@ -381,7 +356,7 @@ fn centrifuge_from_a_tumble_result() {
     assert_eq!(missing.len(), 2, "{missing:?}");
     // --from must be a tumble result.
     simulate(&dir, "a.csv", &["misalign", "accel", "--seed", "2"]);
-    ok(&incal_in(
+    ok(&run_in(
         &dir,
         &[
             "misalign",
@@ -397,7 +372,7 @@ fn centrifuge_from_a_tumble_result() {
     ));
     let mut wrong = common.to_vec();
     wrong.extend_from_slice(&["--from", "m.json"]);
-    let o = incal_in(&dir, &wrong);
+    let o = run_in(&dir, &wrong);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("needs a tumble result"));
     let _ = std::fs::remove_dir_all(&dir);
@@ -452,10 +427,10 @@ fn snapshots_of_plans_compare_and_demo() {
         ),
     ];
     for (name, args) in runs {
-        insta::assert_snapshot!(format!("{name}_text"), ok(&incal_in(&dir, &args)));
+        insta::assert_snapshot!(format!("{name}_text"), ok(&run_in(&dir, &args)));
         let mut j = args.clone();
         j.push("--json");
-        let v: Value = serde_json::from_str(&ok(&incal_in(&dir, &j))).unwrap();
+        let v: Value = serde_json::from_str(&ok(&run_in(&dir, &j))).unwrap();
         insta::assert_snapshot!(
             format!("{name}_json"),
             serde_json::to_string_pretty(&rounded(v)).unwrap()
@@ -465,7 +440,7 @@ fn snapshots_of_plans_compare_and_demo() {
         let csv = format!("t{seed}.csv");
         let out = format!("t{seed}.json");
         simulate(&dir, &csv, &["tumble", "--seed", seed]);
-        ok(&incal_in(
+        ok(&run_in(
             &dir,
             &[
                 "tumble", "--mount", "pendulum", "--input", &csv, "--json", "-o", &out,
@@ -473,14 +448,14 @@ fn snapshots_of_plans_compare_and_demo() {
         ));
     }
     let cmp = ["compare", "t31.json", "t32.json"];
-    insta::assert_snapshot!("compare_text", ok(&incal_in(&dir, &cmp)));
+    insta::assert_snapshot!("compare_text", ok(&run_in(&dir, &cmp)));
     let mut j = cmp.to_vec();
     j.push("--json");
-    let v: Value = serde_json::from_str(&ok(&incal_in(&dir, &j))).unwrap();
+    let v: Value = serde_json::from_str(&ok(&run_in(&dir, &j))).unwrap();
     insta::assert_snapshot!(
         "compare_json",
         serde_json::to_string_pretty(&rounded(v)).unwrap()
     );
-    insta::assert_snapshot!("demo_text", ok(&incal_in(&dir, &["demo"])));
+    insta::assert_snapshot!("demo_text", ok(&run_in(&dir, &["demo"])));
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1,26 +1,11 @@
 //! The real `incal` binary on good and bad tumble input.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
+use common::*;
+
+use std::process::Output;
 
 use serde_json::Value;
-
-fn incal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_incal"))
-        .args(args)
-        .output()
-        .expect("runs incal")
-}
-
-/// A unique temp file with `content`.
-fn temp(name: &str, content: &str) -> PathBuf {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("incal-tumble-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join(name);
-    std::fs::write(&p, content).unwrap();
-    p
-}
 
 fn stderr_line(o: &Output) -> String {
     let s = String::from_utf8_lossy(&o.stderr).to_string();
@@ -30,8 +15,8 @@ fn stderr_line(o: &Output) -> String {
 
 /// `incal tumble --mount MOUNT --input <csv written to NAME> --json`, parsed.
 fn calibrate_json(name: &str, csv: &str, mount: &str) -> Value {
-    let f = temp(name, csv);
-    let o = incal(&[
+    let f = write(name, csv);
+    let o = run(&[
         "tumble",
         "--mount",
         mount,
@@ -46,7 +31,7 @@ fn calibrate_json(name: &str, csv: &str, mount: &str) -> Value {
 fn simulate(args: &[&str]) -> String {
     let mut all = vec!["simulate", "tumble"];
     all.extend_from_slice(args);
-    let o = incal(&all);
+    let o = run(&all);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     String::from_utf8(o.stdout).unwrap()
 }
@@ -100,7 +85,7 @@ fn negative_option_values_are_values() {
     let d = v["coefficients"]["delta_o"]["value"].as_f64().unwrap();
     assert!((d + incal_arcsec(300.0)).abs() < 1e-6, "{d}");
     // A flag is still not swallowed silently as a value.
-    let o = incal(&["simulate", "tumble", "--noise", "--json"]);
+    let o = run(&["simulate", "tumble", "--noise", "--json"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr_line(&o).contains("--noise"));
 }
@@ -121,8 +106,8 @@ fn gate_mount_reports_delta_p_and_k_io() {
     assert!(tables.iter().any(|t| t["id"] == "pass-difference.ccw-cw"));
     assert!(tables.iter().any(|t| t["id"] == "pass-positions.ccw-cw"));
     // Readable report shows arcseconds and the pass difference.
-    let f = temp("gate.csv", &a);
-    let o = incal(&["tumble", "--mount", "gate", "--input", f.to_str().unwrap()]);
+    let f = write("gate.csv", &a);
+    let o = run(&["tumble", "--mount", "gate", "--input", f.to_str().unwrap()]);
     let text = String::from_utf8(o.stdout).unwrap();
     assert!(
         text.contains("arcsec") && text.contains("Pass difference: ccw minus cw"),
@@ -132,7 +117,7 @@ fn gate_mount_reports_delta_p_and_k_io() {
 
 #[test]
 fn plan_tumble_json_contract() {
-    let o = incal(&[
+    let o = run(&[
         "plan",
         "tumble",
         "--range-g",
@@ -169,9 +154,9 @@ fn compare_reports_difference_per_mille_and_en() {
     for seed in ["1", "2"] {
         let csv = simulate(&["--seed", seed]);
         let v = calibrate_json(&format!("cmp{seed}.csv"), &csv, "pendulum");
-        files.push(temp(&format!("cmp{seed}.json"), &v.to_string()));
+        files.push(write(&format!("cmp{seed}.json"), &v.to_string()));
     }
-    let o = incal(&[
+    let o = run(&[
         "compare",
         files[0].to_str().unwrap(),
         files[1].to_str().unwrap(),
@@ -196,7 +181,7 @@ fn compare_reports_difference_per_mille_and_en() {
 
 #[test]
 fn demo_runs_without_input() {
-    let o = incal(&["demo"]);
+    let o = run(&["demo"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = String::from_utf8(o.stdout).unwrap();
     assert!(
@@ -206,7 +191,7 @@ fn demo_runs_without_input() {
     );
     assert_eq!(
         text,
-        String::from_utf8(incal(&["demo"]).stdout).unwrap(),
+        String::from_utf8(run(&["demo"]).stdout).unwrap(),
         "deterministic"
     );
 }
@@ -254,7 +239,7 @@ fn bad_input_exits_2_with_one_line() {
         ),
     ];
     for (name, content, extra, expect) in cases {
-        let f = temp(name, content);
+        let f = write(name, content);
         let mut args = vec![
             "tumble",
             "--mount",
@@ -263,14 +248,14 @@ fn bad_input_exits_2_with_one_line() {
             f.to_str().unwrap(),
         ];
         args.extend(extra);
-        let o = incal(&args);
+        let o = run(&args);
         assert_eq!(o.status.code(), Some(2), "{name}");
         let line = stderr_line(&o);
         assert!(line.contains(name), "{name}: {line}");
         assert!(line.contains(expect), "{name}: {line}");
     }
     // Unknown mount and unknown option: usage errors, exit 2, one line.
-    let f = temp("ok.csv", "angle_deg,output\n0,1\n");
+    let f = write("ok.csv", "angle_deg,output\n0,1\n");
     for args in [
         vec![
             "tumble",
@@ -289,12 +274,12 @@ fn bad_input_exits_2_with_one_line() {
         ],
         vec!["plan", "tumble", "--step-deg", "25"],
     ] {
-        let o = incal(&args);
+        let o = run(&args);
         assert_eq!(o.status.code(), Some(2), "{args:?}");
         stderr_line(&o);
     }
     // A file that does not exist.
-    let o = incal(&["tumble", "--mount", "gate", "--input", "/nonexistent/x.csv"]);
+    let o = run(&["tumble", "--mount", "gate", "--input", "/nonexistent/x.csv"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr_line(&o).contains("/nonexistent/x.csv"));
 }

@@ -1,0 +1,155 @@
+//! The one harness of the CLI tests: run the real `incal` binary, make
+//! scratch files under cargo's `CARGO_TARGET_TMPDIR`, and check its
+//! contract (exit 0 with JSON, or exit 2 with one line naming the problem).
+//! Each test file says `mod common;` and uses what it needs.
+#![allow(dead_code)]
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use serde_json::Value;
+
+/// The binary under test, with standard input closed and no records
+/// store from the environment (`INCAL_DB`).
+pub fn bin() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_incal"));
+    c.stdin(Stdio::null()).env_remove("INCAL_DB");
+    c
+}
+
+/// Run `incal args…` to completion.
+pub fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("runs incal")
+}
+
+/// Run `incal args…` in the working directory `dir`.
+pub fn run_in(dir: &Path, args: &[&str]) -> Output {
+    bin()
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("runs incal")
+}
+
+/// Run `incal args…` with `input` on standard input.
+pub fn run_with_stdin(args: &[&str], input: &[u8]) -> Output {
+    let mut child = bin()
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawns incal");
+    // A command may exit before reading all of its input: ignore EPIPE.
+    let _ = child.stdin.take().expect("stdin").write_all(input);
+    child.wait_with_output().expect("waits for incal")
+}
+
+/// Stem of this test binary's name (`gyro_cli-1a2b…` → `gyro_cli`), so
+/// that scratch files of different test files never share a name.
+fn test_name() -> String {
+    std::env::current_exe()
+        .ok()
+        .and_then(|p| p.file_stem().map(|s| s.to_string_lossy().to_string()))
+        .map(|s| s.split('-').next().unwrap_or("test").to_string())
+        .unwrap_or_else(|| "test".into())
+}
+
+/// A scratch path ending in `name`, the same on every call with the same
+/// name within one test binary (a test may write it and read it back).
+pub fn tmp(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
+        "incal_{}_{}_{name}",
+        test_name(),
+        std::process::id()
+    ))
+}
+
+/// A scratch path ending in `name`, new on every call (for helpers that
+/// tests call concurrently).
+pub fn unique(name: &str) -> PathBuf {
+    static N: AtomicUsize = AtomicUsize::new(0);
+    let k = N.fetch_add(1, Ordering::SeqCst);
+    tmp(&format!("{k}_{name}"))
+}
+
+/// A scratch directory of this test binary (created).
+pub fn dir() -> PathBuf {
+    let d = tmp("dir");
+    std::fs::create_dir_all(&d).expect("creates the scratch directory");
+    d
+}
+
+/// A scratch directory of its own for `test` (created).
+pub fn workdir(test: &str) -> PathBuf {
+    let d = tmp(test);
+    std::fs::create_dir_all(&d).expect("creates the scratch directory");
+    d
+}
+
+/// Write `text` to [`tmp`]`(name)` and return its path.
+pub fn write(name: &str, text: &(impl AsRef<[u8]> + ?Sized)) -> PathBuf {
+    let p = tmp(name);
+    std::fs::write(&p, text).expect("writes a scratch file");
+    p
+}
+
+/// Write `text` to a new [`unique`] path ending in `name` and return it.
+pub fn write_unique(name: &str, text: &(impl AsRef<[u8]> + ?Sized)) -> PathBuf {
+    let p = unique(name);
+    std::fs::write(&p, text).expect("writes a scratch file");
+    p
+}
+
+/// A path as the `&str` an argument list takes.
+pub fn p(x: &Path) -> &str {
+    x.to_str().expect("UTF-8 path")
+}
+
+/// Standard output as text.
+pub fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).to_string()
+}
+
+/// Standard error as text.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).to_string()
+}
+
+/// Exit 0 (else the stderr is shown); the standard output.
+pub fn ok(o: &Output) -> String {
+    assert!(o.status.success(), "stderr: {}", stderr(o));
+    stdout(o)
+}
+
+/// Exit 0 and a JSON document on standard output.
+pub fn json_of(o: &Output) -> Value {
+    serde_json::from_str(&ok(o)).expect("stdout is one JSON document")
+}
+
+/// Exit 2, exactly one short stderr line (under 400 characters), no
+/// panic, containing every `needle`.
+pub fn refused(o: &Output, needles: &[&str]) {
+    let err = stderr(o);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "stderr: {err} stdout: {}",
+        stdout(o)
+    );
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    assert!(err.len() < 400, "too long ({} chars): {err}", err.len());
+    assert!(!err.contains("panicked"), "{err}");
+    for n in needles {
+        assert!(err.contains(n), "{n:?} not in {err}");
+    }
+}
+
+/// The sorted keys of a JSON object.
+pub fn keys(v: &Value) -> Vec<String> {
+    let mut k: Vec<String> = v.as_object().expect("an object").keys().cloned().collect();
+    k.sort();
+    k
+}
