@@ -26,8 +26,9 @@
 //! Every text from the document is escaped. The renderer is pure: no file,
 //! no network (it reads the clock only for the default date).
 
-mod format;
+pub mod format;
 pub mod plots;
+pub mod text;
 
 use incal::document::{Cell, ResultDocument, Table};
 use incal::units::Unit;

@@ -1,0 +1,261 @@
+//! The one text renderer of incal's documents: the readable report of
+//! any result document (`incal.result/1`) and of any plan document
+//! (`incal.plan/1`), in engineering units chosen by
+//! [`incal::units::Unit::engineering`]. Every front end (the CLI, Python)
+//! prints documents through it.
+
+use incal::document::plan::PlanDocument;
+use incal::document::{Cell, ResultDocument, Table};
+
+use crate::format::{dof_text, sig, trimmed};
+
+/// The readable report of any result document: title, instrument and
+/// inputs, coefficients (value, u, U95, dof in engineering units), fits,
+/// decisions, warnings, then every table of the procedure.
+pub fn render(doc: &ResultDocument) -> String {
+    let mut s = format!("{}\n", doc.title);
+    let inst = &doc.instrument;
+    let mut ids: Vec<String> = Vec::new();
+    if let Some(x) = &inst.serial {
+        ids.push(format!("serial {x}"));
+    }
+    if let Some(x) = &inst.model {
+        ids.push(format!("model {x}"));
+    }
+    ids.extend(inst.meta.iter().map(|(k, v)| format!("{k} {v}")));
+    if !ids.is_empty() {
+        s.push_str(&format!("instrument: {}\n", ids.join(", ")));
+    }
+    for i in &doc.inputs {
+        let rows = i.rows.map_or(String::new(), |r| format!(", {r} rows"));
+        s.push_str(&format!(
+            "{}: {} (sha256 {}{rows})\n",
+            i.role,
+            i.path,
+            &i.sha256[..i.sha256.len().min(16)]
+        ));
+    }
+    s.push_str("\nCoefficients\n");
+    let verdicts = doc.verdicts.as_ref();
+    let rows: Vec<Vec<String>> = doc
+        .coefficients
+        .iter()
+        .map(|(name, c)| {
+            let (scale, label) = c.unit.engineering_for(c.value);
+            let mut row = vec![
+                name.to_string(),
+                sig(c.value * scale, 7),
+                sig(c.u * scale, 3),
+                sig(c.u95 * scale, 3),
+                dof_text(c.dof),
+                format!("{:.3}", c.k95),
+                label.to_string(),
+            ];
+            if let Some(v) = verdicts {
+                row.push(v.get(name).map_or(String::new(), |v| {
+                    let lim = |x: Option<f64>| x.map_or("-".to_string(), |x| trimmed(x * scale, 6));
+                    format!("{} [{}, {}]", v.verdict, lim(v.min), lim(v.max))
+                }));
+            }
+            row
+        })
+        .collect();
+    let mut header = vec!["name", "value", "u", "U95", "dof", "k95", "unit"];
+    if verdicts.is_some() {
+        header.push("verdict [min, max]");
+    }
+    s.push_str(&table(&header, &rows));
+    s.push_str(
+        "u: standard uncertainty; U95 = k95 u covers the value with 95 % probability (k95: Student t for dof; inf: known variance)\n",
+    );
+    if let (Some(v), Some(rule)) = (doc.verdict, doc.decision_rule) {
+        let rule = match rule {
+            incal::document::limits::DecisionRule::Simple => {
+                "simple acceptance: value against the limits"
+            }
+            incal::document::limits::DecisionRule::GuardBand => {
+                "guard band: value +- U95 against the limits (ILAC-G8)"
+            }
+        };
+        s.push_str(&format!("verdict: {v} ({rule})\n"));
+    }
+    if !doc.fits.is_empty() {
+        s.push_str("\nFits\n");
+        let rows: Vec<Vec<String>> = doc
+            .fits
+            .iter()
+            .map(|f| {
+                let (scale, label) = f.residual_unit.engineering();
+                vec![
+                    f.label.clone(),
+                    f.observations.to_string(),
+                    f.parameters.to_string(),
+                    f.dof.to_string(),
+                    f.condition_number.map_or("-".into(), |c| sig(c, 3)),
+                    f.chi2_p_value.map_or("-".into(), |p| sig(p, 2)),
+                    match f.variance_source {
+                        incal::estimation::VarianceSource::Prior => "scatter/known".into(),
+                        incal::estimation::VarianceSource::Residuals => "residuals".into(),
+                    },
+                    f.residual_rms
+                        .map_or("-".into(), |r| format!("{} {label}", sig(r * scale, 3))),
+                ]
+            })
+            .collect();
+        s.push_str(&table(
+            &[
+                "fit",
+                "n",
+                "p",
+                "dof",
+                "condition",
+                "chi2 p",
+                "variance",
+                "residual rms",
+            ],
+            &rows,
+        ));
+    }
+    if !doc.decisions.is_empty() || !doc.warnings.is_empty() {
+        s.push('\n');
+    }
+    for d in &doc.decisions {
+        s.push_str(&format!("note: {}\n", d.message));
+    }
+    for w in &doc.warnings {
+        s.push_str(&format!("warning [{}]: {}\n", w.code, w.message));
+    }
+    for t in &doc.tables {
+        s.push('\n');
+        s.push_str(&render_table(t));
+    }
+    s
+}
+
+/// One document table in engineering units. A column with a unit is
+/// converted by it (its header says the unit shown); in a table with a
+/// `unit` column, the unit-less number columns are in each row's unit and
+/// are converted row by row.
+pub fn render_table(t: &Table) -> String {
+    let unit_col = t.columns.iter().position(|c| c.name == "unit");
+    let header: Vec<String> = t
+        .columns
+        .iter()
+        .map(|c| match &c.unit {
+            Some(u) if !u.engineering().1.is_empty() && u.engineering().1 != "1" => {
+                format!("{} ({})", c.name, u.engineering().1)
+            }
+            _ => c.name.clone(),
+        })
+        .collect();
+    let rows: Vec<Vec<String>> = t
+        .rows
+        .iter()
+        .map(|row| {
+            let row_unit = unit_col.and_then(|k| match &row[k] {
+                Cell::Text(u) => Some(incal::units::Unit::parse(u)),
+                _ => None,
+            });
+            row.iter()
+                .enumerate()
+                .map(|(k, cell)| match cell {
+                    Cell::Null => "-".into(),
+                    Cell::Text(x) if Some(k) == unit_col => row_unit
+                        .as_ref()
+                        .map_or(x.clone(), |u| u.engineering().1.to_string()),
+                    Cell::Text(x) => x.clone(),
+                    Cell::Number(x) => {
+                        let scale = match (&t.columns[k].unit, &row_unit) {
+                            (Some(u), _) => u.engineering().0,
+                            (None, Some(u)) => u.engineering().0,
+                            (None, None) => 1.0,
+                        };
+                        trimmed(x * scale, 6)
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let hdr: Vec<&str> = header.iter().map(String::as_str).collect();
+    format!("{}\n{}", t.title, table(&hdr, &rows))
+}
+
+/// A plain text table with right-aligned columns after the first.
+pub fn table(header: &[&str], rows: &[Vec<String>]) -> String {
+    let ncol = header.len();
+    let mut width: Vec<usize> = header.iter().map(|h| h.chars().count()).collect();
+    for r in rows {
+        for (k, c) in r.iter().enumerate().take(ncol) {
+            width[k] = width[k].max(c.chars().count());
+        }
+    }
+    let fmt_row = |cells: Vec<String>| {
+        let mut s = String::new();
+        for (k, c) in cells.iter().enumerate() {
+            let pad = width[k].saturating_sub(c.chars().count());
+            if k == 0 {
+                s.push_str(c);
+                s.push_str(&" ".repeat(pad));
+            } else {
+                s.push_str("  ");
+                s.push_str(&" ".repeat(pad));
+                s.push_str(c);
+            }
+        }
+        s.trim_end().to_string()
+    };
+    let mut out = fmt_row(header.iter().map(|h| h.to_string()).collect());
+    out.push('\n');
+    out.push_str(&"-".repeat(width.iter().sum::<usize>() + 2 * (ncol - 1)));
+    out.push('\n');
+    for r in rows {
+        out.push_str(&fmt_row(r.clone()));
+        out.push('\n');
+    }
+    out
+}
+
+/// A plan value for people: numbers as typed, lists joined by commas,
+/// anything else as compact JSON.
+fn plan_value(v: &serde_json::Value) -> String {
+    use serde_json::Value;
+    match v {
+        Value::Null => "-".into(),
+        Value::String(s) => s.clone(),
+        Value::Number(n) => match n.as_f64() {
+            Some(x) if n.is_f64() => trimmed(x, 6),
+            _ => n.to_string(),
+        },
+        Value::Bool(b) => b.to_string(),
+        Value::Array(a) if a.iter().all(|x| !x.is_object() && !x.is_array()) => {
+            a.iter().map(plan_value).collect::<Vec<_>>().join(", ")
+        }
+        other => other.to_string(),
+    }
+}
+
+/// The readable form of any plan document: title, the plan's own keys,
+/// the predicted standard uncertainty of every term in engineering units,
+/// notes.
+pub fn render_plan(doc: &PlanDocument) -> String {
+    let mut s = format!("{}\n", doc.title);
+    for (k, v) in &doc.plan {
+        s.push_str(&format!("{k}: {}\n", plan_value(v)));
+    }
+    if let (Some(u), Some(units)) = (&doc.predicted_u, &doc.units) {
+        s.push_str("\nPredicted standard uncertainty\n");
+        let rows: Vec<Vec<String>> = u
+            .iter()
+            .map(|(name, &u)| {
+                let unit = incal::units::Unit::parse(units.get(name).map_or("", |s| s.as_str()));
+                let (scale, label) = unit.engineering_for(u);
+                vec![name.clone(), sig(u * scale, 3), label.to_string()]
+            })
+            .collect();
+        s.push_str(&table(&["term", "predicted u", "unit"], &rows));
+    }
+    for n in &doc.notes {
+        s.push_str(&format!("note: {n}\n"));
+    }
+    s
+}
