@@ -6,7 +6,8 @@
 Default files: README.md, CONTRIBUTING.md and docs/src/*.md.
 
 1. Links: every relative Markdown link `[text](path)` or `[text](path#anchor)`
-   must name a file that exists (anchors are not checked).
+   must name a file that exists, and an anchor must be a heading id (as
+   mdBook makes it) or an `<a id="...">` of that file.
 2. Examples: every ```sh block is run, line by line, with `incal` replaced by
    $INCAL, in one temporary directory per Markdown file (so a chapter's
    blocks build on each other). Lines that start with `cargo`, `cd`,
@@ -53,6 +54,24 @@ def blocks(text):
     return out
 
 
+def anchors(path):
+    """Heading ids as mdBook makes them, and explicit <a id="...">."""
+    ids = set()
+    fence = False
+    for l in open(path, encoding="utf-8").read().split("\n"):
+        if l.strip().startswith("```"):
+            fence = not fence
+            continue
+        if fence:
+            continue
+        m = re.match(r"^#{1,6}\s+(.*)$", l)
+        if m:
+            s = re.sub(r"\[([^]]*)\]\([^)]*\)", r"\1", m.group(1)).replace("`", "").lower()
+            ids.add("".join(c for c in s.replace(" ", "-") if c.isalnum() or c in "-_"))
+        ids.update(re.findall(r'<a id="([^"]+)"', l))
+    return ids
+
+
 def check_links(path, text):
     base = os.path.dirname(path)
     stripped = re.sub(r"```.*?```", "", text, flags=re.S)
@@ -61,9 +80,12 @@ def check_links(path, text):
         target = m.group(1)
         if re.match(r"^[a-z]+:", target) or target.startswith("#"):
             continue
-        file = target.split("#")[0]
-        if not os.path.exists(os.path.normpath(os.path.join(base, file))):
+        file, _, anchor = target.partition("#")
+        full = os.path.normpath(os.path.join(base, file)) if file else path
+        if not os.path.exists(full):
             problems.append(f"{os.path.relpath(path, ROOT)}: link to missing file {target}")
+        elif anchor and full.endswith(".md") and anchor not in anchors(full):
+            problems.append(f"{os.path.relpath(path, ROOT)}: link to missing anchor {target}")
 
 
 def run(cmd, cwd):
