@@ -28,6 +28,7 @@
 
 pub mod format;
 pub mod plots;
+pub mod records;
 pub mod text;
 
 use incal::document::{Cell, ResultDocument, Table};

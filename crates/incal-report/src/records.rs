@@ -1,0 +1,211 @@
+//! Records for people and programs: the list of records, one record's
+//! heading and the history of one coefficient (drift per day,
+//! repeatability, En of the latest), as text in engineering units and as
+//! JSON (non-finite numbers as `null`). Every front end renders records
+//! through these.
+
+use incal_records::{History, RecordSummary, StoredRecord};
+use serde_json::{json, Value};
+
+use crate::format::{dof_text, sig};
+use crate::text::table;
+
+/// `{"records": [{id, serial, procedure, created_utc, sha256, operator,
+/// station, superseded_by}, …]}`.
+pub fn list_json(records: &[RecordSummary]) -> Value {
+    let rows: Vec<Value> = records
+        .iter()
+        .map(|r| {
+            json!({
+                "id": r.id,
+                "serial": r.serial,
+                "procedure": r.procedure,
+                "created_utc": r.created_utc,
+                "sha256": r.sha256,
+                "operator": r.operator,
+                "station": r.station,
+                "superseded_by": r.superseded_by,
+            })
+        })
+        .collect();
+    json!({ "records": rows })
+}
+
+/// The records as a table (`no records` when there are none).
+pub fn list_text(records: &[RecordSummary]) -> String {
+    if records.is_empty() {
+        return "no records\n".to_string();
+    }
+    let dash = |s: &Option<String>| s.clone().unwrap_or_else(|| "-".into());
+    let rows: Vec<Vec<String>> = records
+        .iter()
+        .map(|r| {
+            vec![
+                r.id.to_string(),
+                r.serial.clone(),
+                r.procedure.clone(),
+                r.created_utc.clone(),
+                r.sha256[..16.min(r.sha256.len())].to_string(),
+                dash(&r.operator),
+                dash(&r.station),
+                r.superseded_by.map_or("-".into(), |s| s.to_string()),
+            ]
+        })
+        .collect();
+    table(
+        &[
+            "id",
+            "serial",
+            "procedure",
+            "created_utc",
+            "sha256",
+            "operator",
+            "station",
+            "superseded_by",
+        ],
+        &rows,
+    )
+}
+
+/// The heading of `incal record show`: id, serial, time, hash, who, and
+/// what it supersedes or is superseded by.
+pub fn header_text(r: &StoredRecord) -> String {
+    let mut s = format!(
+        "record {} of serial {}, {} (sha256 {})\n",
+        r.id, r.serial, r.created_utc, r.sha256
+    );
+    let who: Vec<String> = [("operator", &r.operator), ("station", &r.station)]
+        .iter()
+        .filter_map(|(k, v)| v.as_ref().map(|v| format!("{k} {v}")))
+        .collect();
+    if !who.is_empty() {
+        s.push_str(&format!("{}\n", who.join(", ")));
+    }
+    if let Some(sup) = &r.supersedes {
+        s.push_str(&format!(
+            "supersedes record {}: {}\n",
+            sup.old_id, sup.reason
+        ));
+    }
+    if let Some(by) = r.superseded_by {
+        s.push_str(&format!("SUPERSEDED by record {by}\n"));
+    }
+    s
+}
+
+fn num(x: Option<f64>) -> Value {
+    x.filter(|v| v.is_finite()).map_or(Value::Null, Value::from)
+}
+
+/// The JSON of a history (manual, chapter "Calibration records"):
+/// serial, coefficient, unit, points, drift_per_day, repeatability,
+/// En_latest, notes.
+pub fn history_json(h: &History) -> Value {
+    let points: Vec<Value> = h
+        .points
+        .iter()
+        .map(|p| {
+            json!({
+                "id": p.id,
+                "created_utc": p.created_utc,
+                "value": num(Some(p.value)),
+                "u": num(Some(p.u)),
+                "U95": num(Some(p.u95)),
+                "dof": num(p.dof),
+            })
+        })
+        .collect();
+    let d = h.drift.as_ref();
+    let r = h.repeatability.as_ref();
+    json!({
+        "serial": h.serial,
+        "coefficient": h.coefficient,
+        "unit": h.unit.as_str(),
+        "points": points,
+        "drift_per_day": {
+            "value": num(d.map(|d| d.value)),
+            "u": num(d.map(|d| d.u)),
+            "dof": num(d.and_then(|d| d.dof)),
+            "unit": format!("{}/day", h.unit),
+            "variance_source": d.map(|d| json!(d.variance_source)),
+        },
+        "repeatability": {
+            "value": num(r.map(|r| r.value)),
+            "dof": num(r.map(|r| r.dof)),
+        },
+        "En_latest": num(h.en_latest),
+        "notes": h.notes,
+    })
+}
+
+/// The readable history of one coefficient.
+pub fn history_text(h: &History) -> String {
+    let mag = h.points.iter().map(|p| p.value.abs()).fold(0.0, f64::max);
+    let (scale, label) = h.unit.engineering_for(mag);
+    let dof = dof_text;
+    let mut s = format!(
+        "{} of serial {}: {} calibration{} (superseded records left out)\n",
+        h.coefficient,
+        h.serial,
+        h.points.len(),
+        if h.points.len() == 1 { "" } else { "s" }
+    );
+    let rows: Vec<Vec<String>> = h
+        .points
+        .iter()
+        .map(|p| {
+            vec![
+                p.id.to_string(),
+                p.created_utc.clone(),
+                sig(p.value * scale, 7),
+                sig(p.u * scale, 3),
+                sig(p.u95 * scale, 3),
+                dof(p.dof),
+                label.to_string(),
+            ]
+        })
+        .collect();
+    s.push_str(&table(
+        &["id", "created_utc", "value", "u", "U95", "dof", "unit"],
+        &rows,
+    ));
+    s.push('\n');
+    match &h.drift {
+        Some(d) => {
+            let src = match d.variance_source {
+                incal::estimation::VarianceSource::Prior => "from the calibrations' u",
+                incal::estimation::VarianceSource::Residuals => {
+                    "scaled up: the values scatter beyond their u"
+                }
+            };
+            s.push_str(&format!(
+                "drift: {} {label}/day, u {} (dof {}; {src})\n",
+                sig(d.value * scale, 4),
+                sig(d.u * scale, 3),
+                dof(d.dof)
+            ));
+        }
+        None => s.push_str("drift: -\n"),
+    }
+    match &h.repeatability {
+        Some(r) => s.push_str(&format!(
+            "repeatability: {} {label} (standard deviation of the values, dof {})\n",
+            sig(r.value * scale, 3),
+            r.dof
+        )),
+        None => s.push_str("repeatability: -\n"),
+    }
+    match h.en_latest {
+        Some(en) => s.push_str(&format!(
+            "En of the latest against the previous: {} ({})\n",
+            sig(en, 3),
+            if en.abs() <= 1.0 { "agrees" } else { "DIFFERS" }
+        )),
+        None => s.push_str("En of the latest against the previous: -\n"),
+    }
+    for n in &h.notes {
+        s.push_str(&format!("note: {n}\n"));
+    }
+    s.push_str("method: drift by weighted least squares x = a + b t (t in days, weights 1/u^2); En = (x_n - x_n-1)/sqrt(U95_n^2 + U95_n-1^2)\n");
+    s
+}
