@@ -259,3 +259,53 @@ pub fn render_plan(doc: &PlanDocument) -> String {
     }
     s
 }
+
+/// The readable comparison of two results
+/// ([`incal::document::compare::compare_documents`]): one row per
+/// coefficient in engineering units, `|En| <= 1` judged.
+pub fn render_comparison(c: &incal::document::compare::DocumentComparison) -> String {
+    let f = |v: &serde_json::Value| v.as_f64();
+    let mut rows = Vec::new();
+    {
+        for (name, r) in &c.rows {
+            let (x, y) = (
+                f(&r["a"]).unwrap_or(f64::NAN),
+                f(&r["b"]).unwrap_or(f64::NAN),
+            );
+            let unit = incal::units::Unit::parse(r["unit"].as_str().unwrap_or(""));
+            let (scale, label) = unit.engineering_for(x.abs().max(y.abs()));
+            let en = f(&r["En"]);
+            rows.push(vec![
+                name.to_string(),
+                sig(x * scale, 7),
+                sig(y * scale, 7),
+                sig(f(&r["difference"]).unwrap_or(f64::NAN) * scale, 3),
+                f(&r["relative_per_mille"]).map_or("-".into(), |v| sig(v, 3)),
+                en.map_or("-".into(), |e| sig(e, 3)),
+                match en {
+                    Some(e) if e.abs() <= 1.0 => "ok",
+                    Some(_) => "DIFFERS",
+                    None => "-",
+                }
+                .to_string(),
+                label.to_string(),
+            ]);
+        }
+    }
+    let mut s = format!("{} results: a = {}, b = {}\n", c.procedure, c.a, c.b);
+    s.push_str(&table(
+        &[
+            "name",
+            "a",
+            "b",
+            "a - b",
+            "per mille",
+            "En",
+            "|En|<=1",
+            "unit",
+        ],
+        &rows,
+    ));
+    s.push_str("En = (a - b) / sqrt(U95_a^2 + U95_b^2), U95 = k95 u of each result; per mille relative to b\n");
+    s
+}

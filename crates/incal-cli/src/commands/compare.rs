@@ -1,24 +1,13 @@
-//! `incal compare A.json B.json`: coefficient-by-coefficient comparison of
-//! two result documents of the same procedure (seed 000 compares methods
-//! in ‰; seed 001 Table 5 uses the normalized error).
-//!
-//! For every coefficient present in both:
-//! `d = x_A − x_B`, relative difference `1000·d/|x_B|` (‰) and the
-//! normalized error `En = d / sqrt(U_A² + U_B²)` with each side's own
-//! expanded uncertainty `U95 = k95·u` (ISO/IEC 17043 B.3.1.3 with the
-//! coverage factor of each result's degrees of freedom); `|En| ≤ 1` is
-//! satisfactory. Computed in scaled form (every term divided by the
-//! largest magnitude involved), so values near the limits of `f64` neither
-//! overflow nor lose the answer.
+//! `incal compare A.json B.json`: the core's comparison of two result
+//! documents ([`incal::document::compare`]), as JSON or a table.
 
 use std::path::PathBuf;
 
-use incal::document::Coefficient;
-use serde_json::{json, Map, Value};
+use incal::document::compare::compare_documents;
 
 use crate::documents::read_document;
 use crate::error::{CliError, CliResult};
-use crate::output::{json_text, sig, table, write_text};
+use crate::output::{json_text, write_text};
 
 /// Options of `incal compare`.
 #[derive(clap::Args, Debug)]
@@ -35,162 +24,15 @@ pub struct Args {
     pub output: Option<PathBuf>,
 }
 
-/// One comparison: difference, per mille of |b| and En, in scaled form.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Comparison {
-    /// `a − b` (infinite only when it truly overflows).
-    pub difference: f64,
-    /// `1000·(a − b)/|b|` (`None` when b = 0).
-    pub relative_per_mille: Option<f64>,
-    /// `(a − b)/sqrt(U_a² + U_b²)` (`None` when both U are 0).
-    pub en: Option<f64>,
-}
-
-/// Compare `a` with the reference `b` (module docs).
-pub fn compare(a: &Coefficient, b: &Coefficient) -> Comparison {
-    // Scale by the largest magnitude so no intermediate overflows: with
-    // s = max(|a|, |b|, U_a, U_b), every quotient below is formed from
-    // numbers in [−1, 1] (differences in [−2, 2]).
-    let s = [a.value.abs(), b.value.abs(), a.u95, b.u95]
-        .into_iter()
-        .fold(0.0, f64::max);
-    if s == 0.0 {
-        return Comparison {
-            difference: 0.0,
-            relative_per_mille: None,
-            en: None,
-        };
-    }
-    let (xa, xb, ua, ub) = (a.value / s, b.value / s, a.u95 / s, b.u95 / s);
-    let d = xa - xb;
-    let big_u = ua.hypot(ub);
-    Comparison {
-        difference: d * s,
-        relative_per_mille: (xb != 0.0).then(|| 1e3 * d / xb.abs()),
-        en: (big_u > 0.0).then(|| d / big_u),
-    }
-}
-
 /// `incal compare`.
 pub fn run(a: &Args) -> CliResult<()> {
     let (na, _, da) = read_document(&a.a)?;
     let (nb, _, db) = read_document(&a.b)?;
-    if da.procedure != db.procedure {
-        return Err(CliError::Input(format!(
-            "{na} is a {} result and {nb} a {} result: compare needs two results of the same procedure",
-            da.procedure, db.procedure
-        )));
-    }
-    let mut rows = Vec::new();
-    let mut m = Map::new();
-    for (name, x) in da.coefficients.iter() {
-        let Some(y) = db.coefficients.get(name) else {
-            continue;
-        };
-        if x.unit != y.unit {
-            return Err(CliError::Input(format!(
-                "{name}: unit '{}' in {na} but '{}' in {nb}",
-                x.unit, y.unit
-            )));
-        }
-        let c = compare(x, y);
-        if !c.difference.is_finite() {
-            return Err(CliError::Input(format!(
-                "{name}: the difference {} - ({}) overflows a double",
-                x.value, y.value
-            )));
-        }
-        m.insert(
-            name.to_string(),
-            json!({
-                "a": x.value, "u_a": x.u, "U95_a": x.u95,
-                "b": y.value, "u_b": y.u, "U95_b": y.u95,
-                "difference": c.difference,
-                "relative_per_mille": c.relative_per_mille,
-                "En": c.en,
-                "unit": x.unit.as_str(),
-            }),
-        );
-        let (scale, label) = x.unit.engineering_for(x.value.abs().max(y.value.abs()));
-        rows.push(vec![
-            name.to_string(),
-            sig(x.value * scale, 7),
-            sig(y.value * scale, 7),
-            sig(c.difference * scale, 3),
-            c.relative_per_mille.map_or("-".into(), |r| sig(r, 3)),
-            c.en.map_or("-".into(), |e| sig(e, 3)),
-            match c.en {
-                Some(e) if e.abs() <= 1.0 => "ok",
-                Some(_) => "DIFFERS",
-                None => "-",
-            }
-            .to_string(),
-            label.to_string(),
-        ]);
-    }
-    if m.is_empty() {
-        return Err(CliError::Input(format!(
-            "{na} and {nb} have no coefficient in common"
-        )));
-    }
+    let c = compare_documents(&na, &da, &nb, &db).map_err(|e| CliError::Input(e.to_string()))?;
     let text = if a.json {
-        json_text(&json!({
-            "procedure": da.procedure.as_str(),
-            "a": na,
-            "b": nb,
-            "convention": "difference = a - b; relative_per_mille = 1000*difference/|b|; En = difference/sqrt(U95_a^2 + U95_b^2), U95 = k95*u of each result",
-            "comparisons": Value::Object(m),
-        }))
+        json_text(&c.to_json())
     } else {
-        let mut s = format!("{} results: a = {na}, b = {nb}\n", da.procedure);
-        s.push_str(&table(
-            &[
-                "name",
-                "a",
-                "b",
-                "a - b",
-                "per mille",
-                "En",
-                "|En|<=1",
-                "unit",
-            ],
-            &rows,
-        ));
-        s.push_str("En = (a - b) / sqrt(U95_a^2 + U95_b^2), U95 = k95 u of each result; per mille relative to b\n");
-        s
+        incal_report::text::render_comparison(&c)
     };
     write_text(a.output.as_deref(), &text)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use incal::units::Unit;
-
-    fn c(v: f64, u: f64) -> Coefficient {
-        Coefficient::new("x", v, u, Unit::G, f64::INFINITY).unwrap()
-    }
-
-    #[test]
-    fn en_uses_each_sides_u95() {
-        let a = Coefficient::new("x", 1.0, 0.1, Unit::G, 4.0).unwrap();
-        let b = c(0.5, 0.1);
-        let r = compare(&a, &b);
-        let expect = 0.5 / (a.u95.powi(2) + b.u95.powi(2)).sqrt();
-        assert!((r.en.unwrap() - expect).abs() < 1e-12);
-        assert!((r.relative_per_mille.unwrap() - 1000.0).abs() < 1e-9);
-    }
-
-    #[test]
-    fn extreme_values_do_not_overflow() {
-        let r = compare(&c(1e200, 1e199), &c(-1e200, 1e199));
-        assert!((r.en.unwrap() - 2e200 / (2f64.sqrt() * 1.959964e199)).abs() < 1e-3);
-        assert_eq!(r.difference, 2e200);
-        let r = compare(&c(1.7e308, 1e300), &c(-1.7e308, 1e300));
-        assert!(r.en.unwrap() > 1e6, "{r:?}");
-        assert!(r.difference.is_infinite());
-        let r = compare(&c(1e-300, 1e-310), &c(0.0, 1e-310));
-        assert!(r.en.unwrap() > 1.0 && r.en.unwrap().is_finite());
-        assert_eq!(r.relative_per_mille, None);
-    }
 }

@@ -27,6 +27,7 @@
 //! `schema/result.schema.json` ([`json_schema`]).
 
 pub mod centrifuge;
+pub mod compare;
 pub mod gfimu;
 pub mod gyro;
 pub mod imu;
