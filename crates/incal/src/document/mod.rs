@@ -27,7 +27,6 @@
 //! `schema/result.schema.json` ([`json_schema`]).
 
 pub mod centrifuge;
-pub mod gfimu;
 pub mod gyro;
 pub mod imu;
 pub mod limits;
