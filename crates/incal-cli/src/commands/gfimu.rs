@@ -208,7 +208,6 @@ pub struct SimArgs {
     pub output: Option<PathBuf>,
 }
 
-
 /// Options of `incal plan gfimu`.
 #[derive(clap::Args, Debug)]
 pub struct PlanArgs {
@@ -241,7 +240,9 @@ pub enum F0FrameArg {
 fn vec3(opt: &str, v: &[f64]) -> CliResult<Vector3<f64>> {
     match v {
         [x, y, z] => Ok(Vector3::new(*x, *y, *z)),
-        _ => Err(usage(format!("{opt}: expected three numbers x,y,z, got {v:?}"))),
+        _ => Err(usage(format!(
+            "{opt}: expected three numbers x,y,z, got {v:?}"
+        ))),
     }
 }
 

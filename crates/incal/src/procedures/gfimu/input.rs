@@ -35,7 +35,9 @@ use crate::models::gfimu::{ArrayAccelerometer, Geometry};
 /// Built-in gyro-free layouts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Layout {
-    /// The paper's six accelerometers (seed 004 Fig. 1): a, b at ±L on x
+    /// The six accelerometers of Fig. 1 of the technical note *Error
+    /// coefficient calibration algorithm; error compensation algorithm*
+    /// (authors and year not known): a, b at ±L on x
     /// sensing z; c, d at ±L on y sensing x; e, f at ±L on z sensing y.
     Paper,
     /// Twelve accelerometers, two across each of the six lever arms: the
@@ -100,8 +102,8 @@ impl ArrayGeometry {
     /// `[[accelerometer]]` tables (module docs). Every problem names the
     /// file, and the line for a TOML syntax error.
     pub fn from_toml(name: &str, path: &str, bytes: &[u8], sha256: String) -> Result<Self> {
-        let text = std::str::from_utf8(bytes)
-            .map_err(|_| InputError::file(name, "not valid UTF-8"))?;
+        let text =
+            std::str::from_utf8(bytes).map_err(|_| InputError::file(name, "not valid UTF-8"))?;
         if text.trim().is_empty() {
             return Err(
                 InputError::file(name, "empty file (expected [[accelerometer]] tables)").into(),
@@ -448,4 +450,66 @@ pub fn read_calibration(
         });
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::procedures::gfimu::sim::{simulate_static, six_positions, GfimuTruth};
+    use crate::procedures::gfimu::{GfimuCalibrate, GfimuCalibrateOptions};
+    use crate::procedures::{reduce_source, Silent};
+
+    /// The static CSV as written by the simulator reads back, through the
+    /// one input layer, whatever its delimiter, line ends, BOM or comments.
+    #[test]
+    fn static_csv_round_trips_in_any_dialect() {
+        let array = ArrayGeometry::builtin(Layout::Paper, 0.1).unwrap();
+        let g = &array.geometry;
+        let truth = GfimuTruth::typical(g, 1.0);
+        let data = simulate_static(g, &truth, &six_positions(), 3, 1e-4, 1).unwrap();
+        let csv =
+            String::from_utf8(write_static(&data, g, &["n".into()], Vec::new()).unwrap()).unwrap();
+        let dialect = format!(
+            "\u{feff}# c\r\n{}",
+            csv.replace(',', ";").replace('\n', "\r\n")
+        );
+        let o = GfimuCalibrateOptions {
+            array: array.clone(),
+            noise: crate::estimation::Noise::Auto,
+        };
+        let a = reduce_source::<GfimuCalibrate, _>(
+            "a.csv",
+            csv.as_bytes(),
+            &Default::default(),
+            &o,
+            &Silent,
+        )
+        .unwrap();
+        let b = reduce_source::<GfimuCalibrate, _>(
+            "a.csv",
+            dialect.as_bytes(),
+            &Default::default(),
+            &o,
+            &Silent,
+        )
+        .unwrap();
+        assert_eq!(a.coefficients, b.coefficients);
+        assert_eq!(a.inputs[0].rows, Some(18));
+        assert_eq!(a.options["geometry"], "paper layout, lever arm 0.1 m");
+    }
+
+    #[test]
+    fn geometry_and_calibration_files_are_read_strictly() {
+        let toml = b"[[accelerometer]]\nname = \"a\"\nposition_m = [0.1, x]\n";
+        let e = ArrayGeometry::from_toml("g.toml", "g.toml", toml, String::new()).unwrap_err();
+        assert!(e.to_string().starts_with("g.toml:3: "), "{e}");
+        let g = Geometry::paper(0.1).unwrap();
+        let e = read_calibration("c.json", b"{\"accelerometers\": {}}", &g).unwrap_err();
+        assert!(e.to_string().contains("$.accelerometers.a: missing"), "{e}");
+        let e = read_calibration("c.json", b"{\n\xff", &g).unwrap_err();
+        assert_eq!(e.to_string(), "c.json:2: not valid UTF-8");
+        let e = ArrayGeometry::builtin(Layout::Paper, 1e300).unwrap_err();
+        assert!(e.to_string().contains("lever_arm_m"), "{e}");
+        assert!(e.to_string().contains("1.000000e300"), "{e}");
+    }
 }

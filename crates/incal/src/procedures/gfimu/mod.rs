@@ -94,7 +94,11 @@ impl super::Procedure for GfimuCalibrate {
         o: &GfimuCalibrateOptions,
         _: &dyn super::Progress,
     ) -> Result<crate::document::ResultDocument> {
-        let cal = calibrate(&o.array.geometry, samples, &CalibrateOptions { noise: o.noise })?;
+        let cal = calibrate(
+            &o.array.geometry,
+            samples,
+            &CalibrateOptions { noise: o.noise },
+        )?;
         let mut doc = cal.document(&o.array.label, o.noise.sigma().is_some())?;
         doc.inputs.extend(o.array.file.clone());
         Ok(doc)

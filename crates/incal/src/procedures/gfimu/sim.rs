@@ -559,7 +559,8 @@ impl GfimuSim {
     /// [`GfimuSim::validate`] first: a configuration it refuses is an
     /// `InvalidInput` error here.
     pub fn write<W: Write>(&self, out: W) -> std::io::Result<W> {
-        let invalid = |e: Error| std::io::Error::new(std::io::ErrorKind::InvalidInput, e.to_string());
+        let invalid =
+            |e: Error| std::io::Error::new(std::io::ErrorKind::InvalidInput, e.to_string());
         self.validate().map_err(invalid)?;
         let g = &self.array.geometry;
         let truth = self.truth();
@@ -572,7 +573,8 @@ impl GfimuSim {
                 super::input::write_static(&data, g, &notes, out)
             }
             SimKind::Motion(m) => {
-                let series = motion_samples(g, &truth, m, self.noise, self.seed).map_err(invalid)?;
+                let series =
+                    motion_samples(g, &truth, m, self.noise, self.seed).map_err(invalid)?;
                 super::input::write_motion(series, g, &notes, out)
             }
         }

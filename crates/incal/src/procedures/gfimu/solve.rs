@@ -534,10 +534,10 @@ impl Solver {
         opts: &SolveOptions,
     ) -> Result<Self> {
         Self::new(geometry, cal, opts).map_err(|e| match e {
-            Error::Unseparable { .. } | Error::IllConditioned { .. } => Error::Unsupported(
-                format!("calibrated geometry cannot solve the motion: {e}"),
-            )
-            .in_file(file),
+            Error::Unseparable { .. } | Error::IllConditioned { .. } => {
+                Error::Unsupported(format!("calibrated geometry cannot solve the motion: {e}"))
+                    .in_file(file)
+            }
             e => e.in_file(file),
         })
     }

@@ -490,7 +490,8 @@ pub fn solve_stream<R: Read + Send, W: Write>(
         let (tx, rx) = sync_channel::<Parsed>(8);
         let (back_tx, back_rx) = sync_channel::<Batch>(8);
         scope.spawn(move || parse_series(series, &tx, &back_rx));
-        let at = |line: usize, msg: String| StreamError::Input(InputError::at(&name, line, msg).into());
+        let at =
+            |line: usize, msg: String| StreamError::Input(InputError::at(&name, line, msg).into());
         for msg in rx.iter() {
             let batch = match msg {
                 Parsed::Rows(b) => b,
@@ -565,4 +566,80 @@ pub fn solve_stream<R: Read + Send, W: Write>(
     out.write_all(&buf)?;
     out.flush()?;
     outcome
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::procedures::gfimu::input::{write_motion, ArrayGeometry, Layout};
+    use crate::procedures::gfimu::sim::{motion_samples, GfimuTruth, MotionProfile};
+    use crate::procedures::gfimu::SolveOptions;
+
+    fn series(array: &ArrayGeometry) -> (Vec<u8>, GfimuTruth) {
+        let g = &array.geometry;
+        let truth = GfimuTruth::typical(g, 1.0);
+        let m = MotionProfile::rate_table();
+        let s = motion_samples(g, &truth, &m, 1e-4, 7).unwrap();
+        (
+            write_motion(s, g, &["a note".into()], Vec::new()).unwrap(),
+            truth,
+        )
+    }
+
+    fn run(
+        csv: &[u8],
+        array: &ArrayGeometry,
+        truth: &GfimuTruth,
+        format: SolutionFormat,
+    ) -> (String, std::result::Result<incal_io::Summary, StreamError>) {
+        let g = &array.geometry;
+        let solver =
+            Solver::new(g, &truth.calibration(Some(1e-4)), &SolveOptions::default()).unwrap();
+        let s = MotionSeries::open("m.csv", csv, &Default::default(), g).unwrap();
+        let mut out = Vec::new();
+        let r = solve_stream(s, solver, format, &mut out, None);
+        (String::from_utf8(out).unwrap(), r)
+    }
+
+    /// The three forms carry the same samples; the JSON document holds
+    /// its u array (kept in memory meanwhile) and the input is hashed.
+    #[test]
+    fn every_form_streams_every_sample() {
+        let array = ArrayGeometry::builtin(Layout::Twelve, 0.1).unwrap();
+        let (csv, truth) = series(&array);
+        let (json, r) = run(&csv, &array, &truth, SolutionFormat::Json);
+        let summary = r.unwrap();
+        assert_eq!(summary.rows, 201);
+        assert_eq!(summary.sha256.len(), 64);
+        let d: serde_json::Value = serde_json::from_str(&json).unwrap();
+        assert_eq!(d["samples"].as_array().unwrap().len(), 201);
+        assert_eq!(d["uncertainty"].as_array().unwrap().len(), 201);
+        assert_eq!(d["mode"], "direct");
+        let (lines, _) = run(&csv, &array, &truth, SolutionFormat::JsonLines);
+        assert_eq!(lines.lines().count(), 202);
+        let (text, _) = run(&csv, &array, &truth, SolutionFormat::Csv);
+        assert!(text.starts_with(SOLUTION_CSV_HEADER));
+        assert_eq!(text.lines().filter(|l| !l.starts_with('#')).count(), 202);
+    }
+
+    /// A bad row stops the run at its line; the document before it stays
+    /// valid JSON and says why it stopped.
+    #[test]
+    fn a_bad_row_closes_the_document() {
+        let array = ArrayGeometry::builtin(Layout::Paper, 0.1).unwrap();
+        let (csv, truth) = series(&array);
+        let text = String::from_utf8(csv).unwrap();
+        let mut lines: Vec<String> = text.lines().map(String::from).collect();
+        // Line 20 of the file: a data row (notes and header come first).
+        let f: Vec<&str> = lines[19].split(',').collect();
+        lines[19] = format!("{},x,{}", f[0], f[2..].join(","));
+        let bad = lines.join("\n");
+        let (json, r) = run(bad.as_bytes(), &array, &truth, SolutionFormat::Json);
+        let e = r.unwrap_err().to_string();
+        assert!(e.starts_with("m.csv:20: column 'a'"), "{e}");
+        let d: serde_json::Value = serde_json::from_str(&json).unwrap();
+        assert_eq!(d["error"], e.as_str());
+        // Lines 3..=19 (after the note and the header) were solved.
+        assert_eq!(d["samples"].as_array().unwrap().len(), 17);
+    }
 }
