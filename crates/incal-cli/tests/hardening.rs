@@ -373,7 +373,7 @@ fn huge_lever_arm_and_long_cells_are_not_echoed_whole() {
             "--lever-arm-m",
             "1e300",
         ]),
-        &["--lever-arm-m", "1.000000e300"],
+        &["lever_arm_m", "1.000000e300"],
     );
     let long = "9".repeat(100_000) + "x";
     let f = write("long.csv", &format!("angle_deg,output\n0,{long}\n"));
@@ -474,7 +474,7 @@ fn plan_gfimu_predicts_and_refuses() {
     ]));
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["plan"], "gfimu");
-    let u = v["predicted_u"]["a"]["K0"].as_f64().unwrap();
+    let u = v["predicted_u"]["a.K0"].as_f64().unwrap();
     // σ/√(6·50) for the six-position test.
     assert!((u - 2e-4 / 300f64.sqrt()).abs() < 1e-9, "{u}");
     assert_eq!(v["motion"]["rank"], 6);

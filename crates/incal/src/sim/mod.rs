@@ -6,11 +6,12 @@
 
 pub mod centrifuge;
 pub mod demo;
-pub mod gfimu;
 pub mod gyro;
 pub mod imu;
 pub mod misalign;
 pub mod noise;
+/// The gyro-free unit simulator (lives with its procedure).
+pub use crate::procedures::gfimu::sim as gfimu;
 /// The tumble simulator (lives with its procedure).
 pub use crate::procedures::tumble::sim as tumble;
 

@@ -97,6 +97,38 @@ pub struct SolveOptions {
     pub omega_u_limit_rad_s: f64,
 }
 
+/// Largest local gravity accepted (m/s²): the g unit of a unit on Earth
+/// (or a centrifuge's equivalent), not a typo of 1000.
+pub const MAX_GRAVITY_M_S2: f64 = 100.0;
+
+impl SolveOptions {
+    /// Refuse a non-finite initial rate, a gravity that is not positive
+    /// or above [`MAX_GRAVITY_M_S2`], and a u limit that is not positive,
+    /// naming the option.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(v) = self.omega0_rad_s.iter().find(|v| !v.is_finite()) {
+            return Err(Error::Unsupported(format!(
+                "omega0_rad_s must be three finite numbers, got {v}"
+            )));
+        }
+        let g = self.gravity_m_s2;
+        if !(g.is_finite() && g > 0.0 && g <= MAX_GRAVITY_M_S2) {
+            return Err(Error::Unsupported(format!(
+                "gravity_m_s2 must be a positive number (at most {MAX_GRAVITY_M_S2}), got {}",
+                super::input::shown(g)
+            )));
+        }
+        let l = self.omega_u_limit_rad_s;
+        if !(l.is_finite() && l > 0.0) {
+            return Err(Error::Unsupported(format!(
+                "omega_u_limit_rad_s must be a positive number, got {}",
+                super::input::shown(l)
+            )));
+        }
+        Ok(())
+    }
+}
+
 impl Default for SolveOptions {
     fn default() -> Self {
         Self {
@@ -489,6 +521,24 @@ impl Solver {
             count: 0,
             y: vec![0.0; n],
             grad: vec![Vector3::zeros(); n],
+        })
+    }
+
+    /// [`Solver::new`] for the calibration file `file`: every problem is
+    /// refused naming the file, and a calibrated array that cannot separate
+    /// f0 and ω̇ says so.
+    pub fn for_calibration(
+        file: &str,
+        geometry: &Geometry,
+        cal: &[CalibratedAccelerometer],
+        opts: &SolveOptions,
+    ) -> Result<Self> {
+        Self::new(geometry, cal, opts).map_err(|e| match e {
+            Error::Unseparable { .. } | Error::IllConditioned { .. } => {
+                Error::Unsupported(format!("calibrated geometry cannot solve the motion: {e}"))
+                    .in_file(file)
+            }
+            e => e.in_file(file),
         })
     }
 

@@ -2,8 +2,10 @@
 
 use serde_json::{json, Map, Value};
 
-use super::variance_decision;
-use super::{Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure, ResultDocument, Table};
+use crate::document::variance_decision;
+use crate::document::{
+    Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure, ResultDocument, Table,
+};
 use crate::error::Result;
 use crate::procedures::gfimu::GfimuCalibration;
 use crate::units::Unit;

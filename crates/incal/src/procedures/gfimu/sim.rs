@@ -4,13 +4,20 @@
 //!
 //! Output of accelerometer j: `E_j = K0_j + Ks_jᵀ f_j + n`, `n ~ N(0, σ²)`,
 //! `f_j = f0 + (ω̇ × r_j + ω × (ω × r_j))/g` ([`crate::models::gfimu`]).
+//!
+//! [`GfimuSim`] is one simulated test as a front end asks for it: its
+//! checks ([`GfimuSim::validate`]) and its CSV ([`GfimuSim::write`], the
+//! input formats of [`super::input`]).
+
+use std::io::Write;
 
 use nalgebra::Vector3;
 
-use super::{normal, rng};
+use super::input::{shown, ArrayGeometry};
 use crate::error::{Error, Result};
 use crate::models::gfimu::{cross_axes, Geometry};
 use crate::procedures::gfimu::{CalibratedAccelerometer, StaticSample};
+use crate::sim::{normal, rng};
 
 /// Truth of every accelerometer, geometry order.
 #[derive(Debug, Clone, PartialEq)]
@@ -386,6 +393,191 @@ impl Iterator for MotionSamples<'_> {
     fn size_hint(&self) -> (usize, Option<usize>) {
         let n = self.count - self.k;
         (n, Some(n))
+    }
+}
+
+/// What a simulated test records.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SimKind {
+    /// The six-position static test ([`six_positions`]), `samples` per
+    /// position: the input of `gfimu calibrate`.
+    Static {
+        /// Samples per position (at least 1).
+        samples: usize,
+    },
+    /// A rate-table motion: the input of `gfimu solve`.
+    Motion(MotionProfile),
+}
+
+/// One simulated gyro-free unit test: the array, a truth built from a
+/// nominal scale factor ([`GfimuTruth::typical`]), white output noise,
+/// what is recorded, and the seed (same seed, same file).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GfimuSim {
+    /// The array.
+    pub array: ArrayGeometry,
+    /// Nominal scale factor of every accelerometer (output/g).
+    pub k1_out_per_g: f64,
+    /// Output noise σ of one sample (output).
+    pub noise: f64,
+    /// Static test or motion.
+    pub kind: SimKind,
+    /// Random seed.
+    pub seed: u64,
+}
+
+impl GfimuSim {
+    /// Refuse a configuration that cannot be simulated, naming the option:
+    /// a zero or non-finite `k1`, a negative or non-finite `noise`, no
+    /// static samples or more than [`crate::sim::MAX_SIM_ROWS`] rows, and
+    /// for a motion a zero axis, a non-finite spin-up, an oscillation at or
+    /// above half the sample rate (or an amplitude without a frequency), a
+    /// table-frame f0 with a rate across the axis, and everything
+    /// [`MotionProfile::check`] refuses.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |msg: String| Err(Error::Unsupported(msg));
+        if !(self.k1_out_per_g.is_finite() && self.k1_out_per_g != 0.0) {
+            return bad(format!(
+                "k1 must be a finite non-zero number, got {}",
+                shown(self.k1_out_per_g)
+            ));
+        }
+        if !(self.noise.is_finite() && self.noise >= 0.0) {
+            return bad(format!(
+                "noise must be a non-negative number, got {}",
+                shown(self.noise)
+            ));
+        }
+        match &self.kind {
+            SimKind::Static { samples } => {
+                if *samples == 0 {
+                    return bad("samples must be at least 1".into());
+                }
+                crate::sim::check_rows(&[
+                    ("samples", *samples as f64),
+                    ("positions", six_positions().len() as f64),
+                ])
+            }
+            SimKind::Motion(m) => {
+                if m.axis.norm() == 0.0 {
+                    return bad("axis must not be zero".into());
+                }
+                if !(m.angular_accel_rad_s2.is_finite()
+                    && m.spin_up_s.is_finite()
+                    && m.spin_up_s >= 0.0)
+                {
+                    return bad(
+                        "angular_accel_rad_s2 and spin_up_s must be finite (spin-up >= 0)".into(),
+                    );
+                }
+                if !(m.oscillation_hz.is_finite()
+                    && m.oscillation_hz >= 0.0
+                    && m.oscillation_hz < m.rate_hz / 2.0)
+                {
+                    return bad(format!(
+                        "oscillation_hz must be at least 0 and below half of rate_hz ({} Hz), got {}",
+                        shown(m.rate_hz / 2.0),
+                        shown(m.oscillation_hz)
+                    ));
+                }
+                if !m.oscillation_amplitude_rad_s.is_finite()
+                    || (m.oscillation_amplitude_rad_s != 0.0 && m.oscillation_hz == 0.0)
+                {
+                    return bad(
+                        "oscillation_amplitude_rad_s must be finite, with oscillation_hz > 0 when it is not 0"
+                            .into(),
+                    );
+                }
+                if m.f0_frame == F0Frame::Table && !m.omega0_along_axis() {
+                    return bad(
+                        "f0_frame table: omega0_rad_s must lie along axis (the unit turns about that one axis)"
+                            .into(),
+                    );
+                }
+                m.check()?;
+                let count = (m.duration_s * m.rate_hz).floor() + 1.0;
+                if count > MAX_MOTION_SAMPLES as f64 {
+                    return Err(Error::InvalidValue {
+                        what: "number of samples (duration x rate, at most 1e7)".into(),
+                        value: count.to_string(),
+                    });
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// The truth of every accelerometer ([`GfimuTruth::typical`]).
+    pub fn truth(&self) -> GfimuTruth {
+        GfimuTruth::typical(&self.array.geometry, self.k1_out_per_g)
+    }
+
+    /// The `#` comment lines of the simulated file: the array, the seed,
+    /// every accelerometer's truth and, for a motion, the profile.
+    pub fn notes(&self) -> Vec<String> {
+        let truth = self.truth();
+        let mut notes = vec![format!(
+            "simulated gyro-free unit ({}), seed {}",
+            self.array.label, self.seed
+        )];
+        for (j, a) in self.array.geometry.accelerometers().iter().enumerate() {
+            let ks = truth.ks[j];
+            notes.push(format!(
+                "truth {}: K0 = {} output, Ks = [{}, {}, {}] output/g",
+                a.name, truth.k0[j], ks.x, ks.y, ks.z
+            ));
+        }
+        if let SimKind::Motion(m) = &self.kind {
+            notes.push(format!(
+                "motion: axis {:?}, {} rad/s^2 for {} s, f0 {:?} g, omega0 {:?} rad/s",
+                m.axis.as_slice(),
+                m.angular_accel_rad_s2,
+                m.spin_up_s,
+                m.f0_g.as_slice(),
+                m.omega0_rad_s.as_slice()
+            ));
+            if m.f0_frame == F0Frame::Table || m.oscillation_amplitude_rad_s != 0.0 {
+                notes.push(format!(
+                    "f0 frame: {}; rate oscillation {} rad/s at {} Hz",
+                    if m.f0_frame == F0Frame::Table {
+                        "table (turns with the rotation)"
+                    } else {
+                        "unit"
+                    },
+                    m.oscillation_amplitude_rad_s,
+                    m.oscillation_hz
+                ));
+            }
+        }
+        notes
+    }
+
+    /// Simulate (deterministic for a given seed) and write the CSV to
+    /// `out`: the static format of [`super::input::write_static`] or the
+    /// motion format of [`super::input::write_motion`], streamed row by row
+    /// (10⁶ motion samples need no memory for the file). Call
+    /// [`GfimuSim::validate`] first: a configuration it refuses is an
+    /// `InvalidInput` error here.
+    pub fn write<W: Write>(&self, out: W) -> std::io::Result<W> {
+        let invalid =
+            |e: Error| std::io::Error::new(std::io::ErrorKind::InvalidInput, e.to_string());
+        self.validate().map_err(invalid)?;
+        let g = &self.array.geometry;
+        let truth = self.truth();
+        let notes = self.notes();
+        match &self.kind {
+            SimKind::Static { samples } => {
+                let data =
+                    simulate_static(g, &truth, &six_positions(), *samples, self.noise, self.seed)
+                        .map_err(invalid)?;
+                super::input::write_static(&data, g, &notes, out)
+            }
+            SimKind::Motion(m) => {
+                let series =
+                    motion_samples(g, &truth, m, self.noise, self.seed).map_err(invalid)?;
+                super::input::write_motion(series, g, &notes, out)
+            }
+        }
     }
 }
 
