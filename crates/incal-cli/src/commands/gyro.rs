@@ -7,7 +7,9 @@ use std::path::PathBuf;
 
 use clap::{Subcommand, ValueEnum};
 use incal::estimation::Noise;
-use incal::procedures::gyro::positions::plan::{plan_document as positions_plan, PositionsPlanOptions};
+use incal::procedures::gyro::positions::plan::{
+    plan_document as positions_plan, PositionsPlanOptions,
+};
 use incal::procedures::gyro::positions::sim::{simulate_positions, DriftTruth, GyroPositionsSim};
 use incal::procedures::gyro::positions::{
     self as gp, Axial, DriftTerm, GyroPositions, GyroPositionsOptions, K1Source,

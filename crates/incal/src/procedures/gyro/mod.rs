@@ -9,9 +9,10 @@
 //!
 //! Both are reduced from the means of repeated samples (per rate, per head
 //! angle and azimuth) on the one least-squares engine, with the variance of
-//! the means from the pooled sample scatter (or a known noise σ of one sample), and both are
-//! planned by running the same reduction on noise-free means with a known
-//! noise (so the plan and the reduction cannot disagree).
+//! the means from the pooled sample scatter (or a known noise σ of one
+//! sample), and both are planned by running the same reduction on
+//! noise-free means with a known noise (so the plan and the reduction
+//! cannot disagree).
 //!
 //! # Units
 //! Rates in deg/s at the input (`rate_deg_s`), the scale factor K1 in

@@ -4,8 +4,8 @@ use serde_json::json;
 
 use super::{DriftTerm, PositionsResult, ScaleFactor};
 use crate::document::{
-    variance_decision, Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure,
-    ResultDocument, Table,
+    variance_decision, Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure, ResultDocument,
+    Table,
 };
 use crate::error::Result;
 use crate::procedures::gyro::dof_lookup;

@@ -36,10 +36,7 @@ pub fn read<R: Read>(
         let angle = row.f64(ca)?;
         if angle.abs() > MAX_ANGLE_DEG {
             return Err(row
-                .cell_error(
-                    ca,
-                    format!("{angle} is out of range (|angle| <= 1e4 deg)"),
-                )
+                .cell_error(ca, format!("{angle} is out of range (|angle| <= 1e4 deg)"))
                 .into());
         }
         let az = match cz {

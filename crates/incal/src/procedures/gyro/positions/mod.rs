@@ -249,7 +249,10 @@ pub(crate) fn check_angles_deg(what: &str, v: &[f64]) -> Result<()> {
             got: 0,
         });
     }
-    match v.iter().find(|x| !(x.is_finite() && x.abs() <= MAX_ANGLE_DEG)) {
+    match v
+        .iter()
+        .find(|x| !(x.is_finite() && x.abs() <= MAX_ANGLE_DEG))
+    {
         Some(x) => Err(Error::InvalidValue {
             what: format!("{what} (an angle, |angle| <= 1e4 deg)"),
             value: x.to_string(),

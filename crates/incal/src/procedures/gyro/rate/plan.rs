@@ -7,8 +7,8 @@
 use serde_json::json;
 
 use super::{
-    calibrate, check_latitude_deg, coefficient_unit, input_rate_deg_s,
-    term_names, InputAxis, RateObservation, RateOptions, RateResult, RateTerm, MAX_RATE_DEG_S,
+    calibrate, check_latitude_deg, coefficient_unit, input_rate_deg_s, term_names, InputAxis,
+    RateObservation, RateOptions, RateResult, RateTerm, MAX_RATE_DEG_S,
 };
 use crate::document::plan::PlanDocument;
 use crate::error::{Error, Result};

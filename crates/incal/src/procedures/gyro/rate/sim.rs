@@ -140,7 +140,11 @@ impl GyroRateSim {
             we * self.latitude_rad.sin() + rate_deg_s,
         ];
         let w_in: f64 = (0..3).map(|k| w[k] * axis[k]).sum();
-        let k1 = if w_in >= 0.0 { self.k1_pos } else { self.k1_neg };
+        let k1 = if w_in >= 0.0 {
+            self.k1_pos
+        } else {
+            self.k1_neg
+        };
         (w_in, k1)
     }
 
