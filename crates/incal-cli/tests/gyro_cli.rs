@@ -496,7 +496,7 @@ fn simulators_refuse_sizes_and_nonsense() {
         &run(&["simulate", "gyro-rate", "--samples", "1000000000"]),
         &["10000000"],
     );
-    refused(&run(&["simulate", "gyro-rate", "--k1", "0"]), &["--k1"]);
+    refused(&run(&["simulate", "gyro-rate", "--k1", "0"]), &["k1"]);
     refused(
         &run(&["simulate", "gyro-positions", "--latitude-deg", "-91"]),
         &["--latitude-deg"],

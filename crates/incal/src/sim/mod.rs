@@ -6,7 +6,13 @@
 
 pub mod centrifuge;
 pub mod demo;
-pub mod gyro;
+/// The gyro simulators (live with their procedures).
+pub mod gyro {
+    pub use crate::procedures::gyro::positions::sim::{
+        simulate_positions, DriftTruth, GyroPositionsSim,
+    };
+    pub use crate::procedures::gyro::rate::sim::{simulate_rate, GyroRateSim};
+}
 pub mod imu;
 pub mod misalign;
 pub mod noise;

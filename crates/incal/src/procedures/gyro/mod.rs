@@ -2,11 +2,17 @@
 //! 1431 / 517): the rate-transfer test ([`rate`]) and the multi-position
 //! test ([`positions`]).
 //!
+//! Each is one procedure folder with the files of every procedure
+//! (`{mod,input,plan,sim,document}.rs`: model and map, columns and checks
+//! of a recording, plan, simulator, result document) and implements
+//! [`super::Procedure`]: [`rate::GyroRate`] and [`positions::GyroPositions`].
+//!
 //! Both are reduced from the means of repeated samples (per rate, per head
 //! angle and azimuth) on the one least-squares engine, with the variance of
-//! the means from the pooled sample scatter (or `--noise`), and both are
-//! planned by running the same reduction on noise-free means with a known
-//! noise (so the plan and the reduction cannot disagree).
+//! the means from the pooled sample scatter (or a known noise σ of one
+//! sample), and both are planned by running the same reduction on
+//! noise-free means with a known noise (so the plan and the reduction
+//! cannot disagree).
 //!
 //! # Units
 //! Rates in deg/s at the input (`rate_deg_s`), the scale factor K1 in
@@ -73,6 +79,13 @@ pub(crate) fn scale_noise(n: Noise, s: f64) -> Noise {
             sigma: sigma * s.abs(),
         },
     }
+}
+
+/// Effective degrees of freedom of coefficient `name` (infinite when not listed).
+pub(crate) fn dof_lookup(dof: &[(String, f64)], name: &str) -> f64 {
+    dof.iter()
+        .find(|d| d.0 == name)
+        .map_or(f64::INFINITY, |d| d.1)
 }
 
 /// Welch–Satterthwaite effective degrees of freedom (JCGM 100 eq. G.2b) of

@@ -1,5 +1,6 @@
-//! Gyro rate-table and dividing-head simulators, from a truth to the input
-//! of [`crate::procedures::gyro`].
+//! Dividing-head simulator of the multi-position test: a drift truth and
+//! a plan give observations in the input format of
+//! [`crate::procedures::gyro::positions`].
 //!
 //! The kinematics are computed here from vectors (frame x north, y east,
 //! z up; head axis `d`, `h = z × d`, `IA = cos θ h + sin θ z`,
@@ -7,74 +8,14 @@
 //! force `(0, 0, 1)` g), not from the closed forms the reduction uses, so a
 //! round trip checks the reduction's kinematics as well as its statistics.
 
-use super::{normal, rng};
-use crate::procedures::gyro::positions::{Axial, PositionObservation};
-use crate::procedures::gyro::rate::{InputAxis, RateObservation};
+use super::{Axial, PositionObservation, ALL_TERMS};
+use crate::error::{Error, Result};
+use crate::procedures::gyro::rate::sim::{MAX_SIM_K1, MAX_SIM_NOISE};
+use crate::sim::{normal, rng};
 use crate::units::EARTH_RATE_RAD_S;
 
-/// Truth and plan of a simulated rate-transfer test.
-#[derive(Debug, Clone, PartialEq)]
-pub struct GyroRateSim {
-    /// Scale factor for positive input rates (output/(deg/s)).
-    pub k1_pos: f64,
-    /// Scale factor for negative input rates (output/(deg/s)).
-    pub k1_neg: f64,
-    /// Bias (deg/h).
-    pub b_deg_h: f64,
-    /// K2 (1/(deg/s)).
-    pub k2: f64,
-    /// K3 (1/(deg/s)²).
-    pub k3: f64,
-    /// Latitude (rad).
-    pub latitude_rad: f64,
-    /// Input axis up or down.
-    pub ia: InputAxis,
-    /// Table rates (deg/s), in test order.
-    pub rates_deg_s: Vec<f64>,
-    /// Samples per rate.
-    pub samples: usize,
-    /// Output noise per sample (output units).
-    pub noise: f64,
-    /// Number of runs (1: no run column).
-    pub runs: usize,
-    /// Run-to-run scatter of K1 (ppm, standard deviation), one draw per run.
-    pub run_scatter_ppm: f64,
-    /// Seed.
-    pub seed: u64,
-}
-
-/// Simulate a rate-transfer test: `E = K1± (ω_in + B + K2 ω_in² + K3 ω_in³) + n`
-/// with `ω_in` the table rate plus the Earth rate projected on IA.
-pub fn simulate_rate(cfg: &GyroRateSim) -> Vec<RateObservation> {
-    let mut r = rng(cfg.seed);
-    let we = EARTH_RATE_RAD_S.to_degrees();
-    let axis = [0.0, 0.0, cfg.ia.sign()];
-    let mut out = Vec::new();
-    for run in 0..cfg.runs.max(1) {
-        let scale = 1.0 + normal(&mut r, cfg.run_scatter_ppm * 1e-6);
-        let label = (cfg.runs > 1).then(|| format!("run{}", run + 1));
-        for &rate in &cfg.rates_deg_s {
-            // Total rate (deg/s) in the local frame: Earth plus the table about z.
-            let w = [
-                we * cfg.latitude_rad.cos(),
-                0.0,
-                we * cfg.latitude_rad.sin() + rate,
-            ];
-            let w_in: f64 = (0..3).map(|k| w[k] * axis[k]).sum();
-            let k1 = if w_in >= 0.0 { cfg.k1_pos } else { cfg.k1_neg } * scale;
-            let e0 =
-                k1 * (w_in + cfg.b_deg_h / 3600.0 + cfg.k2 * w_in * w_in + cfg.k3 * w_in.powi(3));
-            for _ in 0..cfg.samples.max(1) {
-                out.push(RateObservation {
-                    rate_deg_s: rate,
-                    output: e0 + normal(&mut r, cfg.noise),
-                    run: label.clone(),
-                });
-            }
-        }
-    }
-    out
-}
+/// Largest drift term of a simulated truth (deg/h, deg/h/g, deg/h/g²).
+pub const MAX_SIM_DRIFT: f64 = 1e7;
 
 /// Drift-model truth (deg/h, deg/h/g, deg/h/g²), IEEE Std 517 / 1431.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -153,11 +94,71 @@ pub struct GyroPositionsSim {
     pub seed: u64,
 }
 
+impl GyroPositionsSim {
+    /// Refuse a configuration that cannot be simulated: a drift term that
+    /// is not finite or beyond 1e7, a K1 that is zero or beyond 1e9, a
+    /// latitude outside ±90°, no angles or azimuths or one beyond 1e4 deg,
+    /// no samples, more than [`crate::sim::MAX_SIM_ROWS`] rows, a noise
+    /// outside 0…1e9.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |what: String, v: f64| {
+            Err(Error::InvalidValue {
+                what,
+                value: v.to_string(),
+            })
+        };
+        for t in ALL_TERMS {
+            let v = self.drift.get(t.name());
+            if !(v.is_finite() && v.abs() <= MAX_SIM_DRIFT) {
+                return bad(
+                    format!("{} truth (finite, at most 1e7 in magnitude)", t.name()),
+                    v,
+                );
+            }
+        }
+        if !(self.k1.is_finite() && self.k1 != 0.0 && self.k1.abs() <= MAX_SIM_K1) {
+            return bad("k1 (non-zero, at most 1e9 in magnitude)".into(), self.k1);
+        }
+        super::super::check_latitude(self.latitude_rad)?;
+        super::check_angles_deg("angles_deg", &self.angles_deg)?;
+        if self.azimuths_rad.is_empty() {
+            return super::check_angles_deg("azimuths_deg", &[]);
+        }
+        let max_rad = super::MAX_ANGLE_DEG.to_radians();
+        if let Some(z) = self
+            .azimuths_rad
+            .iter()
+            .find(|z| !(z.is_finite() && z.abs() <= max_rad))
+        {
+            return bad(
+                "azimuths_deg (an angle, |angle| <= 1e4 deg)".into(),
+                z.to_degrees(),
+            );
+        }
+        if self.samples == 0 {
+            return bad("samples (at least 1 per position)".into(), 0.0);
+        }
+        crate::sim::check_rows(&[
+            ("angles_deg", self.angles_deg.len() as f64),
+            ("azimuths_deg", self.azimuths_rad.len() as f64),
+            ("samples", self.samples as f64),
+        ])?;
+        if !(self.noise.is_finite() && (0.0..=MAX_SIM_NOISE).contains(&self.noise)) {
+            return bad(
+                "noise (a non-negative number, at most 1e9)".into(),
+                self.noise,
+            );
+        }
+        Ok(())
+    }
+}
+
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-/// Simulate a multi-position test (module docs).
+/// Simulate a multi-position test (module docs; deterministic for a given
+/// seed).
 pub fn simulate_positions(cfg: &GyroPositionsSim) -> Vec<PositionObservation> {
     let mut r = rng(cfg.seed);
     let we_deg_h = EARTH_RATE_RAD_S.to_degrees() * 3600.0;

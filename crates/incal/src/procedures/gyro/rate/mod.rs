@@ -40,6 +40,13 @@
 //!   `(K1, −B, K2, 2 K3) ε`; that covariance is added with infinite degrees
 //!   of freedom and each coefficient's dof is Welch–Satterthwaite.
 
+pub mod document;
+pub mod input;
+pub mod plan;
+pub mod sim;
+
+pub use plan::plan;
+
 use nalgebra::{DMatrix, DVector};
 
 use super::{earth_rate_deg_s, group, welch_satterthwaite};
@@ -162,6 +169,127 @@ pub struct RateOptions {
     pub noise: Noise,
     /// Relative standard uncertainty of the table rate (ppm, type B).
     pub rate_uncertainty_ppm: f64,
+}
+
+/// Largest table rate a recording or a plan may hold (deg/s).
+pub const MAX_RATE_DEG_S: f64 = 1e5;
+
+/// Largest relative uncertainty of the table rate (ppm).
+pub const MAX_RATE_UNCERTAINTY_PPM: f64 = 1e5;
+
+/// Default terms of the reduction: B and K1.
+pub fn default_terms() -> Vec<RateTerm> {
+    vec![RateTerm::B, RateTerm::K1]
+}
+
+/// Options of the rate-transfer test as a front end gives them, validated
+/// once by [`GyroRateOptions::validate`]; [`GyroRateOptions::reduction`]
+/// gives the [`RateOptions`] of the reduction. In the document's
+/// `options`: `{"ia": "up", "latitude_deg": 45.0, "noise": null,
+/// "rate_uncertainty_ppm": 0.0, "terms": ["B", "K1"]}` (`latitude_deg` as
+/// given; `noise` the known σ of one output sample or null for "from the
+/// data"; `terms` as fitted: sorted, K1 added).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GyroRateOptions {
+    /// Latitude φ of the rate table (deg, −90…90).
+    pub latitude_deg: f64,
+    /// Input axis up or down.
+    pub ia: InputAxis,
+    /// Terms (K1 is added when missing).
+    pub terms: Vec<RateTerm>,
+    /// Noise of one output sample.
+    pub noise: Noise,
+    /// Relative standard uncertainty of the table rate (ppm, type B,
+    /// 0…[`MAX_RATE_UNCERTAINTY_PPM`]).
+    pub rate_uncertainty_ppm: f64,
+}
+
+impl GyroRateOptions {
+    /// Refuse options no reduction can use: a latitude outside ±90°, a
+    /// known noise that is not a positive number, a rate uncertainty
+    /// outside 0…1e5 ppm.
+    pub fn validate(&self) -> Result<()> {
+        check_latitude_deg(self.latitude_deg)?;
+        self.noise.validate()?;
+        let ppm = self.rate_uncertainty_ppm;
+        if !(ppm.is_finite() && (0.0..=MAX_RATE_UNCERTAINTY_PPM).contains(&ppm)) {
+            return Err(Error::InvalidValue {
+                what: "rate_uncertainty_ppm (within 0..1e5 ppm)".into(),
+                value: ppm.to_string(),
+            });
+        }
+        Ok(())
+    }
+
+    /// The options of [`calibrate`] (latitude in rad).
+    pub fn reduction(&self) -> RateOptions {
+        RateOptions {
+            latitude_rad: self.latitude_deg.to_radians(),
+            ia: self.ia,
+            terms: self.terms.clone(),
+            noise: self.noise,
+            rate_uncertainty_ppm: self.rate_uncertainty_ppm,
+        }
+    }
+}
+
+impl serde::Serialize for GyroRateOptions {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(5))?;
+        m.serialize_entry("ia", self.ia.name())?;
+        m.serialize_entry("latitude_deg", &self.latitude_deg)?;
+        m.serialize_entry("noise", &self.noise.sigma())?;
+        m.serialize_entry("rate_uncertainty_ppm", &self.rate_uncertainty_ppm)?;
+        m.serialize_entry("terms", &term_names(&self.terms))?;
+        m.end()
+    }
+}
+
+/// The names of the terms as fitted (sorted, K1 added).
+pub(crate) fn term_names(terms: &[RateTerm]) -> Vec<&'static str> {
+    normalized_terms(terms).iter().map(|t| t.name()).collect()
+}
+
+/// A latitude given in degrees: finite and within ±90°.
+pub(crate) fn check_latitude_deg(latitude_deg: f64) -> Result<()> {
+    if latitude_deg.is_finite() && latitude_deg.abs() <= 90.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidValue {
+            what: "latitude_deg (must be within -90..90 deg)".into(),
+            value: latitude_deg.to_string(),
+        })
+    }
+}
+
+/// The rate-transfer test as one [`crate::procedures::Procedure`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct GyroRate;
+
+impl crate::procedures::Procedure for GyroRate {
+    const ID: crate::document::Procedure = crate::document::Procedure::GyroRate;
+    type Options = GyroRateOptions;
+    type Input = Vec<RateObservation>;
+
+    fn validate(o: &GyroRateOptions) -> Result<()> {
+        o.validate()
+    }
+
+    fn read<R: std::io::Read>(
+        rows: &mut incal_io::Reader<R>,
+        _: &GyroRateOptions,
+    ) -> Result<Vec<RateObservation>> {
+        input::read(rows)
+    }
+
+    fn reduce(
+        obs: &Vec<RateObservation>,
+        o: &GyroRateOptions,
+        _: &dyn crate::procedures::Progress,
+    ) -> Result<crate::document::ResultDocument> {
+        calibrate(obs, &o.reduction())?.document(o.noise.sigma().is_some(), o.rate_uncertainty_ppm)
+    }
 }
 
 /// One rate of the test (samples at the same rate and run).
@@ -551,39 +679,4 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
         terms,
         warnings,
     })
-}
-
-/// Predicted standard uncertainty of every coefficient for a plan: the
-/// reduction run on noise-free means at the nominal scale factor `k1`
-/// with a known noise `noise` per sample and `samples` samples per rate.
-/// The result's coefficients hold the predicted u (K1, B, K2, K3 as
-/// chosen, and the asymmetry when the rates separate it).
-pub fn plan(
-    rates_deg_s: &[f64],
-    samples: usize,
-    noise: f64,
-    k1: f64,
-    opts: &RateOptions,
-) -> Result<RateResult> {
-    crate::validity::require_plan_inputs(samples, noise, k1, "nominal K1")?;
-    // Noise-free means: each rate gets `samples` identical samples.
-    let obs: Vec<RateObservation> = rates_deg_s
-        .iter()
-        .flat_map(|&r| {
-            let e = k1 * input_rate_deg_s(r, opts.latitude_rad, opts.ia);
-            std::iter::repeat_n(
-                RateObservation {
-                    rate_deg_s: r,
-                    output: e,
-                    run: None,
-                },
-                samples,
-            )
-        })
-        .collect();
-    let o = RateOptions {
-        noise: Noise::Known { sigma: noise },
-        ..opts.clone()
-    };
-    calibrate(&obs, &o)
 }

@@ -1,15 +1,14 @@
-//! The result documents of the gyro rate-transfer and multi-position tests.
+//! The result document of the gyro rate-transfer test.
 
 use serde_json::json;
 
-use super::variance_decision;
-use super::{
-    position_stats, position_table, Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure,
-    ResultDocument, Table,
+use super::{coefficient_unit, RateResult, RateTerm};
+use crate::document::{
+    position_stats, position_table, variance_decision, Cell, DecisionCode, DocumentBuilder,
+    FitSummary, Procedure, ResultDocument, Table,
 };
 use crate::error::{Error, Result};
-use crate::procedures::gyro::positions::{DriftTerm, PositionsResult, ScaleFactor};
-use crate::procedures::gyro::rate::{coefficient_unit, RateResult, RateTerm};
+use crate::procedures::gyro::dof_lookup;
 use crate::units::Unit;
 
 fn rate_unit(name: &str) -> Result<Unit> {
@@ -17,19 +16,6 @@ fn rate_unit(name: &str) -> Result<Unit> {
         "asymmetry" | "K1_pos" | "K1_neg" => Ok(Unit::parse(coefficient_unit(name))),
         other => RateTerm::parse(other).map(|t| Unit::parse(t.unit())),
     }
-}
-
-fn drift_unit(name: &str) -> Result<Unit> {
-    if name == "K1" {
-        return Ok(Unit::OutputPerDegS);
-    }
-    DriftTerm::parse(name).map(|t| Unit::parse(t.unit()))
-}
-
-fn dof_lookup(dof: &[(String, f64)], name: &str) -> f64 {
-    dof.iter()
-        .find(|d| d.0 == name)
-        .map_or(f64::INFINITY, |d| d.1)
 }
 
 impl RateResult {
@@ -141,107 +127,6 @@ impl RateResult {
             }
             b.table(t);
         }
-        Ok(b.finish())
-    }
-}
-
-impl PositionsResult {
-    /// The result document: drift coefficients `B`, `D_I`, … (those fitted,
-    /// deg/h, deg/h/g, deg/h/g²), `K1` when fitted; per-position table.
-    pub fn document(
-        &self,
-        known_noise: bool,
-        scale_factor: ScaleFactor,
-        axial: &str,
-    ) -> Result<ResultDocument> {
-        let f = &self.fit;
-        let mut b = DocumentBuilder::new(
-            Procedure::GyroPositions,
-            format!(
-                "Gyro multi-position test, {axial} axial ({} positions, terms {})",
-                f.diagnostics.n_obs,
-                self.terms
-                    .iter()
-                    .map(|t| t.name())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        );
-        b.estimates_dof(&self.coefficients, "", drift_unit, |n| {
-            dof_lookup(&self.dof, n)
-        })?;
-        let fitted_k1 = matches!(scale_factor, ScaleFactor::Fit);
-        b.fit(FitSummary::of(
-            "main",
-            f,
-            if fitted_k1 {
-                Unit::Output
-            } else {
-                Unit::Other("deg/h".into())
-            },
-        ));
-        b.option("axial", json!(axial));
-        b.option(
-            "terms",
-            json!(self.terms.iter().map(|t| t.name()).collect::<Vec<_>>()),
-        );
-        match scale_factor {
-            ScaleFactor::Known { k1, u, dof } => {
-                b.extra(
-                    "scale_factor",
-                    json!({"value": k1, "u": u, "unit": "output/(deg/s)", "dof": if dof.is_finite() { json!(dof) } else { json!(null) }, "source": "given"}),
-                )?;
-                b.decision(
-                    DecisionCode::VarianceSource,
-                    format!(
-                        "{}; u(K1) propagated into every drift term",
-                        variance_decision(f.variance_source, known_noise)
-                    ),
-                );
-            }
-            ScaleFactor::Fit => {
-                b.decision(
-                    DecisionCode::VarianceSource,
-                    format!(
-                        "{}; K1 fitted from the Earth-rate projection",
-                        variance_decision(f.variance_source, known_noise)
-                    ),
-                );
-            }
-        }
-        b.warnings(self.warnings.iter().cloned());
-        let res_unit = if fitted_k1 {
-            Unit::Output
-        } else {
-            Unit::Other("deg/h".into())
-        };
-        let mut t = Table::new(
-            "positions",
-            "Positions",
-            &[
-                ("angle", Some(Unit::Deg)),
-                ("azimuth", Some(Unit::Deg)),
-                ("earth_rate_ia", Some(Unit::Other("deg/h".into()))),
-                ("n", None),
-                ("mean", Some(Unit::Output)),
-                ("std", Some(Unit::Output)),
-                ("residual", Some(res_unit)),
-                ("standardized_residual", Some(Unit::One)),
-            ],
-        );
-        for p in &self.positions {
-            t.push(vec![
-                Cell::num(p.angle_rad.to_degrees()),
-                Cell::num(p.azimuth_rad.to_degrees()),
-                Cell::num(p.earth_rate_deg_h),
-                Cell::num(p.stats.n as f64),
-                Cell::num(p.stats.mean),
-                Cell::num(p.stats.std),
-                Cell::num(p.residual),
-                Cell::num(p.standardized_residual),
-            ])?;
-        }
-        b.table(t);
         Ok(b.finish())
     }
 }

@@ -38,13 +38,20 @@
 //! Since `a_I² + a_P² = 1` at every position, B cannot be separated from
 //! `D_II + D_PP` (P = O or S by the mount); the refusal names it.
 
+pub mod document;
+pub mod input;
+pub mod plan;
+pub mod sim;
+
+pub use plan::plan;
+
 use nalgebra::{DMatrix, DVector};
 
 use super::{earth_rate_deg_h, group, scale_noise, scale_stats, welch_satterthwaite};
 use crate::error::{Error, Result};
 use crate::estimation::{fit_means, Design, Estimates, Fit, Noise, PositionStats};
 use crate::rigs::rate_table::sin_cos_exact;
-use crate::warning::Warning;
+use crate::warning::{Warning, WarningCode};
 
 /// One sample of the multi-position test.
 #[derive(Debug, Clone, PartialEq)]
@@ -221,6 +228,260 @@ pub struct PositionsOptions {
     pub noise: Noise,
     /// The scale factor.
     pub scale_factor: ScaleFactor,
+}
+
+/// Largest head angle or azimuth (deg, in magnitude) a recording, a plan
+/// or a simulation may hold.
+pub const MAX_ANGLE_DEG: f64 = 1e4;
+
+/// Head angles of the default plan: 0°, 30°, …, 330° (deg).
+pub fn default_angles_deg() -> Vec<f64> {
+    (0..12).map(|k| 30.0 * k as f64).collect()
+}
+
+/// A list of angles (deg) named `what`: at least one, each finite and
+/// within ±[`MAX_ANGLE_DEG`].
+pub(crate) fn check_angles_deg(what: &str, v: &[f64]) -> Result<()> {
+    if v.is_empty() {
+        return Err(Error::TooFew {
+            what: format!("{what} (angles)"),
+            needed: 1,
+            got: 0,
+        });
+    }
+    match v
+        .iter()
+        .find(|x| !(x.is_finite() && x.abs() <= MAX_ANGLE_DEG))
+    {
+        Some(x) => Err(Error::InvalidValue {
+            what: format!("{what} (an angle, |angle| <= 1e4 deg)"),
+            value: x.to_string(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Where the scale factor K1 of a multi-position test comes from, as a
+/// front end is given it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum K1Source {
+    /// A value (output/(deg/s)) with its standard uncertainty; without
+    /// one, K1 is taken as exact and the document warns that every u
+    /// derived from it is too small by its share.
+    Given {
+        /// K1 (output/(deg/s)), finite and non-zero.
+        k1: f64,
+        /// u(K1), at least 0 and smaller than |K1|.
+        u: Option<f64>,
+    },
+    /// The K1 of a gyro-rate result document, with its u and degrees of
+    /// freedom; the document is recorded among the inputs (role `from`).
+    Result {
+        /// K1 (output/(deg/s)).
+        k1: f64,
+        /// u(K1).
+        u: f64,
+        /// Degrees of freedom of u(K1) (infinite when the result gives none).
+        dof: f64,
+        /// The result document as an input of the reduction.
+        input: crate::document::InputFile,
+    },
+    /// Fitted from the Earth-rate projection (needs several azimuths).
+    Fit,
+}
+
+impl K1Source {
+    /// K1 from a gyro-rate result document (`input` records that document
+    /// with role `from`). Refuses a result of another procedure, one
+    /// without K1, or a K1 that is not a usable scale factor.
+    pub fn from_rate_result(
+        doc: &crate::document::ResultDocument,
+        input: crate::document::InputFile,
+    ) -> Result<K1Source> {
+        if doc.procedure != crate::document::Procedure::GyroRate {
+            return Err(Error::Unsupported(format!(
+                "K1 needs a gyro-rate result, this is a {} result",
+                doc.procedure
+            )));
+        }
+        let c = doc
+            .coefficients
+            .get("K1")
+            .ok_or_else(|| Error::Unsupported("$.coefficients.K1: missing".into()))?;
+        if !(c.value.is_finite() && c.value != 0.0 && c.u.is_finite() && c.u >= 0.0) {
+            return Err(Error::Unsupported(format!(
+                "$.coefficients.K1: value {} with u {} is not a usable scale factor",
+                c.value, c.u
+            )));
+        }
+        Ok(K1Source::Result {
+            k1: c.value,
+            u: c.u,
+            dof: c.dof.unwrap_or(f64::INFINITY),
+            input,
+        })
+    }
+
+    /// Refuse a K1 that is not finite or is zero, and a u(K1) that is
+    /// negative or not smaller than |K1|.
+    pub fn validate(&self) -> Result<()> {
+        let (k1, u) = match self {
+            K1Source::Given { k1, u } => (*k1, *u),
+            K1Source::Result { k1, u, .. } => (*k1, Some(*u)),
+            K1Source::Fit => return Ok(()),
+        };
+        if !(k1.is_finite() && k1 != 0.0) {
+            return Err(Error::InvalidValue {
+                what: "k1 (a finite, non-zero scale factor, output/(deg/s))".into(),
+                value: k1.to_string(),
+            });
+        }
+        match u {
+            Some(u) if !(u.is_finite() && u >= 0.0 && u < k1.abs()) => Err(Error::InvalidValue {
+                what: "u_k1 (>= 0 and smaller than |k1|)".into(),
+                value: u.to_string(),
+            }),
+            _ => Ok(()),
+        }
+    }
+
+    /// The scale factor of the reduction.
+    pub fn scale_factor(&self) -> ScaleFactor {
+        match self {
+            K1Source::Given { k1, u } => ScaleFactor::Known {
+                k1: *k1,
+                u: u.unwrap_or(0.0),
+                dof: f64::INFINITY,
+            },
+            K1Source::Result { k1, u, dof, .. } => ScaleFactor::Known {
+                k1: *k1,
+                u: *u,
+                dof: *dof,
+            },
+            K1Source::Fit => ScaleFactor::Fit,
+        }
+    }
+
+    /// What the document warns about the source (a K1 without its u).
+    pub fn warnings(&self) -> Vec<Warning> {
+        match self {
+            K1Source::Given { u: None, .. } => vec![Warning::new(
+                WarningCode::MissingUncertainty,
+                "k1 given without u_k1: K1 is taken as exact, and every u derived from it is too small by its share",
+            )],
+            _ => Vec::new(),
+        }
+    }
+}
+
+/// Options of the multi-position test as a front end gives them,
+/// validated once by [`GyroPositionsOptions::validate`];
+/// [`GyroPositionsOptions::reduction`] gives the [`PositionsOptions`] of
+/// the reduction. In the document's `options`: `{"axial": "sa",
+/// "azimuth_deg": 90.0, "latitude_deg": 45.0, "noise": null, "terms":
+/// ["B", "D_I", "D_O"]}` (angles as given; `azimuth_deg` null when the
+/// recording has an `azimuth_deg` column; `noise` the known σ of one output
+/// sample or null; `terms` as fitted, sorted). Where K1 came from is in the
+/// document's `scale_factor` and `inputs`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GyroPositionsOptions {
+    /// Latitude φ (deg, −90…90).
+    pub latitude_deg: f64,
+    /// Azimuth of the head axis (deg from north towards east) of every row
+    /// of a recording without an `azimuth_deg` column.
+    pub azimuth_deg: Option<f64>,
+    /// Which gyro axis is along the head axis.
+    pub axial: Axial,
+    /// Drift terms.
+    pub terms: Vec<DriftTerm>,
+    /// Noise of one output sample (output units).
+    pub noise: Noise,
+    /// The scale factor K1 and where it comes from.
+    pub k1: K1Source,
+}
+
+impl GyroPositionsOptions {
+    /// Refuse options no reduction can use: a latitude outside ±90°, an
+    /// azimuth that is not an angle within 1e4 deg, a known noise that is
+    /// not a positive number, a K1 or u(K1) [`K1Source::validate`] refuses.
+    pub fn validate(&self) -> Result<()> {
+        super::rate::check_latitude_deg(self.latitude_deg)?;
+        if let Some(z) = self.azimuth_deg {
+            if !(z.is_finite() && z.abs() <= MAX_ANGLE_DEG) {
+                return Err(Error::InvalidValue {
+                    what: "azimuth_deg (an angle, |angle| <= 1e4 deg)".into(),
+                    value: z.to_string(),
+                });
+            }
+        }
+        self.noise.validate()?;
+        self.k1.validate()
+    }
+
+    /// The options of [`calibrate`] (latitude in rad).
+    pub fn reduction(&self) -> PositionsOptions {
+        PositionsOptions {
+            latitude_rad: self.latitude_deg.to_radians(),
+            axial: self.axial,
+            terms: self.terms.clone(),
+            noise: self.noise,
+            scale_factor: self.k1.scale_factor(),
+        }
+    }
+}
+
+impl serde::Serialize for GyroPositionsOptions {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(5))?;
+        m.serialize_entry("axial", self.axial.name())?;
+        m.serialize_entry("azimuth_deg", &self.azimuth_deg)?;
+        m.serialize_entry("latitude_deg", &self.latitude_deg)?;
+        m.serialize_entry("noise", &self.noise.sigma())?;
+        m.serialize_entry("terms", &term_names(&self.terms))?;
+        m.end()
+    }
+}
+
+/// The names of the terms as fitted (sorted, without repeats).
+pub(crate) fn term_names(terms: &[DriftTerm]) -> Vec<&'static str> {
+    normalized(terms).iter().map(|t| t.name()).collect()
+}
+
+/// The multi-position test as one [`crate::procedures::Procedure`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct GyroPositions;
+
+impl crate::procedures::Procedure for GyroPositions {
+    const ID: crate::document::Procedure = crate::document::Procedure::GyroPositions;
+    type Options = GyroPositionsOptions;
+    type Input = Vec<PositionObservation>;
+
+    fn validate(o: &GyroPositionsOptions) -> Result<()> {
+        o.validate()
+    }
+
+    fn read<R: std::io::Read>(
+        rows: &mut incal_io::Reader<R>,
+        o: &GyroPositionsOptions,
+    ) -> Result<Vec<PositionObservation>> {
+        input::read(rows, o.azimuth_deg)
+    }
+
+    fn reduce(
+        obs: &Vec<PositionObservation>,
+        o: &GyroPositionsOptions,
+        _: &dyn crate::procedures::Progress,
+    ) -> Result<crate::document::ResultDocument> {
+        let sf = o.k1.scale_factor();
+        let r = calibrate(obs, &o.reduction())?;
+        let mut doc = r.document(o.noise.sigma().is_some(), sf, o.axial.name())?;
+        doc.warnings.extend(o.k1.warnings());
+        if let K1Source::Result { input, .. } = &o.k1 {
+            doc.inputs.push(input.clone());
+        }
+        Ok(doc)
+    }
 }
 
 /// One position (head angle and azimuth) of the test.
@@ -421,36 +682,4 @@ pub fn calibrate(obs: &[PositionObservation], opts: &PositionsOptions) -> Result
         terms,
         warnings,
     })
-}
-
-/// Predicted uncertainties for a plan: the reduction run on noise-free
-/// means (zero drift, output `K1·Ω·IA/3600`) with a known noise per sample.
-/// `angles_rad × azimuths_rad` are the positions, `samples` per position.
-pub fn plan(
-    angles_rad: &[f64],
-    azimuths_rad: &[f64],
-    samples: usize,
-    noise: f64,
-    k1_nominal: f64,
-    opts: &PositionsOptions,
-) -> Result<PositionsResult> {
-    crate::validity::require_plan_inputs(samples, noise, k1_nominal, "nominal K1")?;
-    let mut obs = Vec::new();
-    for &z in azimuths_rad {
-        for &a in angles_rad {
-            let e = k1_nominal * earth_rate_ia_deg_h(a, z, opts.latitude_rad) / 3600.0;
-            for _ in 0..samples {
-                obs.push(PositionObservation {
-                    angle_rad: a,
-                    azimuth_rad: z,
-                    output: e,
-                });
-            }
-        }
-    }
-    let o = PositionsOptions {
-        noise: Noise::Known { sigma: noise },
-        ..opts.clone()
-    };
-    calibrate(&obs, &o)
 }

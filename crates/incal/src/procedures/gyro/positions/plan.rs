@@ -1,0 +1,190 @@
+//! Multi-position test plans and their predicted uncertainties: the
+//! reduction ([`super::calibrate`]) run on noise-free means (zero drift,
+//! output `K1·Ω·IA/3600`) with a known noise, so the plan and the
+//! reduction cannot disagree (IEEE Std 1431-2004 §10.3.6 for the test;
+//! JCGM 100 for the propagation).
+
+use serde_json::json;
+
+use super::{
+    calibrate, check_angles_deg, earth_rate_ia_deg_h, term_names, Axial, DriftTerm,
+    PositionObservation, PositionsOptions, PositionsResult, ScaleFactor,
+};
+use crate::document::plan::PlanDocument;
+use crate::error::{Error, Result};
+use crate::estimation::Noise;
+use crate::procedures::gyro::rate::check_latitude_deg;
+use crate::procedures::gyro::rate::plan::{check_plan_noise, set_warnings};
+
+/// Predicted uncertainties for a plan: the reduction run on noise-free
+/// means (zero drift, output `K1·Ω·IA/3600`) with a known noise per sample.
+/// `angles_rad × azimuths_rad` are the positions, `samples` per position.
+pub fn plan(
+    angles_rad: &[f64],
+    azimuths_rad: &[f64],
+    samples: usize,
+    noise: f64,
+    k1_nominal: f64,
+    opts: &PositionsOptions,
+) -> Result<PositionsResult> {
+    crate::validity::require_plan_inputs(samples, noise, k1_nominal, "nominal K1")?;
+    let mut obs = Vec::new();
+    for &z in azimuths_rad {
+        for &a in angles_rad {
+            let e = k1_nominal * earth_rate_ia_deg_h(a, z, opts.latitude_rad) / 3600.0;
+            for _ in 0..samples {
+                obs.push(PositionObservation {
+                    angle_rad: a,
+                    azimuth_rad: z,
+                    output: e,
+                });
+            }
+        }
+    }
+    let o = PositionsOptions {
+        noise: Noise::Known { sigma: noise },
+        ..opts.clone()
+    };
+    calibrate(&obs, &o)
+}
+
+/// Options of a multi-position plan. In the plan document's `options`:
+/// `angles_deg`, `axial`, `azimuths_deg`, `fit_k1`, `k1` (nominal,
+/// output/(deg/s)), `latitude_deg`, `noise` (σ of one output sample,
+/// output units), `samples` (per position), `terms` (sorted), `u_k1`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PositionsPlanOptions {
+    /// Head angles (deg); every angle at each azimuth.
+    pub angles_deg: Vec<f64>,
+    /// Azimuths of the head axis (deg from north towards east).
+    pub azimuths_deg: Vec<f64>,
+    /// Latitude (deg, −90…90).
+    pub latitude_deg: f64,
+    /// Which gyro axis is along the head axis.
+    pub axial: Axial,
+    /// Drift terms.
+    pub terms: Vec<DriftTerm>,
+    /// Nominal scale factor K1 (output/(deg/s)).
+    pub k1: f64,
+    /// Standard uncertainty of K1 (output/(deg/s), ≥ 0; unused with `fit_k1`).
+    pub u_k1: f64,
+    /// Predict with K1 fitted from the Earth-rate projection.
+    pub fit_k1: bool,
+    /// σ of one output sample (output units, > 0).
+    pub noise: f64,
+    /// Samples averaged per position.
+    pub samples: usize,
+}
+
+impl serde::Serialize for PositionsPlanOptions {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(10))?;
+        m.serialize_entry("angles_deg", &self.angles_deg)?;
+        m.serialize_entry("axial", self.axial.name())?;
+        m.serialize_entry("azimuths_deg", &self.azimuths_deg)?;
+        m.serialize_entry("fit_k1", &self.fit_k1)?;
+        m.serialize_entry("k1", &self.k1)?;
+        m.serialize_entry("latitude_deg", &self.latitude_deg)?;
+        m.serialize_entry("noise", &self.noise)?;
+        m.serialize_entry("samples", &self.samples)?;
+        m.serialize_entry("terms", &term_names(&self.terms))?;
+        m.serialize_entry("u_k1", &self.u_k1)?;
+        m.end()
+    }
+}
+
+impl PositionsPlanOptions {
+    /// Refuse options no prediction can use: a noise that is not a
+    /// positive number, no samples or too many, no angles or azimuths or
+    /// one beyond 1e4 deg, a K1 that is not finite, a u(K1) that is not a
+    /// non-negative number, a latitude outside ±90°.
+    pub fn validate(&self) -> Result<()> {
+        check_plan_noise(self.noise, self.samples)?;
+        check_angles_deg("angles_deg", &self.angles_deg)?;
+        check_angles_deg("azimuths_deg", &self.azimuths_deg)?;
+        if !self.k1.is_finite() {
+            return Err(Error::InvalidValue {
+                what: "k1 (a finite scale factor)".into(),
+                value: self.k1.to_string(),
+            });
+        }
+        if !(self.u_k1.is_finite() && self.u_k1 >= 0.0) {
+            return Err(Error::InvalidValue {
+                what: "u_k1 (a non-negative number)".into(),
+                value: self.u_k1.to_string(),
+            });
+        }
+        check_latitude_deg(self.latitude_deg)
+    }
+
+    /// The options of the reduction the plan runs.
+    pub fn reduction(&self) -> PositionsOptions {
+        PositionsOptions {
+            latitude_rad: self.latitude_deg.to_radians(),
+            axial: self.axial,
+            terms: self.terms.clone(),
+            noise: Noise::Auto,
+            scale_factor: if self.fit_k1 {
+                ScaleFactor::Fit
+            } else {
+                ScaleFactor::Known {
+                    k1: self.k1,
+                    u: self.u_k1,
+                    dof: f64::INFINITY,
+                }
+            },
+        }
+    }
+}
+
+/// The plan document of a multi-position plan: the angles, azimuths,
+/// samples, noise and K1 as planned (top-level keys `plan`, `angles_deg`,
+/// `azimuths_deg`, `samples`, `noise`, `k1`, `u_k1`, `fit_k1`,
+/// `latitude_deg`, `axial`, `warnings`) and the predicted u of every drift
+/// term (and of K1 when fitted).
+pub fn plan_document(o: &PositionsPlanOptions) -> Result<PlanDocument> {
+    o.validate()?;
+    let rad = |v: &[f64]| v.iter().map(|x| x.to_radians()).collect::<Vec<f64>>();
+    let p = plan(
+        &rad(&o.angles_deg),
+        &rad(&o.azimuths_deg),
+        o.samples,
+        o.noise,
+        o.k1,
+        &o.reduction(),
+    )?;
+    let mut d = PlanDocument::new(
+        crate::document::Procedure::GyroPositions,
+        format!(
+            "Gyro multi-position plan: {} angles x {} azimuths, {} samples each, noise {:e} per sample, K1 = {}",
+            o.angles_deg.len(),
+            o.azimuths_deg.len(),
+            o.samples,
+            o.noise,
+            o.k1
+        ),
+    );
+    d.with_options(o)?;
+    d.set("plan", json!("gyro-positions"))?;
+    d.set("angles_deg", json!(o.angles_deg))?;
+    d.set("azimuths_deg", json!(o.azimuths_deg))?;
+    d.set("samples", json!(o.samples))?;
+    d.set("noise", json!(o.noise))?;
+    d.set("k1", json!(o.k1))?;
+    d.set("u_k1", json!(o.u_k1))?;
+    d.set("fit_k1", json!(o.fit_k1))?;
+    d.set("latitude_deg", json!(o.latitude_deg))?;
+    d.set("axial", json!(o.axial.name()))?;
+    let c = &p.coefficients;
+    for (k, n) in c.names().iter().enumerate() {
+        let unit = if n == "K1" {
+            "output/(deg/s)"
+        } else {
+            DriftTerm::parse(n).map_or("", |t| t.unit())
+        };
+        d.predict(n, c.u_at(k), unit)?;
+    }
+    set_warnings(&mut d, &p.warnings)?;
+    Ok(d)
+}

@@ -1,0 +1,205 @@
+//! Rate-transfer test plans and their predicted uncertainties: the
+//! reduction ([`super::calibrate`]) run on noise-free means at a nominal
+//! scale factor with a known noise, so the plan and the reduction cannot
+//! disagree (IEEE Std 952-1997 §12.3.3 for the test; JCGM 100 for the
+//! propagation).
+
+use serde_json::json;
+
+use super::{
+    calibrate, check_latitude_deg, coefficient_unit, input_rate_deg_s, term_names, InputAxis,
+    RateObservation, RateOptions, RateResult, RateTerm, MAX_RATE_DEG_S,
+};
+use crate::document::plan::PlanDocument;
+use crate::error::{Error, Result};
+use crate::estimation::Noise;
+
+/// Most samples a plan may average per rate.
+pub const MAX_PLAN_SAMPLES: usize = 100_000_000;
+
+/// Predicted standard uncertainty of every coefficient for a plan: the
+/// reduction run on noise-free means at the nominal scale factor `k1`
+/// with a known noise `noise` per sample and `samples` samples per rate.
+/// The result's coefficients hold the predicted u (K1, B, K2, K3 as
+/// chosen, and the asymmetry when the rates separate it).
+pub fn plan(
+    rates_deg_s: &[f64],
+    samples: usize,
+    noise: f64,
+    k1: f64,
+    opts: &RateOptions,
+) -> Result<RateResult> {
+    crate::validity::require_plan_inputs(samples, noise, k1, "nominal K1")?;
+    // Noise-free means: each rate gets `samples` identical samples.
+    let obs: Vec<RateObservation> = rates_deg_s
+        .iter()
+        .flat_map(|&r| {
+            let e = k1 * input_rate_deg_s(r, opts.latitude_rad, opts.ia);
+            std::iter::repeat_n(
+                RateObservation {
+                    rate_deg_s: r,
+                    output: e,
+                    run: None,
+                },
+                samples,
+            )
+        })
+        .collect();
+    let o = RateOptions {
+        noise: Noise::Known { sigma: noise },
+        ..opts.clone()
+    };
+    calibrate(&obs, &o)
+}
+
+/// Options of a rate-transfer plan. In the plan document's `options`:
+/// `ia`, `k1` (nominal, output/(deg/s)), `latitude_deg`, `noise` (σ of one
+/// output sample, output units), `rate_uncertainty_ppm`, `rates_deg_s`,
+/// `samples` (per rate), `terms` (sorted, K1 added).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RatePlanOptions {
+    /// Table rates (deg/s), in test order.
+    pub rates_deg_s: Vec<f64>,
+    /// Samples averaged per rate (1…[`MAX_PLAN_SAMPLES`]).
+    pub samples: usize,
+    /// σ of one output sample (output units, > 0).
+    pub noise: f64,
+    /// Nominal scale factor K1 (output/(deg/s)).
+    pub k1: f64,
+    /// Latitude of the rate table (deg, −90…90).
+    pub latitude_deg: f64,
+    /// Input axis up or down.
+    pub ia: InputAxis,
+    /// Terms (K1 is added when missing).
+    pub terms: Vec<RateTerm>,
+    /// Relative standard uncertainty of the table rate (ppm, ≥ 0).
+    pub rate_uncertainty_ppm: f64,
+}
+
+impl serde::Serialize for RatePlanOptions {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(8))?;
+        m.serialize_entry("ia", self.ia.name())?;
+        m.serialize_entry("k1", &self.k1)?;
+        m.serialize_entry("latitude_deg", &self.latitude_deg)?;
+        m.serialize_entry("noise", &self.noise)?;
+        m.serialize_entry("rate_uncertainty_ppm", &self.rate_uncertainty_ppm)?;
+        m.serialize_entry("rates_deg_s", &self.rates_deg_s)?;
+        m.serialize_entry("samples", &self.samples)?;
+        m.serialize_entry("terms", &term_names(&self.terms))?;
+        m.end()
+    }
+}
+
+impl RatePlanOptions {
+    /// Refuse options no prediction can use: a noise that is not a
+    /// positive number, no samples or more than [`MAX_PLAN_SAMPLES`], a
+    /// rate that is not finite or beyond 1e5 deg/s, a K1 that is not
+    /// finite, a latitude outside ±90°, a negative rate uncertainty.
+    pub fn validate(&self) -> Result<()> {
+        check_plan_noise(self.noise, self.samples)?;
+        if let Some(r) = self
+            .rates_deg_s
+            .iter()
+            .find(|r| !(r.is_finite() && r.abs() <= MAX_RATE_DEG_S))
+        {
+            return Err(Error::InvalidValue {
+                what: "rates_deg_s (a table rate, |rate| <= 1e5 deg/s)".into(),
+                value: r.to_string(),
+            });
+        }
+        if !self.k1.is_finite() {
+            return Err(Error::InvalidValue {
+                what: "k1 (a finite scale factor)".into(),
+                value: self.k1.to_string(),
+            });
+        }
+        check_latitude_deg(self.latitude_deg)?;
+        let ppm = self.rate_uncertainty_ppm;
+        if !(ppm.is_finite() && ppm >= 0.0) {
+            return Err(Error::InvalidValue {
+                what: "rate_uncertainty_ppm (a non-negative number)".into(),
+                value: ppm.to_string(),
+            });
+        }
+        Ok(())
+    }
+
+    /// The options of the reduction the plan runs.
+    pub fn reduction(&self) -> RateOptions {
+        RateOptions {
+            latitude_rad: self.latitude_deg.to_radians(),
+            ia: self.ia,
+            terms: self.terms.clone(),
+            noise: Noise::Auto,
+            rate_uncertainty_ppm: self.rate_uncertainty_ppm,
+        }
+    }
+}
+
+/// The σ of one sample and the samples per position of a plan: a
+/// positive number, and 1…[`MAX_PLAN_SAMPLES`].
+pub(crate) fn check_plan_noise(noise: f64, samples: usize) -> Result<()> {
+    if !(noise.is_finite() && noise > 0.0) {
+        return Err(Error::InvalidValue {
+            what: "noise (a positive number)".into(),
+            value: noise.to_string(),
+        });
+    }
+    if !(1..=MAX_PLAN_SAMPLES).contains(&samples) {
+        return Err(Error::InvalidValue {
+            what: format!("samples (1..{MAX_PLAN_SAMPLES} per position)"),
+            value: samples.to_string(),
+        });
+    }
+    Ok(())
+}
+
+/// The plan document of a rate-transfer plan: the rates, samples, noise
+/// and K1 as planned (top-level keys `plan`, `rates_deg_s`, `samples`,
+/// `noise`, `k1`, `latitude_deg`, `ia`, `rate_uncertainty_ppm`,
+/// `warnings`) and the predicted u of K1, B, K2, K3 (those chosen) and of
+/// the asymmetry (ppm) when the rates separate it.
+pub fn plan_document(o: &RatePlanOptions) -> Result<PlanDocument> {
+    o.validate()?;
+    let p = plan(&o.rates_deg_s, o.samples, o.noise, o.k1, &o.reduction())?;
+    let mut d = PlanDocument::new(
+        crate::document::Procedure::GyroRate,
+        format!(
+            "Gyro rate-transfer plan: {} rates, {} samples each, noise {:e} per sample, K1 = {}",
+            o.rates_deg_s.len(),
+            o.samples,
+            o.noise,
+            o.k1
+        ),
+    );
+    d.with_options(o)?;
+    d.set("plan", json!("gyro-rate"))?;
+    d.set("rates_deg_s", json!(o.rates_deg_s))?;
+    d.set("samples", json!(o.samples))?;
+    d.set("noise", json!(o.noise))?;
+    d.set("k1", json!(o.k1))?;
+    d.set("latitude_deg", json!(o.latitude_deg))?;
+    d.set("ia", json!(o.ia.name()))?;
+    d.set("rate_uncertainty_ppm", json!(o.rate_uncertainty_ppm))?;
+    let c = &p.coefficients;
+    for (k, n) in c.names().iter().enumerate() {
+        // K1_pos and K1_neg follow from K1 and the asymmetry.
+        if !n.starts_with("K1_") {
+            d.predict(n, c.u_at(k), coefficient_unit(n))?;
+        }
+    }
+    set_warnings(&mut d, &p.warnings)?;
+    Ok(d)
+}
+
+/// The warnings of a plan's reduction: the `warnings` key (typed, as in
+/// result documents) and one note each for people.
+pub(crate) fn set_warnings(d: &mut PlanDocument, warnings: &[crate::Warning]) -> Result<()> {
+    d.set("warnings", json!(warnings))?;
+    for w in warnings {
+        d.note(format!("warning [{}]: {}", w.code, w.message));
+    }
+    Ok(())
+}
