@@ -29,7 +29,6 @@
 pub mod centrifuge;
 pub mod gfimu;
 pub mod gyro;
-pub mod imu;
 pub mod limits;
 pub mod misalign;
 pub mod noise;

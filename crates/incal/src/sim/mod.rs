@@ -8,9 +8,10 @@ pub mod centrifuge;
 pub mod demo;
 pub mod gfimu;
 pub mod gyro;
-pub mod imu;
 pub mod misalign;
 pub mod noise;
+/// The IMU triad simulator (lives with its procedures).
+pub use crate::procedures::imu::sim as imu;
 /// The tumble simulator (lives with its procedure).
 pub use crate::procedures::tumble::sim as tumble;
 
