@@ -43,10 +43,10 @@
 use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
 
 use super::detect::{self, Interval};
+use super::sim::TriadParams;
 use super::{check_gravity, M3, V3};
 use crate::error::{Error, Result};
 use crate::estimation::{fit, propagate, Design, Estimates, Fit, FitOptions, Variance};
-use super::sim::TriadParams;
 use crate::warning::{Warning, WarningCode};
 
 /// Which autocalibration (`incal` or `tedaldi` in documents).

@@ -621,13 +621,19 @@ mod tests {
         assert!(!m.gyro);
         let mut r = reader("position,acc_x,acc_y,acc_z\nx_p,1,2,3\nx_a,1,2,3\nx_a,1,2,3\n");
         let e = read_multipos(&mut r, false).unwrap_err().to_string();
-        assert!(e.starts_with("s.csv:2:") && e.contains("single sample"), "{e}");
+        assert!(
+            e.starts_with("s.csv:2:") && e.contains("single sample"),
+            "{e}"
+        );
     }
 
     #[test]
     fn time_must_increase() {
         let mut r = reader("time_s,acc_x,acc_y,acc_z\n0,1,2,3\n0,1,2,3\n");
         let e = read_autocal(&mut r, 100.0).unwrap_err().to_string();
-        assert!(e.contains("s.csv:3") && e.contains("does not increase"), "{e}");
+        assert!(
+            e.contains("s.csv:3") && e.contains("does not increase"),
+            "{e}"
+        );
     }
 }
