@@ -340,16 +340,16 @@ pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
             line.push_str(fmt.format(t));
             line.push(',');
         }
-        for k in 0..3 {
+        for (k, x) in r.acc.iter().enumerate() {
             if k > 0 {
                 line.push(',');
             }
-            line.push_str(fmt.format(r.acc[k]));
+            line.push_str(fmt.format(*x));
         }
         if let Some(g) = r.gyr {
-            for k in 0..3 {
+            for x in g.iter() {
                 line.push(',');
-                line.push_str(fmt.format(g[k]));
+                line.push_str(fmt.format(*x));
             }
         }
         line.push('\n');

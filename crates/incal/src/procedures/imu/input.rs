@@ -566,22 +566,19 @@ pub fn write<W: std::io::Write>(
                     }
                 };
                 w.cell(Cell::Text(label))?;
-                for k in 0..3 {
-                    w.cell(Cell::Num(up[k]))?;
+                for x in up.iter() {
+                    w.cell(Cell::Num(*x))?;
                 }
                 if *north {
                     let n = s.north.unwrap_or_else(V3::zeros);
-                    for k in 0..3 {
-                        w.cell(Cell::Num(n[k]))?;
+                    for x in n.iter() {
+                        w.cell(Cell::Num(*x))?;
                     }
                 }
             }
         }
-        for k in 0..3 {
-            w.cell(Cell::Num(s.acc[k]))?;
-        }
-        for k in 0..3 {
-            w.cell(Cell::Num(s.gyr[k]))?;
+        for x in s.acc.iter().chain(s.gyr.iter()) {
+            w.cell(Cell::Num(*x))?;
         }
         w.end_row()?;
     }
