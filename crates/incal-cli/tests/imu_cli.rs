@@ -108,7 +108,7 @@ fn ferraris_refuses_bad_sections() {
     let session = format!("{FIX}annotated_session.csv");
     refused(
         &run(&["imu", "ferraris", "--input", &session, "--rate-hz", "0"]),
-        &["--rate-hz"],
+        &["rate_hz"],
     );
     refused(
         &run(&[
@@ -121,7 +121,7 @@ fn ferraris_refuses_bad_sections() {
             "--gravity-m-s2",
             "0",
         ]),
-        &["--gravity-m-s2"],
+        &["gravity_m_s2"],
     );
 }
 

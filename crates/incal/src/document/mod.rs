@@ -28,7 +28,6 @@
 
 pub mod centrifuge;
 pub mod compare;
-pub mod imu;
 pub mod limits;
 pub mod misalign;
 pub mod noise;

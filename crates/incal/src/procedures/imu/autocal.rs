@@ -43,14 +43,15 @@
 use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
 
 use super::detect::{self, Interval};
+use super::sim::TriadParams;
 use super::{check_gravity, M3, V3};
 use crate::error::{Error, Result};
 use crate::estimation::{fit, propagate, Design, Estimates, Fit, FitOptions, Variance};
-use crate::sim::imu::TriadParams;
 use crate::warning::{Warning, WarningCode};
 
-/// Which autocalibration.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Which autocalibration (`incal` or `tedaldi` in documents).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Method {
     /// incal's weighted form with full covariance (default).
     Incal,
@@ -101,6 +102,110 @@ impl AutocalOptions {
             min_intervals: 12,
             settle_s: if method == Method::Incal { 0.1 } else { 0.0 },
         }
+    }
+}
+
+/// Options of the [`Autocal`] procedure (a record read from a file). In
+/// the document: `{"rate_hz", "method", "gravity_m_s2", "init_static_s",
+/// "settle_s", "window_samples", "min_samples"}` (`settle_s` as used: 0 for
+/// method `tedaldi`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AutocalSessionOptions {
+    /// Sample rate (Hz); the record's `time_s`, when present, gives the
+    /// time steps instead.
+    pub rate_hz: f64,
+    /// Method.
+    pub method: Method,
+    /// Gravity magnitude (m/s², > 0): the calibrated accelerometer output
+    /// is in this unit.
+    pub gravity_m_s2: f64,
+    /// Duration of the still start (s).
+    pub init_static_s: f64,
+    /// Time trimmed from both ends of every still interval (s; method
+    /// `incal` only).
+    pub settle_s: f64,
+}
+
+impl AutocalSessionOptions {
+    /// Refuse options the method cannot use, naming the option: a sample
+    /// rate outside (0, 1e6] Hz, a gravity outside (0, 100], a still start
+    /// outside (0, 1e6] s, a settling time outside [0, 1000] s.
+    pub fn validate(&self) -> Result<()> {
+        super::check_rate_hz(self.rate_hz)?;
+        super::check_gravity_magnitude(self.gravity_m_s2)?;
+        if !(self.init_static_s.is_finite()
+            && self.init_static_s > 0.0
+            && self.init_static_s <= 1e6)
+        {
+            return Err(Error::InvalidValue {
+                what: "init_static_s (must be > 0 and <= 1e6 s)".into(),
+                value: self.init_static_s.to_string(),
+            });
+        }
+        if !(self.settle_s.is_finite() && (0.0..=1e3).contains(&self.settle_s)) {
+            return Err(Error::InvalidValue {
+                what: "settle_s (must be within 0..1000 s)".into(),
+                value: self.settle_s.to_string(),
+            });
+        }
+        Ok(())
+    }
+
+    /// The options of [`autocal`]: the method's settings
+    /// ([`AutocalOptions::new`]) with the settling time for method `incal`.
+    pub fn model(&self) -> AutocalOptions {
+        let mut o = AutocalOptions::new(self.method, self.gravity_m_s2, self.init_static_s);
+        if self.method == Method::Incal {
+            o.settle_s = self.settle_s;
+        }
+        o
+    }
+}
+
+impl serde::Serialize for AutocalSessionOptions {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let o = self.model();
+        let mut m = s.serialize_map(Some(7))?;
+        m.serialize_entry("method", &o.method)?;
+        m.serialize_entry("gravity_m_s2", &o.gravity)?;
+        m.serialize_entry("init_static_s", &o.init_static_s)?;
+        m.serialize_entry("window_samples", &o.window)?;
+        m.serialize_entry("min_samples", &o.min_samples)?;
+        m.serialize_entry("settle_s", &o.settle_s)?;
+        m.serialize_entry("rate_hz", &self.rate_hz)?;
+        m.end()
+    }
+}
+
+/// The autocalibration as one [`crate::procedures::Procedure`]: a record
+/// CSV ([`super::input::read_autocal`]) into the result document
+/// ([`AutocalResult::document`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Autocal;
+
+impl crate::procedures::Procedure for Autocal {
+    const ID: crate::document::Procedure = crate::document::Procedure::ImuAutocal;
+    type Options = AutocalSessionOptions;
+    type Input = super::input::AutocalInput;
+
+    fn validate(o: &AutocalSessionOptions) -> Result<()> {
+        o.validate()
+    }
+
+    fn read<R: std::io::Read>(
+        rows: &mut incal_io::Reader<R>,
+        o: &AutocalSessionOptions,
+    ) -> Result<Self::Input> {
+        super::input::read_autocal(rows, o.rate_hz)
+    }
+
+    fn reduce(
+        input: &Self::Input,
+        o: &AutocalSessionOptions,
+        _: &dyn crate::procedures::Progress,
+    ) -> Result<crate::document::ResultDocument> {
+        autocal(&input.time, &input.acc, input.gyr.as_deref(), &o.model())?.document()
     }
 }
 

@@ -37,7 +37,10 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::{check_gravity, check_rate_hz, component_name, element_name, SectionStats, M3, V3};
+use super::{
+    check_gravity, check_rate_hz, check_rotation_deg, component_name, element_name, SectionStats,
+    M3, V3,
+};
 use crate::error::{Error, Result};
 use crate::estimation::{numeric_jacobian, propagate, Estimates};
 use crate::warning::{Warning, WarningCode};
@@ -50,13 +53,15 @@ pub const SECTIONS: [&str; 9] = [
 /// The seven calibration quantities, in imucal's order.
 pub const QUANTITIES: [&str; 7] = ["K_a", "R_a", "b_a", "K_g", "R_g", "K_ga", "b_g"];
 
-/// Options of [`ferraris`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Options of [`ferraris`] and of the [`Ferraris`] procedure. In the
+/// document: `{"rate_hz", "gravity_m_s2", "rotation_deg", "u_rotation_deg"}`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct FerrarisOptions {
     /// Sample rate F_s (Hz).
     pub rate_hz: f64,
     /// Gravity g (m/s²; imucal default 9.81; negative flips the sign
     /// convention of the positions).
+    #[serde(rename = "gravity_m_s2")]
     pub gravity: f64,
     /// Rotation angle A of each rotation section (deg; imucal default −360).
     pub rotation_deg: f64,
@@ -73,6 +78,54 @@ impl FerrarisOptions {
             rotation_deg: -360.0,
             u_rotation_deg: 0.0,
         }
+    }
+
+    /// Refuse options the method cannot use, naming the option: a sample
+    /// rate outside (0, 1e6] Hz, a gravity that is zero or beyond ±100, a
+    /// rotation angle that is zero or beyond ±36 000 deg, a rotation-angle
+    /// uncertainty outside [0, 360] deg.
+    pub fn validate(&self) -> Result<()> {
+        check_rate_hz(self.rate_hz)?;
+        check_gravity(self.gravity)?;
+        check_rotation_deg(self.rotation_deg)?;
+        if !(self.u_rotation_deg.is_finite() && (0.0..=360.0).contains(&self.u_rotation_deg)) {
+            return Err(Error::InvalidValue {
+                what: "u_rotation_deg (must be within 0..360 deg)".into(),
+                value: self.u_rotation_deg.to_string(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The Ferraris calibration as one [`crate::procedures::Procedure`]: a
+/// session CSV ([`super::input::read_ferraris`]) into the result document
+/// ([`FerrarisResult::document`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Ferraris;
+
+impl crate::procedures::Procedure for Ferraris {
+    const ID: crate::document::Procedure = crate::document::Procedure::ImuFerraris;
+    type Options = FerrarisOptions;
+    type Input = super::input::FerrarisSections;
+
+    fn validate(o: &FerrarisOptions) -> Result<()> {
+        o.validate()
+    }
+
+    fn read<R: std::io::Read>(
+        rows: &mut incal_io::Reader<R>,
+        _: &FerrarisOptions,
+    ) -> Result<Self::Input> {
+        super::input::read_ferraris(rows)
+    }
+
+    fn reduce(
+        sections: &Self::Input,
+        o: &FerrarisOptions,
+        _: &dyn crate::procedures::Progress,
+    ) -> Result<crate::document::ResultDocument> {
+        ferraris(sections, o)?.document()
     }
 }
 
@@ -240,23 +293,7 @@ fn map(x: &[f64], counts: &[usize; 9], opts: &FerrarisOptions) -> Option<Ferrari
 /// and when the positions do not determine a scale (a zero row of `U_d` or
 /// of the rotation integrals).
 pub fn ferraris(sections: &[Vec<[f64; 6]>; 9], opts: &FerrarisOptions) -> Result<FerrarisResult> {
-    check_rate_hz(opts.rate_hz)?;
-    check_gravity(opts.gravity)?;
-    if !opts.rotation_deg.is_finite()
-        || opts.rotation_deg == 0.0
-        || opts.rotation_deg.abs() > 36000.0
-    {
-        return Err(Error::InvalidValue {
-            what: "rotation angle (must be non-zero, |A| <= 36000 deg)".into(),
-            value: opts.rotation_deg.to_string(),
-        });
-    }
-    if !opts.u_rotation_deg.is_finite() || opts.u_rotation_deg < 0.0 {
-        return Err(Error::InvalidValue {
-            what: "u of the rotation angle (deg, >= 0)".into(),
-            value: opts.u_rotation_deg.to_string(),
-        });
-    }
+    opts.validate()?;
     let mut stats = Vec::with_capacity(9);
     for (k, s) in sections.iter().enumerate() {
         if s.len() < 2 {

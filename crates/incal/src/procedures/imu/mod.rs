@@ -9,6 +9,14 @@
 //!   in imu_tk's exact steps (`tedaldi`) or incal's weighted form with
 //!   covariance.
 //! * [`detect`]: the moving-variance static detector.
+//! * [`input`]: the sessions' columns, segmentation and checks, and the
+//!   CSV of simulated sessions; [`sim`]: the session simulator;
+//!   [`document`]: the result documents; [`apply`]: a calibration applied
+//!   to a raw series, row by row.
+//!
+//! The three reductions are [`super::Procedure`]s:
+//! [`ferraris::Ferraris`], [`multipos::Multipos`] and
+//! [`autocal::Autocal`].
 //!
 //! # Frames and units
 //! The IMU frame is the frame the positions and rotations are given in;
@@ -16,10 +24,14 @@
 //! angular rate (right-handed: counter-clockwise seen from the tip of the
 //! axis is positive). Raw outputs are in any unit (counts or physical).
 
+pub mod apply;
 pub mod autocal;
 pub mod detect;
+pub mod document;
 pub mod ferraris;
+pub mod input;
 pub mod multipos;
+pub mod sim;
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -110,7 +122,19 @@ pub fn check_gravity(g: f64) -> Result<()> {
         Ok(())
     } else {
         Err(Error::InvalidValue {
-            what: "gravity (must be finite, non-zero and |g| <= 100)".into(),
+            what: "gravity_m_s2 (must be finite, non-zero and |g| <= 100)".into(),
+            value: g.to_string(),
+        })
+    }
+}
+
+/// Check a gravity magnitude: finite, positive, at most 100.
+pub fn check_gravity_magnitude(g: f64) -> Result<()> {
+    if g.is_finite() && g > 0.0 && g <= 100.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidValue {
+            what: "gravity_m_s2 (must be > 0 and <= 100)".into(),
             value: g.to_string(),
         })
     }
@@ -122,8 +146,21 @@ pub fn check_rate_hz(rate_hz: f64) -> Result<()> {
         Ok(())
     } else {
         Err(Error::InvalidValue {
-            what: "sample rate (must be > 0 and <= 1e6 Hz)".into(),
+            what: "rate_hz (sample rate, must be > 0 and <= 1e6 Hz)".into(),
             value: rate_hz.to_string(),
+        })
+    }
+}
+
+/// Check the angle of the rotation sections (deg): finite, non-zero, at
+/// most 100 turns.
+pub fn check_rotation_deg(a: f64) -> Result<()> {
+    if a.is_finite() && a != 0.0 && a.abs() <= 36000.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidValue {
+            what: "rotation_deg (must be non-zero with |A| <= 36000 deg)".into(),
+            value: a.to_string(),
         })
     }
 }

@@ -32,8 +32,9 @@ use crate::estimation::{fit, numeric_jacobian, Design, Estimates, Fit, FitOption
 use crate::units::EARTH_RATE_RAD_S;
 use crate::warning::Warning;
 
-/// Accelerometer matrix convention.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Accelerometer matrix convention (`full` or `upper` in documents).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
 pub enum MatrixForm {
     /// Nine elements.
     Full,
@@ -90,6 +91,89 @@ pub struct MultiposOptions {
     pub rotation_deg: f64,
     /// Whether the session has gyro channels.
     pub gyro: bool,
+}
+
+/// Options of the [`Multipos`] procedure (a session read from a file; the
+/// session tells whether there is a gyro). In the document:
+/// `{"gravity_m_s2", "matrix", "rate_hz", "latitude_deg", "rotation_deg"}`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct MultiposSessionOptions {
+    /// Gravity (m/s², > 0).
+    pub gravity_m_s2: f64,
+    /// Accelerometer matrix convention.
+    pub matrix: MatrixForm,
+    /// Sample rate (Hz): times the rotations.
+    pub rate_hz: f64,
+    /// Latitude (deg) for the Earth rate (the session then needs the north
+    /// direction, `nx, ny, nz`).
+    pub latitude_deg: Option<f64>,
+    /// Rotation angle of each rotation section (deg; −360 is clockwise
+    /// seen from the axis tip).
+    pub rotation_deg: f64,
+}
+
+impl MultiposSessionOptions {
+    /// Refuse options the method cannot use, naming the option: a gravity
+    /// outside (0, 100], a sample rate outside (0, 1e6] Hz, a latitude
+    /// beyond ±90 deg, a rotation angle that is zero or beyond ±36 000 deg.
+    pub fn validate(&self) -> Result<()> {
+        super::check_rate_hz(self.rate_hz)?;
+        super::check_gravity_magnitude(self.gravity_m_s2)?;
+        super::check_rotation_deg(self.rotation_deg)?;
+        if let Some(lat) = self.latitude_deg {
+            if !(lat.is_finite() && lat.abs() <= 90.0) {
+                return Err(Error::InvalidValue {
+                    what: "latitude_deg (must be within -90..90)".into(),
+                    value: lat.to_string(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The options of [`multipos`] for a session with (`gyro`) or without
+    /// gyro columns.
+    pub fn model(&self, gyro: bool) -> MultiposOptions {
+        MultiposOptions {
+            gravity: self.gravity_m_s2,
+            matrix: self.matrix,
+            rate_hz: self.rate_hz,
+            latitude_deg: self.latitude_deg,
+            rotation_deg: self.rotation_deg,
+            gyro,
+        }
+    }
+}
+
+/// The multi-position calibration as one [`crate::procedures::Procedure`]:
+/// a session CSV ([`super::input::read_multipos`]) into the result
+/// document ([`MultiposResult::document`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Multipos;
+
+impl crate::procedures::Procedure for Multipos {
+    const ID: crate::document::Procedure = crate::document::Procedure::ImuMultipos;
+    type Options = MultiposSessionOptions;
+    type Input = super::input::MultiposInput;
+
+    fn validate(o: &MultiposSessionOptions) -> Result<()> {
+        o.validate()
+    }
+
+    fn read<R: std::io::Read>(
+        rows: &mut incal_io::Reader<R>,
+        o: &MultiposSessionOptions,
+    ) -> Result<Self::Input> {
+        super::input::read_multipos(rows, o.latitude_deg.is_some())
+    }
+
+    fn reduce(
+        input: &Self::Input,
+        o: &MultiposSessionOptions,
+        _: &dyn crate::procedures::Progress,
+    ) -> Result<crate::document::ResultDocument> {
+        multipos(&input.statics, &input.rotations, &o.model(input.gyro))?.document()
+    }
 }
 
 /// Result of [`multipos`].

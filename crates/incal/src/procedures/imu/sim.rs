@@ -19,10 +19,10 @@
 
 use rand_distr::{Distribution, Uniform};
 
-use super::{normal, rng};
+use super::ferraris::FerrarisMatrices;
+use super::{M3, V3};
 use crate::error::{Error, Result};
-use crate::procedures::imu::ferraris::FerrarisMatrices;
-use crate::procedures::imu::{M3, V3};
+use crate::sim::{normal, rng};
 use crate::units::EARTH_RATE_RAD_S;
 
 /// The sensor truth (see the module docs).
@@ -176,6 +176,58 @@ impl ImuTruth {
         let k_ga = M3::from_fn(|_, _| u(&mut r, 0.02));
         ImuTruth::from_imu_tk(&acc, &gyr, k_ga).expect("invertible")
     }
+
+    /// The simulators' sensor: [`ImuTruth::mems_counts`] for `truth_seed`
+    /// 0, else [`ImuTruth::random_around_mems`] with that seed; without
+    /// `g_sensitivity` the gyro's K_ga is zero (the autocalibration's model).
+    pub fn of_seed(truth_seed: u64, g_sensitivity: bool) -> ImuTruth {
+        let mut t = if truth_seed == 0 {
+            ImuTruth::mems_counts()
+        } else {
+            ImuTruth::random_around_mems(truth_seed)
+        };
+        if !g_sensitivity {
+            t.gyr_k_ga = M3::zeros();
+        }
+        t
+    }
+
+    /// The truth as the JSON a simulator writes beside its session:
+    /// `imucal` (imucal's `K_a, R_a, b_a, K_g, R_g, K_ga, b_g`, lists of
+    /// rows, gyro in deg/s), `imu_tk` (`acc`, `gyr` as `{"T", "K", "b"}`)
+    /// and `model` (`acc_A`, `acc_b`, `gyr_A`, `gyr_K_ga`, `gyr_b` of the
+    /// sensor model above, with their `units`). Fails when the truth is
+    /// singular.
+    pub fn to_json(&self) -> Result<serde_json::Value> {
+        use super::rows;
+        use serde_json::json;
+        let f = self.ferraris();
+        let mut imucal = serde_json::Map::new();
+        for q in super::ferraris::QUANTITIES {
+            let v = match f.matrix(q) {
+                Some(m) => json!(rows(&m)),
+                None => {
+                    let b = if q == "b_a" { f.b_a } else { f.b_g };
+                    json!([b[0], b[1], b[2]])
+                }
+            };
+            imucal.insert(q.to_string(), v);
+        }
+        let tk = self
+            .imu_tk()
+            .ok_or_else(|| Error::Unsupported("the truth is singular".into()))?;
+        let triad = |p: &TriadParams| json!({"T": rows(&p.t()), "K": rows(&p.k()), "b": p.bias});
+        Ok(json!({
+            "imucal": imucal,
+            "imu_tk": {"acc": triad(&tk.0), "gyr": triad(&tk.1)},
+            "model": {
+                "acc_A": rows(&self.acc_a), "acc_b": [self.acc_b[0], self.acc_b[1], self.acc_b[2]],
+                "gyr_A": rows(&self.gyr_a), "gyr_K_ga": rows(&self.gyr_k_ga),
+                "gyr_b": [self.gyr_b[0], self.gyr_b[1], self.gyr_b[2]],
+                "units": "acc_A output/(m/s^2), gyr_A output/(rad/s), gyr_K_ga output/(m/s^2), biases output"
+            }
+        }))
+    }
 }
 
 /// `A = K R` with `K = diag(‖row_i(A)‖)` and unit-norm rows in R.
@@ -237,6 +289,44 @@ pub enum Sequence {
     },
 }
 
+impl Sequence {
+    /// Static positions given by their labels (see
+    /// [`super::input::position_direction`]: `x_p`, `x_p+y_a`, …), then the
+    /// rotations `x_rot, y_rot, z_rot` of `(deg, s)` when given. A label
+    /// that is not a position is refused naming it.
+    pub fn positions<S: AsRef<str>>(
+        labels: &[S],
+        rotations: Option<(f64, f64)>,
+    ) -> Result<Sequence> {
+        let up = labels
+            .iter()
+            .map(|l| {
+                super::input::position_direction(l.as_ref())
+                    .map_err(|e| Error::Unsupported(format!("positions: {e}")))
+            })
+            .collect::<Result<Vec<V3>>>()?;
+        Ok(Sequence::Positions { up, rotations })
+    }
+}
+
+/// The columns a simulated session is written with (the input format of
+/// the procedure it is for; see [`super::input::write`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Layout {
+    /// `time_s, part, acc_x … gyr_z` (input of `imu ferraris`).
+    Ferraris,
+    /// `time_s, acc_x … gyr_z` (input of `imu autocal`).
+    Random,
+    /// `time_s, position, fx, fy, fz[, nx, ny, nz], acc_x … gyr_z` (input of
+    /// `imu multipos`); `labels` name the positions in order.
+    Positions {
+        /// Label of every position ([`Sequence::positions`]).
+        labels: Vec<String>,
+        /// Write the north direction (a latitude was simulated).
+        north: bool,
+    },
+}
+
 /// Options of [`simulate`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct ImuSim {
@@ -258,6 +348,102 @@ pub struct ImuSim {
     pub latitude_deg: Option<f64>,
     /// Seed.
     pub seed: u64,
+}
+
+impl ImuSim {
+    /// Refuse a session that cannot be simulated or is too large to
+    /// write, naming the option: a sample rate outside (0, 1e5] Hz, a
+    /// static duration outside (0, 1e5] s, a gravity outside (0, 100], a
+    /// noise outside [0, 1e6]; rotations of zero or more than 3600 deg or
+    /// lasting outside (0, 1e4] s; a still start outside (0, 1e5] s, moves
+    /// outside (0, 1e4] s, 0 or more than 10 000 orientations; 0 or more
+    /// than 1000 positions; more than [`crate::sim::MAX_SIM_ROWS`] rows.
+    pub fn validate(&self) -> Result<()> {
+        let range = |what: &str, x: f64, lo_open: bool, hi: f64| -> Result<()> {
+            let lo_ok = if lo_open { x > 0.0 } else { x >= 0.0 };
+            if x.is_finite() && lo_ok && x <= hi {
+                Ok(())
+            } else {
+                Err(Error::InvalidValue {
+                    what: format!(
+                        "{what} (must be {} 0 and <= {hi})",
+                        if lo_open { ">" } else { ">=" }
+                    ),
+                    value: x.to_string(),
+                })
+            }
+        };
+        range("rate_hz", self.rate_hz, true, 1e5)?;
+        range("static_s", self.static_s, true, 1e5)?;
+        range("gravity_m_s2", self.gravity, true, 100.0)?;
+        range("noise_acc", self.noise_acc, false, 1e6)?;
+        range("noise_gyr", self.noise_gyr, false, 1e6)?;
+        if let Some(lat) = self.latitude_deg {
+            if !(lat.is_finite() && lat.abs() <= 90.0) {
+                return Err(Error::InvalidValue {
+                    what: "latitude_deg (must be within -90..90)".into(),
+                    value: lat.to_string(),
+                });
+            }
+        }
+        let rotation = |deg: f64, dur: f64| -> Result<()> {
+            if !(deg.is_finite() && deg != 0.0 && deg.abs() <= 3600.0) {
+                return Err(Error::InvalidValue {
+                    what: "rotation_deg (must be non-zero with |A| <= 3600)".into(),
+                    value: deg.to_string(),
+                });
+            }
+            range("rotation_s", dur, true, 1e4)
+        };
+        let (rate, stat) = (self.rate_hz, self.static_s);
+        match &self.sequence {
+            Sequence::Ferraris {
+                rotation_deg,
+                rotation_s,
+            } => {
+                rotation(*rotation_deg, *rotation_s)?;
+                crate::sim::check_rows(&[(
+                    "(6 x static_s + 3 x rotation_s) x rate_hz",
+                    (6.0 * stat + 3.0 * rotation_s) * rate,
+                )])
+            }
+            Sequence::Random {
+                positions,
+                init_s,
+                move_s,
+            } => {
+                range("init_static_s", *init_s, true, 1e5)?;
+                range("move_s", *move_s, true, 1e4)?;
+                if !(1..=10_000).contains(positions) {
+                    return Err(Error::InvalidValue {
+                        what: "orientations (must be within 1..10000)".into(),
+                        value: positions.to_string(),
+                    });
+                }
+                crate::sim::check_rows(&[(
+                    "(init_static_s + orientations x (static_s + move_s)) x rate_hz",
+                    (init_s + *positions as f64 * (stat + move_s)) * rate,
+                )])
+            }
+            Sequence::Positions { up, rotations } => {
+                if up.is_empty() || up.len() > 1000 {
+                    return Err(Error::InvalidValue {
+                        what: "positions (1 to 1000 labels)".into(),
+                        value: up.len().to_string(),
+                    });
+                }
+                let mut rot_s = 0.0;
+                if let Some((deg, dur)) = rotations {
+                    rotation(*deg, *dur)?;
+                    rot_s = 3.0 * dur;
+                }
+                crate::sim::check_rows(&[(
+                    "(positions x static_s + 3 x rotation_s) x rate_hz",
+                    (up.len() as f64 * stat + rot_s) * rate,
+                )])
+            }
+        }
+    }
 }
 
 /// Rotation by `angle` (rad) about the unit `axis` (Rodrigues).
@@ -293,7 +479,7 @@ pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
     if !(cfg.static_s.is_finite() && cfg.static_s > 0.0) {
         return Err(bad("static duration (s, > 0)", cfg.static_s));
     }
-    crate::procedures::imu::check_gravity(cfg.gravity)?;
+    super::check_gravity(cfg.gravity)?;
     let mut r = rng(cfg.seed);
     let g = cfg.gravity;
     let n_static = (cfg.static_s * cfg.rate_hz).round().max(1.0) as usize;

@@ -2,10 +2,13 @@
 
 use serde_json::json;
 
-use super::{Cell, DocumentBuilder, FitSummary, Procedure, ResultDocument, Table};
+use super::autocal::AutocalResult;
+use super::ferraris::{FerrarisResult, QUANTITIES, SECTIONS};
+use super::multipos::MultiposResult;
+use super::sim::TriadParams;
+use super::{rows, SectionStats, AXES};
+use crate::document::{Cell, DocumentBuilder, FitSummary, Procedure, ResultDocument, Table};
 use crate::error::Result;
-use crate::procedures::imu::ferraris::{FerrarisResult, QUANTITIES, SECTIONS};
-use crate::procedures::imu::rows;
 use crate::units::Unit;
 
 /// Unit of a Ferraris element (`K_a.xy` → `output/(m/s^2)`).
@@ -24,7 +27,7 @@ pub fn ferraris_unit(name: &str) -> Result<Unit> {
 
 /// The per-section statistics table (label, samples, means and scatter of
 /// the six channels).
-fn section_table(labels: &[&str], stats: &[crate::procedures::imu::SectionStats]) -> Result<Table> {
+fn section_table(labels: &[&str], stats: &[SectionStats]) -> Result<Table> {
     let ch = ["acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"];
     let mut cols: Vec<(String, Option<Unit>)> =
         vec![("section".into(), None), ("samples".into(), None)];
@@ -104,7 +107,7 @@ pub fn autocal_unit(name: &str) -> Result<Unit> {
     ))
 }
 
-fn triad_json(p: &crate::sim::imu::TriadParams) -> serde_json::Value {
+fn triad_json(p: &TriadParams) -> serde_json::Value {
     json!({
         "T": rows(&p.t()),
         "K": rows(&p.k()),
@@ -112,7 +115,7 @@ fn triad_json(p: &crate::sim::imu::TriadParams) -> serde_json::Value {
     })
 }
 
-impl crate::procedures::imu::autocal::AutocalResult {
+impl AutocalResult {
     /// The result document: `acc.m_yz … acc.b_z` (and `gyr.*`) in
     /// `coefficients` with their joint covariance; top-level `acc` and
     /// `gyr` as `{"T", "K", "b"}` in imu_tk's convention
@@ -230,14 +233,13 @@ pub fn multipos_unit(name: &str) -> Result<Unit> {
     ))
 }
 
-impl crate::procedures::imu::multipos::MultiposResult {
+impl MultiposResult {
     /// The result document: every parameter in `coefficients`; top-level
     /// `acc` (`A`, `b`, `S`, `M`) and `gyr` (`b`, `G`, and `A`, `S`, `M`
     /// when estimated) with matrices as lists of rows (zero where the
     /// convention fixes an element, 1 on the diagonal of M); per-position
     /// and per-axis-fit tables.
     pub fn document(&self) -> Result<ResultDocument> {
-        use crate::procedures::imu::AXES;
         let o = &self.options;
         let mut b = DocumentBuilder::new(
             Procedure::ImuMultipos,

@@ -1,0 +1,636 @@
+//! Reading IMU sessions: columns, segmentation and checks of the three
+//! procedures' recordings, row by row through the input layer, and the CSV
+//! writer of simulated sessions.
+//!
+//! # Columns
+//! * `acc_x, acc_y, acc_z`: raw accelerometer outputs; `gyr_x, gyr_y,
+//!   gyr_z`: raw gyro outputs (any unit: counts or physical). A triad is
+//!   all three columns or none.
+//! * `time_s` (optional): time (s), strictly increasing.
+//! * Ferraris: `part`, one of [`super::ferraris::SECTIONS`] per row, or
+//!   empty for rows between sections.
+//! * Multi-position: `position` (a label: 1 to 3 face labels joined by `+`,
+//!   see [`position_direction`]; `x_rot`, `y_rot`, `z_rot` for rotations;
+//!   empty between positions) and/or `fx, fy, fz` (the unit up direction in
+//!   the IMU frame); `nx, ny, nz` (optional: the unit north direction).
+//!   Consecutive rows of one position are its samples.
+//!
+//! Other columns are ignored.
+
+use std::io::Read;
+
+use incal_io::{clip, InputError, Reader, Row};
+
+use super::ferraris::SECTIONS;
+use super::multipos::{RotationSection, StaticPosition};
+use super::sim::{ImuSample, Layout};
+use super::{SectionStats, V3};
+use crate::error::{Error, Result};
+
+/// Accelerometer columns of a session.
+pub const ACC: [&str; 3] = ["acc_x", "acc_y", "acc_z"];
+/// Gyro columns of a session.
+pub const GYR: [&str; 3] = ["gyr_x", "gyr_y", "gyr_z"];
+/// Labels of the rotation sections, about x, y and z.
+pub const ROTATIONS: [&str; 3] = ["x_rot", "y_rot", "z_rot"];
+
+/// A number echoed in a message or a label: as written when short, else in
+/// scientific notation.
+fn num(x: f64) -> String {
+    let s = format!("{x}");
+    if s.len() > 24 {
+        format!("{x:.6e}")
+    } else {
+        s
+    }
+}
+
+/// Direction of a position label: one to three face labels (`x_p`, `y_a`,
+/// …) on different axes joined by `+`; the normalised sum of their unit
+/// vectors (`x_p` is +x up, `x_a` is −x up). `x_p+y_p` is the edge between
+/// two faces (45°), `x_p+y_p+z_p` a corner.
+pub fn position_direction(label: &str) -> std::result::Result<V3, String> {
+    let mut v = V3::zeros();
+    let mut used = [false; 3];
+    let parts: Vec<&str> = label.split('+').collect();
+    if parts.is_empty() || parts.len() > 3 {
+        return Err(format!(
+            "position '{}' is not 1 to 3 face labels joined by '+'",
+            clip(label)
+        ));
+    }
+    for p in parts {
+        let (axis, sign) = match p.trim() {
+            "x_p" => (0, 1.0),
+            "x_a" => (0, -1.0),
+            "y_p" => (1, 1.0),
+            "y_a" => (1, -1.0),
+            "z_p" => (2, 1.0),
+            "z_a" => (2, -1.0),
+            other => {
+                return Err(format!(
+                    "position '{}': '{}' is not a face label (x_p, x_a, y_p, y_a, z_p, z_a)",
+                    clip(label),
+                    clip(other)
+                ))
+            }
+        };
+        if used[axis] {
+            return Err(format!(
+                "position '{}' names the {} axis twice",
+                clip(label),
+                super::AXES[axis]
+            ));
+        }
+        used[axis] = true;
+        v[axis] = sign;
+    }
+    let n = v.norm();
+    Ok(v / n)
+}
+
+/// The columns of a triad: none of them (`None`), or all three (a partial
+/// triad is refused naming the missing column).
+fn triad_columns(h: &incal_io::Header, names: [&str; 3]) -> Result<Option<[usize; 3]>> {
+    if names.iter().all(|n| h.opt_column(n).is_none()) {
+        return Ok(None);
+    }
+    Ok(Some([
+        h.column(names[0])?,
+        h.column(names[1])?,
+        h.column(names[2])?,
+    ]))
+}
+
+/// Where a session holds its time and triads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SessionColumns {
+    /// `time_s`, when present.
+    pub time: Option<usize>,
+    /// The accelerometer triad, when present.
+    pub acc: Option<[usize; 3]>,
+    /// The gyro triad, when present.
+    pub gyr: Option<[usize; 3]>,
+}
+
+impl SessionColumns {
+    /// The session columns of a header; `need_acc`/`need_gyr` make a
+    /// triad required, and one of the two always is (the accelerometer's
+    /// is named when neither is there).
+    pub fn of(h: &incal_io::Header, need_acc: bool, need_gyr: bool) -> Result<SessionColumns> {
+        let acc = triad_columns(h, ACC)?;
+        let gyr = triad_columns(h, GYR)?;
+        if need_acc && acc.is_none() {
+            h.column(ACC[0])?;
+        }
+        if need_gyr && gyr.is_none() {
+            h.column(GYR[0])?;
+        }
+        if acc.is_none() && gyr.is_none() {
+            h.column(ACC[0])?;
+        }
+        Ok(SessionColumns {
+            time: h.opt_column("time_s"),
+            acc,
+            gyr,
+        })
+    }
+}
+
+/// One row of a session: time (when the file has it) and the triads
+/// present.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct SessionRow {
+    time: Option<f64>,
+    acc: Option<[f64; 3]>,
+    gyr: Option<[f64; 3]>,
+}
+
+impl SessionRow {
+    /// Accelerometer then gyro channels; a missing triad is zero.
+    fn six(&self) -> [f64; 6] {
+        let a = self.acc.unwrap_or([0.0; 3]);
+        let g = self.gyr.unwrap_or([0.0; 3]);
+        [a[0], a[1], a[2], g[0], g[1], g[2]]
+    }
+}
+
+/// Reads session rows, checking that time increases.
+struct SessionReader {
+    cols: SessionColumns,
+    last_time: Option<f64>,
+}
+
+impl SessionReader {
+    fn new(cols: SessionColumns) -> Self {
+        Self {
+            cols,
+            last_time: None,
+        }
+    }
+
+    fn read(&mut self, row: &Row<'_>) -> Result<SessionRow> {
+        let triad = |c: Option<[usize; 3]>| -> Result<Option<[f64; 3]>> {
+            match c {
+                Some([x, y, z]) => Ok(Some([row.f64(x)?, row.f64(y)?, row.f64(z)?])),
+                None => Ok(None),
+            }
+        };
+        let acc = triad(self.cols.acc)?;
+        let gyr = triad(self.cols.gyr)?;
+        let time = match self.cols.time {
+            None => None,
+            Some(c) => {
+                let x = row.f64(c)?;
+                if let Some(prev) = self.last_time {
+                    if x <= prev {
+                        return Err(row
+                            .error(format!(
+                                "time_s {} does not increase (previous row {})",
+                                num(x),
+                                num(prev)
+                            ))
+                            .into());
+                    }
+                }
+                self.last_time = Some(x);
+                Some(x)
+            }
+        };
+        Ok(SessionRow { time, acc, gyr })
+    }
+}
+
+/// A reader that has handed out no row is refused as the input layer
+/// refuses an empty table (before any procedure-specific check).
+fn some_rows<R: Read>(rows: &Reader<R>) -> Result<()> {
+    if rows.rows() == 0 {
+        return Err(InputError::file(rows.header().file(), "no data rows after the header").into());
+    }
+    Ok(())
+}
+
+/// The nine Ferraris sections of a session, in [`SECTIONS`] order, each a
+/// list of 6-vectors (accelerometer x, y, z, gyro x, y, z).
+pub type FerrarisSections = [Vec<[f64; 6]>; 9];
+
+/// Read a Ferraris session: both triads and `part` are required; rows with
+/// an empty part are skipped (their numbers are still checked); every
+/// section needs at least 2 samples (the refusal names every missing or
+/// short one).
+pub fn read_ferraris<R: Read>(rows: &mut Reader<R>) -> Result<FerrarisSections> {
+    let mut session = SessionReader::new(SessionColumns::of(rows.header(), true, true)?);
+    let cp = rows.header().column("part")?;
+    let mut secs: FerrarisSections = Default::default();
+    while let Some(row) = rows.next_row()? {
+        let s = session.read(&row)?;
+        let label = row.text(cp).trim();
+        if label.is_empty() {
+            continue;
+        }
+        let k = SECTIONS.iter().position(|l| *l == label).ok_or_else(|| {
+            row.error(format!(
+                "part '{}' is not a Ferraris section (one of {}, or empty)",
+                clip(label),
+                SECTIONS.join(", ")
+            ))
+        })?;
+        secs[k].push(s.six());
+    }
+    some_rows(rows)?;
+    let missing: Vec<&str> = SECTIONS
+        .iter()
+        .zip(&secs)
+        .filter(|(_, v)| v.len() < 2)
+        .map(|(l, _)| *l)
+        .collect();
+    if !missing.is_empty() {
+        return Err(Error::Unsupported(format!(
+            "the Ferraris method needs all nine sections with at least 2 samples each; missing or too short: {}",
+            missing.join(", ")
+        )));
+    }
+    Ok(secs)
+}
+
+/// The observations of a multi-position session.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MultiposInput {
+    /// Static positions, in file order.
+    pub statics: Vec<StaticPosition>,
+    /// Rotation sections, in file order.
+    pub rotations: Vec<RotationSection>,
+    /// Whether the session has gyro columns.
+    pub gyro: bool,
+}
+
+/// What a row of a multi-position session is.
+#[derive(Debug, Clone, PartialEq)]
+enum Kind {
+    /// Between positions.
+    Skip,
+    /// A static position: key (label, or the up direction as text), up,
+    /// north.
+    Static(String, V3, Option<V3>),
+    /// A rotation: label, axis.
+    Rotation(String, usize),
+}
+
+impl Kind {
+    /// Whether two rows belong to one block (the north of a block is its
+    /// first row's).
+    fn same(&self, other: &Kind) -> bool {
+        match (self, other) {
+            (Kind::Static(a, _, _), Kind::Static(b, _, _)) => a == b,
+            (Kind::Rotation(a, _), Kind::Rotation(b, _)) => a == b,
+            (Kind::Skip, Kind::Skip) => true,
+            _ => false,
+        }
+    }
+}
+
+/// The columns of a multi-position session.
+struct MultiposColumns {
+    position: Option<usize>,
+    up: Option<[usize; 3]>,
+    north: Option<[usize; 3]>,
+}
+
+impl MultiposColumns {
+    fn of(h: &incal_io::Header, latitude: bool) -> Result<Self> {
+        let position = h.opt_column("position");
+        let up = match (h.opt_column("fx"), h.opt_column("fy"), h.opt_column("fz")) {
+            (Some(x), Some(y), Some(z)) => Some([x, y, z]),
+            (None, None, None) => None,
+            _ => {
+                for c in ["fx", "fy", "fz"] {
+                    h.column(c)?;
+                }
+                None
+            }
+        };
+        if position.is_none() && up.is_none() {
+            h.column("position")?;
+        }
+        let north = match (h.opt_column("nx"), h.opt_column("ny"), h.opt_column("nz")) {
+            (Some(x), Some(y), Some(z)) => Some([x, y, z]),
+            _ => None,
+        };
+        if latitude && north.is_none() {
+            h.column("nx")?;
+        }
+        Ok(Self {
+            position,
+            up,
+            north,
+        })
+    }
+
+    /// What row `row` is (its label, its direction from the label and/or
+    /// fx,fy,fz, which must agree, and its north).
+    fn kind(&self, row: &Row<'_>) -> Result<Kind> {
+        let label = self.position.map(|c| row.text(c).trim().to_string());
+        if let Some(l) = &label {
+            if let Some(axis) = ROTATIONS.iter().position(|r| r == l) {
+                return Ok(Kind::Rotation(l.clone(), axis));
+            }
+            if l.is_empty() && self.up.is_none() {
+                return Ok(Kind::Skip);
+            }
+        }
+        let from_label = match &label {
+            Some(l) if !l.is_empty() => Some(position_direction(l).map_err(|e| row.error(e))?),
+            _ => None,
+        };
+        let from_f = match self.up {
+            Some([x, y, z]) => {
+                let v = V3::new(row.f64(x)?, row.f64(y)?, row.f64(z)?);
+                let n = v.norm();
+                if (n - 1.0).abs() > 1e-3 {
+                    return Err(row
+                        .error(format!(
+                            "fx,fy,fz must be a unit vector, its norm is {}",
+                            num(n)
+                        ))
+                        .into());
+                }
+                Some(v / n)
+            }
+            None => None,
+        };
+        let up = match (from_label, from_f) {
+            (Some(l), Some(f)) => {
+                if (l - f).norm() > 1e-3 {
+                    return Err(row
+                        .error(format!(
+                            "position '{}' points ({}, {}, {}) but fx,fy,fz say ({}, {}, {})",
+                            clip(label.as_deref().unwrap_or("")),
+                            num(l[0]),
+                            num(l[1]),
+                            num(l[2]),
+                            num(f[0]),
+                            num(f[1]),
+                            num(f[2])
+                        ))
+                        .into());
+                }
+                f
+            }
+            (Some(l), None) => l,
+            (None, Some(f)) => f,
+            (None, None) => return Ok(Kind::Skip),
+        };
+        let north = match self.north {
+            Some([x, y, z]) => {
+                let v = V3::new(row.f64(x)?, row.f64(y)?, row.f64(z)?);
+                if (v.norm() - 1.0).abs() > 1e-3 || v.dot(&up).abs() > 1e-3 {
+                    return Err(row
+                        .error("nx,ny,nz must be a unit vector normal to the up direction")
+                        .into());
+                }
+                Some(v)
+            }
+            None => None,
+        };
+        let key = label
+            .filter(|l| !l.is_empty())
+            .unwrap_or_else(|| format!("({}, {}, {})", num(up[0]), num(up[1]), num(up[2])));
+        Ok(Kind::Static(key, up, north))
+    }
+}
+
+/// A block of consecutive rows of one kind being gathered.
+struct Block {
+    kind: Kind,
+    line: usize,
+    samples: Vec<[f64; 6]>,
+}
+
+/// Read a multi-position session (columns in the module docs): the
+/// accelerometer triad is required, the gyro's optional; `latitude`
+/// requires the north direction. Consecutive rows with the same label (or
+/// the same up direction) are one position; a position needs at least 2
+/// samples, a rotation the gyro columns.
+pub fn read_multipos<R: Read>(rows: &mut Reader<R>, latitude: bool) -> Result<MultiposInput> {
+    let cols = SessionColumns::of(rows.header(), true, false)?;
+    let gyro = cols.gyr.is_some();
+    let mut session = SessionReader::new(cols);
+    let mc = MultiposColumns::of(rows.header(), latitude)?;
+    let file = rows.header().file().to_string();
+    let mut input = MultiposInput {
+        statics: Vec::new(),
+        rotations: Vec::new(),
+        gyro,
+    };
+    let flush = |b: Block, input: &mut MultiposInput| -> Result<()> {
+        match b.kind {
+            Kind::Skip => {}
+            Kind::Static(key, up, north) => {
+                if b.samples.len() < 2 {
+                    return Err(InputError::at(
+                        &file,
+                        b.line,
+                        format!("position {key} has a single sample (at least 2 are needed)"),
+                    )
+                    .into());
+                }
+                input.statics.push(StaticPosition {
+                    label: key,
+                    up,
+                    north,
+                    stats: SectionStats::of(&b.samples)?,
+                });
+            }
+            Kind::Rotation(label, axis) => {
+                if !gyro {
+                    return Err(InputError::at(
+                        &file,
+                        b.line,
+                        format!("rotation {label} without gyro columns"),
+                    )
+                    .into());
+                }
+                input.rotations.push(RotationSection {
+                    label,
+                    axis,
+                    stats: SectionStats::of(&b.samples)?,
+                });
+            }
+        }
+        Ok(())
+    };
+    let mut block: Option<Block> = None;
+    while let Some(row) = rows.next_row()? {
+        let s = session.read(&row)?.six();
+        let kind = mc.kind(&row)?;
+        match &mut block {
+            Some(b) if b.kind.same(&kind) => b.samples.push(s),
+            _ => {
+                if let Some(b) = block.take() {
+                    flush(b, &mut input)?;
+                }
+                block = Some(Block {
+                    kind,
+                    line: row.line(),
+                    samples: vec![s],
+                });
+            }
+        }
+    }
+    if let Some(b) = block.take() {
+        flush(b, &mut input)?;
+    }
+    some_rows(rows)?;
+    Ok(input)
+}
+
+/// The record of an autocalibration: time (s; from `time_s`, else sample
+/// index / rate), raw accelerometer and, when present, raw gyro samples.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AutocalInput {
+    /// Time of every sample (s), increasing.
+    pub time: Vec<f64>,
+    /// Raw accelerometer samples.
+    pub acc: Vec<[f64; 3]>,
+    /// Raw gyro samples of the same instants.
+    pub gyr: Option<Vec<[f64; 3]>>,
+}
+
+/// Read an autocalibration record: the accelerometer triad is required,
+/// the gyro's optional; without `time_s` the time is `k / rate_hz`.
+pub fn read_autocal<R: Read>(rows: &mut Reader<R>, rate_hz: f64) -> Result<AutocalInput> {
+    let cols = SessionColumns::of(rows.header(), true, false)?;
+    let mut session = SessionReader::new(cols);
+    let mut time = Vec::new();
+    let mut acc = Vec::new();
+    let mut gyr = cols.gyr.map(|_| Vec::new());
+    while let Some(row) = rows.next_row()? {
+        let s = session.read(&row)?;
+        let t = s.time.unwrap_or(acc.len() as f64 / rate_hz);
+        time.push(t);
+        acc.push(s.acc.unwrap_or([0.0; 3]));
+        if let (Some(g), Some(v)) = (gyr.as_mut(), s.gyr) {
+            g.push(v);
+        }
+    }
+    some_rows(rows)?;
+    Ok(AutocalInput { time, acc, gyr })
+}
+
+/// Write a simulated session in the input format of the procedure its
+/// layout names: `time_s`, then `part` (Ferraris), nothing (random
+/// orientations: the autocalibration's record) or `position, fx, fy, fz`
+/// and `nx, ny, nz` when the north is written (multi-position; rotation
+/// rows carry their axis as the direction), then `acc_x … gyr_z`.
+/// Numbers in Rust's shortest round-trip form.
+pub fn write<W: std::io::Write>(
+    samples: &[ImuSample],
+    layout: &Layout,
+    out: W,
+) -> std::io::Result<W> {
+    use incal_io::{Cell, CsvWriter};
+    const TRIADS: [&str; 6] = ["acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"];
+    let mut header = vec!["time_s"];
+    match layout {
+        Layout::Ferraris => header.push("part"),
+        Layout::Random => {}
+        Layout::Positions { north, .. } => {
+            header.extend(["position", "fx", "fy", "fz"]);
+            if *north {
+                header.extend(["nx", "ny", "nz"]);
+            }
+        }
+    }
+    header.extend(TRIADS);
+    let mut w = CsvWriter::new(out, &header)?;
+    for s in samples {
+        w.cell(Cell::Num(s.time_s))?;
+        match layout {
+            Layout::Ferraris => w.cell(Cell::Text(&s.part))?,
+            Layout::Random => {}
+            Layout::Positions { labels, north } => {
+                let (label, up) = match ROTATIONS.iter().position(|r| *r == s.part) {
+                    Some(k) => {
+                        let mut up = V3::zeros();
+                        up[k] = 1.0;
+                        (s.part.as_str(), up)
+                    }
+                    None => {
+                        let label = s
+                            .part
+                            .strip_prefix('p')
+                            .and_then(|k| k.parse::<usize>().ok())
+                            .and_then(|k| labels.get(k.wrapping_sub(1)))
+                            .map_or(s.part.as_str(), |l| l.trim());
+                        (label, s.up.unwrap_or_else(V3::zeros))
+                    }
+                };
+                w.cell(Cell::Text(label))?;
+                for x in up.iter() {
+                    w.cell(Cell::Num(*x))?;
+                }
+                if *north {
+                    let n = s.north.unwrap_or_else(V3::zeros);
+                    for x in n.iter() {
+                        w.cell(Cell::Num(*x))?;
+                    }
+                }
+            }
+        }
+        for x in s.acc.iter().chain(s.gyr.iter()) {
+            w.cell(Cell::Num(*x))?;
+        }
+        w.end_row()?;
+    }
+    w.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn reader(text: &str) -> Reader<&[u8]> {
+        Reader::new("s.csv", text.as_bytes(), &incal_io::ReadOptions::default()).unwrap()
+    }
+
+    #[test]
+    fn labels_give_directions() {
+        let v = position_direction("x_p+y_a").unwrap();
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        assert!((v - V3::new(h, -h, 0.0)).norm() < 1e-15);
+        assert!(position_direction("x_p+x_a")
+            .unwrap_err()
+            .contains("names the x axis twice"));
+        assert!(position_direction("up")
+            .unwrap_err()
+            .contains("is not a face label"));
+    }
+
+    #[test]
+    fn multipos_rows_are_segmented_by_label() {
+        let mut r = reader(
+            "position,acc_x,acc_y,acc_z\nx_p,1,2,3\nx_p,1,2,4\n,0,0,0\nx_a,5,6,7\nx_a,5,6,8\n",
+        );
+        let m = read_multipos(&mut r, false).unwrap();
+        assert_eq!(m.statics.len(), 2);
+        assert_eq!(m.statics[1].label, "x_a");
+        assert_eq!(m.statics[1].stats.n, 2);
+        assert!(!m.gyro);
+        let mut r = reader("position,acc_x,acc_y,acc_z\nx_p,1,2,3\nx_a,1,2,3\nx_a,1,2,3\n");
+        let e = read_multipos(&mut r, false).unwrap_err().to_string();
+        assert!(
+            e.starts_with("s.csv:2:") && e.contains("single sample"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn time_must_increase() {
+        let mut r = reader("time_s,acc_x,acc_y,acc_z\n0,1,2,3\n0,1,2,3\n");
+        let e = read_autocal(&mut r, 100.0).unwrap_err().to_string();
+        assert!(
+            e.contains("s.csv:3") && e.contains("does not increase"),
+            "{e}"
+        );
+    }
+}
