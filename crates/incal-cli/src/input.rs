@@ -8,7 +8,6 @@ use incal_io::{ColumnMap, ReadOptions};
 
 use crate::error::{CliError, CliResult};
 
-pub use incal_io::MAX_ABS_VALUE;
 
 impl From<incal_io::InputError> for CliError {
     fn from(e: incal_io::InputError) -> Self {

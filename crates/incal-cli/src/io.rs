@@ -3,6 +3,7 @@
 //! the file: unreadable input is bad input (exit 2), an unwritable output is
 //! a failure (exit 1).
 
+
 use std::io::{Read, Write};
 use std::path::Path;
 
@@ -69,31 +70,6 @@ pub fn read_text(path: &Path) -> CliResult<(String, String)> {
             Err(CliError::Input(format!("{name}:{line}: not valid UTF-8")))
         }
     }
-}
-
-/// A reader of the file `path` (or standard input for `-`) for inputs read
-/// row by row, buffered, past a UTF-8 byte-order mark; with its display
-/// name. Fails (exit 2) with `NAME: cannot read: ...`.
-pub fn open_input(path: &Path) -> CliResult<(String, std::io::BufReader<Box<dyn Read + Send>>)> {
-    use std::io::BufRead;
-    let name = display_name(path);
-    let input: Box<dyn Read + Send> = if is_dash(path) {
-        Box::new(std::io::stdin())
-    } else {
-        Box::new(
-            std::fs::File::open(path)
-                .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?,
-        )
-    };
-    let mut reader = std::io::BufReader::with_capacity(1 << 16, input);
-    if reader
-        .fill_buf()
-        .map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?
-        .starts_with(BOM)
-    {
-        reader.consume(BOM.len());
-    }
-    Ok((name, reader))
 }
 
 /// A buffered writer to the file `path`, or to standard output when `path`
