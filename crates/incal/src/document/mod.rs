@@ -32,7 +32,8 @@ pub mod gyro;
 pub mod imu;
 pub mod limits;
 pub mod misalign;
-pub mod noise;
+/// The noise result document (lives with its procedure).
+pub use crate::procedures::noise::document as noise;
 pub mod plan;
 
 use std::collections::BTreeMap;

@@ -10,7 +10,8 @@ pub mod gfimu;
 pub mod gyro;
 pub mod imu;
 pub mod misalign;
-pub mod noise;
+/// The noise simulator (lives with its procedure).
+pub use crate::procedures::noise::sim as noise;
 /// The tumble simulator (lives with its procedure).
 pub use crate::procedures::tumble::sim as tumble;
 
