@@ -15,6 +15,7 @@
 
 #![warn(missing_docs)]
 
+pub mod binary;
 pub mod columns;
 pub mod error;
 pub mod reader;

@@ -30,7 +30,8 @@ pub mod centrifuge;
 pub mod compare;
 pub mod limits;
 pub mod misalign;
-pub mod noise;
+/// The noise result document (lives with its procedure).
+pub use crate::procedures::noise::document as noise;
 pub mod plan;
 
 use std::collections::BTreeMap;

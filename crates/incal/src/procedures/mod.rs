@@ -16,6 +16,7 @@ pub mod gfimu;
 pub mod gyro;
 pub mod imu;
 pub mod misalign;
+pub mod noise;
 pub mod tumble;
 
 use std::io::Read;

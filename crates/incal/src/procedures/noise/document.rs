@@ -8,7 +8,7 @@
 
 use serde_json::{json, Value};
 
-use super::{Cell, Coefficient, DocumentBuilder, Procedure, ResultDocument, Table};
+use crate::document::{Cell, Coefficient, DocumentBuilder, Procedure, ResultDocument, Table};
 use crate::error::Result;
 use crate::noise::terms::{Term, TermFit};
 use crate::noise::{Deviation, Stability};

@@ -1,0 +1,224 @@
+//! Reading a noise record: the channels of a CSV record through the input
+//! layer ([`read`]), or of a mapped binary record in one checking pass
+//! ([`read_mapped`]); and the samples as the analysis reads them
+//! ([`Samples`]).
+//!
+//! A CSV record has a header; every column but `time_s` is a channel
+//! unless `--columns` (the input layer's [`incal_io::ColumnMap`]) selects
+//! and renames them. Every sample must be a finite number.
+
+use std::io::Read;
+
+use incal_io::binary::{decode, MappedRecord, RecordHash};
+
+use super::Build;
+use crate::error::{Error, Result};
+use crate::noise::phase_reference;
+use crate::procedures::Progress;
+
+/// The channels of a CSV record.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Channels {
+    /// Channel names (the columns' names after `--columns`).
+    pub names: Vec<String>,
+    /// Samples of each channel, in the input unit.
+    pub samples: Vec<Vec<f64>>,
+    /// Rows (samples per channel).
+    pub rows: usize,
+}
+
+/// The channels of a CSV record: the columns the header selects (every
+/// one but `time_s` when none is selected), each cell a finite number.
+pub fn read<R: Read>(rows: &mut incal_io::Reader<R>) -> Result<Channels> {
+    let h = rows.header();
+    let pick: Vec<usize> = if h.selected().is_empty() {
+        (0..h.width())
+            .filter(|&k| h.names()[k] != "time_s")
+            .collect()
+    } else {
+        h.selected().to_vec()
+    };
+    if pick.is_empty() {
+        return Err(h.error("no channel column besides time_s").into());
+    }
+    let names: Vec<String> = pick.iter().map(|&k| h.names()[k].clone()).collect();
+    let mut samples = vec![Vec::new(); pick.len()];
+    while let Some(row) = rows.next_row()? {
+        for (d, &k) in samples.iter_mut().zip(&pick) {
+            d.push(row.f64(k)?);
+        }
+    }
+    for d in &mut samples {
+        d.shrink_to_fit();
+    }
+    Ok(Channels {
+        names,
+        samples,
+        rows: rows.rows(),
+    })
+}
+
+/// Where the samples are: parsed columns (CSV), or the memory map of a
+/// binary record (read in place: the phase is the only copy).
+pub(crate) enum Samples<'a> {
+    /// One vector per channel.
+    Columns(&'a [Vec<f64>]),
+    /// A mapped record and, per analysed channel, its channel in the frame.
+    Mapped {
+        rec: &'a MappedRecord,
+        index: Vec<usize>,
+    },
+}
+
+impl Samples<'_> {
+    /// Rows per release window of a mapped record (every row for columns).
+    pub(crate) fn window_rows(&self) -> usize {
+        match self {
+            Samples::Columns(_) => usize::MAX,
+            Samples::Mapped { rec, .. } => rec.window_rows(),
+        }
+    }
+
+    /// Give the pages of rows `[from, to)` of a mapped record back to the
+    /// kernel once they are read ([`MappedRecord::release`]); columns:
+    /// nothing.
+    pub(crate) fn release(&self, from: usize, to: usize) {
+        if let Samples::Mapped { rec, .. } = self {
+            rec.release(from, to);
+        }
+    }
+
+    /// Sample `r` of analysed channel `k`, read in order from row 0: at
+    /// each window boundary the window before is released
+    /// ([`Samples::release`]). Call `release(0, rows)` after the last row.
+    #[inline]
+    pub(crate) fn get_streamed(&self, k: usize, r: usize, window: usize) -> f64 {
+        if r > 0 && r % window == 0 {
+            self.release(r - window, r);
+        }
+        self.get(k, r)
+    }
+
+    /// Sample `r` of analysed channel `k`.
+    #[inline]
+    pub(crate) fn get(&self, k: usize, r: usize) -> f64 {
+        match self {
+            Samples::Columns(c) => c[k][r],
+            Samples::Mapped { rec, index } => rec.get(index[k], r),
+        }
+    }
+}
+
+/// What the reading pass of a mapped record gives.
+pub(crate) struct MappedRead {
+    /// Per analysed channel its array ([`Build`]), when the pass built
+    /// them (the arrays take no more memory than the file).
+    pub(crate) built: Option<Vec<Vec<f64>>>,
+    /// The record's SHA-256, done or under way.
+    pub(crate) hash: RecordHash,
+}
+
+/// One pass over a mapped record, window by window, each released after
+/// (one copy resident): per channel of `pick` (channel in the frame, name)
+/// the first non-finite sample (refused before any result) and, when the
+/// selected channels' arrays take no more memory than the file, the arrays
+/// themselves; the hash of the bytes on a thread of its own that runs on
+/// while the deviations start (`parallel`), or in this pass (one thread).
+/// `progress` counts the rows read.
+pub(crate) fn read_mapped(
+    rec: &MappedRecord,
+    pick: &[(usize, String)],
+    build: Build,
+    parallel: bool,
+    progress: &dyn Progress,
+) -> Result<MappedRead> {
+    progress.start("rows read", rec.rows() as u64);
+    let out = pass(rec, pick, build, parallel, progress);
+    progress.finish();
+    out
+}
+
+fn pass(
+    rec: &MappedRecord,
+    pick: &[(usize, String)],
+    build: Build,
+    parallel: bool,
+    progress: &dyn Progress,
+) -> Result<MappedRead> {
+    let rows = rec.rows();
+    let frame = rec.frame();
+    let f64le = rec.f64le();
+    let mut hash = rec.hash(parallel);
+    let fused = pick.len() * 8 <= frame;
+    let win = rec.window_rows();
+    let f = build.factor;
+    let refs: Vec<f64> = pick
+        .iter()
+        .map(|&(c, _)| {
+            if fused && build.rate {
+                phase_reference(rows, |r| rec.get(c, r) * f)
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mut built: Vec<Vec<f64>> = (0..if fused { pick.len() } else { 0 })
+        .map(|_| vec![0.0; build.len(rows)])
+        .collect();
+    let mut accs = vec![0.0; pick.len()];
+    // Per channel the first bad row: a non-finite sample (true) or, with
+    // finite samples, the phase overflowing (false).
+    let mut bad: Vec<Option<(usize, bool)>> = vec![None; pick.len()];
+    let mut r0 = 0;
+    while r0 < rows {
+        let r1 = (r0 + win).min(rows);
+        let bytes = rec.bytes(r0, r1);
+        hash.update(bytes);
+        for (k, b) in bad.iter_mut().enumerate() {
+            if b.is_some() {
+                continue;
+            }
+            let off = pick[k].0 * rec.width();
+            let y = |i: usize| decode(f64le, bytes, i * frame + off) * f;
+            let first_bad = || (0..r1 - r0).find(|&i| !y(i).is_finite());
+            if fused {
+                let at = usize::from(build.rate) + r0;
+                let out = &mut built[k][at..at + (r1 - r0)];
+                accs[k] = build.window(out, accs[k], refs[k], y);
+                // A non-finite sample makes the running sum non-finite
+                // for good: look for it only then.
+                if !accs[k].is_finite() {
+                    *b = Some(match first_bad() {
+                        Some(i) => (r0 + i, true),
+                        None => (
+                            r0 + out.iter().position(|v| !v.is_finite()).unwrap_or(0),
+                            false,
+                        ),
+                    });
+                }
+            } else if let Some(i) = first_bad() {
+                *b = Some((r0 + i, true));
+            }
+        }
+        rec.release(r0, r1);
+        progress.advance((r1 - r0) as u64);
+        r0 = r1;
+    }
+    for (k, (_, name)) in pick.iter().enumerate() {
+        if let Some((r, sample)) = bad[k] {
+            let what = if sample {
+                "not a finite number"
+            } else {
+                "the running sum (phase) of the samples overflows"
+            };
+            return Err(Error::Unsupported(format!(
+                "sample {} of {name}: {what}",
+                r + 1
+            )));
+        }
+    }
+    Ok(MappedRead {
+        built: fused.then_some(built),
+        hash,
+    })
+}

@@ -1,0 +1,512 @@
+//! Noise and stability of long static records (`"procedure": "noise"`):
+//! the Allan family of deviations with confidence intervals, the IEEE
+//! Std 952 noise terms and bias stability of every channel.
+//!
+//! # Model
+//! Rate samples `y_k` (gyro rate, accelerometer specific force, any rate
+//! unit `u`) at spacing `τ0 = 1/F` are analysed as phase
+//! `x_0 = 0`, `x_{k+1} = x_k + (y_k − c) τ0` (NIST SP 1065, W. J. Riley,
+//! "Handbook of Frequency Stability Analysis", 2008, §5.2; the constant
+//! `c` of [`crate::noise::phase_reference`] only adds a line every
+//! deviation is blind to); angle (velocity increment) sums are the phase
+//! itself. On the phase, at every averaging time `τ = m τ0` of the grid:
+//! OADEV, MDEV, OHDEV, TDEV and TOTDEV ([`crate::noise::stability`]), the
+//! power-law noise identified per τ and χ² bounds at the requested
+//! confidence from the Greenhall & Riley equivalent degrees of freedom
+//! (C. A. Greenhall and W. J. Riley, "Uncertainty of stability variances
+//! based on finite differences", PTTI 2003).
+//!
+//! # Terms
+//! The Allan variance model of IEEE Std 952-1997 Annex C (eq. C.15 ff.),
+//! `σ²(τ) = 3Q²/τ² + N²/τ + (2 ln 2/π) B² + K²τ/3 + R²τ²/2`
+//!
+//! | symbol | term | gyro unit | accelerometer unit |
+//! |---|---|---|---|
+//! | Q | quantization | arcsec | m/s |
+//! | N | angle (velocity) random walk | deg/√h | µg/√Hz |
+//! | B | bias instability | deg/h | µg |
+//! | K | rate (acceleration) random walk | deg/h/√h | µg/√s |
+//! | R | rate (acceleration) ramp | deg/h² | µg/s |
+//!
+//! fitted to OADEV by weighted least squares with the EDF's weights
+//! ([`crate::noise::terms::fit_terms`]), with the slope-line readings of
+//! IEEE Std 952 Fig. C.2 beside them, and bias stability (the standard
+//! deviation of τ-averages, GJB 2426A / IEEE Std 1431) at each requested τ.
+//! Accelerometer units follow IEEE Std 1293-2018.
+//!
+//! # Inputs
+//! A CSV record ([`input::read`]: one column per channel, an optional
+//! `time_s`) through the input layer ([`Noise`] is a [`Procedure`]), or a
+//! raw interleaved little-endian `f32`/`f64` record mapped in place
+//! ([`reduce_mapped`] over an [`incal_io::binary::MappedRecord`]).
+//!
+//! # Speed
+//! Channels are analysed in parallel (rayon; `parallel: false` gives the
+//! same bits on one thread). A mapped record is read once: each window is
+//! checked and, when the channels' arrays fit in the file's size, built
+//! into the phase in the same pass, then its pages are released, while the
+//! record's SHA-256 runs on a thread of its own ([`input::read_mapped`]).
+
+pub mod document;
+pub mod input;
+pub mod sim;
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::document::ResultDocument;
+use crate::error::{Error, Result};
+use crate::noise::{
+    phase_fill, phase_from_rate_with, stability_with_progress, terms, StabilityOptions, TauGrid,
+};
+use crate::procedures::{options_map, Procedure, Progress};
+use document::{ChannelResult, Quantity};
+use input::{Channels, Samples};
+
+/// What the channels measure, and so the units of the noise terms.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum QuantityKind {
+    /// Gyro: rate in deg/s, rad/s or deg/h.
+    Gyro,
+    /// Accelerometer: specific force in g, mg or m/s².
+    Accel,
+    /// Anything else: terms in the input unit.
+    Generic,
+}
+
+impl QuantityKind {
+    /// The unit of the samples when none is given: deg/s, g or 1.
+    pub fn default_unit(self) -> &'static str {
+        match self {
+            QuantityKind::Gyro => "deg/s",
+            QuantityKind::Accel => "g",
+            QuantityKind::Generic => "1",
+        }
+    }
+}
+
+/// What the samples are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DataKind {
+    /// Rate ("frequency") samples in the unit.
+    Rate,
+    /// Angle or velocity-increment sums ("phase") in the unit times s.
+    Angle,
+}
+
+/// How the record is stored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Format {
+    /// CSV with a header (through [`incal_io::Reader`]).
+    Csv,
+    /// Raw little-endian 32-bit floats, channels interleaved.
+    F32le,
+    /// Raw little-endian 64-bit floats, channels interleaved.
+    F64le,
+}
+
+/// Options of a noise analysis. Serialised (the document's `options`) as
+/// `rate_hz`, `quantity`, `unit` (the unit in use, the default filled in),
+/// `data`, `taus`, `stability_tau_s` and `confidence`; the storage
+/// (`format`, `channels`) and `parallel` change no number and are not
+/// recorded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NoiseOptions {
+    /// Sample rate F (Hz); τ0 = 1/F.
+    pub rate_hz: f64,
+    /// What the channels measure.
+    pub quantity: QuantityKind,
+    /// Unit of the samples: deg/s, rad/s, deg/h (gyro); g, mg, m/s2
+    /// (accel); any text (generic). `None`: [`QuantityKind::default_unit`].
+    pub unit: Option<String>,
+    /// Rate samples or their running sums.
+    pub data: DataKind,
+    /// Averaging times: `octave`, `decade`, `all` or N points per decade.
+    pub taus: String,
+    /// Confidence of the deviation bounds, 0 < P < 1 (Stable32: 0.683).
+    pub confidence: f64,
+    /// Averaging times (s) of bias stability.
+    pub stability_tau_s: Vec<f64>,
+    /// How the record is stored.
+    pub format: Format,
+    /// Interleaved channels of a binary record (binary formats only).
+    pub channels: Option<usize>,
+    /// Channels and sums on rayon's threads (the same bits either way).
+    pub parallel: bool,
+}
+
+impl Default for NoiseOptions {
+    fn default() -> Self {
+        Self {
+            rate_hz: 1.0,
+            quantity: QuantityKind::Generic,
+            unit: None,
+            data: DataKind::Rate,
+            taus: "octave".into(),
+            confidence: 0.683,
+            stability_tau_s: vec![10.0, 100.0],
+            format: Format::Csv,
+            channels: None,
+            parallel: true,
+        }
+    }
+}
+
+impl Serialize for NoiseOptions {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        #[derive(Serialize)]
+        struct Shown<'a> {
+            rate_hz: f64,
+            quantity: QuantityKind,
+            unit: &'a str,
+            data: DataKind,
+            taus: &'a str,
+            stability_tau_s: &'a [f64],
+            confidence: f64,
+        }
+        Shown {
+            rate_hz: self.rate_hz,
+            quantity: self.quantity,
+            unit: self.unit_text(),
+            data: self.data,
+            taus: &self.taus,
+            stability_tau_s: &self.stability_tau_s,
+            confidence: self.confidence,
+        }
+        .serialize(s)
+    }
+}
+
+fn invalid(what: &str, value: impl ToString) -> Error {
+    Error::InvalidValue {
+        what: what.into(),
+        value: value.to_string(),
+    }
+}
+
+impl NoiseOptions {
+    /// The unit of the samples (the default of the quantity when none is given).
+    pub fn unit_text(&self) -> &str {
+        self.unit.as_deref().unwrap_or(self.quantity.default_unit())
+    }
+
+    /// The quantity with its term units, the unit text, and the factor
+    /// from the input unit to the internal one (deg/s for gyros, g for
+    /// accelerometers, the unit itself otherwise).
+    pub fn units(&self) -> Result<(Quantity, String, f64)> {
+        let u = self.unit_text();
+        let bad = |ok: &str| invalid(&format!("unit (a {ok})"), u);
+        Ok(match self.quantity {
+            QuantityKind::Gyro => {
+                let f = match u {
+                    "deg/s" => 1.0,
+                    "rad/s" => 180.0 / std::f64::consts::PI,
+                    "deg/h" => 1.0 / 3600.0,
+                    _ => return Err(bad("gyro unit: deg/s, rad/s or deg/h")),
+                };
+                (Quantity::Gyro, u.to_string(), f)
+            }
+            QuantityKind::Accel => {
+                let f = match u {
+                    "g" => 1.0,
+                    "mg" => 1e-3,
+                    "m/s2" => 1.0 / crate::units::STANDARD_GRAVITY_M_S2,
+                    _ => return Err(bad("accelerometer unit: g, mg or m/s2")),
+                };
+                (Quantity::Accel, u.to_string(), f)
+            }
+            QuantityKind::Generic => (Quantity::Generic(u.to_string()), u.to_string(), 1.0),
+        })
+    }
+
+    /// The τ grid of [`NoiseOptions::taus`].
+    pub fn grid(&self) -> Result<TauGrid> {
+        TauGrid::parse(&self.taus).ok_or_else(|| {
+            invalid(
+                "taus (octave, decade, all or a number of points per decade, 1-1000)",
+                &self.taus,
+            )
+        })
+    }
+
+    /// The fewest samples one averaging time needs: 4 rate samples (5
+    /// phase points), or 5 angle samples.
+    pub fn min_samples(&self) -> usize {
+        match self.data {
+            DataKind::Rate => 4,
+            DataKind::Angle => 5,
+        }
+    }
+
+    /// The array each channel is analysed as.
+    fn build(&self, factor: f64) -> Build {
+        Build {
+            factor,
+            tau0: 1.0 / self.rate_hz,
+            rate: self.data == DataKind::Rate,
+        }
+    }
+}
+
+/// The noise and stability analysis as a [`Procedure`] over CSV records
+/// (binary records: [`reduce_mapped`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Noise;
+
+impl Procedure for Noise {
+    const ID: crate::document::Procedure = crate::document::Procedure::Noise;
+    type Options = NoiseOptions;
+    type Input = Channels;
+
+    /// The sample rate positive, the confidence in (0, 1), the τ grid
+    /// known, every bias-stability τ positive, the unit one of the
+    /// quantity's, and `channels` given with (and only with) a binary
+    /// format, at least 1.
+    fn validate(o: &NoiseOptions) -> Result<()> {
+        if !(o.rate_hz.is_finite() && o.rate_hz > 0.0) {
+            return Err(invalid("rate_hz (a positive number, Hz)", o.rate_hz));
+        }
+        if !(o.confidence > 0.0 && o.confidence < 1.0) {
+            return Err(invalid(
+                "confidence (between 0 and 1, e.g. 0.683)",
+                o.confidence,
+            ));
+        }
+        o.grid()?;
+        if let Some(t) = o
+            .stability_tau_s
+            .iter()
+            .find(|t| !(t.is_finite() && **t > 0.0))
+        {
+            return Err(invalid("stability_tau_s (a positive time, s)", t));
+        }
+        o.units()?;
+        match (o.format, o.channels) {
+            (Format::Csv, Some(_)) => Err(Error::Unsupported(
+                "channels goes with format f32le or f64le (a CSV record names its columns)".into(),
+            )),
+            (Format::F32le | Format::F64le, None) => Err(Error::Unsupported(
+                "format f32le/f64le needs channels (the number of interleaved channels)".into(),
+            )),
+            (_, Some(0)) => Err(invalid("channels (at least 1)", 0)),
+            _ => Ok(()),
+        }
+    }
+
+    fn read<R: std::io::Read>(
+        rows: &mut incal_io::Reader<R>,
+        o: &NoiseOptions,
+    ) -> Result<Channels> {
+        if o.format != Format::Csv {
+            return Err(Error::Unsupported(
+                "a binary record is read mapped (reduce_mapped), not as CSV".into(),
+            ));
+        }
+        input::read(rows)
+    }
+
+    fn reduce(
+        input: &Channels,
+        o: &NoiseOptions,
+        progress: &dyn Progress,
+    ) -> Result<ResultDocument> {
+        let (quantity, unit, factor) = o.units()?;
+        let results = analyse(
+            &Samples::Columns(&input.samples),
+            &input.names,
+            input.rows,
+            None,
+            o.build(factor),
+            o,
+            progress,
+        )?;
+        document::document(
+            &results,
+            &quantity,
+            &unit,
+            o.confidence,
+            o.grid()? != TauGrid::All,
+        )
+    }
+}
+
+/// Reduce a mapped binary record: validate the options, select the
+/// channels (`selection`: as [`incal_io::binary::MappedRecord::select`]),
+/// read the record once ([`input::read_mapped`]), analyse every channel
+/// and record the input (its SHA-256 and rows) and the options. Errors
+/// name the file.
+pub fn reduce_mapped(
+    rec: &incal_io::binary::MappedRecord,
+    selection: &incal_io::ColumnMap,
+    o: &NoiseOptions,
+    progress: &dyn Progress,
+) -> Result<ResultDocument> {
+    Noise::validate(o)?;
+    let name = rec.name();
+    let (quantity, unit, factor) = o.units()?;
+    let build = o.build(factor);
+    let pick = rec.select(selection)?;
+    let read =
+        input::read_mapped(rec, &pick, build, o.parallel, progress).map_err(|e| e.in_file(name))?;
+    let index: Vec<usize> = pick.iter().map(|p| p.0).collect();
+    let names: Vec<String> = pick.into_iter().map(|p| p.1).collect();
+    let results = analyse(
+        &Samples::Mapped { rec, index },
+        &names,
+        rec.rows(),
+        read.built,
+        build,
+        o,
+        progress,
+    )
+    .map_err(|e| e.in_file(name))?;
+    let tables = o.grid()? != TauGrid::All;
+    let mut doc = document::document(&results, &quantity, &unit, o.confidence, tables)?;
+    let path = if name == incal_io::source::STDIN_NAME {
+        "-"
+    } else {
+        name
+    };
+    doc.inputs.push(crate::document::InputFile {
+        role: "input".into(),
+        path: path.into(),
+        sha256: read.hash.finish(name)?,
+        rows: Some(rec.rows() as u64),
+    });
+    doc.options = options_map(o)?;
+    Ok(doc)
+}
+
+/// The array each channel is analysed as: the phase of rate samples
+/// ([`phase_from_rate_with`]) or the angle samples themselves, times
+/// `factor` (input unit to internal unit).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Build {
+    pub(crate) factor: f64,
+    pub(crate) tau0: f64,
+    pub(crate) rate: bool,
+}
+
+impl Build {
+    /// Length of the array for `rows` samples.
+    pub(crate) fn len(&self, rows: usize) -> usize {
+        rows + usize::from(self.rate)
+    }
+
+    /// The whole array from samples `get(r)` (already × factor): the same
+    /// bits as the windows of [`Build::window`].
+    fn whole(&self, rows: usize, get: impl Fn(usize) -> f64) -> Vec<f64> {
+        if self.rate {
+            phase_from_rate_with(rows, self.tau0, get)
+        } else {
+            (0..rows).map(get).collect()
+        }
+    }
+
+    /// Rows `r0..r0 + out.len()` of the array, `y(i)` the i-th of them
+    /// (already × factor); `acc`: the phase before them, returned moved on
+    /// (for angle data `acc + Σ 0·value`: 0 while every value is finite,
+    /// NaN for good after one that is not).
+    #[inline]
+    pub(crate) fn window(
+        &self,
+        out: &mut [f64],
+        acc: f64,
+        c: f64,
+        y: impl Fn(usize) -> f64,
+    ) -> f64 {
+        if self.rate {
+            phase_fill(out, acc, c, self.tau0, y)
+        } else {
+            let mut s = acc;
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = y(i);
+                s += 0.0 * *o;
+            }
+            s
+        }
+    }
+}
+
+/// Every channel of a record: the deviations, the term fit, the
+/// slope-line readings and bias stability (channels on rayon's threads
+/// when `o.parallel`; the same bits either way). `built`: the channels'
+/// arrays when the reading pass built them.
+fn analyse(
+    d: &Samples<'_>,
+    names: &[String],
+    rows: usize,
+    built: Option<Vec<Vec<f64>>>,
+    build: Build,
+    o: &NoiseOptions,
+    progress: &dyn Progress,
+) -> Result<Vec<ChannelResult>> {
+    let min = o.min_samples();
+    if rows < min {
+        return Err(Error::Unsupported(format!(
+            "{rows} samples; at least {min} are needed for one averaging time"
+        )));
+    }
+    let grid = o.grid()?;
+    let tau0 = build.tau0;
+    let factor = build.factor;
+    let opts = StabilityOptions {
+        tau0_s: tau0,
+        grid,
+        confidence: o.confidence,
+        parallel: o.parallel,
+    };
+    let total = (grid.factors(rows + 1).len() * names.len()) as u64;
+    progress.start("averaging times", total);
+    let in_channel = |k: usize| {
+        let name = &names[k];
+        move |e: Error| Error::Unsupported(format!("channel {name}: {e}"))
+    };
+    let one = |k: usize| -> Result<ChannelResult> {
+        let win = d.window_rows();
+        // Read in windows, each released once read: the phase is the only
+        // resident copy of the channel.
+        let get = |r: usize| d.get_streamed(k, r, win) * factor;
+        let whole;
+        let x: &[f64] = match &built {
+            Some(b) => &b[k],
+            None => {
+                whole = build.whole(rows, get);
+                d.release(0, rows);
+                &whole
+            }
+        };
+        let tick = |_: usize| progress.advance(1);
+        let st = stability_with_progress(x, &opts, &tick).map_err(in_channel(k))?;
+        let fit =
+            terms::fit_terms(&st.taus_s, &st.oadev, &st.alpha, tau0).map_err(in_channel(k))?;
+        let slope = terms::slope_readings(&st.taus_s, &st.oadev);
+        let bias_stability = o
+            .stability_tau_s
+            .iter()
+            .map(|&t| (t, terms::bias_stability(x, tau0, t)))
+            .collect();
+        Ok(ChannelResult {
+            name: names[k].clone(),
+            samples: rows,
+            stability: st,
+            fit,
+            slope,
+            bias_stability,
+            to_input: 1.0 / factor,
+        })
+    };
+    let results = if o.parallel {
+        (0..names.len())
+            .into_par_iter()
+            .map(one)
+            .collect::<Result<Vec<_>>>()
+    } else {
+        (0..names.len()).map(one).collect::<Result<Vec<_>>>()
+    };
+    progress.finish();
+    results
+}
