@@ -115,9 +115,7 @@ pub fn plan_document(o: &CentrifugePlanOptions) -> Result<PlanDocument> {
         opposite_sense: o.rig.opposite_sense,
         order: o.order,
         alignment_tolerance_rad: o.alignment_tolerance_deg.to_radians(),
-        noise: Noise::Known {
-            sigma: o.rig.noise,
-        },
+        noise: Noise::Known { sigma: o.rig.noise },
         terms: None,
         u_omega_ppm: o.u_omega_ppm,
     };

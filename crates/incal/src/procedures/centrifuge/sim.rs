@@ -193,9 +193,8 @@ impl RigPlan {
                 what: "positions (plane:phi_deg)".into(),
                 value: item.clone(),
             })?;
-            let plane = Plane::parse(p).map_err(|e| {
-                Error::Unsupported(format!("positions: {e}"))
-            })?;
+            let plane =
+                Plane::parse(p).map_err(|e| Error::Unsupported(format!("positions: {e}")))?;
             let deg: f64 = d
                 .trim()
                 .parse()
