@@ -265,7 +265,7 @@ impl CentrifugeRun {
         if let Some(f) = &self.from {
             if f.document.procedure != crate::document::Procedure::Tumble {
                 return Err(Error::Unsupported(format!(
-                    "a chained result (from) must be a tumble result, this is a {} result",
+                    "from (the result K0 and K1 come from) needs a tumble result, this is a {} result",
                     f.document.procedure
                 ))
                 .in_file(&f.name));
