@@ -26,7 +26,6 @@
 //! The JSON Schema of this type is checked into the repository at
 //! `schema/result.schema.json` ([`json_schema`]).
 
-pub mod centrifuge;
 pub mod compare;
 pub mod limits;
 pub mod misalign;

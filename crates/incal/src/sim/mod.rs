@@ -4,7 +4,8 @@
 //! Monte Carlo trials draw from per-trial seeds derived by SplitMix64, so a
 //! parallel run gives exactly the numbers of a serial one.
 
-pub mod centrifuge;
+/// The centrifuge simulator (lives with its procedure).
+pub use crate::procedures::centrifuge::sim as centrifuge;
 pub mod demo;
 /// The gyro simulators (live with their procedures).
 pub mod gyro {

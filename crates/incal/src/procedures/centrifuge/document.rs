@@ -2,7 +2,7 @@
 
 use serde_json::{json, Map, Value};
 
-use super::{
+use crate::document::{
     term_unit, Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure, ResultDocument, Table,
     Warning, WarningCode,
 };

@@ -1,0 +1,167 @@
+//! Centrifuge test plans and their predicted uncertainties.
+//!
+//! A plan (fixture positions × nominal centripetal levels × samples per
+//! point, seed 001 §3) is judged by running the reduction itself on the
+//! noise-free outputs of the expected instrument with a deterministic
+//! scatter of exactly the output noise σ at every point
+//! ([`super::sim::plan`]): every u it reports (coefficients and radius
+//! quantities, one joint propagation) is the predicted standard
+//! uncertainty of that plan, and shrinks as `1/sqrt(samples)`.
+
+use serde::Serialize;
+use serde_json::json;
+
+use super::radius::ValueU;
+use super::sim::RigPlan;
+use super::CentrifugeOptions;
+use crate::document::plan::PlanDocument;
+use crate::document::Procedure;
+use crate::error::{Error, Result};
+use crate::estimation::Noise;
+use crate::models::{AccelerometerModel, Term};
+
+/// Options of a centrifuge plan's prediction. In the plan document's
+/// `options`: the rig and plan of [`RigPlan`], the expected `k0` (g) and
+/// `k1` (output/g), `u_k0`, `u_k1` (standard uncertainties of K0 and K1
+/// from the 1 g calibration), `order` (2 or 3), `alignment_tolerance_deg`
+/// (fixture angle bound) and `u_omega_ppm` (relative u of the table rate).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CentrifugePlanOptions {
+    /// The instrument expected (its K0 and K1 matter most).
+    #[serde(skip)]
+    pub truth: AccelerometerModel,
+    /// The rig and the plan.
+    #[serde(flatten)]
+    pub rig: RigPlan,
+    /// Standard uncertainty of K0 from the 1 g calibration (g, ≥ 0).
+    pub u_k0: f64,
+    /// Standard uncertainty of K1 from the 1 g calibration (output/g, ≥ 0).
+    pub u_k1: f64,
+    /// Model order of the radius regression and the station fits (2 or 3).
+    pub order: usize,
+    /// Bound of the fixture angle error (deg, ≥ 0), for the type-B Δc2.
+    pub alignment_tolerance_deg: f64,
+    /// Relative standard uncertainty of the table rate (ppm, 0…1e5).
+    pub u_omega_ppm: f64,
+}
+
+impl CentrifugePlanOptions {
+    /// Refuse options no prediction can use: fewer than 2 samples per
+    /// point or no noise (the plan needs a scatter), a negative u or
+    /// tolerance, `u_omega_ppm` outside 0…1e5, a model order other than 2
+    /// or 3, and the rig checks of [`RigPlan::validate`].
+    pub fn validate(&self) -> Result<()> {
+        if self.rig.samples < 2 {
+            return Err(Error::TooFew {
+                what: "samples per point (the plan needs a scatter)".into(),
+                needed: 2,
+                got: self.rig.samples,
+            });
+        }
+        if !(self.rig.noise.is_finite() && self.rig.noise > 0.0) {
+            return Err(Error::InvalidValue {
+                what: "noise (a positive number)".into(),
+                value: self.rig.noise.to_string(),
+            });
+        }
+        for (name, v) in [
+            ("u_k0", self.u_k0),
+            ("u_k1", self.u_k1),
+            ("alignment_tolerance_deg", self.alignment_tolerance_deg),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::InvalidValue {
+                    what: format!("{name} (a non-negative number)"),
+                    value: v.to_string(),
+                });
+            }
+        }
+        super::check_u_omega_ppm(self.u_omega_ppm)?;
+        super::check_order(self.order)?;
+        self.rig.validate()
+    }
+}
+
+/// Unit of a planned quantity: the tilt in rad, radii in m, coefficients
+/// in their term's unit.
+fn unit_of(name: &str) -> String {
+    match name {
+        "tilt_rad" => "rad".into(),
+        n if n.ends_with("_m") => "m".into(),
+        n => Term::parse(n).map_or("g/g^2".to_string(), |t| t.unit().as_str().to_string()),
+    }
+}
+
+/// The plan document of a centrifuge plan: the positions, levels and
+/// samples, and the predicted u of every coefficient and radius quantity
+/// (with the reduction's warnings about the plan).
+pub fn plan_document(o: &CentrifugePlanOptions) -> Result<PlanDocument> {
+    o.validate()?;
+    let cfg = o.rig.simulation(o.truth.clone(), 0)?;
+    let t = &cfg.truth;
+    let opts = CentrifugeOptions {
+        k0_g: ValueU {
+            value: t.k0_g,
+            u: o.u_k0,
+        },
+        k1: ValueU {
+            value: t.k1_out_per_g,
+            u: o.u_k1,
+        },
+        cov_k0_k1: 0.0,
+        radius0_m: o.rig.radius_m,
+        latitude_rad: o.rig.latitude_deg.to_radians(),
+        g_local_m_s2: o.rig.gravity_m_s2,
+        opposite_sense: o.rig.opposite_sense,
+        order: o.order,
+        alignment_tolerance_rad: o.alignment_tolerance_deg.to_radians(),
+        noise: Noise::Known { sigma: o.rig.noise },
+        terms: None,
+        u_omega_ppm: o.u_omega_ppm,
+    };
+    let r = super::sim::plan(&cfg, &opts)?;
+    let mut d = PlanDocument::new(
+        Procedure::Centrifuge,
+        format!(
+            "Centrifuge plan: {} positions x {} levels, {} samples per point, noise {:e} per sample, K1 = {}",
+            cfg.positions.len(),
+            o.rig.levels_g.len(),
+            o.rig.samples,
+            o.rig.noise,
+            t.k1_out_per_g
+        ),
+    );
+    d.with_options(o)?;
+    d.options.insert("k0".into(), json!(t.k0_g));
+    d.options.insert("k1".into(), json!(t.k1_out_per_g));
+    for (key, value) in [
+        ("plan", json!("centrifuge")),
+        ("positions", json!(o.rig.positions)),
+        ("single_polarity", json!(o.rig.single_polarity)),
+        ("levels_g", json!(o.rig.levels_g)),
+        ("radius_m", json!(o.rig.radius_m)),
+        ("samples", json!(o.rig.samples)),
+        ("noise", json!(o.rig.noise)),
+        ("k0", json!(t.k0_g)),
+        ("k1", json!(t.k1_out_per_g)),
+        ("u_k0", json!(o.u_k0)),
+        ("u_k1", json!(o.u_k1)),
+        ("order", json!(o.order)),
+        ("u_omega_ppm", json!(o.u_omega_ppm)),
+        ("latitude_deg", json!(o.rig.latitude_deg)),
+        ("warnings", json!(r.warnings)),
+    ] {
+        d.set(key, value)?;
+    }
+    let mut seen: Vec<&str> = Vec::new();
+    for e in [&r.coefficients, &r.joint] {
+        for (k, n) in e.names().iter().enumerate() {
+            if seen.contains(&n.as_str()) {
+                continue;
+            }
+            seen.push(n);
+            d.predict(n, e.u_at(k), &unit_of(n))?;
+        }
+    }
+    Ok(d)
+}

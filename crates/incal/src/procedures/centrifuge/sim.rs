@@ -1,0 +1,329 @@
+//! Precision-centrifuge simulator: a truth instrument, a true rig (R+, R−,
+//! tilt, latitude, sense) and a plan give observations in the input format
+//! of [`crate::procedures::centrifuge`].
+//!
+//! For every position (in plan order) and every rate (in plan order; 0 =
+//! at rest), `samples` outputs `E = K1·(model at the specific force of
+//! [`Centrifuge::specific_force`]) + n`, `n ~ N(0, σ_n²)`, are drawn. The
+//! specific force includes the ECM radius and alignment error of each
+//! position, the IA tilt and the Earth-rate term.
+
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::models::AccelerometerModel;
+use crate::procedures::centrifuge::Observation;
+use crate::rigs::centrifuge::{Centrifuge, Plane, Position};
+use crate::sim::{normal, rng};
+use crate::units::arcsec_to_rad;
+
+/// Configuration of a simulated centrifuge test.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CentrifugeSim {
+    /// True instrument.
+    pub truth: AccelerometerModel,
+    /// True rig and mounting.
+    pub rig: Centrifuge,
+    /// Positions, in test order.
+    pub positions: Vec<Position>,
+    /// Table rates (rad/s), in test order; include 0 for the at-rest rows.
+    pub rates_rad_s: Vec<f64>,
+    /// Samples per point (≥ 1).
+    pub samples: usize,
+    /// Output noise σ of one sample (output units).
+    pub noise: f64,
+    /// Random seed.
+    pub seed: u64,
+}
+
+impl CentrifugeSim {
+    /// Refuse a configuration that cannot be simulated: no samples, a
+    /// negative or non-finite noise, a rate that is negative or not finite,
+    /// more than [`crate::sim::MAX_SIM_ROWS`] rows, an invalid truth, or a
+    /// truth and rig whose output is not finite at some point.
+    pub fn validate(&self) -> Result<()> {
+        if self.samples == 0 {
+            return bad("samples (at least 1 per point)", "0".into());
+        }
+        if !(self.noise.is_finite() && self.noise >= 0.0) {
+            return bad("noise (a non-negative number)", self.noise.to_string());
+        }
+        if let Some(w) = self
+            .rates_rad_s
+            .iter()
+            .find(|w| !(w.is_finite() && **w >= 0.0))
+        {
+            return bad("rate (rad/s, a non-negative number)", w.to_string());
+        }
+        crate::sim::check_rows(&[
+            ("positions", self.positions.len() as f64),
+            ("levels_g", self.rates_rad_s.len() as f64),
+            ("samples", self.samples as f64),
+        ])?;
+        self.truth.validate()?;
+        for pos in &self.positions {
+            for &w in &self.rates_rad_s {
+                let e = self.truth.output(&self.rig.specific_force(pos, w));
+                if !e.is_finite() {
+                    return bad(
+                        "truth and rig (the output is not finite; choose physical values)",
+                        format!(
+                            "at {}:{} deg, polarity {}, {w} rad/s",
+                            pos.plane.name(),
+                            pos.phi_rad.to_degrees(),
+                            pos.polarity
+                        ),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn bad<T>(what: &str, value: String) -> Result<T> {
+    Err(Error::InvalidValue {
+        what: what.into(),
+        value,
+    })
+}
+
+/// The rig and the test plan of a simulated or planned centrifuge test as
+/// a front end gives them (snake_case keys in a plan document's
+/// `options`): the true ECM radii `r_plus_m`, `r_minus_m` (m) with IA
+/// radial, the nominal radius `radius_m` (m) that turns the nominal
+/// centripetal inputs `levels_g` (g) into rates `ω = sqrt(level·g_L/R)`,
+/// the IA tilt `tilt_arcsec`, `latitude_deg` (north positive),
+/// `gravity_m_s2` (g_L), the sense of rotation, the fixture `positions`
+/// (`plane:phi_deg`, both polarities of each unless `single_polarity`),
+/// `samples` per point and the output `noise` σ of one sample (output
+/// units).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RigPlan {
+    /// True ECM radius with IA radial, polarity + (m).
+    pub r_plus_m: f64,
+    /// True ECM radius with IA radial, polarity − (m).
+    pub r_minus_m: f64,
+    /// Nominal radius used to turn `levels_g` into rates (m).
+    pub radius_m: f64,
+    /// IA tilt above the horizontal plane (arcsec).
+    pub tilt_arcsec: f64,
+    /// Latitude (deg, north positive).
+    pub latitude_deg: f64,
+    /// Local gravity g_L (m/s²).
+    pub gravity_m_s2: f64,
+    /// The table spins opposite to Earth's sense.
+    pub opposite_sense: bool,
+    /// Positions as `plane:phi_deg` (e.g. `ip:45`), in test order.
+    pub positions: Vec<String>,
+    /// Only polarity +1 at each position.
+    pub single_polarity: bool,
+    /// Nominal centripetal inputs (g) at `radius_m`; 0 = at rest.
+    pub levels_g: Vec<f64>,
+    /// Samples per point (≥ 1).
+    pub samples: usize,
+    /// Output noise σ of one sample (output units, ≥ 0).
+    pub noise: f64,
+}
+
+/// Largest radius or local gravity a rig may have (m, m/s²).
+const MAX_RIG_VALUE: f64 = 100.0;
+/// Largest IA tilt (arcsec, 10°).
+const MAX_TILT_ARCSEC: f64 = 36000.0;
+/// Largest nominal centripetal input (g).
+const MAX_LEVEL_G: f64 = 1000.0;
+
+impl RigPlan {
+    /// Refuse a rig or plan no centrifuge has: no samples, a negative noise,
+    /// a radius or gravity that is not positive or above 100, a tilt above
+    /// 10°, a latitude beyond ±90°, a level that is negative or above
+    /// 1000 g, a position that is not `plane:phi_deg`.
+    pub fn validate(&self) -> Result<()> {
+        if self.samples == 0 {
+            return bad("samples (at least 1 per point)", "0".into());
+        }
+        if !(self.noise.is_finite() && self.noise >= 0.0) {
+            return bad("noise (a non-negative number)", self.noise.to_string());
+        }
+        for (name, v) in [
+            ("r_plus_m", self.r_plus_m),
+            ("r_minus_m", self.r_minus_m),
+            ("radius_m", self.radius_m),
+            ("gravity_m_s2", self.gravity_m_s2),
+        ] {
+            if !(v.is_finite() && v > 0.0 && v <= MAX_RIG_VALUE) {
+                return bad(
+                    &format!("{name} (a positive number at most {MAX_RIG_VALUE})"),
+                    v.to_string(),
+                );
+            }
+        }
+        if !(self.tilt_arcsec.is_finite() && self.tilt_arcsec.abs() <= MAX_TILT_ARCSEC) {
+            return bad(
+                "tilt_arcsec (at most 36000, 10 deg, in magnitude)",
+                self.tilt_arcsec.to_string(),
+            );
+        }
+        if !(self.latitude_deg.is_finite() && self.latitude_deg.abs() <= 90.0) {
+            return bad(
+                "latitude_deg (within -90..90)",
+                self.latitude_deg.to_string(),
+            );
+        }
+        if let Some(l) = self
+            .levels_g
+            .iter()
+            .find(|l| !(l.is_finite() && (0.0..=MAX_LEVEL_G).contains(*l)))
+        {
+            return bad(
+                "levels_g (a non-negative level, at most 1000 g: beyond any centrifuge)",
+                l.to_string(),
+            );
+        }
+        self.fixture_positions()?;
+        Ok(())
+    }
+
+    /// The fixture positions of the plan: each `plane:phi_deg` in both
+    /// polarities (+1 then −1), or +1 only with `single_polarity`.
+    pub fn fixture_positions(&self) -> Result<Vec<Position>> {
+        let mut out = Vec::new();
+        for item in &self.positions {
+            let (p, d) = item.split_once(':').ok_or_else(|| Error::InvalidValue {
+                what: "positions (plane:phi_deg)".into(),
+                value: item.clone(),
+            })?;
+            let plane =
+                Plane::parse(p).map_err(|e| Error::Unsupported(format!("positions: {e}")))?;
+            let deg: f64 = d
+                .trim()
+                .parse()
+                .ok()
+                .filter(|x: &f64| x.is_finite())
+                .ok_or_else(|| Error::InvalidValue {
+                    what: "positions (an angle in deg after the plane)".into(),
+                    value: d.to_string(),
+                })?;
+            let pols: &[i8] = if self.single_polarity { &[1] } else { &[1, -1] };
+            for &polarity in pols {
+                out.push(Position {
+                    plane,
+                    phi_rad: deg.to_radians(),
+                    polarity,
+                });
+            }
+        }
+        Ok(out)
+    }
+
+    /// The simulated test of `truth` on this rig and plan, seeded with
+    /// `seed`, checked ([`RigPlan::validate`], [`CentrifugeSim::validate`]).
+    pub fn simulation(&self, truth: AccelerometerModel, seed: u64) -> Result<CentrifugeSim> {
+        self.validate()?;
+        let cfg = CentrifugeSim {
+            truth,
+            rig: Centrifuge {
+                r_plus_m: self.r_plus_m,
+                r_minus_m: self.r_minus_m,
+                latitude_rad: self.latitude_deg.to_radians(),
+                g_local_m_s2: self.gravity_m_s2,
+                opposite_sense: self.opposite_sense,
+                tilt_rad: arcsec_to_rad(self.tilt_arcsec),
+            },
+            positions: self.fixture_positions()?,
+            rates_rad_s: rates_for_levels(&self.levels_g, self.radius_m, self.gravity_m_s2),
+            samples: self.samples,
+            noise: self.noise,
+            seed,
+        };
+        cfg.validate()?;
+        Ok(cfg)
+    }
+}
+
+/// The standard plan of seed 001: IA radial (`ip,0`), PA radial (`ip,90`),
+/// OA radial (`io,90`) and the 45° cross positions `ip,45`, `io,45`,
+/// `po,45`, each in both polarities.
+pub fn standard_positions() -> Vec<Position> {
+    let list = [
+        (Plane::Ip, 0.0),
+        (Plane::Ip, 90.0),
+        (Plane::Io, 90.0),
+        (Plane::Ip, 45.0),
+        (Plane::Io, 45.0),
+        (Plane::Po, 45.0),
+    ];
+    let mut out = Vec::new();
+    for (plane, deg) in list {
+        for polarity in [1, -1] {
+            out.push(Position {
+                plane,
+                phi_rad: f64::to_radians(deg),
+                polarity,
+            });
+        }
+    }
+    out
+}
+
+/// Rates (rad/s) giving the nominal inputs `levels_g` (g) at radius `r_m`
+/// with local gravity `g_m_s2`: `ω = sqrt(level·g/R)` (the Earth-rate term
+/// is left to the procedure).
+pub fn rates_for_levels(levels_g: &[f64], r_m: f64, g_m_s2: f64) -> Vec<f64> {
+    levels_g
+        .iter()
+        .map(|l| (l.max(0.0) * g_m_s2 / r_m).sqrt())
+        .collect()
+}
+
+/// Simulate the observations (deterministic for a given seed).
+pub fn simulate(cfg: &CentrifugeSim) -> Vec<Observation> {
+    let mut r = rng(cfg.seed);
+    let mut out = Vec::with_capacity(cfg.positions.len() * cfg.rates_rad_s.len() * cfg.samples);
+    for pos in &cfg.positions {
+        for &w in &cfg.rates_rad_s {
+            let e0 = cfg.truth.output(&cfg.rig.specific_force(pos, w));
+            for _ in 0..cfg.samples.max(1) {
+                out.push(Observation {
+                    position: *pos,
+                    omega_rad_s: w,
+                    output: e0 + normal(&mut r, cfg.noise),
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The plan of a centrifuge test: the reduction itself run on noise-free
+/// outputs with a deterministic scatter of exactly `cfg.noise` (sample
+/// standard deviation) at every point, the output noise known to the fits.
+/// The u it reports are the predicted standard uncertainties of the plan
+/// (every fit's u scales with the noise; the static radius and tilt take
+/// the scatter of the samples, which is exactly σ here). Needs at least 2
+/// samples per point.
+pub fn plan(
+    cfg: &CentrifugeSim,
+    opts: &crate::procedures::centrifuge::CentrifugeOptions,
+) -> crate::error::Result<crate::procedures::centrifuge::CentrifugeResult> {
+    let n = cfg.samples;
+    if n < 2 || !(cfg.noise.is_finite() && cfg.noise > 0.0) {
+        return Err(crate::error::Error::InvalidValue {
+            what: "plan: samples per point (>= 2) and noise (> 0)".into(),
+            value: format!("{n}, {}", cfg.noise),
+        });
+    }
+    // z_i: zero mean, sample standard deviation exactly 1.
+    let c = (n as f64 - 1.0) / 2.0;
+    let ss: f64 = (0..n).map(|i| (i as f64 - c).powi(2)).sum();
+    let scale = ((n as f64 - 1.0) / ss).sqrt();
+    let mut quiet = cfg.clone();
+    quiet.noise = 0.0;
+    let mut obs = simulate(&quiet);
+    for (k, o) in obs.iter_mut().enumerate() {
+        o.output += cfg.noise * (k % n) as f64 * scale - cfg.noise * c * scale;
+    }
+    let mut o = opts.clone();
+    o.noise = crate::estimation::Noise::Known { sigma: cfg.noise };
+    crate::procedures::centrifuge::calibrate(&obs, &o)
+}
