@@ -8,7 +8,6 @@ use incal_io::{ColumnMap, ReadOptions};
 
 use crate::error::{CliError, CliResult};
 
-
 impl From<incal_io::InputError> for CliError {
     fn from(e: incal_io::InputError) -> Self {
         CliError::Input(e.to_string())
@@ -93,11 +92,6 @@ impl Table {
     /// File line of data row `row`.
     pub fn line(&self, row: usize) -> usize {
         self.inner.line(row)
-    }
-
-    /// Raw text of a cell.
-    pub fn text(&self, row: usize, col: usize) -> &str {
-        self.inner.text(row, col)
     }
 
     /// A finite number within ±1e15 from a cell, or an error naming file,

@@ -3,7 +3,6 @@
 //! the file: unreadable input is bad input (exit 2), an unwritable output is
 //! a failure (exit 1).
 
-
 use std::io::{Read, Write};
 use std::path::Path;
 
