@@ -97,7 +97,7 @@ fn unit_of(name: &str) -> String {
 /// (with the reduction's warnings about the plan).
 pub fn plan_document(o: &CentrifugePlanOptions) -> Result<PlanDocument> {
     o.validate()?;
-    let cfg = o.rig.simulation(o.truth.clone(), 0)?;
+    let cfg = o.rig.simulation(o.truth, 0)?;
     let t = &cfg.truth;
     let opts = CentrifugeOptions {
         k0_g: ValueU {
