@@ -278,7 +278,11 @@ mod tests {
         let v = serde_json::json!([[1, 0, 0], [0, 2, 0], [0, 0, 4]]);
         let m = json_m3(Some(&v), "$.A").unwrap();
         assert_eq!(m[(2, 2)], 4.0);
-        let e = json_m3(Some(&serde_json::json!([[1, 0, 0], [0, 2]])), "$.A").unwrap_err();
+        let e = json_m3(
+            Some(&serde_json::json!([[1, 0, 0], [0, 2], [0, 0, 1]])),
+            "$.A",
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("$.A[1]: expected 3 numbers"), "{e}");
         let e = json_v3(None, "$.b_g").unwrap_err();
         assert_eq!(e.to_string(), "$.b_g: missing");
