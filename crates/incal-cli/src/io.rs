@@ -6,28 +6,13 @@
 use std::io::{Read, Write};
 use std::path::Path;
 
-use crate::error::{CliError, CliResult};
+use incal_io::{display_name, is_dash};
 
-/// Display name of standard input in messages.
-const STDIN_NAME: &str = "<stdin>";
+use crate::error::{CliError, CliResult};
 
 /// The UTF-8 byte-order mark some editors (and spreadsheet exports) put at
 /// the start of a text file.
 const BOM: &[u8] = b"\xEF\xBB\xBF";
-
-/// True when `path` is `-`, the conventional name of stdin / stdout.
-pub fn is_dash(path: &Path) -> bool {
-    path.as_os_str() == "-"
-}
-
-/// Display name of `path` for messages (`<stdin>` for `-`).
-pub fn display_name(path: &Path) -> String {
-    if is_dash(path) {
-        STDIN_NAME.to_string()
-    } else {
-        path.display().to_string()
-    }
-}
 
 /// The display name and the bytes of the file `path`; `-` reads standard
 /// input (display name `<stdin>`). A UTF-8 byte-order mark at the start is
