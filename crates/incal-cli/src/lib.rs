@@ -33,6 +33,11 @@ struct Cli {
     command: Command,
 }
 
+/// The whole command tree (every subcommand and option), as clap sees it.
+pub(crate) fn command() -> clap::Command {
+    Cli::command()
+}
+
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Simulate virtual instruments on every rig, calibrate, and print estimate, truth and uncertainty.

@@ -239,5 +239,5 @@ fn plan_centrifuge_predicts_u_that_scale_with_samples() {
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("samples"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--samples"));
 }

@@ -458,7 +458,7 @@ fn simulate_motion_turning_gravity_and_oscillation() {
             "--oscillation-hz",
             "50",
         ],
-        &["oscillation_hz", "half of rate_hz"],
+        &["--oscillation-hz", "half of --rate-hz"],
     );
     refuses(
         &[
@@ -469,7 +469,7 @@ fn simulate_motion_turning_gravity_and_oscillation() {
             "--oscillation-amplitude-rad-s",
             "0.3",
         ],
-        &["oscillation_hz > 0"],
+        &["--oscillation-hz > 0"],
     );
     refuses(
         &[
@@ -482,7 +482,7 @@ fn simulate_motion_turning_gravity_and_oscillation() {
             "--omega0-rad-s",
             "1,0,0",
         ],
-        &["omega0_rad_s must lie along axis"],
+        &["--omega0-rad-s must lie along axis"],
     );
 }
 

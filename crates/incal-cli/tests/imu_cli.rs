@@ -108,7 +108,7 @@ fn ferraris_refuses_bad_sections() {
     let session = format!("{FIX}annotated_session.csv");
     refused(
         &run(&["imu", "ferraris", "--input", &session, "--rate-hz", "0"]),
-        &["rate_hz"],
+        &["--rate-hz"],
     );
     refused(
         &run(&[
@@ -121,7 +121,7 @@ fn ferraris_refuses_bad_sections() {
             "--gravity-m-s2",
             "0",
         ]),
-        &["gravity_m_s2"],
+        &["--gravity-m-s2"],
     );
 }
 

@@ -230,7 +230,7 @@ fn bad_input_is_one_line_and_exit_2() {
     );
     bad(
         &run(&["noise", "--input", &good, "--rate-hz", "0"]),
-        "rate_hz",
+        "--rate-hz",
     );
     bad(
         &run(&[
@@ -244,7 +244,7 @@ fn bad_input_is_one_line_and_exit_2() {
             "--unit",
             "furlong/s",
         ]),
-        "invalid unit",
+        "invalid --unit",
     );
     bad(
         &run(&[
@@ -256,7 +256,7 @@ fn bad_input_is_one_line_and_exit_2() {
             "--taus",
             "weekly",
         ]),
-        "taus",
+        "--taus",
     );
     bad(
         &run(&[
@@ -268,7 +268,7 @@ fn bad_input_is_one_line_and_exit_2() {
             "--confidence",
             "1.5",
         ]),
-        "confidence",
+        "--confidence",
     );
     bad(
         &run(&[
@@ -316,7 +316,7 @@ fn bad_input_is_one_line_and_exit_2() {
             "-o",
             "-",
         ]),
-        "arw_deg_rth",
+        "--arw-deg-rth",
     );
 }
 
@@ -418,7 +418,7 @@ fn accelerometer_records_round_trip() {
             "--output",
             q.to_str().unwrap(),
         ]),
-        "arw_deg_rth is not a term of quantity accel",
+        "--arw-deg-rth is not a term of quantity accel",
     );
     bad(
         &run(&[
@@ -435,7 +435,7 @@ fn accelerometer_records_round_trip() {
             "--output",
             q.to_str().unwrap(),
         ]),
-        "vrw_ug_rthz is not a term of quantity gyro",
+        "--vrw-ug-rthz is not a term of quantity gyro",
     );
 }
 

@@ -44,6 +44,36 @@ impl Alias {
     }
 }
 
+/// The aliases of a refusal: the terms no position sees grouped in one
+/// clause (`b+, s+ (each regressor is zero at every position)`), then each
+/// dependent combination; so the line stays short however many terms fail.
+fn unseparable(aliases: &[Alias]) -> String {
+    let zero: Vec<&str> = aliases
+        .iter()
+        .filter(|a| a.terms.len() == 1)
+        .map(|a| a.terms[0].as_str())
+        .collect();
+    let mut parts = Vec::new();
+    match zero.len() {
+        0 => {}
+        1 => parts.push(format!(
+            "{} (its regressor is zero at every position)",
+            zero[0]
+        )),
+        _ => parts.push(format!(
+            "{} (each regressor is zero at every position)",
+            zero.join(", ")
+        )),
+    }
+    parts.extend(
+        aliases
+            .iter()
+            .filter(|a| a.terms.len() > 1)
+            .map(|a| a.to_string()),
+    );
+    parts.join("; ")
+}
+
 /// The combination with why it cannot be observed (for refusals).
 impl std::fmt::Display for Alias {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -62,7 +92,7 @@ impl std::fmt::Display for Alias {
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum Error {
     /// The plan cannot separate some terms: the design matrix is rank deficient.
-    #[error("plan cannot separate {}", aliases.iter().map(|a| a.to_string()).collect::<Vec<_>>().join("; "))]
+    #[error("plan cannot separate {}", unseparable(.aliases))]
     Unseparable {
         /// Every independent unobservable combination.
         aliases: Vec<Alias>,
@@ -88,7 +118,7 @@ pub enum Error {
         got: usize,
     },
     /// A value is not finite or out of its domain.
-    #[error("invalid {what}: {value}")]
+    #[error("invalid {what}: {}", short_number(.value))]
     InvalidValue {
         /// Which quantity.
         what: String,
@@ -117,6 +147,15 @@ pub enum Error {
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
+    /// `Err(InvalidValue)` for `what` (a snake_case option key first, then
+    /// what it must be, e.g. `"samples (at least 1)"`) and its value.
+    pub fn invalid<T>(what: impl Into<String>, value: impl std::fmt::Display) -> Result<T> {
+        Err(Error::InvalidValue {
+            what: what.into(),
+            value: value.to_string(),
+        })
+    }
+
     /// This error as found in the data of `file` (an input-layer error
     /// already names its file and is left as it is).
     pub fn in_file(self, file: &str) -> Error {
@@ -127,6 +166,15 @@ impl Error {
                 source: Box::new(other),
             },
         }
+    }
+}
+
+/// A value echoed in a message: a long number (`1e300` prints 301 digits)
+/// in scientific notation, anything else as it is.
+pub fn short_number(value: &str) -> String {
+    match value.parse::<f64>() {
+        Ok(x) if value.len() > 24 => format!("{x:.6e}"),
+        _ => value.to_string(),
     }
 }
 
