@@ -259,6 +259,10 @@ fn plan_predicts_each_angle() {
         "dtheta_z2",
         "gamma",
     ] {
-        assert!(u[n]["u"].as_f64().unwrap() > 0.0, "{n}");
+        assert!(u[n].as_f64().unwrap() > 0.0, "{n}");
+        assert_eq!(v["units"][n], "rad", "{n}");
     }
+    assert_eq!(v["schema"], "incal.plan/1");
+    assert_eq!(v["procedure"], "misalign-gyro");
+    assert_eq!(v["observations"], 30);
 }

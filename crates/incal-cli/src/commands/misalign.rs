@@ -5,23 +5,23 @@
 use std::path::PathBuf;
 
 use clap::{Subcommand, ValueEnum};
-use incal::procedures::misalign::accel::{self, AccelObservation, AccelOptions};
-use incal::procedures::misalign::averaging::{
-    average_record, RawSample, Record, RecordMean, TurnPolicy,
-};
-use incal::procedures::misalign::gyro::{self, GyroConfig, GyroObservation, GyroOptions};
-use incal::procedures::misalign::plan::{predict_accel, predict_gyro, Prediction};
-use incal::rigs::rate_table::{FaceMounting, GyroMounting};
-use incal::sim::misalign::{
+use incal::estimation::Noise;
+use incal::procedures::misalign::accel::AccelOptions;
+use incal::procedures::misalign::averaging::TurnPolicy;
+use incal::procedures::misalign::gyro::{GyroConfig, GyroOptions};
+use incal::procedures::misalign::input;
+use incal::procedures::misalign::plan::{MisalignPlan, PlanInstrument};
+use incal::procedures::misalign::sim::{
     simulate_accel, simulate_gyro, simulate_gyro_records, AccelSim, GyroSim,
 };
-use incal::units::{arcsec_to_rad, rad_to_arcsec, rad_to_deg};
-use serde_json::{json, Map, Value};
+use incal::procedures::misalign::{GyroRun, MisalignAccel, MisalignGyro};
+use incal::procedures::Silent;
+use incal::rigs::rate_table::{FaceMounting, GyroMounting};
+use incal::units::arcsec_to_rad;
 
-use crate::error::{core, in_file, usage, CliError, CliResult};
-use crate::input::Table;
-use crate::options::noise_option;
-use crate::output::{json_text, sig, table, write_text, ResultArgs};
+use crate::error::{core, usage, CliResult};
+use crate::input::ReadArgs;
+use crate::output::{PlanOut, ResultArgs};
 
 /// `incal misalign …`.
 #[derive(Subcommand, Debug)]
@@ -50,6 +50,15 @@ pub enum TurnsArg {
     All,
 }
 
+impl From<TurnsArg> for TurnPolicy {
+    fn from(t: TurnsArg) -> TurnPolicy {
+        match t {
+            TurnsArg::Whole => TurnPolicy::Whole,
+            TurnsArg::All => TurnPolicy::All,
+        }
+    }
+}
+
 /// Options of `incal misalign gyro`.
 #[derive(clap::Args, Debug)]
 pub struct GyroArgs {
@@ -69,6 +78,8 @@ pub struct GyroArgs {
     #[arg(long = "average", alias = "turns", value_enum, default_value = "whole")]
     pub turns: TurnsArg,
     #[command(flatten)]
+    pub read: ReadArgs,
+    #[command(flatten)]
     pub result: ResultArgs,
 }
 
@@ -85,168 +96,33 @@ pub struct AccelArgs {
     #[arg(long)]
     pub noise: Option<f64>,
     #[command(flatten)]
+    pub read: ReadArgs,
+    #[command(flatten)]
     pub result: ResultArgs,
-}
-
-fn scale_of(k: f64) -> CliResult<f64> {
-    if k.is_finite() && k != 0.0 {
-        Ok(k)
-    } else {
-        Err(usage(format!(
-            "--scale-factor must be a finite non-zero number, got {k}"
-        )))
-    }
-}
-
-/// Raw records read from a table, with the first file line of each.
-fn read_records(t: &Table) -> CliResult<Vec<(usize, Record)>> {
-    let (ca, cb, cr) = (
-        t.column("alpha_deg")?,
-        t.column("beta_deg")?,
-        t.column("rate")?,
-    );
-    let (ct, cg, co) = (
-        t.column("time_s")?,
-        t.column("table_angle_deg")?,
-        t.column("output")?,
-    );
-    let mut out: Vec<(usize, Record)> = Vec::new();
-    let mut last: Option<(f64, f64, f64)> = None;
-    for row in 0..t.row_count() {
-        let key = (t.f64(row, ca)?, t.f64(row, cb)?, t.f64(row, cr)?);
-        if key.2 == 0.0 {
-            return Err(t.error_at(row, "column 'rate': the table rate must not be 0".into()));
-        }
-        let s = RawSample {
-            time_s: t.f64(row, ct)?,
-            table_angle_rad: t.f64(row, cg)?.to_radians(),
-            output: t.f64(row, co)?,
-        };
-        // A new record starts when the configuration or rate changes, or
-        // when the time goes back (records of one configuration written one
-        // after another, each from its own t = 0). Within a record the time
-        // must increase: a repeated time is refused at its own line.
-        let prev_time = out
-            .last()
-            .and_then(|(_, r)| r.samples.last())
-            .map(|p| p.time_s);
-        let restart = matches!(prev_time, Some(p) if s.time_s < p);
-        if last == Some(key) && prev_time == Some(s.time_s) {
-            return Err(t.error_at(
-                row,
-                format!("column 'time_s': {} repeats the previous sample's time (time must increase within a record)", s.time_s),
-            ));
-        }
-        if last != Some(key) || restart {
-            out.push((
-                t.line(row),
-                Record {
-                    config: GyroConfig::deg(key.0, key.1),
-                    rate_deg_s: key.2,
-                    samples: Vec::new(),
-                },
-            ));
-            last = Some(key);
-        }
-        if let Some((_, r)) = out.last_mut() {
-            r.samples.push(s);
-        }
-    }
-    Ok(out)
-}
-
-/// Raw records' reductions with their first file line.
-type RecordRows = Vec<(usize, RecordMean)>;
-
-fn read_gyro(a: &GyroArgs) -> CliResult<(Table, Vec<GyroObservation>, RecordRows)> {
-    let t = Table::read(&a.input)?;
-    let file = t.path.clone();
-    if t.opt_column("table_angle_deg").is_some() || t.opt_column("time_s").is_some() {
-        let policy = match a.turns {
-            TurnsArg::Whole => TurnPolicy::Whole,
-            TurnsArg::All => TurnPolicy::All,
-        };
-        let mut rows = Vec::new();
-        for (line, r) in read_records(&t)? {
-            let mean = average_record(&r, policy)
-                .map_err(|e| CliError::Input(format!("{file}:{line}: {e}")))?;
-            rows.push((line, mean));
-        }
-        let obs = rows.iter().map(|r| r.1.observation).collect();
-        return Ok((t, obs, rows));
-    }
-    let (ca, cb, cr, co) = (
-        t.column("alpha_deg")?,
-        t.column("beta_deg")?,
-        t.column("rate")?,
-        t.column("output")?,
-    );
-    let mut obs = Vec::with_capacity(t.row_count());
-    for row in 0..t.row_count() {
-        let rate = t.f64(row, cr)?;
-        if rate == 0.0 {
-            return Err(t.error_at(row, "column 'rate': the table rate must not be 0".into()));
-        }
-        obs.push(GyroObservation {
-            alpha_rad: t.f64(row, ca)?.to_radians(),
-            beta_rad: t.f64(row, cb)?.to_radians(),
-            rate_deg_s: rate,
-            output: t.f64(row, co)?,
-        });
-    }
-    Ok((t, obs, Vec::new()))
 }
 
 /// `incal misalign gyro|accel`.
 pub fn run(c: &Command) -> CliResult<()> {
     match c {
-        Command::Gyro(a) => run_gyro(a),
-        Command::Accel(a) => run_accel(a),
+        Command::Gyro(a) => {
+            let options = GyroRun {
+                fit: GyroOptions {
+                    scale_factor: a.scale_factor,
+                    per_config_bias: a.per_config_bias,
+                    noise: Noise::from_option(a.noise).map_err(core)?,
+                },
+                average: a.turns.into(),
+            };
+            crate::run::reduce::<MisalignGyro>(&a.input, &a.read, &options, &a.result, &Silent)
+        }
+        Command::Accel(a) => {
+            let options = AccelOptions {
+                scale_factor: a.scale_factor,
+                noise: Noise::from_option(a.noise).map_err(core)?,
+            };
+            crate::run::reduce::<MisalignAccel>(&a.input, &a.read, &options, &a.result, &Silent)
+        }
     }
-}
-
-fn run_gyro(a: &GyroArgs) -> CliResult<()> {
-    let opts = GyroOptions {
-        scale_factor: scale_of(a.scale_factor)?,
-        per_config_bias: a.per_config_bias,
-        noise: noise_option(a.noise)?,
-    };
-    let (table, obs, records) = read_gyro(a)?;
-    let r = gyro::calibrate(&obs, &opts).map_err(|e| in_file(&table.path, e))?;
-    let mut doc = r
-        .document(&opts, &records)
-        .map_err(|e| in_file(&table.path, e))?;
-    doc.inputs.push(table.input_file("input"));
-    doc.options.insert("noise".into(), json!(a.noise));
-    if !records.is_empty() {
-        let turns = match a.turns {
-            TurnsArg::Whole => "whole",
-            TurnsArg::All => "all",
-        };
-        doc.options.insert("average".into(), json!(turns));
-    }
-    a.result.emit(doc)
-}
-
-fn run_accel(a: &AccelArgs) -> CliResult<()> {
-    let opts = AccelOptions {
-        scale_factor: scale_of(a.scale_factor)?,
-        noise: noise_option(a.noise)?,
-    };
-    let t = Table::read(&a.input)?;
-    let (cb, co) = (t.column("beta_deg")?, t.column("output")?);
-    let mut obs = Vec::with_capacity(t.row_count());
-    for row in 0..t.row_count() {
-        obs.push(AccelObservation {
-            beta_rad: t.f64(row, cb)?.to_radians(),
-            output: t.f64(row, co)?,
-        });
-    }
-    let r = accel::calibrate(&obs, &opts).map_err(|e| in_file(&t.path, e))?;
-    let mut doc = r.document(&opts).map_err(|e| in_file(&t.path, e))?;
-    doc.inputs.push(t.input_file("input"));
-    doc.options.insert("noise".into(), json!(a.noise));
-    a.result.emit(doc)
 }
 
 /// Parse `A:B` (deg) configuration pairs.
@@ -267,14 +143,6 @@ fn parse_configs(list: &[String]) -> CliResult<Vec<GyroConfig>> {
             Ok(GyroConfig::deg(a, b))
         })
         .collect()
-}
-
-fn finite_list(name: &str, v: &[f64]) -> CliResult<()> {
-    match v.iter().find(|x| !x.is_finite()) {
-        Some(x) => Err(usage(format!("{name}: {x} is not a finite number"))),
-        None if v.is_empty() => Err(usage(format!("{name}: empty list"))),
-        None => Ok(()),
-    }
 }
 
 const PAPER_CONFIGS: &str = "0:0,0:180,180:180,90:180,0:90";
@@ -320,87 +188,29 @@ pub struct PlanArgs {
     /// Standard deviation of one reading (output units).
     #[arg(long)]
     pub noise: f64,
-    /// Print one JSON object.
-    #[arg(long)]
-    pub json: bool,
-    /// Write to this file instead of standard output.
-    #[arg(long, short = 'o', value_name = "FILE")]
-    pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub out: PlanOut,
 }
 
 /// `incal plan misalign`.
 pub fn plan(a: &PlanArgs) -> CliResult<()> {
-    let k = scale_of(a.scale_factor)?;
-    if a.readings == 0 {
-        return Err(usage("--samples must be at least 1"));
-    }
-    let p: Prediction = match a.instrument {
-        Instrument::Gyro => {
-            finite_list("--rates-deg-s", &a.rates_deg_s)?;
-            let configs = parse_configs(&a.configs)?;
-            predict_gyro(
-                &configs,
-                &a.rates_deg_s,
-                a.readings,
-                k,
-                a.noise,
-                a.per_config_bias,
-            )
-            .map_err(core)?
-        }
-        Instrument::Accel => {
-            finite_list("--betas-deg", &a.betas_deg)?;
-            let b: Vec<f64> = a.betas_deg.iter().map(|x| x.to_radians()).collect();
-            predict_accel(&b, a.readings, k, a.noise).map_err(core)?
-        }
-    };
-    if a.json {
-        let mut u = Map::new();
-        for (j, n) in p.angles.names().iter().enumerate() {
-            u.insert(n.clone(), json!({"u": p.angles.u_at(j), "unit": "rad"}));
-        }
-        u.insert(
-            "gamma".into(),
-            json!({"u": p.u_gamma_max, "unit": "rad", "note": "worst direction"}),
-        );
-        let doc = json!({
-            "instrument": match a.instrument { Instrument::Gyro => "gyro", Instrument::Accel => "accel" },
-            "observations": p.n_obs,
-            "parameters": p.n_params,
-            "predicted_u": Value::Object(u),
-        });
-        return write_text(a.output.as_deref(), &json_text(&doc));
-    }
-    let mut s = format!(
-        "Misalignment plan ({}): {} samples, {} terms, noise {} per sample, kI = {k}\n",
-        match a.instrument {
-            Instrument::Gyro => "gyro on a rate table",
-            Instrument::Accel => "accelerometer on a vertical face",
+    let plan = MisalignPlan {
+        instrument: match a.instrument {
+            Instrument::Gyro => PlanInstrument::Gyro,
+            Instrument::Accel => PlanInstrument::Accel,
         },
-        p.n_obs,
-        p.n_params,
-        sig(a.noise, 3)
-    );
-    let mut rows: Vec<Vec<String>> = p
-        .angles
-        .names()
-        .iter()
-        .enumerate()
-        .map(|(j, n)| {
-            vec![
-                n.clone(),
-                format!("{:.3}", rad_to_arcsec(p.angles.u_at(j))),
-                "arcsec".into(),
-            ]
-        })
-        .collect();
-    rows.push(vec![
-        "gamma (worst direction)".into(),
-        format!("{:.3}", rad_to_arcsec(p.u_gamma_max)),
-        "arcsec".into(),
-    ]);
-    s.push_str(&table(&["angle", "predicted u", "unit"], &rows));
-    write_text(a.output.as_deref(), &s)
+        configs: match a.instrument {
+            Instrument::Gyro => parse_configs(&a.configs)?,
+            Instrument::Accel => Vec::new(),
+        },
+        rates_deg_s: a.rates_deg_s.clone(),
+        per_config_bias: a.per_config_bias,
+        betas_deg: a.betas_deg.clone(),
+        samples: a.readings,
+        scale_factor: a.scale_factor,
+        noise: a.noise,
+    };
+    a.out.emit(&plan.document().map_err(core)?)
 }
 
 /// Options of `incal simulate misalign gyro`.
@@ -465,65 +275,8 @@ pub struct SimGyroArgs {
     pub output: Option<PathBuf>,
 }
 
-fn nonneg(name: &str, x: f64) -> CliResult<()> {
-    if x.is_finite() && x >= 0.0 {
-        Ok(())
-    } else {
-        Err(usage(format!(
-            "{name} must be a non-negative number, got {x}"
-        )))
-    }
-}
-
 fn gyro_sim_of(a: &SimGyroArgs) -> CliResult<GyroSim> {
-    nonneg("--noise", a.noise)?;
-    nonneg("--bias-shift", a.bias_shift)?;
-    finite_list("--rates-deg-s", &a.rates_deg_s)?;
-    if a.rates_deg_s.iter().any(|r| *r <= 0.0) {
-        return Err(usage("--rates-deg-s: rate magnitudes must be positive"));
-    }
-    if !(a.turns.is_finite() && a.turns > 0.0) {
-        return Err(usage("--turns must be positive"));
-    }
-    if a.records == 0 || a.samples_per_turn < 2 {
-        return Err(usage(
-            "--records must be at least 1 and --samples-per-turn at least 2",
-        ));
-    }
-    if a.turns > 1000.0 {
-        return Err(usage(format!(
-            "--turns must be at most 1000, got {}",
-            crate::output::num(a.turns)
-        )));
-    }
-    let configs = parse_configs(&a.configs)?;
-    let rows_per_record = if a.time_series {
-        (a.turns * a.samples_per_turn as f64).ceil()
-    } else {
-        1.0
-    };
-    crate::options::sim_size(&[
-        ("configurations", configs.len() as f64),
-        ("rates x 2 signs", 2.0 * a.rates_deg_s.len() as f64),
-        ("--records", a.records as f64),
-        ("samples per record", rows_per_record),
-    ])?;
-    for (n, v) in [
-        ("--scale-factor", a.scale_factor),
-        ("--bias", a.bias),
-        ("--latitude-deg", a.latitude_deg),
-        ("--dtheta-x0-arcsec", a.dtheta_x0_arcsec),
-        ("--dtheta-y0-arcsec", a.dtheta_y0_arcsec),
-        ("--dtheta-y1-arcsec", a.dtheta_y1_arcsec),
-        ("--dtheta-z1-arcsec", a.dtheta_z1_arcsec),
-        ("--dtheta-y2-arcsec", a.dtheta_y2_arcsec),
-        ("--dtheta-z2-arcsec", a.dtheta_z2_arcsec),
-    ] {
-        if !v.is_finite() {
-            return Err(usage(format!("{n} must be finite")));
-        }
-    }
-    Ok(GyroSim {
+    let cfg = GyroSim {
         mounting: GyroMounting {
             dtheta_x0: arcsec_to_rad(a.dtheta_x0_arcsec),
             dtheta_y0: arcsec_to_rad(a.dtheta_y0_arcsec),
@@ -535,7 +288,7 @@ fn gyro_sim_of(a: &SimGyroArgs) -> CliResult<GyroSim> {
         scale_factor: a.scale_factor,
         bias: a.bias,
         bias_shift: a.bias_shift,
-        configs,
+        configs: parse_configs(&a.configs)?,
         rates_deg_s: a.rates_deg_s.clone(),
         records: a.records,
         turns: a.turns,
@@ -543,12 +296,9 @@ fn gyro_sim_of(a: &SimGyroArgs) -> CliResult<GyroSim> {
         noise: a.noise,
         latitude_rad: a.latitude_deg.to_radians(),
         seed: a.seed,
-    })
-}
-
-/// Degrees printed to 1e-9 deg (round-trip exact for plan angles).
-fn deg9(rad: f64) -> f64 {
-    (rad_to_deg(rad) * 1e9).round() / 1e9
+    };
+    cfg.validate().map_err(core)?;
+    Ok(cfg)
 }
 
 /// `incal simulate misalign gyro|accel`.
@@ -556,47 +306,25 @@ pub fn simulate(c: &SimCommand) -> CliResult<()> {
     match c {
         SimCommand::Gyro(a) => {
             let cfg = gyro_sim_of(a)?;
-            let mut text = String::new();
             if a.time_series {
-                text.push_str("alpha_deg,beta_deg,rate,time_s,table_angle_deg,output\n");
-                for r in simulate_gyro_records(&cfg) {
-                    for s in &r.samples {
-                        text.push_str(&format!(
-                            "{},{},{},{},{},{}\n",
-                            deg9(r.config.alpha_rad),
-                            deg9(r.config.beta_rad),
-                            r.rate_deg_s,
-                            s.time_s,
-                            deg9(s.table_angle_rad),
-                            crate::options::finite_output(s.output)?
-                        ));
-                    }
-                }
+                let records = simulate_gyro_records(&cfg);
+                crate::io::write_stream(a.output.as_deref(), |out| {
+                    input::write_gyro_records(&records, out).map(|_| ())
+                })
             } else {
-                text.push_str("alpha_deg,beta_deg,rate,output\n");
-                for o in simulate_gyro(&cfg).map_err(core)? {
-                    text.push_str(&format!(
-                        "{},{},{},{}\n",
-                        deg9(o.alpha_rad),
-                        deg9(o.beta_rad),
-                        o.rate_deg_s,
-                        crate::options::finite_output(o.output)?
-                    ));
-                }
+                let obs = simulate_gyro(&cfg).map_err(core)?;
+                crate::io::write_stream(a.output.as_deref(), |out| {
+                    input::write_gyro_means(&obs, out).map(|_| ())
+                })
             }
-            write_text(a.output.as_deref(), &text)
         }
         SimCommand::Accel(a) => {
-            let cfg = accel_sim_of(a)?;
-            let mut text = String::from("beta_deg,output\n");
-            for o in simulate_accel(&cfg) {
-                text.push_str(&format!(
-                    "{},{}\n",
-                    deg9(o.beta_rad),
-                    crate::options::finite_output(o.output)?
-                ));
-            }
-            write_text(a.output.as_deref(), &text)
+            let cfg = accel_sim_of(a);
+            cfg.validate().map_err(core)?;
+            let obs = simulate_accel(&cfg);
+            crate::io::write_stream(a.output.as_deref(), |out| {
+                input::write_accel(&obs, out).map(|_| ())
+            })
         }
     }
 }
@@ -641,31 +369,8 @@ pub struct SimAccelArgs {
     pub output: Option<PathBuf>,
 }
 
-fn accel_sim_of(a: &SimAccelArgs) -> CliResult<AccelSim> {
-    nonneg("--noise", a.noise)?;
-    finite_list("--betas-deg", &a.betas_deg)?;
-    for b in &a.betas_deg {
-        crate::options::angle_deg("--betas-deg", *b)?;
-    }
-    if a.samples == 0 {
-        return Err(usage("--samples must be at least 1"));
-    }
-    crate::options::sim_size(&[
-        ("angles", a.betas_deg.len() as f64),
-        ("--samples", a.samples as f64),
-    ])?;
-    for (n, v) in [
-        ("--scale-factor", a.scale_factor),
-        ("--bias", a.bias),
-        ("--dtheta-y0-arcsec", a.dtheta_y0_arcsec),
-        ("--dtheta-y2-arcsec", a.dtheta_y2_arcsec),
-        ("--dtheta-z2-arcsec", a.dtheta_z2_arcsec),
-    ] {
-        if !v.is_finite() {
-            return Err(usage(format!("{n} must be finite")));
-        }
-    }
-    Ok(AccelSim {
+fn accel_sim_of(a: &SimAccelArgs) -> AccelSim {
+    AccelSim {
         mounting: FaceMounting {
             dtheta_y0: arcsec_to_rad(a.dtheta_y0_arcsec),
             dtheta_y1: 0.0,
@@ -678,5 +383,5 @@ fn accel_sim_of(a: &SimAccelArgs) -> CliResult<AccelSim> {
         samples: a.samples,
         noise: a.noise,
         seed: a.seed,
-    })
+    }
 }

@@ -14,11 +14,12 @@ pub mod gyro {
     };
     pub use crate::procedures::gyro::rate::sim::{simulate_rate, GyroRateSim};
 }
-pub mod misalign;
 /// The gyro-free unit simulator (lives with its procedure).
 pub use crate::procedures::gfimu::sim as gfimu;
 /// The IMU triad simulator (lives with its procedures).
 pub use crate::procedures::imu::sim as imu;
+/// The misalignment simulators (live with their procedures).
+pub use crate::procedures::misalign::sim as misalign;
 /// The noise simulator (lives with its procedure).
 pub use crate::procedures::noise::sim as noise;
 /// The tumble simulator (lives with its procedure).

@@ -24,7 +24,9 @@
 pub mod accel;
 pub mod averaging;
 pub mod gyro;
+pub mod input;
 pub mod plan;
+pub mod sim;
 
 use nalgebra::{DMatrix, DVector};
 
@@ -133,6 +135,121 @@ pub fn large_angle_warning(angles: &crate::estimation::Estimates) -> Option<crat
             ),
         )
     })
+}
+
+/// Refuse a scale factor kI that is zero or not finite.
+fn check_scale_factor(k: f64) -> Result<()> {
+    if k.is_finite() && k != 0.0 {
+        Ok(())
+    } else {
+        crate::Error::invalid("scale_factor (a finite non-zero number)", k)
+    }
+}
+
+/// `incal misalign gyro`: a gyro on a rate table ([`gyro`]), from record
+/// means or raw records ([`input`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct MisalignGyro;
+
+/// Options of [`MisalignGyro`]: the fit and how raw records are averaged.
+/// In the document: `{"average": "whole", "noise": null,
+/// "per_config_bias": false, "scale_factor": -2.9222,
+/// "scale_factor_unit": "output/(deg/s)"}`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GyroRun {
+    /// Scale factor, bias layout and noise policy.
+    pub fit: gyro::GyroOptions,
+    /// Which samples of a raw record are averaged (unused for record means).
+    pub average: averaging::TurnPolicy,
+}
+
+impl serde::Serialize for GyroRun {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(5))?;
+        m.serialize_entry(
+            "average",
+            match self.average {
+                averaging::TurnPolicy::Whole => "whole",
+                averaging::TurnPolicy::All => "all",
+            },
+        )?;
+        m.serialize_entry("noise", &self.fit.noise.sigma())?;
+        m.serialize_entry("per_config_bias", &self.fit.per_config_bias)?;
+        m.serialize_entry("scale_factor", &self.fit.scale_factor)?;
+        m.serialize_entry(
+            "scale_factor_unit",
+            crate::units::Unit::OutputPerDegS.as_str(),
+        )?;
+        m.end()
+    }
+}
+
+impl super::Procedure for MisalignGyro {
+    const ID: crate::document::Procedure = crate::document::Procedure::MisalignGyro;
+    type Options = GyroRun;
+    type Input = input::GyroInput;
+
+    fn validate(o: &GyroRun) -> Result<()> {
+        check_scale_factor(o.fit.scale_factor)?;
+        o.fit.noise.validate()
+    }
+
+    fn read<R: std::io::Read>(
+        rows: &mut incal_io::Reader<R>,
+        o: &GyroRun,
+    ) -> Result<input::GyroInput> {
+        input::read_gyro(rows, o.average)
+    }
+
+    fn reduce(
+        i: &input::GyroInput,
+        o: &GyroRun,
+        _: &dyn super::Progress,
+    ) -> Result<crate::document::ResultDocument> {
+        gyro::calibrate(&i.observations, &o.fit)?.document(&o.fit, &i.records)
+    }
+}
+
+/// `incal misalign accel`: an accelerometer on a vertical face ([`accel`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct MisalignAccel;
+
+impl serde::Serialize for accel::AccelOptions {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(3))?;
+        m.serialize_entry("noise", &self.noise.sigma())?;
+        m.serialize_entry("scale_factor", &self.scale_factor)?;
+        m.serialize_entry("scale_factor_unit", crate::units::Unit::OutputPerG.as_str())?;
+        m.end()
+    }
+}
+
+impl super::Procedure for MisalignAccel {
+    const ID: crate::document::Procedure = crate::document::Procedure::MisalignAccel;
+    type Options = accel::AccelOptions;
+    type Input = Vec<accel::AccelObservation>;
+
+    fn validate(o: &accel::AccelOptions) -> Result<()> {
+        check_scale_factor(o.scale_factor)?;
+        o.noise.validate()
+    }
+
+    fn read<R: std::io::Read>(
+        rows: &mut incal_io::Reader<R>,
+        _: &accel::AccelOptions,
+    ) -> Result<Vec<accel::AccelObservation>> {
+        input::read_accel(rows)
+    }
+
+    fn reduce(
+        obs: &Vec<accel::AccelObservation>,
+        o: &accel::AccelOptions,
+        _: &dyn super::Progress,
+    ) -> Result<crate::document::ResultDocument> {
+        accel::calibrate(obs, o)?.document(o)
+    }
 }
 
 /// Grouping key of an angle: micro-degrees in [0, 360°).

@@ -134,3 +134,152 @@ pub fn predict_accel(
     let d = accel::design(&all, scale_factor)?;
     predict_design(&d, noise, &ACCEL_ANGLES)
 }
+
+/// Which instrument a misalignment plan is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlanInstrument {
+    /// Gyro on a rate table ([`predict_gyro`]).
+    Gyro,
+    /// Accelerometer on a vertical face ([`predict_accel`]).
+    Accel,
+}
+
+impl PlanInstrument {
+    /// Name in documents: `gyro` or `accel`.
+    pub fn name(self) -> &'static str {
+        match self {
+            PlanInstrument::Gyro => "gyro",
+            PlanInstrument::Accel => "accel",
+        }
+    }
+}
+
+/// Options of a misalignment plan. In the document's `options`: the
+/// instrument, `samples`, `scale_factor`, `noise`, and the instrument's
+/// own keys (`configs` as `ALPHA:BETA` in deg, `rates_deg_s`,
+/// `per_config_bias`; or `betas_deg`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MisalignPlan {
+    /// Gyro or accelerometer.
+    pub instrument: PlanInstrument,
+    /// Gyro: configurations, in test order.
+    pub configs: Vec<GyroConfig>,
+    /// Gyro: table rate magnitudes (deg/s), each run forward and reverse.
+    pub rates_deg_s: Vec<f64>,
+    /// Gyro: one bias per configuration.
+    pub per_config_bias: bool,
+    /// Accelerometer: angles β (deg).
+    pub betas_deg: Vec<f64>,
+    /// Samples (record means or single readings) per position, ≥ 1.
+    pub samples: usize,
+    /// Scale factor kI (gyro: output per deg/s; accelerometer: output per g).
+    pub scale_factor: f64,
+    /// Standard deviation of one sample (output units), > 0.
+    pub noise: f64,
+}
+
+impl serde::Serialize for MisalignPlan {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(None)?;
+        m.serialize_entry("instrument", self.instrument.name())?;
+        match self.instrument {
+            PlanInstrument::Gyro => {
+                let configs: Vec<String> = self
+                    .configs
+                    .iter()
+                    .map(|c| format!("{}:{}", c.alpha_rad.to_degrees(), c.beta_rad.to_degrees()))
+                    .collect();
+                m.serialize_entry("configs", &configs)?;
+                m.serialize_entry("rates_deg_s", &self.rates_deg_s)?;
+                m.serialize_entry("per_config_bias", &self.per_config_bias)?;
+            }
+            PlanInstrument::Accel => m.serialize_entry("betas_deg", &self.betas_deg)?,
+        }
+        m.serialize_entry("samples", &self.samples)?;
+        m.serialize_entry("scale_factor", &self.scale_factor)?;
+        m.serialize_entry("noise", &self.noise)?;
+        m.end()
+    }
+}
+
+impl MisalignPlan {
+    /// Refuse options that make no plan: no sample, a scale factor that
+    /// is zero or not finite, an angle that is not finite (the design
+    /// refuses what cannot separate an angle, naming it).
+    pub fn validate(&self) -> Result<()> {
+        if self.samples == 0 {
+            return Error::invalid("samples (at least 1 per position)", 0);
+        }
+        if !(self.scale_factor.is_finite() && self.scale_factor != 0.0) {
+            return Error::invalid("scale_factor (a finite non-zero number)", self.scale_factor);
+        }
+        match self.instrument {
+            PlanInstrument::Gyro => {
+                if self.rates_deg_s.is_empty() {
+                    return Error::invalid("rates_deg_s (at least one rate)", "none");
+                }
+                for c in &self.configs {
+                    if !(c.alpha_rad.is_finite() && c.beta_rad.is_finite()) {
+                        return Error::invalid("configs (finite angles)", "not finite");
+                    }
+                }
+            }
+            PlanInstrument::Accel => {
+                if self.betas_deg.is_empty() {
+                    return Error::invalid("betas_deg (at least one angle)", "none");
+                }
+                if let Some(b) = self.betas_deg.iter().find(|b| !b.is_finite()) {
+                    return Error::invalid("betas_deg (finite angles)", b);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The plan document: observations and terms, the predicted u of every
+    /// separable angle (rad) and the worst-direction u of γ.
+    pub fn document(&self) -> Result<crate::document::plan::PlanDocument> {
+        use serde_json::json;
+        self.validate()?;
+        let (procedure, what, p) = match self.instrument {
+            PlanInstrument::Gyro => (
+                crate::document::Procedure::MisalignGyro,
+                "gyro on a rate table",
+                predict_gyro(
+                    &self.configs,
+                    &self.rates_deg_s,
+                    self.samples,
+                    self.scale_factor,
+                    self.noise,
+                    self.per_config_bias,
+                )?,
+            ),
+            PlanInstrument::Accel => {
+                let b: Vec<f64> = self.betas_deg.iter().map(|x| x.to_radians()).collect();
+                (
+                    crate::document::Procedure::MisalignAccel,
+                    "accelerometer on a vertical face",
+                    predict_accel(&b, self.samples, self.scale_factor, self.noise)?,
+                )
+            }
+        };
+        let mut d = crate::document::plan::PlanDocument::new(
+            procedure,
+            format!(
+                "Misalignment plan ({what}): {} samples, {} terms",
+                p.n_obs, p.n_params
+            ),
+        );
+        d.with_options(self)?;
+        d.set("instrument", json!(self.instrument.name()))?;
+        d.set("observations", json!(p.n_obs))?;
+        d.set("parameters", json!(p.n_params))?;
+        for (j, n) in p.angles.names().iter().enumerate() {
+            d.predict(n, p.angles.u_at(j), "rad")?;
+        }
+        d.predict(super::GAMMA, p.u_gamma_max, "rad")?;
+        d.note("gamma: the worst direction of the misalignment (its u depends on the unknown direction)");
+        Ok(d)
+    }
+}

@@ -14,14 +14,14 @@
 //!
 //! Accelerometer: `V = V0 + kI a_I(β) + n` at each β, `samples` per angle.
 
-use super::{normal, rng};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::procedures::misalign::accel::AccelObservation;
 use crate::procedures::misalign::averaging::{average_records, RawSample, Record, TurnPolicy};
 use crate::procedures::misalign::gyro::{GyroConfig, GyroObservation};
 use crate::rigs::rate_table::{
     face_specific_force_g, gyro_rates_deg_s, FaceMounting, GyroMounting,
 };
+use crate::sim::{check_rows, normal, rng};
 use rand::RngExt;
 
 /// Configuration of a simulated gyro misalignment test.
@@ -53,11 +53,112 @@ pub struct GyroSim {
     pub seed: u64,
 }
 
+/// Largest angle of a plan (deg, in magnitude): beyond it an angle is a typo.
+pub const MAX_PLAN_ANGLE_DEG: f64 = 1e4;
+
+/// Largest number of table revolutions per simulated record.
+pub const MAX_TURNS: f64 = 1000.0;
+
+fn finite_all(values: &[(&str, f64)]) -> Result<()> {
+    for (n, v) in values {
+        if !v.is_finite() {
+            return Error::invalid(format!("{n} (a finite number)"), v);
+        }
+    }
+    Ok(())
+}
+
+fn plan_angle(what: &str, rad: f64) -> Result<()> {
+    let d = rad.to_degrees();
+    if d.is_finite() && d.abs() <= MAX_PLAN_ANGLE_DEG {
+        Ok(())
+    } else {
+        Error::invalid(format!("{what} (|angle| <= 1e4 deg)"), d)
+    }
+}
+
+fn non_negative(what: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Error::invalid(format!("{what} (a non-negative number)"), v)
+    }
+}
+
+impl GyroSim {
+    /// Samples in one record: `max(2, round(turns · samples_per_turn))`.
+    pub fn samples_per_record(&self) -> usize {
+        ((self.turns.max(0.0) * self.samples_per_turn.max(2) as f64).round() as usize).max(2)
+    }
+
+    /// Refuse a configuration that cannot be simulated: a negative noise or
+    /// bias shift, no configuration or rate, a rate magnitude not positive,
+    /// turns not within (0, 1000], no record, fewer than 2 samples per
+    /// turn, a latitude beyond ±90°, a non-finite truth, or more than
+    /// [`crate::sim::MAX_SIM_ROWS`] samples (held in memory, whichever
+    /// layout is written).
+    pub fn validate(&self) -> Result<()> {
+        non_negative("noise", self.noise)?;
+        non_negative("bias_shift", self.bias_shift)?;
+        if self.configs.is_empty() {
+            return Error::invalid("configs (at least one ALPHA:BETA)", "none");
+        }
+        for c in &self.configs {
+            plan_angle("configs", c.alpha_rad)?;
+            plan_angle("configs", c.beta_rad)?;
+        }
+        if self.rates_deg_s.is_empty() {
+            return Error::invalid("rates_deg_s (at least one rate)", "none");
+        }
+        for r in &self.rates_deg_s {
+            if !(r.is_finite() && *r > 0.0) {
+                return Error::invalid("rates_deg_s (rate magnitudes must be positive)", r);
+            }
+        }
+        if !(self.turns.is_finite() && self.turns > 0.0 && self.turns <= MAX_TURNS) {
+            return Error::invalid(
+                "turns (revolutions per record, positive, at most 1000)",
+                self.turns,
+            );
+        }
+        if self.records == 0 {
+            return Error::invalid("records (at least 1)", 0);
+        }
+        if self.samples_per_turn < 2 {
+            return Error::invalid("samples_per_turn (at least 2)", self.samples_per_turn);
+        }
+        let lat = self.latitude_rad.to_degrees();
+        if !(lat.is_finite() && lat.abs() <= 90.0) {
+            return Error::invalid("latitude_deg (within -90..90)", lat);
+        }
+        let m = &self.mounting;
+        finite_all(&[
+            ("scale_factor", self.scale_factor),
+            ("bias", self.bias),
+            ("dtheta_x0", m.dtheta_x0),
+            ("dtheta_y0", m.dtheta_y0),
+            ("dtheta_y1", m.dtheta_y1),
+            ("dtheta_z1", m.dtheta_z1),
+            ("dtheta_y2", m.dtheta_y2),
+            ("dtheta_z2", m.dtheta_z2),
+        ])?;
+        check_rows(&[
+            ("configurations", self.configs.len() as f64),
+            ("rates x 2 signs", 2.0 * self.rates_deg_s.len() as f64),
+            ("records", self.records as f64),
+            (
+                "samples per record",
+                (self.turns * self.samples_per_turn as f64).round().max(2.0),
+            ),
+        ])
+    }
+}
+
 /// Simulate raw records (deterministic for a given seed).
 pub fn simulate_gyro_records(cfg: &GyroSim) -> Vec<Record> {
     let mut r = rng(cfg.seed);
     let per_turn = cfg.samples_per_turn.max(2);
-    let m = ((cfg.turns.max(0.0) * per_turn as f64).round() as usize).max(2);
+    let m = cfg.samples_per_record();
     let mut out = Vec::new();
     for c in &cfg.configs {
         let shift = normal(&mut r, cfg.bias_shift);
@@ -128,6 +229,37 @@ pub struct AccelSim {
     pub noise: f64,
     /// Random seed.
     pub seed: u64,
+}
+
+impl AccelSim {
+    /// Refuse a configuration that cannot be simulated: a negative noise,
+    /// no angle or an angle beyond 1e4 deg, no sample, a non-finite truth,
+    /// or more than [`crate::sim::MAX_SIM_ROWS`] rows.
+    pub fn validate(&self) -> Result<()> {
+        non_negative("noise", self.noise)?;
+        if self.betas_rad.is_empty() {
+            return Error::invalid("betas_deg (at least one angle)", "none");
+        }
+        for b in &self.betas_rad {
+            plan_angle("betas_deg", *b)?;
+        }
+        if self.samples == 0 {
+            return Error::invalid("samples (at least 1 per angle)", 0);
+        }
+        let m = &self.mounting;
+        finite_all(&[
+            ("scale_factor", self.scale_factor),
+            ("bias", self.bias),
+            ("dtheta_y0", m.dtheta_y0),
+            ("dtheta_y1", m.dtheta_y1),
+            ("dtheta_y2", m.dtheta_y2),
+            ("dtheta_z2", m.dtheta_z2),
+        ])?;
+        check_rows(&[
+            ("angles", self.betas_rad.len() as f64),
+            ("samples", self.samples as f64),
+        ])
+    }
 }
 
 /// Simulate accelerometer outputs (deterministic for a given seed).
