@@ -2,8 +2,6 @@
 //! reading command shares (`--columns`, `--delimiter`) and the conversion
 //! of its errors (exit 2, one line naming file, line and column).
 
-use std::path::Path;
-
 use incal_io::{ColumnMap, ReadOptions};
 
 use crate::error::{CliError, CliResult};
@@ -43,75 +41,4 @@ impl ReadArgs {
             ..ReadOptions::default()
         })
     }
-}
-
-/// A CSV file read into memory through the input layer, with what the
-/// commands not yet moved into the core use of it.
-#[derive(Debug, Clone)]
-pub struct Table {
-    /// Path as given by the user (for messages).
-    pub path: String,
-    inner: incal_io::Table,
-}
-
-impl Table {
-    /// Read `path` (`-`: standard input) with the default options.
-    pub fn read(path: &Path) -> CliResult<Table> {
-        Self::read_with(path, &ReadArgs::default())
-    }
-
-    /// Read `path` with the command's `--columns` and `--delimiter`.
-    pub fn read_with(path: &Path, read: &ReadArgs) -> CliResult<Table> {
-        let inner = incal_io::read_table(path, &read.options()?)?;
-        Ok(Table {
-            path: inner.file().to_string(),
-            inner,
-        })
-    }
-
-    /// The record of this file as an input of a result.
-    pub fn input_file(&self, role: &str) -> incal::document::InputFile {
-        input_file(self.inner.summary(), role)
-    }
-
-    /// Number of data rows (at least 1 after a successful read).
-    pub fn row_count(&self) -> usize {
-        self.inner.row_count()
-    }
-
-    /// Index of a required column.
-    pub fn column(&self, name: &str) -> CliResult<usize> {
-        Ok(self.inner.column(name)?)
-    }
-
-    /// Index of an optional column.
-    pub fn opt_column(&self, name: &str) -> Option<usize> {
-        self.inner.opt_column(name)
-    }
-
-    /// File line of data row `row`.
-    pub fn line(&self, row: usize) -> usize {
-        self.inner.line(row)
-    }
-
-    /// A finite number within ±1e15 from a cell, or an error naming file,
-    /// line and column.
-    pub fn f64(&self, row: usize, col: usize) -> CliResult<f64> {
-        Ok(self.inner.f64(row, col)?)
-    }
-
-    /// An error at data row `row`.
-    pub fn error_at(&self, row: usize, msg: String) -> CliError {
-        self.inner.error_at(row, msg).into()
-    }
-}
-
-/// The record of a file read through the input layer as an input of a result.
-pub fn input_file(s: &incal_io::Summary, role: &str) -> incal::document::InputFile {
-    let path = if s.file == incal_io::source::STDIN_NAME {
-        "-"
-    } else {
-        &s.file
-    };
-    crate::output::input_file(role, path, s.sha256.clone(), Some(s.rows))
 }

@@ -131,16 +131,6 @@ pub fn clip(s: &str) -> String {
     }
 }
 
-/// A number echoed in a message: as typed when short, else in scientific notation.
-pub fn num(x: f64) -> String {
-    let s = format!("{x}");
-    if s.len() > 24 {
-        format!("{x:.6e}")
-    } else {
-        s
-    }
-}
-
 /// Options every plan command shares: output form and destination.
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct PlanOut {
