@@ -130,10 +130,29 @@ impl Header {
                 format!(
                     "missing column '{}' (columns: {})",
                     clip(name),
-                    self.names.join(", ")
+                    self.listed()
                 ),
             )
         })
+    }
+    /// The columns for a message: each clipped, at most 12 of them (a
+    /// header that swallowed a quoted newline stays one line).
+    fn listed(&self) -> String {
+        const MAX: usize = 12;
+        let mut shown: Vec<String> = self.names.iter().take(MAX).map(|n| clip(n)).collect();
+        if self.names.len() > MAX {
+            shown.push(format!("... {} in all", self.names.len()));
+        }
+        let s = shown.join(", ");
+        if s.chars().count() > 200 {
+            format!(
+                "{}... ({} columns)",
+                s.chars().take(200).collect::<String>(),
+                self.names.len()
+            )
+        } else {
+            s
+        }
     }
     /// Index of an optional column.
     pub fn opt_column(&self, name: &str) -> Option<usize> {

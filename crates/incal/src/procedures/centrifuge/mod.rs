@@ -947,13 +947,29 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
         }
     }
     if coefficients.is_empty() {
-        let why: Vec<String> = unsupported
+        // One reason per distinct cause (terms sharing it listed together),
+        // so the line stays readable; `incal plan centrifuge` says the rest.
+        let mut why: Vec<(Vec<String>, &str)> = Vec::new();
+        for (t, w) in &unsupported {
+            match why.iter_mut().find(|(_, r)| *r == w.as_str()) {
+                Some((terms, _)) => terms.push(t.to_string()),
+                None => why.push((vec![t.to_string()], w.as_str())),
+            }
+        }
+        let shown: Vec<String> = why
             .iter()
-            .map(|(t, w)| format!("{t}: {w}"))
+            .take(2)
+            .map(|(t, w)| format!("{}: {w}", t.join(", ")))
             .collect();
+        let more = why.len().saturating_sub(2);
         return Err(Error::Unsupported(format!(
-            "this position set gives no coefficient ({})",
-            why.join("; ")
+            "this position set gives no coefficient ({}{})",
+            shown.join("; "),
+            if more > 0 {
+                format!("; and {more} more: see incal plan centrifuge")
+            } else {
+                String::new()
+            }
         )));
     }
     for s in &stations {
