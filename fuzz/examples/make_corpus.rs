@@ -3,11 +3,10 @@
 
 fn main() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus");
-    for (t, what) in incal_cli::fuzz::TARGETS {
+    for (t, what) in incal_fuzz::TARGETS {
         let dir = root.join(t.replace('-', "_"));
         std::fs::create_dir_all(&dir).expect("corpus directory");
-        std::fs::write(dir.join("seed"), incal_cli::fuzz::seed(t)).expect("seed file");
+        std::fs::write(dir.join("seed"), incal_fuzz::seed(t)).expect("seed file");
         println!("{t}: {what}");
     }
-    incal_cli::fuzz::cleanup();
 }

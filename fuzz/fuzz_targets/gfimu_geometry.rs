@@ -1,9 +1,9 @@
 #![no_main]
-//! Fuzz target `gfimu-geometry`: see `incal_cli::fuzz`.
+//! Fuzz target `gfimu-geometry`: see `incal_fuzz`.
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    if let Err(e) = incal_cli::fuzz::check("gfimu-geometry", data) {
+    if let Err(e) = incal_fuzz::check("gfimu-geometry", data) {
         panic!("gfimu-geometry: {e}");
     }
 });

@@ -1,9 +1,9 @@
 #![no_main]
-//! Fuzz target `gyro-positions`: see `incal_cli::fuzz`.
+//! Fuzz target `gyro-positions`: see `incal_fuzz`.
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    if let Err(e) = incal_cli::fuzz::check("gyro-positions", data) {
+    if let Err(e) = incal_fuzz::check("gyro-positions", data) {
         panic!("gyro-positions: {e}");
     }
 });

@@ -1,9 +1,9 @@
 #![no_main]
-//! Fuzz target `gyro-rate`: see `incal_cli::fuzz`.
+//! Fuzz target `gyro-rate`: see `incal_fuzz`.
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    if let Err(e) = incal_cli::fuzz::check("gyro-rate", data) {
+    if let Err(e) = incal_fuzz::check("gyro-rate", data) {
         panic!("gyro-rate: {e}");
     }
 });

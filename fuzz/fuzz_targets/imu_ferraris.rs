@@ -1,9 +1,9 @@
 #![no_main]
-//! Fuzz target `imu-ferraris`: see `incal_cli::fuzz`.
+//! Fuzz target `imu-ferraris`: see `incal_fuzz`.
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    if let Err(e) = incal_cli::fuzz::check("imu-ferraris", data) {
+    if let Err(e) = incal_fuzz::check("imu-ferraris", data) {
         panic!("imu-ferraris: {e}");
     }
 });

@@ -1,9 +1,9 @@
 #![no_main]
-//! Fuzz target `noise`: see `incal_cli::fuzz`.
+//! Fuzz target `noise`: see `incal_fuzz`.
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    if let Err(e) = incal_cli::fuzz::check("noise", data) {
+    if let Err(e) = incal_fuzz::check("noise", data) {
         panic!("noise: {e}");
     }
 });

@@ -10,7 +10,6 @@
 mod commands;
 mod documents;
 mod error;
-pub mod fuzz;
 mod input;
 mod io;
 mod options;
@@ -335,9 +334,6 @@ fn usage_message(e: &clap::Error, command: &str) -> String {
 /// One line on standard error; a standard error that cannot be written to
 /// is ignored (there is nowhere left to report it).
 fn say(line: &str) {
-    if fuzz::QUIET.load(std::sync::atomic::Ordering::Relaxed) {
-        return;
-    }
     let _ = writeln!(std::io::stderr().lock(), "incal: {}", one_line(line));
 }
 
@@ -369,8 +365,7 @@ fn parse_failure(e: &clap::Error, args: &[OsString]) -> u8 {
 
 /// Run `incal` with `args` (the program name first) and return the exit
 /// code: 0 success, 2 bad usage or input, 1 any other failure (crate docs).
-/// The binary's `main` is this on the process arguments; the fuzz targets
-/// and their property tests call it in-process.
+/// The binary's `main` is this on the process arguments.
 pub fn main_from(args: &[OsString]) -> u8 {
     let cli = match parse(args) {
         Ok(c) => c,

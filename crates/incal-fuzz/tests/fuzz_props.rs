@@ -1,11 +1,11 @@
-//! The fuzz targets (`incal_cli::fuzz`) as a quick property-based pass:
-//! each target's valid seed input, then mutations of it (bytes flipped,
-//! cut, duplicated, or replaced by the tokens that break readers: NaN,
-//! inf, 1e308, empty fields, separators, a BOM, text), must never panic
-//! and must exit 0 with valid JSON or exit 2. The long runs are
-//! `cargo fuzz` (README "Development").
+//! The fuzz targets ([`incal_fuzz`]) as a quick property-based pass, in
+//! process: each target's valid seed input, then mutations of it (bytes
+//! flipped, cut, duplicated, or replaced by the tokens that break readers:
+//! NaN, inf, 1e308, empty fields, separators, a BOM, text), must never
+//! panic and must be accepted with valid output or refused with one short
+//! line. The long runs are `cargo fuzz` (docs/src/development.md).
 
-use incal_cli::fuzz::{check, seed, TARGETS};
+use incal_fuzz::{check, run, seed, Outcome, TARGETS};
 use proptest::prelude::*;
 
 const TOKENS: &[&str] = &[
@@ -91,21 +91,24 @@ fn every_seed_is_valid_and_accepted() {
     for (t, _) in TARGETS {
         let s = seed(t);
         assert!(!s.is_empty(), "{t}: empty seed");
-        let (code, _) = incal_cli::fuzz::run(t, &s);
-        assert_eq!(code, 0, "{t}: the valid seed is refused");
-        check(t, &s).unwrap();
+        match run(t, s) {
+            Outcome::Accepted(_) => {}
+            Outcome::Refused(m) => panic!("{t}: the valid seed is refused: {m}"),
+        }
+        check(t, s).unwrap_or_else(|e| panic!("{t}: {e}"));
         // The empty input is refused, not a panic.
-        check(t, b"").unwrap();
+        assert!(matches!(run(t, b""), Outcome::Refused(_)), "{t}");
+        check(t, b"").unwrap_or_else(|e| panic!("{t}: {e}"));
     }
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 96, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 1500, failure_persistence: None, ..ProptestConfig::default() })]
 
     #[test]
     fn mutated_inputs_never_panic(target in 0..TARGETS.len(), muts in prop::collection::vec(mutation(), 1..6)) {
         let t = TARGETS[target].0;
-        let data = apply(&seed(t), &muts);
+        let data = apply(seed(t), &muts);
         let r = std::panic::catch_unwind(|| check(t, &data));
         match r {
             Ok(Ok(())) => {}

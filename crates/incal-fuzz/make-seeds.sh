@@ -1,0 +1,25 @@
+#!/bin/sh
+# Regenerate the fuzz seeds (one valid input per target) with the incal
+# simulators: INCAL=target/debug/incal sh crates/incal-fuzz/make-seeds.sh
+# The seeds are small on purpose: a fuzzer mutates them byte by byte.
+# gfimu-geometry (the paper layout) and limits are written by hand.
+set -eu
+INCAL=${INCAL:-target/debug/incal}
+D=$(dirname "$0")/seeds
+mkdir -p "$D"
+$INCAL simulate tumble --samples 3 --seed 3 -o "$D/tumble"
+$INCAL simulate centrifuge --levels-g 0,1,4,9 --samples 3 -o "$D/centrifuge"
+$INCAL simulate misalign gyro --records 1 -o "$D/misalign-gyro"
+$INCAL simulate misalign gyro --time-series --configs 0:0,0:180,180:180,90:180,0:90 --rates-deg-s 20,40 --records 1 --samples-per-turn 12 -o "$D/misalign-gyro-raw"
+$INCAL simulate misalign accel --samples 3 -o "$D/misalign-accel"
+$INCAL simulate gfimu --seed 3 -o "$D/gfimu-calibrate"
+$INCAL simulate gfimu --kind motion --duration-s 0.2 --seed 3 -o "$D/gfimu-solve"
+$INCAL gfimu calibrate --input "$D/gfimu-calibrate" --json -o "$D/gfimu-calibration"
+$INCAL simulate gyro-rate --samples 4 -o "$D/gyro-rate"
+$INCAL simulate gyro-positions --samples 4 -o "$D/gyro-positions"
+$INCAL simulate noise --duration-s 20 --rate-hz 100 --seed 3 -o "$D/noise"
+$INCAL simulate imu --sequence ferraris --static-s 0.5 --rotation-s 1 -o "$D/imu-ferraris"
+$INCAL simulate imu --sequence positions --static-s 0.3 -o "$D/imu-multipos"
+$INCAL simulate imu --sequence random --orientations 12 --init-static-s 3 --static-s 2 --move-s 1.5 -o "$D/imu-autocal"
+$INCAL imu ferraris --input "$D/imu-ferraris" --rate-hz 100 --json -o "$D/imu-calibration"
+$INCAL tumble --mount pendulum --input "$D/tumble" --json -o "$D/result"

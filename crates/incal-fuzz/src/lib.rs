@@ -1,0 +1,373 @@
+//! incal's fuzz targets, in process: each target feeds arbitrary bytes to
+//! the input layer ([`incal_io`]) and a procedure of the core through the
+//! same calls every front end makes ([`incal::procedures::reduce_source`],
+//! the document, limits and calibration parsers). No temporary file, no
+//! process, no command line: a target costs what its reduction costs.
+//!
+//! The contract checked by [`check`]: no panic; an input is either
+//! accepted, with an output that is one valid JSON document (or, for `imu
+//! apply`, rows of finite numbers), or refused with one line of at most
+//! [`MAX_MESSAGE`] characters.
+//!
+//! The targets run under `cargo fuzz` (`fuzz/` at the repository root) and
+//! as a property-based pass in the normal test suite (`tests/fuzz_props.rs`).
+//! Each target's valid seed (`seeds/`, written by the simulators:
+//! `make-seeds.sh`) is compiled in.
+
+use incal::document::ResultDocument;
+use incal::estimation::Noise;
+use incal::procedures::{reduce_source, Procedure, Silent};
+
+/// Longest refusal message allowed (characters): one readable line.
+pub const MAX_MESSAGE: usize = 400;
+
+/// Every target: `(name, what the fuzzed bytes are)`.
+pub const TARGETS: &[(&str, &str)] = &[
+    ("tumble", "tumble CSV"),
+    ("centrifuge", "centrifuge CSV"),
+    ("misalign-gyro", "misalignment gyro CSV (record means)"),
+    ("misalign-gyro-raw", "misalignment gyro CSV (raw records)"),
+    ("misalign-accel", "misalignment accelerometer CSV"),
+    ("gfimu-calibrate", "gyro-free unit static CSV"),
+    ("gfimu-geometry", "gyro-free unit geometry TOML"),
+    ("gfimu-solve", "gyro-free unit motion CSV"),
+    (
+        "gfimu-calibration",
+        "gyro-free unit calibration JSON (gfimu solve --calibration)",
+    ),
+    ("gyro-rate", "gyro rate-transfer CSV"),
+    ("gyro-positions", "gyro multi-position CSV"),
+    ("noise", "noise CSV"),
+    ("imu-ferraris", "IMU Ferraris session CSV"),
+    ("imu-multipos", "IMU multi-position CSV"),
+    ("imu-autocal", "IMU autocalibration CSV"),
+    (
+        "imu-calibration",
+        "IMU calibration JSON (imu apply --calibration)",
+    ),
+    ("result", "result document JSON (compare)"),
+    ("limits", "limits TOML (--limits)"),
+];
+
+/// A valid input of `target` (empty for an unknown target).
+pub fn seed(target: &str) -> &'static [u8] {
+    match target {
+        "tumble" => include_bytes!("../seeds/tumble"),
+        "centrifuge" => include_bytes!("../seeds/centrifuge"),
+        "misalign-gyro" => include_bytes!("../seeds/misalign-gyro"),
+        "misalign-gyro-raw" => include_bytes!("../seeds/misalign-gyro-raw"),
+        "misalign-accel" => include_bytes!("../seeds/misalign-accel"),
+        "gfimu-calibrate" => include_bytes!("../seeds/gfimu-calibrate"),
+        "gfimu-geometry" => include_bytes!("../seeds/gfimu-geometry"),
+        "gfimu-solve" => include_bytes!("../seeds/gfimu-solve"),
+        "gfimu-calibration" => include_bytes!("../seeds/gfimu-calibration"),
+        "gyro-rate" => include_bytes!("../seeds/gyro-rate"),
+        "gyro-positions" => include_bytes!("../seeds/gyro-positions"),
+        "noise" => include_bytes!("../seeds/noise"),
+        "imu-ferraris" => include_bytes!("../seeds/imu-ferraris"),
+        "imu-multipos" => include_bytes!("../seeds/imu-multipos"),
+        "imu-autocal" => include_bytes!("../seeds/imu-autocal"),
+        "imu-calibration" => include_bytes!("../seeds/imu-calibration"),
+        "result" => include_bytes!("../seeds/result"),
+        "limits" => include_bytes!("../seeds/limits"),
+        _ => b"",
+    }
+}
+
+/// What a target made of its bytes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// Accepted: the output as a front end would write it.
+    Accepted(String),
+    /// Refused: the one-line message a front end would show.
+    Refused(String),
+}
+
+/// The name the fuzzed bytes go by in messages.
+const NAME: &str = "input";
+
+fn reduce<P: Procedure>(data: &[u8], options: &P::Options) -> Outcome {
+    let read = incal_io::ReadOptions::default();
+    match reduce_source::<P, _>(NAME, data, &read, options, &Silent) {
+        Ok(doc) => Outcome::Accepted(doc.to_json()),
+        Err(e) => Outcome::Refused(e.to_string()),
+    }
+}
+
+fn document(data: &[u8]) -> Result<ResultDocument, String> {
+    let text = std::str::from_utf8(data).map_err(|_| format!("{NAME}: not UTF-8 text"))?;
+    ResultDocument::from_json(text).map_err(|e| format!("{NAME}: {e}"))
+}
+
+fn tumble_options() -> incal::procedures::tumble::TumbleOptions {
+    incal::procedures::tumble::TumbleOptions::new(incal::rigs::Mount::Pendulum)
+}
+
+/// Run `target` on `data` (module docs). Panics only for an unknown target.
+pub fn run(target: &str, data: &[u8]) -> Outcome {
+    use incal::procedures::{centrifuge, gfimu, gyro, imu, misalign, noise, tumble};
+    match target {
+        "tumble" => reduce::<tumble::Tumble>(data, &tumble_options()),
+        "centrifuge" => reduce::<centrifuge::CentrifugeTest>(
+            data,
+            &centrifuge::CentrifugeRun {
+                from: None,
+                k0_g: Some(1.2e-4),
+                u_k0_g: None,
+                k1: Some(1.3),
+                u_k1: None,
+                radius_m: 0.71,
+                latitude_deg: 39.9,
+                gravity_m_s2: incal::units::STANDARD_GRAVITY_M_S2,
+                opposite_sense: false,
+                order: 3,
+                alignment_tolerance_deg: 0.0,
+                noise: Noise::Auto,
+                terms: None,
+                u_omega_ppm: 0.0,
+            },
+        ),
+        "misalign-gyro" | "misalign-gyro-raw" => reduce::<misalign::MisalignGyro>(
+            data,
+            &misalign::GyroRun {
+                fit: misalign::gyro::GyroOptions {
+                    scale_factor: -2.9222,
+                    per_config_bias: false,
+                    noise: Noise::Auto,
+                },
+                average: misalign::averaging::TurnPolicy::Whole,
+            },
+        ),
+        "misalign-accel" => reduce::<misalign::MisalignAccel>(
+            data,
+            &misalign::accel::AccelOptions {
+                scale_factor: 1.299,
+                noise: Noise::Auto,
+            },
+        ),
+        "gfimu-calibrate" => match builtin_array() {
+            Ok(array) => reduce::<gfimu::GfimuCalibrate>(
+                data,
+                &gfimu::GfimuCalibrateOptions {
+                    array,
+                    noise: Noise::Auto,
+                },
+            ),
+            Err(e) => Outcome::Refused(e),
+        },
+        "gfimu-geometry" => {
+            match gfimu::input::ArrayGeometry::from_toml(NAME, NAME, data, String::new()) {
+                Ok(array) => reduce::<gfimu::GfimuCalibrate>(
+                    seed("gfimu-calibrate"),
+                    &gfimu::GfimuCalibrateOptions {
+                        array,
+                        noise: Noise::Auto,
+                    },
+                ),
+                Err(e) => Outcome::Refused(e.to_string()),
+            }
+        }
+        "gfimu-solve" => solve(seed("gfimu-calibration"), data),
+        "gfimu-calibration" => solve(data, seed("gfimu-solve")),
+        "gyro-rate" => reduce::<gyro::rate::GyroRate>(
+            data,
+            &gyro::rate::GyroRateOptions {
+                latitude_deg: 45.0,
+                ia: gyro::rate::InputAxis::Up,
+                terms: gyro::rate::default_terms(),
+                noise: Noise::Auto,
+                rate_uncertainty_ppm: 0.0,
+            },
+        ),
+        "gyro-positions" => {
+            let axial = gyro::positions::Axial::Sa;
+            reduce::<gyro::positions::GyroPositions>(
+                data,
+                &gyro::positions::GyroPositionsOptions {
+                    latitude_deg: 45.0,
+                    azimuth_deg: Some(90.0),
+                    axial,
+                    terms: gyro::positions::default_terms(axial),
+                    noise: Noise::Auto,
+                    k1: gyro::positions::K1Source::Given { k1: 0.02, u: None },
+                },
+            )
+        }
+        "noise" => reduce::<noise::Noise>(
+            data,
+            &noise::NoiseOptions {
+                rate_hz: 100.0,
+                // Sequential: a fuzzer's process stays on one thread.
+                parallel: false,
+                ..noise::NoiseOptions::default()
+            },
+        ),
+        "imu-ferraris" => reduce::<imu::ferraris::Ferraris>(data, &ferraris_options()),
+        "imu-multipos" => reduce::<imu::multipos::Multipos>(
+            data,
+            &imu::multipos::MultiposSessionOptions {
+                gravity_m_s2: 9.81,
+                matrix: imu::multipos::MatrixForm::Full,
+                rate_hz: 100.0,
+                latitude_deg: None,
+                rotation_deg: -360.0,
+            },
+        ),
+        "imu-autocal" => reduce::<imu::autocal::Autocal>(
+            data,
+            &imu::autocal::AutocalSessionOptions {
+                rate_hz: 100.0,
+                method: imu::autocal::Method::Incal,
+                gravity_m_s2: 9.81,
+                init_static_s: 3.0,
+                settle_s: 0.1,
+            },
+        ),
+        "imu-calibration" => apply_imu(data, seed("imu-ferraris")),
+        "result" => match document(data) {
+            Ok(d) => match incal::document::compare::compare_documents("a", &d, "b", &d) {
+                Ok(c) => Outcome::Accepted(c.to_json().to_string()),
+                Err(e) => Outcome::Refused(e.to_string()),
+            },
+            Err(e) => Outcome::Refused(e),
+        },
+        "limits" => {
+            let limits = match std::str::from_utf8(data) {
+                Ok(text) => incal::document::limits::Limits::parse(text),
+                Err(_) => Err("not UTF-8 text".into()),
+            };
+            match limits {
+                Ok(limits) => {
+                    let read = incal_io::ReadOptions::default();
+                    let doc = reduce_source::<tumble::Tumble, _>(
+                        "tumble.csv",
+                        seed("tumble"),
+                        &read,
+                        &tumble_options(),
+                        &Silent,
+                    );
+                    match doc {
+                        Ok(mut doc) => match incal::document::limits::apply(&mut doc, &limits) {
+                            Ok(()) => Outcome::Accepted(doc.to_json()),
+                            Err(e) => Outcome::Refused(format!("{NAME}: {e}")),
+                        },
+                        Err(e) => Outcome::Refused(format!("seed: {e}")),
+                    }
+                }
+                Err(e) => Outcome::Refused(format!("{NAME}: {e}")),
+            }
+        }
+        other => panic!("unknown fuzz target {other}"),
+    }
+}
+
+fn ferraris_options() -> incal::procedures::imu::ferraris::FerrarisOptions {
+    incal::procedures::imu::ferraris::FerrarisOptions {
+        rate_hz: 100.0,
+        gravity: 9.81,
+        rotation_deg: -360.0,
+        u_rotation_deg: 0.0,
+    }
+}
+
+fn builtin_array() -> Result<incal::procedures::gfimu::input::ArrayGeometry, String> {
+    use incal::procedures::gfimu::input::{ArrayGeometry, Layout, DEFAULT_LEVER_ARM_M};
+    ArrayGeometry::builtin(Layout::Paper, DEFAULT_LEVER_ARM_M).map_err(|e| e.to_string())
+}
+
+/// `gfimu solve`: a calibration document and a motion series, the
+/// solution streamed as one JSON document into memory.
+fn solve(calibration: &[u8], series: &[u8]) -> Outcome {
+    use incal::procedures::gfimu::input::read_calibration;
+    use incal::procedures::gfimu::solve::Solver;
+    use incal::procedures::gfimu::stream::{solve_stream, MotionSeries, SolutionFormat};
+    use incal::procedures::gfimu::SolveOptions;
+    let array = match builtin_array() {
+        Ok(a) => a,
+        Err(e) => return Outcome::Refused(e),
+    };
+    let g = &array.geometry;
+    let run = || -> Result<String, String> {
+        let cal = read_calibration("calibration", calibration, g).map_err(|e| e.to_string())?;
+        let solver = Solver::for_calibration("calibration", g, &cal, &SolveOptions::default())
+            .map_err(|e| e.to_string())?;
+        let series = MotionSeries::open("series", series, &incal_io::ReadOptions::default(), g)
+            .map_err(|e| e.to_string())?;
+        let mut out = Vec::new();
+        solve_stream(series, solver, SolutionFormat::Json, &mut out, None)
+            .map_err(|e| e.to_string())?;
+        String::from_utf8(out).map_err(|_| "the solution is not UTF-8".to_string())
+    };
+    match run() {
+        Ok(s) => Outcome::Accepted(s),
+        Err(e) => Outcome::Refused(e),
+    }
+}
+
+/// `imu apply`: a calibration document applied to a raw series, row by row
+/// (the output: one line of numbers per row).
+fn apply_imu(calibration: &[u8], raw: &[u8]) -> Outcome {
+    use incal::procedures::imu::apply::ImuCalibration;
+    let run = || -> Result<String, String> {
+        let doc = document(calibration)?;
+        let cal = ImuCalibration::from_document(&doc).map_err(|e| format!("{NAME}: {e}"))?;
+        let read = incal_io::ReadOptions {
+            hash: false,
+            ..incal_io::ReadOptions::default()
+        };
+        let mut rows = incal_io::Reader::new("raw", raw, &read).map_err(|e| e.to_string())?;
+        let cols = cal.columns(rows.header()).map_err(|e| e.to_string())?;
+        let mut out = String::new();
+        while let Some(row) = rows.next_row().map_err(|e| e.to_string())? {
+            let r = cal.row(&cols, &row).map_err(|e| e.to_string())?;
+            let mut line: Vec<f64> = r.time.into_iter().collect();
+            line.extend(r.acc.iter());
+            if let Some(g) = r.gyr {
+                line.extend(g.iter());
+            }
+            let cells: Vec<String> = line.iter().map(|x| x.to_string()).collect();
+            out.push_str(&cells.join(","));
+            out.push('\n');
+        }
+        Ok(out)
+    };
+    match run() {
+        Ok(s) => Outcome::Accepted(s),
+        Err(e) => Outcome::Refused(e),
+    }
+}
+
+/// [`run`] and the contract (module docs); `Err` says what broke it.
+pub fn check(target: &str, data: &[u8]) -> Result<(), String> {
+    match run(target, data) {
+        Outcome::Accepted(out) if target == "imu-calibration" => {
+            for (i, line) in out.lines().enumerate() {
+                for f in line.split(',') {
+                    match f.parse::<f64>() {
+                        Ok(v) if v.is_finite() => {}
+                        _ => return Err(format!("output row {}: '{f}'", i + 1)),
+                    }
+                }
+            }
+            Ok(())
+        }
+        Outcome::Accepted(out) => serde_json::from_str::<serde_json::Value>(&out)
+            .map(|_| ())
+            .map_err(|e| format!("accepted with an output that is not JSON: {e}")),
+        Outcome::Refused(m) => {
+            if m.trim().is_empty() {
+                Err("refused without a message".into())
+            } else if m.contains('\n') {
+                Err(format!("a message of several lines: {m:?}"))
+            } else if m.chars().count() > MAX_MESSAGE {
+                Err(format!(
+                    "a message of {} characters: {}…",
+                    m.chars().count(),
+                    m.chars().take(120).collect::<String>()
+                ))
+            } else {
+                Ok(())
+            }
+        }
+    }
+}
