@@ -318,13 +318,23 @@ fn angle_key(angle_rad: f64) -> (i64, f64) {
 fn group(obs: &[Observation]) -> Vec<(f64, Option<String>, Vec<f64>)> {
     let mut index: BTreeMap<(Option<String>, i64), usize> = BTreeMap::new();
     let mut out: Vec<(f64, Option<String>, Vec<f64>)> = Vec::new();
+    // Samples of one position come in runs: the previous row's slot is
+    // tried first, so the map is searched once per run, not once per row.
+    let mut last: Option<(f64, usize)> = None;
     for o in obs {
+        if let Some((angle_rad, slot)) = last {
+            if angle_rad == o.angle_rad && out[slot].1 == o.pass {
+                out[slot].2.push(o.output);
+                continue;
+            }
+        }
         let (key, angle) = angle_key(o.angle_rad);
         let slot = *index.entry((o.pass.clone(), key)).or_insert_with(|| {
             out.push((angle, o.pass.clone(), Vec::new()));
             out.len() - 1
         });
         out[slot].2.push(o.output);
+        last = Some((o.angle_rad, slot));
     }
     out
 }
