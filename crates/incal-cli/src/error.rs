@@ -65,6 +65,10 @@ pub fn core(e: incal::Error) -> CliError {
             as_flag(&what, true)
         )),
         incal::Error::Unsupported(m) => CliError::Input(as_flag(&m, false)),
+        incal::Error::InFile { file, source } => match core(*source) {
+            CliError::Input(m) => CliError::Input(format!("{file}: {m}")),
+            other => other,
+        },
         other => CliError::Input(other.to_string()),
     }
 }
@@ -82,7 +86,8 @@ fn as_flag(what: &str, lead: bool) -> String {
         let end = rest.find(|c: char| !is_key(c)).unwrap_or(rest.len());
         let (word, tail) = rest.split_at(end);
         let flag = word.replace('_', "-");
-        let boundary = !out.ends_with(|c: char| c.is_ascii_alphanumeric() || c == '-');
+        // A key stands alone: after a space or '(' (never inside a path).
+        let boundary = out.is_empty() || out.ends_with([' ', '(']);
         if !word.is_empty()
             && boundary
             && ((lead && first) || word.contains('_'))

@@ -35,3 +35,4 @@ pub mod noise;
 pub mod procedures;
 pub mod rigs;
 pub mod sim;
+pub mod timebase;

@@ -53,6 +53,13 @@ pub enum WarningCode {
     /// or gravity of the other sign): the numbers are right for the options
     /// given, but probably not what was meant.
     SignConvention,
+    /// Time stamps repeat (a clock coarser than the sampling): how many, and
+    /// whether the time steps were taken from the sample index
+    /// ([`crate::timebase`]).
+    TimeRepeats,
+    /// Gaps in the time stamps (steps above 1.5 periods): count, longest,
+    /// total ([`crate::timebase`]).
+    TimeGaps,
 }
 
 impl WarningCode {
@@ -73,6 +80,8 @@ impl WarningCode {
             WarningCode::NoiseTermNotIdentified => "noise-term-not-identified",
             WarningCode::ShortRecord => "short-record",
             WarningCode::SignConvention => "sign-convention",
+            WarningCode::TimeRepeats => "time-repeats",
+            WarningCode::TimeGaps => "time-gaps",
         }
     }
 }

@@ -205,7 +205,17 @@ impl crate::procedures::Procedure for Autocal {
         o: &AutocalSessionOptions,
         _: &dyn crate::procedures::Progress,
     ) -> Result<crate::document::ResultDocument> {
-        autocal(&input.time, &input.acc, input.gyr.as_deref(), &o.model())?.document()
+        // imu_tk's method takes its time steps from the stamps as they are
+        // (repeats give zero steps); incal's from the time-stamp policy.
+        let time = match (o.method, &input.stamps) {
+            (Method::Tedaldi, Some(stamps)) => stamps,
+            _ => &input.time,
+        };
+        let mut doc = autocal(time, &input.acc, input.gyr.as_deref(), &o.model())?.document()?;
+        if let Some(tb) = &input.timebase {
+            doc.warnings.extend(tb.warnings());
+        }
+        Ok(doc)
     }
 }
 

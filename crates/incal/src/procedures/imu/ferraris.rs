@@ -107,7 +107,10 @@ pub struct Ferraris;
 impl crate::procedures::Procedure for Ferraris {
     const ID: crate::document::Procedure = crate::document::Procedure::ImuFerraris;
     type Options = FerrarisOptions;
-    type Input = super::input::FerrarisSections;
+    type Input = (
+        super::input::FerrarisSections,
+        Option<crate::timebase::TimeBase>,
+    );
 
     fn validate(o: &FerrarisOptions) -> Result<()> {
         o.validate()
@@ -115,17 +118,21 @@ impl crate::procedures::Procedure for Ferraris {
 
     fn read<R: std::io::Read>(
         rows: &mut incal_io::Reader<R>,
-        _: &FerrarisOptions,
+        o: &FerrarisOptions,
     ) -> Result<Self::Input> {
-        super::input::read_ferraris(rows)
+        super::input::read_ferraris_timed(rows, Some(o.rate_hz))
     }
 
     fn reduce(
-        sections: &Self::Input,
+        input: &Self::Input,
         o: &FerrarisOptions,
         _: &dyn crate::procedures::Progress,
     ) -> Result<crate::document::ResultDocument> {
-        ferraris(sections, o)?.document()
+        let mut doc = ferraris(&input.0, o)?.document()?;
+        if let Some(tb) = &input.1 {
+            doc.warnings.extend(tb.warnings());
+        }
+        Ok(doc)
     }
 }
 

@@ -26,6 +26,7 @@ use super::multipos::{RotationSection, StaticPosition};
 use super::sim::{ImuSample, Layout};
 use super::{SectionStats, V3};
 use crate::error::{Error, Result};
+use crate::timebase::TimeBase;
 
 /// Accelerometer columns of a session.
 pub const ACC: [&str; 3] = ["acc_x", "acc_y", "acc_z"];
@@ -155,18 +156,31 @@ impl SessionRow {
     }
 }
 
-/// Reads session rows, checking that time increases.
+/// Reads session rows, keeping every `time_s` stamp; a stamp below the
+/// one before is refused at its line (repeats are the time base's to
+/// judge, [`crate::timebase`]).
 struct SessionReader {
     cols: SessionColumns,
-    last_time: Option<f64>,
+    stamps: Vec<f64>,
 }
 
 impl SessionReader {
     fn new(cols: SessionColumns) -> Self {
         Self {
             cols,
-            last_time: None,
+            stamps: Vec::new(),
         }
+    }
+
+    /// The time base of the stamps read (none without `time_s`); a
+    /// nominal rate that contradicts them is refused naming both.
+    fn timebase(&self, file: &str, nominal_hz: Option<f64>) -> Result<Option<TimeBase>> {
+        if self.cols.time.is_none() {
+            return Ok(None);
+        }
+        crate::timebase::analyse(&self.stamps, nominal_hz)
+            .map(Some)
+            .map_err(|e| Error::Unsupported(e.to_string()).in_file(file))
     }
 
     fn read(&mut self, row: &Row<'_>) -> Result<SessionRow> {
@@ -182,18 +196,18 @@ impl SessionReader {
             None => None,
             Some(c) => {
                 let x = row.f64(c)?;
-                if let Some(prev) = self.last_time {
-                    if x <= prev {
+                if let Some(&prev) = self.stamps.last() {
+                    if x < prev {
                         return Err(row
                             .error(format!(
-                                "time_s {} does not increase (previous row {})",
+                                "time_s {} is below the stamp before ({}): stamps must not decrease",
                                 num(x),
                                 num(prev)
                             ))
                             .into());
                     }
                 }
-                self.last_time = Some(x);
+                self.stamps.push(x);
                 Some(x)
             }
         };
@@ -219,6 +233,15 @@ pub type FerrarisSections = [Vec<[f64; 6]>; 9];
 /// section needs at least 2 samples (the refusal names every missing or
 /// short one).
 pub fn read_ferraris<R: Read>(rows: &mut Reader<R>) -> Result<FerrarisSections> {
+    Ok(read_ferraris_timed(rows, None)?.0)
+}
+
+/// [`read_ferraris`] and the time base of `time_s` when the session has it
+/// (`rate_hz`, the nominal rate, must agree with it).
+pub fn read_ferraris_timed<R: Read>(
+    rows: &mut Reader<R>,
+    rate_hz: Option<f64>,
+) -> Result<(FerrarisSections, Option<TimeBase>)> {
     let mut session = SessionReader::new(SessionColumns::of(rows.header(), true, true)?);
     let cp = rows.header().column("part")?;
     let mut secs: FerrarisSections = Default::default();
@@ -250,7 +273,8 @@ pub fn read_ferraris<R: Read>(rows: &mut Reader<R>) -> Result<FerrarisSections> 
             missing.join(", ")
         )));
     }
-    Ok(secs)
+    let tb = session.timebase(rows.header().file(), rate_hz)?;
+    Ok((secs, tb))
 }
 
 /// The observations of a multi-position session.
@@ -262,6 +286,8 @@ pub struct MultiposInput {
     pub rotations: Vec<RotationSection>,
     /// Whether the session has gyro columns.
     pub gyro: bool,
+    /// The time base of `time_s`, when the session has it.
+    pub timebase: Option<TimeBase>,
 }
 
 /// What a row of a multi-position session is.
@@ -412,6 +438,15 @@ struct Block {
 /// the same up direction) are one position; a position needs at least 2
 /// samples, a rotation the gyro columns.
 pub fn read_multipos<R: Read>(rows: &mut Reader<R>, latitude: bool) -> Result<MultiposInput> {
+    read_multipos_timed(rows, latitude, None)
+}
+
+/// [`read_multipos`], the nominal `rate_hz` checked against `time_s`.
+pub fn read_multipos_timed<R: Read>(
+    rows: &mut Reader<R>,
+    latitude: bool,
+    rate_hz: Option<f64>,
+) -> Result<MultiposInput> {
     let cols = SessionColumns::of(rows.header(), true, false)?;
     let gyro = cols.gyr.is_some();
     let mut session = SessionReader::new(cols);
@@ -421,6 +456,7 @@ pub fn read_multipos<R: Read>(rows: &mut Reader<R>, latitude: bool) -> Result<Mu
         statics: Vec::new(),
         rotations: Vec::new(),
         gyro,
+        timebase: None,
     };
     let flush = |b: Block, input: &mut MultiposInput| -> Result<()> {
         match b.kind {
@@ -481,15 +517,23 @@ pub fn read_multipos<R: Read>(rows: &mut Reader<R>, latitude: bool) -> Result<Mu
         flush(b, &mut input)?;
     }
     some_rows(rows)?;
+    input.timebase = session.timebase(&file, rate_hz)?;
     Ok(input)
 }
 
-/// The record of an autocalibration: time (s; from `time_s`, else sample
-/// index / rate), raw accelerometer and, when present, raw gyro samples.
+/// The record of an autocalibration: time (s; from `time_s` under the
+/// time-stamp policy of [`crate::timebase`], else sample index / rate), raw
+/// accelerometer and, when present, raw gyro samples.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AutocalInput {
-    /// Time of every sample (s), increasing.
+    /// Time of every sample (s), non-decreasing: the policy's times
+    /// (regularised when the stamps repeat on a regular grid).
     pub time: Vec<f64>,
+    /// The `time_s` stamps as read, when the file has them (imu_tk's
+    /// method takes its time steps from these, repeats and all).
+    pub stamps: Option<Vec<f64>>,
+    /// The time base of the stamps, when the file has them.
+    pub timebase: Option<TimeBase>,
     /// Raw accelerometer samples.
     pub acc: Vec<[f64; 3]>,
     /// Raw gyro samples of the same instants.
@@ -497,24 +541,34 @@ pub struct AutocalInput {
 }
 
 /// Read an autocalibration record: the accelerometer triad is required,
-/// the gyro's optional; without `time_s` the time is `k / rate_hz`.
+/// the gyro's optional; without `time_s` the time is `k / rate_hz`, with it
+/// `rate_hz` must agree with the stamps.
 pub fn read_autocal<R: Read>(rows: &mut Reader<R>, rate_hz: f64) -> Result<AutocalInput> {
     let cols = SessionColumns::of(rows.header(), true, false)?;
     let mut session = SessionReader::new(cols);
-    let mut time = Vec::new();
     let mut acc = Vec::new();
     let mut gyr = cols.gyr.map(|_| Vec::new());
     while let Some(row) = rows.next_row()? {
         let s = session.read(&row)?;
-        let t = s.time.unwrap_or(acc.len() as f64 / rate_hz);
-        time.push(t);
         acc.push(s.acc.unwrap_or([0.0; 3]));
         if let (Some(g), Some(v)) = (gyr.as_mut(), s.gyr) {
             g.push(v);
         }
     }
     some_rows(rows)?;
-    Ok(AutocalInput { time, acc, gyr })
+    let timebase = session.timebase(rows.header().file(), Some(rate_hz))?;
+    let time = match &timebase {
+        Some(tb) => tb.times.clone(),
+        None => (0..acc.len()).map(|k| k as f64 / rate_hz).collect(),
+    };
+    let stamps = timebase.as_ref().map(|_| session.stamps);
+    Ok(AutocalInput {
+        time,
+        stamps,
+        timebase,
+        acc,
+        gyr,
+    })
 }
 
 /// Write a simulated session in the input format of the procedure its
@@ -625,12 +679,33 @@ mod tests {
     }
 
     #[test]
-    fn time_must_increase() {
-        let mut r = reader("time_s,acc_x,acc_y,acc_z\n0,1,2,3\n0,1,2,3\n");
+    fn time_must_not_decrease_and_may_repeat() {
+        let mut r = reader("time_s,acc_x,acc_y,acc_z\n0.01,1,2,3\n0,1,2,3\n");
         let e = read_autocal(&mut r, 100.0).unwrap_err().to_string();
         assert!(
-            e.contains("s.csv:3") && e.contains("does not increase"),
+            e.contains("s.csv:3") && e.contains("must not decrease"),
             "{e}"
         );
+        // 200 Hz stamped to 10 ms: accepted, regularised.
+        let mut text = String::from("time_s,acc_x,acc_y,acc_z\n");
+        for k in 0..40 {
+            text.push_str(&format!("{:.2},1,2,3\n", (k / 2) as f64 * 0.01));
+        }
+        let a = read_autocal(&mut reader(&text), 200.0).unwrap();
+        let tb = a.timebase.as_ref().unwrap();
+        assert_eq!(tb.repeats, 20);
+        assert!(tb.regularised);
+        // The slope of a 40-sample staircase: 0.2 % short of 5 ms (1/n² bias).
+        assert!(
+            (a.time[1] - a.time[0] - 0.005).abs() < 2e-5,
+            "{:?}",
+            &a.time[..3]
+        );
+        assert_eq!(a.stamps.as_ref().unwrap()[1], 0.0);
+        // The same file announced at 100 Hz is refused naming both rates.
+        let e = read_autocal(&mut reader(&text), 100.0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("100 Hz") && e.contains("200.3759 Hz"), "{e}");
     }
 }

@@ -164,7 +164,7 @@ impl crate::procedures::Procedure for Multipos {
         rows: &mut incal_io::Reader<R>,
         o: &MultiposSessionOptions,
     ) -> Result<Self::Input> {
-        super::input::read_multipos(rows, o.latitude_deg.is_some())
+        super::input::read_multipos_timed(rows, o.latitude_deg.is_some(), Some(o.rate_hz))
     }
 
     fn reduce(
@@ -172,7 +172,12 @@ impl crate::procedures::Procedure for Multipos {
         o: &MultiposSessionOptions,
         _: &dyn crate::procedures::Progress,
     ) -> Result<crate::document::ResultDocument> {
-        multipos(&input.statics, &input.rotations, &o.model(input.gyro))?.document()
+        let mut doc =
+            multipos(&input.statics, &input.rotations, &o.model(input.gyro))?.document()?;
+        if let Some(tb) = &input.timebase {
+            doc.warnings.extend(tb.warnings());
+        }
+        Ok(doc)
     }
 }
 

@@ -25,6 +25,8 @@ pub struct Channels {
     pub samples: Vec<Vec<f64>>,
     /// Rows (samples per channel).
     pub rows: usize,
+    /// The `time_s` stamps, when the record has them.
+    pub stamps: Option<Vec<f64>>,
 }
 
 /// The channels of a CSV record: the columns the header selects (every
@@ -42,10 +44,24 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>) -> Result<Channels> {
         return Err(h.error("no channel column besides time_s").into());
     }
     let names: Vec<String> = pick.iter().map(|&k| h.names()[k].clone()).collect();
+    let time = h.opt_column("time_s").filter(|c| !pick.contains(c));
+    let mut stamps = time.map(|_| Vec::new());
     let mut samples = vec![Vec::new(); pick.len()];
     while let Some(row) = rows.next_row()? {
         for (d, &k) in samples.iter_mut().zip(&pick) {
             d.push(row.f64(k)?);
+        }
+        if let (Some(c), Some(st)) = (time, stamps.as_mut()) {
+            let t = row.f64(c)?;
+            if st.last().is_some_and(|&p: &f64| t < p) {
+                return Err(row
+                    .cell_error(
+                        c,
+                        format!("{t} is below the stamp before: stamps must not decrease"),
+                    )
+                    .into());
+            }
+            st.push(t);
         }
     }
     for d in &mut samples {
@@ -55,6 +71,7 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>) -> Result<Channels> {
         names,
         samples,
         rows: rows.rows(),
+        stamps,
     })
 }
 

@@ -305,7 +305,15 @@ impl Procedure for Noise {
                 "a binary record is read mapped (reduce_mapped), not as CSV".into(),
             ));
         }
-        input::read(rows)
+        let channels = input::read(rows)?;
+        // `--rate-hz` must agree with the stamps (a wrong rate scales every
+        // noise coefficient); the time base itself is checked again in
+        // `reduce` for its warnings.
+        if let Some(st) = &channels.stamps {
+            crate::timebase::analyse(st, Some(o.rate_hz))
+                .map_err(|e| Error::Unsupported(e.to_string()))?;
+        }
+        Ok(channels)
     }
 
     fn reduce(
@@ -323,13 +331,30 @@ impl Procedure for Noise {
             o,
             progress,
         )?;
-        document::document(
+        let mut doc = document::document(
             &results,
             &quantity,
             &unit,
             o.confidence,
             o.grid()? != TauGrid::All,
-        )
+        )?;
+        if let Some(st) = &input.stamps {
+            let tb = crate::timebase::analyse(st, Some(o.rate_hz))
+                .map_err(|e| Error::Unsupported(e.to_string()))?;
+            let mut w = tb.warnings();
+            // The statistics take the samples as equally spaced at
+            // 1/rate_hz: say so where the stamps show gaps.
+            for x in w
+                .iter_mut()
+                .filter(|x| x.code == crate::WarningCode::TimeGaps)
+            {
+                x.message.push_str(
+                    "; the Allan statistics treat the samples as contiguous at 1/rate_hz, so every tau that spans a gap is biased",
+                );
+            }
+            doc.warnings.extend(w);
+        }
+        Ok(doc)
     }
 }
 

@@ -1,0 +1,213 @@
+//! Recordings as they come (docs/src/recordings.md): quantised time
+//! stamps are accepted and give the clean run's numbers within their
+//! stated U95, a `--rate-hz` that contradicts the stamps is refused naming
+//! both rates, a decreasing stamp is refused at its line, gaps are
+//! reported.
+
+mod common;
+use common::*;
+
+/// A copy of `text` whose `time_s` (first column) is floored to
+/// `resolution_s`, as a coarse acquisition clock prints it.
+fn quantised(text: &str, resolution_s: f64) -> String {
+    let mut out = String::new();
+    let mut header = true;
+    for line in text.lines() {
+        if line.starts_with('#') || std::mem::replace(&mut header, false) {
+            out.push_str(line);
+        } else {
+            let (t, rest) = line.split_once(',').unwrap();
+            let t: f64 = t.parse().unwrap();
+            let q = (t / resolution_s + 1e-9).floor() * resolution_s;
+            out.push_str(&format!("{q:.3},{rest}"));
+        }
+        out.push('\n');
+    }
+    out
+}
+
+fn autocal_session() -> String {
+    let f = tmp("session.csv");
+    ok(&run(&[
+        "simulate",
+        "imu",
+        "--sequence",
+        "random",
+        "--orientations",
+        "14",
+        "--init-static-s",
+        "3",
+        "--static-s",
+        "2",
+        "--move-s",
+        "1.5",
+        "--seed",
+        "11",
+        "-o",
+        p(&f),
+    ]));
+    std::fs::read_to_string(&f).unwrap()
+}
+
+fn autocal(file: &std::path::Path, method: &str) -> serde_json::Value {
+    json_of(&run(&[
+        "imu",
+        "autocal",
+        "--input",
+        p(file),
+        "--rate-hz",
+        "100",
+        "--init-static-s",
+        "3",
+        "--method",
+        method,
+        "--json",
+    ]))
+}
+
+#[test]
+fn quantised_stamps_give_the_clean_result_within_u95() {
+    let text = autocal_session();
+    let header = text.lines().find(|l| !l.starts_with('#')).unwrap();
+    assert!(header.starts_with("time_s,"), "a stamped session: {header}");
+    let clean = write("clean.csv", &text);
+    let coarse = write("coarse.csv", &quantised(&text, 0.02));
+    let a = autocal(&clean, "incal");
+    let b = autocal(&coarse, "incal");
+    assert!(a["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|w| w["code"] != "time-repeats"));
+    let w = b["warnings"].as_array().unwrap();
+    assert!(
+        w.iter().any(|w| w["code"] == "time-repeats"
+            && w["message"].as_str().unwrap().contains("sample index")),
+        "{w:?}"
+    );
+    let coefficients = a["coefficients"].as_object().unwrap();
+    assert!(coefficients.len() >= 18);
+    for (name, c) in coefficients {
+        let (x, y) = (
+            c["value"].as_f64().unwrap(),
+            b["coefficients"][name]["value"].as_f64().unwrap(),
+        );
+        let u95 = c["U95"].as_f64().unwrap();
+        assert!((x - y).abs() <= u95, "{name}: {x} vs {y} (U95 {u95})");
+    }
+    // imu_tk's steps take the stamps as read (zero steps and all): it runs.
+    let t = autocal(&coarse, "tedaldi");
+    assert_eq!(t["options"]["method"], "tedaldi");
+}
+
+#[test]
+fn a_rate_that_contradicts_the_stamps_is_refused_naming_both() {
+    let f = tmp("ferraris.csv");
+    ok(&run(&[
+        "simulate",
+        "imu",
+        "--sequence",
+        "ferraris",
+        "--static-s",
+        "0.5",
+        "--rotation-s",
+        "1",
+        "-o",
+        p(&f),
+    ]));
+    refused(
+        &run(&["imu", "ferraris", "--input", p(&f), "--rate-hz", "200"]),
+        &["ferraris.csv", "--rate-hz 200 Hz", "100.0000 Hz"],
+    );
+    refused(
+        &run(&["imu", "multipos", "--input", p(&f), "--rate-hz", "50"]),
+        &["ferraris.csv"],
+    );
+    let n = tmp("noise.csv");
+    ok(&run(&[
+        "simulate",
+        "noise",
+        "--arw-deg-rth",
+        "0.1",
+        "--duration-s",
+        "30",
+        "--rate-hz",
+        "100",
+        "--seed",
+        "2",
+        "-o",
+        p(&n),
+    ]));
+    refused(
+        &run(&["noise", "--input", p(&n), "--rate-hz", "200", "--quiet"]),
+        &["noise.csv", "--rate-hz 200 Hz", "100.0000 Hz"],
+    );
+    // Within 2 %: accepted.
+    ok(&run(&[
+        "noise",
+        "--input",
+        p(&n),
+        "--rate-hz",
+        "101",
+        "--quiet",
+    ]));
+}
+
+#[test]
+fn a_decreasing_stamp_is_refused_at_its_line_and_gaps_are_reported() {
+    let text = autocal_session();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let header = lines.iter().position(|l| l.starts_with("time_s")).unwrap();
+    // Row header+10 gets a stamp before its predecessor's.
+    let bad = header + 10;
+    let rest = lines[bad].split_once(',').unwrap().1.to_string();
+    lines[bad] = format!("0,{rest}");
+    let f = write("decreasing.csv", &(lines.join("\n") + "\n"));
+    refused(
+        &run(&["imu", "autocal", "--input", p(&f), "--rate-hz", "100"]),
+        &[&format!("decreasing.csv:{}", bad + 1), "must not decrease"],
+    );
+    // 100 samples lost from a noise record: reported, with what it means.
+    let n = tmp("gappy.csv");
+    ok(&run(&[
+        "simulate",
+        "noise",
+        "--arw-deg-rth",
+        "0.1",
+        "--duration-s",
+        "30",
+        "--rate-hz",
+        "100",
+        "--seed",
+        "3",
+        "-o",
+        p(&n),
+    ]));
+    let text = std::fs::read_to_string(&n).unwrap();
+    let kept: Vec<&str> = text
+        .lines()
+        .enumerate()
+        .filter(|(i, _)| !(1000..1100).contains(i))
+        .map(|(_, l)| l)
+        .collect();
+    let g = write("gappy2.csv", &(kept.join("\n") + "\n"));
+    let v = json_of(&run(&[
+        "noise",
+        "--input",
+        p(&g),
+        "--rate-hz",
+        "100",
+        "--quiet",
+        "--json",
+    ]));
+    let w = v["warnings"].as_array().unwrap();
+    let gap = w
+        .iter()
+        .find(|w| w["code"] == "time-gaps")
+        .expect("a time-gaps warning");
+    let m = gap["message"].as_str().unwrap();
+    assert!(
+        m.starts_with("1 gap(s)") && m.contains("1.0000 s missing"),
+        "{m}"
+    );
+}
