@@ -88,13 +88,40 @@ impl std::fmt::Display for TimeError {
             TimeError::NoSpan => write!(f, "time_s does not advance (fewer than two distinct stamps)"),
             TimeError::Decreasing { stamp, previous, .. } => write!(
                 f,
-                "time_s {stamp} is below the stamp before ({previous}): stamps must not decrease"
+                "time_s {} is below the stamp before ({}): stamps must not decrease",
+                short(*stamp),
+                short(*previous)
             ),
             TimeError::RateContradiction { given_hz, stamps_hz } => write!(
                 f,
-                "rate_hz {given_hz} Hz contradicts the time_s stamps ({stamps_hz:.4} Hz, gaps excluded): give the rate of the recording"
+                "rate_hz {} Hz contradicts the time_s stamps ({}, gaps excluded): give the rate of the recording",
+                short(*given_hz),
+                hz(*stamps_hz)
             ),
         }
+    }
+}
+
+/// A number in a message: as Rust prints it when short, else scientific.
+fn short(x: f64) -> String {
+    crate::error::short_number(&x.to_string())
+}
+
+/// A duration in a message: 4 decimals, scientific when huge.
+fn short4(x: f64) -> String {
+    if x.abs() < 1e9 {
+        format!("{x:.4}")
+    } else {
+        format!("{x:.4e}")
+    }
+}
+
+/// A rate in a message: 4 decimals, scientific when huge.
+fn hz(x: f64) -> String {
+    if x.abs() < 1e9 {
+        format!("{x:.4} Hz")
+    } else {
+        format!("{x:.4e} Hz")
     }
 }
 
@@ -243,10 +270,10 @@ impl TimeBase {
             out.push(Warning::new(
                 WarningCode::TimeRepeats,
                 format!(
-                    "{} time_s stamps repeat the one before (stamp resolution {} s, sample rate {:.4} Hz from the stamps): {}",
+                    "{} time_s stamps repeat the one before (stamp resolution {} s, sample rate {} from the stamps): {}",
                     self.repeats,
-                    (self.resolution_s * 1e9).round() / 1e9,
-                    self.rate_hz,
+                    short((self.resolution_s * 1e9).round() / 1e9),
+                    hz(self.rate_hz),
                     if self.regularised {
                         "the time steps were taken from the sample index (every stamp is within one resolution of that grid)"
                     } else {
@@ -261,11 +288,11 @@ impl TimeBase {
             out.push(Warning::new(
                 WarningCode::TimeGaps,
                 format!(
-                    "{} gap(s) in time_s (steps above 1.5 periods): the longest {:.4} s, {:.4} s missing in all, the first after t = {} s",
+                    "{} gap(s) in time_s (steps above 1.5 periods): the longest {} s, {} s missing in all, the first after t = {} s",
                     self.gaps.len(),
-                    longest,
-                    total,
-                    self.gaps[0].start_s
+                    short4(longest),
+                    short4(total),
+                    short(self.gaps[0].start_s)
                 ),
             ));
         }
@@ -330,6 +357,9 @@ mod tests {
         assert!(e.to_string().contains("200 Hz") && e.to_string().contains("100.0000 Hz"));
         assert!(analyse(&stamps, Some(101.0)).is_ok(), "1 % is agreement");
         assert_eq!(analyse(&[1.0, 1.0], None), Err(TimeError::NoSpan));
+        // A denormal stamp is echoed short (found by the fuzz targets).
+        let m = analyse(&[0.01, 1e-320], None).unwrap_err().to_string();
+        assert!(m.len() < 120 && m.contains("e-321"), "{m}");
     }
 
     #[test]
