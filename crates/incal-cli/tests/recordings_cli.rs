@@ -26,6 +26,26 @@ fn quantised(text: &str, resolution_s: f64) -> String {
     out
 }
 
+/// A 30 s, 100 Hz gyro noise record with `time_s` (seeded).
+fn noise_record(name: &str, seed: &str) -> std::path::PathBuf {
+    let f = tmp(name);
+    ok(&run(&[
+        "simulate",
+        "noise",
+        "--arw-deg-rth",
+        "0.1",
+        "--duration-s",
+        "30",
+        "--rate-hz",
+        "100",
+        "--seed",
+        seed,
+        "-o",
+        p(&f),
+    ]));
+    f
+}
+
 fn autocal_session() -> String {
     let f = tmp("session.csv");
     ok(&run(&[
@@ -123,21 +143,7 @@ fn a_rate_that_contradicts_the_stamps_is_refused_naming_both() {
         &run(&["imu", "multipos", "--input", p(&f), "--rate-hz", "50"]),
         &["ferraris.csv"],
     );
-    let n = tmp("noise.csv");
-    ok(&run(&[
-        "simulate",
-        "noise",
-        "--arw-deg-rth",
-        "0.1",
-        "--duration-s",
-        "30",
-        "--rate-hz",
-        "100",
-        "--seed",
-        "2",
-        "-o",
-        p(&n),
-    ]));
+    let n = noise_record("noise.csv", "2");
     refused(
         &run(&["noise", "--input", p(&n), "--rate-hz", "200", "--quiet"]),
         &["noise.csv", "--rate-hz 200 Hz", "100.0000 Hz"],
@@ -168,21 +174,7 @@ fn a_decreasing_stamp_is_refused_at_its_line_and_gaps_are_reported() {
         &[&format!("decreasing.csv:{}", bad + 1), "must not decrease"],
     );
     // 100 samples lost from a noise record: reported, with what it means.
-    let n = tmp("gappy.csv");
-    ok(&run(&[
-        "simulate",
-        "noise",
-        "--arw-deg-rth",
-        "0.1",
-        "--duration-s",
-        "30",
-        "--rate-hz",
-        "100",
-        "--seed",
-        "3",
-        "-o",
-        p(&n),
-    ]));
+    let n = noise_record("gappy.csv", "3");
     let text = std::fs::read_to_string(&n).unwrap();
     let kept: Vec<&str> = text
         .lines()

@@ -178,6 +178,12 @@ pub fn short_number(value: &str) -> String {
     }
 }
 
+/// A number echoed in a message: as Rust prints it when short, else in
+/// scientific notation ([`short_number`] of its text).
+pub fn short_f64(x: f64) -> String {
+    short_number(&x.to_string())
+}
+
 /// Return `Err(InvalidValue)` unless `x` is finite.
 pub fn finite(what: &str, x: f64) -> Result<f64> {
     if x.is_finite() {

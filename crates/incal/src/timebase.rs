@@ -102,9 +102,24 @@ impl std::fmt::Display for TimeError {
     }
 }
 
-/// A number in a message: as Rust prints it when short, else scientific.
-fn short(x: f64) -> String {
-    crate::error::short_number(&x.to_string())
+use crate::error::short_f64 as short;
+
+/// Append the next stamp `t` of a series being read: a stamp below the one
+/// before is refused (the message, for the reader to place at its line);
+/// repeats are accepted (the time base judges them, [`analyse`]).
+pub fn push_stamp(stamps: &mut Vec<f64>, t: f64) -> Result<(), String> {
+    if let Some(&prev) = stamps.last() {
+        if t < prev {
+            return Err(TimeError::Decreasing {
+                index: stamps.len(),
+                stamp: t,
+                previous: prev,
+            }
+            .to_string());
+        }
+    }
+    stamps.push(t);
+    Ok(())
 }
 
 /// A duration in a message: 4 decimals, scientific when huge.
@@ -357,7 +372,14 @@ mod tests {
         assert!(e.to_string().contains("200 Hz") && e.to_string().contains("100.0000 Hz"));
         assert!(analyse(&stamps, Some(101.0)).is_ok(), "1 % is agreement");
         assert_eq!(analyse(&[1.0, 1.0], None), Err(TimeError::NoSpan));
-        // A denormal stamp is echoed short (found by the fuzz targets).
+        // A denormal stamp is echoed short (found by the fuzz targets),
+        // by the readers' check too.
+        let mut st = vec![0.01];
+        let m = push_stamp(&mut st, 1e-320).unwrap_err();
+        assert!(m.len() < 120 && m.contains("e-321"), "{m}");
+        assert_eq!(st, [0.01]);
+        push_stamp(&mut st, 0.01).unwrap();
+        assert_eq!(st, [0.01, 0.01], "a repeat is kept");
         let m = analyse(&[0.01, 1e-320], None).unwrap_err().to_string();
         assert!(m.len() < 120 && m.contains("e-321"), "{m}");
     }

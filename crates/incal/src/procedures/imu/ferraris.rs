@@ -120,7 +120,7 @@ impl crate::procedures::Procedure for Ferraris {
         rows: &mut incal_io::Reader<R>,
         o: &FerrarisOptions,
     ) -> Result<Self::Input> {
-        super::input::read_ferraris_timed(rows, Some(o.rate_hz))
+        super::input::read_ferraris(rows, Some(o.rate_hz))
     }
 
     fn reduce(

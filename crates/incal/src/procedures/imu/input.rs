@@ -35,16 +35,7 @@ pub const GYR: [&str; 3] = ["gyr_x", "gyr_y", "gyr_z"];
 /// Labels of the rotation sections, about x, y and z.
 pub const ROTATIONS: [&str; 3] = ["x_rot", "y_rot", "z_rot"];
 
-/// A number echoed in a message or a label: as written when short, else in
-/// scientific notation.
-fn num(x: f64) -> String {
-    let s = format!("{x}");
-    if s.len() > 24 {
-        format!("{x:.6e}")
-    } else {
-        s
-    }
-}
+use crate::error::short_f64 as num;
 
 /// Direction of a position label: one to three face labels (`x_p`, `y_a`,
 /// …) on different axes joined by `+`; the normalised sum of their unit
@@ -196,18 +187,7 @@ impl SessionReader {
             None => None,
             Some(c) => {
                 let x = row.f64(c)?;
-                if let Some(&prev) = self.stamps.last() {
-                    if x < prev {
-                        return Err(row
-                            .error(format!(
-                                "time_s {} is below the stamp before ({}): stamps must not decrease",
-                                num(x),
-                                num(prev)
-                            ))
-                            .into());
-                    }
-                }
-                self.stamps.push(x);
+                crate::timebase::push_stamp(&mut self.stamps, x).map_err(|m| row.error(m))?;
                 Some(x)
             }
         };
@@ -232,13 +212,10 @@ pub type FerrarisSections = [Vec<[f64; 6]>; 9];
 /// an empty part are skipped (their numbers are still checked); every
 /// section needs at least 2 samples (the refusal names every missing or
 /// short one).
-pub fn read_ferraris<R: Read>(rows: &mut Reader<R>) -> Result<FerrarisSections> {
-    Ok(read_ferraris_timed(rows, None)?.0)
-}
-
-/// [`read_ferraris`] and the time base of `time_s` when the session has it
+///
+/// With the sections, the time base of `time_s` when the session has it
 /// (`rate_hz`, the nominal rate, must agree with it).
-pub fn read_ferraris_timed<R: Read>(
+pub fn read_ferraris<R: Read>(
     rows: &mut Reader<R>,
     rate_hz: Option<f64>,
 ) -> Result<(FerrarisSections, Option<TimeBase>)> {
@@ -437,12 +414,9 @@ struct Block {
 /// requires the north direction. Consecutive rows with the same label (or
 /// the same up direction) are one position; a position needs at least 2
 /// samples, a rotation the gyro columns.
-pub fn read_multipos<R: Read>(rows: &mut Reader<R>, latitude: bool) -> Result<MultiposInput> {
-    read_multipos_timed(rows, latitude, None)
-}
-
-/// [`read_multipos`], the nominal `rate_hz` checked against `time_s`.
-pub fn read_multipos_timed<R: Read>(
+///
+/// The nominal `rate_hz`, when given, is checked against `time_s`.
+pub fn read_multipos<R: Read>(
     rows: &mut Reader<R>,
     latitude: bool,
     rate_hz: Option<f64>,
@@ -665,13 +639,13 @@ mod tests {
         let mut r = reader(
             "position,acc_x,acc_y,acc_z\nx_p,1,2,3\nx_p,1,2,4\n,0,0,0\nx_a,5,6,7\nx_a,5,6,8\n",
         );
-        let m = read_multipos(&mut r, false).unwrap();
+        let m = read_multipos(&mut r, false, None).unwrap();
         assert_eq!(m.statics.len(), 2);
         assert_eq!(m.statics[1].label, "x_a");
         assert_eq!(m.statics[1].stats.n, 2);
         assert!(!m.gyro);
         let mut r = reader("position,acc_x,acc_y,acc_z\nx_p,1,2,3\nx_a,1,2,3\nx_a,1,2,3\n");
-        let e = read_multipos(&mut r, false).unwrap_err().to_string();
+        let e = read_multipos(&mut r, false, None).unwrap_err().to_string();
         assert!(
             e.starts_with("s.csv:2:") && e.contains("single sample"),
             "{e}"

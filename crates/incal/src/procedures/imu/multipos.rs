@@ -164,7 +164,7 @@ impl crate::procedures::Procedure for Multipos {
         rows: &mut incal_io::Reader<R>,
         o: &MultiposSessionOptions,
     ) -> Result<Self::Input> {
-        super::input::read_multipos_timed(rows, o.latitude_deg.is_some(), Some(o.rate_hz))
+        super::input::read_multipos(rows, o.latitude_deg.is_some(), Some(o.rate_hz))
     }
 
     fn reduce(

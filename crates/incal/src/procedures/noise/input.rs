@@ -25,13 +25,16 @@ pub struct Channels {
     pub samples: Vec<Vec<f64>>,
     /// Rows (samples per channel).
     pub rows: usize,
-    /// The `time_s` stamps, when the record has them.
-    pub stamps: Option<Vec<f64>>,
+    /// The time base of the `time_s` stamps, when the record has them
+    /// ([`crate::timebase`]).
+    pub timebase: Option<crate::timebase::TimeBase>,
 }
 
 /// The channels of a CSV record: the columns the header selects (every
-/// one but `time_s` when none is selected), each cell a finite number.
-pub fn read<R: Read>(rows: &mut incal_io::Reader<R>) -> Result<Channels> {
+/// one but `time_s` when none is selected), each cell a finite number; a
+/// `time_s` column is checked against the nominal `rate_hz` (a wrong rate
+/// scales every noise coefficient) and its time base kept for warnings.
+pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, rate_hz: f64) -> Result<Channels> {
     let h = rows.header();
     let pick: Vec<usize> = if h.selected().is_empty() {
         (0..h.width())
@@ -52,18 +55,16 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>) -> Result<Channels> {
             d.push(row.f64(k)?);
         }
         if let (Some(c), Some(st)) = (time, stamps.as_mut()) {
-            let t = row.f64(c)?;
-            if st.last().is_some_and(|&p: &f64| t < p) {
-                return Err(row
-                    .cell_error(
-                        c,
-                        format!("{t} is below the stamp before: stamps must not decrease"),
-                    )
-                    .into());
-            }
-            st.push(t);
+            crate::timebase::push_stamp(st, row.f64(c)?).map_err(|m| row.error(m))?;
         }
     }
+    let timebase = match &stamps {
+        Some(st) => Some(
+            crate::timebase::analyse(st, Some(rate_hz))
+                .map_err(|e| Error::Unsupported(e.to_string()))?,
+        ),
+        None => None,
+    };
     for d in &mut samples {
         d.shrink_to_fit();
     }
@@ -71,7 +72,7 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>) -> Result<Channels> {
         names,
         samples,
         rows: rows.rows(),
-        stamps,
+        timebase,
     })
 }
 

@@ -305,15 +305,7 @@ impl Procedure for Noise {
                 "a binary record is read mapped (reduce_mapped), not as CSV".into(),
             ));
         }
-        let channels = input::read(rows)?;
-        // `--rate-hz` must agree with the stamps (a wrong rate scales every
-        // noise coefficient); the time base itself is checked again in
-        // `reduce` for its warnings.
-        if let Some(st) = &channels.stamps {
-            crate::timebase::analyse(st, Some(o.rate_hz))
-                .map_err(|e| Error::Unsupported(e.to_string()))?;
-        }
-        Ok(channels)
+        input::read(rows, o.rate_hz)
     }
 
     fn reduce(
@@ -338,9 +330,7 @@ impl Procedure for Noise {
             o.confidence,
             o.grid()? != TauGrid::All,
         )?;
-        if let Some(st) = &input.stamps {
-            let tb = crate::timebase::analyse(st, Some(o.rate_hz))
-                .map_err(|e| Error::Unsupported(e.to_string()))?;
+        if let Some(tb) = &input.timebase {
             let mut w = tb.warnings();
             // The statistics take the samples as equally spaced at
             // 1/rate_hz: say so where the stamps show gaps.
