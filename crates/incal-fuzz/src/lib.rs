@@ -221,6 +221,7 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
                 gravity_m_s2: 9.81,
                 init_static_s: 3.0,
                 settle_s: 0.1,
+                init: Default::default(),
             },
         ),
         "imu-calibration" => apply_imu(data, seed("imu-ferraris")),

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use clap::Subcommand;
 use incal::procedures::imu::apply::ImuCalibration;
-use incal::procedures::imu::autocal::{Autocal, AutocalSessionOptions, Method};
+use incal::procedures::imu::autocal::{Autocal, AutocalSessionOptions, Initial, Method};
 use incal::procedures::imu::ferraris::{Ferraris, FerrarisOptions};
 use incal::procedures::imu::input;
 use incal::procedures::imu::multipos::{MatrixForm, Multipos, MultiposSessionOptions};
@@ -95,6 +95,30 @@ pub struct AutocalArgs {
     /// Time trimmed from both ends of every still interval (s; method incal).
     #[arg(long, default_value_t = 0.1)]
     pub settle_s: f64,
+    /// Initial accelerometer bias (raw units): one value for all axes or X,Y,Z (e.g. 32768 for offset 16-bit counts); default: from the data.
+    #[arg(
+        long,
+        value_name = "B",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    pub init_acc_bias: Option<Vec<f64>>,
+    /// Initial accelerometer scale (m/s^2 per raw unit): one value or X,Y,Z; default: from the data.
+    #[arg(
+        long,
+        value_name = "S",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    pub init_acc_scale: Option<Vec<f64>>,
+    /// Initial gyro scale (rad/s per raw unit): one value or X,Y,Z (e.g. 0.000159795 for 1/6258); default: from the data.
+    #[arg(
+        long,
+        value_name = "S",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    pub init_gyro_scale: Option<Vec<f64>>,
     #[command(flatten)]
     pub read: ReadArgs,
     #[command(flatten)]
@@ -112,8 +136,26 @@ pub fn run_autocal(a: &AutocalArgs) -> CliResult<()> {
         gravity_m_s2: a.gravity_m_s2,
         init_static_s: a.init_static_s,
         settle_s: a.settle_s,
+        init: Initial {
+            acc_bias: triple("--init-acc-bias", &a.init_acc_bias)?,
+            acc_scale: triple("--init-acc-scale", &a.init_acc_scale)?,
+            gyro_scale: triple("--init-gyro-scale", &a.init_gyro_scale)?,
+        },
     };
     crate::run::reduce::<Autocal>(&a.input, &a.read, &options, &a.result, &Silent)
+}
+
+/// One value for the three axes, or one per axis.
+fn triple(flag: &str, v: &Option<Vec<f64>>) -> CliResult<Option<[f64; 3]>> {
+    match v.as_deref() {
+        None => Ok(None),
+        Some(&[x]) => Ok(Some([x; 3])),
+        Some(&[x, y, z]) => Ok(Some([x, y, z])),
+        Some(other) => Err(crate::error::usage(format!(
+            "{flag} takes one value or three (X,Y,Z), not {}",
+            other.len()
+        ))),
+    }
 }
 
 /// Session sequence of `incal simulate imu`.

@@ -69,6 +69,47 @@ impl Method {
     }
 }
 
+/// Initial values of the fits (imu_tk's `setInitAccCalibration` and
+/// `setInitGyroCalibration`), for exact comparisons with imu_tk; each
+/// absent value comes from the data (the accelerometer's from an ellipsoid
+/// through the still-interval means, the gyro scale from the rotation
+/// angles over the raw integrals). In the document as `init_acc_bias`,
+/// `init_acc_scale`, `init_gyro_scale` (raw units; scales in calibrated
+/// unit per raw unit) when given.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Initial {
+    /// Accelerometer bias (raw units), e.g. 32768 for 16-bit offset counts.
+    pub acc_bias: Option<[f64; 3]>,
+    /// Accelerometer scale (m/s² per raw unit).
+    pub acc_scale: Option<[f64; 3]>,
+    /// Gyro scale (rad/s per raw unit), e.g. 1/6258 for an Xsens in counts.
+    pub gyro_scale: Option<[f64; 3]>,
+}
+
+impl Initial {
+    /// Refuse a non-finite value or a scale of 0, naming the option.
+    pub fn validate(&self) -> Result<()> {
+        for (key, v, scale) in [
+            ("init_acc_bias", self.acc_bias, false),
+            ("init_acc_scale", self.acc_scale, true),
+            ("init_gyro_scale", self.gyro_scale, true),
+        ] {
+            let Some(v) = v else { continue };
+            for x in v {
+                if !x.is_finite() || (scale && x == 0.0) || x.abs() > 1e12 {
+                    let need = if scale {
+                        "must be finite, non-zero and within 1e12"
+                    } else {
+                        "must be finite and within 1e12"
+                    };
+                    return Error::invalid(format!("{key} ({need})"), x);
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Options of [`autocal`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AutocalOptions {
@@ -87,6 +128,8 @@ pub struct AutocalOptions {
     pub min_intervals: usize,
     /// Time trimmed from both ends of each interval (incal method, s).
     pub settle_s: f64,
+    /// Initial values given by the user.
+    pub init: Initial,
 }
 
 impl AutocalOptions {
@@ -101,6 +144,7 @@ impl AutocalOptions {
             min_samples: 100,
             min_intervals: 12,
             settle_s: if method == Method::Incal { 0.1 } else { 0.0 },
+            init: Initial::default(),
         }
     }
 }
@@ -124,6 +168,8 @@ pub struct AutocalSessionOptions {
     /// Time trimmed from both ends of every still interval (s; method
     /// `incal` only).
     pub settle_s: f64,
+    /// Initial values of the fits (absent: from the data).
+    pub init: Initial,
 }
 
 impl AutocalSessionOptions {
@@ -148,7 +194,7 @@ impl AutocalSessionOptions {
                 value: self.settle_s.to_string(),
             });
         }
-        Ok(())
+        self.init.validate()
     }
 
     /// The options of [`autocal`]: the method's settings
@@ -158,6 +204,7 @@ impl AutocalSessionOptions {
         if self.method == Method::Incal {
             o.settle_s = self.settle_s;
         }
+        o.init = self.init;
         o
     }
 }
@@ -166,7 +213,7 @@ impl serde::Serialize for AutocalSessionOptions {
     fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
         use serde::ser::SerializeMap;
         let o = self.model();
-        let mut m = s.serialize_map(Some(7))?;
+        let mut m = s.serialize_map(None)?;
         m.serialize_entry("method", &o.method)?;
         m.serialize_entry("gravity_m_s2", &o.gravity)?;
         m.serialize_entry("init_static_s", &o.init_static_s)?;
@@ -174,6 +221,15 @@ impl serde::Serialize for AutocalSessionOptions {
         m.serialize_entry("min_samples", &o.min_samples)?;
         m.serialize_entry("settle_s", &o.settle_s)?;
         m.serialize_entry("rate_hz", &self.rate_hz)?;
+        for (key, v) in [
+            ("init_acc_bias", o.init.acc_bias),
+            ("init_acc_scale", o.init.acc_scale),
+            ("init_gyro_scale", o.init.gyro_scale),
+        ] {
+            if let Some(v) = v {
+                m.serialize_entry(key, &v)?;
+            }
+        }
         m.end()
     }
 }
@@ -664,11 +720,12 @@ pub fn autocal(
             }
         }
         let (samples, weights) = acc_observations(acc, &ivs, &used, opts, None)?;
+        let start = acc_start(acc, &ivs, &used, g, &x0, &opts.init);
         let x = minimize(
             &acc_names,
             &|x| acc_residuals(x, &samples, g),
             &|x| acc_jacobian(x, &samples),
-            x0.clone(),
+            start,
             weights.as_ref(),
         )?;
         let r = acc_residuals(&x, &samples, g);
@@ -828,7 +885,8 @@ pub fn autocal(
                 .collect();
             ratios.sort_by(f64::total_cmp);
             let sg = ratios.get(ratios.len() / 2).copied().unwrap_or(1.0);
-            let xg0 = DVector::from_vec(vec![0.0, 0.0, 0.0, 0.0, 0.0, 0.0, sg, sg, sg]);
+            let s0 = opts.init.gyro_scale.unwrap_or([sg; 3]);
+            let xg0 = DVector::from_vec(vec![0.0, 0.0, 0.0, 0.0, 0.0, 0.0, s0[0], s0[1], s0[2]]);
             let gnames: Vec<String> = GYR_PARAMS.iter().map(|n| format!("gyr.{n}")).collect();
             let scale: Vec<f64> = (0..9).map(|k| if k < 6 { 1.0 } else { sg.abs() }).collect();
             let res = |x: &DVector<f64>| gyro_residuals(x, &bias, &motions, project);
@@ -1004,6 +1062,106 @@ pub fn autocal(
         warnings,
         options: *opts,
     })
+}
+
+/// The accelerometer fit's starting point: the user's initial values
+/// where given ([`Initial`]), the rest from an ellipsoid through the
+/// intervals' means ([`ellipsoid_start`]), or `fallback` (bias 0, scale g
+/// over the median mean magnitude) when the means do not define one.
+fn acc_start(
+    acc: &[[f64; 3]],
+    ivs: &[Interval],
+    used: &dyn Fn(&Interval) -> Option<Interval>,
+    g: f64,
+    fallback: &DVector<f64>,
+    init: &Initial,
+) -> DVector<f64> {
+    let means: Vec<[f64; 3]> = ivs
+        .iter()
+        .filter_map(used)
+        .map(|u| detect::mean(acc, u))
+        .collect();
+    let mut x = fallback.clone();
+    if let Some((scale, bias)) = ellipsoid_start(&means, g) {
+        for k in 0..3 {
+            x[3 + k] = scale[k];
+            x[6 + k] = bias[k];
+        }
+    }
+    if let Some(s) = init.acc_scale {
+        for k in 0..3 {
+            x[3 + k] = s[k];
+        }
+    }
+    if let Some(b) = init.acc_bias {
+        for k in 0..3 {
+            x[6 + k] = b[k];
+        }
+    }
+    x
+}
+
+/// Scale and bias of the axis-aligned ellipsoid `Σ_j (s_j (m_j − b_j))² = g²`
+/// through the still-interval means `m` (raw units), or `None` when fewer
+/// than 7 means or they do not define an ellipsoid (too few directions).
+///
+/// Why: on raw counts (offsets of ~32768, scales of ~1e-4) a start at
+/// bias 0 lies in the basin where the bias runs off to infinity with the
+/// scale to zero; the ellipsoid lands next to the minimum in any unit.
+/// Fitted linearly: `[u², v², w², u, v, w, 1]·p = 0` on the means centred
+/// and scaled to unit spread, `p` the right singular vector of the
+/// smallest singular value.
+pub fn ellipsoid_start(means: &[[f64; 3]], g: f64) -> Option<([f64; 3], [f64; 3])> {
+    let n = means.len();
+    if n < 7 {
+        return None;
+    }
+    let mut c = [0.0; 3];
+    for m in means {
+        for k in 0..3 {
+            c[k] += m[k] / n as f64;
+        }
+    }
+    let spread = (means
+        .iter()
+        .map(|m| (0..3).map(|k| (m[k] - c[k]).powi(2)).sum::<f64>())
+        .sum::<f64>()
+        / n as f64)
+        .sqrt();
+    if !(spread.is_finite() && spread > 0.0) {
+        return None;
+    }
+    let mut a = DMatrix::zeros(n, 7);
+    for (i, m) in means.iter().enumerate() {
+        for k in 0..3 {
+            let u = (m[k] - c[k]) / spread;
+            a[(i, k)] = u * u;
+            a[(i, 3 + k)] = u;
+        }
+        a[(i, 6)] = 1.0;
+    }
+    let svd = a.svd(false, true);
+    let vt = svd.v_t?;
+    let (j, _) = svd.singular_values.argmin();
+    let mut p: Vec<f64> = vt.row(j).iter().copied().collect();
+    if p[0] < 0.0 {
+        p.iter_mut().for_each(|v| *v = -*v);
+    }
+    if !(p[0] > 0.0 && p[1] > 0.0 && p[2] > 0.0) {
+        return None;
+    }
+    let u0: Vec<f64> = (0..3).map(|k| -p[3 + k] / (2.0 * p[k])).collect();
+    let r = (0..3).map(|k| p[k] * u0[k] * u0[k]).sum::<f64>() - p[6];
+    if !(r > 0.0) {
+        return None;
+    }
+    let mut scale = [0.0; 3];
+    let mut bias = [0.0; 3];
+    for k in 0..3 {
+        scale[k] = g * (p[k] / r).sqrt() / spread;
+        bias[k] = c[k] + spread * u0[k];
+    }
+    (scale.iter().chain(&bias).all(|v| v.is_finite())).then_some((scale, bias))
 }
 
 /// `R(q)ᵀ ĝ₀ − ĝ₁` of one motion (unprojected).
