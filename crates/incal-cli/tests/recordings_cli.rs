@@ -203,3 +203,120 @@ fn a_decreasing_stamp_is_refused_at_its_line_and_gaps_are_reported() {
         "{m}"
     );
 }
+
+/// `text` in offset counts: every acc_/gyr_ column times `gain` plus 32768
+/// (a 16-bit converter's offset), as a raw-count recording gives it.
+fn in_counts(text: &str, gain: f64) -> String {
+    let mut out = String::new();
+    let mut cols: Option<Vec<bool>> = None;
+    for line in text.lines() {
+        if line.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = line.split(',').collect();
+        match &cols {
+            None => {
+                cols = Some(
+                    fields
+                        .iter()
+                        .map(|f| f.starts_with("acc_") || f.starts_with("gyr_"))
+                        .collect(),
+                );
+                out.push_str(line);
+            }
+            Some(c) => {
+                let row: Vec<String> = fields
+                    .iter()
+                    .zip(c)
+                    .map(|(f, &raw)| match (raw, f.parse::<f64>()) {
+                        (true, Ok(x)) => format!("{}", x * gain + 32768.0),
+                        _ => f.to_string(),
+                    })
+                    .collect();
+                out.push_str(&row.join(","));
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// Raw counts need no option and no initial value: Ferraris, multipos and
+/// the autocalibration (both methods) give, on a session rewritten in
+/// offset counts (× 7 + 32768), the clean run's coefficients carried into
+/// counts (biases × 7 + 32768, output-per-input terms × 7, the
+/// autocalibration's input-per-output scales ÷ 7, misalignments as they
+/// were) and their U95 likewise.
+#[test]
+fn raw_counts_give_the_same_calibration_in_counts() {
+    let gain = 7.0;
+    let sim = |sequence: &str, name: &str| {
+        let f = tmp(name);
+        let mut args = vec!["simulate", "imu", "--sequence", sequence, "--seed", "5"];
+        if sequence == "random" {
+            args.extend([
+                "--orientations",
+                "14",
+                "--init-static-s",
+                "3",
+                "--static-s",
+                "2",
+                "--move-s",
+                "1.5",
+            ]);
+        }
+        args.extend(["-o", p(&f)]);
+        ok(&run(&args));
+        let counts = write(
+            &format!("counts_{name}"),
+            &in_counts(&std::fs::read_to_string(&f).unwrap(), gain),
+        );
+        (f, counts)
+    };
+    let reduce = |cmd: &str, f: &std::path::Path, extra: &[&str]| {
+        let mut args = vec!["imu", cmd, "--input", p(f), "--rate-hz", "100", "--json"];
+        args.extend_from_slice(extra);
+        json_of(&run(&args))
+    };
+    let ferraris = sim("ferraris", "ferraris.csv");
+    let positions = sim("positions", "positions.csv");
+    let random = sim("random", "random.csv");
+    let autocal_opts = ["--init-static-s", "3"];
+    let cases = [
+        ("ferraris", &ferraris, vec![]),
+        ("multipos", &positions, vec![]),
+        ("autocal", &random, autocal_opts.to_vec()),
+        ("autocal", &random, [&autocal_opts[..], &["--method", "tedaldi"]].concat()),
+    ];
+    for (cmd, (clean, counts), extra) in cases {
+        let a = reduce(cmd, clean, &extra);
+        let b = reduce(cmd, counts, &extra);
+        let ca = a["coefficients"].as_object().unwrap();
+        assert!(ca.len() >= 18, "{cmd}");
+        for (name, c) in ca {
+            let short = name.split('.').nth(1).unwrap();
+            let (factor, offset) = if short.starts_with("b_") || name.starts_with("b_") {
+                (gain, 32768.0)
+            } else if name.starts_with("R_") || short.starts_with("M_") || short.starts_with("m_")
+            {
+                (1.0, 0.0)
+            } else if cmd == "autocal" && short.starts_with("s_") {
+                (1.0 / gain, 0.0)
+            } else {
+                (gain, 0.0)
+            };
+            let want = c["value"].as_f64().unwrap() * factor + offset;
+            let want_u95 = c["U95"].as_f64().unwrap() * factor;
+            let got = &b["coefficients"][name];
+            let (v, u95) = (got["value"].as_f64().unwrap(), got["U95"].as_f64().unwrap());
+            assert!(
+                (v - want).abs() <= 0.01 * u95 + 1e-9 * want.abs(),
+                "{cmd} {name}: {v} in counts, {want} carried from the clean run (U95 {u95})"
+            );
+            assert!(
+                (u95 - want_u95).abs() <= 0.01 * want_u95 + 1e-12,
+                "{cmd} {name}: U95 {u95} in counts, {want_u95} carried"
+            );
+        }
+    }
+}
