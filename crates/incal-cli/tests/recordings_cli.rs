@@ -286,7 +286,11 @@ fn raw_counts_give_the_same_calibration_in_counts() {
         ("ferraris", &ferraris, vec![]),
         ("multipos", &positions, vec![]),
         ("autocal", &random, autocal_opts.to_vec()),
-        ("autocal", &random, [&autocal_opts[..], &["--method", "tedaldi"]].concat()),
+        (
+            "autocal",
+            &random,
+            [&autocal_opts[..], &["--method", "tedaldi"]].concat(),
+        ),
     ];
     for (cmd, (clean, counts), extra) in cases {
         let a = reduce(cmd, clean, &extra);
@@ -297,8 +301,7 @@ fn raw_counts_give_the_same_calibration_in_counts() {
             let short = name.split('.').nth(1).unwrap();
             let (factor, offset) = if short.starts_with("b_") || name.starts_with("b_") {
                 (gain, 32768.0)
-            } else if name.starts_with("R_") || short.starts_with("M_") || short.starts_with("m_")
-            {
+            } else if name.starts_with("R_") || short.starts_with("M_") || short.starts_with("m_") {
                 (1.0, 0.0)
             } else if cmd == "autocal" && short.starts_with("s_") {
                 (1.0 / gain, 0.0)

@@ -60,6 +60,12 @@ pub enum WarningCode {
     /// Gaps in the time stamps (steps above 1.5 periods): count, longest,
     /// total ([`crate::timebase`]).
     TimeGaps,
+    /// Samples of a still section far from its median (robust scale) were
+    /// left out of its mean ([`crate::procedures::imu::screen`]).
+    Spikes,
+    /// A channel sits at its extreme value in many rows (a converter at
+    /// full scale).
+    Saturated,
 }
 
 impl WarningCode {
@@ -82,6 +88,8 @@ impl WarningCode {
             WarningCode::SignConvention => "sign-convention",
             WarningCode::TimeRepeats => "time-repeats",
             WarningCode::TimeGaps => "time-gaps",
+            WarningCode::Spikes => "spikes",
+            WarningCode::Saturated => "saturated",
         }
     }
 }

@@ -253,7 +253,7 @@ fn tedaldi_reproduces_imu_tk_on_raw_counts() {
     // minimum (at bias 0 the fit would run off with the bias to infinity).
     let found = reduce(&csv, &xsens_options(Method::Tedaldi, false));
     assert_reproduces(&found, acc, gyr);
-    assert!(found.options.get("init_acc_bias").is_none());
+    assert!(!found.options.contains_key("init_acc_bias"));
 }
 
 /// `--method incal` on raw counts with no option: 19 of 21 coefficients

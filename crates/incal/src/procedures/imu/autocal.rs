@@ -525,6 +525,8 @@ struct Motion {
     g1: V3,
     /// Two unit vectors normal to g1 (incal's projection).
     basis: [V3; 2],
+    /// Index of the still interval it starts from.
+    from: usize,
 }
 
 /// Integrate the calibrated rates of a motion: `R(q)` from the start.
@@ -627,13 +629,65 @@ pub fn autocal(
             got: init.len(),
         });
     }
+    let mut checked = Vec::new();
+    let mut channels = super::screen::ChannelCheck::<6>::default();
+    for (i, a) in acc.iter().enumerate() {
+        let w = gyr.map_or([0.0; 3], |g| g[i]);
+        channels.push(&[a[0], a[1], a[2], w[0], w[1], w[2]]);
+    }
+    channels.finish(
+        &super::screen::session_channels(gyr.is_some()),
+        &mut checked,
+    )?;
+    // incal: accelerometer spikes replaced by their local median (a
+    // Hampel filter scaled by the still start's robust scatter) before the
+    // detector and the means; tedaldi: imu_tk's steps, as read.
+    let screened;
+    let (acc, spike_flags) = if opts.method == Method::Incal {
+        let scale: [f64; 3] = std::array::from_fn(|k| {
+            let mut c: Vec<f64> = acc[init.start..=init.end].iter().map(|s| s[k]).collect();
+            super::screen::robust(&mut c).1
+        });
+        let (a, f) = super::screen::hampel(acc, scale);
+        screened = a;
+        (&screened[..], f)
+    } else {
+        (acc, Vec::new())
+    };
     let norm_th = detect::norm3(detect::variance(acc, init));
     if norm_th.is_nan() || norm_th <= 0.0 {
         return Err(Error::Unsupported(
             "the initial still interval has zero accelerometer variance: the threshold k*||var|| is 0 and nothing is still (a noise-free or saturated record?)".into(),
         ));
     }
-    let norms = detect::variance_norms(acc, opts.window);
+    // incal: steps above 1.5 typical steps are gaps (a still interval
+    // never spans one; a motion across one is left out of the gyro fit).
+    // tedaldi: imu_tk's steps, no gap handling.
+    let gaps: Vec<usize> = if opts.method == Method::Incal {
+        let mut steps: Vec<f64> = time
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .filter(|d| *d > 0.0)
+            .collect();
+        let mid = steps.len() / 2;
+        let typical = if steps.is_empty() {
+            0.0
+        } else {
+            *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+        };
+        (1..time.len())
+            .filter(|&i| typical > 0.0 && time[i] - time[i - 1] > 1.5 * typical)
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let spans_gap = |end: usize, start: usize| gaps.iter().any(|&g| g > end && g <= start);
+    let mut norms = detect::variance_norms(acc, opts.window);
+    for &g in &gaps {
+        // Both samples beside a gap read as moving: intervals end there.
+        norms[g - 1] = Some(f64::INFINITY);
+        norms[g] = Some(f64::INFINITY);
+    }
     let dt_mean = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
     let trim = if opts.method == Method::Incal {
         (opts.settle_s / dt_mean).round() as usize
@@ -827,9 +881,20 @@ pub fn autocal(
         });
     }
     let orientations = distinct_orientations(&dirs);
-    let mut warnings = acc_fit.quality_warnings(
+    let mut warnings = checked;
+    warnings.extend(acc_fit.quality_warnings(
         "the sensor is not still in some intervals, or the model (scale, three misalignments, bias) does not hold",
-    );
+    ));
+    let mut spikes: Vec<(String, usize)> = Vec::new();
+    let mut gyro_spikes = 0;
+    let mut gyro_in_motion = 0;
+    if !spike_flags.is_empty() {
+        for iv in &best.intervals {
+            let u = used(iv).unwrap_or(*iv);
+            let n = spike_flags[u.start..=u.end].iter().filter(|f| **f).count();
+            spikes.push((format!("acc {:.2}-{:.2} s", time[u.start], time[u.end]), n));
+        }
+    }
 
     // Gyro.
     let mut names = acc_names.clone();
@@ -837,10 +902,36 @@ pub fn autocal(
     let (gyr_p, gyr_fit, cov) = match gyr {
         None => (None, None, acc_cov.clone()),
         Some(gy) => {
-            let gi = detect::mean(gy, init);
-            let gv = detect::variance(gy, init);
+            // incal: gyro samples that stand out in motion are reported,
+            // not changed (a knock and a bad sample look alike).
+            if opts.method == Method::Incal {
+                let six: Vec<[f64; 6]> = gy[init.start..=init.end]
+                    .iter()
+                    .map(|w| [0.0, 0.0, 0.0, w[0], w[1], w[2]])
+                    .collect();
+                let (_, flags) = super::screen::hampel(gy, super::screen::gyro_scale_of(&six));
+                gyro_in_motion = best
+                    .intervals
+                    .windows(2)
+                    .map(|w| flags[w[0].end..w[1].start].iter().filter(|f| **f).count())
+                    .sum();
+            }
+            // The gyro bias: the still start's mean (incal: its spikes
+            // left out).
+            let start = &gy[init.start..=init.end];
+            let (kept, dropped) = match opts.method {
+                Method::Incal => super::screen::without_spikes(start),
+                Method::Tedaldi => (start.to_vec(), 0),
+            };
+            gyro_spikes = dropped;
+            let all = Interval {
+                start: 0,
+                end: kept.len() - 1,
+            };
+            let gi = detect::mean(&kept, all);
+            let gv = detect::variance(&kept, all);
             let bias = V3::from(gi);
-            let n_init = init.len() as f64;
+            let n_init = kept.len() as f64;
             // Gravity directions: calibrated means of whole intervals
             // (tedaldi) or of the used samples (incal).
             let gdir = |xa: &DVector<f64>, iv: &Interval| -> V3 {
@@ -855,7 +946,9 @@ pub fn autocal(
             let build = |xa: &DVector<f64>| -> Vec<Motion> {
                 best.intervals
                     .windows(2)
-                    .map(|w| {
+                    .enumerate()
+                    .filter(|(_, w)| !spans_gap(w[0].end, w[1].start))
+                    .map(|(from, w)| {
                         let (i0, i1) = (w[0].end, w[1].start - 1);
                         let g0 = gdir(xa, &w[0]);
                         let g1 = gdir(xa, &w[1]);
@@ -865,6 +958,7 @@ pub fn autocal(
                             g0,
                             g1,
                             basis: unit_basis(&g1),
+                            from,
                         }
                     })
                     .collect()
@@ -931,8 +1025,8 @@ pub fn autocal(
                     let dt2: f64 = m.dt.iter().map(|d| d * d).sum();
                     let c_phi = cw * dt2;
                     let rot = integrate(m, &tk, &bias);
-                    let c0 = rot.transpose() * gdir_cov(k) * rot;
-                    let c1 = gdir_cov(k + 1);
+                    let c0 = rot.transpose() * gdir_cov(m.from) * rot;
+                    let c1 = gdir_cov(m.from + 1);
                     for a in 0..2 {
                         let e = m.basis[a];
                         let vv = e.cross(&m.g1);
@@ -1028,6 +1122,32 @@ pub fn autocal(
             (Some(gp), Some(gf), c)
         }
     };
+    warnings.extend(super::screen::spikes_warning(
+        &spikes,
+        super::screen::REPLACED,
+    ));
+    warnings.extend(super::screen::spikes_warning(
+        &[("gyro still start".into(), gyro_spikes)],
+        super::screen::LEFT_OUT,
+    ));
+    warnings.extend(super::screen::spikes_warning(
+        &[("gyro between still intervals".into(), gyro_in_motion)],
+        super::screen::NOT_CHANGED,
+    ));
+    let across = best
+        .intervals
+        .windows(2)
+        .filter(|w| spans_gap(w[0].end, w[1].start))
+        .count();
+    if gyr.is_some() && across > 0 {
+        warnings.push(Warning::new(
+            WarningCode::TimeGaps,
+            format!(
+                "{across} of {} motions between still intervals span a time gap and are left out of the gyro fit (a rotation cannot be integrated across missing samples)",
+                best.intervals.len() - 1
+            ),
+        ));
+    }
     let dof = match &gyr_fit {
         Some(gf) => acc_fit.estimates.dof().min(gf.estimates.dof()),
         None => acc_fit.estimates.dof(),
@@ -1152,7 +1272,7 @@ pub fn ellipsoid_start(means: &[[f64; 3]], g: f64) -> Option<([f64; 3], [f64; 3]
     }
     let u0: Vec<f64> = (0..3).map(|k| -p[3 + k] / (2.0 * p[k])).collect();
     let r = (0..3).map(|k| p[k] * u0[k] * u0[k]).sum::<f64>() - p[6];
-    if !(r > 0.0) {
+    if r.is_nan() || r <= 0.0 {
         return None;
     }
     let mut scale = [0.0; 3];

@@ -30,6 +30,8 @@ use crate::timebase::TimeBase;
 
 /// Accelerometer columns of a session.
 pub const ACC: [&str; 3] = ["acc_x", "acc_y", "acc_z"];
+/// The six channels of a session sample, in its order.
+pub const CHANNELS: [&str; 6] = ["acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"];
 /// Gyro columns of a session.
 pub const GYR: [&str; 3] = ["gyr_x", "gyr_y", "gyr_z"];
 /// Labels of the rotation sections, about x, y and z.
@@ -195,6 +197,30 @@ impl SessionReader {
     }
 }
 
+/// Refuse a rotation section that spans a gap of the time base: its
+/// integral (samples × 1/rate) would miss the rotation made while no
+/// samples came. `spans`: each rotation section's label and the stamp
+/// indices of its consecutive samples (first, last).
+fn check_rotation_gaps(
+    file: &str,
+    tb: Option<&TimeBase>,
+    spans: &[(String, usize, usize)],
+) -> Result<()> {
+    let Some(tb) = tb else { return Ok(()) };
+    for g in &tb.gaps {
+        if let Some((label, _, _)) = spans.iter().find(|(_, a, b)| *a < g.index && g.index <= *b) {
+            return Err(Error::Unsupported(format!(
+                "rotation section {} spans a time gap of {} s after time_s {}: its integral would miss the rotation made in the gap; record that rotation again",
+                clip(label),
+                num(g.step_s),
+                num(g.start_s)
+            ))
+            .in_file(file));
+        }
+    }
+    Ok(())
+}
+
 /// A reader that has handed out no row is refused as the input layer
 /// refuses an empty table (before any procedure-specific check).
 fn some_rows<R: Read>(rows: &Reader<R>) -> Result<()> {
@@ -222,11 +248,22 @@ pub fn read_ferraris<R: Read>(
     let mut session = SessionReader::new(SessionColumns::of(rows.header(), true, true)?);
     let cp = rows.header().column("part")?;
     let mut secs: FerrarisSections = Default::default();
+    // Stamp index of the first and last sample of each run of a rotation
+    // section (for the gap check).
+    let mut runs: Vec<(String, usize, usize)> = Vec::new();
+    let mut index = 0usize;
     while let Some(row) = rows.next_row()? {
         let s = session.read(&row)?;
+        index += 1;
         let label = row.text(cp).trim();
         if label.is_empty() {
             continue;
+        }
+        if label.ends_with("_rot") {
+            match runs.last_mut() {
+                Some((l, _, last)) if l == label && *last + 2 == index => *last = index - 1,
+                _ => runs.push((label.to_string(), index - 1, index - 1)),
+            }
         }
         let k = SECTIONS.iter().position(|l| *l == label).ok_or_else(|| {
             row.error(format!(
@@ -251,6 +288,7 @@ pub fn read_ferraris<R: Read>(
         )));
     }
     let tb = session.timebase(rows.header().file(), rate_hz)?;
+    check_rotation_gaps(rows.header().file(), tb.as_ref(), &runs)?;
     Ok((secs, tb))
 }
 
@@ -265,6 +303,9 @@ pub struct MultiposInput {
     pub gyro: bool,
     /// The time base of `time_s`, when the session has it.
     pub timebase: Option<TimeBase>,
+    /// What the input checks found: spikes left out of the static
+    /// positions' means ([`super::screen`]), saturated channels.
+    pub warnings: Vec<crate::warning::Warning>,
 }
 
 /// What a row of a multi-position session is.
@@ -406,6 +447,8 @@ impl MultiposColumns {
 struct Block {
     kind: Kind,
     line: usize,
+    /// Row index of its first sample (for the gap check).
+    first: usize,
     samples: Vec<[f64; 6]>,
 }
 
@@ -431,8 +474,15 @@ pub fn read_multipos<R: Read>(
         rotations: Vec::new(),
         gyro,
         timebase: None,
+        warnings: Vec::new(),
     };
-    let flush = |b: Block, input: &mut MultiposInput| -> Result<()> {
+    let mut spikes = Vec::new();
+    let mut still_scales = Vec::new();
+    let mut pending: Vec<(String, usize, Vec<[f64; 6]>)> = Vec::new();
+    let mut runs: Vec<(String, usize, usize)> = Vec::new();
+    let mut index = 0usize;
+    let mut channels = super::screen::ChannelCheck::default();
+    let mut flush = |b: Block, input: &mut MultiposInput| -> Result<()> {
         match b.kind {
             Kind::Skip => {}
             Kind::Static(key, up, north) => {
@@ -444,11 +494,14 @@ pub fn read_multipos<R: Read>(
                     )
                     .into());
                 }
+                let (kept, n) = super::screen::without_spikes(&b.samples);
+                spikes.push((key.clone(), n));
+                still_scales.push(super::screen::gyro_scale_of(&kept));
                 input.statics.push(StaticPosition {
                     label: key,
                     up,
                     north,
-                    stats: SectionStats::of(&b.samples)?,
+                    stats: SectionStats::of(&kept)?,
                 });
             }
             Kind::Rotation(label, axis) => {
@@ -460,11 +513,10 @@ pub fn read_multipos<R: Read>(
                     )
                     .into());
                 }
-                input.rotations.push(RotationSection {
-                    label,
-                    axis,
-                    stats: SectionStats::of(&b.samples)?,
-                });
+                // Summarised at the end, when the still scatter that
+                // scales their spike screening is known.
+                runs.push((label.clone(), b.first, b.first + b.samples.len() - 1));
+                pending.push((label, axis, b.samples));
             }
         }
         Ok(())
@@ -472,6 +524,8 @@ pub fn read_multipos<R: Read>(
     let mut block: Option<Block> = None;
     while let Some(row) = rows.next_row()? {
         let s = session.read(&row)?.six();
+        channels.push(&s);
+        index += 1;
         let kind = mc.kind(&row)?;
         match &mut block {
             Some(b) if b.kind.same(&kind) => b.samples.push(s),
@@ -482,6 +536,7 @@ pub fn read_multipos<R: Read>(
                 block = Some(Block {
                     kind,
                     line: row.line(),
+                    first: index - 1,
                     samples: vec![s],
                 });
             }
@@ -491,7 +546,28 @@ pub fn read_multipos<R: Read>(
         flush(b, &mut input)?;
     }
     some_rows(rows)?;
+    let scale = super::screen::median_scale(&still_scales);
+    let mut replaced = Vec::new();
+    for (label, axis, samples) in pending {
+        let n = super::screen::rotation_spikes(&samples, scale);
+        replaced.push((label.clone(), n));
+        input.rotations.push(RotationSection {
+            label,
+            axis,
+            stats: SectionStats::of(&samples)?,
+        });
+    }
     input.timebase = session.timebase(&file, rate_hz)?;
+    check_rotation_gaps(&file, input.timebase.as_ref(), &runs)?;
+    channels.finish(&super::screen::session_channels(gyro), &mut input.warnings)?;
+    input.warnings.extend(super::screen::spikes_warning(
+        &spikes,
+        super::screen::LEFT_OUT,
+    ));
+    input.warnings.extend(super::screen::spikes_warning(
+        &replaced,
+        super::screen::NOT_CHANGED,
+    ));
     Ok(input)
 }
 
@@ -557,7 +633,6 @@ pub fn write<W: std::io::Write>(
     out: W,
 ) -> std::io::Result<W> {
     use incal_io::{Cell, CsvWriter};
-    const TRIADS: [&str; 6] = ["acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z"];
     let mut header = vec!["time_s"];
     match layout {
         Layout::Ferraris => header.push("part"),
@@ -569,7 +644,7 @@ pub fn write<W: std::io::Write>(
             }
         }
     }
-    header.extend(TRIADS);
+    header.extend(CHANNELS);
     let mut w = CsvWriter::new(out, &header)?;
     for s in samples {
         w.cell(Cell::Num(s.time_s))?;

@@ -31,6 +31,7 @@ pub mod document;
 pub mod ferraris;
 pub mod input;
 pub mod multipos;
+pub mod screen;
 pub mod sim;
 
 use nalgebra::{Matrix3, Vector3};

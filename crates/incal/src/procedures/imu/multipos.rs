@@ -177,6 +177,7 @@ impl crate::procedures::Procedure for Multipos {
         if let Some(tb) = &input.timebase {
             doc.warnings.extend(tb.warnings());
         }
+        doc.warnings.extend(input.warnings.iter().cloned());
         Ok(doc)
     }
 }
