@@ -197,9 +197,10 @@ impl SessionReader {
     }
 }
 
-/// Refuse a rotation section that spans a gap of the time base: its
-/// integral (samples × 1/rate) would miss the rotation made while no
-/// samples came. `spans`: each rotation section's label and the stamp
+/// Refuse a rotation section that spans or borders a gap of the time
+/// base: its integral (samples × 1/rate) would miss the rotation made
+/// while no samples came (a gap right before or after the section may hide
+/// its start or end). `spans`: each rotation section's label and the stamp
 /// indices of its consecutive samples (first, last).
 fn check_rotation_gaps(
     file: &str,
@@ -208,9 +209,13 @@ fn check_rotation_gaps(
 ) -> Result<()> {
     let Some(tb) = tb else { return Ok(()) };
     for g in &tb.gaps {
-        if let Some((label, _, _)) = spans.iter().find(|(_, a, b)| *a < g.index && g.index <= *b) {
+        // The gap lies between samples g.index − 1 and g.index.
+        if let Some((label, _, _)) = spans
+            .iter()
+            .find(|(_, a, b)| *a <= g.index && g.index <= *b + 1)
+        {
             return Err(Error::Unsupported(format!(
-                "rotation section {} spans a time gap of {} s after time_s {}: its integral would miss the rotation made in the gap; record that rotation again",
+                "rotation section {} spans or borders a time gap of {} s after time_s {}: its integral would miss the rotation made in the gap; record that rotation again",
                 clip(label),
                 num(g.step_s),
                 num(g.start_s)
