@@ -564,3 +564,89 @@ fn injected_faults_are_undone_refused_or_named() {
         }
     }
 }
+
+/// `--sort-time`: rows out of time order are refused at their line
+/// without it; with it they are put in order (the clean result, to the
+/// bit) and a `time-sorted` warning counts the rows moved. The same for
+/// `noise`.
+#[test]
+fn sort_time_puts_rows_in_order_and_says_how_many() {
+    let text = autocal_session();
+    let clean = write("inorder.csv", &text);
+    let mut lines: Vec<&str> = text.lines().collect();
+    let header = lines.iter().position(|l| l.starts_with("time_s")).unwrap();
+    lines.swap(header + 500, header + 501);
+    lines.swap(header + 900, header + 903);
+    let f = write("swapped.csv", &(lines.join("\n") + "\n"));
+    refused(
+        &run(&[
+            "imu",
+            "autocal",
+            "--input",
+            p(&f),
+            "--rate-hz",
+            "100",
+            "--init-static-s",
+            "3",
+        ]),
+        &[
+            &format!("swapped.csv:{}", header + 502),
+            "must not decrease",
+        ],
+    );
+    let args = |file: &std::path::Path, sort: bool| {
+        let mut a = vec![
+            "imu",
+            "autocal",
+            "--input",
+            p(file),
+            "--rate-hz",
+            "100",
+            "--init-static-s",
+            "3",
+            "--json",
+        ]
+        .into_iter()
+        .map(String::from)
+        .collect::<Vec<_>>();
+        if sort {
+            a.push("--sort-time".into());
+        }
+        a
+    };
+    let go = |a: Vec<String>| json_of(&run(&a.iter().map(String::as_str).collect::<Vec<_>>()));
+    let a = go(args(&clean, false));
+    let b = go(args(&f, true));
+    assert_eq!(a["coefficients"], b["coefficients"]);
+    assert_eq!(b["options"]["sort_time"], true);
+    let w = b["warnings"].as_array().unwrap();
+    assert!(
+        w.iter()
+            .any(|w| w["code"] == "time-sorted"
+                && w["message"].as_str().unwrap().starts_with("4 of ")),
+        "{w:?}"
+    );
+    let n = std::fs::read_to_string(noise_record("sortnoise.csv", "4")).unwrap();
+    let mut lines: Vec<&str> = n.lines().collect();
+    lines.swap(10, 11);
+    let g = write("sortnoise2.csv", &(lines.join("\n") + "\n"));
+    refused(
+        &run(&["noise", "--input", p(&g), "--rate-hz", "100", "--quiet"]),
+        &["sortnoise2.csv:", "must not decrease"],
+    );
+    let v = json_of(&run(&[
+        "noise",
+        "--input",
+        p(&g),
+        "--rate-hz",
+        "100",
+        "--quiet",
+        "--sort-time",
+        "--json",
+    ]));
+    assert!(v["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|w| w["code"] == "time-sorted"));
+}

@@ -222,6 +222,7 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
                 init_static_s: 3.0,
                 settle_s: 0.1,
                 init: Default::default(),
+                sort_time: false,
             },
         ),
         "imu-calibration" => apply_imu(data, seed("imu-ferraris")),

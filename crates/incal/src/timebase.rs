@@ -122,6 +122,33 @@ pub fn push_stamp(stamps: &mut Vec<f64>, t: f64) -> Result<(), String> {
     Ok(())
 }
 
+/// The stable order of `stamps` by time and how many rows it moves (rows
+/// whose position changes), or `None` when they are already in order.
+/// For `--sort-time`: a recording whose rows came out of time order (two
+/// acquisition threads, a merged file) is put in order instead of refused.
+pub fn time_order(stamps: &[f64]) -> Option<(Vec<usize>, usize)> {
+    if stamps.windows(2).all(|w| w[0] <= w[1]) {
+        return None;
+    }
+    let mut order: Vec<usize> = (0..stamps.len()).collect();
+    order.sort_by(|&a, &b| stamps[a].total_cmp(&stamps[b]));
+    let moved = order.iter().enumerate().filter(|(i, &k)| *i != k).count();
+    Some((order, moved))
+}
+
+/// The `time-sorted` warning for `moved` of `rows` rows put in order.
+pub fn sorted_warning(moved: usize, rows: usize) -> crate::warning::Warning {
+    crate::warning::Warning::new(
+        crate::warning::WarningCode::TimeSorted,
+        format!("{moved} of {rows} rows were out of time order and were put in order by time_s (--sort-time)"),
+    )
+}
+
+/// Put `v` in `order` ([`time_order`]).
+pub fn permute<T: Copy>(v: &mut Vec<T>, order: &[usize]) {
+    *v = order.iter().map(|&k| v[k]).collect();
+}
+
 /// A duration in a message: 4 decimals, scientific when huge.
 fn short4(x: f64) -> String {
     if x.abs() < 1e9 {
@@ -317,6 +344,18 @@ impl TimeBase {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn time_order_is_stable_and_counts_the_rows_moved() {
+        assert!(time_order(&[0.0, 0.0, 1.0]).is_none());
+        let (order, moved) = time_order(&[0.0, 2.0, 1.0, 1.0, 3.0]).unwrap();
+        assert_eq!(order, vec![0, 2, 3, 1, 4]);
+        assert_eq!(moved, 3);
+        let mut v = vec!['a', 'b', 'c', 'd', 'e'];
+        permute(&mut v, &order);
+        assert_eq!(v, vec!['a', 'c', 'd', 'b', 'e']);
+    }
+
     use super::*;
 
     #[test]

@@ -66,6 +66,8 @@ pub enum WarningCode {
     /// A channel sits at its extreme value in many rows (a converter at
     /// full scale).
     Saturated,
+    /// Rows out of time order were put in order (`--sort-time`).
+    TimeSorted,
 }
 
 impl WarningCode {
@@ -90,6 +92,7 @@ impl WarningCode {
             WarningCode::TimeGaps => "time-gaps",
             WarningCode::Spikes => "spikes",
             WarningCode::Saturated => "saturated",
+            WarningCode::TimeSorted => "time-sorted",
         }
     }
 }

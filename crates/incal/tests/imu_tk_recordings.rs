@@ -102,6 +102,7 @@ fn t265_options(method: Method) -> AutocalSessionOptions {
         init_static_s: 50.0,
         settle_s: 0.1,
         init: Default::default(),
+        sort_time: false,
     }
 }
 
@@ -124,6 +125,7 @@ fn xsens_options(method: Method, imu_tk_init: bool) -> AutocalSessionOptions {
         } else {
             Initial::default()
         },
+        sort_time: false,
     }
 }
 

@@ -95,6 +95,9 @@ pub struct AutocalArgs {
     /// Time trimmed from both ends of every still interval (s; method incal).
     #[arg(long, default_value_t = 0.1)]
     pub settle_s: f64,
+    /// Put rows that are out of time order in order by time_s instead of refusing them (warning time-sorted counts the rows moved).
+    #[arg(long)]
+    pub sort_time: bool,
     /// Initial accelerometer bias (raw units): one value for all axes or X,Y,Z (e.g. 32768 for offset 16-bit counts); default: from the data.
     #[arg(
         long,
@@ -141,6 +144,7 @@ pub fn run_autocal(a: &AutocalArgs) -> CliResult<()> {
             acc_scale: triple("--init-acc-scale", &a.init_acc_scale)?,
             gyro_scale: triple("--init-gyro-scale", &a.init_gyro_scale)?,
         },
+        sort_time: a.sort_time,
     };
     crate::run::reduce::<Autocal>(&a.input, &a.read, &options, &a.result, &Silent)
 }

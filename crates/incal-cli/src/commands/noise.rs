@@ -106,6 +106,9 @@ pub struct Args {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Put CSV rows that are out of time order in order by time_s instead of refusing them (warning time-sorted counts the rows moved).
+    #[arg(long)]
+    pub sort_time: bool,
     /// One thread (same numbers as the parallel default, bit for bit).
     #[arg(long)]
     pub sequential: bool,
@@ -191,6 +194,7 @@ pub fn run(a: &Args) -> CliResult<()> {
         format: a.format.into(),
         channels: a.channels,
         parallel: !a.sequential,
+        sort_time: a.sort_time,
     };
     let bars = Bars::new(a.quiet);
     let sample = match a.format {

@@ -170,6 +170,9 @@ pub struct AutocalSessionOptions {
     pub settle_s: f64,
     /// Initial values of the fits (absent: from the data).
     pub init: Initial,
+    /// Put rows that are out of time order in order instead of refusing
+    /// them (warning `time-sorted`).
+    pub sort_time: bool,
 }
 
 impl AutocalSessionOptions {
@@ -221,6 +224,9 @@ impl serde::Serialize for AutocalSessionOptions {
         m.serialize_entry("min_samples", &o.min_samples)?;
         m.serialize_entry("settle_s", &o.settle_s)?;
         m.serialize_entry("rate_hz", &self.rate_hz)?;
+        if self.sort_time {
+            m.serialize_entry("sort_time", &true)?;
+        }
         for (key, v) in [
             ("init_acc_bias", o.init.acc_bias),
             ("init_acc_scale", o.init.acc_scale),
@@ -253,7 +259,7 @@ impl crate::procedures::Procedure for Autocal {
         rows: &mut incal_io::Reader<R>,
         o: &AutocalSessionOptions,
     ) -> Result<Self::Input> {
-        super::input::read_autocal(rows, o.rate_hz)
+        super::input::read_autocal(rows, o.rate_hz, o.sort_time)
     }
 
     fn reduce(
@@ -268,6 +274,12 @@ impl crate::procedures::Procedure for Autocal {
             _ => &input.time,
         };
         let mut doc = autocal(time, &input.acc, input.gyr.as_deref(), &o.model())?.document()?;
+        if input.sorted > 0 {
+            doc.warnings.push(crate::timebase::sorted_warning(
+                input.sorted,
+                input.acc.len(),
+            ));
+        }
         if let Some(tb) = &input.timebase {
             doc.warnings.extend(tb.warnings());
         }

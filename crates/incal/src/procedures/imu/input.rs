@@ -155,6 +155,8 @@ impl SessionRow {
 struct SessionReader {
     cols: SessionColumns,
     stamps: Vec<f64>,
+    /// `--sort-time`: keep stamps out of order (sorted after reading).
+    sort: bool,
 }
 
 impl SessionReader {
@@ -162,6 +164,7 @@ impl SessionReader {
         Self {
             cols,
             stamps: Vec::new(),
+            sort: false,
         }
     }
 
@@ -189,7 +192,11 @@ impl SessionReader {
             None => None,
             Some(c) => {
                 let x = row.f64(c)?;
-                crate::timebase::push_stamp(&mut self.stamps, x).map_err(|m| row.error(m))?;
+                if self.sort {
+                    self.stamps.push(x);
+                } else {
+                    crate::timebase::push_stamp(&mut self.stamps, x).map_err(|m| row.error(m))?;
+                }
                 Some(x)
             }
         };
@@ -593,14 +600,21 @@ pub struct AutocalInput {
     pub acc: Vec<[f64; 3]>,
     /// Raw gyro samples of the same instants.
     pub gyr: Option<Vec<[f64; 3]>>,
+    /// Rows moved into time order (`--sort-time`; 0 when in order).
+    pub sorted: usize,
 }
 
 /// Read an autocalibration record: the accelerometer triad is required,
 /// the gyro's optional; without `time_s` the time is `k / rate_hz`, with it
 /// `rate_hz` must agree with the stamps.
-pub fn read_autocal<R: Read>(rows: &mut Reader<R>, rate_hz: f64) -> Result<AutocalInput> {
+pub fn read_autocal<R: Read>(
+    rows: &mut Reader<R>,
+    rate_hz: f64,
+    sort_time: bool,
+) -> Result<AutocalInput> {
     let cols = SessionColumns::of(rows.header(), true, false)?;
     let mut session = SessionReader::new(cols);
+    session.sort = sort_time;
     let mut acc = Vec::new();
     let mut gyr = cols.gyr.map(|_| Vec::new());
     while let Some(row) = rows.next_row()? {
@@ -611,6 +625,15 @@ pub fn read_autocal<R: Read>(rows: &mut Reader<R>, rate_hz: f64) -> Result<Autoc
         }
     }
     some_rows(rows)?;
+    let mut sorted = 0;
+    if let Some((order, moved)) = crate::timebase::time_order(&session.stamps) {
+        crate::timebase::permute(&mut session.stamps, &order);
+        crate::timebase::permute(&mut acc, &order);
+        if let Some(g) = gyr.as_mut() {
+            crate::timebase::permute(g, &order);
+        }
+        sorted = moved;
+    }
     let timebase = session.timebase(rows.header().file(), Some(rate_hz))?;
     let time = match &timebase {
         Some(tb) => tb.times.clone(),
@@ -623,6 +646,7 @@ pub fn read_autocal<R: Read>(rows: &mut Reader<R>, rate_hz: f64) -> Result<Autoc
         timebase,
         acc,
         gyr,
+        sorted,
     })
 }
 
@@ -735,7 +759,7 @@ mod tests {
     #[test]
     fn time_must_not_decrease_and_may_repeat() {
         let mut r = reader("time_s,acc_x,acc_y,acc_z\n0.01,1,2,3\n0,1,2,3\n");
-        let e = read_autocal(&mut r, 100.0).unwrap_err().to_string();
+        let e = read_autocal(&mut r, 100.0, false).unwrap_err().to_string();
         assert!(
             e.contains("s.csv:3") && e.contains("must not decrease"),
             "{e}"
@@ -745,7 +769,7 @@ mod tests {
         for k in 0..40 {
             text.push_str(&format!("{:.2},1,2,3\n", (k / 2) as f64 * 0.01));
         }
-        let a = read_autocal(&mut reader(&text), 200.0).unwrap();
+        let a = read_autocal(&mut reader(&text), 200.0, false).unwrap();
         let tb = a.timebase.as_ref().unwrap();
         assert_eq!(tb.repeats, 20);
         assert!(tb.regularised);
@@ -757,7 +781,7 @@ mod tests {
         );
         assert_eq!(a.stamps.as_ref().unwrap()[1], 0.0);
         // The same file announced at 100 Hz is refused naming both rates.
-        let e = read_autocal(&mut reader(&text), 100.0)
+        let e = read_autocal(&mut reader(&text), 100.0, false)
             .unwrap_err()
             .to_string();
         assert!(e.contains("100 Hz") && e.contains("200.3759 Hz"), "{e}");

@@ -28,13 +28,21 @@ pub struct Channels {
     /// The time base of the `time_s` stamps, when the record has them
     /// ([`crate::timebase`]).
     pub timebase: Option<crate::timebase::TimeBase>,
+    /// Rows moved into time order (`sort_time`; 0 when in order).
+    pub sorted: usize,
 }
 
 /// The channels of a CSV record: the columns the header selects (every
 /// one but `time_s` when none is selected), each cell a finite number; a
 /// `time_s` column is checked against the nominal `rate_hz` (a wrong rate
 /// scales every noise coefficient) and its time base kept for warnings.
-pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, rate_hz: f64) -> Result<Channels> {
+/// With `sort_time`, rows out of time order are put in order by `time_s`
+/// instead of refused.
+pub fn read<R: Read>(
+    rows: &mut incal_io::Reader<R>,
+    rate_hz: f64,
+    sort_time: bool,
+) -> Result<Channels> {
     let h = rows.header();
     let pick: Vec<usize> = if h.selected().is_empty() {
         (0..h.width())
@@ -55,7 +63,22 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, rate_hz: f64) -> Result<Cha
             d.push(row.f64(k)?);
         }
         if let (Some(c), Some(st)) = (time, stamps.as_mut()) {
-            crate::timebase::push_stamp(st, row.f64(c)?).map_err(|m| row.error(m))?;
+            let t = row.f64(c)?;
+            if sort_time {
+                st.push(t);
+            } else {
+                crate::timebase::push_stamp(st, t).map_err(|m| row.error(m))?;
+            }
+        }
+    }
+    let mut sorted = 0;
+    if let Some(st) = stamps.as_mut() {
+        if let Some((order, moved)) = crate::timebase::time_order(st) {
+            crate::timebase::permute(st, &order);
+            for d in &mut samples {
+                crate::timebase::permute(d, &order);
+            }
+            sorted = moved;
         }
     }
     let timebase = match &stamps {
@@ -73,6 +96,7 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, rate_hz: f64) -> Result<Cha
         samples,
         rows: rows.rows(),
         timebase,
+        sorted,
     })
 }
 

@@ -136,6 +136,9 @@ pub struct NoiseOptions {
     pub channels: Option<usize>,
     /// Channels and sums on rayon's threads (the same bits either way).
     pub parallel: bool,
+    /// Put CSV rows that are out of time order in order by `time_s`
+    /// instead of refusing them (warning `time-sorted`).
+    pub sort_time: bool,
 }
 
 impl Default for NoiseOptions {
@@ -151,6 +154,7 @@ impl Default for NoiseOptions {
             format: Format::Csv,
             channels: None,
             parallel: true,
+            sort_time: false,
         }
     }
 }
@@ -166,6 +170,8 @@ impl Serialize for NoiseOptions {
             taus: &'a str,
             stability_tau_s: &'a [f64],
             confidence: f64,
+            #[serde(skip_serializing_if = "std::ops::Not::not")]
+            sort_time: bool,
         }
         Shown {
             rate_hz: self.rate_hz,
@@ -175,6 +181,7 @@ impl Serialize for NoiseOptions {
             taus: &self.taus,
             stability_tau_s: &self.stability_tau_s,
             confidence: self.confidence,
+            sort_time: self.sort_time,
         }
         .serialize(s)
     }
@@ -305,7 +312,7 @@ impl Procedure for Noise {
                 "a binary record is read mapped (reduce_mapped), not as CSV".into(),
             ));
         }
-        input::read(rows, o.rate_hz)
+        input::read(rows, o.rate_hz, o.sort_time)
     }
 
     fn reduce(
@@ -330,6 +337,10 @@ impl Procedure for Noise {
             o.confidence,
             o.grid()? != TauGrid::All,
         )?;
+        if input.sorted > 0 {
+            doc.warnings
+                .push(crate::timebase::sorted_warning(input.sorted, input.rows));
+        }
         if let Some(tb) = &input.timebase {
             let mut w = tb.warnings();
             // The statistics take the samples as equally spaced at
