@@ -650,3 +650,66 @@ fn sort_time_puts_rows_in_order_and_says_how_many() {
         .iter()
         .any(|w| w["code"] == "time-sorted"));
 }
+
+/// An accelerometer record at rest in m/s² analysed as g (a channel mean
+/// of 9.8 "g") carries `unit-suspect`; the same record at 1 g does not.
+#[test]
+fn an_accelerometer_record_in_the_wrong_unit_is_named() {
+    let f = tmp("accel.csv");
+    ok(&run(&[
+        "simulate",
+        "noise",
+        "--quantity",
+        "accel",
+        "--vrw-ug-rthz",
+        "50",
+        "--duration-s",
+        "20",
+        "--rate-hz",
+        "100",
+        "--seed",
+        "6",
+        "-o",
+        p(&f),
+    ]));
+    let text = std::fs::read_to_string(&f).unwrap();
+    let offset = |g: f64, name: &str| {
+        let mut out = String::new();
+        for (i, l) in text.lines().enumerate() {
+            if l.starts_with('#') || i == 0 || !l.contains(',') {
+                out.push_str(l);
+            } else {
+                let (a, b) = l.rsplit_once(',').unwrap();
+                let x: f64 = b.parse().unwrap();
+                out.push_str(&format!("{a},{}", x + g));
+            }
+            out.push('\n');
+        }
+        write(name, &out)
+    };
+    let analyse = |file: &std::path::Path| {
+        json_of(&run(&[
+            "noise",
+            "--input",
+            p(file),
+            "--rate-hz",
+            "100",
+            "--quantity",
+            "accel",
+            "--unit",
+            "g",
+            "--quiet",
+            "--json",
+        ]))
+    };
+    let suspect = |v: &serde_json::Value| {
+        v["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w["code"] == "unit-suspect")
+    };
+    let wrong = analyse(&offset(9.80665, "accel_ms2.csv"));
+    assert!(suspect(&wrong), "{}", wrong["warnings"]);
+    assert!(!suspect(&analyse(&offset(1.0, "accel_g.csv"))));
+}

@@ -68,6 +68,9 @@ pub enum WarningCode {
     Saturated,
     /// Rows out of time order were put in order (`--sort-time`).
     TimeSorted,
+    /// The data's magnitudes contradict the unit given (an accelerometer
+    /// record in m/s² analysed as g, or the reverse).
+    UnitSuspect,
 }
 
 impl WarningCode {
@@ -93,6 +96,7 @@ impl WarningCode {
             WarningCode::Spikes => "spikes",
             WarningCode::Saturated => "saturated",
             WarningCode::TimeSorted => "time-sorted",
+            WarningCode::UnitSuspect => "unit-suspect",
         }
     }
 }

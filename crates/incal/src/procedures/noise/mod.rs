@@ -337,6 +337,8 @@ impl Procedure for Noise {
             o.confidence,
             o.grid()? != TauGrid::All,
         )?;
+        doc.warnings
+            .extend(unit_suspect(&input.names, &input.samples, o, factor));
         if input.sorted > 0 {
             doc.warnings
                 .push(crate::timebase::sorted_warning(input.sorted, input.rows));
@@ -535,4 +537,47 @@ fn analyse(
     };
     progress.finish();
     results
+}
+
+/// The unit check of an accelerometer record (every channel's mean in g,
+/// `factor` from the input unit): a record at rest reads at most 1 g on
+/// any axis, so a channel mean above 1.5 g says the samples are not in the
+/// unit given (m/s² analysed as g); three channels whose means make a
+/// vector of 0.08–0.12 g while the unit is m/s² say the reverse (a triad at
+/// rest reads 1 g = 9.8 m/s²). Gyro units cannot be told apart this way.
+fn unit_suspect(
+    names: &[String],
+    samples: &[Vec<f64>],
+    o: &NoiseOptions,
+    factor: f64,
+) -> Option<crate::warning::Warning> {
+    if o.quantity != QuantityKind::Accel || o.data != DataKind::Rate {
+        return None;
+    }
+    let means: Vec<f64> = samples
+        .iter()
+        .map(|s| s.iter().sum::<f64>() / s.len().max(1) as f64 * factor)
+        .collect();
+    let unit = o.unit_text();
+    if let Some((k, m)) = means.iter().enumerate().find(|(_, m)| m.abs() > 1.5) {
+        return Some(crate::warning::Warning::new(
+            crate::WarningCode::UnitSuspect,
+            format!(
+                "channel {} averages {} g (unit {unit}): an accelerometer at rest reads at most 1 g, so the samples are probably not in {unit} (m/s2? give --unit m/s2); every noise term scales with the unit",
+                names[k],
+                crate::error::short_f64(*m)
+            ),
+        ));
+    }
+    let norm = means.iter().map(|m| m * m).sum::<f64>().sqrt();
+    if unit == "m/s2" && means.len() == 3 && (0.08..=0.12).contains(&norm) {
+        return Some(crate::warning::Warning::new(
+            crate::WarningCode::UnitSuspect,
+            format!(
+                "the three channels' means make a vector of {} m/s2: a triad at rest reads 9.8 m/s2, so the samples are probably in g (give --unit g); every noise term scales with the unit",
+                crate::error::short_f64(norm / factor)
+            ),
+        ));
+    }
+    None
 }
