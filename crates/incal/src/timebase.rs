@@ -105,11 +105,12 @@ impl std::fmt::Display for TimeError {
 use crate::error::short_f64 as short;
 
 /// Append the next stamp `t` of a series being read: a stamp below the one
-/// before is refused (the message, for the reader to place at its line);
+/// before is refused (the message, for the reader to place at its line)
+/// unless the series is to be sorted afterwards (`sort`, [`time_order`]);
 /// repeats are accepted (the time base judges them, [`analyse`]).
-pub fn push_stamp(stamps: &mut Vec<f64>, t: f64) -> Result<(), String> {
+pub fn push_stamp(stamps: &mut Vec<f64>, t: f64, sort: bool) -> Result<(), String> {
     if let Some(&prev) = stamps.last() {
-        if t < prev {
+        if t < prev && !sort {
             return Err(TimeError::Decreasing {
                 index: stamps.len(),
                 stamp: t,
@@ -122,18 +123,29 @@ pub fn push_stamp(stamps: &mut Vec<f64>, t: f64) -> Result<(), String> {
     Ok(())
 }
 
-/// The stable order of `stamps` by time and how many rows it moves (rows
-/// whose position changes), or `None` when they are already in order.
-/// For `--sort-time`: a recording whose rows came out of time order (two
-/// acquisition threads, a merged file) is put in order instead of refused.
-pub fn time_order(stamps: &[f64]) -> Option<(Vec<usize>, usize)> {
+/// Put `stamps` in time order (a stable sort) and return the order, for
+/// the series read with them ([`permute`]), and how many rows it moved
+/// (rows whose position changed); `None`, and `stamps` untouched, when
+/// they are already in order. For `--sort-time`: a recording whose rows
+/// came out of time order (two acquisition threads, a merged file) is put
+/// in order instead of refused.
+pub fn time_order(stamps: &mut Vec<f64>) -> Option<(Vec<usize>, usize)> {
     if stamps.windows(2).all(|w| w[0] <= w[1]) {
         return None;
     }
     let mut order: Vec<usize> = (0..stamps.len()).collect();
     order.sort_by(|&a, &b| stamps[a].total_cmp(&stamps[b]));
     let moved = order.iter().enumerate().filter(|(i, &k)| *i != k).count();
+    permute(stamps, &order);
     Some((order, moved))
+}
+
+/// The indices of the first sample after each gap of `times` under
+/// [`analyse`]'s rule (none when the times have no span).
+pub fn gap_indices(times: &[f64]) -> Vec<usize> {
+    analyse(times, None)
+        .map(|tb| tb.gaps.iter().map(|g| g.index).collect())
+        .unwrap_or_default()
 }
 
 /// The `time-sorted` warning for `moved` of `rows` rows put in order.
@@ -344,19 +356,21 @@ impl TimeBase {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
 
     #[test]
     fn time_order_is_stable_and_counts_the_rows_moved() {
-        assert!(time_order(&[0.0, 0.0, 1.0]).is_none());
-        let (order, moved) = time_order(&[0.0, 2.0, 1.0, 1.0, 3.0]).unwrap();
+        let mut sorted = vec![0.0, 0.0, 1.0];
+        assert!(time_order(&mut sorted).is_none());
+        let mut st = vec![0.0, 2.0, 1.0, 1.0, 3.0];
+        let (order, moved) = time_order(&mut st).unwrap();
         assert_eq!(order, vec![0, 2, 3, 1, 4]);
         assert_eq!(moved, 3);
+        assert_eq!(st, vec![0.0, 1.0, 1.0, 2.0, 3.0]);
         let mut v = vec!['a', 'b', 'c', 'd', 'e'];
         permute(&mut v, &order);
         assert_eq!(v, vec!['a', 'c', 'd', 'b', 'e']);
     }
-
-    use super::*;
 
     #[test]
     fn quantised_stamps_are_regularised_and_their_rate_found() {
@@ -414,11 +428,13 @@ mod tests {
         // A denormal stamp is echoed short (found by the fuzz targets),
         // by the readers' check too.
         let mut st = vec![0.01];
-        let m = push_stamp(&mut st, 1e-320).unwrap_err();
+        let m = push_stamp(&mut st, 1e-320, false).unwrap_err();
         assert!(m.len() < 120 && m.contains("e-321"), "{m}");
         assert_eq!(st, [0.01]);
-        push_stamp(&mut st, 0.01).unwrap();
+        push_stamp(&mut st, 0.01, false).unwrap();
         assert_eq!(st, [0.01, 0.01], "a repeat is kept");
+        push_stamp(&mut st, 0.001, true).unwrap();
+        assert_eq!(st, [0.01, 0.01, 0.001], "kept for sorting");
         let m = analyse(&[0.01, 1e-320], None).unwrap_err().to_string();
         assert!(m.len() < 120 && m.contains("e-321"), "{m}");
     }

@@ -651,15 +651,12 @@ pub fn autocal(
         &super::screen::session_channels(gyr.is_some()),
         &mut checked,
     )?;
-    // incal: accelerometer spikes replaced by their local median (a
-    // Hampel filter scaled by the still start's robust scatter) before the
-    // detector and the means; tedaldi: imu_tk's steps, as read.
+    // incal: accelerometer spikes mended by a Hampel filter scaled by the
+    // still start's robust scatter before the detector and the means;
+    // tedaldi: imu_tk's steps, as read.
     let screened;
     let (acc, spike_flags) = if opts.method == Method::Incal {
-        let scale: [f64; 3] = std::array::from_fn(|k| {
-            let mut c: Vec<f64> = acc[init.start..=init.end].iter().map(|s| s[k]).collect();
-            super::screen::robust(&mut c).1
-        });
+        let scale = super::screen::triad_scale(&acc[init.start..=init.end], 0);
         let (a, f) = super::screen::hampel(acc, scale);
         screened = a;
         (&screened[..], f)
@@ -672,24 +669,11 @@ pub fn autocal(
             "the initial still interval has zero accelerometer variance: the threshold k*||var|| is 0 and nothing is still (a noise-free or saturated record?)".into(),
         ));
     }
-    // incal: steps above 1.5 typical steps are gaps (a still interval
-    // never spans one; a motion across one is left out of the gyro fit).
-    // tedaldi: imu_tk's steps, no gap handling.
+    // incal: the time-stamp policy's gaps (a still interval never spans
+    // one; a motion across one is left out of the gyro fit). tedaldi:
+    // imu_tk's steps, no gap handling.
     let gaps: Vec<usize> = if opts.method == Method::Incal {
-        let mut steps: Vec<f64> = time
-            .windows(2)
-            .map(|w| w[1] - w[0])
-            .filter(|d| *d > 0.0)
-            .collect();
-        let mid = steps.len() / 2;
-        let typical = if steps.is_empty() {
-            0.0
-        } else {
-            *steps.select_nth_unstable_by(mid, f64::total_cmp).1
-        };
-        (1..time.len())
-            .filter(|&i| typical > 0.0 && time[i] - time[i - 1] > 1.5 * typical)
-            .collect()
+        crate::timebase::gap_indices(time)
     } else {
         Vec::new()
     };
@@ -917,11 +901,8 @@ pub fn autocal(
             // incal: gyro samples that stand out in motion are reported,
             // not changed (a knock and a bad sample look alike).
             if opts.method == Method::Incal {
-                let six: Vec<[f64; 6]> = gy[init.start..=init.end]
-                    .iter()
-                    .map(|w| [0.0, 0.0, 0.0, w[0], w[1], w[2]])
-                    .collect();
-                let (_, flags) = super::screen::hampel(gy, super::screen::gyro_scale_of(&six));
+                let scale = super::screen::triad_scale(&gy[init.start..=init.end], 0);
+                let flags = super::screen::hampel_flags(gy, scale);
                 gyro_in_motion = best
                     .intervals
                     .windows(2)

@@ -192,11 +192,8 @@ impl SessionReader {
             None => None,
             Some(c) => {
                 let x = row.f64(c)?;
-                if self.sort {
-                    self.stamps.push(x);
-                } else {
-                    crate::timebase::push_stamp(&mut self.stamps, x).map_err(|m| row.error(m))?;
-                }
+                crate::timebase::push_stamp(&mut self.stamps, x, self.sort)
+                    .map_err(|m| row.error(m))?;
                 Some(x)
             }
         };
@@ -508,7 +505,7 @@ pub fn read_multipos<R: Read>(
                 }
                 let (kept, n) = super::screen::without_spikes(&b.samples);
                 spikes.push((key.clone(), n));
-                still_scales.push(super::screen::gyro_scale_of(&kept));
+                still_scales.push(super::screen::triad_scale(&kept, 3));
                 input.statics.push(StaticPosition {
                     label: key,
                     up,
@@ -626,8 +623,7 @@ pub fn read_autocal<R: Read>(
     }
     some_rows(rows)?;
     let mut sorted = 0;
-    if let Some((order, moved)) = crate::timebase::time_order(&session.stamps) {
-        crate::timebase::permute(&mut session.stamps, &order);
+    if let Some((order, moved)) = crate::timebase::time_order(&mut session.stamps) {
         crate::timebase::permute(&mut acc, &order);
         if let Some(g) = gyr.as_mut() {
             crate::timebase::permute(g, &order);

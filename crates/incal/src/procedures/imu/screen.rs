@@ -93,7 +93,7 @@ pub const NOT_CHANGED: &str = "from the median of their 11 neighbours were found
 
 /// The `spikes` warning for `(section, count)` pairs (sections without
 /// spikes are not listed) saying what was `done` ([`LEFT_OUT`],
-/// [`REPLACED`]), or `None` when there are none.
+/// [`REPLACED`], [`NOT_CHANGED`]), or `None` when there are none.
 pub fn spikes_warning(counts: &[(String, usize)], done: &str) -> Option<Warning> {
     let hit: Vec<String> = counts
         .iter()
@@ -133,19 +133,51 @@ pub const HAMPEL_HALF: usize = 5;
 /// for spikes). Each spike is replaced by the straight line between its
 /// nearest unflagged neighbours (exact on a slope, the local level when
 /// still), so the sample count and time steps stay as recorded. Returns
-/// the record so mended, and the flags.
+/// the record so mended, and the flags ([`hampel_flags`]).
 pub fn hampel(x: &[[f64; 3]], scale: [f64; 3]) -> (Vec<[f64; 3]>, Vec<bool>) {
     let n = x.len();
+    let hits = hampel_hits(x, scale);
     let mut out = x.to_vec();
-    let mut flags = vec![false; n];
+    for (k, hit) in hits.iter().enumerate() {
+        for i in (0..n).filter(|&i| hit[i]) {
+            let l = (0..i).rev().find(|&j| !hit[j]);
+            let r = (i + 1..n).find(|&j| !hit[j]);
+            out[i][k] = match (l, r) {
+                (Some(l), Some(r)) => {
+                    x[l][k] + (x[r][k] - x[l][k]) * (i - l) as f64 / (r - l) as f64
+                }
+                (Some(j), None) | (None, Some(j)) => x[j][k],
+                (None, None) => x[i][k],
+            };
+        }
+    }
+    (out, any_channel(&hits))
+}
+
+/// The samples [`hampel`] flags (any channel), without mending the record:
+/// for data that is reported and left as recorded.
+pub fn hampel_flags(x: &[[f64; 3]], scale: [f64; 3]) -> Vec<bool> {
+    any_channel(&hampel_hits(x, scale))
+}
+
+/// Per sample: flagged on any channel.
+fn any_channel(hits: &[Vec<bool>; 3]) -> Vec<bool> {
+    (0..hits[0].len())
+        .map(|i| hits.iter().any(|h| h[i]))
+        .collect()
+}
+
+/// Per channel, the samples the test of [`hampel`] flags (a channel whose
+/// `scale` is not positive flags none).
+fn hampel_hits(x: &[[f64; 3]], scale: [f64; 3]) -> [Vec<bool>; 3] {
+    let n = x.len();
     let mut w = Vec::with_capacity(2 * HAMPEL_HALF + 1);
     let mut d = Vec::with_capacity(2 * HAMPEL_HALF);
-    let mut hit = vec![false; n];
-    for k in 0..3 {
+    std::array::from_fn(|k| {
+        let mut hit = vec![false; n];
         if scale[k].is_nan() || scale[k] <= 0.0 {
-            continue;
+            return hit;
         }
-        hit.iter_mut().for_each(|h| *h = false);
         // The first and last HAMPEL_HALF samples are not judged: their
         // window does not fit, and a truncated one mistakes a trend for a
         // spike.
@@ -162,37 +194,24 @@ pub fn hampel(x: &[[f64; 3]], scale: [f64; 3]) -> (Vec<[f64; 3]>, Vec<bool>) {
             let s = scale[k].max(1.4826 * step / std::f64::consts::SQRT_2);
             hit[i] = (x[i][k] - med).abs() > SPIKE_SIGMAS * s;
         }
-        for i in 0..n {
-            if !hit[i] {
-                continue;
-            }
-            flags[i] = true;
-            let l = (0..i).rev().find(|&j| !hit[j]);
-            let r = (i + 1..n).find(|&j| !hit[j]);
-            out[i][k] = match (l, r) {
-                (Some(l), Some(r)) => {
-                    x[l][k] + (x[r][k] - x[l][k]) * (i - l) as f64 / (r - l) as f64
-                }
-                (Some(j), None) | (None, Some(j)) => x[j][k],
-                (None, None) => x[i][k],
-            };
-        }
-    }
-    (out, flags)
+        hit
+    })
 }
 
 /// The gyro's still scatter: per channel, the median over the still
 /// sections of each section's robust σ̂ (the scale of [`hampel`] for the
 /// rotations).
 pub fn gyro_still_scale<'a>(statics: impl Iterator<Item = &'a [[f64; 6]]>) -> [f64; 3] {
-    let per: Vec<[f64; 3]> = statics.map(gyro_scale_of).collect();
+    let per: Vec<[f64; 3]> = statics.map(|s| triad_scale(s, 3)).collect();
     median_scale(&per)
 }
 
-/// The gyro's robust σ̂ of one still section.
-pub fn gyro_scale_of(s: &[[f64; 6]]) -> [f64; 3] {
+/// The robust σ̂ ([`robust`]) of channels `first..first + 3` of a still
+/// stretch: the accelerometer (`first` 0) or gyro (3 of a session sample,
+/// 0 of a gyro triad).
+pub fn triad_scale<const N: usize>(s: &[[f64; N]], first: usize) -> [f64; 3] {
     std::array::from_fn(|k| {
-        let mut c: Vec<f64> = s.iter().map(|x| x[3 + k]).collect();
+        let mut c: Vec<f64> = s.iter().map(|x| x[first + k]).collect();
         robust(&mut c).1
     })
 }
@@ -212,7 +231,7 @@ pub fn median_scale(per: &[[f64; 3]]) -> [f64; 3] {
 /// and the rotation integral must keep the real one.
 pub fn rotation_spikes(section: &[[f64; 6]], scale: [f64; 3]) -> usize {
     let gyro: Vec<[f64; 3]> = section.iter().map(|s| [s[3], s[4], s[5]]).collect();
-    hampel(&gyro, scale).1.iter().filter(|f| **f).count()
+    hampel_flags(&gyro, scale).iter().filter(|f| **f).count()
 }
 
 /// Rows at the extreme value before a channel is called saturated: at

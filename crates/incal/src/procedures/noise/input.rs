@@ -63,18 +63,12 @@ pub fn read<R: Read>(
             d.push(row.f64(k)?);
         }
         if let (Some(c), Some(st)) = (time, stamps.as_mut()) {
-            let t = row.f64(c)?;
-            if sort_time {
-                st.push(t);
-            } else {
-                crate::timebase::push_stamp(st, t).map_err(|m| row.error(m))?;
-            }
+            crate::timebase::push_stamp(st, row.f64(c)?, sort_time).map_err(|m| row.error(m))?;
         }
     }
     let mut sorted = 0;
     if let Some(st) = stamps.as_mut() {
         if let Some((order, moved)) = crate::timebase::time_order(st) {
-            crate::timebase::permute(st, &order);
             for d in &mut samples {
                 crate::timebase::permute(d, &order);
             }
