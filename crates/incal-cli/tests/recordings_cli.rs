@@ -46,26 +46,35 @@ fn noise_record(name: &str, seed: &str) -> std::path::PathBuf {
     f
 }
 
+/// A short autocalibration session: 14 random orientations after a 3 s
+/// still start (options of `simulate imu --sequence random`).
+const RANDOM_SESSION: [&str; 8] = [
+    "--orientations",
+    "14",
+    "--init-static-s",
+    "3",
+    "--static-s",
+    "2",
+    "--move-s",
+    "1.5",
+];
+
+/// `simulate imu --sequence SEQUENCE EXTRA… -o NAME`, the file written.
+fn simulate_imu(sequence: &str, extra: &[&str], name: &str) -> std::path::PathBuf {
+    let f = tmp(name);
+    let mut args = vec!["simulate", "imu", "--sequence", sequence];
+    args.extend_from_slice(extra);
+    args.extend(["-o", p(&f)]);
+    ok(&run(&args));
+    f
+}
+
 fn autocal_session() -> String {
-    let f = tmp("session.csv");
-    ok(&run(&[
-        "simulate",
-        "imu",
-        "--sequence",
+    let f = simulate_imu(
         "random",
-        "--orientations",
-        "14",
-        "--init-static-s",
-        "3",
-        "--static-s",
-        "2",
-        "--move-s",
-        "1.5",
-        "--seed",
-        "11",
-        "-o",
-        p(&f),
-    ]));
+        &[&RANDOM_SESSION[..], &["--seed", "11"]].concat(),
+        "session.csv",
+    );
     std::fs::read_to_string(&f).unwrap()
 }
 
@@ -94,17 +103,9 @@ fn quantised_stamps_give_the_clean_result_within_u95() {
     let coarse = write("coarse.csv", &quantised(&text, 0.02));
     let a = autocal(&clean, "incal");
     let b = autocal(&coarse, "incal");
-    assert!(a["warnings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .all(|w| w["code"] != "time-repeats"));
-    let w = b["warnings"].as_array().unwrap();
-    assert!(
-        w.iter().any(|w| w["code"] == "time-repeats"
-            && w["message"].as_str().unwrap().contains("sample index")),
-        "{w:?}"
-    );
+    assert!(warnings_with(&a, "time-repeats").is_empty());
+    let w = warnings_with(&b, "time-repeats");
+    assert!(w.iter().any(|m| m.contains("sample index")), "{w:?}");
     let coefficients = a["coefficients"].as_object().unwrap();
     assert!(coefficients.len() >= 18);
     for (name, c) in coefficients {
@@ -122,19 +123,11 @@ fn quantised_stamps_give_the_clean_result_within_u95() {
 
 #[test]
 fn a_rate_that_contradicts_the_stamps_is_refused_naming_both() {
-    let f = tmp("ferraris.csv");
-    ok(&run(&[
-        "simulate",
-        "imu",
-        "--sequence",
+    let f = simulate_imu(
         "ferraris",
-        "--static-s",
-        "0.5",
-        "--rotation-s",
-        "1",
-        "-o",
-        p(&f),
-    ]));
+        &["--static-s", "0.5", "--rotation-s", "1"],
+        "ferraris.csv",
+    );
     refused(
         &run(&["imu", "ferraris", "--input", p(&f), "--rate-hz", "200"]),
         &["ferraris.csv", "--rate-hz 200 Hz", "100.0000 Hz"],
@@ -192,12 +185,7 @@ fn a_decreasing_stamp_is_refused_at_its_line_and_gaps_are_reported() {
         "--quiet",
         "--json",
     ]));
-    let w = v["warnings"].as_array().unwrap();
-    let gap = w
-        .iter()
-        .find(|w| w["code"] == "time-gaps")
-        .expect("a time-gaps warning");
-    let m = gap["message"].as_str().unwrap();
+    let m = warnings_with(&v, "time-gaps")[0];
     assert!(
         m.starts_with("1 gap(s)") && m.contains("1.0000 s missing"),
         "{m}"
@@ -251,22 +239,12 @@ fn in_counts(text: &str, gain: f64) -> String {
 fn raw_counts_give_the_same_calibration_in_counts() {
     let gain = 7.0;
     let sim = |sequence: &str, name: &str| {
-        let f = tmp(name);
-        let mut args = vec!["simulate", "imu", "--sequence", sequence, "--seed", "5"];
-        if sequence == "random" {
-            args.extend([
-                "--orientations",
-                "14",
-                "--init-static-s",
-                "3",
-                "--static-s",
-                "2",
-                "--move-s",
-                "1.5",
-            ]);
-        }
-        args.extend(["-o", p(&f)]);
-        ok(&run(&args));
+        let extra: &[&str] = if sequence == "random" {
+            &RANDOM_SESSION
+        } else {
+            &[]
+        };
+        let f = simulate_imu(sequence, &[extra, &["--seed", "5"]].concat(), name);
         let counts = write(
             &format!("counts_{name}"),
             &in_counts(&std::fs::read_to_string(&f).unwrap(), gain),
@@ -325,6 +303,7 @@ fn raw_counts_give_the_same_calibration_in_counts() {
 }
 
 /// A simulated session's rows (`time_s` first) to edit.
+#[derive(Clone)]
 struct Session {
     header: String,
     rows: Vec<Vec<String>>,
@@ -375,19 +354,7 @@ fn uniform(state: &mut u64) -> f64 {
 #[test]
 fn injected_faults_are_undone_refused_or_named() {
     let sim = |sequence: &str, name: &str| {
-        let f = tmp(name);
-        ok(&run(&[
-            "simulate",
-            "imu",
-            "--sequence",
-            sequence,
-            "--static-s",
-            "12",
-            "--seed",
-            "5",
-            "-o",
-            p(&f),
-        ]));
+        let f = simulate_imu(sequence, &["--static-s", "12", "--seed", "5"], name);
         Session::of(&std::fs::read_to_string(&f).unwrap())
     };
     let reduce = |cmd: &str, f: &std::path::Path| {
@@ -408,14 +375,7 @@ fn injected_faults_are_undone_refused_or_named() {
             );
         }
     };
-    let codes = |v: &serde_json::Value| -> Vec<String> {
-        v["warnings"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|w| w["code"].as_str().unwrap().to_string())
-            .collect()
-    };
+    let has = |v: &serde_json::Value, code: &str| !warnings_with(v, code).is_empty();
     let mut rng = 0x9E37_79B9_7F4A_7C15u64;
     // The autocalibration: accelerometer spikes anywhere are undone, gyro
     // spikes in motion are named (not changed), gaps cut intervals and
@@ -426,8 +386,7 @@ fn injected_faults_are_undone_refused_or_named() {
         let clean = cal(&s.write("autocal_clean.csv"));
         let acc = s.column("acc_x");
         for (what, first) in [("acc", acc), ("gyr", s.column("gyr_x"))] {
-            let mut f = Session::of(&format!("{}\n", s.header));
-            f.rows = s.rows.clone();
+            let mut f = s.clone();
             for r in &mut f.rows[400..] {
                 if uniform(&mut rng) < 0.01 {
                     let k = first + (uniform(&mut rng) * 3.0) as usize;
@@ -436,28 +395,26 @@ fn injected_faults_are_undone_refused_or_named() {
                 }
             }
             let v = cal(&f.write(&format!("autocal_{what}_spikes.csv")));
-            assert!(codes(&v).contains(&"spikes".to_string()), "{what}");
+            assert!(has(&v, "spikes"), "{what}");
             if what == "acc" {
                 within_u(&clean, &v, "autocal acc spikes");
             }
         }
         for gap in [1usize, 10, 100] {
-            let mut f = Session::of(&format!("{}\n", s.header));
-            f.rows = s.rows.clone();
+            let mut f = s.clone();
             let at = 400 + (uniform(&mut rng) * (s.rows.len() - 600) as f64) as usize;
             f.rows.drain(at..at + gap);
             let v = cal(&f.write(&format!("autocal_gap{gap}.csv")));
             within_u(&clean, &v, &format!("autocal gap {gap}"));
-            assert!(codes(&v).contains(&"time-gaps".to_string()));
+            assert!(has(&v, "time-gaps"));
         }
-        let mut f = Session::of(&format!("{}\n", s.header));
-        f.rows = s.rows.clone();
+        let mut f = s.clone();
         for r in &mut f.rows {
             let t: f64 = r[0].parse().unwrap();
             r[0] = format!("{}", t + 0.002 * (2.0 * uniform(&mut rng) - 1.0));
         }
         let v = cal(&f.write("autocal_jitter.csv"));
-        if !codes(&v).contains(&"lack-of-fit".to_string()) {
+        if !has(&v, "lack-of-fit") {
             within_u(&clean, &v, "autocal jitter");
         }
     }
@@ -467,8 +424,7 @@ fn injected_faults_are_undone_refused_or_named() {
         let still = |i: usize| !s.label(i).is_empty() && !s.label(i).ends_with("_rot");
         // 1 % spikes of ±50 σ on every channel of the still rows: left
         // out of the means.
-        let mut f = Session::of(&format!("{}\n", s.header));
-        f.rows = s.rows.clone();
+        let mut f = s.clone();
         let first = s.column("acc_x");
         let mut spikes = 0;
         for i in 0..f.rows.len() {
@@ -483,11 +439,10 @@ fn injected_faults_are_undone_refused_or_named() {
         assert!(spikes > 20, "{cmd}: {spikes} spikes");
         let v = json_of(&reduce(cmd, &f.write(&format!("{cmd}_spikes.csv"))));
         within_u(&clean, &v, &format!("{cmd} with {spikes} spikes"));
-        assert!(codes(&v).contains(&"spikes".to_string()), "{cmd}");
+        assert!(has(&v, "spikes"), "{cmd}");
         // Time stamps jittered by up to ±0.2 periods: the rotation
         // integrals take 1/rate, the result is the clean one.
-        let mut f = Session::of(&format!("{}\n", s.header));
-        f.rows = s.rows.clone();
+        let mut f = s.clone();
         for r in &mut f.rows {
             let t: f64 = r[0].parse().unwrap();
             r[0] = format!("{}", t + 0.002 * (2.0 * uniform(&mut rng) - 1.0));
@@ -501,8 +456,7 @@ fn injected_faults_are_undone_refused_or_named() {
         // mean loses those samples (within u); beside or inside a rotation
         // the section is refused naming it.
         for gap in [1usize, 10, 100, 1000] {
-            let mut f = Session::of(&format!("{}\n", s.header));
-            f.rows = s.rows.clone();
+            let mut f = s.clone();
             // A still row with `gap` rows after it in the same section.
             let at = (0..s.rows.len() - gap)
                 .find(|&i| {
@@ -515,14 +469,10 @@ fn injected_faults_are_undone_refused_or_named() {
             f.rows.drain(at..at + gap);
             let v = json_of(&reduce(cmd, &f.write(&format!("{cmd}_gap{gap}.csv"))));
             within_u(&clean, &v, &format!("{cmd} gap {gap}"));
-            assert!(
-                codes(&v).contains(&"time-gaps".to_string()),
-                "{cmd} gap {gap}"
-            );
+            assert!(has(&v, "time-gaps"), "{cmd} gap {gap}");
         }
         if cmd == "ferraris" {
-            let mut f = Session::of(&format!("{}\n", s.header));
-            f.rows = s.rows.clone();
+            let mut f = s.clone();
             let at = (0..s.rows.len()).find(|&i| s.label(i) == "y_rot").unwrap() + 50;
             f.rows.drain(at..at + 10);
             refused(
@@ -530,8 +480,7 @@ fn injected_faults_are_undone_refused_or_named() {
                 &["ferraris_rotgap.csv", "rotation section y_rot", "time gap"],
             );
             // A gyro saturated through part of a rotation: named.
-            let mut f = Session::of(&format!("{}\n", s.header));
-            f.rows = s.rows.clone();
+            let mut f = s.clone();
             let k = s.column("gyr_z");
             let rot: Vec<usize> = (0..s.rows.len())
                 .filter(|&i| s.label(i) == "z_rot")
@@ -545,14 +494,9 @@ fn injected_faults_are_undone_refused_or_named() {
                 f.rows[i][k] = format!("{}", x.clamp(-0.8 * peak, 0.8 * peak));
             }
             let v = json_of(&reduce(cmd, &f.write("ferraris_clipped.csv")));
-            assert!(
-                codes(&v).contains(&"saturated".to_string()),
-                "{:?}",
-                codes(&v)
-            );
+            assert!(has(&v, "saturated"), "{}", v["warnings"]);
             // A dead channel: refused naming its column.
-            let mut f = Session::of(&format!("{}\n", s.header));
-            f.rows = s.rows.clone();
+            let mut f = s.clone();
             let k = s.column("acc_y");
             for r in &mut f.rows {
                 r[k] = "2048".into();
@@ -619,13 +563,8 @@ fn sort_time_puts_rows_in_order_and_says_how_many() {
     let b = go(args(&f, true));
     assert_eq!(a["coefficients"], b["coefficients"]);
     assert_eq!(b["options"]["sort_time"], true);
-    let w = b["warnings"].as_array().unwrap();
-    assert!(
-        w.iter()
-            .any(|w| w["code"] == "time-sorted"
-                && w["message"].as_str().unwrap().starts_with("4 of ")),
-        "{w:?}"
-    );
+    let w = warnings_with(&b, "time-sorted");
+    assert!(w.iter().any(|m| m.starts_with("4 of ")), "{w:?}");
     let n = std::fs::read_to_string(noise_record("sortnoise.csv", "4")).unwrap();
     let mut lines: Vec<&str> = n.lines().collect();
     lines.swap(10, 11);
@@ -644,11 +583,7 @@ fn sort_time_puts_rows_in_order_and_says_how_many() {
         "--sort-time",
         "--json",
     ]));
-    assert!(v["warnings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .any(|w| w["code"] == "time-sorted"));
+    assert!(!warnings_with(&v, "time-sorted").is_empty());
 }
 
 /// An accelerometer record at rest in m/s² analysed as g (a channel mean
@@ -702,13 +637,7 @@ fn an_accelerometer_record_in_the_wrong_unit_is_named() {
             "--json",
         ]))
     };
-    let suspect = |v: &serde_json::Value| {
-        v["warnings"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .any(|w| w["code"] == "unit-suspect")
-    };
+    let suspect = |v: &serde_json::Value| !warnings_with(v, "unit-suspect").is_empty();
     let wrong = analyse(&offset(9.80665, "accel_ms2.csv"));
     assert!(suspect(&wrong), "{}", wrong["warnings"]);
     assert!(!suspect(&analyse(&offset(1.0, "accel_g.csv"))));

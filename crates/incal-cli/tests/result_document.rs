@@ -338,21 +338,12 @@ fn centrifuge_from_a_tumble_result() {
         .unwrap()
         .iter()
         .any(|d| d["code"] == "chained-input"));
-    assert!(b["warnings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .all(|w| w["code"] != "missing-uncertainty"));
+    assert!(warnings_with(&b, "missing-uncertainty").is_empty());
     // Explicit values without their u: a warning, not a silent 0.
     let mut bare = common.to_vec();
     bare.extend_from_slice(&["--k0", &k0, "--k1", &k1]);
     let c: Value = serde_json::from_str(&ok(&run_in(&dir, &bare))).unwrap();
-    let missing: Vec<&Value> = c["warnings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|w| w["code"] == "missing-uncertainty")
-        .collect();
+    let missing = warnings_with(&c, "missing-uncertainty");
     assert_eq!(missing.len(), 2, "{missing:?}");
     // --from must be a tumble result.
     simulate(&dir, "a.csv", &["misalign", "accel", "--seed", "2"]);

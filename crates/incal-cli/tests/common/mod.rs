@@ -147,6 +147,17 @@ pub fn refused(o: &Output, needles: &[&str]) {
     }
 }
 
+/// The messages of the warnings of result document `v` with `code`.
+pub fn warnings_with<'a>(v: &'a Value, code: &str) -> Vec<&'a str> {
+    v["warnings"]
+        .as_array()
+        .expect("a warnings array")
+        .iter()
+        .filter(|w| w["code"] == code)
+        .map(|w| w["message"].as_str().expect("a message"))
+        .collect()
+}
+
 /// The sorted keys of a JSON object.
 pub fn keys(v: &Value) -> Vec<String> {
     let mut k: Vec<String> = v.as_object().expect("an object").keys().cloned().collect();
