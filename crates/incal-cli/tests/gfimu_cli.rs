@@ -611,3 +611,121 @@ fn solve_stopped_midway_closes_its_output() {
         }
     }
 }
+
+/// `gfimu solve` under the streaming time-stamp policy: stamps floored to
+/// twice the period repeat (zero steps, warning `time-repeats`) and a gap
+/// of up to four lost samples is bridged (warning `time-gaps`), each with
+/// the final ω within 4 u of the clean run (the trapezoid error over the
+/// bridged step is below the noise); a longer gap and a decreasing stamp
+/// are refused at their line.
+#[test]
+fn solve_takes_repeats_and_short_gaps_and_refuses_long_ones() {
+    let (cal, _) = calibration("twelve", "11");
+    let text = simulate(&["--layout", "twelve", "--kind", "motion", "--seed", "12"]);
+    let lines: Vec<&str> = text.lines().collect();
+    let first = lines.iter().position(|l| l.starts_with("time_s")).unwrap() + 1;
+    let solve = |name: &str, body: &[String]| {
+        let mut t: String = lines[..first].iter().map(|l| format!("{l}\n")).collect();
+        for l in body {
+            t.push_str(l);
+            t.push('\n');
+        }
+        let f = write_unique(name, &t);
+        let o = run(&[
+            "gfimu",
+            "solve",
+            "--layout",
+            "twelve",
+            "--calibration",
+            p(&cal),
+            "--input",
+            p(&f),
+            "--json",
+        ]);
+        (f, o)
+    };
+    let rows: Vec<String> = lines[first..].iter().map(|l| l.to_string()).collect();
+    let last_omega = |o: &std::process::Output| -> (Vec<f64>, Vec<f64>, Value) {
+        let d = json_of(o);
+        let s = d["samples"].as_array().unwrap().last().unwrap().clone();
+        let u = d["uncertainty"].as_array().unwrap().last().unwrap().clone();
+        let v = |x: &Value| {
+            x.as_array()
+                .unwrap()
+                .iter()
+                .map(|a| a.as_f64().unwrap())
+                .collect()
+        };
+        (v(&s["omega_rad_s"]), v(&u["u_omega_rad_s"]), d)
+    };
+    let (_, o) = solve("clean.csv", &rows);
+    let (w0, u0, d) = last_omega(&o);
+    assert!(
+        warnings_with(&d, "time-repeats").is_empty() && warnings_with(&d, "time-gaps").is_empty()
+    );
+    let period: f64 = {
+        let t = |k: usize| rows[k].split(',').next().unwrap().parse::<f64>().unwrap();
+        t(1) - t(0)
+    };
+    let close = |w: &[f64], what: &str| {
+        for a in 0..3 {
+            assert!(
+                (w[a] - w0[a]).abs() < 4.0 * u0[a],
+                "{what}: axis {a}: {} vs {} ± {}",
+                w[a],
+                w0[a],
+                u0[a]
+            );
+        }
+    };
+    // Floored to two periods: every other stamp repeats.
+    let floored: Vec<String> = rows
+        .iter()
+        .map(|l| {
+            let (t, rest) = l.split_once(',').unwrap();
+            let t: f64 = t.parse().unwrap();
+            let q = (t / (2.0 * period) + 1e-9).floor() * 2.0 * period;
+            format!("{q},{rest}")
+        })
+        .collect();
+    let (_, o) = solve("floored.csv", &floored);
+    let (w, _, d) = last_omega(&o);
+    assert_eq!(
+        warnings_with(&d, "time-repeats").len(),
+        1,
+        "{}",
+        d["warnings"]
+    );
+    close(&w, "floored stamps");
+    // Four samples lost: bridged.
+    let mut lost = rows.clone();
+    lost.drain(100..104);
+    let (_, o) = solve("lost4.csv", &lost);
+    let (w, _, d) = last_omega(&o);
+    let g = warnings_with(&d, "time-gaps");
+    assert!(g.len() == 1 && g[0].starts_with("1 gap(s)"), "{g:?}");
+    close(&w, "four samples lost");
+    // Ten lost: refused at the row after the gap.
+    let mut lost = rows.clone();
+    lost.drain(100..110);
+    let (f, o) = solve("lost10.csv", &lost);
+    refused(
+        &o,
+        &[
+            &format!("{}:{}:", p(&f), first + 101),
+            "time_s",
+            "gap of 11",
+        ],
+    );
+    // A stamp going back: refused at its line.
+    let mut back = rows.clone();
+    back.swap(50, 51);
+    let (f, o) = solve("back.csv", &back);
+    refused(
+        &o,
+        &[
+            &format!("{}:{}:", p(&f), first + 52),
+            "below the stamp before",
+        ],
+    );
+}

@@ -642,3 +642,182 @@ fn an_accelerometer_record_in_the_wrong_unit_is_named() {
     assert!(suspect(&wrong), "{}", wrong["warnings"]);
     assert!(!suspect(&analyse(&offset(1.0, "accel_g.csv"))));
 }
+
+/// The coefficients of a result as name → (value, u).
+fn coefficients(v: &serde_json::Value) -> Vec<(String, f64, f64)> {
+    v["coefficients"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .map(|(name, c)| {
+            (
+                name.clone(),
+                c["value"].as_f64().unwrap(),
+                c["u"].as_f64().unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// Misalignment raw records under the time-stamp policy: stamps from a
+/// clock coarser than the sampling repeat and change nothing (time gives
+/// only the measured table rate); a few samples lost in a record are
+/// counted by table angle and warned with their Earth-rate bound, within
+/// u of the clean run; more than 1 % of a record lost is refused naming
+/// the record's line.
+#[test]
+fn misalign_raw_records_take_repeats_and_count_lost_samples() {
+    let o = run(&[
+        "simulate",
+        "misalign",
+        "gyro",
+        "--time-series",
+        "--records",
+        "1",
+        "--samples-per-turn",
+        "400",
+        "--seed",
+        "5",
+    ]);
+    let clean = ok(&o);
+    let solve = |name: &str, text: &str| {
+        let f = write(name, text);
+        run(&[
+            "misalign",
+            "gyro",
+            "--input",
+            p(&f),
+            "--scale-factor",
+            "-2.9222",
+            "--json",
+        ])
+    };
+    let base = json_of(&solve("clean.csv", &clean));
+    assert!(warnings_with(&base, "time-repeats").is_empty());
+    let c0 = coefficients(&base);
+    // time_s is the fourth column: floor it to 0.1 s (samples every 0.045 s).
+    let lines: Vec<&str> = clean.lines().collect();
+    let floor = |l: &str| -> String {
+        let mut f: Vec<String> = l.split(',').map(String::from).collect();
+        let t: f64 = f[3].parse().unwrap();
+        f[3] = format!("{:.1}", (t / 0.1 + 1e-9).floor() * 0.1);
+        f.join(",")
+    };
+    let q: String = std::iter::once(lines[0].to_string())
+        .chain(lines[1..].iter().map(|l| floor(l)))
+        .map(|l| l + "\n")
+        .collect();
+    let v = json_of(&solve("quantised.csv", &q));
+    assert!(!warnings_with(&v, "time-repeats").is_empty());
+    for (a, b) in c0.iter().zip(coefficients(&v)) {
+        assert_eq!(a.1, b.1, "{}: only the measured rate uses time", a.0);
+    }
+    // Two samples lost in the first record (0.5 %), then ten (2.5 %).
+    let drop = |k: std::ops::Range<usize>| -> String {
+        lines
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !k.contains(i))
+            .map(|(_, l)| format!("{l}\n"))
+            .collect()
+    };
+    let v = json_of(&solve("lost2.csv", &drop(150..152)));
+    let w = warnings_with(&v, "time-gaps");
+    assert!(
+        w.len() == 1 && w[0].starts_with("line 2") && w[0].contains("lose 2 samples"),
+        "{w:?}"
+    );
+    for (a, b) in c0.iter().zip(coefficients(&v)) {
+        assert!(
+            (a.1 - b.1).abs() < a.2,
+            "{}: {} against {} ± {}",
+            a.0,
+            b.1,
+            a.1,
+            a.2
+        );
+    }
+    let f = write("lost10.csv", &drop(150..160));
+    let o = run(&[
+        "misalign",
+        "gyro",
+        "--input",
+        p(&f),
+        "--scale-factor",
+        "-2.9222",
+    ]);
+    refused(&o, &[p(&f), ":2:", "lose 10 samples", "more than 1 %"]);
+}
+
+/// `imu apply` under the streaming time-stamp policy: repeated stamps are
+/// copied and reported on standard error, a decreasing stamp is refused
+/// at its line, `--sort-time` puts the rows in order and says how many
+/// moved; the calibrated values of every row are those of the clean file.
+#[test]
+fn imu_apply_copies_stamps_under_the_policy() {
+    let text = autocal_session();
+    let session = write("apply_session.csv", &text);
+    let cal = tmp("apply_cal.json");
+    std::fs::write(
+        &cal,
+        ok(&run(&[
+            "imu",
+            "autocal",
+            "--input",
+            p(&session),
+            "--rate-hz",
+            "100",
+            "--init-static-s",
+            "3",
+            "--json",
+        ])),
+    )
+    .unwrap();
+    let apply = |f: &std::path::Path, extra: &[&str]| {
+        let mut args = vec!["imu", "apply", "--calibration", p(&cal), "--input", p(f)];
+        args.extend_from_slice(extra);
+        run(&args)
+    };
+    let clean = apply(&session, &[]);
+    assert!(stderr(&clean).is_empty(), "{}", stderr(&clean));
+    let clean = ok(&clean);
+    // Stamps floored to 20 ms: copied as floored, warned, values unchanged.
+    let q = write("apply_quantised.csv", &quantised(&text, 0.02));
+    let o = apply(&q, &[]);
+    let out = ok(&o);
+    assert!(
+        stderr(&o).contains("warning [time-repeats]"),
+        "{}",
+        stderr(&o)
+    );
+    let after_time = |s: &str| -> Vec<String> {
+        s.lines()
+            .map(|l| l.split_once(',').unwrap().1.to_string())
+            .collect()
+    };
+    assert_eq!(after_time(&out), after_time(&clean));
+    // Two data rows swapped: refused at the second one's line, unless
+    // --sort-time, which gives the clean output back.
+    let mut lines: Vec<&str> = text.lines().collect();
+    let first = lines
+        .iter()
+        .position(|l| l.starts_with(|c: char| c.is_ascii_digit()))
+        .unwrap();
+    lines.swap(first + 10, first + 11);
+    let swapped = write("apply_swapped.csv", &(lines.join("\n") + "\n"));
+    refused(
+        &apply(&swapped, &[]),
+        &[
+            p(&swapped),
+            &format!(":{}:", first + 12),
+            "below the stamp before",
+        ],
+    );
+    let o = apply(&swapped, &["--sort-time"]);
+    assert_eq!(ok(&o), clean);
+    assert!(
+        stderr(&o).contains("warning [time-sorted]: 2 of"),
+        "{}",
+        stderr(&o)
+    );
+}

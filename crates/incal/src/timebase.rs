@@ -73,6 +73,17 @@ pub enum TimeError {
         /// The stamp before (s).
         previous: f64,
     },
+    /// A gap longer than a streaming reduction bridges ([`StampStream`]).
+    GapTooLong {
+        /// Time of the sample before the gap (s).
+        start_s: f64,
+        /// The step across the gap (s).
+        step_s: f64,
+        /// The period of the stamps (s).
+        period_s: f64,
+        /// The longest step bridged, in periods.
+        max_periods: f64,
+    },
     /// The nominal rate contradicts the stamps.
     RateContradiction {
         /// The nominal rate given (Hz).
@@ -91,6 +102,15 @@ impl std::fmt::Display for TimeError {
                 "time_s {} is below the stamp before ({}): stamps must not decrease",
                 short(*stamp),
                 short(*previous)
+            ),
+            TimeError::GapTooLong { start_s, step_s, period_s, max_periods } => write!(
+                f,
+                "time_s jumps {} s after t = {} s, a gap of {} periods (period {} s): gaps up to {} periods are bridged, this one is not; reduce the parts before and after it separately",
+                short4(*step_s),
+                short(*start_s),
+                short4(step_s / period_s),
+                short((period_s * 1e9).round() / 1e9),
+                short(*max_periods)
             ),
             TimeError::RateContradiction { given_hz, stamps_hz } => write!(
                 f,
@@ -319,38 +339,289 @@ impl TimeBase {
     /// many, the resolution, whether the times were regularised) and
     /// `time-gaps` when there are gaps (count, longest, total).
     pub fn warnings(&self) -> Vec<Warning> {
-        let mut out = Vec::new();
-        if self.repeats > 0 {
-            out.push(Warning::new(
-                WarningCode::TimeRepeats,
-                format!(
-                    "{} time_s stamps repeat the one before (stamp resolution {} s, sample rate {} from the stamps): {}",
-                    self.repeats,
-                    short((self.resolution_s * 1e9).round() / 1e9),
-                    hz(self.rate_hz),
-                    if self.regularised {
-                        "the time steps were taken from the sample index (every stamp is within one resolution of that grid)"
-                    } else {
-                        "the stamps were taken as given (they stray from a regular grid by more than their resolution)"
-                    }
-                ),
-            ));
+        let steps = if self.regularised {
+            Steps::Regularised
+        } else {
+            Steps::AsGiven
+        };
+        stamp_warnings(
+            self.repeats,
+            self.resolution_s,
+            self.rate_hz,
+            steps,
+            &GapSummary::of(&self.gaps, self.period_s),
+        )
+    }
+}
+
+/// How a reduction took its time steps (for the `time-repeats` warning).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Steps {
+    /// From the sample index ([`TimeBase::regularised`]).
+    Regularised,
+    /// The stamps as given (they stray from a grid by more than their
+    /// resolution).
+    AsGiven,
+    /// The stamps as given by a streaming reduction ([`StampStream`]): a
+    /// repeated stamp is a step of zero, the next step spans both periods.
+    Streamed,
+}
+
+/// The gaps of a series in brief: constant memory for streams.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct GapSummary {
+    /// Number of gaps.
+    pub count: usize,
+    /// The longest step across a gap (s).
+    pub longest_s: f64,
+    /// Time missing in all: each gap's step less one period (s).
+    pub missing_s: f64,
+    /// Time of the sample before the first gap (s).
+    pub first_start_s: f64,
+}
+
+impl GapSummary {
+    /// The summary of `gaps` at period `period_s`.
+    pub fn of(gaps: &[Gap], period_s: f64) -> Self {
+        let mut s = GapSummary::default();
+        for g in gaps {
+            s.add(g, period_s);
         }
-        if !self.gaps.is_empty() {
-            let longest = self.gaps.iter().map(|g| g.step_s).fold(0.0, f64::max);
-            let total: f64 = self.gaps.iter().map(|g| g.step_s - self.period_s).sum();
-            out.push(Warning::new(
-                WarningCode::TimeGaps,
-                format!(
-                    "{} gap(s) in time_s (steps above 1.5 periods): the longest {} s, {} s missing in all, the first after t = {} s",
-                    self.gaps.len(),
-                    short4(longest),
-                    short4(total),
-                    short(self.gaps[0].start_s)
-                ),
-            ));
+        s
+    }
+
+    fn add(&mut self, g: &Gap, period_s: f64) {
+        if self.count == 0 {
+            self.first_start_s = g.start_s;
         }
-        out
+        self.count += 1;
+        self.longest_s = self.longest_s.max(g.step_s);
+        self.missing_s += g.step_s - period_s;
+    }
+}
+
+/// The warnings of the policy from its figures ([`TimeBase::warnings`],
+/// [`StampStream::warnings`]).
+pub fn stamp_warnings(
+    repeats: usize,
+    resolution_s: f64,
+    rate_hz: f64,
+    steps: Steps,
+    gaps: &GapSummary,
+) -> Vec<Warning> {
+    let mut out = Vec::new();
+    if repeats > 0 {
+        out.push(Warning::new(
+            WarningCode::TimeRepeats,
+            format!(
+                "{} time_s stamps repeat the one before (stamp resolution {} s, sample rate {} from the stamps): {}",
+                repeats,
+                short((resolution_s * 1e9).round() / 1e9),
+                hz(rate_hz),
+                match steps {
+                    Steps::Regularised => "the time steps were taken from the sample index (every stamp is within one resolution of that grid)",
+                    Steps::AsGiven => "the stamps were taken as given (they stray from a regular grid by more than their resolution)",
+                    Steps::Streamed => "the stamps were taken as given (a streaming reduction: a repeated stamp is a step of zero and the next step spans both periods)",
+                }
+            ),
+        ));
+    }
+    if gaps.count > 0 {
+        out.push(Warning::new(
+            WarningCode::TimeGaps,
+            format!(
+                "{} gap(s) in time_s (steps above 1.5 periods): the longest {} s, {} s missing in all, the first after t = {} s",
+                gaps.count,
+                short4(gaps.longest_s),
+                short4(gaps.missing_s),
+                short(gaps.first_start_s)
+            ),
+        ));
+    }
+    out
+}
+
+/// Stamps read before a [`StampStream`] sets its period: enough for a
+/// mean step within a few per cent under a 10 ms clock at 200 Hz.
+pub const WARM_UP: usize = 256;
+
+/// The policy for a reduction that reads each sample once in constant
+/// memory (`gfimu solve`, `imu apply`): decreasing stamps are refused,
+/// repeats are counted and taken as given ([`Steps::Streamed`]; a grid
+/// needs the whole series), and gaps are found against the period of the
+/// stamps so far (set from the first [`WARM_UP`] stamps by [`analyse`],
+/// then the running mean step, gaps excluded). A gap longer than
+/// `max_gap_periods` periods is refused ([`TimeError::GapTooLong`]).
+#[derive(Debug, Clone)]
+pub struct StampStream {
+    max_gap_periods: f64,
+    warm: Vec<(f64, usize)>,
+    first: f64,
+    prev: Option<f64>,
+    n: usize,
+    repeats: usize,
+    resolution: f64,
+    gap_steps: usize,
+    gap_span: f64,
+    gaps: GapSummary,
+    period: Option<f64>,
+}
+
+impl StampStream {
+    /// A stream refusing gaps longer than `max_gap_periods` periods
+    /// (`f64::INFINITY`: every gap is only counted).
+    pub fn new(max_gap_periods: f64) -> Self {
+        StampStream {
+            max_gap_periods,
+            warm: Vec::with_capacity(WARM_UP),
+            first: 0.0,
+            prev: None,
+            n: 0,
+            repeats: 0,
+            resolution: f64::INFINITY,
+            gap_steps: 0,
+            gap_span: 0.0,
+            gaps: GapSummary::default(),
+            period: None,
+        }
+    }
+
+    /// Take the next stamp `t`, read at `line` (the error names the line
+    /// of the offending stamp: `(line, error)`).
+    pub fn push(&mut self, t: f64, line: usize) -> Result<(), (usize, TimeError)> {
+        if let Some(prev) = self.prev {
+            let d = t - prev;
+            if d < 0.0 || !d.is_finite() {
+                return Err((
+                    line,
+                    TimeError::Decreasing {
+                        index: self.n,
+                        stamp: t,
+                        previous: prev,
+                    },
+                ));
+            }
+            if d == 0.0 {
+                self.repeats += 1;
+            } else if d < self.resolution {
+                self.resolution = d;
+            }
+            if let Some(p) = self.period {
+                self.step(prev, d, p, line)?;
+            }
+        } else {
+            self.first = t;
+        }
+        self.prev = Some(t);
+        self.n += 1;
+        if self.period.is_none() {
+            self.warm.push((t, line));
+            if self.warm.len() == WARM_UP {
+                self.settle()?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The gap threshold at period `p` ([`analyse`]'s rule).
+    fn threshold(&self, p: f64) -> f64 {
+        1.5 * p
+            + if self.repeats > 0 {
+                self.resolution
+            } else {
+                0.0
+            }
+    }
+
+    /// Judge the step `d` after the stamp `prev` at period `p`, and move
+    /// the running period on.
+    fn step(&mut self, prev: f64, d: f64, p: f64, line: usize) -> Result<(), (usize, TimeError)> {
+        if d > self.threshold(p) {
+            let gap = Gap {
+                index: self.n,
+                start_s: prev,
+                step_s: d,
+            };
+            // In whole periods: stamps carry rounding.
+            if (d / p).round() > self.max_gap_periods {
+                return Err((
+                    line,
+                    TimeError::GapTooLong {
+                        start_s: prev,
+                        step_s: d,
+                        period_s: p,
+                        max_periods: self.max_gap_periods,
+                    },
+                ));
+            }
+            self.gaps.add(&gap, p);
+            self.gap_steps += 1;
+            self.gap_span += d;
+        }
+        let steps = self.n - self.gap_steps;
+        let span = prev + d - self.first - self.gap_span;
+        if steps > 0 && span > 0.0 {
+            self.period = Some(span / steps as f64);
+        }
+        Ok(())
+    }
+
+    /// Set the period from the stamps read so far, and judge their steps.
+    fn settle(&mut self) -> Result<(), (usize, TimeError)> {
+        let warm = std::mem::take(&mut self.warm);
+        let stamps: Vec<f64> = warm.iter().map(|w| w.0).collect();
+        let tb = analyse(&stamps, None).map_err(|e| (warm[warm.len() - 1].1, e))?;
+        let p = tb.period_s;
+        self.period = Some(p);
+        // Replay the steps through the running rule (same counts as a
+        // stream that had known the period from the start).
+        let (n, first) = (self.n, self.first);
+        self.n = 1;
+        self.first = first;
+        for w in warm.windows(2) {
+            let d = w[1].0 - w[0].0;
+            let period = self.period.unwrap_or(p);
+            self.step(w[0].0, d, period, w[1].1)?;
+            self.n += 1;
+        }
+        self.n = n;
+        Ok(())
+    }
+
+    /// Close the stream: a short series settles its period here.
+    pub fn finish(&mut self) -> Result<(), (usize, TimeError)> {
+        if self.period.is_none() && self.warm.len() >= 2 {
+            self.settle()?;
+        }
+        Ok(())
+    }
+
+    /// Sample rate of the stamps (Hz), when known.
+    pub fn rate_hz(&self) -> Option<f64> {
+        self.period.map(|p| 1.0 / p)
+    }
+
+    /// The gaps found so far.
+    pub fn gaps(&self) -> &GapSummary {
+        &self.gaps
+    }
+
+    /// The warnings of the policy for the stamps read ([`stamp_warnings`]).
+    pub fn warnings(&self) -> Vec<Warning> {
+        match self.period {
+            Some(p) => stamp_warnings(
+                self.repeats,
+                if self.resolution.is_finite() {
+                    self.resolution
+                } else {
+                    0.0
+                },
+                1.0 / p,
+                Steps::Streamed,
+                &self.gaps,
+            ),
+            None => Vec::new(),
+        }
     }
 }
 
@@ -453,5 +724,68 @@ mod tests {
         assert_eq!(tb.times, stamps);
         assert!((tb.rate_hz - 100.0).abs() < 0.01, "{}", tb.rate_hz);
         assert!(tb.warnings().is_empty());
+    }
+
+    #[test]
+    fn the_stream_finds_the_gaps_the_whole_series_finds() {
+        // 200 Hz stamped to 10 ms, with gaps of 1, 3 and 40 samples, one
+        // inside the warm-up.
+        let mut stamps = Vec::new();
+        let mut k = 0usize;
+        for i in 0..5000usize {
+            if i == 100 || i == 2000 {
+                k += 3;
+            }
+            if i == 4000 {
+                k += 40;
+            }
+            if i == 3000 {
+                k += 1;
+            }
+            stamps.push(((k as f64 * 0.005) / 0.01).floor() * 0.01);
+            k += 1;
+        }
+        let whole = analyse(&stamps, None).unwrap();
+        let mut s = StampStream::new(f64::INFINITY);
+        for (i, t) in stamps.iter().enumerate() {
+            s.push(*t, i + 2).unwrap();
+        }
+        s.finish().unwrap();
+        assert_eq!(s.gaps().count, whole.gaps.len(), "{:?}", whole.gaps);
+        assert!((s.rate_hz().unwrap() - 200.0).abs() < 1.0);
+        let w = s.warnings();
+        assert_eq!(w[0].code, WarningCode::TimeRepeats);
+        assert!(w[0].message.contains("streaming"), "{}", w[0].message);
+        assert_eq!(w[1].code, WarningCode::TimeGaps);
+        // Bridging at most 10 periods: the 41-period step is refused at its
+        // line, naming its time.
+        let mut s = StampStream::new(10.0);
+        let e = stamps
+            .iter()
+            .enumerate()
+            .try_for_each(|(i, t)| s.push(*t, i + 2))
+            .unwrap_err();
+        assert_eq!(e.0, 4000 + 2);
+        let m = e.1.to_string();
+        assert!(m.contains("gap of") && m.contains("10 periods"), "{m}");
+    }
+
+    #[test]
+    fn the_stream_refuses_decreasing_stamps_at_their_line() {
+        let mut s = StampStream::new(f64::INFINITY);
+        s.push(0.0, 2).unwrap();
+        s.push(0.01, 3).unwrap();
+        s.push(0.01, 4).unwrap();
+        let (line, e) = s.push(0.005, 5).unwrap_err();
+        assert_eq!(line, 5);
+        assert!(matches!(e, TimeError::Decreasing { .. }));
+        // A short clean series settles at its end, without warnings.
+        let mut s = StampStream::new(f64::INFINITY);
+        for k in 0..10 {
+            s.push(k as f64 * 0.01, k + 2).unwrap();
+        }
+        s.finish().unwrap();
+        assert!((s.rate_hz().unwrap() - 100.0).abs() < 1e-9);
+        assert!(s.warnings().is_empty());
     }
 }

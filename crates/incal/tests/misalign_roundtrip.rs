@@ -138,7 +138,7 @@ fn partial_turn_averaging_error_is_shown_and_removed() {
     let worst = |policy| {
         let means = average_records(&records, policy).unwrap();
         assert!(
-            means.iter().all(|r| r.warning.is_some()),
+            means.iter().all(|r| !r.warnings.is_empty()),
             "partial turns flagged"
         );
         let obs: Vec<_> = means.iter().map(|r| r.observation).collect();
@@ -160,7 +160,7 @@ fn partial_turn_averaging_error_is_shown_and_removed() {
     let mut cfg2 = gyro_sim(5, 0.0, 2.0);
     cfg2.noise = 0.0;
     let means = average_records(&simulate_gyro_records(&cfg2), TurnPolicy::All).unwrap();
-    assert!(means.iter().all(|r| r.warning.is_none()));
+    assert!(means.iter().all(|r| r.warnings.is_empty()));
     assert!(means.iter().all(|r| (r.turns_used - 2.0).abs() < 1e-9));
 }
 

@@ -357,6 +357,9 @@ pub struct ApplyArgs {
     /// Write the calibrated CSV here instead of standard output.
     #[arg(long, short = 'o', value_name = "FILE")]
     pub output: Option<PathBuf>,
+    /// Put rows that are out of time order in order by time_s instead of refusing them (holds the series in memory; warning time-sorted on standard error counts the rows moved).
+    #[arg(long)]
+    pub sort_time: bool,
 }
 
 /// `incal imu apply`: the calibration read from its document by the core,
@@ -379,8 +382,7 @@ pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
     line.push('\n');
     w.write_all(line.as_bytes()).map_err(wfail)?;
     let mut fmt = ryu::Buffer::new();
-    while let Some(row) = rows.next_row()? {
-        let r = cal.row(&cols, &row).map_err(core)?;
+    let mut put = |r: &incal::procedures::imu::apply::CalibratedRow| -> CliResult<()> {
         line.clear();
         if let Some(t) = r.time {
             line.push_str(fmt.format(t));
@@ -399,8 +401,53 @@ pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
             }
         }
         line.push('\n');
-        w.write_all(line.as_bytes()).map_err(wfail)?;
+        w.write_all(line.as_bytes()).map_err(wfail)
+    };
+    // The time-stamp policy of a streaming reduction: stamps copied as
+    // read, a decreasing one refused at its line (or, with --sort-time,
+    // the rows held and put in order), repeats and gaps reported.
+    let mut stamps = incal::timebase::StampStream::new(f64::INFINITY);
+    let stamp_error = |(l, e): (usize, incal::timebase::TimeError)| {
+        CliError::from(incal_io::InputError::cell(
+            &src.name,
+            l,
+            "time_s",
+            e.to_string(),
+        ))
+    };
+    let mut held = Vec::new();
+    while let Some(row) = rows.next_row()? {
+        let r = cal.row(&cols, &row).map_err(core)?;
+        if a.sort_time {
+            held.push(r);
+            continue;
+        }
+        if let Some(t) = r.time {
+            stamps.push(t, row.line()).map_err(stamp_error)?;
+        }
+        put(&r)?;
     }
     rows.finish()?;
-    w.flush().map_err(wfail)
+    let mut warnings = Vec::new();
+    if cols.time.is_some() && a.sort_time {
+        let mut times: Vec<f64> = held.iter().map(|r| r.time.unwrap_or(0.0)).collect();
+        if let Some((order, moved)) = incal::timebase::time_order(&mut times) {
+            incal::timebase::permute(&mut held, &order);
+            warnings.push(incal::timebase::sorted_warning(moved, held.len()));
+        }
+        for (k, t) in times.iter().enumerate() {
+            stamps.push(*t, k + 1).map_err(stamp_error)?;
+        }
+    }
+    for r in &held {
+        put(r)?;
+    }
+    stamps.finish().map_err(stamp_error)?;
+    warnings.extend(stamps.warnings());
+    w.flush().map_err(wfail)?;
+    let mut err = std::io::stderr().lock();
+    for x in warnings {
+        let _ = writeln!(err, "incal: warning [{}]: {}", x.code, x.message);
+    }
+    Ok(())
 }

@@ -123,9 +123,11 @@ impl GyroResult {
         b.option("scale_factor_unit", json!(Unit::OutputPerDegS.as_str()));
         b.option("per_config_bias", json!(opts.per_config_bias));
         for (line, r) in records {
-            if let Some(w) = &r.warning {
-                b.warnings([w.clone().prefixed(&format!("line {line}"))]);
-            }
+            b.warnings(
+                r.warnings
+                    .iter()
+                    .map(|w| w.clone().prefixed(&format!("line {line}"))),
+            );
         }
         b.warnings(self.warnings.iter().cloned());
         let mut t = position_table(

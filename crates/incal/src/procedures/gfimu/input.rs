@@ -18,7 +18,7 @@
 //! and one column per accelerometer named as in the geometry (output).
 //!
 //! # Motion CSV
-//! `time_s` (s, strictly increasing) and one column per accelerometer
+//! `time_s` (s, not decreasing; the streaming time-stamp policy of [`crate::timebase::StampStream`]) and one column per accelerometer
 //! (output); other columns are ignored.
 
 use std::io::{Read, Write};

@@ -583,7 +583,13 @@ impl Solver {
         x
     }
 
-    /// Solve one sample (time strictly after the previous one).
+    /// Add warnings about the series (its time stamps) to the solution's.
+    pub fn add_warnings(&mut self, w: impl IntoIterator<Item = Warning>) {
+        self.warnings.extend(w);
+    }
+
+    /// Solve one sample (time not before the previous one; a repeated
+    /// stamp is a step of zero: ω does not move, [`crate::timebase`]).
     pub fn step(&mut self, t: f64, e: &[f64]) -> Result<MotionSample> {
         let n = self.cal.len();
         let p = self.p;
@@ -608,9 +614,9 @@ impl Solver {
                 (self.solve_at(e, &w), w, 0.0)
             }
             Some((tp, wp, wdp)) => {
-                if t <= tp {
+                if t < tp {
                     return Err(Error::InvalidValue {
-                        what: format!("time of sample {k} (times must increase)"),
+                        what: format!("time of sample {k} (times must not decrease)"),
                         value: t.to_string(),
                     });
                 }
@@ -787,7 +793,7 @@ impl Solver {
 }
 
 /// Solve every sample `(t_k, E_k)` of a time series for f0, ω̇ and ω
-/// (module docs). Times must increase strictly.
+/// (module docs). Times must not decrease.
 pub fn solve(
     geometry: &Geometry,
     cal: &[CalibratedAccelerometer],

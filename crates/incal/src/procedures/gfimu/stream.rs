@@ -50,6 +50,13 @@ pub enum SolutionFormat {
 /// then the standard uncertainty of each.
 pub const SOLUTION_CSV_HEADER: &str = "time_s,f0_x_g,f0_y_g,f0_z_g,omega_dot_x_rad_s2,omega_dot_y_rad_s2,omega_dot_z_rad_s2,omega_x_rad_s,omega_y_rad_s,omega_z_rad_s,u_f0_x_g,u_f0_y_g,u_f0_z_g,u_omega_dot_x_rad_s2,u_omega_dot_y_rad_s2,u_omega_dot_z_rad_s2,u_omega_x_rad_s,u_omega_y_rad_s,u_omega_z_rad_s\n";
 
+/// The longest time step `gfimu solve` bridges, in sample periods (up to
+/// four samples lost). The ω integration steps over a gap with the
+/// trapezoid rule, whose error grows as the cube of the step: a 5-period
+/// step adds the error of 125 ordinary steps, small beside the thousands
+/// of a record; a longer gap is refused naming its line.
+pub const MAX_GAP_PERIODS: f64 = 5.0;
+
 /// Rows parsed per batch handed from the reader thread to the solver.
 const BATCH_ROWS: usize = 4096;
 
@@ -384,13 +391,15 @@ impl Batch {
 enum Parsed {
     Rows(Batch),
     Failed(Error),
-    Done(incal_io::Summary),
+    Done(incal_io::Summary, Vec<Warning>),
 }
 
 /// The reader thread: parse every data row into batches of numbers, in
 /// order; stop at the first bad row and send its error. A row is checked
-/// here (numbers, increasing time) so the solver sees only clean samples;
-/// the line numbers travel with the rows for the solver's errors.
+/// here (numbers, and the time stamps under the streaming policy,
+/// [`crate::timebase::StampStream`]: decreasing stamps and gaps above
+/// [`MAX_GAP_PERIODS`] periods refused) so the solver sees only clean
+/// samples; the line numbers travel with the rows for the solver's errors.
 fn parse_series<R: Read>(
     series: MotionSeries<R>,
     tx: &SyncSender<Parsed>,
@@ -399,24 +408,19 @@ fn parse_series<R: Read>(
     let MotionSeries { mut rows, cols } = series;
     let stride = cols.len();
     let mut batch = Batch::new(stride);
-    let mut prev_t: Option<f64> = None;
+    let mut stamps = crate::timebase::StampStream::new(MAX_GAP_PERIODS);
+    let file = rows.header().file().to_string();
+    let time_name = rows.header().names()[cols[0]].clone();
+    let stamp_error = |(line, e): (usize, crate::timebase::TimeError)| -> Error {
+        InputError::cell(&file, line, &time_name, e.to_string()).into()
+    };
     let mut read = || -> Result<bool> {
         while let Some(row) = rows.next_row()? {
             let line = row.line();
             for (i, &k) in cols.iter().enumerate() {
                 let v = row.f64(k)?;
                 if i == 0 {
-                    if let Some(prev) = prev_t {
-                        if v <= prev {
-                            return Err(row
-                                .cell_error(
-                                    k,
-                                    format!("{v} is not after the previous sample ({prev})"),
-                                )
-                                .into());
-                        }
-                    }
-                    prev_t = Some(v);
+                    stamps.push(v, line).map_err(stamp_error)?;
                 }
                 batch.values.push(v);
             }
@@ -441,13 +445,16 @@ fn parse_series<R: Read>(
         }
         Ok(true)
     };
-    let result = read();
+    let result = read().and_then(|more| {
+        stamps.finish().map_err(stamp_error)?;
+        Ok(more)
+    });
     if !batch.lines.is_empty() {
         let _ = tx.send(Parsed::Rows(batch));
     }
     let last = match result {
         Ok(true) => match rows.finish() {
-            Ok(s) => Parsed::Done(s),
+            Ok(s) => Parsed::Done(s, stamps.warnings()),
             Err(e) => Parsed::Failed(e.into()),
         },
         Ok(false) => return,
@@ -496,8 +503,9 @@ pub fn solve_stream<R: Read + Send, W: Write>(
             let batch = match msg {
                 Parsed::Rows(b) => b,
                 Parsed::Failed(e) => return Err(StreamError::Input(e)),
-                Parsed::Done(s) => {
+                Parsed::Done(s, w) => {
                     summary = Some(s);
+                    solver.add_warnings(w);
                     break;
                 }
             };

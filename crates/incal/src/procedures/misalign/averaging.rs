@@ -19,7 +19,8 @@ use super::gyro::{GyroConfig, GyroObservation};
 /// One raw sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RawSample {
-    /// Time (s), strictly increasing within a record.
+    /// Time (s), not decreasing within a record (repeats from a coarse
+    /// clock are accepted: time only gives the measured table rate).
     pub time_s: f64,
     /// Table angle γ (rad), as read on the table (wraps allowed).
     pub table_angle_rad: f64,
@@ -63,9 +64,17 @@ pub struct RecordMean {
     pub turns_used: f64,
     /// Table rate measured from angle and time (°/s, signed).
     pub measured_rate_deg_s: f64,
-    /// A warning about this record (partial turn, rate mismatch).
-    pub warning: Option<crate::Warning>,
+    /// Warnings about this record: partial turn or rate mismatch
+    /// (`partial-turns`), repeated stamps (`time-repeats`), samples lost
+    /// in gaps (`time-gaps`).
+    pub warnings: Vec<crate::Warning>,
 }
+
+/// The largest fraction of a record's samples that may be lost in time
+/// gaps (1 %): the Earth-rate term then cancels except over the missing
+/// samples, at most `Ωe · missing / n` ≈ 0.15 °/h on the mean input rate;
+/// more is refused.
+pub const MAX_MISSING_FRACTION: f64 = 0.01;
 
 /// Tolerance on "whole number of turns", in turns.
 pub const WHOLE_TURN_TOL: f64 = 0.01;
@@ -94,9 +103,9 @@ pub fn average_record(r: &Record, policy: TurnPolicy) -> Result<RecordMean> {
     let mut acc = r.samples[0].table_angle_rad;
     unwrapped.push(acc);
     for w in r.samples.windows(2) {
-        if w[1].time_s <= w[0].time_s {
+        if w[1].time_s < w[0].time_s {
             return Err(Error::InvalidValue {
-                what: format!("time in {} (must increase)", describe(r)),
+                what: format!("time in {} (must not decrease)", describe(r)),
                 value: format!("{} after {}", w[1].time_s, w[0].time_s),
             });
         }
@@ -106,37 +115,104 @@ pub fn average_record(r: &Record, policy: TurnPolicy) -> Result<RecordMean> {
         acc += d;
         unwrapped.push(acc);
     }
+    // The time stamps under the policy of crate::timebase: repeats are
+    // accepted (only the first and last stamps are used), samples lost in
+    // gaps are counted on the grid.
+    let stamps: Vec<f64> = r.samples.iter().map(|s| s.time_s).collect();
+    let tb = crate::timebase::analyse(&stamps, None).map_err(|e| Error::InvalidValue {
+        what: format!("time in {}", describe(r)),
+        value: e.to_string(),
+    })?;
+    let missing: usize = tb
+        .gaps
+        .iter()
+        .map(|g| ((g.step_s / tb.period_s).round() as usize).saturating_sub(1))
+        .sum();
+    let mut warnings = Vec::new();
+    if tb.repeats > 0 {
+        warnings.push(crate::Warning::new(
+            crate::WarningCode::TimeRepeats,
+            format!(
+                "{}: {} time_s stamps repeat the one before (stamp resolution {} s): time gives only the measured table rate, from the record's first and last stamps",
+                describe(r),
+                tb.repeats,
+                crate::error::short_f64((tb.resolution_s * 1e9).round() / 1e9)
+            ),
+        ));
+    }
+    if missing > 0 {
+        let frac = missing as f64 / (m + missing) as f64;
+        let longest = tb.gaps.iter().map(|g| g.step_s).fold(0.0, f64::max);
+        let what = format!(
+            "{} gap(s) in time_s lose {} samples ({:.3} %), the longest {:.4} s after t = {} s",
+            tb.gaps.len(),
+            missing,
+            100.0 * frac,
+            longest,
+            crate::error::short_f64(tb.gaps[0].start_s)
+        );
+        if frac > MAX_MISSING_FRACTION {
+            return Err(Error::InvalidValue {
+                what: format!("time in {}", describe(r)),
+                value: format!(
+                    "{what}; more than {} % of a record lost leaves the Earth-rate term uncancelled; re-record it",
+                    100.0 * MAX_MISSING_FRACTION
+                ),
+            });
+        }
+        let we_deg_h = crate::units::EARTH_RATE_RAD_S.to_degrees() * 3600.0;
+        warnings.push(crate::Warning::new(
+            crate::WarningCode::TimeGaps,
+            format!(
+                "{}: {what}: the Earth-rate term cancels except over them, at most {:.3} deg/h on the record's mean input rate; samples counted by table angle",
+                describe(r),
+                we_deg_h * missing as f64 / m as f64
+            ),
+        ));
+    }
     let span = unwrapped[m - 1] - unwrapped[0];
-    let step = span / (m - 1) as f64;
+    // Equal angle steps, counting the samples lost in gaps.
+    let step = span / (m - 1 + missing) as f64;
     if step == 0.0 {
         return Err(Error::InvalidValue {
             what: format!("table angle in {} (it does not turn)", describe(r)),
             value: format!("{}", r.samples[0].table_angle_rad.to_degrees()),
         });
     }
-    let turns_total = m as f64 * step.abs() / std::f64::consts::TAU;
+    let turns_total = (m + missing) as f64 * step.abs() / std::f64::consts::TAU;
     let dt = r.samples[m - 1].time_s - r.samples[0].time_s;
     let measured = span.to_degrees() / dt;
     let whole = (turns_total + WHOLE_TURN_TOL).floor();
     let (n_used, turns_used) = match policy {
-        TurnPolicy::Whole if whole >= 1.0 => {
+        TurnPolicy::Whole if whole >= 1.0 && missing == 0 => {
             let n = ((whole * std::f64::consts::TAU / step.abs()).round() as usize).clamp(2, m);
             (n, n as f64 * step.abs() / std::f64::consts::TAU)
         }
+        TurnPolicy::Whole if whole >= 1.0 => {
+            // Samples lost: count the samples by angle, each standing for
+            // one step ahead of it.
+            let end = whole * std::f64::consts::TAU - 0.5 * step.abs();
+            let n = unwrapped
+                .iter()
+                .take_while(|a| (*a - unwrapped[0]).abs() < end)
+                .count()
+                .clamp(2, m);
+            (n, whole.min(turns_total))
+        }
         _ => (m, turns_total),
     };
-    let mut warnings = Vec::new();
+    let mut partial = Vec::new();
     let frac = (turns_total - turns_total.round()).abs();
     if frac > WHOLE_TURN_TOL || turns_total < 1.0 - WHOLE_TURN_TOL {
         if n_used < m {
-            warnings.push(format!(
+            partial.push(format!(
                 "{} covers {:.3} turns, not a whole number: averaged over its first {} whole turn(s)",
                 describe(r),
                 turns_total,
                 whole
             ));
         } else {
-            warnings.push(format!(
+            partial.push(format!(
                 "{} covers {:.3} turns, not a whole number, and is averaged as is: the Earth-rate term does not cancel",
                 describe(r),
                 turns_total
@@ -146,7 +222,7 @@ pub fn average_record(r: &Record, policy: TurnPolicy) -> Result<RecordMean> {
     if measured.signum() != r.rate_deg_s.signum()
         || (measured - r.rate_deg_s).abs() > 0.01 * r.rate_deg_s.abs()
     {
-        warnings.push(format!(
+        partial.push(format!(
             "{}: table angle and time give a rate of {measured:.4} deg/s",
             describe(r)
         ));
@@ -164,13 +240,14 @@ pub fn average_record(r: &Record, policy: TurnPolicy) -> Result<RecordMean> {
         turns_total,
         turns_used,
         measured_rate_deg_s: measured,
-        warning: if warnings.is_empty() {
-            None
-        } else {
-            Some(crate::Warning::new(
-                crate::WarningCode::PartialTurns,
-                warnings.join("; "),
-            ))
+        warnings: {
+            if !partial.is_empty() {
+                warnings.insert(
+                    0,
+                    crate::Warning::new(crate::WarningCode::PartialTurns, partial.join("; ")),
+                );
+            }
+            warnings
         },
     })
 }

@@ -83,17 +83,6 @@ pub fn read_gyro<R: Read>(
             .and_then(|(_, r)| r.samples.last())
             .map(|p| p.time_s);
         let restart = matches!(prev_time, Some(p) if s.time_s < p);
-        if last == Some(key) && prev_time == Some(s.time_s) {
-            return Err(row
-                .cell_error(
-                    ct,
-                    format!(
-                        "{} repeats the previous sample's time (time must increase within a record)",
-                        s.time_s
-                    ),
-                )
-                .into());
-        }
         if last != Some(key) || restart {
             records.push((
                 row.line(),
@@ -238,7 +227,7 @@ mod tests {
     }
 
     #[test]
-    fn a_zero_rate_and_a_repeated_time_are_refused_at_their_line() {
+    fn a_zero_rate_and_a_record_without_span_are_refused_at_their_line() {
         let e = read_gyro(
             &mut reader(b"alpha_deg,beta_deg,rate,output\n0,0,20,1\n0,0,0,1\n"),
             TurnPolicy::Whole,
@@ -252,6 +241,20 @@ mod tests {
         )
         .unwrap_err()
         .to_string();
-        assert!(e.contains("t.csv:3") && e.contains("time"), "{e}");
+        assert!(
+            e.contains("t.csv:2") && e.contains("does not advance"),
+            "{e}"
+        );
+        // A repeated stamp inside a record is accepted and counted.
+        let got = read_gyro(
+            &mut reader(b"alpha_deg,beta_deg,rate,time_s,table_angle_deg,output\n0,0,20,0,0,1\n0,0,20,0,10,1\n0,0,20,1,20,1\n"),
+            TurnPolicy::All,
+        )
+        .unwrap();
+        let w = &got.records[0].1.warnings;
+        assert!(
+            w.iter().any(|w| w.code == crate::WarningCode::TimeRepeats),
+            "{w:?}"
+        );
     }
 }
