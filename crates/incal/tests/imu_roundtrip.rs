@@ -197,6 +197,90 @@ fn autocal_incal_u95_covers_the_truth() {
     check_coverage("autocal incal", &names, &h);
 }
 
+/// A hand-held session on a cube fixture, as the RealSense T265 recording
+/// published with imu_tk (41 still intervals on 6 faces, each 2.5–4.5°
+/// off the sensor axes): a still start, then 40 quarter turns
+/// ([`Sequence::Faces`], tilts of 3° standard deviation), no
+/// g-sensitivity.
+fn faces_session(seed: u64) -> autocal::Session {
+    let mut truth = ImuTruth::random_around_mems(trial_seed(seed, 5));
+    truth.gyr_k_ga = incal::procedures::imu::M3::zeros();
+    let s = simulate(&ImuSim {
+        truth: truth.clone(),
+        sequence: Sequence::Faces {
+            positions: 40,
+            init_s: 10.0,
+            move_s: 1.5,
+        },
+        rate_hz: 100.0,
+        static_s: 3.0,
+        gravity: 9.81,
+        noise_acc: 3.0,
+        noise_gyr: 2.0,
+        latitude_deg: None,
+        seed,
+    })
+    .unwrap();
+    let time = s.iter().map(|x| x.time_s).collect();
+    let acc = s.iter().map(|x| [x.acc[0], x.acc[1], x.acc[2]]).collect();
+    let gyr = s.iter().map(|x| [x.gyr[0], x.gyr[1], x.gyr[2]]).collect();
+    (truth, time, acc, gyr)
+}
+
+/// On cube-face sessions (the T265 recording's kind) incal's U95 covers
+/// the truth at its stated rate, pooled per group of parameters; imu_tk's
+/// estimator (`--method tedaldi`) does not: its gyro misalignments miss
+/// the truth by several of its own U95 (printed; measured 2026-11-26 over
+/// 13 CLI sessions: 58 of 273 parameters beyond U95, the gyro
+/// misalignments m_xz, m_xy, m_yx up to 8.8 U95). This is why the two
+/// disagree on the T265 recording ([`imu_tk_recordings`] test file).
+#[test]
+fn autocal_on_cube_faces_incal_covers_and_tedaldi_misses() {
+    use incal::procedures::imu::autocal::{autocal as run, AutocalOptions, Method};
+    const TRIALS: usize = 60;
+    let mut pooled = Vec::new();
+    for method in [Method::Incal, Method::Tedaldi] {
+        let hits = monte_carlo(29, TRIALS, |seed| {
+            let (truth, time, acc, gyr) = faces_session(seed);
+            let r = run(
+                &time,
+                &acc,
+                Some(&gyr),
+                &AutocalOptions::new(method, 9.81, 10.0),
+            )
+            .unwrap();
+            let want = autocal::truth_vector(&truth);
+            let k95 = r.estimates.coverage_factor(0.95);
+            (0..want.len())
+                .map(|k| (r.estimates.values()[k] - want[k]).abs() <= k95 * r.estimates.u_at(k))
+                .collect::<Vec<bool>>()
+        });
+        // Groups: acc misalignment, scale, bias (0..9); gyro misalignment
+        // (9..15), scale (15..18), bias (18..21).
+        let groups = [(0, 3), (3, 6), (6, 9), (9, 15), (15, 18), (18, 21)];
+        let rates: Vec<f64> = groups
+            .iter()
+            .map(|&(a, b)| {
+                let n: usize = hits
+                    .iter()
+                    .map(|h| h[a..b].iter().filter(|x| **x).count())
+                    .sum();
+                n as f64 / (TRIALS * (b - a)) as f64
+            })
+            .collect();
+        eprintln!("{method:?} coverage by group (acc m, s, b; gyr m, s, b): {rates:.3?}");
+        pooled.push(rates);
+    }
+    for (g, r) in pooled[0].iter().enumerate() {
+        assert!((0.90..=0.99).contains(r), "incal group {g}: {r:.3}");
+    }
+    assert!(
+        pooled[1][3] < 0.85,
+        "tedaldi's gyro misalignments cover at {:.3}: imu_tk's estimator no longer misses on faces, revisit the T265 note",
+        pooled[1][3]
+    );
+}
+
 mod multipos {
     use super::*;
     use incal::procedures::imu::multipos::{

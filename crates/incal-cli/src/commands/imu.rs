@@ -169,6 +169,8 @@ pub enum SequenceArg {
     Ferraris,
     /// A still start, then random orientations joined by rotations (input of `incal imu autocal`).
     Random,
+    /// As random, but every turn is 90 deg about a sensor axis: the six faces of a cube visited again and again (a hand-held session).
+    Faces,
     /// Static positions with their labels and fx,fy,fz (input of `incal imu multipos`).
     Positions,
 }
@@ -176,7 +178,7 @@ pub enum SequenceArg {
 /// Options of `incal simulate imu`.
 #[derive(clap::Args, Debug)]
 pub struct SimArgs {
-    /// ferraris, random or positions.
+    /// ferraris, random, faces or positions.
     #[arg(long, value_enum, default_value = "ferraris")]
     pub sequence: SequenceArg,
     /// Sample rate (Hz).
@@ -251,6 +253,14 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         ),
         SequenceArg::Random => (
             Sequence::Random {
+                positions: a.orientations,
+                init_s: a.init_static_s,
+                move_s: a.move_s,
+            },
+            Layout::Random,
+        ),
+        SequenceArg::Faces => (
+            Sequence::Faces {
                 positions: a.orientations,
                 init_s: a.init_static_s,
                 move_s: a.move_s,

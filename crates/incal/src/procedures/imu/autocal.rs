@@ -594,6 +594,54 @@ fn unit_basis(g: &V3) -> [V3; 2] {
     [u, g.cross(&u)]
 }
 
+/// The smallest tilt off the sensor axes that separates an accelerometer
+/// misalignment: `max_k |ĝ_i ĝ_j| ≥ 0.02` (about 1.1°) over the still
+/// intervals for the pair of axes `i, j` of the term.
+pub const MISALIGNMENT_SEPARATION: f64 = 0.02;
+
+/// Name the accelerometer misalignments a session's gravity directions
+/// cannot separate at first order (the error, for a refusal when the fit
+/// then cannot converge, and for the warning when it can). The autocalibration sees the
+/// accelerometer through the gravity norm only, and `|T v|` with `v` along
+/// a sensor axis changes with the misalignments of `T` at second order: a
+/// session whose still intervals all lie on the six faces (a precise cube
+/// fixture) leaves them undetermined at first order (the fit then wanders
+/// along a flat valley). `m_yz` needs gravity on x and y together, `m_zy`
+/// on x and z, `m_zx` on y and z ([`MISALIGNMENT_SEPARATION`]); directions
+/// from the starting calibration `x` ([`acc_start`]).
+fn check_separation(
+    acc: &[[f64; 3]],
+    ivs: &[Interval],
+    used: &dyn Fn(&Interval) -> Option<Interval>,
+    x: &DVector<f64>,
+) -> Result<()> {
+    let p = acc_params(x);
+    let mut most = [0.0f64; 3];
+    for iv in ivs {
+        let u = used(iv).unwrap_or(*iv);
+        let d = p.apply(&V3::from(detect::mean(acc, u))).normalize();
+        for (k, (i, j)) in [(0, 1), (0, 2), (1, 2)].into_iter().enumerate() {
+            most[k] = most[k].max((d[i] * d[j]).abs());
+        }
+    }
+    let names = ["acc.m_yz", "acc.m_zy", "acc.m_zx"];
+    // `most` starts at 0 and f64::max skips NaN: a plain comparison.
+    let weak: Vec<usize> = (0..3)
+        .filter(|&k| most[k] < MISALIGNMENT_SEPARATION)
+        .collect();
+    let missing: Vec<&str> = weak.iter().map(|&k| names[k]).collect();
+    if missing.is_empty() {
+        return Ok(());
+    }
+    Err(Error::Unsupported(format!(
+        "plan cannot separate {}: every still interval has gravity within {:.1} deg of a sensor axis for {} (largest |g_i g_j| {:.4}), where the gravity norm changes with misalignment only at second order; hold some orientations tilted 10 deg or more between the faces (on an edge or a corner)",
+        missing.join(", "),
+        ((2.0 * MISALIGNMENT_SEPARATION).asin() / 2.0).to_degrees(),
+        if missing.len() == 1 { "its axes" } else { "their axes" },
+        weak.iter().map(|&k| most[k]).fold(0.0, f64::max)
+    )))
+}
+
 /// Count gravity directions more than 10° apart (greedy clustering).
 fn distinct_orientations(dirs: &[V3]) -> usize {
     let mut reps: Vec<V3> = Vec::new();
@@ -728,6 +776,7 @@ pub fn autocal(
 
     struct Candidate {
         k: f64,
+        separation: Option<Error>,
         intervals: Vec<Interval>,
         x: DVector<f64>,
         cost: f64,
@@ -771,13 +820,17 @@ pub fn autocal(
         }
         let (samples, weights) = acc_observations(acc, &ivs, &used, opts, None)?;
         let start = acc_start(acc, &ivs, &used, g, &x0, &opts.init);
+        // A session that cannot separate a misalignment at first order
+        // is named: refused when the fit cannot converge, else warned.
+        let separation = check_separation(acc, &ivs, &used, &start).err();
         let x = minimize(
             &acc_names,
             &|x| acc_residuals(x, &samples, g),
             &|x| acc_jacobian(x, &samples),
             start,
             weights.as_ref(),
-        )?;
+        )
+        .map_err(|e| separation.clone().unwrap_or(e))?;
         let r = acc_residuals(&x, &samples, g);
         let cost = 0.5 * r.norm_squared();
         trials.push(ThresholdTrial {
@@ -793,6 +846,7 @@ pub fn autocal(
         if better {
             best = Some(Candidate {
                 k,
+                separation,
                 intervals: ivs,
                 x,
                 cost,
@@ -829,7 +883,8 @@ pub fn autocal(
                 &|x| acc_jacobian(x, &s2),
                 x,
                 weights.as_ref(),
-            )?;
+            )
+            .map_err(|e| best.separation.clone().unwrap_or(e))?;
         }
         let variance = match opts.method {
             Method::Tedaldi => Variance::FromResiduals,
@@ -878,6 +933,15 @@ pub fn autocal(
     }
     let orientations = distinct_orientations(&dirs);
     let mut warnings = checked;
+    if let Some(e) = &best.separation {
+        warnings.push(Warning::new(
+            WarningCode::WeakConditioning,
+            format!(
+                "{}; the values and u of these terms rest on second-order effects and the gyro misalignments are relative to them",
+                e.to_string().replacen("plan cannot separate", "this session hardly separates", 1)
+            ),
+        ));
+    }
     warnings.extend(acc_fit.quality_warnings(
         "the sensor is not still in some intervals, or the model (scale, three misalignments, bias) does not hold",
     ));
@@ -1338,6 +1402,54 @@ fn acc_observations(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Gravity on the six faces only leaves the three accelerometer
+    /// misalignments unseparated (named); one edge between x and y
+    /// separates `acc.m_yz` and only it.
+    #[test]
+    fn faces_alone_cannot_separate_the_accelerometer_misalignments() {
+        let mut acc = Vec::new();
+        let mut ivs = Vec::new();
+        fn block(d: [f64; 3], acc: &mut Vec<[f64; 3]>, ivs: &mut Vec<Interval>) {
+            let start = acc.len();
+            acc.extend(std::iter::repeat_n(d, 50));
+            ivs.push(Interval {
+                start,
+                end: acc.len() - 1,
+            });
+        }
+        for d in [
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.005, -1.0],
+        ] {
+            block(d, &mut acc, &mut ivs);
+        }
+        let x = DVector::from_vec(vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0]);
+        let used = |iv: &Interval| Some(*iv);
+        let e = check_separation(&acc, &ivs, &used, &x)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("plan cannot separate acc.m_yz, acc.m_zy, acc.m_zx: every still interval has gravity within 1.1 deg"),
+            "{e}"
+        );
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        block([h, h, 0.0], &mut acc, &mut ivs);
+        let e = check_separation(&acc, &ivs, &used, &x)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("plan cannot separate acc.m_zy, acc.m_zx:"),
+            "{e}"
+        );
+        block([h, 0.0, h], &mut acc, &mut ivs);
+        block([0.0, 0.1, 1.0], &mut acc, &mut ivs);
+        check_separation(&acc, &ivs, &used, &x).unwrap();
+    }
 
     #[test]
     fn rk4_integrates_a_constant_rate() {

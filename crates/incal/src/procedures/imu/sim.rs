@@ -278,6 +278,19 @@ pub enum Sequence {
         /// Duration of one rotation (s).
         move_s: f64,
     },
+    /// As [`Sequence::Random`], but every turn is 90° about a horizontal
+    /// axis of the sensor, so the sensor visits the six faces of a cube
+    /// again and again: a hand-held session on a cube-shaped fixture (the
+    /// RealSense T265 recording published with imu_tk has 41 still
+    /// intervals on 6 faces).
+    Faces {
+        /// Orientations after the start.
+        positions: usize,
+        /// Duration of the still start (s).
+        init_s: f64,
+        /// Duration of one rotation (s).
+        move_s: f64,
+    },
     /// Static positions with the given up directions (IMU frame, unit
     /// vectors), each at a heading; no motion between them.
     Positions {
@@ -411,6 +424,11 @@ impl ImuSim {
                 positions,
                 init_s,
                 move_s,
+            }
+            | Sequence::Faces {
+                positions,
+                init_s,
+                move_s,
             } => {
                 range("init_static_s", *init_s, true, 1e5)?;
                 range("move_s", *move_s, true, 1e4)?;
@@ -445,6 +463,11 @@ impl ImuSim {
         }
     }
 }
+
+/// Standard deviation of the tilt of each face visit in
+/// [`Sequence::Faces`] (deg): a hand-held fixture (the T265 recording's
+/// faces lie 2.5–4.5° off the sensor axes).
+pub const FACE_TILT_DEG: f64 = 3.0;
 
 /// Rotation by `angle` (rad) about the unit `axis` (Rodrigues).
 pub fn rotation(axis: &V3, angle: f64) -> M3 {
@@ -519,7 +542,13 @@ pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
             positions,
             init_s,
             move_s,
+        }
+        | Sequence::Faces {
+            positions,
+            init_s,
+            move_s,
         } => {
+            let faces = matches!(cfg.sequence, Sequence::Faces { .. });
             if !(init_s.is_finite() && *init_s > 0.0 && move_s.is_finite() && *move_s > 0.0) {
                 return Err(bad("init/move duration (s)", *init_s));
             }
@@ -530,12 +559,40 @@ pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
             }
             let ang = Uniform::new(45f64.to_radians(), 135f64.to_radians())
                 .map_err(|e| Error::Unsupported(e.to_string()))?;
+            // Faces: each visit tilted off the face by a few degrees (a hand
+            // on a fixture), undone before the next quarter turn.
+            let mut tilt: Option<(V3, f64)> = None;
             for _ in 0..*positions {
+                if let Some((ax, th)) = tilt.take() {
+                    c = w.rotate("", &c, &ax, -th, move_s / 3.0);
+                }
                 let up = c.row(2).transpose();
                 let v = V3::new(normal(w.r, 1.0), normal(w.r, 1.0), normal(w.r, 1.0));
-                let axis = up.cross(&v).normalize();
-                let angle = ang.sample(w.r);
-                c = w.rotate("", &c, &axis, angle, *move_s);
+                let (axis, angle) = if faces {
+                    // The sensor axis nearest the random horizontal one, by
+                    // a quarter turn either way.
+                    let h = up.cross(&v);
+                    let i = (0..3)
+                        .filter(|&i| up[i].abs() < 0.5)
+                        .max_by(|&a, &b| h[a].abs().total_cmp(&h[b].abs()))
+                        .unwrap_or(0);
+                    let mut e = V3::zeros();
+                    e[i] = 1.0;
+                    (e, std::f64::consts::FRAC_PI_2 * h[i].signum())
+                } else {
+                    (up.cross(&v).normalize(), ang.sample(w.r))
+                };
+                if faces {
+                    c = w.rotate("", &c, &axis, angle, move_s / 3.0);
+                    let up = c.row(2).transpose();
+                    let v = V3::new(normal(w.r, 1.0), normal(w.r, 1.0), normal(w.r, 1.0));
+                    let ax = up.cross(&v).normalize();
+                    let th = normal(w.r, FACE_TILT_DEG.to_radians());
+                    c = w.rotate("", &c, &ax, th, move_s / 3.0);
+                    tilt = Some((ax, th));
+                } else {
+                    c = w.rotate("", &c, &axis, angle, *move_s);
+                }
                 for _ in 0..n_static {
                     w.push("", &c, &V3::zeros(), true);
                 }
