@@ -1,4 +1,5 @@
-//! CLI errors and exit codes: 0 ok, 1 failure, 2 bad usage or bad input.
+//! CLI errors and exit codes: 0 ok, 1 failure, 2 bad usage or bad input,
+//! 3 a record stored whose output could not be written.
 
 use std::fmt;
 
@@ -9,6 +10,9 @@ pub enum CliError {
     Input(String),
     /// Anything else (exit code 1), e.g. an output file cannot be written.
     Failure(anyhow::Error),
+    /// A record was stored but its output could not be written (exit code
+    /// 3): retrying the same `add` finds the record and writes nothing new.
+    Stored(String),
 }
 
 impl fmt::Display for CliError {
@@ -16,6 +20,7 @@ impl fmt::Display for CliError {
         match self {
             CliError::Input(m) => f.write_str(m),
             CliError::Failure(e) => write!(f, "{e:#}"),
+            CliError::Stored(m) => f.write_str(m),
         }
     }
 }
@@ -32,6 +37,7 @@ impl CliError {
         match self {
             CliError::Input(_) => 2,
             CliError::Failure(_) => 1,
+            CliError::Stored(_) => 3,
         }
     }
 }

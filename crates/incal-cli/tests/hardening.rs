@@ -179,7 +179,7 @@ fn simulated_gyro_time_series_with_default_records_reduces() {
 }
 
 #[test]
-fn repeated_time_in_a_raw_record_names_the_line_at_fault() {
+fn repeated_time_in_a_raw_record_is_counted_in_its_record() {
     let f = tmp("g3.csv");
     ok(&run(&[
         "simulate",
@@ -196,9 +196,23 @@ fn repeated_time_in_a_raw_record_names_the_line_at_fault() {
     cells[3] = prev_time;
     lines[9] = cells.join(",");
     let g = write("g_time.csv", &(lines.join("\n") + "\n"));
-    refused(
-        &run(&["misalign", "gyro", "--input", p(&g), "--k1", "-2.9222"]),
-        &["g_time.csv:10", "time"],
+    // Under the time-stamp policy a repeated stamp is accepted (time
+    // gives only the measured table rate) and counted in its record's
+    // warning, which names the record's first line.
+    let v = json_of(&run(&[
+        "misalign",
+        "gyro",
+        "--input",
+        p(&g),
+        "--k1",
+        "-2.9222",
+        "--json",
+    ]));
+    let w = warnings_with(&v, "time-repeats");
+    assert!(
+        w.len() == 1
+            && w[0].starts_with("line 2: record alpha=0 beta=0 rate=20: 1 time_s stamps repeat"),
+        "{w:?}"
     );
 }
 

@@ -424,6 +424,105 @@ fn verify_names_a_record_changed_behind_incals_back() {
     drop(c);
     let m = fails(1, &["record", "verify", "--db", s(&db)]);
     assert!(m.starts_with("incal: record 2: "), "{m}");
+    // Reading commands refuse the broken store naming the record, and
+    // nothing is added onto it.
+    for args in [
+        vec!["record", "show", "1", "--db", s(&db)],
+        vec![
+            "record",
+            "history",
+            "--serial",
+            "SN-3",
+            "--coefficient",
+            "K0",
+            "--db",
+            s(&db),
+        ],
+    ] {
+        let m = fails(1, &args);
+        assert!(
+            m.contains("record 2: ") && m.contains("the chain is broken"),
+            "{m}"
+        );
+    }
+    let f = tumble_result(&dir, "t9", 8e-3, 29, Some("SN-3"));
+    let m = fails(1, &["record", "add", s(&f), "--db", s(&db)]);
+    assert!(m.contains("nothing is added to a broken chain"), "{m}");
+}
+
+/// The newest record deleted passes a plain verify (what is left is a
+/// whole chain) but not `verify --head` with the head written down before;
+/// a future date and a correction of another procedure are refused; names
+/// are printed without control or bidi characters.
+#[test]
+fn head_checking_dates_procedures_and_printable_names() {
+    let dir = temp_dir("head");
+    let db = dir.join("r.db");
+    for k in 0..3 {
+        let f = tumble_result(&dir, &format!("t{k}"), 8e-3, 40 + k, Some("SN-4"));
+        ok(&["record", "add", s(&f), "--db", s(&db)]);
+    }
+    let v = ok_json(&["record", "verify", "--db", s(&db), "--json"]);
+    let head = v["head"].as_str().unwrap().to_string();
+    ok(&["record", "verify", "--db", s(&db), "--head", &head]);
+    let c = rusqlite::Connection::open(&db).unwrap();
+    c.execute_batch(
+        "DELETE FROM record_inputs WHERE record_id = 3; DELETE FROM records WHERE id = 3;",
+    )
+    .unwrap();
+    drop(c);
+    ok(&["record", "verify", "--db", s(&db)]);
+    let m = fails(1, &["record", "verify", "--db", s(&db), "--head", &head]);
+    assert!(m.contains(&format!("does not hold head {head}")), "{m}");
+    let m = fails(2, &["record", "verify", "--db", s(&db), "--head", "abc"]);
+    assert!(m.contains("--head") && m.contains("64 hexadecimal"), "{m}");
+
+    let f = tumble_result(&dir, "late", 8e-3, 50, Some("SN-4"));
+    let m = fails(
+        2,
+        &[
+            "record",
+            "add",
+            s(&f),
+            "--db",
+            s(&db),
+            "--created-utc",
+            "2999-01-01",
+        ],
+    );
+    assert!(m.contains("in the future"), "{m}");
+
+    // A centrifuge-procedure document may not supersede a tumble record.
+    let text = std::fs::read_to_string(&f).unwrap();
+    let mut doc: Value = serde_json::from_str(&text).unwrap();
+    doc["procedure"] = Value::from("centrifuge");
+    let other = dir.join("other.json");
+    std::fs::write(&other, serde_json::to_string_pretty(&doc).unwrap()).unwrap();
+    let o = run(&[
+        "record",
+        "supersede",
+        "1",
+        s(&other),
+        "--reason",
+        "x",
+        "--db",
+        s(&db),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("must be of the same procedure") || err.contains("procedure"),
+        "{err}"
+    );
+
+    let f = tumble_result(&dir, "esc", 8e-3, 51, Some("SN\u{1b}[2J\u{202e}x"));
+    ok(&["record", "add", s(&f), "--db", s(&db)]);
+    let list = ok(&["record", "list", "--db", s(&db)]);
+    assert!(
+        !list.contains('\u{1b}') && !list.contains('\u{202e}'),
+        "{list:?}"
+    );
+    assert!(list.contains("SN\\u{001b}[2J\\u{202e}x"), "{list}");
 }
 
 /// SplitMix64, seeded: the kill delays.
@@ -566,4 +665,74 @@ fn eight_writer_processes_at_once_lose_nothing() {
         .collect();
     assert_eq!(ids, (1..=(WRITERS * EACH) as i64).collect::<Vec<_>>());
     ok(&["record", "verify", "--db", s(&db)]);
+}
+
+/// Records are never lost or stored twice (hardening issue): in-memory
+/// and URI stores are refused; an output that fails after the commit says
+/// the record is stored (exit 3) and the retry finds it instead of adding
+/// a duplicate; reading commands refuse an empty or foreign file and
+/// leave it as it was.
+#[test]
+fn no_record_is_lost_or_stored_twice() {
+    let dir = temp_dir("lost-or-twice");
+    let r = tumble_result(&dir, "a", 1e-3, 3, Some("SN-9"));
+    for db in [":memory:", "file::memory:", "file:x.db?mode=memory"] {
+        let e = fails(2, &["record", "add", s(&r), "--db", db]);
+        assert!(e.contains("give the path of a records file"), "{e}");
+    }
+    let db = dir.join("r.db");
+    if Path::new("/dev/full").exists() {
+        let e = fails(
+            3,
+            &["record", "add", s(&r), "--db", s(&db), "-o", "/dev/full"],
+        );
+        assert!(
+            e.contains("record 1 stored; writing the output failed"),
+            "{e}"
+        );
+    } else {
+        ok(&["record", "add", s(&r), "--db", s(&db)]);
+    }
+    let o = run(&["record", "add", s(&r), "--db", s(&db), "--json"]);
+    let again: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(again["id"], 1);
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("record 1 already holds this document"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let list = ok_json(&["record", "list", "--db", s(&db), "--json"]);
+    assert_eq!(
+        list["records"]
+            .as_array()
+            .map(|a| a.len())
+            .unwrap_or(usize::MAX),
+        1,
+        "{list}"
+    );
+
+    let empty = dir.join("empty.db");
+    std::fs::write(&empty, b"").unwrap();
+    for cmd in ["verify", "list"] {
+        let e = fails(2, &["record", cmd, "--db", s(&empty)]);
+        assert!(
+            e.contains("not an incal records store (an empty file)"),
+            "{e}"
+        );
+    }
+    assert_eq!(std::fs::metadata(&empty).unwrap().len(), 0);
+    let foreign = dir.join("other.sqlite");
+    rusqlite::Connection::open(&foreign)
+        .unwrap()
+        .execute_batch("CREATE TABLE notes (id INTEGER PRIMARY KEY, text TEXT); INSERT INTO notes (text) VALUES ('mine');")
+        .unwrap();
+    let bytes = std::fs::read(&foreign).unwrap();
+    for args in [
+        vec!["record", "verify", "--db", s(&foreign)],
+        vec!["record", "add", s(&r), "--db", s(&foreign)],
+    ] {
+        let e = fails(2, &args);
+        assert!(e.contains("not an incal records store"), "{e}");
+    }
+    assert_eq!(std::fs::read(&foreign).unwrap(), bytes);
 }

@@ -83,6 +83,13 @@ pub enum Error {
         /// What does not match.
         problem: String,
     },
+    /// The chain no longer holds a head kept elsewhere: records were
+    /// removed or the chain rebuilt since ([`Store::verify_head`]; exit 1).
+    #[error("the chain does not hold head {head}: records were removed or the chain rebuilt since it was written down")]
+    HeadMissing {
+        /// The head looked for.
+        head: String,
+    },
     /// Any other database failure (exit 1).
     #[error("{path}: {source}")]
     Database {
@@ -143,6 +150,10 @@ pub struct Added {
     pub sha256: String,
     /// Its hash in the chain.
     pub record_hash: String,
+    /// The same document was already stored for this instrument: this is
+    /// that record, and nothing was written (a retried `add` never makes a
+    /// duplicate).
+    pub existing: bool,
 }
 
 /// One line of [`Store::list`].
@@ -268,13 +279,50 @@ impl Store {
         Self::open_with(path.as_ref(), true)
     }
 
-    /// Open an existing store; a missing file is an error (reading
-    /// commands do not create stores).
+    /// Open an existing store for reading: read-only, so a missing, empty
+    /// or foreign file is refused and never created, migrated or changed
+    /// (an auditor's read-only copy can be verified).
     pub fn open_existing(path: impl AsRef<Path>) -> Result<Store> {
         Self::open_with(path.as_ref(), false)
     }
 
+    /// Open an existing store for writing (`supersede`): a missing file
+    /// is refused, not created.
+    pub fn open_to_write(path: impl AsRef<Path>) -> Result<Store> {
+        let path = path.as_ref();
+        Self::check_path(path)?;
+        if !path.exists() {
+            return Err(Error::Store {
+                path: path.display().to_string(),
+                message: "no records store here (no such file; 'incal record add' creates one)"
+                    .into(),
+            });
+        }
+        Self::open_with(path, true)
+    }
+
+    /// Refuse what is not a plain file path: SQLite's in-memory and URI
+    /// names (`:memory:`, `file:…`) would accept a record and keep nothing.
+    fn check_path(path: &Path) -> Result<()> {
+        let text = path.to_string_lossy();
+        let bad = if text.is_empty() {
+            Some("an empty path")
+        } else if text == ":memory:" || text.starts_with("file:") {
+            Some("an in-memory or URI database, which keeps nothing in a file")
+        } else {
+            None
+        };
+        match bad {
+            Some(what) => Err(Error::Store {
+                path: text.into_owned(),
+                message: format!("{what}: give the path of a records file"),
+            }),
+            None => Ok(()),
+        }
+    }
+
     fn open_with(path: &Path, create: bool) -> Result<Store> {
+        Self::check_path(path)?;
         let name = path.display().to_string();
         if !create && !path.exists() {
             return Err(Error::Store {
@@ -289,12 +337,19 @@ impl Store {
                 message: "is a directory, not a records store".into(),
             });
         }
-        let mut flags = OpenFlags::SQLITE_OPEN_READ_WRITE
-            | OpenFlags::SQLITE_OPEN_URI
-            | OpenFlags::SQLITE_OPEN_NO_MUTEX;
-        if create {
-            flags |= OpenFlags::SQLITE_OPEN_CREATE;
+        if !create && path.metadata().is_ok_and(|m| m.len() == 0) {
+            return Err(Error::Store {
+                path: name,
+                message: "not an incal records store (an empty file)".into(),
+            });
         }
+        let flags = if create {
+            OpenFlags::SQLITE_OPEN_READ_WRITE
+                | OpenFlags::SQLITE_OPEN_CREATE
+                | OpenFlags::SQLITE_OPEN_NO_MUTEX
+        } else {
+            OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX
+        };
         let conn = Connection::open_with_flags(path, flags).map_err(|e| Error::Store {
             path: name.clone(),
             message: format!("cannot open: {e}"),
@@ -303,8 +358,46 @@ impl Store {
             conn,
             path: path.to_path_buf(),
         };
-        store.setup()?;
+        if create {
+            // Another application's SQLite file is not made a store.
+            if store.schema_version()?.is_none() && store.has_tables()? {
+                return Err(Error::Store {
+                    path: name,
+                    message: "not an incal records store (an SQLite file with other tables)".into(),
+                });
+            }
+            store.setup()?;
+        } else {
+            store.check_readable()?;
+        }
         Ok(store)
+    }
+
+    /// A store opened for reading: an incal store at the schema this
+    /// version knows, checked without writing anything.
+    fn check_readable(&mut self) -> Result<()> {
+        self.conn.busy_timeout(BUSY_TIMEOUT).map_err(self.db())?;
+        let latest = MIGRATIONS.last().map_or(0, |m| m.0);
+        let foreign = |what: &str| Error::Store {
+            path: self.path.display().to_string(),
+            message: format!("not an incal records store ({what})"),
+        };
+        match self.schema_version()? {
+            None => Err(foreign("no incal tables")),
+            Some(v) if v > latest => Err(Error::Store {
+                path: self.path.display().to_string(),
+                message: format!(
+                    "schema version {v} is newer than this incal knows ({latest}): use a newer incal"
+                ),
+            }),
+            Some(v) if v < latest => Err(Error::Store {
+                path: self.path.display().to_string(),
+                message: format!(
+                    "schema version {v} is older than this incal's ({latest}): 'incal record add' brings it up to date"
+                ),
+            }),
+            Some(_) => Ok(()),
+        }
     }
 
     /// The store's path.
@@ -394,6 +487,17 @@ impl Store {
         tx.commit().map_err(|e| db_err(&name, e))
     }
 
+    /// True when the file holds any table (of anyone).
+    fn has_tables(&self) -> Result<bool> {
+        self.conn
+            .query_row(
+                "SELECT COUNT(*) > 0 FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'",
+                [],
+                |r| r.get(0),
+            )
+            .map_err(self.db())
+    }
+
     /// The schema version (`None` before the first migration).
     fn schema_version(&self) -> Result<Option<i64>> {
         let exists: bool = self
@@ -443,6 +547,19 @@ impl Store {
             }
             None => time::now_utc(),
         };
+        if created_utc > time::now_utc() {
+            return Err(Error::Input(format!(
+                "created_utc {created_utc} is in the future: a record is dated when it was made"
+            )));
+        }
+        // Never extend a broken chain: the new record would seal it.
+        self.verify().map_err(|e| match e {
+            Error::Tampered { id, problem } => Error::Tampered {
+                id,
+                problem: format!("{problem}; nothing is added to a broken chain"),
+            },
+            other => other,
+        })?;
         let document_sha256 = sha256_hex(req.document.as_bytes());
         let inputs: Vec<InputHash> = doc
             .inputs
@@ -461,25 +578,31 @@ impl Store {
             .map_err(e)?;
         let fallback_serial = match supersedes {
             Some((old, _)) => {
-                let row: Option<(String, Option<i64>)> = tx
+                let row: Option<(String, Option<i64>, String)> = tx
                     .query_row(
-                        "SELECT i.serial, s.new_id FROM records r
+                        "SELECT i.serial, s.new_id, r.procedure FROM records r
                          JOIN instruments i ON i.id = r.instrument_id
                          LEFT JOIN supersessions s ON s.old_id = r.id
                          WHERE r.id = ?1",
                         [old],
-                        |r| Ok((r.get(0)?, r.get(1)?)),
+                        |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)),
                     )
                     .optional()
                     .map_err(e)?;
                 match row {
                     None => return Err(Error::Input(format!("record {old}: no such record"))),
-                    Some((_, Some(by))) => {
+                    Some((_, Some(by), _)) => {
                         return Err(Error::Input(format!(
                             "record {old} is already superseded by record {by}: supersede record {by} instead"
                         )))
                     }
-                    Some((serial, None)) => Some(serial),
+                    Some((_, None, procedure)) if procedure != doc.procedure.as_str() => {
+                        return Err(Error::Input(format!(
+                            "record {old} is a {procedure} result and the correction a {} result: a correction must be of the same procedure",
+                            doc.procedure.as_str()
+                        )))
+                    }
+                    Some((serial, None, _)) => Some(serial),
                 }
             }
             None => None,
@@ -501,6 +624,27 @@ impl Store {
             )
             .optional()
             .map_err(e)?;
+        if let (Some(_), None) = (instrument_id, supersedes) {
+            let same: Option<(i64, String)> = tx
+                .query_row(
+                    "SELECT r.id, r.record_hash FROM records r
+                     JOIN instruments i ON i.id = r.instrument_id
+                     WHERE i.serial = ?1 AND r.document_sha256 = ?2
+                     ORDER BY r.id LIMIT 1",
+                    params![serial, document_sha256],
+                    |r| Ok((r.get(0)?, r.get(1)?)),
+                )
+                .optional()
+                .map_err(e)?;
+            if let Some((id, record_hash)) = same {
+                return Ok(Added {
+                    id,
+                    sha256: document_sha256,
+                    record_hash,
+                    existing: true,
+                });
+            }
+        }
         let instrument_id = match instrument_id {
             Some(id) => id,
             None => {
@@ -583,6 +727,7 @@ impl Store {
             id,
             sha256: document_sha256,
             record_hash,
+            existing: false,
         })
     }
 
@@ -757,6 +902,31 @@ impl Store {
     /// a record that covers it. The first record that fails is
     /// [`Error::Tampered`]. Reads one consistent snapshot.
     pub fn verify(&self) -> Result<Verified> {
+        self.verify_holding(None)
+    }
+
+    /// [`Store::verify`], and check that the chain still holds `head`, a
+    /// `record_hash` kept elsewhere (on a certificate, in another system):
+    /// a store truncated or rebuilt since no longer holds it
+    /// ([`Error::HeadMissing`]).
+    pub fn verify_head(&self, head: &str) -> Result<Verified> {
+        self.verify_holding(Some(head))
+    }
+
+    /// Refuse to read a store whose chain is broken, naming the first
+    /// record that does not match (for `show`, `history` and reports).
+    pub fn check_chain(&self) -> Result<()> {
+        self.verify().map(|_| ()).map_err(|e| match e {
+            Error::Tampered { id, problem } => Error::Tampered {
+                id,
+                problem: format!("{problem} (the chain is broken: nothing is read from this store; 'incal record verify' names it)"),
+            },
+            other => other,
+        })
+    }
+
+    fn verify_holding(&self, anchor: Option<&str>) -> Result<Verified> {
+        let mut held = anchor.is_none() || anchor == Some(GENESIS);
         let tx = self.conn.unchecked_transaction().map_err(self.db())?;
         let mut st = tx
             .prepare(
@@ -865,6 +1035,9 @@ impl Store {
                         .into(),
                 ));
             }
+            if anchor == Some(hash.as_str()) {
+                held = true;
+            }
             prev_id = id;
             prev_hash = hash;
             count += 1;
@@ -892,6 +1065,11 @@ impl Store {
             .map_err(self.db())?;
         if let Some((id, problem)) = orphan {
             return Err(Error::Tampered { id, problem });
+        }
+        if let (false, Some(h)) = (held, anchor) {
+            return Err(Error::HeadMissing {
+                head: h.to_string(),
+            });
         }
         Ok(Verified {
             records: count,

@@ -105,13 +105,16 @@ fn bad_input_is_refused_and_writes_nothing() {
         })
         .unwrap_err();
     assert!(e.is_input() && e.to_string().contains("created_utc"), "{e}");
-    // The same serial given twice is fine.
-    s.add(&NewRecord {
-        serial: Some("SN-1"),
-        ..NewRecord::new(&sn1)
-    })
-    .unwrap();
-    assert_eq!(s.list(None).unwrap().len(), 5);
+    // The same serial given twice is fine; the same document for the
+    // same instrument is the record already stored (no duplicate).
+    let again = s
+        .add(&NewRecord {
+            serial: Some("SN-1"),
+            ..NewRecord::new(&sn1)
+        })
+        .unwrap();
+    assert!(again.existing);
+    assert_eq!(s.list(None).unwrap().len(), 4);
     s.verify().unwrap();
 
     let dir = temp_dir("not-a-store");
@@ -273,5 +276,74 @@ fn verify_names_the_first_record_changed_behind_its_back() {
         ("t-blob", "UPDATE records SET document = CAST(document AS BLOB) || x'ff' WHERE id = 1", 1),
     ] {
         names(&tampered(tag, sql), id);
+    }
+}
+
+/// Reading opens a store read-only: a read-only copy can be verified and
+/// listed, and an empty file, another application's SQLite file, an
+/// in-memory or URI name are refused without a byte changed.
+#[test]
+fn reading_never_creates_or_changes_a_file() {
+    let (path, s) = filled("readonly");
+    let before = s.verify().unwrap();
+    let n = s.list(None).unwrap().len();
+    drop(s);
+    let dir = temp_dir("readonly-copy");
+    let copy = dir.join("audit.db");
+    std::fs::copy(&path, &copy).unwrap();
+    let mut perm = std::fs::metadata(&copy).unwrap().permissions();
+    perm.set_readonly(true);
+    std::fs::set_permissions(&copy, perm).unwrap();
+    let bytes = std::fs::read(&copy).unwrap();
+    let r = Store::open_existing(&copy).unwrap();
+    assert_eq!(r.verify().unwrap(), before);
+    assert_eq!(r.list(None).unwrap().len(), n);
+    drop(r);
+    assert_eq!(
+        std::fs::read(&copy).unwrap(),
+        bytes,
+        "the copy is unchanged"
+    );
+
+    let empty = dir.join("empty.db");
+    std::fs::write(&empty, b"").unwrap();
+    let e = Store::open_existing(&empty).unwrap_err();
+    assert!(
+        e.is_input()
+            && e.to_string()
+                .contains("not an incal records store (an empty file)"),
+        "{e}"
+    );
+    assert_eq!(std::fs::metadata(&empty).unwrap().len(), 0);
+
+    let foreign = dir.join("other.sqlite");
+    {
+        let c = rusqlite::Connection::open(&foreign).unwrap();
+        c.execute_batch("CREATE TABLE notes (id INTEGER PRIMARY KEY, text TEXT); INSERT INTO notes (text) VALUES ('mine');")
+            .unwrap();
+    }
+    let bytes = std::fs::read(&foreign).unwrap();
+    for e in [
+        Store::open_existing(&foreign).unwrap_err(),
+        Store::open(&foreign).unwrap_err(),
+    ] {
+        assert!(
+            e.is_input() && e.to_string().contains("not an incal records store"),
+            "{e}"
+        );
+    }
+    assert_eq!(
+        std::fs::read(&foreign).unwrap(),
+        bytes,
+        "the foreign file is unchanged"
+    );
+    assert!(!dir.join("other.sqlite-wal").exists());
+
+    for name in [":memory:", "file::memory:", "file:x.db?mode=memory", ""] {
+        let e = Store::open(name).unwrap_err();
+        assert!(
+            e.is_input() && e.to_string().contains("give the path of a records file"),
+            "{name}: {e}"
+        );
     }
 }

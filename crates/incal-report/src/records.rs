@@ -31,19 +31,36 @@ pub fn list_json(records: &[RecordSummary]) -> Value {
     json!({ "records": rows })
 }
 
+/// `text` for a terminal: control characters (ESC, newline, …) and the
+/// bidirectional overrides and isolates (which reorder what follows) as
+/// `\u{…}` escapes, so a name cannot move the cursor, break a line or
+/// hide text.
+pub fn printable(text: &str) -> String {
+    let bidi = |c: char| matches!(c, '\u{200E}' | '\u{200F}' | '\u{061C}' | '\u{202A}'..='\u{202E}' | '\u{2066}'..='\u{2069}');
+    text.chars()
+        .map(|c| {
+            if c.is_control() || bidi(c) {
+                format!("\\u{{{:04x}}}", c as u32)
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
+}
+
 /// The records as a table (`no records` when there are none).
 pub fn list_text(records: &[RecordSummary]) -> String {
     if records.is_empty() {
         return "no records\n".to_string();
     }
-    let dash = |s: &Option<String>| s.clone().unwrap_or_else(|| "-".into());
+    let dash = |s: &Option<String>| s.as_deref().map_or_else(|| "-".into(), printable);
     let rows: Vec<Vec<String>> = records
         .iter()
         .map(|r| {
             vec![
                 r.id.to_string(),
-                r.serial.clone(),
-                r.procedure.clone(),
+                printable(&r.serial),
+                printable(&r.procedure),
                 r.created_utc.clone(),
                 r.sha256[..16.min(r.sha256.len())].to_string(),
                 dash(&r.operator),
@@ -72,11 +89,14 @@ pub fn list_text(records: &[RecordSummary]) -> String {
 pub fn header_text(r: &StoredRecord) -> String {
     let mut s = format!(
         "record {} of serial {}, {} (sha256 {})\n",
-        r.id, r.serial, r.created_utc, r.sha256
+        r.id,
+        printable(&r.serial),
+        r.created_utc,
+        r.sha256
     );
     let who: Vec<String> = [("operator", &r.operator), ("station", &r.station)]
         .iter()
-        .filter_map(|(k, v)| v.as_ref().map(|v| format!("{k} {v}")))
+        .filter_map(|(k, v)| v.as_ref().map(|v| format!("{k} {}", printable(v))))
         .collect();
     if !who.is_empty() {
         s.push_str(&format!("{}\n", who.join(", ")));
@@ -84,7 +104,8 @@ pub fn header_text(r: &StoredRecord) -> String {
     if let Some(sup) = &r.supersedes {
         s.push_str(&format!(
             "supersedes record {}: {}\n",
-            sup.old_id, sup.reason
+            sup.old_id,
+            printable(&sup.reason)
         ));
     }
     if let Some(by) = r.superseded_by {
@@ -208,4 +229,17 @@ pub fn history_text(h: &History) -> String {
     }
     s.push_str("method: drift by weighted least squares x = a + b t (t in days, weights 1/u^2); En = (x_n - x_n-1)/sqrt(U95_n^2 + U95_n-1^2)\n");
     s
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn names_print_without_control_or_bidi_characters() {
+        assert_eq!(
+            super::printable("SN\u{1b}[2J-1\n"),
+            "SN\\u{001b}[2J-1\\u{000a}"
+        );
+        assert_eq!(super::printable("a\u{202E}b"), "a\\u{202e}b");
+        assert_eq!(super::printable("Müller 北京"), "Müller 北京");
+    }
 }

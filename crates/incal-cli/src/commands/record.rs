@@ -9,6 +9,7 @@
 //! line; a chain that does not verify is exit 1 with
 //! `incal: record N: …`.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use clap::Subcommand;
@@ -156,6 +157,9 @@ pub struct HistoryArgs {
 pub struct VerifyArgs {
     #[command(flatten)]
     pub db: DbArgs,
+    /// Also check that the chain still holds this head (a record_hash written down earlier, e.g. on a certificate): a store truncated or rebuilt since fails.
+    #[arg(long, value_name = "HEX")]
+    pub head: Option<String>,
     #[command(flatten)]
     pub out: OutArgs,
 }
@@ -247,13 +251,28 @@ fn request<'a>(text: &'a str, who: &'a WhoArgs) -> NewRecord<'a> {
     }
 }
 
+/// The new record's id (with `--json`, also its document's hash; a
+/// document already stored for the instrument is said on stderr). The record is committed before this runs, so a
+/// failure here says so (exit 3): the same `add` again finds the record.
 fn print_added(out: &OutArgs, added: &incal_records::Added) -> CliResult<()> {
     let text = if out.json {
         json_text(&json!({"id": added.id, "sha256": added.sha256}))
     } else {
         format!("{}\n", added.id)
     };
-    write_text(out.output.as_deref(), &text)
+    if added.existing {
+        let _ = writeln!(
+            std::io::stderr().lock(),
+            "incal: record {} already holds this document for this instrument: nothing stored",
+            added.id
+        );
+    }
+    write_text(out.output.as_deref(), &text).map_err(|e| {
+        CliError::Stored(format!(
+            "record {} stored; writing the output failed: {e}",
+            added.id
+        ))
+    })
 }
 
 fn add(a: &AddArgs) -> CliResult<()> {
@@ -274,7 +293,7 @@ fn supersede(a: &SupersedeArgs) -> CliResult<()> {
     }
     // No serial anywhere is fine here: the old record's is taken.
     let (_, text, _) = read_result(&a.result, &a.who)?;
-    let mut store = open(&a.db, false)?;
+    let mut store = Store::open_to_write(a.db.path()).map_err(store_err)?;
     let added = store
         .supersede(a.id, &request(&text, &a.who), &a.reason)
         .map_err(store_err)?;
@@ -313,6 +332,7 @@ struct ShowJson<'a> {
 
 fn show(a: &ShowArgs) -> CliResult<()> {
     let store = open(&a.db, false)?;
+    store.check_chain().map_err(store_err)?;
     let r = store.show(a.id).map_err(store_err)?;
     let broken = |why: String| {
         CliError::Failure(anyhow::anyhow!(
@@ -356,6 +376,7 @@ fn show(a: &ShowArgs) -> CliResult<()> {
 
 fn history(a: &HistoryArgs) -> CliResult<()> {
     let store = open(&a.db, false)?;
+    store.check_chain().map_err(store_err)?;
     let h = store
         .history(&a.serial, &a.coefficient)
         .map_err(store_err)?;
@@ -369,7 +390,19 @@ fn history(a: &HistoryArgs) -> CliResult<()> {
 
 fn verify(a: &VerifyArgs) -> CliResult<()> {
     let store = open(&a.db, false)?;
-    let v = store.verify().map_err(store_err)?;
+    let v = match &a.head {
+        Some(h) => {
+            if h.len() != 64 || !h.bytes().all(|b| b.is_ascii_hexdigit()) {
+                return Err(CliError::Input(format!(
+                    "--head: '{}' is not a record hash (64 hexadecimal digits)",
+                    incal::error::short_number(h)
+                )));
+            }
+            store.verify_head(&h.to_ascii_lowercase())
+        }
+        None => store.verify(),
+    }
+    .map_err(store_err)?;
     let text = if a.out.json {
         json_text(&json!({"records": v.records, "head": v.head}))
     } else {

@@ -51,8 +51,17 @@ fn history(a: &Args, doc: &ResultDocument) -> CliResult<Vec<HistorySeries>> {
     if a.db.is_none() && !path.exists() {
         return Ok(Vec::new());
     }
-    let store = incal_records::Store::open_existing(&path)
-        .map_err(|e| CliError::Input(format!("{}: {e}", path.display())))?;
+    // Store errors name the path themselves.
+    let store = incal_records::Store::open_existing(&path).map_err(|e| {
+        if e.is_input() {
+            CliError::Input(e.to_string())
+        } else {
+            CliError::Failure(anyhow::anyhow!("{e}"))
+        }
+    })?;
+    store
+        .check_chain()
+        .map_err(|e| CliError::Failure(anyhow::anyhow!("{}: {e}", path.display())))?;
     let mut out = Vec::new();
     for (name, v) in verdicts {
         let h = store
