@@ -101,14 +101,136 @@ pub fn write_stream<W>(path: Option<&Path>, write: W) -> CliResult<()>
 where
     W: FnOnce(&mut dyn Write) -> std::io::Result<()>,
 {
+    write_stream_checked(path, true, write)
+}
+
+/// [`write_stream`] for a binary stream (`noise` simulation in f32/f64):
+/// no text cells to check.
+pub fn write_binary_stream<W>(path: Option<&Path>, write: W) -> CliResult<()>
+where
+    W: FnOnce(&mut dyn Write) -> std::io::Result<()>,
+{
+    write_stream_checked(path, false, write)
+}
+
+fn write_stream_checked<W>(path: Option<&Path>, check: bool, write: W) -> CliResult<()>
+where
+    W: FnOnce(&mut dyn Write) -> std::io::Result<()>,
+{
+    if !check {
+        let name = match path {
+            Some(p) if !is_dash(p) => p.display().to_string(),
+            _ => "stdout".to_string(),
+        };
+        let mut out = open_output(path)?;
+        return write(&mut out)
+            .and_then(|()| out.flush())
+            .map_err(|e| CliError::Failure(anyhow::anyhow!("{name}: cannot write: {e}")));
+    }
     let name = match path {
         Some(p) if !is_dash(p) => p.display().to_string(),
         _ => "stdout".to_string(),
     };
-    let mut out = open_output(path)?;
-    write(&mut out)
-        .and_then(|()| out.flush())
-        .map_err(|e| CliError::Failure(anyhow::anyhow!("{name}: cannot write: {e}")))
+    let out = open_output(path)?;
+    let mut guard = FiniteGuard {
+        inner: out,
+        cell: Vec::with_capacity(16),
+        line: 1,
+        found: None,
+    };
+    let r = write(&mut guard).and_then(|()| guard.flush());
+    if let Some((line, token)) = guard.found.take() {
+        // Half a file with inf in it is worse than none.
+        drop(guard);
+        if let Some(p) = path.filter(|p| !is_dash(p)) {
+            let _ = std::fs::remove_file(p);
+        }
+        return Err(CliError::Input(format!(
+            "{name}: the simulation gave a non-finite value ({token}) on line {line}: an option is outside what the simulator can represent (nothing written)"
+        )));
+    }
+    match r {
+        // A writer that refuses a value it cannot write (non-finite) says
+        // so with InvalidData: an option out of range, not a disk failure.
+        Err(e) if e.kind() == std::io::ErrorKind::InvalidData => {
+            drop(guard);
+            if let Some(p) = path.filter(|p| !is_dash(p)) {
+                let _ = std::fs::remove_file(p);
+            }
+            Err(CliError::Input(format!(
+                "{name}: {e}: an option is outside what the simulator can represent (nothing written)"
+            )))
+        }
+        r => r.map_err(|e| CliError::Failure(anyhow::anyhow!("{name}: cannot write: {e}"))),
+    }
+}
+
+/// A writer that refuses a CSV cell spelling a non-finite number (`NaN`,
+/// `inf`, `-inf`): a simulator must never write one, whatever its
+/// options (hardening issue). Cells are split at `,`, `;`, tab and line
+/// ends; a cell longer than 16 bytes is no such token.
+struct FiniteGuard<W: Write> {
+    inner: W,
+    cell: Vec<u8>,
+    line: usize,
+    found: Option<(usize, String)>,
+}
+
+impl<W: Write> FiniteGuard<W> {
+    fn end_cell(&mut self) {
+        let t = self.cell.trim_ascii();
+        let bad = matches!(
+            t.to_ascii_lowercase().as_slice(),
+            b"nan"
+                | b"+nan"
+                | b"-nan"
+                | b"inf"
+                | b"+inf"
+                | b"-inf"
+                | b"infinity"
+                | b"+infinity"
+                | b"-infinity"
+        );
+        if bad && self.found.is_none() {
+            self.found = Some((self.line, String::from_utf8_lossy(t).into_owned()));
+        }
+        self.cell.clear();
+    }
+}
+
+impl<W: Write> Write for FiniteGuard<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        for &b in buf {
+            match b {
+                b',' | b';' | b'\t' | b'\r' => self.end_cell(),
+                b'\n' => {
+                    self.end_cell();
+                    self.line += 1;
+                }
+                _ if self.cell.len() < 16 => self.cell.push(b),
+                _ => {}
+            }
+        }
+        if self.found.is_some() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                "a non-finite value in the output",
+            ));
+        }
+        self.inner.write_all(buf)?;
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.end_cell();
+        if self.found.is_some() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                "a non-finite value in the output",
+            ));
+        }
+        self.inner.flush()
+    }
 }
 
 #[cfg(test)]

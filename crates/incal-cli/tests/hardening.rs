@@ -231,9 +231,10 @@ fn compare_overflow_gives_a_finite_en() {
     let mut a: serde_json::Value = serde_json::from_str(&out).unwrap();
     let mut b = a.clone();
     for (d, v) in [(&mut a, 1e200), (&mut b, -1e200)] {
+        let k95 = d["coefficients"]["K0"]["k95"].as_f64().unwrap();
         d["coefficients"]["K0"]["value"] = serde_json::json!(v);
         d["coefficients"]["K0"]["u"] = serde_json::json!(1e180);
-        d["coefficients"]["K0"]["U95"] = serde_json::json!(2e180);
+        d["coefficients"]["K0"]["U95"] = serde_json::json!(k95 * 1e180);
     }
     let fa = write("a.json", &a.to_string());
     let fb = write("b.json", &b.to_string());
@@ -553,4 +554,352 @@ fn centrifuge_static_radius_carries_the_rate_uncertainty() {
     let mut a = base.to_vec();
     a.extend_from_slice(&["--u-omega-ppm", "-5"]);
     refused(&run(&a), &["--u-omega-ppm"]);
+}
+
+/// Second hardening round: one gyro axis dead in its rotation section gave
+/// `K_g.zz = 0.063 ± 0.002` (truth about 16.7) with exit 0. Now refused
+/// naming the section and the column, in `imu ferraris` and `imu
+/// multipos`.
+#[test]
+fn a_dead_gyro_axis_in_its_rotation_section_is_refused() {
+    for (sequence, command, extra) in [
+        ("ferraris", "ferraris", &[][..]),
+        ("positions", "multipos", &["--rotations"][..]),
+    ] {
+        let f = tmp(&format!("{sequence}.csv"));
+        let mut args = vec!["simulate", "imu", "--sequence", sequence, "-o", p(&f)];
+        args.extend_from_slice(extra);
+        ok(&run(&args));
+        let text = std::fs::read_to_string(&f).unwrap();
+        let mut lines: Vec<String> = text.lines().map(String::from).collect();
+        let header = lines.iter().position(|l| !l.starts_with('#')).unwrap();
+        let cols: Vec<String> = lines[header].split(',').map(String::from).collect();
+        let (cp, cz) = (
+            cols.iter()
+                .position(|c| c == "part" || c == "position")
+                .unwrap(),
+            cols.iter().position(|c| c == "gyr_z").unwrap(),
+        );
+        for l in lines.iter_mut().skip(header + 1) {
+            let mut cells: Vec<String> = l.split(',').map(String::from).collect();
+            if cells[cp] == "z_rot" {
+                cells[cz] = "-312".into();
+                *l = cells.join(",");
+            }
+        }
+        let g = write(&format!("{sequence}_dead.csv"), &(lines.join("\n") + "\n"));
+        refused(
+            &run(&["imu", command, "--input", p(&g), "--rate-hz", "100"]),
+            &[
+                p(&g),
+                "rotation section z_rot",
+                "column gyr_z is -312",
+                "dead gyro channel",
+            ],
+        );
+    }
+}
+
+/// Second hardening round: `gyro positions --from R.json` took K1 whatever
+/// its unit, its u (1.0 against K1 = 0.02) or its dof (−3, 0). Each is now
+/// refused naming the JSON path.
+#[test]
+fn gyro_positions_from_checks_the_unit_u_and_dof_of_k1() {
+    let r = tmp("rate.csv");
+    ok(&run(&["simulate", "gyro-rate", "-o", p(&r)]));
+    let text = ok(&run(&[
+        "gyro",
+        "rate",
+        "--input",
+        p(&r),
+        "--latitude-deg",
+        "45",
+        "--json",
+    ]));
+    let pos = tmp("pos.csv");
+    ok(&run(&[
+        "simulate",
+        "gyro-positions",
+        "--latitude-deg",
+        "30",
+        "--azimuths-deg",
+        "60",
+        "--axial",
+        "oa",
+        "-o",
+        p(&pos),
+    ]));
+    let positions = |from: &std::path::Path| {
+        run(&[
+            "gyro",
+            "positions",
+            "--input",
+            p(&pos),
+            "--latitude-deg",
+            "30",
+            "--azimuth-deg",
+            "60",
+            "--axial",
+            "oa",
+            "--from",
+            p(from),
+        ])
+    };
+    ok(&positions(&write("good.json", &text)));
+    let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let k1 = doc["coefficients"]["K1"]["value"].as_f64().unwrap();
+    for (name, key, value, needle) in [
+        (
+            "unit.json",
+            "unit",
+            serde_json::json!("output/g"),
+            "$.coefficients.K1.unit",
+        ),
+        (
+            "u.json",
+            "u",
+            serde_json::json!(2.0 * k1.abs()),
+            "$.coefficients.K1.u",
+        ),
+        (
+            "dof.json",
+            "dof",
+            serde_json::json!(-3.0),
+            "$.coefficients.K1.dof",
+        ),
+        (
+            "dof0.json",
+            "dof",
+            serde_json::json!(0.0),
+            "$.coefficients.K1.dof",
+        ),
+    ] {
+        let mut d = doc.clone();
+        d["coefficients"]["K1"][key] = value;
+        if key == "u" {
+            let k95 = d["coefficients"]["K1"]["k95"].as_f64().unwrap();
+            d["coefficients"]["K1"]["U95"] = serde_json::json!(2.0 * k1.abs() * k95);
+        }
+        let f = write(name, &serde_json::to_string_pretty(&d).unwrap());
+        refused(&positions(&f), &[p(&f), needle]);
+    }
+}
+
+/// Second hardening round: `compare` took a negative u and a U95 that is
+/// not k95·u (En = 4.9e207); `report` took a negative u, rows shorter than
+/// their header, panicked on a longer one, and never finished on values
+/// of 1e308. A document is now checked before use, the error naming the
+/// JSON path.
+#[test]
+fn result_documents_are_checked_before_compare_and_report() {
+    let t = tmp("tc.csv");
+    ok(&run(&["simulate", "tumble", "-o", p(&t)]));
+    let out = ok(&run(&[
+        "tumble",
+        "--mount",
+        "pendulum",
+        "--input",
+        p(&t),
+        "--json",
+    ]));
+    let good = write("good.json", &out);
+    let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
+    type Change = Box<dyn Fn(&mut serde_json::Value)>;
+    let cases: Vec<(&str, Change, &str)> = vec![
+        (
+            "negu.json",
+            Box::new(|d| d["coefficients"]["K0"]["u"] = serde_json::json!(-1.0)),
+            "$.coefficients.K0.u",
+        ),
+        (
+            "u95.json",
+            Box::new(|d| d["coefficients"]["K0"]["U95"] = serde_json::json!(1e200)),
+            "$.coefficients.K0.U95",
+        ),
+        (
+            "huge.json",
+            Box::new(|d| d["coefficients"]["K0"]["value"] = serde_json::json!(1e300)),
+            "$.coefficients.K0.value",
+        ),
+        (
+            "long.json",
+            Box::new(|d| {
+                let row = &mut d["tables"][0]["rows"][0];
+                row.as_array_mut().unwrap().push(serde_json::json!(1.0));
+            }),
+            "$.tables[0].rows[0]",
+        ),
+        (
+            "short.json",
+            Box::new(|d| {
+                let row = &mut d["tables"][0]["rows"][0];
+                row.as_array_mut().unwrap().pop();
+            }),
+            "$.tables[0].rows[0]",
+        ),
+        (
+            "cell.json",
+            Box::new(|d| d["tables"][0]["rows"][0][0] = serde_json::json!(-1e308)),
+            "$.tables[0].rows[0][0]",
+        ),
+    ];
+    for (name, change, needle) in cases {
+        let mut d = doc.clone();
+        change(&mut d);
+        let f = write(name, &d.to_string());
+        refused(&run(&["compare", p(&good), p(&f)]), &[p(&f), needle]);
+        refused(
+            &run(&["report", p(&f), "-o", p(&tmp("r.html"))]),
+            &[p(&f), needle],
+        );
+    }
+}
+
+/// Second hardening round: `imu multipos` never parsed fx,fy,fz on
+/// rotation rows (text there was accepted). Now every cell present is a
+/// number or the row is refused naming its line and column.
+#[test]
+fn multipos_parses_the_direction_columns_on_rotation_rows() {
+    let f = tmp("mp.csv");
+    ok(&run(&[
+        "simulate",
+        "imu",
+        "--sequence",
+        "positions",
+        "--rotations",
+        "-o",
+        p(&f),
+    ]));
+    let text = std::fs::read_to_string(&f).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let header = lines.iter().position(|l| !l.starts_with('#')).unwrap();
+    let cols: Vec<String> = lines[header].split(',').map(String::from).collect();
+    let (cp, cx) = (
+        cols.iter().position(|c| c == "position").unwrap(),
+        cols.iter().position(|c| c == "fx").unwrap(),
+    );
+    let k = (header + 1..lines.len())
+        .find(|&k| lines[k].split(',').nth(cp) == Some("y_rot"))
+        .unwrap();
+    let mut cells: Vec<String> = lines[k].split(',').map(String::from).collect();
+    cells[cx] = "abc".into();
+    lines[k] = cells.join(",");
+    let g = write("mp_text.csv", &(lines.join("\n") + "\n"));
+    refused(
+        &run(&["imu", "multipos", "--input", p(&g), "--rate-hz", "100"]),
+        &[
+            &format!("{}:{}:", p(&g), k + 1),
+            "'fx'",
+            "'abc' is not a number",
+        ],
+    );
+}
+
+/// Second hardening round: `plan centrifuge` took `--u-k1` at or above
+/// |K1|, `--u-k0 200` and an alignment tolerance of 1e300 deg (and
+/// `--u-k1 1e300` predicted u = 0). Each is refused naming the option.
+#[test]
+fn plan_centrifuge_checks_its_uncertainties_against_their_quantities() {
+    for (opt, value) in [
+        ("--u-k1", "1e300"),
+        ("--u-k0", "200"),
+        ("--alignment-tolerance-deg", "1e300"),
+    ] {
+        let o = run(&["plan", "centrifuge", opt, value]);
+        refused(&o, &[opt]);
+    }
+}
+
+/// Second hardening round: simulators wrote `inf` and `NaN` for options
+/// past what they can represent (`simulate centrifuge --positions
+/// ip:1e300`, `simulate imu --rate-hz 1e-320`, `simulate gfimu` with
+/// huge rates). Whatever slips past the option checks, no simulator writes
+/// a non-finite number: exit 2 naming the line, and no file left.
+#[test]
+fn no_simulator_writes_a_non_finite_number() {
+    for (name, args) in [
+        (
+            "c.csv",
+            vec!["simulate", "centrifuge", "--positions", "ip:1e300"],
+        ),
+        ("i.csv", vec!["simulate", "imu", "--rate-hz", "1e-320"]),
+        (
+            "g.csv",
+            vec![
+                "simulate",
+                "gfimu",
+                "--kind",
+                "motion",
+                "--angular-accel-rad-s2",
+                "1e300",
+            ],
+        ),
+        (
+            "w.csv",
+            vec![
+                "simulate",
+                "gfimu",
+                "--kind",
+                "motion",
+                "--omega0-rad-s",
+                "1e300,0,0",
+            ],
+        ),
+    ] {
+        let f = tmp(name);
+        let mut a = args.clone();
+        a.extend(["-o", p(&f)]);
+        let o = run(&a);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert_eq!(stderr(&o).lines().count(), 1, "{}", stderr(&o));
+        assert!(
+            !f.exists()
+                || !std::fs::read_to_string(&f)
+                    .unwrap()
+                    .to_lowercase()
+                    .contains("inf")
+        );
+    }
+}
+
+/// Second hardening round: `tumble` with angles offset by 3.6e14 deg gave
+/// K1 9.9944 for 10 and K2 of the wrong sign; a `# note` after a pass or
+/// run label made a new pass; NUL bytes in labels were accepted. Each is
+/// now refused naming the cell.
+#[test]
+fn angles_and_labels_are_checked_where_they_are_read() {
+    let f = write(
+        "far.csv",
+        "angle_deg,output\n360000000000000,1\n360000000000090,2\n",
+    );
+    refused(
+        &run(&["tumble", "--mount", "pendulum", "--input", p(&f)]),
+        &["far.csv:2", "'angle_deg'", "1e4 deg"],
+    );
+    for (name, text, needle) in [
+        (
+            "note.csv",
+            "angle_deg,output,pass\n0,1,cw\n90,2,cw # redo\n",
+            "'#'",
+        ),
+        (
+            "nul.csv",
+            "angle_deg,output,pass\n0,1,cw\n90,2,c\u{0}w\n",
+            "control characters",
+        ),
+    ] {
+        let f = write(name, text);
+        refused(
+            &run(&["tumble", "--mount", "pendulum", "--input", p(&f)]),
+            &[&format!("{name}:3"), "'pass'", needle],
+        );
+    }
+    let f = write(
+        "run.csv",
+        "rate_deg_s,output,run\n10,1,a\n-10,2,a # again\n",
+    );
+    refused(
+        &run(&["gyro", "rate", "--input", p(&f), "--latitude-deg", "45"]),
+        &["run.csv:3", "'run'", "'#'"],
+    );
 }

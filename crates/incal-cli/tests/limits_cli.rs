@@ -94,6 +94,8 @@ fn guard_band_and_simple_verdicts_through_the_binary() {
             "unit 'ug'",
         ),
         ("rule = \"lenient\"\n", "l.toml: line 1"),
+        // An empty table gave a result without any verdict.
+        ("[misalign-accel]\n", "[misalign-accel] is empty"),
     ] {
         std::fs::write(d.join("l.toml"), toml).unwrap();
         let mut args = base.to_vec();

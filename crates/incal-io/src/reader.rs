@@ -712,6 +712,22 @@ impl<'a> Row<'a> {
     pub fn text(&self, col: usize) -> &'a str {
         std::str::from_utf8(self.bytes(col)).unwrap_or("")
     }
+    /// A label cell (a pass, a run, a position name), trimmed; refused
+    /// naming the cell when it holds `#` (a note written after the label
+    /// would make a new label) or a control character (NUL, ESC, …).
+    pub fn label(&self, col: usize) -> Result<&'a str> {
+        let t = self.text(col).trim();
+        if t.contains('#') {
+            return Err(self.cell_error(
+                col,
+                "a label must not contain '#' (a note after the label?)",
+            ));
+        }
+        if t.chars().any(char::is_control) {
+            return Err(self.cell_error(col, "a label must not contain control characters"));
+        }
+        Ok(t)
+    }
     /// A finite number within ±[`MAX_ABS_VALUE`] from a cell, or an error
     /// naming the file, line and column.
     pub fn f64(&self, col: usize) -> Result<f64> {

@@ -931,7 +931,7 @@ impl Store {
         let mut st = tx
             .prepare(
                 "SELECT r.id, i.serial, r.procedure, r.created_utc, r.operator, r.station,
-                        r.document, r.document_sha256, r.prev_hash, r.record_hash
+                        r.document, r.document_sha256, r.prev_hash, r.record_hash, i.model
                  FROM records r
                  LEFT JOIN instruments i ON i.id = r.instrument_id
                  ORDER BY r.id",
@@ -948,8 +948,12 @@ impl Store {
             String,
             String,
             String,
+            Option<String>,
         );
         let mut rows = st.query([]).map_err(self.db())?;
+        // The instrument row's model is set from the first record of its
+        // serial: checked against that record's (hashed) document.
+        let mut seen_serials = std::collections::HashSet::new();
         let (mut prev_id, mut prev_hash) = (0i64, GENESIS.to_string());
         let mut count = 0i64;
         while let Some(r) = rows.next().map_err(self.db())? {
@@ -972,14 +976,26 @@ impl Store {
                     r.get(7)?,
                     r.get(8)?,
                     r.get(9)?,
+                    r.get(10)?,
                 ))
             })()
             .map_err(|e| Error::Tampered {
                 id: r.get(0).unwrap_or(prev_id + 1),
                 problem: format!("a column does not read as stored by incal ({e})"),
             })?;
-            let (id, serial, procedure, created, operator, station, document, doc_sha, prev, hash) =
-                row;
+            let (
+                id,
+                serial,
+                procedure,
+                created,
+                operator,
+                station,
+                document,
+                doc_sha,
+                prev,
+                hash,
+                model,
+            ) = row;
             let bad = |problem: String| Error::Tampered { id, problem };
             if id != prev_id + 1 {
                 return Err(bad(if prev_id == 0 {
@@ -1000,6 +1016,18 @@ impl Store {
                 return Err(bad("the stored document does not match its SHA-256".into()));
             }
             let serial = serial.ok_or_else(|| bad("its instrument row is missing".into()))?;
+            if seen_serials.insert(serial.clone()) {
+                let doc_model = serde_json::from_slice::<serde_json::Value>(&document)
+                    .ok()
+                    .and_then(|v| v["instrument"]["model"].as_str().map(String::from));
+                if doc_model != model {
+                    return Err(bad(format!(
+                        "the instrument's model ({}) is not the one in its first record's document ({})",
+                        model.as_deref().unwrap_or("none"),
+                        doc_model.as_deref().unwrap_or("none")
+                    )));
+                }
+            }
             let inputs = inputs_of(&tx, id).map_err(self.db())?;
             let sup = supersession_of(&tx, id).map_err(self.db())?;
             if let Some(s) = &sup {

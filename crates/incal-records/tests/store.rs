@@ -347,3 +347,22 @@ fn reading_never_creates_or_changes_a_file() {
         );
     }
 }
+
+/// `instruments.model` was not covered: an edit went unnoticed. It is now
+/// checked against the first record of the instrument.
+#[test]
+fn an_edited_instrument_model_is_caught() {
+    let (path, s) = filled("model");
+    s.verify().unwrap();
+    drop(s);
+    let c = rusqlite::Connection::open(&path).unwrap();
+    c.execute("UPDATE instruments SET model = 'XYZ-9'", [])
+        .unwrap();
+    drop(c);
+    let s = Store::open_existing(&path).unwrap();
+    let e = s.verify().unwrap_err().to_string();
+    assert!(
+        e.starts_with("record 1: the instrument's model (XYZ-9)"),
+        "{e}"
+    );
+}

@@ -294,7 +294,11 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
     }
     // The output is opened before the (possibly long) simulation, so a
     // path that cannot be written fails at once.
-    crate::io::write_stream(Some(&a.output), |out| {
-        sim.write(&sim.simulate(), a.format.into(), out).map(|_| ())
-    })
+    let write =
+        |out: &mut dyn std::io::Write| sim.write(&sim.simulate(), a.format.into(), out).map(|_| ());
+    if a.format == FormatArg::Csv {
+        crate::io::write_stream(Some(&a.output), write)
+    } else {
+        crate::io::write_binary_stream(Some(&a.output), write)
+    }
 }

@@ -226,6 +226,12 @@ pub fn apply(doc: &mut ResultDocument, limits: &Limits) -> std::result::Result<(
         .procedures
         .get(p.as_str())
         .ok_or_else(|| format!("no [{p}] section: no limits for this procedure"))?;
+    if coefs.is_empty() {
+        // An empty table would give a result with no verdict at all.
+        return Err(format!(
+            "[{p}] is empty: no limits for this procedure (give at least one coefficient's min or max)"
+        ));
+    }
     let mut verdicts = BTreeMap::new();
     for (name, l) in coefs {
         let c = doc.coefficients.get(name).ok_or_else(|| {

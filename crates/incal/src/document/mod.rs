@@ -567,7 +567,7 @@ impl ResultDocument {
         }
         // From the text, not the Value: the coefficients keep their order.
         let de = &mut serde_json::Deserializer::from_str(text);
-        serde_path_to_error::deserialize(de).map_err(|e| {
+        let doc: ResultDocument = serde_path_to_error::deserialize(de).map_err(|e| {
             let path = e.path().to_string();
             let path = if path == "." {
                 "$".to_string()
@@ -575,7 +575,78 @@ impl ResultDocument {
                 format!("$.{path}")
             };
             format!("{path}: not a valid {SCHEMA} document: {}", e.inner())
-        })
+        })?;
+        doc.check()?;
+        Ok(doc)
+    }
+
+    /// The largest magnitude a number of a document may have: beyond it,
+    /// differences and plot ranges overflow (a report axis from −1e308 to
+    /// 1e308 has an infinite span).
+    pub const MAX_MAGNITUDE: f64 = 1e250;
+
+    /// What the schema cannot say: every u and U95 not negative, U95 =
+    /// k95·u (to 1e-9 relative, for rounding), k95 at least 1, dof
+    /// positive, no number beyond [`Self::MAX_MAGNITUDE`], and every table
+    /// row as wide as its header. The error names the JSON path.
+    pub fn check(&self) -> std::result::Result<(), String> {
+        let big = |x: f64| x.is_nan() || x.abs() > Self::MAX_MAGNITUDE;
+        for (name, c) in self.coefficients.iter() {
+            let at = format!("$.coefficients.{name}");
+            if big(c.value) {
+                return Err(format!(
+                    "{at}.value: {:e} is beyond 1e250 in magnitude",
+                    c.value
+                ));
+            }
+            if c.u < 0.0 || big(c.u) {
+                return Err(format!(
+                    "{at}.u: {:e} is not a standard uncertainty (0 to 1e250)",
+                    c.u
+                ));
+            }
+            if c.k95 < 1.0 || big(c.k95) {
+                return Err(format!(
+                    "{at}.k95: {} is not a coverage factor (at least 1)",
+                    c.k95
+                ));
+            }
+            if c.u95 < 0.0 || (c.u95 - c.k95 * c.u).abs() > 1e-9 * c.u95.abs().max(c.k95 * c.u) {
+                return Err(format!(
+                    "{at}.U95: {:e} is not k95 x u = {:e}",
+                    c.u95,
+                    c.k95 * c.u
+                ));
+            }
+            if let Some(d) = c.dof {
+                if d.is_nan() || d <= 0.0 {
+                    return Err(format!(
+                        "{at}.dof: {d} is not a positive number of degrees of freedom"
+                    ));
+                }
+            }
+        }
+        for (t, table) in self.tables.iter().enumerate() {
+            for (r, row) in table.rows.iter().enumerate() {
+                if row.len() != table.columns.len() {
+                    return Err(format!(
+                        "$.tables[{t}].rows[{r}]: {} cells for {} columns",
+                        row.len(),
+                        table.columns.len()
+                    ));
+                }
+                for (k, cell) in row.iter().enumerate() {
+                    if let Cell::Number(x) = cell {
+                        if big(*x) {
+                            return Err(format!(
+                                "$.tables[{t}].rows[{r}][{k}]: {x:e} is beyond 1e250 in magnitude"
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Pretty JSON text (ends without a newline).

@@ -48,7 +48,8 @@ pub struct CentrifugePlanOptions {
 impl CentrifugePlanOptions {
     /// Refuse options no prediction can use: fewer than 2 samples per
     /// point or no noise (the plan needs a scatter), a negative u or
-    /// tolerance, `u_omega_ppm` outside 0…1e5, a model order other than 2
+    /// tolerance, `u_k1` not below |K1|, `u_k0` not below 1 g, a tolerance
+    /// above 10°, `u_omega_ppm` outside 0…1e5, a model order other than 2
     /// or 3, and the rig checks of [`RigPlan::validate`].
     pub fn validate(&self) -> Result<()> {
         if self.rig.samples < 2 {
@@ -72,6 +73,32 @@ impl CentrifugePlanOptions {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(Error::InvalidValue {
                     what: format!("{name} (a non-negative number)"),
+                    value: v.to_string(),
+                });
+            }
+        }
+        // Bounds on what a 1 g calibration and a fixture can give: a u as
+        // large as K1 (or above 1 g for K0) means the quantity is not
+        // known, and past 10 deg the small-angle fixture model fails.
+        let k1 = self.truth.k1_out_per_g.abs();
+        for (name, v, limit, what) in [
+            ("u_k1", self.u_k1, k1, "smaller than |K1|"),
+            ("u_k0", self.u_k0, 1.0, "below 1 g"),
+            (
+                "alignment_tolerance_deg",
+                self.alignment_tolerance_deg,
+                10.0,
+                "at most 10 deg",
+            ),
+        ] {
+            let ok = if name == "alignment_tolerance_deg" {
+                v <= limit
+            } else {
+                v < limit
+            };
+            if !ok {
+                return Err(Error::InvalidValue {
+                    what: format!("{name} ({what})"),
                     value: v.to_string(),
                 });
             }

@@ -230,6 +230,26 @@ fn check_rotation_gaps(
     Ok(())
 }
 
+/// Refuse a rotation section whose gyro channel about the rotation axis
+/// holds one value in every sample: a dead channel would integrate the turn
+/// to nothing and give a scale factor near zero with a small u.
+fn check_rotation_alive(file: &str, label: &str, axis: usize, samples: &[[f64; 6]]) -> Result<()> {
+    let c = 3 + axis;
+    match samples.first() {
+        Some(first) if samples.len() >= 3 && samples.iter().all(|s| s[c] == first[c]) => {
+            Err(Error::Unsupported(format!(
+                "rotation section {}: column gyr_{} is {} in every one of its {} samples: a dead gyro channel cannot measure the turn",
+                clip(label),
+                ["x", "y", "z"][axis],
+                num(first[c]),
+                samples.len()
+            ))
+            .in_file(file))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// A reader that has handed out no row is refused as the input layer
 /// refuses an empty table (before any procedure-specific check).
 fn some_rows<R: Read>(rows: &Reader<R>) -> Result<()> {
@@ -298,6 +318,14 @@ pub fn read_ferraris<R: Read>(
     }
     let tb = session.timebase(rows.header().file(), rate_hz)?;
     check_rotation_gaps(rows.header().file(), tb.as_ref(), &runs)?;
+    for axis in 0..3 {
+        check_rotation_alive(
+            rows.header().file(),
+            SECTIONS[6 + axis],
+            axis,
+            &secs[6 + axis],
+        )?;
+    }
     Ok((secs, tb))
 }
 
@@ -385,6 +413,13 @@ impl MultiposColumns {
         let label = self.position.map(|c| row.text(c).trim().to_string());
         if let Some(l) = &label {
             if let Some(axis) = ROTATIONS.iter().position(|r| r == l) {
+                // The direction columns carry nothing on a rotation row,
+                // but what is there must still be a number.
+                for c in self.up.iter().chain(self.north.iter()).flatten() {
+                    if !row.text(*c).trim().is_empty() {
+                        row.f64(*c)?;
+                    }
+                }
                 return Ok(Kind::Rotation(l.clone(), axis));
             }
             if l.is_empty() && self.up.is_none() {
@@ -558,6 +593,7 @@ pub fn read_multipos<R: Read>(
     let scale = super::screen::median_scale(&still_scales);
     let mut replaced = Vec::new();
     for (label, axis, samples) in pending {
+        check_rotation_alive(&file, &label, axis, &samples)?;
         let n = super::screen::rotation_spikes(&samples, scale);
         replaced.push((label.clone(), n));
         input.rotations.push(RotationSection {

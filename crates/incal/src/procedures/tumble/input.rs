@@ -8,6 +8,11 @@ use std::io::Read;
 use super::Observation;
 use crate::error::Result;
 
+/// The largest head angle read (deg): ±1e4 deg is 27 turns either way. A
+/// larger angle loses digits in its sine (3.6e14 deg gave K1 9.9944 for
+/// 10): an offset that large is not a head reading.
+pub const MAX_ANGLE_DEG: f64 = 1e4;
+
 /// The observations of a tumble recording, row by row (the file itself is
 /// never held: a 720 000-row file costs its observations only).
 pub fn read<R: Read>(rows: &mut incal_io::Reader<R>) -> Result<Vec<Observation>> {
@@ -20,10 +25,18 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>) -> Result<Vec<Observation>>
     let mut obs = Vec::new();
     while let Some(row) = rows.next_row()? {
         let angle = row.f64(ca)?;
+        if angle.abs() > MAX_ANGLE_DEG {
+            return Err(row
+                .cell_error(
+                    ca,
+                    format!("{angle} is beyond a dividing head's range (|angle| <= 1e4 deg)"),
+                )
+                .into());
+        }
         let output = row.f64(co)?;
         let pass = match cp {
             Some(c) => {
-                let label = row.text(c);
+                let label = row.label(c)?;
                 if label.is_empty() {
                     return Err(row
                         .error("column 'pass': empty label (label every row of a multi-pass file)")

@@ -314,6 +314,31 @@ impl K1Source {
                 c.value, c.u
             )));
         }
+        // The positions reduction divides by K1 in output/(deg/s): another
+        // unit, a u as large as K1 or a dof that is not positive would
+        // give confident wrong rates.
+        if c.unit != crate::units::Unit::OutputPerDegS {
+            return Err(Error::Unsupported(format!(
+                "$.coefficients.K1.unit: '{}', not '{}' (a gyro-rate scale factor)",
+                c.unit.as_str(),
+                crate::units::Unit::OutputPerDegS.as_str()
+            )));
+        }
+        if c.u >= c.value.abs() {
+            return Err(Error::Unsupported(format!(
+                "$.coefficients.K1.u: {} is not smaller than |K1| = {}: the scale factor is not known",
+                crate::error::short_f64(c.u),
+                crate::error::short_f64(c.value.abs())
+            )));
+        }
+        if let Some(d) = c.dof {
+            if d.is_nan() || d <= 0.0 {
+                return Err(Error::Unsupported(format!(
+                    "$.coefficients.K1.dof: {}: degrees of freedom must be positive",
+                    crate::error::short_f64(d)
+                )));
+            }
+        }
         Ok(K1Source::Result {
             k1: c.value,
             u: c.u,

@@ -32,7 +32,7 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>) -> Result<Vec<RateObservati
         }
         let run = match crun {
             Some(c) => {
-                let label = row.text(c);
+                let label = row.label(c)?;
                 if label.is_empty() {
                     return Err(row
                         .cell_error(c, "empty run label (label every row of a multi-run file)")
