@@ -216,18 +216,31 @@ fn repeated_time_in_a_raw_record_is_counted_in_its_record() {
     );
 }
 
-#[test]
-fn compare_overflow_gives_a_finite_en() {
-    let t = tmp("t.csv");
+/// The JSON result of `incal tumble` on a simulated tumble test written
+/// to `csv`.
+fn tumble_result_json(csv: &str) -> String {
+    let t = tmp(csv);
     ok(&run(&["simulate", "tumble", "-o", p(&t)]));
-    let out = ok(&run(&[
+    ok(&run(&[
         "tumble",
         "--mount",
         "pendulum",
         "--input",
         p(&t),
         "--json",
-    ]));
+    ]))
+}
+
+/// `incal` with the words of `args` (no word holds a space) then `extra`.
+fn run_words(args: &str, extra: &[&str]) -> std::process::Output {
+    let mut a: Vec<&str> = args.split(' ').collect();
+    a.extend_from_slice(extra);
+    run(&a)
+}
+
+#[test]
+fn compare_overflow_gives_a_finite_en() {
+    let out = tumble_result_json("t.csv");
     let mut a: serde_json::Value = serde_json::from_str(&out).unwrap();
     let mut b = a.clone();
     for (d, v) in [(&mut a, 1e200), (&mut b, -1e200)] {
@@ -400,16 +413,7 @@ fn huge_lever_arm_and_long_cells_are_not_echoed_whole() {
 
 #[test]
 fn json_with_a_bom_is_read_everywhere() {
-    let t = tmp("t3.csv");
-    ok(&run(&["simulate", "tumble", "-o", p(&t)]));
-    let out = ok(&run(&[
-        "tumble",
-        "--mount",
-        "pendulum",
-        "--input",
-        p(&t),
-        "--json",
-    ]));
+    let out = tumble_result_json("t3.csv");
     let f = write("bom.json", &format!("\u{feff}{out}"));
     ok(&run(&["compare", p(&f), p(&f)]));
     ok(&run(&["report", p(&f), "-o", p(&tmp("bom.html"))]));
@@ -617,33 +621,15 @@ fn gyro_positions_from_checks_the_unit_u_and_dof_of_k1() {
         "--json",
     ]));
     let pos = tmp("pos.csv");
-    ok(&run(&[
-        "simulate",
-        "gyro-positions",
-        "--latitude-deg",
-        "30",
-        "--azimuths-deg",
-        "60",
-        "--axial",
-        "oa",
-        "-o",
-        p(&pos),
-    ]));
+    ok(&run_words(
+        "simulate gyro-positions --latitude-deg 30 --azimuths-deg 60 --axial oa -o",
+        &[p(&pos)],
+    ));
     let positions = |from: &std::path::Path| {
-        run(&[
-            "gyro",
-            "positions",
-            "--input",
-            p(&pos),
-            "--latitude-deg",
-            "30",
-            "--azimuth-deg",
-            "60",
-            "--axial",
-            "oa",
-            "--from",
-            p(from),
-        ])
+        run_words(
+            "gyro positions --latitude-deg 30 --azimuth-deg 60 --axial oa --input",
+            &[p(&pos), "--from", p(from)],
+        )
     };
     ok(&positions(&write("good.json", &text)));
     let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
@@ -692,16 +678,7 @@ fn gyro_positions_from_checks_the_unit_u_and_dof_of_k1() {
 /// JSON path.
 #[test]
 fn result_documents_are_checked_before_compare_and_report() {
-    let t = tmp("tc.csv");
-    ok(&run(&["simulate", "tumble", "-o", p(&t)]));
-    let out = ok(&run(&[
-        "tumble",
-        "--mount",
-        "pendulum",
-        "--input",
-        p(&t),
-        "--json",
-    ]));
+    let out = tumble_result_json("tc.csv");
     let good = write("good.json", &out);
     let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
     type Change = Box<dyn Fn(&mut serde_json::Value)>;
@@ -761,15 +738,10 @@ fn result_documents_are_checked_before_compare_and_report() {
 #[test]
 fn multipos_parses_the_direction_columns_on_rotation_rows() {
     let f = tmp("mp.csv");
-    ok(&run(&[
-        "simulate",
-        "imu",
-        "--sequence",
-        "positions",
-        "--rotations",
-        "-o",
-        p(&f),
-    ]));
+    ok(&run_words(
+        "simulate imu --sequence positions --rotations -o",
+        &[p(&f)],
+    ));
     let text = std::fs::read_to_string(&f).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
     let header = lines.iter().position(|l| !l.starts_with('#')).unwrap();
