@@ -680,9 +680,10 @@ fn misalign_raw_records_take_repeats_and_count_lost_samples() {
         "5",
     ]);
     let clean = ok(&o);
+    // The file written and the run on it.
     let solve = |name: &str, text: &str| {
         let f = write(name, text);
-        run(&[
+        let o = run(&[
             "misalign",
             "gyro",
             "--input",
@@ -690,9 +691,10 @@ fn misalign_raw_records_take_repeats_and_count_lost_samples() {
             "--scale-factor",
             "-2.9222",
             "--json",
-        ])
+        ]);
+        (f, o)
     };
-    let base = json_of(&solve("clean.csv", &clean));
+    let base = json_of(&solve("clean.csv", &clean).1);
     assert!(warnings_with(&base, "time-repeats").is_empty());
     let c0 = coefficients(&base);
     // time_s is the fourth column: floor it to 0.1 s (samples every 0.045 s).
@@ -707,7 +709,7 @@ fn misalign_raw_records_take_repeats_and_count_lost_samples() {
         .chain(lines[1..].iter().map(|l| floor(l)))
         .map(|l| l + "\n")
         .collect();
-    let v = json_of(&solve("quantised.csv", &q));
+    let v = json_of(&solve("quantised.csv", &q).1);
     assert!(!warnings_with(&v, "time-repeats").is_empty());
     for (a, b) in c0.iter().zip(coefficients(&v)) {
         assert_eq!(a.1, b.1, "{}: only the measured rate uses time", a.0);
@@ -721,7 +723,7 @@ fn misalign_raw_records_take_repeats_and_count_lost_samples() {
             .map(|(_, l)| format!("{l}\n"))
             .collect()
     };
-    let v = json_of(&solve("lost2.csv", &drop(150..152)));
+    let v = json_of(&solve("lost2.csv", &drop(150..152)).1);
     let w = warnings_with(&v, "time-gaps");
     assert!(
         w.len() == 1 && w[0].starts_with("line 2") && w[0].contains("lose 2 samples"),
@@ -737,15 +739,7 @@ fn misalign_raw_records_take_repeats_and_count_lost_samples() {
             a.2
         );
     }
-    let f = write("lost10.csv", &drop(150..160));
-    let o = run(&[
-        "misalign",
-        "gyro",
-        "--input",
-        p(&f),
-        "--scale-factor",
-        "-2.9222",
-    ]);
+    let (f, o) = solve("lost10.csv", &drop(150..160));
     refused(&o, &[p(&f), ":2:", "lose 10 samples", "more than 1 %"]);
 }
 

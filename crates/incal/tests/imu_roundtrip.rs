@@ -100,17 +100,28 @@ mod autocal {
     pub type Session = (ImuTruth, Vec<f64>, Vec<[f64; 3]>, Vec<[f64; 3]>);
 
     pub fn session(seed: u64) -> Session {
-        let mut truth = ImuTruth::random_around_mems(trial_seed(seed, 2));
-        truth.gyr_k_ga = M3::zeros();
-        let s = simulate(&ImuSim {
-            truth: truth.clone(),
-            sequence: Sequence::Random {
+        simulated(
+            seed,
+            2,
+            Sequence::Random {
                 positions: 30,
                 init_s: 10.0,
                 move_s: 1.5,
             },
+            2.5,
+        )
+    }
+
+    /// A session of `sequence` (static positions of `static_s` s) from a
+    /// truth drawn from trial stream `stream`, without g-sensitivity.
+    pub fn simulated(seed: u64, stream: u64, sequence: Sequence, static_s: f64) -> Session {
+        let mut truth = ImuTruth::random_around_mems(trial_seed(seed, stream));
+        truth.gyr_k_ga = M3::zeros();
+        let s = simulate(&ImuSim {
+            truth: truth.clone(),
+            sequence,
             rate_hz: 100.0,
-            static_s: 2.5,
+            static_s,
             gravity: 9.81,
             noise_acc: 3.0,
             noise_gyr: 2.0,
@@ -122,6 +133,14 @@ mod autocal {
         let acc = s.iter().map(|x| [x.acc[0], x.acc[1], x.acc[2]]).collect();
         let gyr = s.iter().map(|x| [x.gyr[0], x.gyr[1], x.gyr[2]]).collect();
         (truth, time, acc, gyr)
+    }
+
+    /// Whether `|x̂ − x| ≤ U95` for each parameter of `e` against `want`.
+    pub fn u95_hits(e: &incal::estimation::Estimates, want: &[f64]) -> Vec<bool> {
+        let k95 = e.coverage_factor(0.95);
+        (0..want.len())
+            .map(|k| (e.values()[k] - want[k]).abs() <= k95 * e.u_at(k))
+            .collect()
     }
 
     pub fn truth_vector(t: &ImuTruth) -> Vec<f64> {
@@ -184,12 +203,9 @@ fn autocal_incal_u95_covers_the_truth() {
         )
         .unwrap();
         let want = autocal::truth_vector(&truth);
-        let k95 = r.estimates.coverage_factor(0.95);
         (
             r.estimates.names().to_vec(),
-            (0..want.len())
-                .map(|k| (r.estimates.values()[k] - want[k]).abs() <= k95 * r.estimates.u_at(k))
-                .collect::<Vec<bool>>(),
+            autocal::u95_hits(&r.estimates, &want),
         )
     });
     names.extend(hits[0].0.iter().cloned());
@@ -203,28 +219,16 @@ fn autocal_incal_u95_covers_the_truth() {
 /// ([`Sequence::Faces`], tilts of 3° standard deviation), no
 /// g-sensitivity.
 fn faces_session(seed: u64) -> autocal::Session {
-    let mut truth = ImuTruth::random_around_mems(trial_seed(seed, 5));
-    truth.gyr_k_ga = incal::procedures::imu::M3::zeros();
-    let s = simulate(&ImuSim {
-        truth: truth.clone(),
-        sequence: Sequence::Faces {
+    autocal::simulated(
+        seed,
+        5,
+        Sequence::Faces {
             positions: 40,
             init_s: 10.0,
             move_s: 1.5,
         },
-        rate_hz: 100.0,
-        static_s: 3.0,
-        gravity: 9.81,
-        noise_acc: 3.0,
-        noise_gyr: 2.0,
-        latitude_deg: None,
-        seed,
-    })
-    .unwrap();
-    let time = s.iter().map(|x| x.time_s).collect();
-    let acc = s.iter().map(|x| [x.acc[0], x.acc[1], x.acc[2]]).collect();
-    let gyr = s.iter().map(|x| [x.gyr[0], x.gyr[1], x.gyr[2]]).collect();
-    (truth, time, acc, gyr)
+        3.0,
+    )
 }
 
 /// On cube-face sessions (the T265 recording's kind) incal's U95 covers
@@ -249,11 +253,7 @@ fn autocal_on_cube_faces_incal_covers_and_tedaldi_misses() {
                 &AutocalOptions::new(method, 9.81, 10.0),
             )
             .unwrap();
-            let want = autocal::truth_vector(&truth);
-            let k95 = r.estimates.coverage_factor(0.95);
-            (0..want.len())
-                .map(|k| (r.estimates.values()[k] - want[k]).abs() <= k95 * r.estimates.u_at(k))
-                .collect::<Vec<bool>>()
+            autocal::u95_hits(&r.estimates, &autocal::truth_vector(&truth))
         });
         // Groups: acc misalignment, scale, bias (0..9); gyro misalignment
         // (9..15), scale (15..18), bias (18..21).
