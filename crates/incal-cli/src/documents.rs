@@ -12,13 +12,19 @@ use crate::error::{CliError, CliResult};
 /// that is not an incal result is refused with one line naming the file
 /// and the JSON path.
 pub fn read_document(path: &Path) -> CliResult<(String, String, ResultDocument)> {
+    read_document_text(path).map(|(name, sha, _, doc)| (name, sha, doc))
+}
+
+/// As [`read_document`], with the document's text (without a BOM: the
+/// text `incal record add` stores).
+pub fn read_document_text(path: &Path) -> CliResult<(String, String, String, ResultDocument)> {
     let (name, bytes, sha) = crate::io::read_hashed(path)?;
-    let text = std::str::from_utf8(&bytes)
-        .map_err(|_| CliError::Input(format!("{name}: not UTF-8 text")))?;
+    let text =
+        String::from_utf8(bytes).map_err(|_| CliError::Input(format!("{name}: not UTF-8 text")))?;
     if text.trim().is_empty() {
         return Err(CliError::Input(format!("{name}: empty file")));
     }
     let doc =
-        ResultDocument::from_json(text).map_err(|e| CliError::Input(format!("{name}: {e}")))?;
-    Ok((name, sha, doc))
+        ResultDocument::from_json(&text).map_err(|e| CliError::Input(format!("{name}: {e}")))?;
+    Ok((name, sha, text, doc))
 }

@@ -3,16 +3,12 @@
 //! the file: unreadable input is bad input (exit 2), an unwritable output is
 //! a failure (exit 1).
 
-use std::io::{Read, Write};
+use std::io::Write;
 use std::path::Path;
 
-use incal_io::{display_name, is_dash};
+use incal_io::is_dash;
 
 use crate::error::{CliError, CliResult};
-
-/// The UTF-8 byte-order mark some editors (and spreadsheet exports) put at
-/// the start of a text file.
-const BOM: &[u8] = b"\xEF\xBB\xBF";
 
 /// The display name and the bytes of the file `path`; `-` reads standard
 /// input (display name `<stdin>`). A UTF-8 byte-order mark at the start is
@@ -22,24 +18,10 @@ pub fn read_bytes(path: &Path) -> CliResult<(String, Vec<u8>)> {
 }
 
 /// As [`read_bytes`], with the SHA-256 of the bytes as stored (BOM
-/// included, so it equals `sha256sum FILE`) for the result's inputs.
+/// included, so it equals `sha256sum FILE`) for the result's inputs. A
+/// document larger than [`incal_io::MAX_DOCUMENT_BYTES`] is refused.
 pub fn read_hashed(path: &Path) -> CliResult<(String, Vec<u8>, String)> {
-    let name = display_name(path);
-    let read = if is_dash(path) {
-        let mut bytes = Vec::new();
-        std::io::stdin()
-            .lock()
-            .read_to_end(&mut bytes)
-            .map(|_| bytes)
-    } else {
-        std::fs::read(path)
-    };
-    let mut bytes = read.map_err(|e| CliError::Input(format!("{name}: cannot read: {e}")))?;
-    let sha = crate::output::sha256_hex(&bytes);
-    if bytes.starts_with(BOM) {
-        bytes.drain(..BOM.len());
-    }
-    Ok((name, bytes, sha))
+    incal_io::read_hashed(path).map_err(|e| CliError::Input(e.to_string()))
 }
 
 /// As [`read_bytes`], checked to be UTF-8; invalid UTF-8 fails (exit 2) with
@@ -53,6 +35,15 @@ pub fn read_text(path: &Path) -> CliResult<(String, String)> {
             let line = 1 + good.iter().filter(|&&b| b == b'\n').count();
             Err(CliError::Input(format!("{name}:{line}: not valid UTF-8")))
         }
+    }
+}
+
+/// The name of an output in messages: its path, or `stdout` for `None`
+/// and `-`.
+pub fn output_name(path: Option<&Path>) -> String {
+    match path {
+        Some(p) if !is_dash(p) => p.display().to_string(),
+        _ => "stdout".to_string(),
     }
 }
 
@@ -117,20 +108,13 @@ fn write_stream_checked<W>(path: Option<&Path>, check: bool, write: W) -> CliRes
 where
     W: FnOnce(&mut dyn Write) -> std::io::Result<()>,
 {
+    let name = output_name(path);
     if !check {
-        let name = match path {
-            Some(p) if !is_dash(p) => p.display().to_string(),
-            _ => "stdout".to_string(),
-        };
         let mut out = open_output(path)?;
         return write(&mut out)
             .and_then(|()| out.flush())
             .map_err(|e| CliError::Failure(anyhow::anyhow!("{name}: cannot write: {e}")));
     }
-    let name = match path {
-        Some(p) if !is_dash(p) => p.display().to_string(),
-        _ => "stdout".to_string(),
-    };
     let out = open_output(path)?;
     let mut guard = FiniteGuard {
         inner: out,
@@ -146,7 +130,7 @@ where
             let _ = std::fs::remove_file(p);
         }
         return Err(CliError::Input(format!(
-            "{name}: the simulation gave a non-finite value ({token}) on line {line}: an option is outside what the simulator can represent (nothing written)"
+            "{name}: the simulation gave a value incal cannot read back ({token}: not finite, or beyond ±1e15) on line {line}: an option is outside what the simulator can represent (nothing written)"
         )));
     }
     match r {
@@ -166,14 +150,33 @@ where
 }
 
 /// A writer that refuses a CSV cell spelling a non-finite number (`NaN`,
-/// `inf`, `-inf`): a simulator must never write one, whatever its
-/// options (hardening issue). Cells are split at `,`, `;`, tab and line
-/// ends; a cell longer than 16 bytes is no such token.
+/// `inf`, `-inf`) or a number beyond ±10¹⁵ (which incal's own reader
+/// refuses): a simulator must never write one, whatever its options
+/// (hardening issue). Cells are split at `,`, `;`, tab and line ends; a
+/// cell longer than 40 bytes is no such token.
 struct FiniteGuard<W: Write> {
     inner: W,
     cell: Vec<u8>,
     line: usize,
     found: Option<(usize, String)>,
+}
+
+/// True for a cell that reads as a number beyond [`incal_io::MAX_ABS_VALUE`].
+/// Only a cell with an exponent or 16 digits before its point can be one,
+/// so the common cell is never parsed.
+fn beyond_range(t: &[u8]) -> bool {
+    let digits = t
+        .iter()
+        .skip_while(|b| matches!(b, b'-' | b'+'))
+        .take_while(|b| b.is_ascii_digit())
+        .count();
+    if digits < 16 && !t.iter().any(|b| matches!(b, b'e' | b'E')) {
+        return false;
+    }
+    std::str::from_utf8(t)
+        .ok()
+        .and_then(|s| s.parse::<f64>().ok())
+        .is_some_and(|v| v.abs() > incal_io::MAX_ABS_VALUE)
 }
 
 impl<W: Write> FiniteGuard<W> {
@@ -190,7 +193,7 @@ impl<W: Write> FiniteGuard<W> {
                 | b"infinity"
                 | b"+infinity"
                 | b"-infinity"
-        );
+        ) || beyond_range(t);
         if bad && self.found.is_none() {
             self.found = Some((self.line, String::from_utf8_lossy(t).into_owned()));
         }
@@ -207,7 +210,7 @@ impl<W: Write> Write for FiniteGuard<W> {
                     self.end_cell();
                     self.line += 1;
                 }
-                _ if self.cell.len() < 16 => self.cell.push(b),
+                _ if self.cell.len() < 40 => self.cell.push(b),
                 _ => {}
             }
         }

@@ -875,3 +875,219 @@ fn angles_and_labels_are_checked_where_they_are_read() {
         &["run.csv:3", "'run'", "'#'"],
     );
 }
+
+#[test]
+fn gfimu_calibrations_and_geometries_are_checked_for_what_they_can_hold() {
+    let st = unique("st.csv");
+    ok(&run(&["simulate", "gfimu", "--seed", "1", "-o", p(&st)]));
+    let cal = unique("cal.json");
+    ok(&run_words(
+        "gfimu calibrate --json --input",
+        &[p(&st), "-o", p(&cal)],
+    ));
+    let mo = unique("mo.csv");
+    ok(&run(&[
+        "simulate",
+        "gfimu",
+        "--kind",
+        "motion",
+        "--seed",
+        "2",
+        "-o",
+        p(&mo),
+    ]));
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&cal).unwrap()).unwrap();
+    // K0 beyond the outputs' range was blamed on motion.csv; a sample
+    // noise of 1e-201 made the solve spin for ever.
+    let cases: [(&str, &str, f64, &str); 3] = [
+        (
+            "k0.json",
+            "/accelerometers/a/K0/value",
+            1e200,
+            "$.accelerometers.a.K0.value",
+        ),
+        (
+            "tiny.json",
+            "/accelerometers/a/noise_output",
+            1e-201,
+            "$.accelerometers.a.noise_output",
+        ),
+        (
+            "ks.json",
+            "/accelerometers/b/Ks/value/2",
+            1e300,
+            "$.accelerometers.b.Ks.value",
+        ),
+    ];
+    for (name, path, v, needle) in cases {
+        let mut d = doc.clone();
+        *d.pointer_mut(path).unwrap() = serde_json::json!(v);
+        let f = write_unique(name, &serde_json::to_string(&d).unwrap());
+        let out = unique("x.csv");
+        refused(
+            &run(&[
+                "gfimu",
+                "solve",
+                "--calibration",
+                p(&f),
+                "--input",
+                p(&mo),
+                "-o",
+                p(&out),
+            ]),
+            &[name, needle],
+        );
+    }
+    // An accelerometer 1e308 m from the origin is the geometry's fault.
+    let g = write_unique(
+        "far.toml",
+        "[[accelerometer]]\nname = \"a\"\nposition_m = [1e308, 0, 0]\ndirection = [0, 0, 1]\n",
+    );
+    refused(
+        &run(&["gfimu", "calibrate", "--geometry", p(&g), "--input", p(&st)]),
+        &["far.toml", "accelerometer[0].position_m", "beyond 10 m"],
+    );
+}
+
+#[test]
+fn binary_noise_samples_beyond_the_readable_range_are_refused() {
+    for (name, big) in [("n16.f64", 1e16), ("n300.f64", 1e300)] {
+        let mut bytes = Vec::new();
+        for k in 0..2000 {
+            let v = if k == 1234 {
+                big
+            } else {
+                ((k * 7919) % 101) as f64 * 0.01
+            };
+            bytes.extend_from_slice(&f64::to_le_bytes(v));
+        }
+        let f = write_unique(name, &bytes);
+        refused(
+            &run_words(
+                "noise --format f64le --channels 1 --rate-hz 100 --input",
+                &[p(&f)],
+            ),
+            &[name, "sample 1235 of ch1", "beyond the readable range"],
+        );
+    }
+}
+
+#[test]
+fn documents_read_whole_are_capped_in_size() {
+    // /dev/zero as a result document grew memory without end.
+    for args in [
+        vec!["report", "/dev/zero"],
+        vec!["compare", "/dev/zero", "/dev/zero"],
+        vec!["record", "add", "/dev/zero", "--db", "never.db"],
+    ] {
+        refused(&run(&args), &["/dev/zero", "larger than 64 MiB"]);
+    }
+}
+
+#[test]
+fn limits_errors_name_their_line() {
+    let t = unique("t.csv");
+    ok(&run(&["simulate", "tumble", "--seed", "7", "-o", p(&t)]));
+    let head = "rule = \"simple\"\n[tumble]\nK0 = { min = -1, max = 1 }\n";
+    for (text, needles) in [
+        (
+            format!("{head}K2 = {{ min = \"x\" }}\n"),
+            vec!["line 4", "invalid type"],
+        ),
+        (
+            format!("{head}K2 = {{ mni = 3 }}\n"),
+            vec!["line 4", "unknown field `mni`"],
+        ),
+        (
+            format!("{head}K2 = {{ min = 3, max = 2 }}\n"),
+            vec!["line 4", "[tumble] K2", "min 3 is above max 2"],
+        ),
+        (format!("{head}K2 = 3\n"), vec!["line 4"]),
+        (
+            format!("{head}[tumbel]\nK1 = {{ max = 1 }}\n"),
+            vec!["line 4", "[tumbel]: not a procedure", "imu-autocal"],
+        ),
+        (
+            "\n\nrule = \"simpel\"\n[tumble]\nK0 = { max = 1 }\n".to_string(),
+            vec!["line 3", "simpel"],
+        ),
+    ] {
+        let f = write_unique("l.toml", &text);
+        let mut needles = needles;
+        needles.push("l.toml");
+        refused(
+            &run_words(
+                "tumble --mount pendulum --limits",
+                &[p(&f), "--input", p(&t)],
+            ),
+            &needles,
+        );
+    }
+}
+
+#[test]
+fn messages_name_the_file_they_are_about() {
+    // An empty serial in the document names the document.
+    let mut d: serde_json::Value = serde_json::from_str(&tumble_result_json("msg_t.csv")).unwrap();
+    d["instrument"]["serial"] = serde_json::json!(" ");
+    let f = write_unique("blank.json", &serde_json::to_string(&d).unwrap());
+    refused(
+        &run(&["record", "add", p(&f), "--db", p(&unique("s.db"))]),
+        &["blank.json", "$.instrument.serial: empty"],
+    );
+    // A full output device is named.
+    let raw = unique("imu.csv");
+    ok(&run(&["simulate", "imu", "--seed", "3", "-o", p(&raw)]));
+    let cal = unique("fr.json");
+    ok(&run_words(
+        "imu ferraris --rate-hz 100 --json --input",
+        &[p(&raw), "-o", p(&cal)],
+    ));
+    let o = run_words(
+        "imu apply -o /dev/full --input",
+        &[p(&raw), "--calibration", p(&cal)],
+    );
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).starts_with("incal: /dev/full: cannot write"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn plan_misalign_sizes_are_capped_and_never_built_row_by_row() {
+    let plan = |n: &str| {
+        run_words(
+            "plan misalign --scale-factor 1 --noise 0.01 --json --readings",
+            &[n],
+        )
+    };
+    refused(&plan("1000000000000"), &["samples", "100000000"]);
+    // 10^6 readings predict u / 1000 of one reading, without a 10^6-row
+    // design (it took 25 s and 5.4 GB).
+    let u = |n: &str| json_of(&plan(n))["predicted_u"]["gamma"].as_f64().unwrap();
+    let (one, many) = (u("1"), u("1000000"));
+    assert!((many * 1000.0 / one - 1.0).abs() < 1e-9, "{one} {many}");
+}
+
+#[test]
+fn plan_tumble_checks_its_options_without_a_prediction() {
+    // One position was accepted when k1 and noise were not given.
+    refused(
+        &run(&["plan", "tumble", "--angles-deg", "0"]),
+        &["cannot separate", "K1"],
+    );
+    refused(
+        &run(&[
+            "plan",
+            "tumble",
+            "--range-g",
+            "0.5",
+            "--step-resolution-deg",
+            "1e300",
+        ]),
+        &["step resolution", "at most 18"],
+    );
+}

@@ -268,6 +268,17 @@ fn add_list_show_supersede_history_verify_keep_the_contract() {
     assert!(v.starts_with("ok: 6 records"), "{v}");
     let vj = ok_json(&["record", "verify", "--db", db, "--json"]);
     assert_eq!(vj["records"], 6);
+    // record list shows the same chain head, text and JSON.
+    let head = vj["head"].as_str().unwrap();
+    let lj = ok_json(&["record", "list", "--db", db, "--json"]);
+    assert_eq!(lj["chain"]["head"], head);
+    assert_eq!(lj["chain"]["records"], 6);
+    let lt = ok(&["record", "list", "--db", db]);
+    assert!(
+        lt.trim_end()
+            .ends_with(&format!("chain: 6 records, hash chain intact; head {head}")),
+        "{lt}"
+    );
 
     // $INCAL_DB, and incal.db in the working directory.
     let o = Command::new(env!("CARGO_BIN_EXE_incal"))
@@ -735,4 +746,41 @@ fn no_record_is_lost_or_stored_twice() {
         assert!(e.contains("not an incal records store"), "{e}");
     }
     assert_eq!(std::fs::read(&foreign).unwrap(), bytes);
+}
+
+#[test]
+fn the_certificate_names_its_record_and_the_chain_head() {
+    let dir = temp_dir("certificate-head");
+    let db = dir.join("incal.db");
+    let a = tumble_result(&dir, "a", 8000.0, 1, Some("SN-C"));
+    let b = tumble_result(&dir, "b", 8001.0, 2, Some("SN-C"));
+    for f in [&a, &b] {
+        ok(&["record", "add", s(f), "--db", s(&db)]);
+    }
+    let head = ok_json(&["record", "verify", "--db", s(&db), "--json"])["head"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let html = ok(&["report", s(&a), "--db", s(&db)]);
+    assert!(html.contains("record 1 in"), "the record of this document");
+    assert!(html.contains(&head), "the chain head, whole");
+    // A result of a new instrument, judged against limits, while an
+    // incal.db sits in the working directory: a certificate with no
+    // history (not "no records of this instrument").
+    let c = tumble_result(&dir, "c", 8000.0, 3, Some("SN-NEW"));
+    let limits = dir.join("l.toml");
+    std::fs::write(&limits, "[tumble]\nK1 = { min = 9.9, max = 10.1 }\n").unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_incal"))
+        .args(["report", s(&c), "--limits", s(&limits), "-o", "c.html"])
+        .env_remove("INCAL_DB")
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let html = std::fs::read_to_string(dir.join("c.html")).unwrap();
+    assert!(
+        html.contains("not stored in incal.db"),
+        "named as not stored"
+    );
+    assert!(html.contains(&head));
 }

@@ -49,6 +49,106 @@ pub const TARGETS: &[(&str, &str)] = &[
     ("limits", "limits TOML (--limits)"),
 ];
 
+/// Executions of every target in the test suite (`tests/fuzz_props.rs`,
+/// [`campaign`]): a fixed number per target, so CI does the same work on
+/// every run; fewer for the targets that reduce a whole session per valid
+/// input (a few seconds each in the test profile).
+pub fn ci_executions(target: &str) -> u64 {
+    match target {
+        "imu-autocal" => 100,
+        "gfimu-solve" | "noise" | "imu-ferraris" | "imu-multipos" | "imu-calibration"
+        | "gfimu-calibration" => 600,
+        _ => 2000,
+    }
+}
+
+/// The bytes that break readers, spliced in by [`mutate`].
+pub const TOKENS: &[&[u8]] = &[
+    b"nan", b"inf", b"1e308", b"1e16", b"", b",", b"\n", b"-1", b"0", b"abc", b"\"", b"#",
+];
+
+/// xorshift64*: a fixed stream from a seed, so a campaign is reproducible.
+#[derive(Debug, Clone)]
+pub struct Rng(pub u64);
+
+impl Rng {
+    /// The next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+
+    /// Uniform in `0..n` (0 when `n` is 0).
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n.max(1) as u64) as usize
+    }
+}
+
+/// `base` with one to three mutations: a bit flipped, the tail cut, or a
+/// span replaced by one of [`TOKENS`].
+pub fn mutate(base: &[u8], r: &mut Rng) -> Vec<u8> {
+    let mut v = base.to_vec();
+    for _ in 0..1 + r.below(3) {
+        let n = v.len().max(1);
+        match r.below(3) {
+            0 if !v.is_empty() => {
+                let at = r.below(n);
+                v[at] ^= 1 << r.below(8);
+            }
+            1 => v.truncate(r.below(n + 1)),
+            _ => {
+                let at = r.below(n).min(v.len());
+                let end = (at + r.below(8)).min(v.len());
+                let t = TOKENS[r.below(TOKENS.len())];
+                v.splice(at..end, t.iter().copied());
+            }
+        }
+    }
+    v
+}
+
+/// What a campaign did: executions and how many inputs were accepted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Campaign {
+    /// Inputs run.
+    pub executions: u64,
+    /// Inputs accepted (the rest refused with one line).
+    pub accepted: u64,
+}
+
+/// Run `executions` mutations of `target`'s seed from the stream `seed`,
+/// checking the contract ([`check`]) on each: the first broken one is the
+/// error, with the input's size and the failure.
+pub fn campaign(target: &str, executions: u64, seed_value: u64) -> Result<Campaign, String> {
+    let base = seed(target);
+    let mut r = Rng(seed_value | 1);
+    let mut accepted = 0;
+    for k in 0..executions {
+        let data = mutate(base, &mut r);
+        let Ok(outcome) = std::panic::catch_unwind(|| run(target, &data)) else {
+            return Err(format!(
+                "{target}: execution {k}: panicked on a {}-byte input",
+                data.len()
+            ));
+        };
+        check_outcome(target, &outcome).map_err(|e| {
+            format!(
+                "{target}: execution {k}: contract broken on a {}-byte input: {e}",
+                data.len()
+            )
+        })?;
+        if matches!(outcome, Outcome::Accepted(_)) {
+            accepted += 1;
+        }
+    }
+    Ok(Campaign {
+        executions,
+        accepted,
+    })
+}
+
 /// A valid input of `target` (empty for an unknown target).
 pub fn seed(target: &str) -> &'static [u8] {
     match target {
@@ -341,7 +441,12 @@ fn apply_imu(calibration: &[u8], raw: &[u8]) -> Outcome {
 
 /// [`run`] and the contract (module docs); `Err` says what broke it.
 pub fn check(target: &str, data: &[u8]) -> Result<(), String> {
-    match run(target, data) {
+    check_outcome(target, &run(target, data))
+}
+
+/// The contract of [`check`] on an outcome already run.
+pub fn check_outcome(target: &str, outcome: &Outcome) -> Result<(), String> {
+    match outcome {
         Outcome::Accepted(out) if target == "imu-calibration" => {
             for (i, line) in out.lines().enumerate() {
                 for f in line.split(',') {
@@ -353,7 +458,7 @@ pub fn check(target: &str, data: &[u8]) -> Result<(), String> {
             }
             Ok(())
         }
-        Outcome::Accepted(out) => serde_json::from_str::<serde_json::Value>(&out)
+        Outcome::Accepted(out) => serde_json::from_str::<serde_json::Value>(out)
             .map(|_| ())
             .map_err(|e| format!("accepted with an output that is not JSON: {e}")),
         Outcome::Refused(m) => {

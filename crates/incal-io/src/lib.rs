@@ -29,7 +29,9 @@ pub use reader::{
     hex, parse_delimiter, parse_f64, Header, ReadOptions, Reader, Row, Summary, MAX_ABS_VALUE,
     MAX_LINE_BYTES,
 };
-pub use source::{display_name, is_dash, open, read_hashed, read_table, stream, stream_table};
+pub use source::{
+    display_name, is_dash, open, read_hashed, read_table, stream, stream_table, MAX_DOCUMENT_BYTES,
+};
 pub use table::{Table, TableRow};
 pub use writer::{Cell, CsvWriter};
 

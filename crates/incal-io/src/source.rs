@@ -97,19 +97,43 @@ where
     Ok(r.finish()?)
 }
 
-/// The bytes of `path` (`-`: standard input), with their SHA-256 (of the
-/// bytes as stored, so it equals `sha256sum FILE`); a leading UTF-8
-/// byte-order mark is stripped from the bytes returned.
+/// Largest document read whole (result documents, calibrations, geometry
+/// and limits files): 64 MiB, far above any document incal writes, so a
+/// binary file or `/dev/zero` given as one is refused in bounded memory.
+pub const MAX_DOCUMENT_BYTES: usize = 64 << 20;
+
+/// The bytes of the document at `path` (`-`: standard input), with their
+/// SHA-256 (of the bytes as stored, so it equals `sha256sum FILE`); a
+/// leading UTF-8 byte-order mark is stripped from the bytes returned.
+/// More than [`MAX_DOCUMENT_BYTES`] is refused (`NAME: larger than 64 MiB
+/// …`) without reading further.
 pub fn read_hashed(path: &Path) -> Result<(String, Vec<u8>, String)> {
     use sha2::Digest;
-    let mut o = open(path)?;
+    let o = open(path)?;
+    if o.size > MAX_DOCUMENT_BYTES {
+        return Err(too_large(&o.name));
+    }
     let mut bytes = Vec::with_capacity(o.size);
     o.reader
+        .take(MAX_DOCUMENT_BYTES as u64 + 1)
         .read_to_end(&mut bytes)
         .map_err(|e| InputError::io(&o.name, &e))?;
+    if bytes.len() > MAX_DOCUMENT_BYTES {
+        return Err(too_large(&o.name));
+    }
     let sha = crate::hex(&sha2::Sha256::digest(&bytes));
     if bytes.starts_with(b"\xEF\xBB\xBF") {
         bytes.drain(..3);
     }
     Ok((o.name, bytes, sha))
+}
+
+fn too_large(name: &str) -> InputError {
+    InputError::file(
+        name,
+        format!(
+            "larger than {} MiB: not a document incal reads whole (a result, calibration, geometry or limits file)",
+            MAX_DOCUMENT_BYTES >> 20
+        ),
+    )
 }

@@ -811,6 +811,19 @@ impl Store {
     /// left out; none at all, or a unit that changes between records, is
     /// an error.
     pub fn history(&self, serial: &str, coefficient: &str) -> Result<History> {
+        self.history_if_any(serial, coefficient)?
+            .map_err(Error::Input)
+    }
+
+    /// As [`Store::history`], with "nothing to show" (no records of the
+    /// instrument, every one superseded, none with the coefficient) as
+    /// `Ok(Err(why))` rather than an error: a report plots the histories
+    /// there are.
+    pub fn history_if_any(
+        &self,
+        serial: &str,
+        coefficient: &str,
+    ) -> Result<std::result::Result<History, String>> {
         let mut st = self
             .conn
             .prepare(
@@ -836,7 +849,7 @@ impl Store {
                     |r| r.get(0),
                 )
                 .map_err(self.db())?;
-            return Err(Error::Input(if known {
+            return Ok(Err(if known {
                 format!("serial '{serial}': every record is superseded")
             } else {
                 format!("serial '{serial}': no records of this instrument")
@@ -876,13 +889,13 @@ impl Store {
             });
         }
         if points.is_empty() {
-            return Err(Error::Input(format!(
+            return Ok(Err(format!(
                 "serial '{serial}': no calibration has a coefficient '{coefficient}' (recorded: {})",
                 names.join(", ")
             )));
         }
         let a = history::analyse(&points);
-        Ok(History {
+        Ok(Ok(History {
             serial: serial.to_string(),
             coefficient: coefficient.to_string(),
             unit: points[0].unit.clone(),
@@ -891,7 +904,7 @@ impl Store {
             repeatability: a.repeatability,
             en_latest: a.en_latest,
             notes: a.notes,
-        })
+        }))
     }
 
     /// Recompute the chain: for every record in id order, the id follows
@@ -914,15 +927,34 @@ impl Store {
     }
 
     /// Refuse to read a store whose chain is broken, naming the first
-    /// record that does not match (for `show`, `history` and reports).
-    pub fn check_chain(&self) -> Result<()> {
-        self.verify().map(|_| ()).map_err(|e| match e {
+    /// record that does not match (for `show`, `history` and reports);
+    /// the intact chain's count and head otherwise.
+    pub fn check_chain(&self) -> Result<Verified> {
+        self.verify().map_err(|e| match e {
             Error::Tampered { id, problem } => Error::Tampered {
                 id,
                 problem: format!("{problem} (the chain is broken: nothing is read from this store; 'incal record verify' names it)"),
             },
             other => other,
         })
+    }
+
+    /// The record of instrument `serial` whose stored document is
+    /// `document` byte for byte (its SHA-256), the first if corrected
+    /// since: `(id, record_hash)`, or `None`. A certificate of that
+    /// document names the record.
+    pub fn find(&self, serial: &str, document: &str) -> Result<Option<(i64, String)>> {
+        self.conn
+            .query_row(
+                "SELECT r.id, r.record_hash FROM records r
+                 JOIN instruments i ON i.id = r.instrument_id
+                 WHERE i.serial = ?1 AND r.document_sha256 = ?2
+                 ORDER BY r.id LIMIT 1",
+                params![serial, sha256_hex(document.as_bytes())],
+                |r| Ok((r.get(0)?, r.get(1)?)),
+            )
+            .optional()
+            .map_err(self.db())
     }
 
     fn verify_holding(&self, anchor: Option<&str>) -> Result<Verified> {

@@ -79,6 +79,25 @@ pub enum ReportError {
 pub struct RenderOptions {
     /// The report date as printed; `None`: now, `YYYY-MM-DD HH:MM UTC`.
     pub date: Option<String>,
+    /// The records store the report was checked against, if any.
+    pub record: Option<RecordStamp>,
+}
+
+/// Where the reported document is kept: its record in a store, and the
+/// head of the store's hash chain when the report was written (checked
+/// whole). The head printed on the certificate lets anyone check later,
+/// with `incal record verify --head HEX`, that the store still holds
+/// every record up to this one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordStamp {
+    /// The store as named (its path).
+    pub store: String,
+    /// The record holding this very document (`None`: not stored there).
+    pub id: Option<i64>,
+    /// Records in the chain.
+    pub records: i64,
+    /// `record_hash` of the chain's last record.
+    pub head: String,
 }
 
 /// The report of `doc`, dated now (UTC), with the `history` plots (none
@@ -270,7 +289,7 @@ fn document_table(t: &Table) -> String {
     )
 }
 
-fn header_html(doc: &ResultDocument, date: &str) -> String {
+fn header_html(doc: &ResultDocument, date: &str, record: Option<&RecordStamp>) -> String {
     let mut s = String::from("<header id=\"header\">\n");
     s.push_str(&format!(
         "<h1>Calibration report<span class=\"sub\">{}</span></h1>\n",
@@ -297,6 +316,24 @@ fn header_html(doc: &ResultDocument, date: &str) -> String {
     ]);
     rows.push(vec![text_cell("document"), text_cell(&doc.schema)]);
     rows.push(vec![text_cell("report date"), text_cell(date)]);
+    if let Some(r) = record {
+        let held = match r.id {
+            Some(id) => format!("record {id} in {}", r.store),
+            None => format!("not stored in {}", r.store),
+        };
+        rows.push(vec![text_cell("record"), text_cell(&held)]);
+        rows.push(vec![
+            text_cell("chain head"),
+            (
+                false,
+                format!(
+                    "<span class=\"hash\">{}</span> ({} records, checked whole; <code>incal record verify --head</code> checks a store still holds it)",
+                    esc(&r.head),
+                    r.records
+                ),
+            ),
+        ]);
+    }
     if let Some(v) = verdict_of(doc, None) {
         rows.push(vec![
             text_cell("verdict"),
@@ -529,7 +566,7 @@ pub fn render_html_with(
         "<title>{}</title>\n<style>{CSS}</style>\n</head>\n<body>\n",
         esc(&format!("incal {}{who}: {}", doc.procedure, doc.title))
     ));
-    s.push_str(&header_html(doc, &date));
+    s.push_str(&header_html(doc, &date, opts.record.as_ref()));
     s.push_str(&coefficients_html(doc));
     s.push_str(&fits_html(doc));
     s.push_str(&notes_html(doc));

@@ -4,15 +4,17 @@
 //! JSON (non-finite numbers as `null`). Every front end renders records
 //! through these.
 
-use incal_records::{History, RecordSummary, StoredRecord};
+use incal_records::{History, RecordSummary, StoredRecord, Verified};
 use serde_json::{json, Value};
 
 use crate::format::{dof_text, sig};
 use crate::text::table;
 
 /// `{"records": [{id, serial, procedure, created_utc, sha256, operator,
-/// station, superseded_by}, …]}`.
-pub fn list_json(records: &[RecordSummary]) -> Value {
+/// station, superseded_by}, …], "chain": {"records", "head"}}`: the chain
+/// checked whole, and its head (the `record_hash` of the last record) to
+/// write down for `incal record verify --head`.
+pub fn list_json(records: &[RecordSummary], chain: &Verified) -> Value {
     let rows: Vec<Value> = records
         .iter()
         .map(|r| {
@@ -28,7 +30,7 @@ pub fn list_json(records: &[RecordSummary]) -> Value {
             })
         })
         .collect();
-    json!({ "records": rows })
+    json!({ "records": rows, "chain": {"records": chain.records, "head": chain.head} })
 }
 
 /// `text` for a terminal: control characters (ESC, newline, …) and the
@@ -48,10 +50,15 @@ pub fn printable(text: &str) -> String {
         .collect()
 }
 
-/// The records as a table (`no records` when there are none).
-pub fn list_text(records: &[RecordSummary]) -> String {
+/// The records as a table (`no records` when there are none), then the
+/// line `chain: N records, hash chain intact; head HEX`.
+pub fn list_text(records: &[RecordSummary], chain: &Verified) -> String {
+    let foot = format!(
+        "chain: {} records, hash chain intact; head {}\n",
+        chain.records, chain.head
+    );
     if records.is_empty() {
-        return "no records\n".to_string();
+        return format!("no records\n{foot}");
     }
     let dash = |s: &Option<String>| s.as_deref().map_or_else(|| "-".into(), printable);
     let rows: Vec<Vec<String>> = records
@@ -81,7 +88,7 @@ pub fn list_text(records: &[RecordSummary]) -> String {
             "superseded_by",
         ],
         &rows,
-    )
+    ) + &foot
 }
 
 /// The heading of `incal record show`: id, serial, time, hash, who, and

@@ -107,6 +107,7 @@ fn fixed(doc: &ResultDocument, history: &[HistorySeries]) -> String {
         history,
         &RenderOptions {
             date: Some("2026-01-02 03:04 UTC".into()),
+            record: None,
         },
     )
     .unwrap()

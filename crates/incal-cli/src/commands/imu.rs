@@ -387,7 +387,9 @@ pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
     let mut rows = incal_io::Reader::new(&src.name, src.reader, &read)?;
     let cols = cal.columns(rows.header()).map_err(core)?;
     let mut w = crate::io::open_output(a.output.as_deref())?;
-    let wfail = |e: std::io::Error| CliError::Failure(anyhow::anyhow!("cannot write: {e}"));
+    let out_name = crate::io::output_name(a.output.as_deref());
+    let wfail =
+        |e: std::io::Error| CliError::Failure(anyhow::anyhow!("{out_name}: cannot write: {e}"));
     let mut line = cols.output_header().join(",");
     line.push('\n');
     w.write_all(line.as_bytes()).map_err(wfail)?;

@@ -233,6 +233,11 @@ fn read_result(path: &Path, who: &WhoArgs) -> CliResult<(String, String, ResultD
         if opt.is_some_and(|g| g.trim().is_empty()) {
             return Err(CliError::Input(format!("--{key}: empty")));
         }
+        if in_doc.is_some_and(|d| d.trim().is_empty()) {
+            return Err(CliError::Input(format!(
+                "{name}: $.instrument.{key}: empty (the record's {key} must name one)"
+            )));
+        }
     }
     if let Some(t) = &who.created_utc {
         incal_records::time::normalize_utc(t)
@@ -302,11 +307,12 @@ fn supersede(a: &SupersedeArgs) -> CliResult<()> {
 
 fn list(a: &ListArgs) -> CliResult<()> {
     let store = open(&a.db, false)?;
+    let chain = store.check_chain().map_err(store_err)?;
     let records = store.list(a.serial.as_deref()).map_err(store_err)?;
     let text = if a.out.json {
-        json_text(&records::list_json(&records))
+        json_text(&records::list_json(&records, &chain))
     } else {
-        records::list_text(&records)
+        records::list_text(&records, &chain)
     };
     write_text(a.out.output.as_deref(), &text)
 }

@@ -5,9 +5,9 @@
 use std::path::PathBuf;
 
 use incal::document::ResultDocument;
-use incal_report::{HistoryPoint, HistorySeries};
+use incal_report::{HistoryPoint, HistorySeries, RecordStamp, RenderOptions};
 
-use crate::documents::read_document;
+use crate::documents::read_document_text;
 use crate::error::{CliError, CliResult};
 use crate::options::db_path;
 use crate::output::{apply_limits, write_text};
@@ -30,26 +30,42 @@ pub struct Args {
 
 /// `incal report`.
 pub fn run(a: &Args) -> CliResult<()> {
-    let (_, _, mut doc) = read_document(&a.result)?;
+    let (_, _, text, mut doc) = read_document_text(&a.result)?;
     if let Some(l) = &a.limits {
         apply_limits(&mut doc, l)?;
     }
-    let history = history(a, &doc)?;
-    let html = incal_report::render_html(&doc, &history)
+    let (history, record) = match store(a, &doc)? {
+        Some((store, chain)) => {
+            let serial = doc.instrument.serial.as_deref().unwrap_or_default();
+            let id = store
+                .find(serial, &text)
+                .map_err(|e| CliError::Failure(anyhow::anyhow!("{e}")))?
+                .map(|(id, _)| id);
+            let record = RecordStamp {
+                store: store.path().display().to_string(),
+                id,
+                records: chain.records,
+                head: chain.head,
+            };
+            (history(&store, &doc)?, Some(record))
+        }
+        None => (Vec::new(), None),
+    };
+    let opts = RenderOptions { date: None, record };
+    let html = incal_report::render_html_with(&doc, &history, &opts)
         .map_err(|e| CliError::Failure(anyhow::anyhow!("{e}")))?;
     write_text(a.output.as_deref(), &html)
 }
 
-/// The history of every limited coefficient of the instrument, from the
-/// store, when the store exists, the result has a serial and there are two
-/// or more calibrations.
-fn history(a: &Args, doc: &ResultDocument) -> CliResult<Vec<HistorySeries>> {
+/// The records store, checked whole, when the result has a serial and a
+/// store is given or present (`--db`, else `$INCAL_DB`, else `incal.db`).
+fn store(
+    a: &Args,
+    doc: &ResultDocument,
+) -> CliResult<Option<(incal_records::Store, incal_records::Verified)>> {
     let path = db_path(a.db.as_deref());
-    let (Some(serial), Some(verdicts)) = (&doc.instrument.serial, &doc.verdicts) else {
-        return Ok(Vec::new());
-    };
-    if a.db.is_none() && !path.exists() {
-        return Ok(Vec::new());
+    if doc.instrument.serial.is_none() || (a.db.is_none() && !path.exists()) {
+        return Ok(None);
     }
     // Store errors name the path themselves.
     let store = incal_records::Store::open_existing(&path).map_err(|e| {
@@ -59,14 +75,29 @@ fn history(a: &Args, doc: &ResultDocument) -> CliResult<Vec<HistorySeries>> {
             CliError::Failure(anyhow::anyhow!("{e}"))
         }
     })?;
-    store
+    let chain = store
         .check_chain()
         .map_err(|e| CliError::Failure(anyhow::anyhow!("{}: {e}", path.display())))?;
+    Ok(Some((store, chain)))
+}
+
+/// The history of every limited coefficient of the instrument, from the
+/// store, when there are two or more calibrations.
+fn history(store: &incal_records::Store, doc: &ResultDocument) -> CliResult<Vec<HistorySeries>> {
+    let (Some(serial), Some(verdicts)) = (&doc.instrument.serial, &doc.verdicts) else {
+        return Ok(Vec::new());
+    };
+    let path = store.path().display().to_string();
     let mut out = Vec::new();
     for (name, v) in verdicts {
-        let h = store
-            .history(serial, name)
-            .map_err(|e| CliError::Input(format!("{}: {e}", path.display())))?;
+        // A new instrument, or a coefficient not recorded before, has no
+        // history to plot.
+        let Ok(h) = store
+            .history_if_any(serial, name)
+            .map_err(|e| CliError::Input(format!("{path}: {e}")))?
+        else {
+            continue;
+        };
         if h.points.len() < 2 {
             continue;
         }

@@ -108,54 +108,128 @@ pub struct Limit {
 
 /// A limits file: the decision rule and, per procedure id, the limits of
 /// its coefficients.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Limits {
     /// The decision rule (default `simple`).
-    #[serde(default)]
     pub rule: DecisionRule,
     /// `procedure id → coefficient name → limit`.
-    #[serde(flatten)]
     pub procedures: BTreeMap<String, BTreeMap<String, Limit>>,
+}
+
+/// One top-level entry of a limits file: `rule = "…"` or a `[procedure]`
+/// table. Read by hand (not with serde's `flatten`, which buffers the
+/// values and loses their position), so every error has its line.
+enum Entry {
+    Rule(DecisionRule),
+    Section(BTreeMap<String, toml::Spanned<Limit>>),
+}
+
+impl<'de> Deserialize<'de> for Entry {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Entry;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a decision rule or a table of limits")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> std::result::Result<Entry, E> {
+                use serde::de::IntoDeserializer;
+                let d: serde::de::value::StrDeserializer<'_, E> = v.into_deserializer();
+                DecisionRule::deserialize(d).map(Entry::Rule)
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> std::result::Result<Entry, A::Error> {
+                let mut out = BTreeMap::new();
+                while let Some(k) = map.next_key::<String>()? {
+                    let limit = map.next_value::<toml::Spanned<Limit>>()?;
+                    out.insert(k, limit);
+                }
+                Ok(Entry::Section(out))
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 impl Limits {
     /// Parse a limits file (TOML). Errors say where (line, key) and what.
     pub fn parse(text: &str) -> std::result::Result<Limits, String> {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        let limits: Limits = toml::from_str(text).map_err(|e| {
-            let line = e
-                .span()
-                .map(|s| text[..s.start.min(text.len())].lines().count().max(1));
+        let line_of = |start: usize| 1 + text[..start.min(text.len())].matches('\n').count();
+        let toml_error = |e: toml::de::Error| {
             let msg = e.message().replace('\n', " ");
-            match line {
-                Some(l) => format!("line {l}: {msg}"),
+            match e.span() {
+                Some(s) => format!("line {}: {msg}", line_of(s.start)),
                 None => msg,
             }
-        })?;
-        for (p, coefs) in &limits.procedures {
-            let known: std::result::Result<Procedure, _> =
-                serde_json::from_value(serde_json::Value::String(p.clone()));
-            if known.is_err() {
-                return Err(format!(
-                    "[{p}]: not a procedure (tumble, centrifuge, misalign-gyro, misalign-accel, gfimu-calibrate)"
-                ));
-            }
-            for (name, l) in coefs {
-                let at = format!("[{p}] {name}");
-                match (l.min, l.max) {
-                    (None, None) => return Err(format!("{at}: give min and/or max")),
-                    (Some(a), Some(b)) if a > b => {
-                        return Err(format!("{at}: min {a} is above max {b}"))
-                    }
-                    _ => {}
+        };
+        let entries: BTreeMap<String, toml::Spanned<Entry>> =
+            toml::from_str(text).map_err(toml_error)?;
+        let mut limits = Limits {
+            rule: DecisionRule::default(),
+            procedures: BTreeMap::new(),
+        };
+        for (key, entry) in entries {
+            let line = line_of(entry.span().start);
+            match (key.as_str(), entry.into_inner()) {
+                ("rule", Entry::Rule(r)) => limits.rule = r,
+                ("rule", Entry::Section(_)) => {
+                    return Err(format!(
+                        "line {line}: rule: expected \"simple\" or \"guard-band\", not a table"
+                    ))
                 }
-                if l.min.is_some_and(|x| !x.is_finite()) || l.max.is_some_and(|x| !x.is_finite()) {
-                    return Err(format!("{at}: limits must be finite numbers"));
+                (p, Entry::Section(coefs)) => {
+                    if Procedure::from_id(p).is_none() {
+                        let all: Vec<&str> = Procedure::ALL.iter().map(|p| p.as_str()).collect();
+                        return Err(format!(
+                            "line {line}: [{}]: not a procedure ({})",
+                            incal_io::clip(p),
+                            all.join(", ")
+                        ));
+                    }
+                    let coefs = checked_section(p, coefs, line_of)?;
+                    limits.procedures.insert(p.to_string(), coefs);
+                }
+                (k, Entry::Rule(_)) => {
+                    return Err(format!(
+                        "line {line}: {}: not a key of a limits file (rule, or a [procedure] table of limits)",
+                        incal_io::clip(k)
+                    ))
                 }
             }
         }
         Ok(limits)
     }
+}
+
+/// A `[procedure]` table's limits, each with the line it is on, checked:
+/// min and/or max given, finite, min not above max.
+fn checked_section(
+    p: &str,
+    coefs: BTreeMap<String, toml::Spanned<Limit>>,
+    line_of: impl Fn(usize) -> usize,
+) -> std::result::Result<BTreeMap<String, Limit>, String> {
+    let mut out = BTreeMap::new();
+    for (name, l) in coefs {
+        let at = format!(
+            "line {}: [{p}] {}",
+            line_of(l.span().start),
+            incal_io::clip(&name)
+        );
+        let l = l.into_inner();
+        match (l.min, l.max) {
+            (None, None) => return Err(format!("{at}: give min and/or max")),
+            (Some(a), Some(b)) if a > b => return Err(format!("{at}: min {a} is above max {b}")),
+            _ => {}
+        }
+        if l.min.is_some_and(|x| !x.is_finite()) || l.max.is_some_and(|x| !x.is_finite()) {
+            return Err(format!("{at}: limits must be finite numbers"));
+        }
+        out.insert(name, l);
+    }
+    Ok(out)
 }
 
 /// How many JSON units one `unit` is, for a coefficient in `json`:

@@ -77,6 +77,26 @@ pub enum Procedure {
 }
 
 impl Procedure {
+    /// Every procedure, in the order of the CLI's help.
+    pub const ALL: [Procedure; 11] = [
+        Procedure::Tumble,
+        Procedure::Centrifuge,
+        Procedure::MisalignGyro,
+        Procedure::MisalignAccel,
+        Procedure::GfimuCalibrate,
+        Procedure::GyroRate,
+        Procedure::GyroPositions,
+        Procedure::Noise,
+        Procedure::ImuFerraris,
+        Procedure::ImuMultipos,
+        Procedure::ImuAutocal,
+    ];
+
+    /// The procedure with id `id`, if any.
+    pub fn from_id(id: &str) -> Option<Procedure> {
+        Self::ALL.into_iter().find(|p| p.as_str() == id)
+    }
+
     /// The procedure id as in the JSON (`tumble`, `misalign-gyro`, …).
     pub fn as_str(self) -> &'static str {
         match self {

@@ -473,8 +473,7 @@ impl Decomposition {
                 DVector::zeros(p),
                 DMatrix::identity(p, p),
             )
-        } else {
-            let svd = padded.svd(true, true);
+        } else if let Some(svd) = super::bounded_svd(padded, true, true) {
             let s = svd.singular_values.clone();
             let u_full = svd.u.unwrap_or_else(|| DMatrix::zeros(n.max(p), p));
             let u = u_full.rows(0, n).into_owned();
@@ -483,6 +482,15 @@ impl Decomposition {
                 .map(|vt| vt.transpose())
                 .unwrap_or_else(|| DMatrix::identity(p, p));
             (u, s, v)
+        } else {
+            // Weights times design overflowed (both are checked finite):
+            // no direction is resolved, so the fit is refused as
+            // unseparable rather than solved with infinities.
+            (
+                DMatrix::zeros(n, p),
+                DVector::zeros(p),
+                DMatrix::identity(p, p),
+            )
         };
         let s_max = s.iter().cloned().fold(0.0, f64::max);
         let tol = s_max / cond_limit;

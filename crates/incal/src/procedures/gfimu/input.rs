@@ -23,7 +23,7 @@
 
 use std::io::{Read, Write};
 
-use incal_io::{clip, Cell, CsvWriter, InputError};
+use incal_io::{clip, Cell, CsvWriter, InputError, MAX_ABS_VALUE};
 use nalgebra::Vector3;
 use serde_json::Value;
 
@@ -51,6 +51,14 @@ pub const DEFAULT_LEVER_ARM_M: f64 = 0.1;
 /// Largest lever arm of a built-in layout (m): a unit on a table is
 /// millimetres to a few metres across.
 pub const MAX_LEVER_ARM_M: f64 = 10.0;
+
+/// Smallest sensing-vector norm |Ks| a calibration may give (output/g).
+pub const MIN_KS_NORM: f64 = 1e-12;
+
+/// Smallest sample noise a calibration may give, in g (`noise_output /
+/// |Ks|`): below any accelerometer's resolution, and far enough above zero
+/// that the solve's weights 1/σ² stay finite.
+pub const MIN_NOISE_G: f64 = 1e-15;
 
 /// The array a command works on: its geometry, a label for messages and
 /// documents (the file name, or the built-in layout and lever arm), and
@@ -126,7 +134,7 @@ impl ArrayGeometry {
             let msg = e.message().replace('\n', " ");
             match e.span() {
                 Some(s) => {
-                    let line = text[..s.start.min(text.len())].lines().count().max(1);
+                    let line = 1 + text[..s.start.min(text.len())].matches('\n').count();
                     InputError::at(name, line, msg)
                 }
                 None => InputError::file(name, msg),
@@ -150,6 +158,19 @@ impl ArrayGeometry {
                     .into());
                 };
                 *slot = Vector3::new(*x, *y, *z);
+            }
+            // An accelerometer further than a lever arm can reach from the
+            // unit's origin is a typo (or millimetres given as metres).
+            let r = v3[0].norm();
+            if r.is_nan() || r > MAX_LEVER_ARM_M {
+                return Err(InputError::file(
+                    name,
+                    format!(
+                        "accelerometer[{k}].position_m: {} m from the origin, beyond {MAX_LEVER_ARM_M} m",
+                        shown(r)
+                    ),
+                )
+                .into());
             }
             accs.push(ArrayAccelerometer {
                 name: a.name,
@@ -427,19 +448,59 @@ pub fn read_calibration(
                     .ok_or_else(|| bad("noise_output", "must be a positive number or null"))?,
             ),
         };
+        // Values a calibration of these outputs can hold: K0 within the
+        // outputs' readable range, a sensing vector of at least 1e-12
+        // output/g, and a sample noise of at least 1e-15 g (finer than any
+        // accelerometer resolves) so the weights 1/σ² stay finite.
+        if k0.abs() > MAX_ABS_VALUE {
+            return Err(bad(
+                "K0.value",
+                &format!(
+                    "{} is beyond ±1e15, the range of the outputs it corrects",
+                    shown(k0)
+                ),
+            ));
+        }
+        let ks_norm = ks.norm();
+        if ks.iter().any(|v| v.abs() > MAX_ABS_VALUE) || ks_norm.is_nan() || ks_norm < MIN_KS_NORM {
+            return Err(bad(
+                "Ks.value",
+                &format!(
+                    "|Ks| = {} must be at least {MIN_KS_NORM:e} output/g with every component within ±1e15",
+                    shown(ks_norm)
+                ),
+            ));
+        }
+        if let Some(s) = noise_output {
+            if s < MIN_NOISE_G * ks_norm || s > MAX_ABS_VALUE {
+                return Err(bad(
+                    "noise_output",
+                    &format!(
+                        "{} is not a sample noise of this accelerometer (at least {MIN_NOISE_G:e} g = {} output, at most 1e15)",
+                        shown(s),
+                        shown(MIN_NOISE_G * ks_norm)
+                    ),
+                ));
+            }
+        }
         // The calibration's u (optional: a hand-made file may omit it).
         let u_k0 = match a.pointer("/K0/u") {
             None | Some(Value::Null) => 0.0,
             Some(v) => v
                 .as_f64()
-                .filter(|u| u.is_finite() && *u >= 0.0)
-                .ok_or_else(|| bad("K0.u", "must be a non-negative number"))?,
+                .filter(|u| (0.0..=MAX_ABS_VALUE).contains(u))
+                .ok_or_else(|| bad("K0.u", "must be a non-negative number within 1e15"))?,
         };
         let u_ks = match a.pointer("/Ks/u") {
             None | Some(Value::Null) => Vector3::zeros(),
             Some(v) => three(v)
-                .filter(|u| u.iter().all(|x| x.is_finite() && *x >= 0.0))
-                .ok_or_else(|| bad("Ks.u", "must be an array of three non-negative numbers"))?,
+                .filter(|u| u.iter().all(|x| (0.0..=MAX_ABS_VALUE).contains(x)))
+                .ok_or_else(|| {
+                    bad(
+                        "Ks.u",
+                        "must be an array of three non-negative numbers within 1e15",
+                    )
+                })?,
         };
         out.push(CalibratedAccelerometer {
             k0,

@@ -447,7 +447,12 @@ impl Solver {
         // (AᵀWA)⁻¹ by SVD of W^{1/2}A (never squares the condition number).
         let sw = w.map(f64::sqrt);
         let aw = DMatrix::from_fn(n, p, |i, j| design[(i, j)] * sw[i]);
-        let svd = aw.clone().svd(true, true);
+        let svd = crate::estimation::bounded_svd(aw, true, true).ok_or_else(|| {
+            Error::Unsupported(
+                "the calibration's Ks and noise_output give a motion design that is not finite"
+                    .into(),
+            )
+        })?;
         let (Some(u), Some(vt)) = (svd.u.as_ref(), svd.v_t.as_ref()) else {
             return Err(Error::Unsupported("SVD of the motion design failed".into()));
         };

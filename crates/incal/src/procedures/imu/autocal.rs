@@ -1317,7 +1317,7 @@ pub fn ellipsoid_start(means: &[[f64; 3]], g: f64) -> Option<([f64; 3], [f64; 3]
         }
         a[(i, 6)] = 1.0;
     }
-    let svd = a.svd(false, true);
+    let svd = crate::estimation::bounded_svd(a, false, true)?;
     let vt = svd.v_t?;
     let (j, _) = svd.singular_values.argmin();
     let mut p: Vec<f64> = vt.row(j).iter().copied().collect();

@@ -37,6 +37,17 @@ fn check_noise(noise: f64) -> Result<()> {
     }
 }
 
+fn check_readings(readings: usize) -> Result<()> {
+    if (1..=MAX_PLAN_SAMPLES).contains(&readings) {
+        Ok(())
+    } else {
+        Error::invalid(
+            format!("samples (1 to {MAX_PLAN_SAMPLES} per position)"),
+            readings,
+        )
+    }
+}
+
 fn worst_gamma(c: &Estimates, y2: &str, z2: &str) -> Result<f64> {
     let two = c.select(&[y2, z2])?;
     let m = two.covariance();
@@ -46,9 +57,17 @@ fn worst_gamma(c: &Estimates, y2: &str, z2: &str) -> Result<f64> {
     Ok((tr + det).max(0.0).sqrt())
 }
 
-fn predict_design(d: &Design, noise: f64, keep: &[&str]) -> Result<Prediction> {
+/// Largest number of samples per position a plan takes (the simulators'
+/// row cap): beyond it the plan is refused rather than predicted.
+pub const MAX_PLAN_SAMPLES: usize = 100_000_000;
+
+/// The prediction of design `d` (one row per position) with `readings`
+/// samples of σ `noise` at each position: `readings` equal rows of σ weigh
+/// as one row of σ/√readings, so the design is never repeated in memory.
+fn predict_design(d: &Design, readings: usize, noise: f64, keep: &[&str]) -> Result<Prediction> {
     check_noise(noise)?;
-    let sigma = DVector::from_element(d.nrows(), noise);
+    check_readings(readings)?;
+    let sigma = DVector::from_element(d.nrows(), noise / (readings as f64).sqrt());
     let all = d.predict(&sigma)?;
     let angles = all.select(keep)?;
     let n = keep.len();
@@ -56,7 +75,7 @@ fn predict_design(d: &Design, noise: f64, keep: &[&str]) -> Result<Prediction> {
     Ok(Prediction {
         angles,
         u_gamma_max,
-        n_obs: d.nrows(),
+        n_obs: d.nrows() * readings,
         n_params: d.ncols(),
     })
 }
@@ -73,9 +92,10 @@ pub fn predict_gyro(
     noise: f64,
     per_config_bias: bool,
 ) -> Result<Prediction> {
-    let positions = gyro_positions(configs, rates_deg_s, readings)?;
+    check_readings(readings)?;
+    let positions = gyro_positions(configs, rates_deg_s, 1)?;
     let d = gyro::design(&positions, scale_factor, per_config_bias)?;
-    predict_design(&d, noise, &GYRO_ANGLES)
+    predict_design(&d, readings, noise, &GYRO_ANGLES)
 }
 
 /// The positions of a gyro plan, forward then reverse at each rate.
@@ -127,12 +147,8 @@ pub fn predict_accel(
             got: distinct.len(),
         });
     }
-    let all: Vec<f64> = betas_rad
-        .iter()
-        .flat_map(|b| std::iter::repeat_n(*b, readings))
-        .collect();
-    let d = accel::design(&all, scale_factor)?;
-    predict_design(&d, noise, &ACCEL_ANGLES)
+    let d = accel::design(betas_rad, scale_factor)?;
+    predict_design(&d, readings, noise, &ACCEL_ANGLES)
 }
 
 /// Which instrument a misalignment plan is for.
@@ -208,9 +224,7 @@ impl MisalignPlan {
     /// is zero or not finite, an angle that is not finite (the design
     /// refuses what cannot separate an angle, naming it).
     pub fn validate(&self) -> Result<()> {
-        if self.samples == 0 {
-            return Error::invalid("samples (at least 1 per position)", 0);
-        }
+        check_readings(self.samples)?;
         if !(self.scale_factor.is_finite() && self.scale_factor != 0.0) {
             return Error::invalid("scale_factor (a finite non-zero number)", self.scale_factor);
         }

@@ -5,11 +5,13 @@
 //!
 //! A CSV record has a header; every column but `time_s` is a channel
 //! unless `--columns` (the input layer's [`incal_io::ColumnMap`]) selects
-//! and renames them. Every sample must be a finite number.
+//! and renames them. Every sample must be a finite number within ±10¹⁵
+//! ([`MAX_ABS_VALUE`], the input layer's range), binary records too.
 
 use std::io::Read;
 
 use incal_io::binary::{decode, MappedRecord, RecordHash};
+use incal_io::MAX_ABS_VALUE;
 
 use super::Build;
 use crate::error::{Error, Result};
@@ -215,7 +217,17 @@ fn pass(
                 continue;
             }
             let off = pick[k].0 * rec.width();
-            let y = |i: usize| decode(f64le, bytes, i * frame + off) * f;
+            let raw = |i: usize| decode(f64le, bytes, i * frame + off);
+            // A sample beyond the input layer's range reads as NaN, so the
+            // running sum below finds it as it finds a non-finite one.
+            let y = |i: usize| {
+                let v = raw(i);
+                if v.abs() <= MAX_ABS_VALUE {
+                    v * f
+                } else {
+                    f64::NAN
+                }
+            };
             let first_bad = || (0..r1 - r0).find(|&i| !y(i).is_finite());
             if fused {
                 let at = usize::from(build.rate) + r0;
@@ -240,12 +252,15 @@ fn pass(
         progress.advance((r1 - r0) as u64);
         r0 = r1;
     }
-    for (k, (_, name)) in pick.iter().enumerate() {
+    for (k, (c, name)) in pick.iter().enumerate() {
         if let Some((r, sample)) = bad[k] {
-            let what = if sample {
-                "not a finite number"
+            let v = rec.get(*c, r);
+            let what = if sample && v.is_finite() {
+                format!("{v:e} is beyond the readable range ±{MAX_ABS_VALUE:e}")
+            } else if sample {
+                "not a finite number".to_string()
             } else {
-                "the running sum (phase) of the samples overflows"
+                "the running sum (phase) of the samples overflows".to_string()
             };
             return Err(Error::Unsupported(format!(
                 "sample {} of {name}: {what}",

@@ -110,9 +110,12 @@ impl TumblePlan {
                 value: range_g.to_string(),
             });
         }
-        if !(resolution_deg.is_finite() && resolution_deg > 0.0) {
+        if !(resolution_deg.is_finite()
+            && resolution_deg > 0.0
+            && resolution_deg <= MAX_SMALL_STEP_DEG)
+        {
             return Err(Error::InvalidValue {
-                what: "step resolution (deg)".into(),
+                what: format!("step resolution (deg, above 0 and at most {MAX_SMALL_STEP_DEG})"),
                 value: resolution_deg.to_string(),
             });
         }
@@ -353,6 +356,10 @@ pub fn plan_document(
             d.set("index_error_arcsec", json!(o.index_error_arcsec))?;
         }
         _ => {
+            // No prediction without them, but a plan that cannot separate a
+            // term is refused all the same (its design does not depend on
+            // the scale of K1 or of the noise).
+            predict(o.mount, &o.terms, &plan.angles_rad(), 1.0, 1.0, 0.0)?;
             d.note("give k1 and noise for the predicted uncertainty of every coefficient");
         }
     }
