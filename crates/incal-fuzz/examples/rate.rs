@@ -34,14 +34,30 @@ fn main() {
             if !named.is_empty() && !named.contains(t) {
                 continue;
             }
+            // In chunks of 10⁴ (chunk k from stream STREAM + k), with the
+            // running count on standard error, so a long campaign shows
+            // where it is.
             let start = Instant::now();
-            match campaign(t, n, STREAM) {
-                Ok(c) => report(t, c.executions, c.accepted, start),
-                Err(e) => {
-                    eprintln!("{e}");
-                    std::process::exit(1);
+            let (mut done, mut accepted, mut k) = (0u64, 0u64, 0u64);
+            while done < n {
+                let m = (n - done).min(10_000);
+                match campaign(t, m, STREAM.wrapping_add(k)) {
+                    Ok(c) => {
+                        done += c.executions;
+                        accepted += c.accepted;
+                    }
+                    Err(e) => {
+                        eprintln!("{e} (chunk {k})");
+                        std::process::exit(1);
+                    }
                 }
+                k += 1;
+                eprintln!(
+                    "{t}: {done} executions, {:.0} s",
+                    start.elapsed().as_secs_f64()
+                );
             }
+            report(t, done, accepted, start);
         }
         return;
     }
