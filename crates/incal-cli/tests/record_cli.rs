@@ -434,7 +434,10 @@ fn verify_names_a_record_changed_behind_incals_back() {
     .unwrap();
     drop(c);
     let m = fails(1, &["record", "verify", "--db", s(&db)]);
-    assert!(m.starts_with("incal: record 2: "), "{m}");
+    assert!(
+        m.starts_with(&format!("incal: {}: record 2: ", s(&db))),
+        "{m}"
+    );
     // Reading commands refuse the broken store naming the record, and
     // nothing is added onto it.
     for args in [
@@ -783,4 +786,13 @@ fn the_certificate_names_its_record_and_the_chain_head() {
         "named as not stored"
     );
     assert!(html.contains(&head));
+    // A store named by $INCAL_DB must exist, as one named by --db.
+    let missing = dir.join("missing.db");
+    let o = Command::new(env!("CARGO_BIN_EXE_incal"))
+        .args(["report", s(&c)])
+        .env("INCAL_DB", &missing)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("missing.db"));
 }

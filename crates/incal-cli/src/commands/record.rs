@@ -178,11 +178,21 @@ pub fn run(c: &Command) -> CliResult<()> {
 
 /// A store error as a CLI error: bad input and unusable stores exit 2,
 /// a broken chain and database failures exit 1.
-fn store_err(e: StoreError) -> CliError {
-    if e.is_input() {
-        CliError::Input(e.to_string())
-    } else {
-        CliError::Failure(anyhow::anyhow!("{e}"))
+/// A store error as one line naming the store once (`PATH: …`).
+fn store_err(db: &DbArgs) -> impl Fn(StoreError) -> CliError + '_ {
+    move |e| {
+        let path = db.path().display().to_string();
+        let msg = e.to_string();
+        let msg = if msg.starts_with(&format!("{path}: ")) {
+            msg
+        } else {
+            format!("{path}: {msg}")
+        };
+        if e.is_input() {
+            CliError::Input(msg)
+        } else {
+            CliError::Failure(anyhow::anyhow!("{msg}"))
+        }
     }
 }
 
@@ -193,7 +203,7 @@ fn open(db: &DbArgs, create: bool) -> CliResult<Store> {
     } else {
         Store::open_existing(&path)
     }
-    .map_err(store_err)
+    .map_err(store_err(db))
 }
 
 /// The result file's text (BOM stripped, UTF-8 checked), checked to be an
@@ -288,7 +298,9 @@ fn add(a: &AddArgs) -> CliResult<()> {
         )));
     }
     let mut store = open(&a.db, true)?;
-    let added = store.add(&request(&text, &a.who)).map_err(store_err)?;
+    let added = store
+        .add(&request(&text, &a.who))
+        .map_err(store_err(&a.db))?;
     print_added(&a.out, &added)
 }
 
@@ -298,17 +310,17 @@ fn supersede(a: &SupersedeArgs) -> CliResult<()> {
     }
     // No serial anywhere is fine here: the old record's is taken.
     let (_, text, _) = read_result(&a.result, &a.who)?;
-    let mut store = Store::open_to_write(a.db.path()).map_err(store_err)?;
+    let mut store = Store::open_to_write(a.db.path()).map_err(store_err(&a.db))?;
     let added = store
         .supersede(a.id, &request(&text, &a.who), &a.reason)
-        .map_err(store_err)?;
+        .map_err(store_err(&a.db))?;
     print_added(&a.out, &added)
 }
 
 fn list(a: &ListArgs) -> CliResult<()> {
     let store = open(&a.db, false)?;
-    let chain = store.check_chain().map_err(store_err)?;
-    let records = store.list(a.serial.as_deref()).map_err(store_err)?;
+    let chain = store.check_chain().map_err(store_err(&a.db))?;
+    let records = store.list(a.serial.as_deref()).map_err(store_err(&a.db))?;
     let text = if a.out.json {
         json_text(&records::list_json(&records, &chain))
     } else {
@@ -338,8 +350,8 @@ struct ShowJson<'a> {
 
 fn show(a: &ShowArgs) -> CliResult<()> {
     let store = open(&a.db, false)?;
-    store.check_chain().map_err(store_err)?;
-    let r = store.show(a.id).map_err(store_err)?;
+    store.check_chain().map_err(store_err(&a.db))?;
+    let r = store.show(a.id).map_err(store_err(&a.db))?;
     let broken = |why: String| {
         CliError::Failure(anyhow::anyhow!(
             "record {}: {why} (run 'incal record verify')",
@@ -382,10 +394,10 @@ fn show(a: &ShowArgs) -> CliResult<()> {
 
 fn history(a: &HistoryArgs) -> CliResult<()> {
     let store = open(&a.db, false)?;
-    store.check_chain().map_err(store_err)?;
+    store.check_chain().map_err(store_err(&a.db))?;
     let h = store
         .history(&a.serial, &a.coefficient)
-        .map_err(store_err)?;
+        .map_err(store_err(&a.db))?;
     let text = if a.out.json {
         json_text(&records::history_json(&h))
     } else {
@@ -408,7 +420,7 @@ fn verify(a: &VerifyArgs) -> CliResult<()> {
         }
         None => store.verify(),
     }
-    .map_err(store_err)?;
+    .map_err(store_err(&a.db))?;
     let text = if a.out.json {
         json_text(&json!({"records": v.records, "head": v.head}))
     } else {

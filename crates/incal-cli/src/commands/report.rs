@@ -58,13 +58,17 @@ pub fn run(a: &Args) -> CliResult<()> {
 }
 
 /// The records store, checked whole, when the result has a serial and a
-/// store is given or present (`--db`, else `$INCAL_DB`, else `incal.db`).
+/// store is named (`--db`, else `$INCAL_DB`: it must exist) or present
+/// (`incal.db` in the working directory).
 fn store(
     a: &Args,
     doc: &ResultDocument,
 ) -> CliResult<Option<(incal_records::Store, incal_records::Verified)>> {
     let path = db_path(a.db.as_deref());
-    if doc.instrument.serial.is_none() || (a.db.is_none() && !path.exists()) {
+    // A store named (--db or $INCAL_DB) must exist; incal.db is used when
+    // present.
+    let named = a.db.is_some() || std::env::var_os("INCAL_DB").is_some_and(|v| !v.is_empty());
+    if doc.instrument.serial.is_none() || (!named && !path.exists()) {
         return Ok(None);
     }
     // Store errors name the path themselves.
