@@ -1091,3 +1091,17 @@ fn plan_tumble_checks_its_options_without_a_prediction() {
         &["step resolution", "at most 18"],
     );
 }
+
+#[test]
+fn duplicated_positions_and_dead_scale_factors_are_refused() {
+    refused(
+        &run_words("plan centrifuge --positions ip:0,io:90,ip:360", &[]),
+        &["positions", "ip:360"],
+    );
+    for c in ["gyro", "accel"] {
+        refused(
+            &run_words("simulate misalign", &[c, "--scale-factor", "0"]),
+            &["--scale-factor", "non-zero"],
+        );
+    }
+}

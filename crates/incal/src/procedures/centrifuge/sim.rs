@@ -204,6 +204,18 @@ impl RigPlan {
                     what: "positions (an angle in deg after the plane)".into(),
                     value: d.to_string(),
                 })?;
+            // The same position twice adds rows but no information the
+            // plan claims: a typo for another angle.
+            let key = |x: f64| (x.rem_euclid(360.0) * 1e9).round() as i64;
+            if out
+                .iter()
+                .any(|q: &Position| q.plane == plane && key(q.phi_rad.to_degrees()) == key(deg))
+            {
+                return Err(Error::InvalidValue {
+                    what: "positions (each plane:phi_deg once)".into(),
+                    value: item.clone(),
+                });
+            }
             let pols: &[i8] = if self.single_polarity { &[1] } else { &[1, -1] };
             for &polarity in pols {
                 out.push(Position {

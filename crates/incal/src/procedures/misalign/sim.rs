@@ -131,6 +131,9 @@ impl GyroSim {
         if !(lat.is_finite() && lat.abs() <= 90.0) {
             return Error::invalid("latitude_deg (within -90..90)", lat);
         }
+        if self.scale_factor == 0.0 {
+            return Error::invalid("scale_factor (non-zero: a dead instrument)", 0);
+        }
         let m = &self.mounting;
         finite_all(&[
             ("scale_factor", self.scale_factor),
@@ -245,6 +248,9 @@ impl AccelSim {
         }
         if self.samples == 0 {
             return Error::invalid("samples (at least 1 per angle)", 0);
+        }
+        if self.scale_factor == 0.0 {
+            return Error::invalid("scale_factor (non-zero: a dead instrument)", 0);
         }
         let m = &self.mounting;
         finite_all(&[
