@@ -55,7 +55,7 @@ pub fn open_output(path: Option<&Path>) -> CliResult<std::io::BufWriter<Box<dyn 
         Some(p) if !is_dash(p) => Box::new(std::fs::File::create(p).map_err(|e| {
             CliError::Failure(anyhow::anyhow!("{}: cannot write: {e}", p.display()))
         })?),
-        _ => Box::new(std::io::stdout().lock()),
+        _ => crate::embed::stdout(),
     };
     Ok(std::io::BufWriter::with_capacity(1 << 16, out))
 }
@@ -76,7 +76,7 @@ pub fn write_text(path: Option<&Path>, text: &str) -> CliResult<()> {
             })
         }
         _ => {
-            let mut out = std::io::stdout().lock();
+            let mut out = crate::embed::stdout();
             out.write_all(text.as_bytes())
                 .and_then(|()| out.flush())
                 .map_err(|e| CliError::Failure(anyhow::anyhow!("stdout: {e}")))

@@ -9,6 +9,7 @@
 
 mod commands;
 mod documents;
+pub mod embed;
 mod error;
 mod input;
 mod io;
@@ -334,7 +335,7 @@ fn usage_message(e: &clap::Error, command: &str) -> String {
 /// One line on standard error; a standard error that cannot be written to
 /// is ignored (there is nowhere left to report it).
 fn say(line: &str) {
-    let _ = writeln!(std::io::stderr().lock(), "incal: {}", one_line(line));
+    embed::stderr_line(&one_line(line));
 }
 
 /// Exit code for a command-line that did not parse: help and version on
@@ -342,6 +343,11 @@ fn say(line: &str) {
 /// given without its subcommand on stderr (2), otherwise one line (2).
 fn parse_failure(e: &clap::Error, args: &[OsString]) -> u8 {
     match e.kind() {
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion if embed::capturing() => {
+            let mut out = embed::stdout();
+            let _ = write!(out, "{}", e.render());
+            0
+        }
         ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
             let printed = e.print().and_then(|()| std::io::stdout().flush());
             if printed.is_ok() {
@@ -352,7 +358,11 @@ fn parse_failure(e: &clap::Error, args: &[OsString]) -> u8 {
         }
         ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
             // clap sends this one to stderr: the usage and the commands.
-            let _ = e.print();
+            if embed::capturing() {
+                say(&usage_message(e, &command_path(&Cli::command(), args)));
+            } else {
+                let _ = e.print();
+            }
             2
         }
         _ => {

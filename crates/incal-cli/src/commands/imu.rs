@@ -457,9 +457,8 @@ pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
     stamps.finish().map_err(stamp_error)?;
     warnings.extend(stamps.warnings());
     w.flush().map_err(wfail)?;
-    let mut err = std::io::stderr().lock();
     for x in warnings {
-        let _ = writeln!(err, "incal: warning [{}]: {}", x.code, x.message);
+        crate::embed::stderr_line(&format!("warning [{}]: {}", x.code, x.message));
     }
     Ok(())
 }

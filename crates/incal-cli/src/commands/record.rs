@@ -9,7 +9,6 @@
 //! line; a chain that does not verify is exit 1 with
 //! `incal: record N: …`.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use clap::Subcommand;
@@ -276,11 +275,10 @@ fn print_added(out: &OutArgs, added: &incal_records::Added) -> CliResult<()> {
         format!("{}\n", added.id)
     };
     if added.existing {
-        let _ = writeln!(
-            std::io::stderr().lock(),
-            "incal: record {} already holds this document for this instrument: nothing stored",
+        crate::embed::stderr_line(&format!(
+            "record {} already holds this document for this instrument: nothing stored",
             added.id
-        );
+        ));
     }
     write_text(out.output.as_deref(), &text).map_err(|e| {
         CliError::Stored(format!(

@@ -1,0 +1,38 @@
+//! The compiled part of the Python package `incal`: one function, `_run`,
+//! that runs an incal command line in process ([`incal_cli::embed`]) with
+//! the GIL released. Everything else of the package is Python in
+//! `python/incal/`: it turns keyword arguments into the CLI's options, so
+//! a document from Python is the CLI's `--json` for the same data and
+//! options by construction.
+
+use pyo3::prelude::*;
+use pyo3::types::PyBytes;
+
+/// `_run(args, stdin=None) -> (code, stdout: bytes, stderr: list[str])`:
+/// the command line `args` (without the program name) as the `incal`
+/// binary runs it, `stdin` (bytes) as its standard input.
+#[pyfunction]
+#[pyo3(signature = (args, stdin=None))]
+fn _run(
+    py: Python<'_>,
+    args: Vec<String>,
+    stdin: Option<Vec<u8>>,
+) -> (u8, Py<PyBytes>, Vec<String>) {
+    let mut argv: Vec<std::ffi::OsString> = vec!["incal".into()];
+    argv.extend(args.into_iter().map(Into::into));
+    let out = py.detach(move || incal_cli::embed::run_embedded(&argv, stdin));
+    (out.code, PyBytes::new(py, &out.stdout).unbind(), out.stderr)
+}
+
+/// The version of the incal library inside the package.
+#[pyfunction]
+fn _version() -> &'static str {
+    env!("CARGO_PKG_VERSION")
+}
+
+#[pymodule]
+fn _incal(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(_run, m)?)?;
+    m.add_function(wrap_pyfunction!(_version, m)?)?;
+    Ok(())
+}
