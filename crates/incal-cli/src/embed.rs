@@ -39,9 +39,7 @@ pub fn run_embedded(args: &[OsString], stdin: Option<Vec<u8>>) -> Embedded {
         Some(bytes) => incal_io::with_stdin(bytes, || crate::main_from(args)),
         None => crate::main_from(args),
     };
-    let (stdout, stderr) = CAPTURE
-        .with(|c| c.borrow_mut().take())
-        .unwrap_or_default();
+    let (stdout, stderr) = CAPTURE.with(|c| c.borrow_mut().take()).unwrap_or_default();
     Embedded {
         code,
         stdout,

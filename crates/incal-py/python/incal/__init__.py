@@ -1,0 +1,302 @@
+"""incal in Python: the calibration procedures of the incal CLI as functions.
+
+Every function runs the same code as the ``incal`` command of the same name,
+in process (the GIL released while the core computes), so the result
+document equals the CLI's ``--json`` output for the same data and options.
+
+>>> import incal
+>>> data, truth = incal.simulate.tumble(seed=7)
+>>> r = incal.tumble(data, mount="pendulum")
+>>> round(r.coefficients["K1"]["value"], 4)
+10.0
+
+Data is a path (``str`` or ``os.PathLike``), a pandas ``DataFrame`` with
+incal's column names, or numpy arrays given by keyword (one per column:
+``incal.tumble(angle_deg=a, output=y, mount="pendulum")``). Options are
+keyword arguments named as the CLI options with ``_`` for ``-``
+(``gravity_m_s2=9.80665``); ``True`` gives a flag, a list or tuple a
+comma-separated value. Errors raise :class:`InputError` (bad data or
+options, the CLI's exit 2) or :class:`IncalError`, with the CLI's one-line
+message.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Dict, List, Optional, Sequence, Tuple
+
+from ._incal import _run, _version
+
+__version__ = _version()
+
+__all__ = [
+    "IncalError",
+    "InputError",
+    "Result",
+    "tumble",
+    "centrifuge",
+    "misalign_gyro",
+    "misalign_accel",
+    "gyro_rate",
+    "gyro_positions",
+    "imu_ferraris",
+    "imu_multipos",
+    "imu_autocal",
+    "gfimu_calibrate",
+    "noise",
+    "read_result",
+    "compare",
+    "apply",
+    "plan",
+    "simulate",
+    "run",
+]
+
+
+class IncalError(Exception):
+    """A command failed (the CLI's exit 1, or 3 for a record stored whose
+    output could not be written). ``code`` is the CLI's exit code."""
+
+    def __init__(self, message: str, code: int = 1):
+        super().__init__(message)
+        self.code = code
+
+
+class InputError(IncalError, ValueError):
+    """Bad data or options (the CLI's exit 2): the message names the file,
+    line and column, or the option."""
+
+    def __init__(self, message: str):
+        super().__init__(message, 2)
+
+
+def _word(value: Any) -> str:
+    """An option value as the CLI reads it (floats in shortest round-trip
+    form, so Python and the CLI see the same number)."""
+    if isinstance(value, bool):
+        raise TypeError("a boolean is a flag, not a value")
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    return str(value)
+
+
+def _options(options: Dict[str, Any]) -> List[str]:
+    """Keyword arguments into CLI options: ``name_x=v`` → ``--name-x v``;
+    ``True`` → the flag alone; ``False`` and ``None`` → nothing; a list or
+    tuple → its items joined by commas."""
+    out: List[str] = []
+    for key, value in options.items():
+        if value is None or value is False:
+            continue
+        flag = "--" + key.replace("_", "-")
+        if value is True:
+            out.append(flag)
+        elif isinstance(value, (list, tuple)):
+            out += [flag, ",".join(_word(v) for v in value)]
+        else:
+            out += [flag, _word(value)]
+    return out
+
+
+def run(words: Sequence[str], stdin: Optional[bytes] = None) -> Tuple[bytes, List[str]]:
+    """Run the incal command line ``words`` (without ``incal``) in process:
+    its standard output and its standard-error lines (warnings). A failure
+    raises :class:`InputError` (exit 2) or :class:`IncalError`."""
+    code, out, err = _run([str(w) for w in words], stdin)
+    if code != 0:
+        message = err[-1] if err else f"incal exited with code {code}"
+        if code == 2:
+            raise InputError(message)
+        raise IncalError(message, code)
+    return bytes(out), list(err)
+
+
+def _is_array(value: Any) -> bool:
+    """A data column given by keyword: a numpy array or pandas Series (not
+    a list or tuple, which are option values)."""
+    return hasattr(value, "__array__") and not isinstance(value, (list, tuple, str))
+
+
+def _csv_cell(value: Any) -> str:
+    if isinstance(value, float) or type(value).__name__.startswith("float"):
+        return repr(float(value))
+    text = str(value)
+    if any(c in text for c in ',"\n\r'):
+        return '"' + text.replace('"', '""') + '"'
+    return text
+
+
+def _csv(columns: Dict[str, Any]) -> bytes:
+    """Columns (name → sequence) as a CSV text: numbers in shortest
+    round-trip form, so the core reads back the same values."""
+    names = list(columns)
+    if not names:
+        raise InputError("no data columns given")
+    cols = [list(columns[n]) for n in names]
+    n = len(cols[0])
+    for name, c in zip(names, cols):
+        if len(c) != n:
+            raise InputError(f"column '{name}' has {len(c)} values, '{names[0]}' has {n}")
+    lines = [",".join(_csv_cell(x) for x in names)]
+    for i in range(n):
+        lines.append(",".join(_csv_cell(c[i]) for c in cols))
+    return ("\n".join(lines) + "\n").encode()
+
+
+def _data(data: Any, options: Dict[str, Any]) -> Tuple[List[str], Optional[bytes]]:
+    """The ``--input`` words and the standard input for ``data`` (a path or
+    a DataFrame) or the array keywords of ``options`` (removed from it)."""
+    arrays = {k: options.pop(k) for k in list(options) if _is_array(options[k])}
+    if data is not None and arrays:
+        raise InputError("give the data as one path or DataFrame, or as arrays by keyword, not both")
+    if data is None:
+        if not arrays:
+            raise InputError("no data: give a path, a DataFrame, or arrays by keyword")
+        return ["--input", "-"], _csv(arrays)
+    if isinstance(data, (str, os.PathLike)):
+        return ["--input", os.fspath(data)], None
+    if hasattr(data, "columns") and hasattr(data, "__getitem__"):
+        return ["--input", "-"], _csv({str(c): data[c].tolist() for c in data.columns})
+    raise InputError(f"data must be a path, a pandas DataFrame or arrays by keyword, not {type(data).__name__}")
+
+
+class Result:
+    """A result document (``incal.result/1``) and its views."""
+
+    def __init__(self, document: Dict[str, Any], warnings: Optional[List[str]] = None):
+        #: The result document as a dict: the CLI's ``--json`` output.
+        self.document = document
+        #: Warnings the command wrote on standard error (streaming commands).
+        self.warnings = warnings or []
+
+    @property
+    def coefficients(self) -> Dict[str, Dict[str, Any]]:
+        """Name → ``{"value", "u", "unit", "dof", "k95", "U95"}`` (JSON units)."""
+        return {k: dict(v) for k, v in self.document.get("coefficients", {}).items()}
+
+    @property
+    def procedure(self) -> str:
+        return self.document["procedure"]
+
+    def to_json(self, path: Optional[str] = None) -> str:
+        """The document as JSON text (written to ``path`` when given)."""
+        text = json.dumps(self.document, indent=2)
+        if path is not None:
+            with open(path, "w", encoding="utf-8") as f:
+                f.write(text + "\n")
+        return text
+
+    def to_dataframe(self):
+        """The coefficients as a pandas DataFrame, one row per coefficient."""
+        import pandas as pd
+
+        rows = [dict(name=k, **v) for k, v in self.coefficients.items()]
+        cols = ["name", "value", "u", "U95", "dof", "k95", "unit"]
+        return pd.DataFrame(rows, columns=cols).set_index("name")
+
+    def report(self, path: str, limits: Optional[str] = None, db: Optional[str] = None) -> str:
+        """Write the HTML report (printable certificate) to ``path``."""
+        words = ["report", "-", "-o", os.fspath(path)] + _options({"limits": limits, "db": db})
+        run(words, self.to_json().encode())
+        return os.fspath(path)
+
+    def to_imucal(self, path: Optional[str] = None) -> Dict[str, Any]:
+        raise NotImplementedError("export to imucal is not built yet")
+
+    def _repr_html_(self) -> str:
+        import html
+
+        head = "".join(f"<th>{h}</th>" for h in ["name", "value", "u", "U95", "dof", "unit"])
+        rows = []
+        for name, c in self.coefficients.items():
+            cells = [name] + [c.get(k) for k in ["value", "u", "U95", "dof", "unit"]]
+            rows.append("<tr>" + "".join(f"<td>{html.escape(str(x))}</td>" for x in cells) + "</tr>")
+        title = html.escape(self.document.get("title", self.procedure))
+        return f"<p><b>{title}</b></p><table><tr>{head}</tr>{''.join(rows)}</table>"
+
+    def __repr__(self) -> str:
+        return f"<incal.Result {self.procedure}: {len(self.coefficients)} coefficients>"
+
+
+def _read_csv(csv: bytes):
+    """A CSV text as incal writes it into a pandas DataFrame, every number
+    read back bit for bit (pandas before 3 needs ``round_trip`` for that);
+    ``#`` lines skipped."""
+    import io
+
+    import pandas as pd
+
+    text = "\n".join(l for l in csv.decode().splitlines() if not l.startswith("#"))
+    if int(pd.__version__.split(".")[0]) < 3:
+        return pd.read_csv(io.StringIO(text), float_precision="round_trip")
+    return pd.read_csv(io.StringIO(text))
+
+
+def _reduce(command: Sequence[str], data: Any, options: Dict[str, Any]) -> Result:
+    options = dict(options)
+    words, stdin = _data(data, options)
+    out, err = run(list(command) + words + ["--json"] + _options(options), stdin)
+    return Result(json.loads(out), err)
+
+
+def _procedure(name: str, command: Sequence[str], doc: str):
+    def reduce(data: Any = None, **options: Any) -> Result:
+        return _reduce(command, data, options)
+
+    reduce.__name__ = name
+    reduce.__qualname__ = name
+    reduce.__doc__ = doc + f"\n\nRuns ``incal {' '.join(command)}``: options as its ``--help`` lists them."
+    return reduce
+
+
+tumble = _procedure("tumble", ["tumble"], "Accelerometer tumble test on a dividing head.")
+centrifuge = _procedure("centrifuge", ["centrifuge"], "Accelerometer on a precision centrifuge.")
+misalign_gyro = _procedure("misalign_gyro", ["misalign", "gyro"], "Gyro misalignment on a rate table.")
+misalign_accel = _procedure("misalign_accel", ["misalign", "accel"], "Accelerometer misalignment on a vertical face.")
+gyro_rate = _procedure("gyro_rate", ["gyro", "rate"], "Gyro rate-transfer test.")
+gyro_positions = _procedure("gyro_positions", ["gyro", "positions"], "Gyro multi-position test.")
+imu_ferraris = _procedure("imu_ferraris", ["imu", "ferraris"], "IMU triad, Ferraris six positions and three rotations.")
+imu_multipos = _procedure("imu_multipos", ["imu", "multipos"], "IMU triad, least squares over known orientations.")
+imu_autocal = _procedure("imu_autocal", ["imu", "autocal"], "IMU triad, autocalibration without a fixture.")
+gfimu_calibrate = _procedure("gfimu_calibrate", ["gfimu", "calibrate"], "Gyro-free unit: K0 and Ks of every accelerometer.")
+noise = _procedure("noise", ["noise"], "Noise and stability: Allan family, IEEE 952 terms, bias stability.")
+
+
+def read_result(path: str) -> Result:
+    """A result document from a file, checked as the CLI checks it."""
+    out, _ = run(["compare", os.fspath(path), os.fspath(path), "--json"])
+    del out  # compare checks the document; read it as written
+    with open(path, "r", encoding="utf-8-sig") as f:
+        return Result(json.load(f))
+
+
+def compare(a: Any, b: Any) -> Dict[str, Any]:
+    """``incal compare`` of two results (``Result`` or paths): the JSON."""
+    if isinstance(a, Result) and isinstance(b, Result):
+        raise InputError("compare: give at most one Result; the other as a path")
+    if isinstance(a, Result):
+        out, _ = run(["compare", "-", os.fspath(b), "--json"], a.to_json().encode())
+    elif isinstance(b, Result):
+        out, _ = run(["compare", os.fspath(a), "-", "--json"], b.to_json().encode())
+    else:
+        out, _ = run(["compare", os.fspath(a), os.fspath(b), "--json"])
+    return json.loads(out)
+
+
+def apply(calibration: Any, data: Any = None, **columns: Any):
+    """``incal imu apply``: a calibration (``Result`` or path) applied to
+    raw data (path, DataFrame or arrays); a pandas DataFrame."""
+    words, stdin = _data(data, columns)
+    if isinstance(calibration, Result):
+        if stdin is not None:
+            raise InputError("apply: with in-memory data, give the calibration as a path")
+        out, _ = run(["imu", "apply", "--calibration", "-"] + words, calibration.to_json().encode())
+    else:
+        out, _ = run(["imu", "apply", "--calibration", os.fspath(calibration)] + words, stdin)
+    return _read_csv(out)
+
+
+from . import plan, simulate  # noqa: E402  (they use run and _options)

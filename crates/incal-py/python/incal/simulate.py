@@ -1,0 +1,47 @@
+"""Simulators with a known truth: ``data, truth = incal.simulate.tumble(seed=7)``
+gives the recording as a pandas DataFrame (the CSV that ``incal simulate``
+writes, numbers read back bit for bit) and the simulator's ``# …`` lines
+(the truth and how it was simulated) as a list of strings. Options as
+``incal simulate <name> --help`` lists them, ``_`` for ``-``."""
+
+from __future__ import annotations
+
+from typing import Any, List, Tuple
+
+from . import _options, _read_csv, run
+
+__all__ = [
+    "tumble",
+    "centrifuge",
+    "misalign_gyro",
+    "misalign_accel",
+    "gfimu",
+    "gyro_rate",
+    "gyro_positions",
+    "imu",
+]
+
+
+def _frame(csv: bytes):
+    notes = [l[1:].strip() for l in csv.decode().splitlines() if l.startswith("#")]
+    return _read_csv(csv), notes
+
+
+def _simulator(words: List[str], name: str):
+    def simulate(**options: Any) -> Tuple[Any, List[str]]:
+        out, _ = run(["simulate"] + words + _options(options))
+        return _frame(out)
+
+    simulate.__name__ = name
+    simulate.__doc__ = f"``incal simulate {' '.join(words)}``: (DataFrame, truth lines)."
+    return simulate
+
+
+tumble = _simulator(["tumble"], "tumble")
+centrifuge = _simulator(["centrifuge"], "centrifuge")
+misalign_gyro = _simulator(["misalign", "gyro"], "misalign_gyro")
+misalign_accel = _simulator(["misalign", "accel"], "misalign_accel")
+gfimu = _simulator(["gfimu"], "gfimu")
+gyro_rate = _simulator(["gyro-rate"], "gyro_rate")
+gyro_positions = _simulator(["gyro-positions"], "gyro_positions")
+imu = _simulator(["imu"], "imu")
