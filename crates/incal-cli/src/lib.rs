@@ -57,6 +57,9 @@ enum Command {
     Misalign(commands::misalign::Command),
     /// Compare the coefficients of two result files: difference, per mille and En.
     Compare(commands::compare::Args),
+    /// Export a result in another tool's format: imucal's calibration JSON.
+    #[command(subcommand)]
+    Export(commands::export::Command),
     /// Print the JSON Schema of the result document (incal.result/1), or with --plan of the plan document (incal.plan/1).
     Schema(commands::schema::Args),
     /// Write one self-contained HTML report (printable certificate) of a result file, with plots.
@@ -131,6 +134,7 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Simulate(SimulateCommand::Tumble(a)) => commands::tumble::simulate(&a),
         Command::Simulate(SimulateCommand::Centrifuge(a)) => commands::centrifuge::simulate(&a),
         Command::Compare(a) => commands::compare::run(&a),
+        Command::Export(c) => commands::export::run(&c),
         Command::Schema(a) => commands::schema::run(&a),
         Command::Report(a) => commands::report::run(&a),
         Command::Gfimu(GfimuCommand::Calibrate(a)) => commands::gfimu::run_calibrate(&a),

@@ -459,4 +459,45 @@ fn apply_refuses_a_calibration_of_another_procedure() {
         ]),
         &["notimu.json", "$.procedure", "not an IMU calibration"],
     );
+    // The export to imucal refuses it the same way.
+    refused(
+        &run(&["export", "imucal", cal.to_str().unwrap()]),
+        &["notimu.json", "$.procedure", "not an IMU calibration"],
+    );
+}
+
+#[test]
+fn export_imucal_copies_a_ferraris_calibration_verbatim() {
+    let raw = tmp("fe.csv");
+    ok(&run(&[
+        "simulate",
+        "imu",
+        "--sequence",
+        "ferraris",
+        "--static-s",
+        "0.5",
+        "--rotation-s",
+        "1",
+        "-o",
+        p(&raw),
+    ]));
+    let doc = json_of(&run(&[
+        "imu",
+        "ferraris",
+        "--rate-hz",
+        "100",
+        "--json",
+        "--input",
+        p(&raw),
+    ]));
+    let cal = tmp("fe.json");
+    std::fs::write(&cal, doc.to_string()).unwrap();
+    let out = json_of(&run(&["export", "imucal", p(&cal)]));
+    for k in [
+        "K_a", "R_a", "b_a", "K_g", "R_g", "K_ga", "b_g", "acc_unit", "gyr_unit", "cal_type",
+    ] {
+        assert_eq!(out[k], doc[k], "{k}");
+    }
+    assert_eq!(out["_format_version"], "2.0.0");
+    assert_eq!(out["from_acc_unit"], "a.u.");
 }

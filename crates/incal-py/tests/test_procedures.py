@@ -43,7 +43,7 @@ CASES = [
     (
         "imu_multipos",
         ["imu", "multipos"],
-        ["imu", "--sequence", "positions", "--static-s", "0.3"],
+        ["imu", "--sequence", "positions", "--static-s", "0.3", "--rotations"],
         {"rate_hz": 100},
     ),
     (
@@ -144,3 +144,34 @@ def test_the_worked_example_runs(tmp_path):
     assert r.returncode == 0, r.stderr
     assert "verdict: pass" in r.stdout
     assert (tmp_path / "t.html").exists()
+
+
+@pytest.mark.parametrize(
+    "name,options",
+    [
+        ("imu_ferraris", {"rate_hz": 100}),
+        ("imu_multipos", {"rate_hz": 100}),
+        ("imu_autocal", {"rate_hz": 100, "init_static_s": 3}),
+    ],
+)
+def test_imu_calibrations_load_in_imucal_and_calibrate_as_incal_does(recordings, tmp_path, name, options):
+    from imucal.management import load_calibration_info
+
+    raw = incal._read_csv(recordings[name].read_bytes())
+    result = getattr(incal, name)(raw, **options)
+    path = tmp_path / "cal.json"
+    exported = result.to_imucal(str(path))
+    cal = load_calibration_info(path)
+    assert type(cal).__name__ == "FerrarisCalibrationInfo"
+    assert exported["cal_type"] == "Ferraris"
+    acc = raw[["acc_x", "acc_y", "acc_z"]].to_numpy()
+    gyr = raw[["gyr_x", "gyr_y", "gyr_z"]].to_numpy()
+    acc_i, gyr_i = cal.calibrate(acc, gyr, "a.u.", "a.u.")
+    result.to_json(str(tmp_path / "r.json"))
+    ours = incal.apply(str(tmp_path / "r.json"), raw)
+    acc_o = ours[[c for c in ours.columns if c.startswith("acc_")]].to_numpy()
+    gyr_o = ours[[c for c in ours.columns if c.startswith("gyr_")]].to_numpy()
+    if name == "imu_autocal":
+        gyr_o = np.degrees(gyr_o)
+    np.testing.assert_allclose(acc_i, acc_o, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(gyr_i, gyr_o, rtol=1e-9, atol=1e-9)

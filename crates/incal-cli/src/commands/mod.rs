@@ -3,6 +3,7 @@
 pub mod centrifuge;
 pub mod compare;
 pub mod demo;
+pub mod export;
 pub mod gfimu;
 pub mod gyro;
 pub mod imu;

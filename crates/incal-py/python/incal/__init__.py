@@ -204,7 +204,14 @@ class Result:
         return os.fspath(path)
 
     def to_imucal(self, path: Optional[str] = None) -> Dict[str, Any]:
-        raise NotImplementedError("export to imucal is not built yet")
+        """An ``imu_ferraris``, ``imu_multipos`` or ``imu_autocal`` result as
+        imucal's calibration JSON (``incal export imucal``), which imucal's
+        ``load_calibration_info`` loads; written to ``path`` when given."""
+        out, _ = run(["export", "imucal", "-"], self.to_json().encode())
+        if path is not None:
+            with open(path, "wb") as f:
+                f.write(out)
+        return json.loads(out)
 
     def _repr_html_(self) -> str:
         import html

@@ -269,6 +269,86 @@ pub struct CalibratedRow {
     pub gyr: Option<V3>,
 }
 
+/// A calibration in the JSON form imucal's `load_calibration_info` reads
+/// (a `FerrarisCalibrationInfo`, format 2.0.0; Küderle et al., "imucal - A
+/// Python library to calibrate 6 DOF IMUs", JOSS 2022): imucal applies
+/// `a = R_a⁻¹ K_a⁻¹ (raw − b_a)` and
+/// `ω = R_g⁻¹ K_g⁻¹ (raw − K_ga a − b_g)`, `a` in m/s², `ω` in deg/s.
+///
+/// An `imu ferraris` document is imucal's own definition: its matrices are
+/// copied verbatim. For `imu multipos` and `imu autocal`, `K R = M⁻¹`
+/// (the inverse of the applied matrix, `M_g` in deg/s per output) is split
+/// into `K`, the diagonal of its row norms, and `R`, its rows normalised,
+/// as imucal's Ferraris method defines them; `K_ga` is the g-sensitivity
+/// (zero for autocal). A calibration without a gyro part is refused:
+/// imucal's format has no accelerometer-only form.
+pub fn to_imucal(doc: &ResultDocument) -> Result<serde_json::Value> {
+    use serde_json::json;
+    let rows = |m: &M3| -> Vec<Vec<f64>> {
+        (0..3)
+            .map(|i| (0..3).map(|j| m[(i, j)]).collect())
+            .collect()
+    };
+    let v3 = |v: &V3| -> Vec<f64> { v.iter().copied().collect() };
+    let cal = ImuCalibration::from_document(doc)?;
+    let Some(g) = cal.gyro else {
+        return Err(bad(
+            "$.gyr",
+            "this calibration has no gyro part: imucal's format needs one",
+        ));
+    };
+    let split = |m: &M3, what: &str| -> Result<(M3, M3)> {
+        let a = inverse(*m, what)?;
+        let mut k = M3::zeros();
+        let mut r = a;
+        for i in 0..3 {
+            let n = a.row(i).norm();
+            k[(i, i)] = n;
+            r.row_mut(i).scale_mut(1.0 / n);
+        }
+        Ok((k, r))
+    };
+    let x = &doc.extra;
+    let (k_a, r_a, k_g, r_g) = if doc.procedure == Procedure::ImuFerraris {
+        (
+            json_m3(x.get("K_a"), "$.K_a")?,
+            json_m3(x.get("R_a"), "$.R_a")?,
+            json_m3(x.get("K_g"), "$.K_g")?,
+            json_m3(x.get("R_g"), "$.R_g")?,
+        )
+    } else {
+        let to_deg = if cal.gyr_unit == "rad_s" {
+            std::f64::consts::PI / 180.0
+        } else {
+            1.0
+        };
+        let (k_a, r_a) = split(&cal.m_a, "M_a")?;
+        // M_g in deg/s per output: ω_deg = M_g,rad · 180/π · (…).
+        let (k_g, r_g) = split(&(g.m / to_deg), "M_g")?;
+        (k_a, r_a, k_g, r_g)
+    };
+    let comment = format!(
+        "exported by incal {} from an {} result",
+        doc.incal_version, doc.procedure
+    );
+    Ok(json!({
+        "acc_unit": "m/s^2",
+        "gyr_unit": "deg/s",
+        "from_acc_unit": "a.u.",
+        "from_gyr_unit": "a.u.",
+        "comment": comment,
+        "K_a": rows(&k_a),
+        "R_a": rows(&r_a),
+        "b_a": v3(&cal.b_a),
+        "K_g": rows(&k_g),
+        "R_g": rows(&r_g),
+        "K_ga": rows(&g.g_sensitivity),
+        "b_g": v3(&g.b),
+        "cal_type": "Ferraris",
+        "_format_version": "2.0.0",
+    }))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
