@@ -87,6 +87,8 @@ def test_document_equals_the_cli_json(recordings, name, words, sim, options):
     expected = json.loads(cli(words + ["--input", path, "--json"] + incal._options(options)))
     assert result.document == expected
     assert result.procedure == expected["procedure"]
+    # Written back, the document is the CLI's file byte for byte.
+    assert result.to_json() == cli(words + ["--input", path, "--json"] + incal._options(options)).decode()
 
 
 @pytest.mark.parametrize("name,words,sim,options", CASES, ids=[c[0] for c in CASES])

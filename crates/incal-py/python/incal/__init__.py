@@ -166,11 +166,20 @@ def _data(data: Any, options: Dict[str, Any]) -> Tuple[List[str], Optional[bytes
 class Result:
     """A result document (``incal.result/1``) and its views."""
 
-    def __init__(self, document: Dict[str, Any], warnings: Optional[List[str]] = None):
+    def __init__(
+        self,
+        document: Dict[str, Any],
+        warnings: Optional[List[str]] = None,
+        text: Optional[str] = None,
+    ):
         #: The result document as a dict: the CLI's ``--json`` output.
         self.document = document
         #: Warnings the command wrote on standard error (streaming commands).
         self.warnings = warnings or []
+        # The document's text as the CLI wrote it: written back unchanged,
+        # so a file from Python is byte for byte the CLI's (and a records
+        # store recognises it as the same document).
+        self._text = text
 
     @property
     def coefficients(self) -> Dict[str, Dict[str, Any]]:
@@ -183,10 +192,13 @@ class Result:
 
     def to_json(self, path: Optional[str] = None) -> str:
         """The document as JSON text (written to ``path`` when given)."""
-        text = json.dumps(self.document, indent=2)
+        if self._text is not None and json.loads(self._text) == self.document:
+            text = self._text
+        else:
+            text = json.dumps(self.document, indent=2) + "\n"
         if path is not None:
             with open(path, "w", encoding="utf-8") as f:
-                f.write(text + "\n")
+                f.write(text)
         return text
 
     def to_dataframe(self):
@@ -246,7 +258,7 @@ def _reduce(command: Sequence[str], data: Any, options: Dict[str, Any]) -> Resul
     options = dict(options)
     words, stdin = _data(data, options)
     out, err = run(list(command) + words + ["--json"] + _options(options), stdin)
-    return Result(json.loads(out), err)
+    return Result(json.loads(out), err, out.decode())
 
 
 def _procedure(name: str, command: Sequence[str], doc: str):
@@ -277,7 +289,8 @@ def read_result(path: str) -> Result:
     out, _ = run(["compare", os.fspath(path), os.fspath(path), "--json"])
     del out  # compare checks the document; read it as written
     with open(path, "r", encoding="utf-8-sig") as f:
-        return Result(json.load(f))
+        text = f.read()
+    return Result(json.loads(text), text=text)
 
 
 def compare(a: Any, b: Any) -> Dict[str, Any]:
