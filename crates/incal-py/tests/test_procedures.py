@@ -177,3 +177,13 @@ def test_imu_calibrations_load_in_imucal_and_calibrate_as_incal_does(recordings,
         gyr_o = np.degrees(gyr_o)
     np.testing.assert_allclose(acc_i, acc_o, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(gyr_i, gyr_o, rtol=1e-9, atol=1e-9)
+
+
+def test_the_package_ships_its_type_stubs():
+    pkg = pathlib.Path(incal.__file__).parent
+    for stub in ["__init__.pyi", "plan.pyi", "simulate.pyi", "py.typed"]:
+        assert (pkg / stub).exists(), stub
+    text = (pkg / "__init__.pyi").read_text()
+    for name in incal.__all__:
+        if name not in ("plan", "simulate"):
+            assert f"def {name}(" in text or f"class {name}" in text, name
