@@ -116,6 +116,9 @@ pub struct Limits {
     pub procedures: BTreeMap<String, BTreeMap<String, Limit>>,
 }
 
+/// Longest parser message kept from a limits file (characters).
+const MAX_ECHO: usize = 200;
+
 /// One top-level entry of a limits file: `rule = "…"` or a `[procedure]`
 /// table. Read by hand (not with serde's `flatten`, which buffers the
 /// values and loses their position), so every error has its line.
@@ -159,7 +162,12 @@ impl Limits {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let line_of = |start: usize| 1 + text[..start.min(text.len())].matches('\n').count();
         let toml_error = |e: toml::de::Error| {
-            let msg = e.message().replace('\n', " ");
+            // The parser echoes the offending value whole (a float literal
+            // of 300 digits): kept to one readable line.
+            let mut msg = e.message().replace('\n', " ");
+            if msg.chars().count() > MAX_ECHO {
+                msg = msg.chars().take(MAX_ECHO).collect::<String>() + "…";
+            }
             match e.span() {
                 Some(s) => format!("line {}: {msg}", line_of(s.start)),
                 None => msg,
@@ -344,6 +352,14 @@ mod tests {
     use super::*;
 
     /// Hand-made cases for each verdict, limits [−1, 1], U = 0.2.
+    #[test]
+    fn a_huge_value_is_not_echoed_whole() {
+        // Found by the fuzz campaign: a 12-byte file gave a 404-character line.
+        let e = Limits::parse("rule = 1e308").unwrap_err();
+        assert!(e.starts_with("line 1: "), "{e}");
+        assert!(e.chars().count() < 230, "{} chars: {e}", e.chars().count());
+    }
+
     #[test]
     fn guard_band_gives_each_of_the_four_verdicts() {
         let g = DecisionRule::GuardBand;
