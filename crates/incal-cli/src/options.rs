@@ -6,12 +6,18 @@
 /// The records store: `--db`, else `$INCAL_DB` (when not empty), else
 /// `incal.db` in the working directory.
 pub fn db_path(db: Option<&std::path::Path>) -> std::path::PathBuf {
+    db_choice(db).0
+}
+
+/// [`db_path`], and whether the store was named (`--db` or `$INCAL_DB`)
+/// rather than the default `incal.db`: a named store must exist.
+pub fn db_choice(db: Option<&std::path::Path>) -> (std::path::PathBuf, bool) {
     if let Some(p) = db {
-        return p.to_path_buf();
+        return (p.to_path_buf(), true);
     }
     match std::env::var_os("INCAL_DB") {
-        Some(p) if !p.is_empty() => std::path::PathBuf::from(p),
-        _ => std::path::PathBuf::from("incal.db"),
+        Some(p) if !p.is_empty() => (std::path::PathBuf::from(p), true),
+        _ => (std::path::PathBuf::from("incal.db"), false),
     }
 }
 

@@ -9,7 +9,7 @@ use incal_report::{HistoryPoint, HistorySeries, RecordStamp, RenderOptions};
 
 use crate::documents::read_document_text;
 use crate::error::{CliError, CliResult};
-use crate::options::db_path;
+use crate::options::db_choice;
 use crate::output::{apply_limits, write_text};
 
 /// Options of `incal report`.
@@ -64,10 +64,9 @@ fn store(
     a: &Args,
     doc: &ResultDocument,
 ) -> CliResult<Option<(incal_records::Store, incal_records::Verified)>> {
-    let path = db_path(a.db.as_deref());
     // A store named (--db or $INCAL_DB) must exist; incal.db is used when
     // present.
-    let named = a.db.is_some() || std::env::var_os("INCAL_DB").is_some_and(|v| !v.is_empty());
+    let (path, named) = db_choice(a.db.as_deref());
     if doc.instrument.serial.is_none() || (!named && !path.exists()) {
         return Ok(None);
     }
