@@ -34,7 +34,8 @@ pub const FORM: &str = "incal.record/1";
 pub const GENESIS: &str = "0000000000000000000000000000000000000000000000000000000000000000";
 
 /// One input file of a record, from the document's `inputs`.
-#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct InputHash {
     /// What the file was to the procedure (`input`, `from`, …).
     pub role: String,

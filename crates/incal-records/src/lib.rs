@@ -34,18 +34,28 @@
 //! ```
 
 pub mod chain;
+mod db;
 pub mod history;
 pub mod time;
 
+use std::cell::RefCell;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use incal::document::ResultDocument;
 use incal::units::Unit;
-use rusqlite::{params, Connection, ErrorCode, OpenFlags, OptionalExtension, TransactionBehavior};
-use serde::Serialize;
+use rusqlite::{Connection, ErrorCode, OpenFlags};
+use serde::{Deserialize, Serialize};
+
+use db::{Conn, DbError, Mode, P};
 
 pub use chain::{sha256_hex, ChainFields, InputHash, GENESIS};
+pub use db::{display_url, is_postgres_url};
+
+/// The largest result document a record holds (as every document incal
+/// reads whole).
+pub const MAX_DOCUMENT_BYTES: usize = 64 << 20;
 pub use history::{Drift, HistoryPoint, Repeatability};
 
 /// The schema migrations, in order: `(version, name, SQL)`.
@@ -93,11 +103,14 @@ pub enum Error {
     /// Any other database failure (exit 1).
     #[error("{path}: {source}")]
     Database {
-        /// The store's path.
+        /// The store's path (or URL, without its password).
         path: String,
-        /// SQLite's error.
-        source: rusqlite::Error,
+        /// The database's error.
+        source: Box<dyn std::error::Error + Send + Sync>,
     },
+    /// Writing an export failed (exit 1).
+    #[error("writing the export: {0}")]
+    Output(String),
 }
 
 impl Error {
@@ -256,49 +269,127 @@ pub struct Verified {
     pub head: String,
 }
 
-/// A records store: one SQLite file.
+/// A records store: one SQLite file, or one PostgreSQL database
+/// (`postgresql://…`), with the same schema, chain and behaviour.
 #[derive(Debug)]
 pub struct Store {
-    conn: Connection,
+    conn: RefCell<Conn>,
+    /// The SQLite path, or the PostgreSQL URL without its password.
     path: PathBuf,
 }
 
-/// True for SQLite's "file is not a database" (and similar corruption on
-/// open).
-fn not_a_database(e: &rusqlite::Error) -> bool {
-    matches!(
-        e.sqlite_error_code(),
-        Some(ErrorCode::NotADatabase | ErrorCode::DatabaseCorrupt)
-    )
+/// How a store is opened.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Opening {
+    /// Created when missing, brought up to date.
+    Create,
+    /// Must exist; brought up to date.
+    ToWrite,
+    /// Must exist at this version; opened read-only.
+    Read,
+}
+
+/// Rows read per round trip when the whole chain is scanned.
+const PAGE: i64 = 256;
+
+/// What [`Store::import`] did.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Imported {
+    /// Records written.
+    pub added: i64,
+    /// Records the store already held (the same record hash at the same id).
+    pub present: i64,
+    /// The chain after the import.
+    pub chain: Verified,
+}
+
+/// A supersession as exported: the record corrected and why.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExportedSupersession {
+    /// The superseded record.
+    pub id: i64,
+    /// Why.
+    pub reason: String,
+}
+
+/// One record as `incal record export` writes it: one JSON object per
+/// line, in chain order, with every field the record hash covers, so an
+/// import into another store rebuilds the same chain and checks it.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExportedRecord {
+    /// Record id (1, 2, 3, … in chain order).
+    pub id: i64,
+    /// Instrument serial.
+    pub serial: String,
+    /// Instrument model as first recorded.
+    pub model: Option<String>,
+    /// Procedure of the result.
+    pub procedure: String,
+    /// `YYYY-MM-DDTHH:MM:SSZ`.
+    pub created_utc: String,
+    /// Operator.
+    pub operator: Option<String>,
+    /// Station.
+    pub station: Option<String>,
+    /// SHA-256 of `document`.
+    pub sha256: String,
+    /// The input files, in the document's order.
+    pub inputs: Vec<InputHash>,
+    /// What this record corrects.
+    pub supersedes: Option<ExportedSupersession>,
+    /// Hash of the record before.
+    pub prev_hash: String,
+    /// This record's hash.
+    pub record_hash: String,
+    /// The result document, exactly as stored.
+    pub document: String,
+}
+
+/// A record as read by a scan of the chain: every column, unchecked.
+struct Scanned {
+    id: i64,
+    serial: Option<String>,
+    model: Option<String>,
+    procedure: String,
+    created_utc: String,
+    operator: Option<String>,
+    station: Option<String>,
+    document: Vec<u8>,
+    document_sha256: String,
+    prev_hash: String,
+    record_hash: String,
+    inputs: Vec<InputHash>,
+    supersedes: Option<Supersession>,
 }
 
 impl Store {
-    /// Open the store at `path`, creating it (and its tables) when it does
-    /// not exist, and bring its schema up to date.
+    /// Open the store at `path` (a file, or a `postgresql://` URL),
+    /// creating it (and its tables) when it does not exist, and bring its
+    /// schema up to date.
     pub fn open(path: impl AsRef<Path>) -> Result<Store> {
-        Self::open_with(path.as_ref(), true)
+        Self::open_at(path.as_ref(), Opening::Create)
     }
 
     /// Open an existing store for reading: read-only, so a missing, empty
-    /// or foreign file is refused and never created, migrated or changed
-    /// (an auditor's read-only copy can be verified).
+    /// or foreign file (or database) is refused and never created,
+    /// migrated or changed (an auditor's read-only copy can be verified).
     pub fn open_existing(path: impl AsRef<Path>) -> Result<Store> {
-        Self::open_with(path.as_ref(), false)
+        Self::open_at(path.as_ref(), Opening::Read)
     }
 
-    /// Open an existing store for writing (`supersede`): a missing file
+    /// Open an existing store for writing (`supersede`): a missing store
     /// is refused, not created.
     pub fn open_to_write(path: impl AsRef<Path>) -> Result<Store> {
-        let path = path.as_ref();
-        Self::check_path(path)?;
-        if !path.exists() {
-            return Err(Error::Store {
-                path: path.display().to_string(),
-                message: "no records store here (no such file; 'incal record add' creates one)"
-                    .into(),
-            });
+        Self::open_at(path.as_ref(), Opening::ToWrite)
+    }
+
+    fn open_at(path: &Path, how: Opening) -> Result<Store> {
+        match path.to_str() {
+            Some(url) if is_postgres_url(url) => Self::open_postgres(url, how),
+            _ => Self::open_sqlite(path, how),
         }
-        Self::open_with(path, true)
     }
 
     /// Refuse what is not a plain file path: SQLite's in-memory and URI
@@ -309,6 +400,8 @@ impl Store {
             Some("an empty path")
         } else if text == ":memory:" || text.starts_with("file:") {
             Some("an in-memory or URI database, which keeps nothing in a file")
+        } else if text.contains("://") {
+            Some("a URL incal cannot open (a records store is a file path or a postgresql:// URL)")
         } else {
             None
         };
@@ -321,10 +414,11 @@ impl Store {
         }
     }
 
-    fn open_with(path: &Path, create: bool) -> Result<Store> {
+    fn open_sqlite(path: &Path, how: Opening) -> Result<Store> {
         Self::check_path(path)?;
         let name = path.display().to_string();
-        if !create && !path.exists() {
+        let create = how != Opening::Read;
+        if (how != Opening::Create) && !path.exists() {
             return Err(Error::Store {
                 path: name,
                 message: "no records store here (no such file; 'incal record add' creates one)"
@@ -354,8 +448,10 @@ impl Store {
             path: name.clone(),
             message: format!("cannot open: {e}"),
         })?;
-        let mut store = Store {
-            conn,
+        conn.busy_timeout(BUSY_TIMEOUT)
+            .map_err(|e| db_err(&name, e.into()))?;
+        let store = Store {
+            conn: RefCell::new(Conn::Sqlite(conn)),
             path: path.to_path_buf(),
         };
         if create {
@@ -366,17 +462,58 @@ impl Store {
                     message: "not an incal records store (an SQLite file with other tables)".into(),
                 });
             }
-            store.setup()?;
+            store.sqlite_pragmas()?;
+            store.migrate()?;
         } else {
             store.check_readable()?;
         }
         Ok(store)
     }
 
+    fn open_postgres(url: &str, how: Opening) -> Result<Store> {
+        let name = display_url(url);
+        let client = db::connect_postgres(url).map_err(|message| Error::Store {
+            path: name.clone(),
+            message,
+        })?;
+        let store = Store {
+            conn: RefCell::new(Conn::Postgres(Box::new(client))),
+            path: PathBuf::from(&name),
+        };
+        if how == Opening::Read {
+            // Reading never writes, whatever the code path.
+            store
+                .conn
+                .borrow_mut()
+                .batch("SET default_transaction_read_only = on")
+                .map_err(store.db())?;
+            store.check_readable()?;
+            return Ok(store);
+        }
+        match store.schema_version()? {
+            None if how == Opening::ToWrite => {
+                return Err(Error::Store {
+                    path: name,
+                    message: "no records store here (no incal tables; 'incal record add' creates them)"
+                        .into(),
+                })
+            }
+            None if store.has_tables()? => {
+                return Err(Error::Store {
+                    path: name,
+                    message: "not an incal records store (a PostgreSQL schema with other tables: give incal a database or schema of its own)"
+                        .into(),
+                })
+            }
+            _ => {}
+        }
+        store.migrate()?;
+        Ok(store)
+    }
+
     /// A store opened for reading: an incal store at the schema this
     /// version knows, checked without writing anything.
-    fn check_readable(&mut self) -> Result<()> {
-        self.conn.busy_timeout(BUSY_TIMEOUT).map_err(self.db())?;
+    fn check_readable(&self) -> Result<()> {
         let latest = MIGRATIONS.last().map_or(0, |m| m.0);
         let foreign = |what: &str| Error::Store {
             path: self.path.display().to_string(),
@@ -400,38 +537,33 @@ impl Store {
         }
     }
 
-    /// The store's path.
+    /// The store's path: the SQLite file, or the PostgreSQL URL without
+    /// its password.
     pub fn path(&self) -> &Path {
         &self.path
     }
 
-    fn db(&self) -> impl Fn(rusqlite::Error) -> Error + '_ {
-        move |e| {
-            if not_a_database(&e) {
-                Error::Store {
-                    path: self.path.display().to_string(),
-                    message: format!("not an incal records store ({e})"),
-                }
-            } else {
-                Error::Database {
-                    path: self.path.display().to_string(),
-                    source: e,
-                }
-            }
-        }
+    /// True when the store is on a PostgreSQL server.
+    pub fn is_postgres(&self) -> bool {
+        self.conn.borrow().is_postgres()
     }
 
-    /// Pragmas, then the migrations not yet applied (each store is brought
-    /// up to date in one write transaction).
-    fn setup(&mut self) -> Result<()> {
-        self.conn.busy_timeout(BUSY_TIMEOUT).map_err(self.db())?;
+    fn db(&self) -> impl Fn(DbError) -> Error + '_ {
+        move |e| db_err(&self.path.display().to_string(), e)
+    }
+
+    /// SQLite only: WAL, full sync, foreign keys.
+    fn sqlite_pragmas(&self) -> Result<()> {
+        let mut c = self.conn.borrow_mut();
+        let Conn::Sqlite(conn) = &mut *c else {
+            return Ok(());
+        };
         // Switching to WAL needs a moment alone with the file: retry while
         // another process holds it (busy_timeout covers most of this).
         let mut tries = 0;
         loop {
             let r: rusqlite::Result<String> =
-                self.conn
-                    .query_row("PRAGMA journal_mode = WAL", [], |r| r.get(0));
+                conn.query_row("PRAGMA journal_mode = WAL", [], |r| r.get(0));
             match r {
                 Ok(_) => break,
                 Err(e)
@@ -444,77 +576,66 @@ impl Store {
                     tries += 1;
                     std::thread::sleep(Duration::from_millis(20));
                 }
-                Err(e) => return Err(self.db()(e)),
+                Err(e) => return Err(db_err(&self.path.display().to_string(), e.into())),
             }
         }
-        self.conn
-            .execute_batch("PRAGMA synchronous = FULL; PRAGMA foreign_keys = ON;")
-            .map_err(self.db())?;
+        conn.execute_batch("PRAGMA synchronous = FULL; PRAGMA foreign_keys = ON;")
+            .map_err(|e| db_err(&self.path.display().to_string(), e.into()))
+    }
+
+    /// The migrations not yet applied, in one transaction (under an
+    /// advisory lock on PostgreSQL, so stations opening a new store at
+    /// once create it once).
+    fn migrate(&self) -> Result<()> {
         let latest = MIGRATIONS.last().map_or(0, |m| m.0);
         if self.schema_version()? == Some(latest) {
             return Ok(());
         }
         let name = self.path.display().to_string();
-        let tx = self
-            .conn
-            .transaction_with_behavior(TransactionBehavior::Immediate)
-            .map_err(|e| db_err(&name, e))?;
-        tx.execute_batch(SCHEMA_MIGRATIONS)
-            .map_err(|e| db_err(&name, e))?;
-        let have: i64 = tx
-            .query_row(
+        let e = |e| db_err(&name, e);
+        let mut c = self.conn.borrow_mut();
+        let mut tx = c.transaction(Mode::Migrate).map_err(e)?;
+        tx.batch(SCHEMA_MIGRATIONS).map_err(e)?;
+        let have = tx
+            .query_one(
                 "SELECT COALESCE(MAX(version), 0) FROM schema_migrations",
-                [],
-                |r| r.get(0),
+                &[],
             )
-            .map_err(|e| db_err(&name, e))?;
+            .and_then(|r| r.i(0))
+            .map_err(e)?;
         if have > latest {
             return Err(Error::Store {
-                path: name,
+                path: name.clone(),
                 message: format!(
                     "schema version {have} is newer than this incal knows ({latest}): use a newer incal"
                 ),
             });
         }
+        let now = time::now_utc();
         for (version, mname, sql) in MIGRATIONS.iter().filter(|m| m.0 > have) {
-            tx.execute_batch(sql).map_err(|e| db_err(&name, e))?;
+            tx.batch(sql).map_err(e)?;
             tx.execute(
                 "INSERT INTO schema_migrations (version, name, applied_utc) VALUES (?1, ?2, ?3)",
-                params![version, mname, time::now_utc()],
+                &[P::I(*version), P::T(Some(mname)), P::T(Some(&now))],
             )
-            .map_err(|e| db_err(&name, e))?;
+            .map_err(e)?;
         }
-        tx.commit().map_err(|e| db_err(&name, e))
+        tx.commit().map_err(e)
     }
 
-    /// True when the file holds any table (of anyone).
+    /// True when the store holds any table (of anyone).
     fn has_tables(&self) -> Result<bool> {
-        self.conn
-            .query_row(
-                "SELECT COUNT(*) > 0 FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'",
-                [],
-                |r| r.get(0),
-            )
-            .map_err(self.db())
+        self.conn.borrow_mut().has_tables().map_err(self.db())
     }
 
     /// The schema version (`None` before the first migration).
     fn schema_version(&self) -> Result<Option<i64>> {
-        let exists: bool = self
-            .conn
-            .query_row(
-                "SELECT COUNT(*) > 0 FROM sqlite_master WHERE type = 'table' AND name = 'schema_migrations'",
-                [],
-                |r| r.get(0),
-            )
-            .map_err(self.db())?;
-        if !exists {
+        let mut c = self.conn.borrow_mut();
+        if !c.table_exists("schema_migrations").map_err(self.db())? {
             return Ok(None);
         }
-        self.conn
-            .query_row("SELECT MAX(version) FROM schema_migrations", [], |r| {
-                r.get(0)
-            })
+        c.query_one("SELECT MAX(version) FROM schema_migrations", &[])
+            .and_then(|r| r.oi(0))
             .map_err(self.db())
     }
 
@@ -537,6 +658,17 @@ impl Store {
         self.insert(req, Some((old_id, reason)))
     }
 
+    /// Never extend a broken chain: the new record would seal it.
+    fn verify_before_writing(&self) -> Result<Verified> {
+        self.verify().map_err(|e| match e {
+            Error::Tampered { id, problem } => Error::Tampered {
+                id,
+                problem: format!("{problem}; nothing is added to a broken chain"),
+            },
+            other => other,
+        })
+    }
+
     fn insert(&mut self, req: &NewRecord, supersedes: Option<(i64, &str)>) -> Result<Added> {
         let doc = ResultDocument::from_json(req.document).map_err(Error::Input)?;
         let operator = from_meta(&doc, "operator", req.operator)?;
@@ -552,14 +684,7 @@ impl Store {
                 "created_utc {created_utc} is in the future: a record is dated when it was made"
             )));
         }
-        // Never extend a broken chain: the new record would seal it.
-        self.verify().map_err(|e| match e {
-            Error::Tampered { id, problem } => Error::Tampered {
-                id,
-                problem: format!("{problem}; nothing is added to a broken chain"),
-            },
-            other => other,
-        })?;
+        self.verify_before_writing()?;
         let document_sha256 = sha256_hex(req.document.as_bytes());
         let inputs: Vec<InputHash> = doc
             .inputs
@@ -571,24 +696,28 @@ impl Store {
             })
             .collect();
         let name = self.path.display().to_string();
-        let e = |e: rusqlite::Error| db_err(&name, e);
-        let tx = self
-            .conn
-            .transaction_with_behavior(TransactionBehavior::Immediate)
-            .map_err(e)?;
+        let e = |e| db_err(&name, e);
+        let mut c = self.conn.borrow_mut();
+        let mut tx = c.transaction(Mode::Write).map_err(e)?;
         let fallback_serial = match supersedes {
             Some((old, _)) => {
-                let row: Option<(String, Option<i64>, String)> = tx
-                    .query_row(
+                let row = tx
+                    .query_opt(
                         "SELECT i.serial, s.new_id, r.procedure FROM records r
                          JOIN instruments i ON i.id = r.instrument_id
                          LEFT JOIN supersessions s ON s.old_id = r.id
                          WHERE r.id = ?1",
-                        [old],
-                        |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)),
+                        &[P::I(old)],
                     )
-                    .optional()
                     .map_err(e)?;
+                let row = match row {
+                    None => None,
+                    Some(r) => Some((
+                        r.t(0).map_err(e)?,
+                        r.oi(1).map_err(e)?,
+                        r.t(2).map_err(e)?,
+                    )),
+                };
                 match row {
                     None => return Err(Error::Input(format!("record {old}: no such record"))),
                     Some((_, Some(by), _)) => {
@@ -616,62 +745,31 @@ impl Store {
                 )));
             }
         }
-        let instrument_id: Option<i64> = tx
-            .query_row(
-                "SELECT id FROM instruments WHERE serial = ?1",
-                [&serial],
-                |r| r.get(0),
-            )
-            .optional()
-            .map_err(e)?;
+        let instrument_id = instrument_of(&mut tx, &serial).map_err(e)?;
         if let (Some(_), None) = (instrument_id, supersedes) {
-            let same: Option<(i64, String)> = tx
-                .query_row(
+            let same = tx
+                .query_opt(
                     "SELECT r.id, r.record_hash FROM records r
                      JOIN instruments i ON i.id = r.instrument_id
                      WHERE i.serial = ?1 AND r.document_sha256 = ?2
                      ORDER BY r.id LIMIT 1",
-                    params![serial, document_sha256],
-                    |r| Ok((r.get(0)?, r.get(1)?)),
+                    &[P::T(Some(&serial)), P::T(Some(&document_sha256))],
                 )
-                .optional()
                 .map_err(e)?;
-            if let Some((id, record_hash)) = same {
+            if let Some(r) = same {
                 return Ok(Added {
-                    id,
+                    id: r.i(0).map_err(e)?,
                     sha256: document_sha256,
-                    record_hash,
+                    record_hash: r.t(1).map_err(e)?,
                     existing: true,
                 });
             }
         }
         let instrument_id = match instrument_id {
             Some(id) => id,
-            None => {
-                let id: i64 = tx
-                    .query_row(
-                        "SELECT COALESCE(MAX(id), 0) + 1 FROM instruments",
-                        [],
-                        |r| r.get(0),
-                    )
-                    .map_err(e)?;
-                tx.execute(
-                    "INSERT INTO instruments (id, serial, model) VALUES (?1, ?2, ?3)",
-                    params![id, serial, doc.instrument.model],
-                )
-                .map_err(e)?;
-                id
-            }
+            None => new_instrument(&mut tx, &serial, doc.instrument.model.as_deref()).map_err(e)?,
         };
-        let (prev_id, prev_hash): (i64, String) = tx
-            .query_row(
-                "SELECT id, record_hash FROM records ORDER BY id DESC LIMIT 1",
-                [],
-                |r| Ok((r.get(0)?, r.get(1)?)),
-            )
-            .optional()
-            .map_err(e)?
-            .unwrap_or((0, GENESIS.to_string()));
+        let (prev_id, prev_hash) = chain_head(&mut tx).map_err(e)?;
         let id = prev_id + 1;
         let procedure = doc.procedure.as_str();
         let fields = ChainFields {
@@ -688,40 +786,7 @@ impl Store {
             reason: supersedes.map(|s| s.1),
         };
         let record_hash = fields.record_hash();
-        tx.execute(
-            "INSERT INTO records (id, instrument_id, procedure, created_utc, operator, station,
-                                  document, document_sha256, prev_hash, record_hash)
-             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)",
-            params![
-                id,
-                instrument_id,
-                procedure,
-                created_utc,
-                operator,
-                station,
-                req.document,
-                document_sha256,
-                prev_hash,
-                record_hash
-            ],
-        )
-        .map_err(e)?;
-        for (k, i) in inputs.iter().enumerate() {
-            tx.execute(
-                "INSERT INTO record_inputs (record_id, position, role, path, sha256)
-                 VALUES (?1, ?2, ?3, ?4, ?5)",
-                params![id, k as i64, i.role, i.path, i.sha256],
-            )
-            .map_err(e)?;
-        }
-        if let Some((old, reason)) = supersedes {
-            tx.execute(
-                "INSERT INTO supersessions (old_id, new_id, reason, created_utc)
-                 VALUES (?1, ?2, ?3, ?4)",
-                params![old, id, reason, created_utc],
-            )
-            .map_err(e)?;
-        }
+        write_record(&mut tx, instrument_id, &fields, req.document, &record_hash).map_err(e)?;
         tx.commit().map_err(e)?;
         Ok(Added {
             id,
@@ -733,41 +798,43 @@ impl Store {
 
     /// Every record (of `serial` only, when given), by id.
     pub fn list(&self, serial: Option<&str>) -> Result<Vec<RecordSummary>> {
-        let mut st = self
+        let rows = self
             .conn
-            .prepare(
+            .borrow_mut()
+            .query(
                 "SELECT r.id, i.serial, r.procedure, r.created_utc, r.document_sha256,
                         r.operator, r.station, s.new_id
                  FROM records r
                  JOIN instruments i ON i.id = r.instrument_id
                  LEFT JOIN supersessions s ON s.old_id = r.id
-                 WHERE ?1 IS NULL OR i.serial = ?1
+                 WHERE CAST(?1 AS TEXT) IS NULL OR i.serial = ?1
                  ORDER BY r.id",
+                &[P::T(serial)],
             )
             .map_err(self.db())?;
-        let rows = st
-            .query_map([serial], |r| {
+        rows.iter()
+            .map(|r| {
                 Ok(RecordSummary {
-                    id: r.get(0)?,
-                    serial: r.get(1)?,
-                    procedure: r.get(2)?,
-                    created_utc: r.get(3)?,
-                    sha256: r.get(4)?,
-                    operator: r.get(5)?,
-                    station: r.get(6)?,
-                    superseded_by: r.get(7)?,
+                    id: r.i(0)?,
+                    serial: r.t(1)?,
+                    procedure: r.t(2)?,
+                    created_utc: r.t(3)?,
+                    sha256: r.t(4)?,
+                    operator: r.ot(5)?,
+                    station: r.ot(6)?,
+                    superseded_by: r.oi(7)?,
                 })
             })
-            .map_err(self.db())?;
-        rows.collect::<rusqlite::Result<Vec<_>>>()
+            .collect::<std::result::Result<Vec<_>, DbError>>()
             .map_err(self.db())
     }
 
     /// Record `id` in full, its document exactly as stored.
     pub fn show(&self, id: i64) -> Result<StoredRecord> {
-        let tx = self.conn.unchecked_transaction().map_err(self.db())?;
-        let rec = tx
-            .query_row(
+        let mut c = self.conn.borrow_mut();
+        let mut tx = c.transaction(Mode::Read).map_err(self.db())?;
+        let row = tx
+            .query_opt(
                 "SELECT r.id, i.serial, i.model, r.procedure, r.created_utc, r.operator,
                         r.station, r.document, r.document_sha256, r.prev_hash, r.record_hash,
                         s.new_id
@@ -775,33 +842,32 @@ impl Store {
                  JOIN instruments i ON i.id = r.instrument_id
                  LEFT JOIN supersessions s ON s.old_id = r.id
                  WHERE r.id = ?1",
-                [id],
-                |r| {
-                    Ok(StoredRecord {
-                        id: r.get(0)?,
-                        serial: r.get(1)?,
-                        model: r.get(2)?,
-                        procedure: r.get(3)?,
-                        created_utc: r.get(4)?,
-                        operator: r.get(5)?,
-                        station: r.get(6)?,
-                        document: r.get(7)?,
-                        sha256: r.get(8)?,
-                        prev_hash: r.get(9)?,
-                        record_hash: r.get(10)?,
-                        inputs: Vec::new(),
-                        supersedes: None,
-                        superseded_by: r.get(11)?,
-                    })
-                },
+                &[P::I(id)],
             )
-            .optional()
             .map_err(self.db())?;
-        let Some(mut rec) = rec else {
+        let Some(r) = row else {
             return Err(Error::Input(format!("record {id}: no such record")));
         };
-        rec.inputs = inputs_of(&tx, id).map_err(self.db())?;
-        rec.supersedes = supersession_of(&tx, id).map_err(self.db())?;
+        let read = |tx: &mut Conn| -> std::result::Result<StoredRecord, DbError> {
+            Ok(StoredRecord {
+                id: r.i(0)?,
+                serial: r.t(1)?,
+                model: r.ot(2)?,
+                procedure: r.t(3)?,
+                created_utc: r.t(4)?,
+                operator: r.ot(5)?,
+                station: r.ot(6)?,
+                document: r.t(7)?,
+                sha256: r.t(8)?,
+                prev_hash: r.t(9)?,
+                record_hash: r.t(10)?,
+                inputs: inputs_between(tx, id, id)?.remove(&id).unwrap_or_default(),
+                supersedes: supersessions_between(tx, id, id)?.remove(&id),
+                superseded_by: r.oi(11)?,
+            })
+        };
+        let rec = read(&mut tx).map_err(self.db())?;
+        tx.commit().map_err(self.db())?;
         Ok(rec)
     }
 
@@ -824,31 +890,30 @@ impl Store {
         serial: &str,
         coefficient: &str,
     ) -> Result<std::result::Result<History, String>> {
-        let mut st = self
-            .conn
-            .prepare(
-                "SELECT r.id, r.created_utc, r.document
-                 FROM records r
-                 JOIN instruments i ON i.id = r.instrument_id
-                 LEFT JOIN supersessions s ON s.old_id = r.id
-                 WHERE i.serial = ?1 AND s.old_id IS NULL
-                 ORDER BY r.created_utc, r.id",
-            )
-            .map_err(self.db())?;
-        let rows: Vec<(i64, String, String)> = st
-            .query_map([serial], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)))
-            .map_err(self.db())?
-            .collect::<rusqlite::Result<_>>()
-            .map_err(self.db())?;
-        if rows.is_empty() {
-            let known: bool = self
-                .conn
-                .query_row(
-                    "SELECT COUNT(*) > 0 FROM instruments WHERE serial = ?1",
-                    [serial],
-                    |r| r.get(0),
+        let (rows, known) = {
+            let mut c = self.conn.borrow_mut();
+            let mut tx = c.transaction(Mode::Read).map_err(self.db())?;
+            let rows = tx
+                .query(
+                    "SELECT r.id, r.created_utc, r.document
+                     FROM records r
+                     JOIN instruments i ON i.id = r.instrument_id
+                     LEFT JOIN supersessions s ON s.old_id = r.id
+                     WHERE i.serial = ?1 AND s.old_id IS NULL
+                     ORDER BY r.created_utc, r.id",
+                    &[P::T(Some(serial))],
                 )
+                .and_then(|rows| {
+                    rows.iter()
+                        .map(|r| Ok((r.i(0)?, r.t(1)?, r.t(2)?)))
+                        .collect::<std::result::Result<Vec<_>, DbError>>()
+                })
                 .map_err(self.db())?;
+            let known = instrument_of(&mut tx, serial).map_err(self.db())?.is_some();
+            tx.commit().map_err(self.db())?;
+            (rows, known)
+        };
+        if rows.is_empty() {
             return Ok(Err(if known {
                 format!("serial '{serial}': every record is superseded")
             } else {
@@ -944,90 +1009,115 @@ impl Store {
     /// since: `(id, record_hash)`, or `None`. A certificate of that
     /// document names the record.
     pub fn find(&self, serial: &str, document: &str) -> Result<Option<(i64, String)>> {
-        self.conn
-            .query_row(
+        let sha = sha256_hex(document.as_bytes());
+        let row = self
+            .conn
+            .borrow_mut()
+            .query_opt(
                 "SELECT r.id, r.record_hash FROM records r
                  JOIN instruments i ON i.id = r.instrument_id
                  WHERE i.serial = ?1 AND r.document_sha256 = ?2
                  ORDER BY r.id LIMIT 1",
-                params![serial, sha256_hex(document.as_bytes())],
-                |r| Ok((r.get(0)?, r.get(1)?)),
+                &[P::T(Some(serial)), P::T(Some(&sha))],
             )
-            .optional()
+            .map_err(self.db())?;
+        row.map(|r| Ok((r.i(0)?, r.t(1)?)))
+            .transpose()
             .map_err(self.db())
+    }
+
+    /// Every record in chain order, from one consistent snapshot, a page
+    /// at a time (memory stays bounded however long the chain). A column
+    /// that does not read as incal stores it is [`Error::Tampered`].
+    fn scan(&self, mut visit: impl FnMut(Scanned) -> Result<()>) -> Result<()> {
+        let mut c = self.conn.borrow_mut();
+        let mut tx = c.transaction(Mode::Read).map_err(self.db())?;
+        let mut after = i64::MIN;
+        loop {
+            let rows = tx
+                .query(
+                    "SELECT r.id, i.serial, r.procedure, r.created_utc, r.operator, r.station,
+                            r.document, r.document_sha256, r.prev_hash, r.record_hash, i.model
+                     FROM records r
+                     LEFT JOIN instruments i ON i.id = r.instrument_id
+                     WHERE r.id > ?1
+                     ORDER BY r.id LIMIT ?2",
+                    &[P::I(after), P::I(PAGE)],
+                )
+                .map_err(self.db())?;
+            let Some(last) = rows.last() else { break };
+            let first_id = rows[0].i(0).unwrap_or(after);
+            let last_id = last.i(0).unwrap_or(i64::MAX);
+            let mut inputs = inputs_between(&mut tx, first_id, last_id).map_err(self.db())?;
+            let mut sups = supersessions_between(&mut tx, first_id, last_id).map_err(self.db())?;
+            for r in &rows {
+                let mut read = || -> std::result::Result<Scanned, DbError> {
+                    let id = r.i(0)?;
+                    Ok(Scanned {
+                        id,
+                        serial: r.ot(1)?,
+                        procedure: r.t(2)?,
+                        created_utc: r.t(3)?,
+                        operator: r.ot(4)?,
+                        station: r.ot(5)?,
+                        // As bytes: a value changed to a blob or to text
+                        // that is not UTF-8 is reported, not a failure.
+                        document: r.bytes(6),
+                        document_sha256: r.t(7)?,
+                        prev_hash: r.t(8)?,
+                        record_hash: r.t(9)?,
+                        model: r.ot(10)?,
+                        inputs: inputs.remove(&id).unwrap_or_default(),
+                        supersedes: sups.remove(&id),
+                    })
+                };
+                let s = read().map_err(|e| Error::Tampered {
+                    id: r.i(0).unwrap_or(after.max(0) + 1),
+                    problem: format!("a column does not read as stored by incal ({e})"),
+                })?;
+                after = s.id;
+                visit(s)?;
+            }
+            if last_id == i64::MAX || (rows.len() as i64) < PAGE {
+                break;
+            }
+        }
+        // Rows that point at no record are covered by no hash.
+        let orphan = tx
+            .query_opt(
+                "SELECT s.old_id, 'a supersession by record ' || s.new_id || ', which does not exist'
+                 FROM supersessions s LEFT JOIN records r ON r.id = s.new_id
+                 WHERE r.id IS NULL
+                 UNION ALL
+                 SELECT s.old_id, 'superseded, but the record does not exist'
+                 FROM supersessions s LEFT JOIN records r ON r.id = s.old_id
+                 WHERE r.id IS NULL
+                 UNION ALL
+                 SELECT x.record_id, 'an input file row of a record that does not exist'
+                 FROM record_inputs x LEFT JOIN records r ON r.id = x.record_id
+                 WHERE r.id IS NULL
+                 LIMIT 1",
+                &[],
+            )
+            .map_err(self.db())?;
+        if let Some(r) = orphan {
+            return Err(Error::Tampered {
+                id: r.i(0).unwrap_or(0),
+                problem: r.t(1).unwrap_or_else(|_| "an orphan row".into()),
+            });
+        }
+        tx.commit().map_err(self.db())
     }
 
     fn verify_holding(&self, anchor: Option<&str>) -> Result<Verified> {
         let mut held = anchor.is_none() || anchor == Some(GENESIS);
-        let tx = self.conn.unchecked_transaction().map_err(self.db())?;
-        let mut st = tx
-            .prepare(
-                "SELECT r.id, i.serial, r.procedure, r.created_utc, r.operator, r.station,
-                        r.document, r.document_sha256, r.prev_hash, r.record_hash, i.model
-                 FROM records r
-                 LEFT JOIN instruments i ON i.id = r.instrument_id
-                 ORDER BY r.id",
-            )
-            .map_err(self.db())?;
-        type Row = (
-            i64,
-            Option<String>,
-            String,
-            String,
-            Option<String>,
-            Option<String>,
-            Vec<u8>,
-            String,
-            String,
-            String,
-            Option<String>,
-        );
-        let mut rows = st.query([]).map_err(self.db())?;
         // The instrument row's model is set from the first record of its
         // serial: checked against that record's (hashed) document.
         let mut seen_serials = std::collections::HashSet::new();
         let (mut prev_id, mut prev_hash) = (0i64, GENESIS.to_string());
         let mut count = 0i64;
-        while let Some(r) = rows.next().map_err(self.db())? {
-            // The document is read as bytes: a value changed to a blob or
-            // to text that is not UTF-8 is reported, not a read failure.
-            let row: Row = (|| {
-                Ok::<Row, rusqlite::Error>((
-                    r.get(0)?,
-                    r.get(1)?,
-                    r.get(2)?,
-                    r.get(3)?,
-                    r.get(4)?,
-                    r.get(5)?,
-                    match r.get_ref(6)? {
-                        rusqlite::types::ValueRef::Text(b) | rusqlite::types::ValueRef::Blob(b) => {
-                            b.to_vec()
-                        }
-                        _ => Vec::new(),
-                    },
-                    r.get(7)?,
-                    r.get(8)?,
-                    r.get(9)?,
-                    r.get(10)?,
-                ))
-            })()
-            .map_err(|e| Error::Tampered {
-                id: r.get(0).unwrap_or(prev_id + 1),
-                problem: format!("a column does not read as stored by incal ({e})"),
-            })?;
-            let (
-                id,
-                serial,
-                procedure,
-                created,
-                operator,
-                station,
-                document,
-                doc_sha,
-                prev,
-                hash,
-                model,
-            ) = row;
+        self.scan(|r| {
+            let id = r.id;
             let bad = |problem: String| Error::Tampered { id, problem };
             if id != prev_id + 1 {
                 return Err(bad(if prev_id == 0 {
@@ -1039,31 +1129,32 @@ impl Store {
                     )
                 }));
             }
-            if prev != prev_hash {
+            if r.prev_hash != prev_hash {
                 return Err(bad(format!(
                     "prev_hash does not match the hash of record {prev_id}"
                 )));
             }
-            if sha256_hex(&document) != doc_sha {
+            if sha256_hex(&r.document) != r.document_sha256 {
                 return Err(bad("the stored document does not match its SHA-256".into()));
             }
-            let serial = serial.ok_or_else(|| bad("its instrument row is missing".into()))?;
+            let serial = r
+                .serial
+                .clone()
+                .ok_or_else(|| bad("its instrument row is missing".into()))?;
             if seen_serials.insert(serial.clone()) {
-                let doc_model = serde_json::from_slice::<serde_json::Value>(&document)
+                let doc_model = serde_json::from_slice::<serde_json::Value>(&r.document)
                     .ok()
                     .and_then(|v| v["instrument"]["model"].as_str().map(String::from));
-                if doc_model != model {
+                if doc_model != r.model {
                     return Err(bad(format!(
                         "the instrument's model ({}) is not the one in its first record's document ({})",
-                        model.as_deref().unwrap_or("none"),
+                        r.model.as_deref().unwrap_or("none"),
                         doc_model.as_deref().unwrap_or("none")
                     )));
                 }
             }
-            let inputs = inputs_of(&tx, id).map_err(self.db())?;
-            let sup = supersession_of(&tx, id).map_err(self.db())?;
-            if let Some(s) = &sup {
-                if s.created_utc != created {
+            if let Some(s) = &r.supersedes {
+                if s.created_utc != r.created_utc {
                     return Err(bad(format!(
                         "the supersession of record {} has a time other than the record's",
                         s.old_id
@@ -1077,55 +1168,32 @@ impl Store {
                 }
             }
             let fields = ChainFields {
-                prev_hash: &prev,
+                prev_hash: &r.prev_hash,
                 id,
                 serial: &serial,
-                procedure: &procedure,
-                created_utc: &created,
-                operator: operator.as_deref(),
-                station: station.as_deref(),
-                document_sha256: &doc_sha,
-                inputs: &inputs,
-                supersedes: sup.as_ref().map(|s| s.old_id),
-                reason: sup.as_ref().map(|s| s.reason.as_str()),
+                procedure: &r.procedure,
+                created_utc: &r.created_utc,
+                operator: r.operator.as_deref(),
+                station: r.station.as_deref(),
+                document_sha256: &r.document_sha256,
+                inputs: &r.inputs,
+                supersedes: r.supersedes.as_ref().map(|s| s.old_id),
+                reason: r.supersedes.as_ref().map(|s| s.reason.as_str()),
             };
-            if fields.record_hash() != hash {
+            if fields.record_hash() != r.record_hash {
                 return Err(bad(
                     "record_hash does not match its fields (serial, procedure, time, operator, station, inputs or supersession changed)"
                         .into(),
                 ));
             }
-            if anchor == Some(hash.as_str()) {
+            if anchor == Some(r.record_hash.as_str()) {
                 held = true;
             }
             prev_id = id;
-            prev_hash = hash;
+            prev_hash = r.record_hash;
             count += 1;
-        }
-        drop(rows);
-        // Rows that point at no record are covered by no hash.
-        let orphan: Option<(i64, String)> = tx
-            .query_row(
-                "SELECT s.old_id, 'a supersession by record ' || s.new_id || ', which does not exist'
-                 FROM supersessions s LEFT JOIN records r ON r.id = s.new_id
-                 WHERE r.id IS NULL
-                 UNION ALL
-                 SELECT s.old_id, 'superseded, but the record does not exist'
-                 FROM supersessions s LEFT JOIN records r ON r.id = s.old_id
-                 WHERE r.id IS NULL
-                 UNION ALL
-                 SELECT x.record_id, 'an input file row of a record that does not exist'
-                 FROM record_inputs x LEFT JOIN records r ON r.id = x.record_id
-                 WHERE r.id IS NULL
-                 LIMIT 1",
-                [],
-                |r| Ok((r.get(0)?, r.get(1)?)),
-            )
-            .optional()
-            .map_err(self.db())?;
-        if let Some((id, problem)) = orphan {
-            return Err(Error::Tampered { id, problem });
-        }
+            Ok(())
+        })?;
         if let (false, Some(h)) = (held, anchor) {
             return Err(Error::HeadMissing {
                 head: h.to_string(),
@@ -1136,10 +1204,225 @@ impl Store {
             head: prev_hash,
         })
     }
+
+    /// Write every record, in chain order, to `out` as one JSON object
+    /// per line ([`ExportedRecord`]), after checking the chain (a broken
+    /// chain is not exported). The chain exported.
+    pub fn export(&self, out: &mut dyn std::io::Write) -> Result<Verified> {
+        let chain = self.check_chain()?;
+        let io = |e: std::io::Error| Error::Output(e.to_string());
+        let mut n = 0i64;
+        let mut head = GENESIS.to_string();
+        self.scan(|r| {
+            // Only the records verified above: a record appended since
+            // belongs to the next export.
+            if r.id > chain.records {
+                return Ok(());
+            }
+            let document = String::from_utf8(r.document).map_err(|_| Error::Tampered {
+                id: r.id,
+                problem: "the stored document is not UTF-8 text".into(),
+            })?;
+            let line = ExportedRecord {
+                id: r.id,
+                serial: r.serial.unwrap_or_default(),
+                model: r.model,
+                procedure: r.procedure,
+                created_utc: r.created_utc,
+                operator: r.operator,
+                station: r.station,
+                sha256: r.document_sha256,
+                inputs: r.inputs,
+                supersedes: r.supersedes.map(|s| ExportedSupersession {
+                    id: s.old_id,
+                    reason: s.reason,
+                }),
+                prev_hash: r.prev_hash,
+                record_hash: r.record_hash,
+                document,
+            };
+            let text = serde_json::to_string(&line).map_err(|e| Error::Output(e.to_string()))?;
+            out.write_all(text.as_bytes()).map_err(io)?;
+            out.write_all(b"\n").map_err(io)?;
+            head = line.record_hash;
+            n += 1;
+            Ok(())
+        })?;
+        out.flush().map_err(io)?;
+        Ok(Verified {
+            records: n,
+            head,
+        })
+    }
+
+    /// Append the records of an export ([`Store::export`]: JSON lines, in
+    /// chain order) to this store, keeping their ids, times and hashes, in
+    /// one transaction: all of them or none. Records the store already
+    /// holds (the same record hash at the same id) are skipped, so an
+    /// import can be repeated or resumed and never stores a record twice;
+    /// a store whose chain differs from the export's is refused. Each new
+    /// record is checked as `verify` would (document hash, link, record
+    /// hash) before it is written; a bad line is [`Error::Input`] naming
+    /// `source` and the line.
+    pub fn import(&mut self, lines: impl std::io::BufRead, source: &str) -> Result<Imported> {
+        use std::io::{BufRead, Read};
+        self.verify_before_writing()?;
+        let name = self.path.display().to_string();
+        let e = |e| db_err(&name, e);
+        let mut c = self.conn.borrow_mut();
+        let mut tx = c.transaction(Mode::Write).map_err(e)?;
+        let (mut head_id, mut head_hash) = chain_head(&mut tx).map_err(e)?;
+        let (mut added, mut present) = (0i64, 0i64);
+        // One line holds one document: bounded as documents are.
+        let limit = 2 * MAX_DOCUMENT_BYTES as u64 + 65_536;
+        let mut reader = lines;
+        let mut buf = String::new();
+        let mut line_no = 0usize;
+        loop {
+            buf.clear();
+            line_no += 1;
+            let at = |m: String| Error::Input(format!("{source}: line {line_no}: {m}"));
+            let got = (&mut reader)
+                .take(limit)
+                .read_line(&mut buf)
+                .map_err(|err| at(format!("cannot read ({err})")))?;
+            if got == 0 {
+                break;
+            }
+            if got as u64 == limit && !buf.ends_with('\n') {
+                return Err(at(format!("longer than {limit} bytes")));
+            }
+            if buf.trim().is_empty() {
+                continue;
+            }
+            let r: ExportedRecord = serde_json::from_str(buf.trim())
+                .map_err(|err| at(format!("not an exported record ({err})")))?;
+            if r.id <= head_id {
+                let have = tx
+                    .query_opt(
+                        "SELECT record_hash FROM records WHERE id = ?1",
+                        &[P::I(r.id)],
+                    )
+                    .map_err(e)?
+                    .map(|row| row.t(0))
+                    .transpose()
+                    .map_err(e)?;
+                if have.as_deref() != Some(r.record_hash.as_str()) {
+                    return Err(at(format!(
+                        "record {} differs from the store's record {}: the store holds another chain",
+                        r.id, r.id
+                    )));
+                }
+                present += 1;
+                continue;
+            }
+            if r.id != head_id + 1 {
+                return Err(at(format!(
+                    "record {} follows record {head_id}: records {}..{} are missing",
+                    r.id,
+                    head_id + 1,
+                    r.id - 1
+                )));
+            }
+            if r.prev_hash != head_hash {
+                return Err(at(format!(
+                    "record {}: prev_hash is not the hash of record {head_id}",
+                    r.id
+                )));
+            }
+            if sha256_hex(r.document.as_bytes()) != r.sha256 {
+                return Err(at(format!(
+                    "record {}: the document does not match its sha256",
+                    r.id
+                )));
+            }
+            let doc = ResultDocument::from_json(&r.document)
+                .map_err(|err| at(format!("record {}: {err}", r.id)))?;
+            if doc.procedure.as_str() != r.procedure {
+                return Err(at(format!(
+                    "record {}: procedure '{}' is not the document's '{}'",
+                    r.id,
+                    r.procedure,
+                    doc.procedure.as_str()
+                )));
+            }
+            time::normalize_utc(&r.created_utc)
+                .ok()
+                .filter(|t| *t == r.created_utc)
+                .ok_or_else(|| {
+                    at(format!(
+                        "record {}: created_utc '{}' is not YYYY-MM-DDTHH:MM:SSZ",
+                        r.id, r.created_utc
+                    ))
+                })?;
+            let fields = ChainFields {
+                prev_hash: &r.prev_hash,
+                id: r.id,
+                serial: &r.serial,
+                procedure: &r.procedure,
+                created_utc: &r.created_utc,
+                operator: r.operator.as_deref(),
+                station: r.station.as_deref(),
+                document_sha256: &r.sha256,
+                inputs: &r.inputs,
+                supersedes: r.supersedes.as_ref().map(|s| s.id),
+                reason: r.supersedes.as_ref().map(|s| s.reason.as_str()),
+            };
+            if fields.record_hash() != r.record_hash {
+                return Err(at(format!(
+                    "record {}: record_hash does not match its fields",
+                    r.id
+                )));
+            }
+            if let Some(s) = &r.supersedes {
+                let old = tx
+                    .query_opt(
+                        "SELECT s.new_id FROM records r
+                         LEFT JOIN supersessions s ON s.old_id = r.id
+                         WHERE r.id = ?1",
+                        &[P::I(s.id)],
+                    )
+                    .map_err(e)?;
+                match old.map(|row| row.oi(0)).transpose().map_err(e)? {
+                    None => {
+                        return Err(at(format!(
+                            "record {} supersedes record {}, which the store does not hold",
+                            r.id, s.id
+                        )))
+                    }
+                    Some(Some(by)) => {
+                        return Err(at(format!(
+                            "record {} supersedes record {}, already superseded by record {by}",
+                            r.id, s.id
+                        )))
+                    }
+                    Some(None) => {}
+                }
+            }
+            let instrument_id = match instrument_of(&mut tx, &r.serial).map_err(e)? {
+                Some(id) => id,
+                None => new_instrument(&mut tx, &r.serial, doc.instrument.model.as_deref())
+                    .map_err(e)?,
+            };
+            write_record(&mut tx, instrument_id, &fields, &r.document, &r.record_hash)
+                .map_err(e)?;
+            head_id = r.id;
+            head_hash = r.record_hash;
+            added += 1;
+        }
+        tx.commit().map_err(e)?;
+        drop(c);
+        let chain = self.verify()?;
+        Ok(Imported {
+            added,
+            present,
+            chain,
+        })
+    }
 }
 
-fn db_err(path: &str, e: rusqlite::Error) -> Error {
-    if not_a_database(&e) {
+fn db_err(path: &str, e: DbError) -> Error {
+    if e.not_a_database() {
         Error::Store {
             path: path.to_string(),
             message: format!("not an incal records store ({e})"),
@@ -1147,39 +1430,145 @@ fn db_err(path: &str, e: rusqlite::Error) -> Error {
     } else {
         Error::Database {
             path: path.to_string(),
-            source: e,
+            source: Box::new(e),
         }
     }
 }
 
-fn inputs_of(conn: &Connection, id: i64) -> rusqlite::Result<Vec<InputHash>> {
-    let mut st = conn.prepare_cached(
-        "SELECT role, path, sha256 FROM record_inputs WHERE record_id = ?1 ORDER BY position",
-    )?;
-    let rows = st.query_map([id], |r| {
-        Ok(InputHash {
-            role: r.get(0)?,
-            path: r.get(1)?,
-            sha256: r.get(2)?,
-        })
-    })?;
-    rows.collect()
+/// The id of instrument `serial`, if it has one.
+fn instrument_of(tx: &mut Conn, serial: &str) -> std::result::Result<Option<i64>, DbError> {
+    tx.query_opt(
+        "SELECT id FROM instruments WHERE serial = ?1",
+        &[P::T(Some(serial))],
+    )?
+    .map(|r| r.i(0))
+    .transpose()
 }
 
-fn supersession_of(conn: &Connection, new_id: i64) -> rusqlite::Result<Option<Supersession>> {
-    conn.query_row(
-        "SELECT old_id, new_id, reason, created_utc FROM supersessions WHERE new_id = ?1",
-        [new_id],
-        |r| {
-            Ok(Supersession {
-                old_id: r.get(0)?,
-                new_id: r.get(1)?,
-                reason: r.get(2)?,
-                created_utc: r.get(3)?,
-            })
-        },
-    )
-    .optional()
+/// A new instrument row (inside a write transaction).
+fn new_instrument(
+    tx: &mut Conn,
+    serial: &str,
+    model: Option<&str>,
+) -> std::result::Result<i64, DbError> {
+    let id = tx
+        .query_one("SELECT COALESCE(MAX(id), 0) + 1 FROM instruments", &[])?
+        .i(0)?;
+    tx.execute(
+        "INSERT INTO instruments (id, serial, model) VALUES (?1, ?2, ?3)",
+        &[P::I(id), P::T(Some(serial)), P::T(model)],
+    )?;
+    Ok(id)
+}
+
+/// The last record's id and hash (0 and [`GENESIS`] for an empty store).
+fn chain_head(tx: &mut Conn) -> std::result::Result<(i64, String), DbError> {
+    match tx.query_opt(
+        "SELECT id, record_hash FROM records ORDER BY id DESC LIMIT 1",
+        &[],
+    )? {
+        Some(r) => Ok((r.i(0)?, r.t(1)?)),
+        None => Ok((0, GENESIS.to_string())),
+    }
+}
+
+/// The rows of one record: the record, its input files, its supersession.
+fn write_record(
+    tx: &mut Conn,
+    instrument_id: i64,
+    f: &ChainFields,
+    document: &str,
+    record_hash: &str,
+) -> std::result::Result<(), DbError> {
+    tx.execute(
+        "INSERT INTO records (id, instrument_id, procedure, created_utc, operator, station,
+                              document, document_sha256, prev_hash, record_hash)
+         VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)",
+        &[
+            P::I(f.id),
+            P::I(instrument_id),
+            P::T(Some(f.procedure)),
+            P::T(Some(f.created_utc)),
+            P::T(f.operator),
+            P::T(f.station),
+            P::T(Some(document)),
+            P::T(Some(f.document_sha256)),
+            P::T(Some(f.prev_hash)),
+            P::T(Some(record_hash)),
+        ],
+    )?;
+    for (k, i) in f.inputs.iter().enumerate() {
+        tx.execute(
+            "INSERT INTO record_inputs (record_id, position, role, path, sha256)
+             VALUES (?1, ?2, ?3, ?4, ?5)",
+            &[
+                P::I(f.id),
+                P::I(k as i64),
+                P::T(Some(&i.role)),
+                P::T(Some(&i.path)),
+                P::T(Some(&i.sha256)),
+            ],
+        )?;
+    }
+    if let (Some(old), Some(reason)) = (f.supersedes, f.reason) {
+        tx.execute(
+            "INSERT INTO supersessions (old_id, new_id, reason, created_utc)
+             VALUES (?1, ?2, ?3, ?4)",
+            &[
+                P::I(old),
+                P::I(f.id),
+                P::T(Some(reason)),
+                P::T(Some(f.created_utc)),
+            ],
+        )?;
+    }
+    Ok(())
+}
+
+/// The input files of records `lo..=hi`, by record, in order.
+fn inputs_between(
+    tx: &mut Conn,
+    lo: i64,
+    hi: i64,
+) -> std::result::Result<HashMap<i64, Vec<InputHash>>, DbError> {
+    let rows = tx.query(
+        "SELECT record_id, role, path, sha256 FROM record_inputs
+         WHERE record_id >= ?1 AND record_id <= ?2 ORDER BY record_id, position",
+        &[P::I(lo), P::I(hi)],
+    )?;
+    let mut out: HashMap<i64, Vec<InputHash>> = HashMap::new();
+    for r in rows {
+        out.entry(r.i(0)?).or_default().push(InputHash {
+            role: r.t(1)?,
+            path: r.t(2)?,
+            sha256: r.t(3)?,
+        });
+    }
+    Ok(out)
+}
+
+/// The supersessions made by records `lo..=hi`, by the correcting record.
+fn supersessions_between(
+    tx: &mut Conn,
+    lo: i64,
+    hi: i64,
+) -> std::result::Result<HashMap<i64, Supersession>, DbError> {
+    let rows = tx.query(
+        "SELECT old_id, new_id, reason, created_utc FROM supersessions
+         WHERE new_id >= ?1 AND new_id <= ?2",
+        &[P::I(lo), P::I(hi)],
+    )?;
+    let mut out = HashMap::new();
+    for r in rows {
+        let s = Supersession {
+            old_id: r.i(0)?,
+            new_id: r.i(1)?,
+            reason: r.t(2)?,
+            created_utc: r.t(3)?,
+        };
+        out.insert(s.new_id, s);
+    }
+    Ok(out)
 }
 
 /// The serial of a new record: the document's, the one given, or the
