@@ -21,6 +21,15 @@ pub fn db_choice(db: Option<&std::path::Path>) -> (std::path::PathBuf, bool) {
     }
 }
 
+/// A records store as named in messages: its path, or its PostgreSQL URL
+/// without the password.
+pub fn store_name(path: &std::path::Path) -> String {
+    match path.to_str() {
+        Some(u) if incal_records::is_postgres_url(u) => incal_records::display_url(u),
+        _ => path.display().to_string(),
+    }
+}
+
 /// `--latitude-deg` everywhere: a finite number within −90…90 (clap value
 /// parser, so a bad value is a usage error naming the option).
 pub fn latitude_deg(s: &str) -> Result<f64, String> {

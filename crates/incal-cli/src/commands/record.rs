@@ -37,13 +37,17 @@ pub enum Command {
     History(HistoryArgs),
     /// Recompute the hash chain and every stored document's hash; exit 1 naming the first record that does not match.
     Verify(VerifyArgs),
+    /// Write every record, in chain order, as JSON lines (one record per line, every field the hash covers): to move a store to another (SQLite or PostgreSQL).
+    Export(ExportArgs),
+    /// Append the records of an export to this store, keeping ids, times and hashes, all or none; records already held are skipped, a store with another chain is refused.
+    Import(ImportArgs),
 }
 
 /// The store every subcommand uses.
 #[derive(clap::Args, Debug, Clone)]
 pub struct DbArgs {
-    /// The records store (an SQLite file); default: $INCAL_DB, else incal.db in the working directory.
-    #[arg(long, value_name = "PATH")]
+    /// The records store: an SQLite file, or a PostgreSQL database (postgresql://user@host:port/db); default: $INCAL_DB, else incal.db in the working directory.
+    #[arg(long, value_name = "PATH|URL")]
     pub db: Option<PathBuf>,
 }
 
@@ -51,6 +55,11 @@ impl DbArgs {
     /// `--db`, else `$INCAL_DB` (when not empty), else `incal.db`.
     fn path(&self) -> PathBuf {
         crate::options::db_path(self.db.as_deref())
+    }
+
+    /// The store as named in messages (a URL without its password).
+    fn name(&self) -> String {
+        crate::options::store_name(&self.path())
     }
 }
 
@@ -151,6 +160,27 @@ pub struct HistoryArgs {
     pub out: OutArgs,
 }
 
+/// Options of `incal record export`.
+#[derive(clap::Args, Debug)]
+pub struct ExportArgs {
+    #[command(flatten)]
+    pub db: DbArgs,
+    /// Write to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+/// Options of `incal record import`.
+#[derive(clap::Args, Debug)]
+pub struct ImportArgs {
+    /// The export (JSON lines from 'incal record export'); - reads standard input.
+    pub export: PathBuf,
+    #[command(flatten)]
+    pub db: DbArgs,
+    #[command(flatten)]
+    pub out: OutArgs,
+}
+
 /// Options of `incal record verify`.
 #[derive(clap::Args, Debug)]
 pub struct VerifyArgs {
@@ -172,7 +202,53 @@ pub fn run(c: &Command) -> CliResult<()> {
         Command::Supersede(a) => supersede(a),
         Command::History(a) => history(a),
         Command::Verify(a) => verify(a),
+        Command::Export(a) => export(a),
+        Command::Import(a) => import(a),
     }
+}
+
+fn export(a: &ExportArgs) -> CliResult<()> {
+    let store = open(&a.db, false)?;
+    // A broken chain is not exported: said as verify says it.
+    store.check_chain().map_err(store_err(&a.db))?;
+    let mut chain = None;
+    crate::io::write_binary_stream(a.output.as_deref(), |w| {
+        chain = Some(
+            store
+                .export(w)
+                .map_err(|e| std::io::Error::other(e.to_string()))?,
+        );
+        Ok(())
+    })?;
+    if let Some(c) = chain {
+        crate::embed::stderr_line(&format!(
+            "exported {} records; head {}",
+            c.records, c.head
+        ));
+    }
+    Ok(())
+}
+
+fn import(a: &ImportArgs) -> CliResult<()> {
+    let opened = incal_io::open(&a.export).map_err(|e| CliError::Input(e.to_string()))?;
+    let mut store = open(&a.db, true)?;
+    let reader = std::io::BufReader::with_capacity(1 << 16, opened.reader);
+    let done = store
+        .import(reader, &opened.name)
+        .map_err(store_err(&a.db))?;
+    let text = if a.out.json {
+        json_text(&json!({
+            "added": done.added,
+            "present": done.present,
+            "chain": {"records": done.chain.records, "head": done.chain.head},
+        }))
+    } else {
+        format!(
+            "imported {} records ({} already present); chain: {} records, hash chain intact; head {}\n",
+            done.added, done.present, done.chain.records, done.chain.head
+        )
+    };
+    write_text(a.out.output.as_deref(), &text)
 }
 
 /// A store error as a CLI error: bad input and unusable stores exit 2,
@@ -180,7 +256,7 @@ pub fn run(c: &Command) -> CliResult<()> {
 /// A store error as one line naming the store once (`PATH: …`).
 fn store_err(db: &DbArgs) -> impl Fn(StoreError) -> CliError + '_ {
     move |e| {
-        let path = db.path().display().to_string();
+        let path = db.name();
         let msg = e.to_string();
         let msg = if msg.starts_with(&format!("{path}: ")) {
             msg

@@ -23,8 +23,8 @@ pub struct Args {
     /// Limits file (TOML): verdicts in the coefficient table, limits in the plots.
     #[arg(long, value_name = "FILE")]
     pub limits: Option<PathBuf>,
-    /// Records store for the history plots of the limited coefficients (default: $INCAL_DB, else incal.db; used when given or present).
-    #[arg(long, value_name = "PATH")]
+    /// Records store (SQLite file or postgresql:// URL) for the history plots of the limited coefficients (default: $INCAL_DB, else incal.db; used when given or present).
+    #[arg(long, value_name = "PATH|URL")]
     pub db: Option<PathBuf>,
 }
 
@@ -80,7 +80,7 @@ fn store(
     })?;
     let chain = store
         .check_chain()
-        .map_err(|e| CliError::Failure(anyhow::anyhow!("{}: {e}", path.display())))?;
+        .map_err(|e| CliError::Failure(anyhow::anyhow!("{}: {e}", store.path().display())))?;
     Ok(Some((store, chain)))
 }
 
