@@ -73,6 +73,8 @@ enum Command {
     /// Calibration records: store results per instrument (append-only, hash-chained), list, show, supersede, history and drift, verify.
     #[command(subcommand)]
     Record(commands::record::Command),
+    /// Reduce many recordings with one procedure on the local machine's cores: results in order, per-file errors collected, records written by one writer.
+    Batch(commands::batch::Args),
     /// Noise and stability of long static records: OADEV, MDEV, OHDEV, TDEV, TOTDEV with confidence bounds, IEEE 952 noise terms, bias stability.
     Noise(commands::noise::Args),
     /// IMU triad calibration: Ferraris (imucal), least squares over known orientations, autocalibration (Tedaldi / imu_tk), apply.
@@ -155,6 +157,7 @@ fn run(cli: Cli) -> CliResult<()> {
             commands::gyro::simulate_positions_cmd(&a)
         }
         Command::Noise(a) => commands::noise::run(&a),
+        Command::Batch(a) => commands::batch::run(&a),
         Command::Imu(commands::imu::Command::Ferraris(a)) => commands::imu::run_ferraris(&a),
         Command::Imu(commands::imu::Command::Autocal(a)) => commands::imu::run_autocal(&a),
         Command::Imu(commands::imu::Command::Multipos(a)) => commands::imu::run_multipos(&a),
@@ -181,6 +184,11 @@ pub fn restore_sigpipe() {
 /// flag taken as a value (`--noise --json`) still fails, as an invalid number.
 fn allow_negative_values(cmd: clap::Command) -> clap::Command {
     // Command-level, so it also reaches the args clap builds lazily.
+    // Not `batch`: its recordings are positional and its procedure's
+    // options follow `--`.
+    if cmd.get_name() == "batch" {
+        return cmd;
+    }
     cmd.allow_hyphen_values(true)
         .mut_subcommands(allow_negative_values)
 }
@@ -345,6 +353,16 @@ fn say(line: &str) {
 /// Exit code for a command-line that did not parse: help and version on
 /// stdout (0, or 1 when stdout cannot be written), the usage of a group
 /// given without its subcommand on stderr (2), otherwise one line (2).
+/// The one-line usage error of a command line, if it does not parse
+/// (`incal batch` checks the procedure's options once, before any
+/// recording is reduced).
+pub(crate) fn usage_error(args: &[OsString]) -> Option<String> {
+    match parse(args) {
+        Ok(_) => None,
+        Err(e) => Some(usage_message(&e, &command_path(&Cli::command(), args))),
+    }
+}
+
 fn parse_failure(e: &clap::Error, args: &[OsString]) -> u8 {
     match e.kind() {
         ErrorKind::DisplayHelp | ErrorKind::DisplayVersion if embed::capturing() => {

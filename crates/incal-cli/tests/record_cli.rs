@@ -817,8 +817,16 @@ fn a_store_moves_between_sqlite_and_postgresql() {
     }
     let fixed = tumble_result(&dir, "fixed", 1.05e-3, 4, Some("SN-1"));
     ok(&[
-        "record", "supersede", "2", s(&fixed), "--reason", "wrong gravity", "--db", s(&db),
-        "--created-utc", "2025-02-03",
+        "record",
+        "supersede",
+        "2",
+        s(&fixed),
+        "--reason",
+        "wrong gravity",
+        "--db",
+        s(&db),
+        "--created-utc",
+        "2025-02-03",
     ]);
     let export = dir.join("lab.jsonl");
     ok(&["record", "export", "--db", s(&db), "-o", s(&export)]);
@@ -834,7 +842,15 @@ fn a_store_moves_between_sqlite_and_postgresql() {
     assert_eq!(post["records"], 4);
     for args in [
         vec!["record", "list", "--json"],
-        vec!["record", "history", "--serial", "SN-1", "--coefficient", "K0", "--json"],
+        vec![
+            "record",
+            "history",
+            "--serial",
+            "SN-1",
+            "--coefficient",
+            "K0",
+            "--json",
+        ],
         vec!["record", "show", "4", "--json"],
     ] {
         let on = |store: &str| {
@@ -850,10 +866,16 @@ fn a_store_moves_between_sqlite_and_postgresql() {
         "PostgreSQL's export is SQLite's, byte for byte"
     );
     let again = ok_json(&["record", "import", s(&export), "--db", &url, "--json"]);
-    assert_eq!((again["added"].as_i64(), again["present"].as_i64()), (Some(0), Some(4)));
+    assert_eq!(
+        (again["added"].as_i64(), again["present"].as_i64()),
+        (Some(0), Some(4))
+    );
     // A certificate from the PostgreSQL store names the record and head.
     let html = ok(&["report", s(&fixed), "--db", &url]);
-    assert!(html.contains(post["head"].as_str().unwrap()), "the head on the certificate");
+    assert!(
+        html.contains(post["head"].as_str().unwrap()),
+        "the head on the certificate"
+    );
 
     // Stations writing to the shared store at once: nothing lost.
     let handles: Vec<_> = (0..8)
@@ -869,16 +891,184 @@ fn a_store_moves_between_sqlite_and_postgresql() {
         .collect();
     ids.sort_unstable();
     assert_eq!(ids, (5..=12).collect::<Vec<_>>());
-    assert_eq!(ok_json(&["record", "verify", "--db", &url, "--json"])["records"], 12);
+    assert_eq!(
+        ok_json(&["record", "verify", "--db", &url, "--json"])["records"],
+        12
+    );
 
     // Bad stores: one line, exit 2, no password.
-    let e = fails(2, &["record", "list", "--db", "postgresql://lab:s3cret@127.0.0.1:1/none"]);
-    assert!(e.starts_with("incal: postgresql://lab@127.0.0.1:1/none: cannot connect"), "{e}");
+    let e = fails(
+        2,
+        &[
+            "record",
+            "list",
+            "--db",
+            "postgresql://lab:s3cret@127.0.0.1:1/none",
+        ],
+    );
+    assert!(
+        e.starts_with("incal: postgresql://lab@127.0.0.1:1/none: cannot connect"),
+        "{e}"
+    );
     assert!(!e.contains("s3cret"));
-    let e = fails(2, &["record", "add", s(&docs[0]), "--db", "mysql://host/db"]);
+    let e = fails(
+        2,
+        &["record", "add", s(&docs[0]), "--db", "mysql://host/db"],
+    );
     assert!(e.contains("a URL incal cannot open"), "{e}");
     let other = pg::pg_database("cli_other");
     ok(&["record", "add", s(&fixed), "--db", &other]);
     let e = fails(2, &["record", "import", s(&export), "--db", &other]);
-    assert!(e.contains("line 1: record 1 differs from the store's record 1"), "{e}");
+    assert!(
+        e.contains("line 1: record 1 differs from the store's record 1"),
+        "{e}"
+    );
+}
+
+/// `incal batch`: many recordings on the local cores, results as the
+/// one-file command gives them and in order, parallel equal to serial,
+/// each bad recording named on its own line without stopping the rest,
+/// records written once each however often the batch runs.
+#[test]
+fn batch_reduces_many_recordings_and_names_the_bad_ones() {
+    let dir = temp_dir("batch");
+    let runs = dir.join("runs");
+    std::fs::create_dir_all(&runs).unwrap();
+    for k in 1..=10 {
+        let p = runs.join(format!("SN-{k:03}.csv"));
+        ok(&[
+            "simulate",
+            "tumble",
+            "--seed",
+            &k.to_string(),
+            "--k0",
+            &format!("{}e-4", k),
+            "-o",
+            s(&p),
+        ]);
+    }
+    std::fs::write(runs.join("SN-900.csv"), "angle_deg,output\n0,1\n90,x\n").unwrap();
+    std::fs::write(runs.join("SN-901.csv"), "").unwrap();
+    std::fs::write(runs.join(".hidden.csv"), "not a recording").unwrap();
+    let db = dir.join("line.db");
+    let batch = |jobs: &str, extra: &[&str]| {
+        let mut args = vec![
+            "batch",
+            "tumble",
+            s(&runs),
+            "--jobs",
+            jobs,
+            "--serial-from-stem",
+            "--json",
+        ];
+        args.extend(extra);
+        args.extend(["--", "--mount", "pendulum"]);
+        run(&args)
+    };
+    let serial = batch("1", &[]);
+    let parallel = batch("2", &["--db", s(&db)]);
+    for o in [&serial, &parallel] {
+        assert_eq!(o.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&o.stderr);
+        let lines: Vec<&str> = err.lines().collect();
+        assert_eq!(lines.len(), 3, "{err}");
+        assert!(
+            lines[0].starts_with("incal: ") && lines[0].contains("SN-900.csv:3"),
+            "{err}"
+        );
+        assert!(lines[1].contains("SN-901.csv"), "{err}");
+        assert_eq!(
+            lines[2],
+            "incal: batch: 2 of 12 recordings refused (named above)"
+        );
+    }
+    let (a, b): (Value, Value) = (
+        serde_json::from_slice(&serial.stdout).unwrap(),
+        serde_json::from_slice(&parallel.stdout).unwrap(),
+    );
+    assert_eq!(
+        (
+            b["recordings"].as_i64(),
+            b["ok"].as_i64(),
+            b["failed"].as_i64()
+        ),
+        (Some(12), Some(10), Some(2))
+    );
+    for (k, (x, y)) in a["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(b["results"].as_array().unwrap())
+        .enumerate()
+    {
+        assert_eq!(x["input"], y["input"], "in order");
+        assert_eq!(x["result"], y["result"], "parallel = serial");
+        if k < 10 {
+            assert_eq!(y["record"], k as i64 + 1);
+            let one = ok_json(&[
+                "tumble",
+                "--mount",
+                "pendulum",
+                "--input",
+                x["input"].as_str().unwrap(),
+                "--json",
+                "--serial",
+                &format!("SN-{:03}", k + 1),
+            ]);
+            assert_eq!(x["result"], one, "as the one-file command");
+        }
+    }
+    // Again into the same store: nothing stored twice.
+    let again: Value = serde_json::from_slice(&batch("2", &["--db", s(&db)]).stdout).unwrap();
+    assert!(again["results"].as_array().unwrap()[..10]
+        .iter()
+        .all(|r| r["already_stored"] == true));
+    assert_eq!(
+        ok_json(&["record", "verify", "--db", s(&db), "--json"])["records"],
+        10
+    );
+
+    // A list file, an output directory and the text summary.
+    let list = dir.join("todo.txt");
+    std::fs::write(&list, "# today\nruns/SN-002.csv\n\nruns/SN-404.csv\n").unwrap();
+    let out = dir.join("out");
+    let o = run(&[
+        "batch",
+        "tumble",
+        "--list",
+        s(&list),
+        "--out-dir",
+        s(&out),
+        "--",
+        "--mount",
+        "pendulum",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("ok    ") && text.contains("SN-002.json"),
+        "{text}"
+    );
+    assert!(
+        text.ends_with("1 of 2 recordings reduced, 1 failed\n"),
+        "{text}"
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("SN-404.csv: cannot read"));
+    assert!(out.join("SN-002.json").is_file());
+
+    // Usage errors are the batch's, said once.
+    let e = fails(
+        2,
+        &["batch", "tumble", s(&runs), "--", "--mount", "sideways"],
+    );
+    assert!(e.contains("invalid value 'sideways' for '--mount"), "{e}");
+    let e = fails(2, &["batch", "wobble", s(&runs)]);
+    assert!(
+        e.contains("'wobble' is not a procedure (one of: tumble, centrifuge"),
+        "{e}"
+    );
+    let e = fails(2, &["batch", "tumble", s(&runs), "--", "--input", "x.csv"]);
+    assert!(e.contains("--input is set by the batch"), "{e}");
+    let e = fails(2, &["batch", "tumble"]);
+    assert!(e.contains("no recordings"), "{e}");
 }

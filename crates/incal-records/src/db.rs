@@ -293,7 +293,9 @@ impl Conn {
     /// PostgreSQL).
     pub(crate) fn table_exists(&mut self, name: &str) -> Result<bool, DbError> {
         let sql = match self {
-            Conn::Sqlite(_) => "SELECT COUNT(*) FROM sqlite_master WHERE type = 'table' AND name = ?1",
+            Conn::Sqlite(_) => {
+                "SELECT COUNT(*) FROM sqlite_master WHERE type = 'table' AND name = ?1"
+            }
             Conn::Postgres(_) => {
                 "SELECT COUNT(*) FROM information_schema.tables
                  WHERE table_schema = current_schema() AND table_name = ?1"
@@ -421,7 +423,11 @@ pub fn display_url(url: &str) -> String {
             postgres::config::Host::Unix(p) => p.display().to_string(),
         })
         .unwrap_or_default();
-    let port = c.get_ports().first().map(|p| format!(":{p}")).unwrap_or_default();
+    let port = c
+        .get_ports()
+        .first()
+        .map(|p| format!(":{p}"))
+        .unwrap_or_default();
     let user = c.get_user().map(|u| format!("{u}@")).unwrap_or_default();
     let db = c.get_dbname().unwrap_or_default();
     format!("postgresql://{user}{host}{port}/{db}")

@@ -712,11 +712,7 @@ impl Store {
                     .map_err(e)?;
                 let row = match row {
                     None => None,
-                    Some(r) => Some((
-                        r.t(0).map_err(e)?,
-                        r.oi(1).map_err(e)?,
-                        r.t(2).map_err(e)?,
-                    )),
+                    Some(r) => Some((r.t(0).map_err(e)?, r.oi(1).map_err(e)?, r.t(2).map_err(e)?)),
                 };
                 match row {
                     None => return Err(Error::Input(format!("record {old}: no such record"))),
@@ -1249,10 +1245,7 @@ impl Store {
             Ok(())
         })?;
         out.flush().map_err(io)?;
-        Ok(Verified {
-            records: n,
-            head,
-        })
+        Ok(Verified { records: n, head })
     }
 
     /// Append the records of an export ([`Store::export`]: JSON lines, in

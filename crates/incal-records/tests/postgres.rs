@@ -62,7 +62,10 @@ fn the_same_records_make_the_same_chain_on_sqlite_and_postgresql() {
     assert_eq!(a.records, 5);
     assert_eq!(a, b, "identical chain heads");
     assert_eq!(lite.list(None).unwrap(), pg.list(None).unwrap());
-    assert_eq!(lite.list(Some("SN-2")).unwrap(), pg.list(Some("SN-2")).unwrap());
+    assert_eq!(
+        lite.list(Some("SN-2")).unwrap(),
+        pg.list(Some("SN-2")).unwrap()
+    );
     for id in 1..=5 {
         assert_eq!(lite.show(id).unwrap(), pg.show(id).unwrap(), "record {id}");
     }
@@ -83,12 +86,19 @@ fn the_same_records_make_the_same_chain_on_sqlite_and_postgresql() {
     let e = pg
         .supersede(2, &NewRecord::new(&again), "again")
         .unwrap_err();
-    assert!(e.to_string().contains("already superseded by record 5"), "{e}");
+    assert!(
+        e.to_string().contains("already superseded by record 5"),
+        "{e}"
+    );
     // A retried add stores nothing.
     let added = pg.add(&NewRecord::new(&again)).unwrap();
     assert!(added.existing && added.id == 3);
     assert_eq!(pg.verify_head(&a.head).unwrap().records, 5);
-    assert!(pg.path().display().to_string().starts_with("postgresql://incal@127.0.0.1:"));
+    assert!(pg
+        .path()
+        .display()
+        .to_string()
+        .starts_with("postgresql://incal@127.0.0.1:"));
 }
 
 #[test]
@@ -186,7 +196,10 @@ fn export_from_sqlite_and_import_into_postgresql_rebuild_the_same_chain() {
     let mut back = Vec::new();
     pg.export(&mut back).unwrap();
     assert_eq!(back, lines);
-    assert_eq!(lite.history("SN-1", "K0").unwrap(), pg.history("SN-1", "K0").unwrap());
+    assert_eq!(
+        lite.history("SN-1", "K0").unwrap(),
+        pg.history("SN-1", "K0").unwrap()
+    );
 
     // A store holding another chain is refused; nothing is written.
     let other_url = pg_database("import-other");
@@ -213,20 +226,36 @@ fn a_bad_export_line_is_named_and_nothing_is_imported() {
         text.lines()
             .enumerate()
             .map(|(k, l)| {
-                let l = if k + 1 == line { l.replacen(from, to, 1) } else { l.to_string() };
+                let l = if k + 1 == line {
+                    l.replacen(from, to, 1)
+                } else {
+                    l.to_string()
+                };
                 format!("{l}\n")
             })
             .collect()
     };
     for (bad, want) in [
-        (edit(3, "\"operator\":\"lee\"", "\"operator\":\"kim\""), "line 3: record 3: record_hash does not match its fields"),
-        (edit(2, "0.0011", "0.0019"), "line 2: record 2: the document does not match its sha256"),
+        (
+            edit(3, "\"operator\":\"lee\"", "\"operator\":\"kim\""),
+            "line 3: record 3: record_hash does not match its fields",
+        ),
+        (
+            edit(2, "0.0011", "0.0019"),
+            "line 2: record 2: the document does not match its sha256",
+        ),
         (edit(4, "{", "["), "line 4: not an exported record"),
-        (text.lines().skip(1).map(|l| format!("{l}\n")).collect(), "line 1: record 2 follows record 0: records 1..1 are missing"),
+        (
+            text.lines().skip(1).map(|l| format!("{l}\n")).collect(),
+            "line 1: record 2 follows record 0: records 1..1 are missing",
+        ),
     ] {
         let e = pg.import(bad.as_bytes(), "x.jsonl").unwrap_err();
         assert!(matches!(e, Error::Input(_)), "{e}");
-        assert!(e.to_string().starts_with(&format!("x.jsonl: {want}")), "{e}");
+        assert!(
+            e.to_string().starts_with(&format!("x.jsonl: {want}")),
+            "{e}"
+        );
         assert_eq!(pg.verify().unwrap().records, 0, "all or nothing");
     }
 }
@@ -235,17 +264,30 @@ fn a_bad_export_line_is_named_and_nothing_is_imported() {
 fn reading_a_postgresql_store_never_creates_or_writes() {
     let url = pg_database("readonly");
     let e = Store::open_existing(&url).unwrap_err();
-    assert!(e.is_input() && e.to_string().contains("no incal tables"), "{e}");
+    assert!(
+        e.is_input() && e.to_string().contains("no incal tables"),
+        "{e}"
+    );
     let e = Store::open_to_write(&url).unwrap_err();
-    assert!(e.is_input() && e.to_string().contains("no records store here"), "{e}");
+    assert!(
+        e.is_input() && e.to_string().contains("no records store here"),
+        "{e}"
+    );
     outsider(&url, "CREATE TABLE inventory (id BIGINT)");
     let e = Store::open(&url).unwrap_err();
-    assert!(e.is_input() && e.to_string().contains("other tables"), "{e}");
+    assert!(
+        e.is_input() && e.to_string().contains("other tables"),
+        "{e}"
+    );
     // A wrong port is a store error naming the URL without the password.
     let bad = "postgresql://incal:secret@127.0.0.1:1/none";
     let e = Store::open(bad).unwrap_err();
     assert!(e.is_input(), "{e}");
-    assert!(e.to_string().starts_with("postgresql://incal@127.0.0.1:1/none: cannot connect"), "{e}");
+    assert!(
+        e.to_string()
+            .starts_with("postgresql://incal@127.0.0.1:1/none: cannot connect"),
+        "{e}"
+    );
     assert!(!e.to_string().contains("secret"));
     let url = pg_database("readonly2");
     fill(&url);

@@ -1,5 +1,6 @@
 //! One module per subcommand family.
 
+pub mod batch;
 pub mod centrifuge;
 pub mod compare;
 pub mod demo;

@@ -221,10 +221,7 @@ fn export(a: &ExportArgs) -> CliResult<()> {
         Ok(())
     })?;
     if let Some(c) = chain {
-        crate::embed::stderr_line(&format!(
-            "exported {} records; head {}",
-            c.records, c.head
-        ));
+        crate::embed::stderr_line(&format!("exported {} records; head {}", c.records, c.head));
     }
     Ok(())
 }

@@ -14,7 +14,10 @@ pub fn pg_server() -> &'static str {
                 return u;
             }
         }
-        let script = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scripts/pg-test-server.sh");
+        let script = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scripts/pg-test-server.sh"
+        );
         let out = std::process::Command::new("bash")
             .arg(script)
             .arg(std::process::id().to_string())
@@ -46,10 +49,8 @@ pub fn pg_database(name: &str) -> String {
 pub fn outsider(location: &str, sql: &str) {
     if incal_records::is_postgres_url(location) {
         let mut c = postgres::Client::connect(location, postgres::NoTls).unwrap();
-        c.batch_execute(&format!(
-            "SET session_replication_role = replica; {sql}"
-        ))
-        .unwrap_or_else(|e| panic!("{sql}: {e:?}"));
+        c.batch_execute(&format!("SET session_replication_role = replica; {sql}"))
+            .unwrap_or_else(|e| panic!("{sql}: {e:?}"));
     } else {
         let c = rusqlite::Connection::open(location).unwrap();
         c.execute_batch("PRAGMA foreign_keys = OFF").unwrap();

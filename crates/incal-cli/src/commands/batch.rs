@@ -1,0 +1,413 @@
+//! `incal batch PROCEDURE SOURCES… [-- OPTIONS…]`: one procedure over many
+//! recordings on the local machine's cores.
+//!
+//! Each recording is reduced exactly as `incal <procedure> --input FILE
+//! --json OPTIONS…` reduces it (the same command, run in process on a
+//! worker thread), so every result equals the one-file run. One bad
+//! recording never stops the batch: its one-line message is collected and
+//! printed, the others go on. Results are written to `--out-dir` (one
+//! `STEM.json` each) and, with `--db`, added to a records store by one
+//! writer (this thread), in the order of the recordings; an `add` repeated
+//! by a second run finds the record and stores nothing twice.
+//!
+//! Exit code: 0 when every recording was reduced; 2 when some were refused
+//! as bad input (each named on its own line); 1 when some failed
+//! otherwise.
+
+use std::ffi::OsString;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+use incal::document::Procedure;
+use serde::Serialize;
+use serde_json::value::RawValue;
+
+use crate::embed::{run_embedded, Embedded};
+use crate::error::{CliError, CliResult};
+use crate::output::write_text;
+
+/// Options of `incal batch`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The procedure, by its id: tumble, centrifuge, misalign-gyro, misalign-accel, gyro-rate, gyro-positions, imu-ferraris, imu-multipos, imu-autocal, gfimu-calibrate, noise ('_' for '-' is accepted).
+    pub procedure: String,
+    /// Recordings: files, or directories (every regular file in them, by name; hidden files skipped).
+    pub sources: Vec<PathBuf>,
+    /// A file listing recordings, one path per line (relative to the list's directory; blank lines and '#' comments skipped).
+    #[arg(long, value_name = "FILE")]
+    pub list: Option<PathBuf>,
+    /// Worker threads (default: every core).
+    #[arg(long, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Write each result document to DIR/STEM.json (STEM: the recording's file name without its extension).
+    #[arg(long, value_name = "DIR")]
+    pub out_dir: Option<PathBuf>,
+    /// Add each result to this records store (SQLite file or postgresql:// URL), in the order of the recordings, by one writer.
+    #[arg(long, value_name = "PATH|URL")]
+    pub db: Option<PathBuf>,
+    /// Give each recording's file stem as the instrument serial (--serial STEM): recordings named by serial, as a production line names them.
+    #[arg(long)]
+    pub serial_from_stem: bool,
+    /// Print the summary as one JSON object (every result document inside) instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the summary to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// The procedure's options, after '--', as for the one-file command (e.g. -- --mount pendulum).
+    #[arg(last = true, value_name = "OPTIONS")]
+    pub options: Vec<String>,
+}
+
+/// One recording in the summary.
+#[derive(Serialize)]
+struct Item {
+    input: String,
+    ok: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    code: Option<u8>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    error: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    output: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    record: Option<i64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    already_stored: Option<bool>,
+    /// The result document exactly as the procedure wrote it (every
+    /// number to the last bit, not re-parsed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    result: Option<Box<RawValue>>,
+}
+
+/// The `--json` summary.
+#[derive(Serialize)]
+struct Summary<'a> {
+    procedure: String,
+    recordings: usize,
+    ok: usize,
+    failed: usize,
+    results: &'a [Item],
+}
+
+/// What became of one recording.
+struct Outcome {
+    input: PathBuf,
+    run: Embedded,
+}
+
+/// The command words of a procedure id (`imu-ferraris` → `imu ferraris`).
+pub fn command_words(id: &str) -> CliResult<Vec<String>> {
+    let id = id.replace('_', "-");
+    match Procedure::from_id(&id) {
+        Some(p) => Ok(p.as_str().split('-').map(str::to_string).collect()),
+        None => Err(CliError::Input(format!(
+            "batch: '{}' is not a procedure (one of: {})",
+            crate::output::clip(&id),
+            Procedure::ALL
+                .iter()
+                .map(|p| p.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))),
+    }
+}
+
+/// The recordings named by the sources and the list, in order.
+fn recordings(a: &Args) -> CliResult<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    for s in &a.sources {
+        if s.is_dir() {
+            let entries = std::fs::read_dir(s).map_err(|e| {
+                CliError::Input(format!("{}: cannot read the directory: {e}", s.display()))
+            })?;
+            let mut files: Vec<PathBuf> = entries
+                .filter_map(|e| e.ok())
+                .filter(|e| !e.file_name().to_string_lossy().starts_with('.'))
+                .map(|e| e.path())
+                .filter(|p| p.is_file())
+                .collect();
+            files.sort();
+            out.extend(files);
+        } else {
+            // A missing file is that recording's failure, said by the
+            // procedure as for one file.
+            out.push(s.clone());
+        }
+    }
+    if let Some(list) = &a.list {
+        let (name, text) = crate::io::read_text(list)?;
+        let base = list.parent().unwrap_or(Path::new(""));
+        for line in text.lines() {
+            let t = line.trim();
+            if t.is_empty() || t.starts_with('#') {
+                continue;
+            }
+            let p = Path::new(t);
+            out.push(if p.is_absolute() || incal_io::is_dash(list) {
+                p.to_path_buf()
+            } else {
+                base.join(p)
+            });
+        }
+        if out.is_empty() {
+            return Err(CliError::Input(format!("{name}: lists no recordings")));
+        }
+    }
+    if out.is_empty() {
+        return Err(CliError::Input(
+            "batch: no recordings (give files, directories or --list)".into(),
+        ));
+    }
+    Ok(out)
+}
+
+fn stem(p: &Path) -> String {
+    p.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// `incal batch`.
+pub fn run(a: &Args) -> CliResult<()> {
+    let words = command_words(&a.procedure)?;
+    for o in &a.options {
+        let flag = o.split('=').next().unwrap_or_default();
+        if matches!(flag, "--input" | "--json" | "-o" | "--output")
+            || (a.serial_from_stem && flag == "--serial")
+        {
+            return Err(CliError::Input(format!(
+                "batch: {flag} is set by the batch for each recording; leave it out of the options"
+            )));
+        }
+    }
+    if a.jobs == Some(0) {
+        return Err(CliError::Input("--jobs: must be at least 1".into()));
+    }
+    let inputs = recordings(a)?;
+    // The procedure's options are checked once: a usage error is the
+    // batch's, not every recording's.
+    if let Some(message) = crate::usage_error(&argv(a, &words, &inputs[0])) {
+        return Err(CliError::Input(message));
+    }
+    if let Some(dir) = &a.out_dir {
+        let mut seen = std::collections::HashMap::new();
+        for p in &inputs {
+            if let Some(other) = seen.insert(stem(p), p) {
+                return Err(CliError::Input(format!(
+                    "--out-dir: {} and {} would both write {}.json",
+                    other.display(),
+                    p.display(),
+                    stem(p)
+                )));
+            }
+        }
+        std::fs::create_dir_all(dir).map_err(|e| {
+            CliError::Failure(anyhow::anyhow!("{}: cannot create: {e}", dir.display()))
+        })?;
+    }
+    let mut store = match &a.db {
+        Some(db) => Some(incal_records::Store::open(db).map_err(|e| store_error(db, e))?),
+        None => None,
+    };
+    let outcomes = reduce_all(a, &words, &inputs);
+    let mut items = Vec::with_capacity(outcomes.len());
+    let (mut failed_input, mut failed_other) = (0usize, 0usize);
+    for o in outcomes {
+        let input = o.input.display().to_string();
+        if o.run.code != 0 {
+            let message = o
+                .run
+                .stderr
+                .last()
+                .cloned()
+                .unwrap_or_else(|| format!("{input}: failed (exit {})", o.run.code));
+            crate::embed::stderr_line(&message);
+            if o.run.code == 2 {
+                failed_input += 1;
+            } else {
+                failed_other += 1;
+            }
+            items.push(Item {
+                input,
+                ok: false,
+                code: Some(o.run.code),
+                error: Some(message),
+                output: None,
+                record: None,
+                already_stored: None,
+                result: None,
+            });
+            continue;
+        }
+        for w in &o.run.stderr {
+            crate::embed::stderr_line(w);
+        }
+        let text = String::from_utf8_lossy(&o.run.stdout).into_owned();
+        let mut item = Item {
+            input,
+            ok: true,
+            code: None,
+            error: None,
+            output: None,
+            record: None,
+            already_stored: None,
+            result: None,
+        };
+        if let Some(dir) = &a.out_dir {
+            let path = dir.join(format!("{}.json", stem(&o.input)));
+            std::fs::write(&path, &text).map_err(|e| {
+                CliError::Failure(anyhow::anyhow!("{}: cannot write: {e}", path.display()))
+            })?;
+            item.output = Some(path.display().to_string());
+        }
+        if let (Some(s), Some(db)) = (store.as_mut(), &a.db) {
+            let added = s
+                .add(&incal_records::NewRecord::new(&text))
+                .map_err(|e| store_error(db, e))?;
+            item.record = Some(added.id);
+            item.already_stored = Some(added.existing);
+        }
+        if a.json {
+            let doc = RawValue::from_string(text.trim_end().to_string()).map_err(|e| {
+                CliError::Failure(anyhow::anyhow!(
+                    "{}: the result is not JSON: {e}",
+                    item.input
+                ))
+            })?;
+            item.result = Some(doc);
+        }
+        items.push(item);
+    }
+    let n = items.len();
+    let failed = failed_input + failed_other;
+    let summary = if a.json {
+        let summary = Summary {
+            procedure: words.join("-"),
+            recordings: n,
+            ok: n - failed,
+            failed,
+            results: &items,
+        };
+        let text = serde_json::to_string_pretty(&summary)
+            .map_err(|e| CliError::Failure(anyhow::anyhow!("cannot print the summary: {e}")))?;
+        format!("{text}\n")
+    } else {
+        let mut s = String::new();
+        for it in &items {
+            if it.ok {
+                s.push_str(&format!("ok    {}", it.input));
+                if let Some(o) = &it.output {
+                    s.push_str(&format!(" -> {o}"));
+                }
+                if let Some(r) = it.record {
+                    s.push_str(&format!(" (record {r})"));
+                }
+            } else {
+                s.push_str(&format!(
+                    "FAIL  {}",
+                    it.error.as_deref().unwrap_or_default()
+                ));
+            }
+            s.push('\n');
+        }
+        s.push_str(&format!(
+            "{} of {n} recordings reduced, {failed} failed\n",
+            n - failed
+        ));
+        s
+    };
+    write_text(a.output.as_deref(), &summary)?;
+    match (failed_input, failed_other) {
+        (0, 0) => Ok(()),
+        (_, 0) => Err(CliError::Input(format!(
+            "batch: {failed} of {n} recordings refused (named above)"
+        ))),
+        _ => Err(CliError::Failure(anyhow::anyhow!(
+            "batch: {failed} of {n} recordings failed (named above)"
+        ))),
+    }
+}
+
+fn store_error(db: &Path, e: incal_records::Error) -> CliError {
+    let name = crate::options::store_name(db);
+    let msg = e.to_string();
+    let msg = if msg.starts_with(&format!("{name}: ")) {
+        msg
+    } else {
+        format!("{name}: {msg}")
+    };
+    if e.is_input() {
+        CliError::Input(msg)
+    } else {
+        CliError::Failure(anyhow::anyhow!("{msg}"))
+    }
+}
+
+/// The command line that reduces one recording.
+fn argv(a: &Args, words: &[String], input: &Path) -> Vec<OsString> {
+    let mut argv: Vec<OsString> = vec!["incal".into()];
+    argv.extend(words.iter().map(OsString::from));
+    argv.push("--input".into());
+    argv.push(input.as_os_str().to_owned());
+    argv.push("--json".into());
+    if a.serial_from_stem {
+        argv.push("--serial".into());
+        argv.push(stem(input).into());
+    }
+    argv.extend(a.options.iter().map(OsString::from));
+    argv
+}
+
+/// Every recording reduced, on `--jobs` threads pulling the next one in
+/// turn; the outcomes in the order of the recordings (a recording's
+/// result does not depend on the thread that reduced it).
+fn reduce_all(a: &Args, words: &[String], inputs: &[PathBuf]) -> Vec<Outcome> {
+    let jobs = a
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .min(inputs.len())
+        .max(1);
+    let next = AtomicUsize::new(0);
+    let slots: Vec<Mutex<Option<Embedded>>> = inputs.iter().map(|_| Mutex::new(None)).collect();
+    let bar = (std::io::stderr().is_terminal() && !crate::embed::capturing()).then(|| {
+        let b = indicatif::ProgressBar::new(inputs.len() as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("incal batch: {pos}/{len} {wide_bar} {eta}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    });
+    std::thread::scope(|scope| {
+        for _ in 0..jobs {
+            scope.spawn(|| loop {
+                let k = next.fetch_add(1, Ordering::Relaxed);
+                let Some(input) = inputs.get(k) else { break };
+                let out = run_embedded(&argv(a, words, input), None);
+                if let Ok(mut slot) = slots[k].lock() {
+                    *slot = Some(out);
+                }
+                if let Some(b) = &bar {
+                    b.inc(1);
+                }
+            });
+        }
+    });
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    inputs
+        .iter()
+        .zip(slots)
+        .map(|(input, slot)| Outcome {
+            input: input.clone(),
+            run: slot.into_inner().ok().flatten().unwrap_or(Embedded {
+                code: 1,
+                stdout: Vec::new(),
+                stderr: vec![format!("{}: not reduced", input.display())],
+            }),
+        })
+        .collect()
+}
