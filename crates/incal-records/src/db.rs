@@ -351,7 +351,7 @@ impl Conn {
 
 /// The key of the advisory lock the migrations take on PostgreSQL
 /// ("incal" in ASCII).
-const MIGRATION_LOCK: i64 = 0x696e_6361_6c;
+const MIGRATION_LOCK: i64 = 0x0069_6e63_616c;
 
 /// What a transaction is for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
