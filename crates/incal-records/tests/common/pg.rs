@@ -1,6 +1,8 @@
 //! A throwaway PostgreSQL server for tests (shared by the records and
 //! the CLI tests: `#[path]`-included by both).
 
+#![allow(dead_code)]
+
 /// The URL of a PostgreSQL server for this test process: `$INCAL_TEST_PG`
 /// when set, else a throwaway server started by
 /// `scripts/pg-test-server.sh` (stopped when this process ends). A
