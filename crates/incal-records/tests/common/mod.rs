@@ -67,4 +67,5 @@ impl Rng {
 
 #[path = "pg.rs"]
 mod pg;
+#[allow(unused_imports)]
 pub use pg::{outsider, pg_database, pg_server};
