@@ -2,10 +2,24 @@
 # Every test of incal: the Rust workspace, then the Python package built
 # from this checkout and installed in a virtualenv of its own
 # (target/py-venv), tested with pytest against the CLI built by the Rust
-# tests. Needs cargo and python3 (3.9 or later) with venv; pip fetches
-# maturin, pytest, numpy and pandas from PyPI.
+# tests. Needs cargo, python3 (3.9 or later) with venv, and the PostgreSQL
+# 15 server binaries (installed here with apt-get when run as root); pip
+# fetches maturin, pytest, numpy, pandas, imucal and dask from PyPI.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+# The records tests start throwaway PostgreSQL servers
+# (scripts/pg-test-server.sh): make sure the server binaries are here.
+pg_bin=${INCAL_PG_BIN:-/usr/lib/postgresql/15/bin}
+if [ ! -x "$pg_bin/postgres" ]; then
+    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+        echo "== installing the PostgreSQL 15 server (records tests)"
+        apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq postgresql-15 >/dev/null
+    else
+        echo "scripts/test.sh: no PostgreSQL server in $pg_bin: install postgresql-15 (or set INCAL_PG_BIN)" >&2
+        exit 1
+    fi
+fi
 
 echo "== Rust: cargo test --workspace --locked"
 cargo test --workspace --locked

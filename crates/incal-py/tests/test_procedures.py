@@ -181,9 +181,14 @@ def test_imu_calibrations_load_in_imucal_and_calibrate_as_incal_does(recordings,
 
 def test_the_package_ships_its_type_stubs():
     pkg = pathlib.Path(incal.__file__).parent
-    for stub in ["__init__.pyi", "plan.pyi", "simulate.pyi", "py.typed"]:
+    for stub in ["__init__.pyi", "plan.pyi", "simulate.pyi", "batch.pyi", "records.pyi", "py.typed"]:
         assert (pkg / stub).exists(), stub
     text = (pkg / "__init__.pyi").read_text()
     for name in incal.__all__:
-        if name not in ("plan", "simulate"):
+        if name not in ("plan", "simulate", "batch", "Records"):
             assert f"def {name}(" in text or f"class {name}" in text, name
+    assert "from .records import Records as Records" in text
+    for module, stub in [(incal.batch, "batch.pyi"), (incal.records, "records.pyi")]:
+        text = (pkg / stub).read_text()
+        for name in module.__all__:
+            assert f"def {name}(" in text or f"class {name}" in text or f"{name}:" in text, (stub, name)

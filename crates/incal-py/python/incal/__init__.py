@@ -50,6 +50,8 @@ __all__ = [
     "apply",
     "plan",
     "simulate",
+    "batch",
+    "Records",
     "run",
 ]
 
@@ -319,4 +321,5 @@ def apply(calibration: Any, data: Any = None, **columns: Any):
     return _read_csv(out)
 
 
-from . import plan, simulate  # noqa: E402  (they use run and _options)
+from . import batch, plan, simulate  # noqa: E402  (they use run and _options)
+from .records import Records  # noqa: E402

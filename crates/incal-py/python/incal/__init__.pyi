@@ -3,8 +3,10 @@
 import os
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
+from . import batch as batch
 from . import plan as plan
 from . import simulate as simulate
+from .records import Records as Records
 
 __version__: str
 
