@@ -40,11 +40,65 @@ impl Sample {
     }
 }
 
+/// The bytes of a record: a file's memory map, or a caller's buffer
+/// ([`with_memory`]).
+enum Bytes {
+    Map(memmap2::Mmap),
+    /// A buffer that outlives the record by the contract of
+    /// [`with_memory`].
+    Memory(*const u8, usize),
+}
+
+impl std::ops::Deref for Bytes {
+    type Target = [u8];
+    fn deref(&self) -> &[u8] {
+        match self {
+            Bytes::Map(m) => m,
+            // SAFETY: `with_memory`'s caller keeps the buffer alive and
+            // unchanged while anything opened inside it exists.
+            Bytes::Memory(p, n) => unsafe { std::slice::from_raw_parts(*p, *n) },
+        }
+    }
+}
+
+// SAFETY: the buffer of `Bytes::Memory` is read-only for as long as the
+// record exists (the contract of `with_memory`), as a file map is.
+unsafe impl Send for Bytes {}
+// SAFETY: as for Send: nothing writes the buffer while it is shared.
+unsafe impl Sync for Bytes {}
+
+thread_local! {
+    /// A buffer that `-` opens as a binary record on this thread.
+    static MEMORY: std::cell::Cell<Option<(*const u8, usize)>> = const { std::cell::Cell::new(None) };
+}
+
+/// The display name of a record read from memory.
+pub const MEMORY_NAME: &str = "<memory>";
+
+/// Run `f` with `bytes` as the binary record `-` opens on this thread
+/// ([`MappedRecord::open`]), read in place, never copied: for front ends
+/// that hand incal an array they hold (a numpy array from Python). The
+/// record is named [`MEMORY_NAME`] and its SHA-256 is of `bytes`.
+///
+/// # Safety
+/// Nothing opened inside `f` may outlive `f` (`f` must not return or
+/// leak a [`MappedRecord`]), and `bytes` must not change while `f` runs.
+pub unsafe fn with_memory<T>(bytes: &[u8], f: impl FnOnce() -> T) -> T {
+    struct Reset(Option<(*const u8, usize)>);
+    impl Drop for Reset {
+        fn drop(&mut self) {
+            MEMORY.with(|m| m.set(self.0));
+        }
+    }
+    let _reset = Reset(MEMORY.with(|m| m.replace(Some((bytes.as_ptr(), bytes.len())))));
+    f()
+}
+
 /// A memory-mapped record of interleaved little-endian samples.
 pub struct MappedRecord {
     name: String,
     path: PathBuf,
-    map: memmap2::Mmap,
+    map: Bytes,
     channels: usize,
     f64le: bool,
     rows: usize,
@@ -68,7 +122,10 @@ impl MappedRecord {
     /// whole number of frames.
     pub fn open(path: &Path, channels: usize, sample: Sample) -> Result<Self> {
         let name = crate::display_name(path);
-        if crate::is_dash(path) {
+        let memory = crate::is_dash(path)
+            .then(|| MEMORY.with(|m| m.take()))
+            .flatten();
+        if crate::is_dash(path) && memory.is_none() {
             return Err(InputError::file(
                 &name,
                 "a binary record must be a file (memory-mapped), not standard input",
@@ -80,13 +137,19 @@ impl MappedRecord {
                 "a binary record needs at least 1 channel",
             ));
         }
-        let file = std::fs::File::open(path).map_err(|e| InputError::io(&name, &e))?;
-        // SAFETY: the map is read-only and private to this process; the
-        // file is not modified while incal runs (a concurrent writer would
-        // give wrong numbers, not memory unsafety beyond what reading a
-        // changing file does).
-        let map = unsafe { memmap2::Mmap::map(&file) }
-            .map_err(|e| InputError::file(&name, format!("cannot map: {e}")))?;
+        let (name, map) = match memory {
+            Some((p, n)) => (MEMORY_NAME.to_string(), Bytes::Memory(p, n)),
+            None => {
+                let file = std::fs::File::open(path).map_err(|e| InputError::io(&name, &e))?;
+                // SAFETY: the map is read-only and private to this
+                // process; the file is not modified while incal runs (a
+                // concurrent writer would give wrong numbers, not memory
+                // unsafety beyond what reading a changing file does).
+                let map = unsafe { memmap2::Mmap::map(&file) }
+                    .map_err(|e| InputError::file(&name, format!("cannot map: {e}")))?;
+                (name, Bytes::Map(map))
+            }
+        };
         let frame = sample.width() * channels;
         if map.is_empty() {
             return Err(InputError::file(&name, "empty file"));
@@ -175,7 +238,9 @@ impl MappedRecord {
     /// is faulted in from the file.
     pub fn release(&self, from: usize, to: usize) {
         let frame = self.frame();
-        release_bytes(&self.map, from * frame, to * frame);
+        if let Bytes::Map(m) = &self.map {
+            release_bytes(m, from * frame, to * frame);
+        }
     }
 
     /// The channels `selection` picks, in its order, with their names: every
@@ -215,7 +280,9 @@ impl MappedRecord {
     /// its work, waited; off it, the hash shares the cores with what comes
     /// after the pass.
     pub fn hash(&self, background: bool) -> RecordHash {
-        if background {
+        // A buffer in memory is hashed by the pass: no thread may read it
+        // after the record is gone.
+        if background && matches!(self.map, Bytes::Map(_)) {
             RecordHash::Background(hash_in_background(
                 self.name.clone(),
                 self.path.clone(),

@@ -24,6 +24,51 @@ fn _run(
     (out.code, PyBytes::new(py, &out.stdout).unbind(), out.stderr)
 }
 
+/// `_run_array(args, array) -> (code, stdout, stderr)`: as [`_run`], with
+/// a C-contiguous float64 or float32 numpy array as the binary record that
+/// `--input -` opens (`incal noise --format f64le|f32le`), read in place
+/// without a copy while the GIL is released. Any other array is refused
+/// (the Python side makes a contiguous copy first).
+#[pyfunction]
+fn _run_array(
+    py: Python<'_>,
+    args: Vec<String>,
+    array: &Bound<'_, PyAny>,
+) -> PyResult<(u8, Py<PyBytes>, Vec<String>)> {
+    use numpy::{PyReadonlyArrayDyn, PyUntypedArrayMethods};
+    let mut argv: Vec<std::ffi::OsString> = vec!["incal".into()];
+    argv.extend(args.into_iter().map(Into::into));
+    let contiguous = || pyo3::exceptions::PyValueError::new_err("the array is not C-contiguous");
+    let out = if let Ok(a) = array.extract::<PyReadonlyArrayDyn<'_, f64>>() {
+        if !a.is_c_contiguous() {
+            return Err(contiguous());
+        }
+        let s = a.as_slice().map_err(|_| contiguous())?;
+        // SAFETY: plain f64 values viewed as their bytes (any bit pattern
+        // is a valid u8); the borrow `a` keeps the array alive and
+        // read-only until the call returns.
+        let bytes = unsafe {
+            std::slice::from_raw_parts(s.as_ptr().cast::<u8>(), std::mem::size_of_val(s))
+        };
+        py.detach(|| incal_cli::embed::run_embedded_with_memory(&argv, bytes))
+    } else if let Ok(a) = array.extract::<PyReadonlyArrayDyn<'_, f32>>() {
+        if !a.is_c_contiguous() {
+            return Err(contiguous());
+        }
+        let s = a.as_slice().map_err(|_| contiguous())?;
+        // SAFETY: as above, for f32.
+        let bytes = unsafe {
+            std::slice::from_raw_parts(s.as_ptr().cast::<u8>(), std::mem::size_of_val(s))
+        };
+        py.detach(|| incal_cli::embed::run_embedded_with_memory(&argv, bytes))
+    } else {
+        return Err(pyo3::exceptions::PyTypeError::new_err(
+            "a float64 or float32 numpy array is needed",
+        ));
+    };
+    Ok((out.code, PyBytes::new(py, &out.stdout).unbind(), out.stderr))
+}
+
 /// The version of the incal library inside the package.
 #[pyfunction]
 fn _version() -> &'static str {
@@ -33,6 +78,7 @@ fn _version() -> &'static str {
 #[pymodule]
 fn _incal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_run, m)?)?;
+    m.add_function(wrap_pyfunction!(_run_array, m)?)?;
     m.add_function(wrap_pyfunction!(_version, m)?)?;
     Ok(())
 }

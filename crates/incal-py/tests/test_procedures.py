@@ -192,3 +192,33 @@ def test_the_package_ships_its_type_stubs():
         text = (pkg / stub).read_text()
         for name in module.__all__:
             assert f"def {name}(" in text or f"class {name}" in text or f"{name}:" in text, (stub, name)
+
+
+def test_noise_reads_numpy_arrays_in_place(tmp_path):
+    """A float64 array is the binary record itself (no copy, no text): the
+    same numbers and the same input hash as the file of its bytes; f32,
+    strided and several channels give what their files give."""
+    rng = np.random.default_rng(5)
+    x = rng.normal(0.0, 0.01, 200_000)
+    y = rng.normal(0.0, 0.02, 200_000).astype(np.float32)
+    x.astype("<f8").tofile(tmp_path / "x.bin")
+    from_array = incal.noise(gx=x, rate_hz=100)
+    from_file = incal.noise(tmp_path / "x.bin", format="f64le", channels=1, rate_hz=100, columns="gx=ch1")
+    assert from_array.coefficients == from_file.coefficients
+    assert from_array.document["inputs"][0]["path"] == "<memory>"
+    assert from_array.document["inputs"][0]["sha256"] == from_file.document["inputs"][0]["sha256"]
+    # float32 stays float32; a strided view is made contiguous first.
+    y.tofile(tmp_path / "y.bin")
+    assert incal.noise(gy=y, rate_hz=100).coefficients == incal.noise(
+        tmp_path / "y.bin", format="f32le", channels=1, rate_hz=100, columns="gy=ch1").coefficients
+    strided = x[::2]
+    np.ascontiguousarray(strided).tofile(tmp_path / "s.bin")
+    assert incal.noise(gx=strided, rate_hz=50).coefficients == incal.noise(
+        tmp_path / "s.bin", format="f64le", channels=1, rate_hz=50, columns="gx=ch1").coefficients
+    # Two channels: interleaved as the two-channel file.
+    np.column_stack([x, y.astype(np.float64)]).tofile(tmp_path / "xy.bin")
+    both = incal.noise(gx=x, gy=y.astype(np.float64), rate_hz=100)
+    assert both.coefficients == incal.noise(
+        tmp_path / "xy.bin", format="f64le", channels=2, rate_hz=100, columns="gx=ch1,gy=ch2").coefficients
+    with pytest.raises(incal.InputError, match="column 'gy' has 3 values"):
+        incal.noise(gx=x, gy=np.zeros(3), rate_hz=100)

@@ -26,7 +26,7 @@ import json
 import os
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
-from ._incal import _run, _version
+from ._incal import _run, _run_array, _version
 
 __version__ = _version()
 
@@ -103,11 +103,16 @@ def _options(options: Dict[str, Any]) -> List[str]:
     return out
 
 
-def run(words: Sequence[str], stdin: Optional[bytes] = None) -> Tuple[bytes, List[str]]:
+def run(words: Sequence[str], stdin: Optional[bytes] = None, array: Any = None) -> Tuple[bytes, List[str]]:
     """Run the incal command line ``words`` (without ``incal``) in process:
-    its standard output and its standard-error lines (warnings). A failure
-    raises :class:`InputError` (exit 2) or :class:`IncalError`."""
-    code, out, err = _run([str(w) for w in words], stdin)
+    its standard output and its standard-error lines (warnings). ``array``
+    (a C-contiguous float64 or float32 numpy array) is the binary record
+    ``--input -`` opens, read in place. A failure raises
+    :class:`InputError` (exit 2) or :class:`IncalError`."""
+    if array is not None:
+        code, out, err = _run_array([str(w) for w in words], array)
+    else:
+        code, out, err = _run([str(w) for w in words], stdin)
     if code != 0:
         message = err[-1] if err else f"incal exited with code {code}"
         if code == 2:
@@ -256,8 +261,49 @@ def _read_csv(csv: bytes):
     return pd.read_csv(io.StringIO(text))
 
 
+def _noise_array(options: Dict[str, Any]):
+    """``incal.noise`` with channels as numpy arrays by keyword: the
+    ``--input`` words and one array of interleaved samples, read by the core
+    in place. One float64 (or float32) C-contiguous 1-D array is not
+    copied; several channels are interleaved into one array (one copy,
+    no text). ``None`` when the arrays do not fit (a ``time_s`` column,
+    non-numeric data, a big-endian machine): the CSV path then."""
+    import sys
+
+    import numpy as np
+
+    names = [k for k in options if _is_array(options[k])]
+    if not names or "time_s" in names or sys.byteorder != "little":
+        return None
+    if any(k in options for k in ("format", "channels", "columns")):
+        return None
+    arrays = [np.asarray(options[k]) for k in names]
+    if any(a.ndim != 1 or a.dtype.kind not in "fiu" for a in arrays):
+        return None
+    n = len(arrays[0])
+    for name, a in zip(names, arrays):
+        if len(a) != n:
+            raise InputError(f"column '{name}' has {len(a)} values, '{names[0]}' has {n}")
+    dtype = np.float32 if all(a.dtype == np.float32 for a in arrays) else np.float64
+    if len(arrays) == 1:
+        data = np.ascontiguousarray(arrays[0], dtype=dtype)  # no copy when it already is
+    else:
+        data = np.column_stack([a.astype(dtype, copy=False) for a in arrays])
+    for k in names:
+        del options[k]
+    fmt = "f32le" if dtype == np.float32 else "f64le"
+    columns = ",".join(f"{k}=ch{i + 1}" for i, k in enumerate(names))
+    return ["--input", "-", "--format", fmt, "--channels", str(len(names)), "--columns", columns], data
+
+
 def _reduce(command: Sequence[str], data: Any, options: Dict[str, Any]) -> Result:
     options = dict(options)
+    if list(command) == ["noise"] and data is None:
+        fast = _noise_array(options)
+        if fast is not None:
+            words, array = fast
+            out, err = run(list(command) + words + ["--json"] + _options(options), array=array)
+            return Result(json.loads(out), err, out.decode())
     words, stdin = _data(data, options)
     out, err = run(list(command) + words + ["--json"] + _options(options), stdin)
     return Result(json.loads(out), err, out.decode())
