@@ -126,6 +126,8 @@ def reduce(
         from . import InputError
 
         raise InputError("batch: give serial or serial_from_stem, not both")
+    if not paths:
+        return Batch([], [], [] if records is not None else None)
     own = None
     if client is None:
         workers = max(1, min(len(paths), os.cpu_count() or 1))
