@@ -631,7 +631,7 @@ fn gyro_positions_from_checks_the_unit_u_and_dof_of_k1() {
             &[p(&pos), "--from", p(from)],
         )
     };
-    ok(&positions(&write("good.json", &text)));
+    ok(&positions(&write_unique("good.json", &text)));
     let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
     let k1 = doc["coefficients"]["K1"]["value"].as_f64().unwrap();
     for (name, key, value, needle) in [
@@ -679,7 +679,7 @@ fn gyro_positions_from_checks_the_unit_u_and_dof_of_k1() {
 #[test]
 fn result_documents_are_checked_before_compare_and_report() {
     let out = tumble_result_json("tc.csv");
-    let good = write("good.json", &out);
+    let good = write_unique("good.json", &out);
     let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
     type Change = Box<dyn Fn(&mut serde_json::Value)>;
     let cases: Vec<(&str, Change, &str)> = vec![

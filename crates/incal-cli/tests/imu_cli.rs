@@ -135,7 +135,7 @@ fn ferraris_refuses_bad_sections() {
 
 #[test]
 fn ferraris_round_trip_from_the_simulator() {
-    let csv = tmp("fe.csv");
+    let csv = unique("fe.csv");
     let truth = tmp("fe_truth.json");
     let o = run(&[
         "simulate",
@@ -468,7 +468,7 @@ fn apply_refuses_a_calibration_of_another_procedure() {
 
 #[test]
 fn export_imucal_copies_a_ferraris_calibration_verbatim() {
-    let raw = tmp("fe.csv");
+    let raw = unique("fe.csv");
     ok(&run(&[
         "simulate",
         "imu",

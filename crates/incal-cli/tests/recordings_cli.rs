@@ -28,7 +28,7 @@ fn quantised(text: &str, resolution_s: f64) -> String {
 
 /// A 30 s, 100 Hz gyro noise record with `time_s` (seeded).
 fn noise_record(name: &str, seed: &str) -> std::path::PathBuf {
-    let f = tmp(name);
+    let f = unique(name);
     ok(&run(&[
         "simulate",
         "noise",
@@ -61,7 +61,7 @@ const RANDOM_SESSION: [&str; 8] = [
 
 /// `simulate imu --sequence SEQUENCE EXTRA… -o NAME`, the file written.
 fn simulate_imu(sequence: &str, extra: &[&str], name: &str) -> std::path::PathBuf {
-    let f = tmp(name);
+    let f = unique(name);
     let mut args = vec!["simulate", "imu", "--sequence", sequence];
     args.extend_from_slice(extra);
     args.extend(["-o", p(&f)]);
@@ -590,7 +590,7 @@ fn sort_time_puts_rows_in_order_and_says_how_many() {
 /// of 9.8 "g") carries `unit-suspect`; the same record at 1 g does not.
 #[test]
 fn an_accelerometer_record_in_the_wrong_unit_is_named() {
-    let f = tmp("accel.csv");
+    let f = unique("accel.csv");
     ok(&run(&[
         "simulate",
         "noise",
@@ -750,8 +750,8 @@ fn misalign_raw_records_take_repeats_and_count_lost_samples() {
 #[test]
 fn imu_apply_copies_stamps_under_the_policy() {
     let text = autocal_session();
-    let session = write("apply_session.csv", &text);
-    let cal = tmp("apply_cal.json");
+    let session = write_unique("apply_session.csv", &text);
+    let cal = unique("apply_cal.json");
     std::fs::write(
         &cal,
         ok(&run(&[
