@@ -518,3 +518,167 @@ fn binary_samples_that_are_not_finite_or_overflow_are_named() {
         "beyond the readable range",
     );
 }
+
+/// `incal export kalibr`: the gyro's and the accelerometer's noise
+/// results as Kalibr's imu.yaml, every value the largest axis's term
+/// converted to SI continuous time (checked here from the results' own
+/// coefficients), read back as numbers; a term not identified on an axis,
+/// a result of the wrong quantity or rate are refused by name.
+#[test]
+fn kalibr_export_converts_the_terms_and_refuses_what_is_missing() {
+    let sim = |name: &str, args: &[&str]| {
+        let p = unique(name);
+        let mut a = vec![
+            "simulate",
+            "noise",
+            "--rate-hz",
+            "100",
+            "--duration-s",
+            "3600",
+            "--channels",
+            "3",
+            "--seed",
+            "11",
+            "-o",
+            p.to_str().unwrap(),
+        ];
+        a.extend_from_slice(args);
+        ok(&run(&a));
+        p
+    };
+    let g = sim(
+        "kal-gyro.csv",
+        &[
+            "--quantity",
+            "gyro",
+            "--arw-deg-rth",
+            "0.2",
+            "--rrw-deg-h-rth",
+            "40",
+        ],
+    );
+    let a = sim(
+        "kal-accel.csv",
+        &[
+            "--quantity",
+            "accel",
+            "--vrw-ug-rthz",
+            "60",
+            "--accel-rw-ug-rts",
+            "30",
+        ],
+    );
+    let reduce = |input: &PathBuf, q: &str, name: &str| {
+        let out = unique(name);
+        ok(&run(&[
+            "noise",
+            "--input",
+            p(input),
+            "--rate-hz",
+            "100",
+            "--quantity",
+            q,
+            "--json",
+            "-o",
+            p(&out),
+        ]));
+        out
+    };
+    let gj = reduce(&g, "gyro", "kal-gyro.json");
+    let aj = reduce(&a, "accel", "kal-accel.json");
+    let yaml = ok(&run(&[
+        "export",
+        "kalibr",
+        "--gyro",
+        p(&gj),
+        "--accel",
+        p(&aj),
+    ]));
+    let read: std::collections::BTreeMap<String, f64> = yaml
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| {
+            let (k, v) = l.split_once(':').unwrap();
+            let v = v.split('#').next().unwrap().trim();
+            (k.to_string(), v.parse::<f64>().unwrap())
+        })
+        .collect();
+    let doc = |f: &PathBuf| -> Value {
+        serde_json::from_str(&std::fs::read_to_string(f).unwrap()).unwrap()
+    };
+    let largest = |d: &Value, term: &str| {
+        ["ch1", "ch2", "ch3"]
+            .iter()
+            .map(|c| {
+                d["coefficients"][format!("{c}.{term}")]["value"]
+                    .as_f64()
+                    .unwrap_or_else(|| panic!("{c}.{term} identified"))
+            })
+            .fold(f64::MIN, f64::max)
+    };
+    let (gd, ad) = (doc(&gj), doc(&aj));
+    let rad = std::f64::consts::PI / 180.0;
+    let g0 = 9.80665;
+    let want = [
+        ("gyroscope_noise_density", largest(&gd, "ARW") * rad / 60.0),
+        (
+            "gyroscope_random_walk",
+            largest(&gd, "RRW") * rad / 216_000.0,
+        ),
+        (
+            "accelerometer_noise_density",
+            largest(&ad, "VRW") * 1e-6 * g0,
+        ),
+        (
+            "accelerometer_random_walk",
+            largest(&ad, "acceleration_random_walk") * 1e-6 * g0,
+        ),
+        ("update_rate", 100.0),
+    ];
+    assert_eq!(read.len(), want.len(), "{yaml}");
+    for (k, v) in want {
+        let got = read[k];
+        assert!((got - v).abs() <= 1e-12 * v.abs(), "{k}: {got} vs {v}");
+    }
+    // Near the truth: ARW 0.2 deg/sqrt(h) is 5.8e-5 rad/s/sqrt(Hz).
+    assert!(
+        (read["gyroscope_noise_density"] / (0.2 * rad / 60.0) - 1.0).abs() < 0.05,
+        "{yaml}"
+    );
+    assert!(yaml.lines().all(|l| l.len() < 200));
+
+    // Refusals, one line each, exit 2.
+    let e = run(&["export", "kalibr", "--gyro", p(&aj), "--accel", p(&aj)]);
+    refused(
+        &e,
+        &["kal-accel", "$.options.quantity is \"accel\", not \"gyro\""],
+    );
+    let white = sim(
+        "kal-white.csv",
+        &["--quantity", "gyro", "--arw-deg-rth", "0.2"],
+    );
+    let wj = reduce(&white, "gyro", "kal-white.json");
+    let e = run(&["export", "kalibr", "--gyro", p(&wj), "--accel", p(&aj)]);
+    refused(
+        &e,
+        &[
+            "ch1: RRW was not identified",
+            "gyroscope_random_walk is not written as zero",
+        ],
+    );
+    let tumble = unique("kal-tumble.json");
+    let csv = unique("kal-tumble.csv");
+    ok(&run(&["simulate", "tumble", "-o", p(&csv)]));
+    ok(&run(&[
+        "tumble",
+        "--mount",
+        "pendulum",
+        "--input",
+        p(&csv),
+        "--json",
+        "-o",
+        p(&tumble),
+    ]));
+    let e = run(&["export", "kalibr", "--gyro", p(&tumble), "--accel", p(&aj)]);
+    refused(&e, &["a tumble result, not a noise result"]);
+}

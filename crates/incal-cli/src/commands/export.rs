@@ -1,5 +1,7 @@
 //! `incal export imucal RESULT.json -o cal.json`: an IMU calibration in the
-//! JSON form another tool reads ([`incal::procedures::imu::apply::to_imucal`]).
+//! JSON form another tool reads ([`incal::procedures::imu::apply::to_imucal`]);
+//! `incal export kalibr --gyro G.json --accel A.json -o imu.yaml`: noise
+//! terms as Kalibr's IMU noise model ([`incal::procedures::noise::export`]).
 
 use std::path::PathBuf;
 
@@ -12,6 +14,22 @@ use crate::output::{json_text, write_text};
 pub enum Command {
     /// An imu ferraris, multipos or autocal result as imucal's calibration JSON (FerrarisCalibrationInfo, loaded by imucal's load_calibration_info).
     Imucal(Args),
+    /// Gyro and accelerometer noise results (incal noise --quantity gyro / accel) as Kalibr's imu.yaml: noise densities and random walks in SI units, the largest axis per sensor.
+    Kalibr(KalibrArgs),
+}
+
+/// Options of `incal export kalibr`.
+#[derive(clap::Args, Debug)]
+pub struct KalibrArgs {
+    /// The gyro noise result (incal noise --quantity gyro --json).
+    #[arg(long, value_name = "FILE")]
+    pub gyro: PathBuf,
+    /// The accelerometer noise result (incal noise --quantity accel --json), recorded at the same rate.
+    #[arg(long, value_name = "FILE")]
+    pub accel: PathBuf,
+    /// Write to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
 }
 
 /// Options of `incal export imucal`.
@@ -32,6 +50,13 @@ pub fn run(c: &Command) -> CliResult<()> {
             let cal =
                 incal::procedures::imu::apply::to_imucal(&doc).map_err(|e| in_file(&name, e))?;
             write_text(a.output.as_deref(), &json_text(&cal))
+        }
+        Command::Kalibr(a) => {
+            let (gname, _, gyro) = read_document(&a.gyro)?;
+            let (aname, _, accel) = read_document(&a.accel)?;
+            let imu = incal::procedures::noise::export::kalibr(&gyro, &gname, &accel, &aname)
+                .map_err(|e| crate::error::CliError::Input(e.to_string()))?;
+            write_text(a.output.as_deref(), &imu.to_yaml())
         }
     }
 }

@@ -48,6 +48,7 @@
 //! record's SHA-256 runs on a thread of its own ([`input::read_mapped`]).
 
 pub mod document;
+pub mod export;
 pub mod input;
 pub mod sim;
 
