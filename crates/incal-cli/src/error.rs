@@ -13,6 +13,9 @@ pub enum CliError {
     /// A record was stored but its output could not be written (exit code
     /// 3): retrying the same `add` finds the record and writes nothing new.
     Stored(String),
+    /// The output was written and the user asked to stop on what it says
+    /// (`--fail-on`: a fail verdict, results that differ): exit code 3.
+    Stop(String),
 }
 
 impl fmt::Display for CliError {
@@ -20,7 +23,7 @@ impl fmt::Display for CliError {
         match self {
             CliError::Input(m) => f.write_str(m),
             CliError::Failure(e) => write!(f, "{e:#}"),
-            CliError::Stored(m) => f.write_str(m),
+            CliError::Stored(m) | CliError::Stop(m) => f.write_str(m),
         }
     }
 }
@@ -37,7 +40,7 @@ impl CliError {
         match self {
             CliError::Input(_) => 2,
             CliError::Failure(_) => 1,
-            CliError::Stored(_) => 3,
+            CliError::Stored(_) | CliError::Stop(_) => 3,
         }
     }
 }

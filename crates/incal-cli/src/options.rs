@@ -21,12 +21,78 @@ pub fn db_choice(db: Option<&std::path::Path>) -> (std::path::PathBuf, bool) {
     }
 }
 
+/// `--fail-on` with `--limits`: which overall verdicts stop a script
+/// (exit 3, after the result is written).
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FailOn {
+    /// Stop on fail, conditional-fail and not-determined (no conformity can be stated).
+    Fail,
+    /// Also stop on conditional-pass.
+    Conditional,
+}
+
+/// Exit 3 (after the output) when `doc`'s overall verdict is one that
+/// `fail_on` stops on, naming the coefficients behind it.
+pub fn check_fail_on(
+    doc: &incal::document::ResultDocument,
+    fail_on: Option<FailOn>,
+) -> crate::error::CliResult<()> {
+    use incal::document::limits::Verdict;
+    let (Some(f), Some(v)) = (fail_on, doc.verdict) else {
+        return Ok(());
+    };
+    let from = match f {
+        FailOn::Fail => Verdict::NotDetermined,
+        FailOn::Conditional => Verdict::ConditionalPass,
+    };
+    if v < from {
+        return Ok(());
+    }
+    let names: Vec<String> = doc
+        .verdicts
+        .iter()
+        .flatten()
+        .filter(|(_, c)| c.verdict >= from)
+        .map(|(n, c)| format!("{n} {}", c.verdict))
+        .collect();
+    let shown = names.iter().take(6).cloned().collect::<Vec<_>>().join(", ");
+    let more = if names.len() > 6 {
+        format!(" and {} more", names.len() - 6)
+    } else {
+        String::new()
+    };
+    let word = match f {
+        FailOn::Fail => "fail",
+        FailOn::Conditional => "conditional",
+    };
+    Err(crate::error::CliError::Stop(format!(
+        "verdict {v} ({shown}{more}): stopped by --fail-on {word}"
+    )))
+}
+
 /// A records store as named in messages: its path, or its PostgreSQL URL
 /// without the password.
 pub fn store_name(path: &std::path::Path) -> String {
     match path.to_str() {
         Some(u) if incal_records::is_postgres_url(u) => incal_records::display_url(u),
         _ => path.display().to_string(),
+    }
+}
+
+/// A records-store error as one line naming the store once
+/// (`NAME: …`): bad input and unusable stores exit 2, a broken chain and
+/// database failures exit 1.
+pub fn store_error(name: &str, e: incal_records::Error) -> crate::error::CliError {
+    let msg = e.to_string();
+    let msg = if msg.starts_with(&format!("{name}: ")) {
+        msg
+    } else {
+        format!("{name}: {msg}")
+    };
+    if e.is_input() {
+        crate::error::CliError::Input(msg)
+    } else {
+        crate::error::CliError::Failure(anyhow::anyhow!("{msg}"))
     }
 }
 

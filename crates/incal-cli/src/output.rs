@@ -29,9 +29,12 @@ pub struct ResultArgs {
     /// Further identity or conditions, KEY=VALUE (repeatable), e.g. --meta operator=lee --meta temperature_c=23.
     #[arg(long = "meta", value_name = "KEY=VALUE")]
     pub meta: Vec<String>,
-    /// Limits file (TOML): judge every limited coefficient (pass, fail, conditional-pass, conditional-fail).
+    /// Limits file (TOML): judge every limited coefficient (pass, conditional-pass, not-determined, conditional-fail, fail).
     #[arg(long, value_name = "FILE")]
     pub limits: Option<PathBuf>,
+    /// With --limits: exit 3 after writing the result when the overall verdict is fail, conditional-fail or not-determined (fail), or any but pass (conditional).
+    #[arg(long, value_enum, value_name = "WHEN", requires = "limits")]
+    pub fail_on: Option<crate::options::FailOn>,
 }
 
 /// Judge `doc` against the limits file `path` (its hash joins the inputs).
@@ -83,7 +86,8 @@ impl ResultArgs {
         } else {
             render(&doc)
         };
-        write_text(self.output.as_deref(), &text)
+        write_text(self.output.as_deref(), &text)?;
+        crate::options::check_fail_on(&doc, self.fail_on)
     }
 }
 

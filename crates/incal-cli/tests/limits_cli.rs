@@ -108,3 +108,219 @@ fn guard_band_and_simple_verdicts_through_the_binary() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Limits for a production line: one wildcard serves every channel; a
+/// term a channel did not identify is `not-determined`, not a refusal; a
+/// misspelled name is still refused; `--fail-on` turns a verdict into
+/// exit 3 after the result is written; `compare --fail-on differs` stops
+/// on |En| > 1; `report --fail-on` as the reduction.
+#[test]
+fn wildcards_not_determined_and_fail_on() {
+    let csv = unique("prod-noise.csv");
+    ok(&run(&[
+        "simulate",
+        "noise",
+        "--quantity",
+        "gyro",
+        "--rate-hz",
+        "100",
+        "--duration-s",
+        "3600",
+        "--arw-deg-rth",
+        "0.15",
+        "--rrw-deg-h-rth",
+        "10",
+        "--channels",
+        "3",
+        "--seed",
+        "3",
+        "-o",
+        p(&csv),
+    ]));
+    let limits = write_unique(
+        "prod.toml",
+        "[noise]\n\"*.ARW\" = { max = 0.3, unit = \"deg/sqrt(h)\" }\n\"*.RRW\" = { max = 100 }\n",
+    );
+    let base = [
+        "noise",
+        "--input",
+        p(&csv),
+        "--rate-hz",
+        "100",
+        "--quantity",
+        "gyro",
+        "--json",
+        "--limits",
+        p(&limits),
+    ];
+    let o = run(&base);
+    let v = json_of(&o);
+    assert!(
+        v["coefficients"].get("ch3.RRW").is_none(),
+        "this seed leaves ch3's RRW unidentified"
+    );
+    let verdicts = &v["verdicts"];
+    for ch in ["ch1", "ch2", "ch3"] {
+        assert_eq!(
+            verdicts[format!("{ch}.ARW")]["verdict"],
+            "pass",
+            "{verdicts}"
+        );
+    }
+    assert_eq!(verdicts["ch1.RRW"]["verdict"], "pass");
+    assert_eq!(verdicts["ch3.RRW"]["verdict"], "not-determined");
+    assert_eq!(verdicts["ch3.RRW"]["max"], 100.0);
+    assert_eq!(v["verdict"], "not-determined");
+    // Exit 3 with --fail-on fail, the result written first.
+    let mut stop = base.to_vec();
+    stop.extend(["--fail-on", "fail"]);
+    let o = run(&stop);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let written: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(written["verdict"], "not-determined");
+    let err = stderr(&o);
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("verdict not-determined (ch3.RRW not-determined): stopped by --fail-on fail"),
+        "{err}"
+    );
+    // The text report names it too.
+    let text = stdout(&run(&[
+        "noise",
+        "--input",
+        p(&csv),
+        "--rate-hz",
+        "100",
+        "--quantity",
+        "gyro",
+        "--limits",
+        p(&limits),
+    ]));
+    assert!(
+        text.contains("ch3.RRW: not-determined (limited, but not reported by this result)"),
+        "{text}"
+    );
+    // A misspelled term, a wildcard that matches nothing: refused.
+    for (body, want) in [
+        (
+            "[noise]\n\"ch1.ARV\" = { max = 1 }\n",
+            "ch1.ARV: not a coefficient of this result",
+        ),
+        (
+            "[noise]\n\"*.VRW\" = { max = 1 }\n",
+            "the wildcard matches no coefficient",
+        ),
+    ] {
+        let l = write_unique("prod-bad.toml", body);
+        let mut a = base[..base.len() - 1].to_vec();
+        a.push(p(&l));
+        refused(&run(&a), &[want]);
+    }
+    // --fail-on needs --limits.
+    let e = run(&[
+        "noise",
+        "--input",
+        p(&csv),
+        "--rate-hz",
+        "100",
+        "--fail-on",
+        "fail",
+    ]);
+    assert_eq!(e.status.code(), Some(2));
+
+    // A tumble: conditional-pass stops only with --fail-on conditional.
+    let t = unique("prod-t.csv");
+    ok(&run(&["simulate", "tumble", "--seed", "2", "-o", p(&t)]));
+    let plain: Value = json_of(&run(&[
+        "tumble",
+        "--mount",
+        "pendulum",
+        "--input",
+        p(&t),
+        "--json",
+    ]));
+    let c = &plain["coefficients"]["K0"];
+    let (x, u) = (c["value"].as_f64().unwrap(), c["U95"].as_f64().unwrap());
+    let l = write_unique(
+        "prod-t.toml",
+        &format!(
+            "rule = \"guard-band\"\n[tumble]\nK0 = {{ min = {}, max = {} }}\n",
+            x - 0.5 * u,
+            x + 2.0 * u
+        ),
+    );
+    let reduce = |extra: &[&str]| {
+        let mut a = vec![
+            "tumble",
+            "--mount",
+            "pendulum",
+            "--input",
+            p(&t),
+            "--json",
+            "--limits",
+            p(&l),
+        ];
+        a.extend_from_slice(extra);
+        run(&a)
+    };
+    assert_eq!(reduce(&[]).status.code(), Some(0));
+    assert_eq!(reduce(&["--fail-on", "fail"]).status.code(), Some(0));
+    let o = reduce(&["--fail-on", "conditional"]);
+    assert_eq!(o.status.code(), Some(3));
+    assert!(stderr(&o).contains(
+        "verdict conditional-pass (K0 conditional-pass): stopped by --fail-on conditional"
+    ));
+    let doc = write_unique("prod-t.json", &stdout(&reduce(&[])));
+    let o = run(&[
+        "report",
+        p(&doc),
+        "--limits",
+        p(&l),
+        "--fail-on",
+        "conditional",
+        "-o",
+        p(&unique("prod.html")),
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+
+    // compare --fail-on differs: En beyond 1 stops, agreement does not.
+    let t2 = unique("prod-t2.csv");
+    ok(&run(&[
+        "simulate",
+        "tumble",
+        "--seed",
+        "3",
+        "--k0",
+        "0.01",
+        "-o",
+        p(&t2),
+    ]));
+    let other = write_unique(
+        "prod-t2.json",
+        &stdout(&run(&[
+            "tumble",
+            "--mount",
+            "pendulum",
+            "--input",
+            p(&t2),
+            "--json",
+        ])),
+    );
+    assert_eq!(
+        run(&["compare", p(&doc), p(&doc), "--fail-on", "differs"])
+            .status
+            .code(),
+        Some(0)
+    );
+    let o = run(&["compare", p(&doc), p(&other), "--fail-on", "differs"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("differ beyond their U95 (K0 En"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(
+        !stdout(&o).is_empty(),
+        "the comparison is written before the stop"
+    );
+}

@@ -222,3 +222,56 @@ def test_noise_reads_numpy_arrays_in_place(tmp_path):
         tmp_path / "xy.bin", format="f64le", channels=2, rate_hz=100, columns="gx=ch1,gy=ch2").coefficients
     with pytest.raises(incal.InputError, match="column 'gy' has 3 values"):
         incal.noise(gx=x, gy=np.zeros(3), rate_hz=100)
+
+
+def test_kalibr_yaml_reads_back_in_pyyaml(tmp_path):
+    """Kalibr reads imu.yaml with PyYAML: every value comes back as a float
+    equal to the largest axis's term converted to SI continuous time."""
+    import math
+
+    import yaml
+
+    def sim(name, *args):
+        p = tmp_path / name
+        incal.run(["simulate", "noise", "--rate-hz", "100", "--duration-s", "3600", "--channels", "3",
+                   "--seed", "11", "-o", p, *args])
+        return p
+
+    g = incal.noise(sim("g.csv", "--quantity", "gyro", "--arw-deg-rth", "0.2", "--rrw-deg-h-rth", "40"),
+                    rate_hz=100, quantity="gyro")
+    a = incal.noise(sim("a.csv", "--quantity", "accel", "--vrw-ug-rthz", "60", "--accel-rw-ug-rts", "30"),
+                    rate_hz=100, quantity="accel")
+    text = incal.export_kalibr(g, a, tmp_path / "imu.yaml")
+    y = yaml.safe_load((tmp_path / "imu.yaml").read_text())
+    assert yaml.safe_load(text) == y
+
+    def largest(r, term):
+        return max(r.coefficients[f"ch{k}.{term}"]["value"] for k in (1, 2, 3))
+
+    want = {
+        "gyroscope_noise_density": largest(g, "ARW") * math.pi / 180 / 60,
+        "gyroscope_random_walk": largest(g, "RRW") * math.pi / 180 / 3600 / 60,
+        "accelerometer_noise_density": largest(a, "VRW") * 1e-6 * 9.80665,
+        "accelerometer_random_walk": largest(a, "acceleration_random_walk") * 1e-6 * 9.80665,
+        "update_rate": 100.0,
+    }
+    assert set(y) == set(want)
+    for k, v in want.items():
+        assert isinstance(y[k], float), (k, y[k])
+        assert y[k] == pytest.approx(v, rel=1e-12), k
+    white = incal.noise(sim("w.csv", "--quantity", "gyro", "--arw-deg-rth", "0.2"), rate_hz=100, quantity="gyro")
+    with pytest.raises(incal.InputError, match="RRW was not identified"):
+        incal.export_kalibr(white, a)
+
+
+def test_fail_on_stops_with_the_result_kept(tmp_path):
+    data, _ = incal.simulate.tumble(seed=2)
+    r = incal.tumble(data, mount="pendulum")
+    k0 = r.coefficients["K0"]
+    limits = tmp_path / "l.toml"
+    limits.write_text(f'[tumble]\nK0 = {{ max = {k0["value"] - 1e-9} }}\n')
+    with pytest.raises(incal.IncalError, match="stopped by --fail-on fail") as e:
+        incal.tumble(data, mount="pendulum", limits=limits, fail_on="fail")
+    assert e.value.code == 3
+    assert e.value.result.document["verdict"] == "fail"
+    assert e.value.result.coefficients == r.coefficients

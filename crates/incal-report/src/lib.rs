@@ -142,7 +142,7 @@ fn verdict_of(doc: &ResultDocument, name: Option<&str>) -> Option<Judged> {
 /// words get one).
 fn verdict_html(v: &str) -> String {
     let class = match v {
-        "pass" | "fail" | "conditional-pass" | "conditional-fail" => v,
+        "pass" | "fail" | "conditional-pass" | "conditional-fail" | "not-determined" => v,
         _ => "other",
     };
     format!("<span class=\"verdict verdict-{class}\">{}</span>", esc(v))
@@ -165,7 +165,7 @@ td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: now
 .verdict { font-weight: bold; }
 .verdict-pass { color: #0a6e0a; }
 .verdict-fail { color: #b00000; }
-.verdict-conditional-pass, .verdict-conditional-fail { color: #9a5800; }
+.verdict-conditional-pass, .verdict-conditional-fail, .verdict-not-determined { color: #9a5800; }
 ul.warnings li { color: #8a3b00; }
 figure.plot { margin: 1em 0 1.4em; }
 figure.plot svg { display: block; width: 100%; max-width: 760px; height: auto; border: 1px solid #ddd; }
@@ -452,6 +452,26 @@ fn coefficients_html(doc: &ResultDocument) -> String {
     header.push("verdict".into());
     let mut s = String::from("<section id=\"coefficients\">\n<h2>Coefficients</h2>\n");
     s.push_str(&html_table("coefficients", &header, &rows));
+    // Limits on terms this result does not report: no row above.
+    let missing: Vec<String> = doc
+        .verdicts
+        .iter()
+        .flatten()
+        .filter(|(n, _)| doc.coefficients.get(n).is_none())
+        .map(|(n, v)| {
+            format!(
+                "<span class=\"name\">{}</span> {}",
+                esc(n),
+                verdict_html(v.verdict.as_str())
+            )
+        })
+        .collect();
+    if !missing.is_empty() {
+        s.push_str(&format!(
+            "<p class=\"note\">Limited but not reported by this result (not identified): {}.</p>\n",
+            missing.join(", ")
+        ));
+    }
     s.push_str("<p class=\"note\">u: standard uncertainty; U95 = k95·u covers the value with 95 % probability (k95: Student t for dof; inf: known variance). Values in engineering units (ug = µg; angles in arcsec, or deg from 0.1 rad).");
     if !any_verdict {
         s.push_str(" No limits were given: no verdict.");

@@ -65,6 +65,17 @@ pub fn render(doc: &ResultDocument) -> String {
         header.push("verdict [min, max]");
     }
     s.push_str(&table(&header, &rows));
+    // Limits on terms this result does not report: no row above.
+    for (name, v) in verdicts
+        .into_iter()
+        .flatten()
+        .filter(|(n, _)| doc.coefficients.get(n).is_none())
+    {
+        s.push_str(&format!(
+            "{name}: {} (limited, but not reported by this result)\n",
+            v.verdict
+        ));
+    }
     s.push_str(
         "u: standard uncertainty; U95 = k95 u covers the value with 95 % probability (k95: Student t for dof; inf: known variance)\n",
     );

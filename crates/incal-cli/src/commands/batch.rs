@@ -12,7 +12,9 @@
 //!
 //! Exit code: 0 when every recording was reduced; 2 when some were refused
 //! as bad input (each named on its own line); 1 when some failed
-//! otherwise.
+//! otherwise; 3 when all were reduced but some verdicts stop the line
+//! (`-- --limits L.toml --fail-on fail`): those results are written and
+//! recorded like the others, and named.
 
 use std::ffi::OsString;
 use std::io::IsTerminal;
@@ -76,6 +78,9 @@ struct Item {
     record: Option<i64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     already_stored: Option<bool>,
+    /// The `--fail-on` message of a result whose verdict stops the line.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    stopped: Option<String>,
     /// The result document exactly as the procedure wrote it (every
     /// number to the last bit, not re-parsed).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -214,10 +219,14 @@ pub fn run(a: &Args) -> CliResult<()> {
     };
     let outcomes = reduce_all(a, &words, &inputs);
     let mut items = Vec::with_capacity(outcomes.len());
-    let (mut failed_input, mut failed_other) = (0usize, 0usize);
+    let (mut failed_input, mut failed_other, mut stopped) = (0usize, 0usize, 0usize);
     for o in outcomes {
         let input = o.input.display().to_string();
-        if o.run.code != 0 {
+        // Exit 3 with a document: a verdict that stops the line (the
+        // result itself is whole).
+        let stop = (o.run.code == 3 && !o.run.stdout.is_empty())
+            .then(|| o.run.stderr.last().cloned().unwrap_or_default());
+        if o.run.code != 0 && stop.is_none() {
             let message = o
                 .run
                 .stderr
@@ -238,12 +247,22 @@ pub fn run(a: &Args) -> CliResult<()> {
                 output: None,
                 record: None,
                 already_stored: None,
+                stopped: None,
                 result: None,
             });
             continue;
         }
-        for w in &o.run.stderr {
+        let warnings = if stop.is_some() {
+            &o.run.stderr[..o.run.stderr.len().saturating_sub(1)]
+        } else {
+            &o.run.stderr[..]
+        };
+        for w in warnings {
             crate::embed::stderr_line(w);
+        }
+        if let Some(m) = &stop {
+            stopped += 1;
+            crate::embed::stderr_line(&format!("{input}: {m}"));
         }
         let text = String::from_utf8_lossy(&o.run.stdout).into_owned();
         let mut item = Item {
@@ -254,6 +273,7 @@ pub fn run(a: &Args) -> CliResult<()> {
             output: None,
             record: None,
             already_stored: None,
+            stopped: stop,
             result: None,
         };
         if let Some(dir) = &a.out_dir {
@@ -305,6 +325,9 @@ pub fn run(a: &Args) -> CliResult<()> {
                 if let Some(r) = it.record {
                     s.push_str(&format!(" (record {r})"));
                 }
+                if let Some(m) = &it.stopped {
+                    s.push_str(&format!(" STOP {m}"));
+                }
             } else {
                 s.push_str(&format!(
                     "FAIL  {}",
@@ -321,6 +344,9 @@ pub fn run(a: &Args) -> CliResult<()> {
     };
     write_text(a.output.as_deref(), &summary)?;
     match (failed_input, failed_other) {
+        (0, 0) if stopped > 0 => Err(CliError::Stop(format!(
+            "batch: {stopped} of {n} results stopped by --fail-on (named above)"
+        ))),
         (0, 0) => Ok(()),
         (_, 0) => Err(CliError::Input(format!(
             "batch: {failed} of {n} recordings refused (named above)"
@@ -332,18 +358,7 @@ pub fn run(a: &Args) -> CliResult<()> {
 }
 
 fn store_error(db: &Path, e: incal_records::Error) -> CliError {
-    let name = crate::options::store_name(db);
-    let msg = e.to_string();
-    let msg = if msg.starts_with(&format!("{name}: ")) {
-        msg
-    } else {
-        format!("{name}: {msg}")
-    };
-    if e.is_input() {
-        CliError::Input(msg)
-    } else {
-        CliError::Failure(anyhow::anyhow!("{msg}"))
-    }
+    crate::options::store_error(&crate::options::store_name(db), e)
 }
 
 /// The command line that reduces one recording.

@@ -252,20 +252,7 @@ fn import(a: &ImportArgs) -> CliResult<()> {
 /// a broken chain and database failures exit 1.
 /// A store error as one line naming the store once (`PATH: …`).
 fn store_err(db: &DbArgs) -> impl Fn(StoreError) -> CliError + '_ {
-    move |e| {
-        let path = db.name();
-        let msg = e.to_string();
-        let msg = if msg.starts_with(&format!("{path}: ")) {
-            msg
-        } else {
-            format!("{path}: {msg}")
-        };
-        if e.is_input() {
-            CliError::Input(msg)
-        } else {
-            CliError::Failure(anyhow::anyhow!("{msg}"))
-        }
-    }
+    move |e| crate::options::store_error(&db.name(), e)
 }
 
 fn open(db: &DbArgs, create: bool) -> CliResult<Store> {

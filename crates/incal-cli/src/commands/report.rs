@@ -26,6 +26,9 @@ pub struct Args {
     /// Records store (SQLite file or postgresql:// URL) for the history plots of the limited coefficients (default: $INCAL_DB, else incal.db; used when given or present).
     #[arg(long, value_name = "PATH|URL")]
     pub db: Option<PathBuf>,
+    /// With --limits: exit 3 after writing the report when the overall verdict is fail, conditional-fail or not-determined (fail), or any but pass (conditional).
+    #[arg(long, value_enum, value_name = "WHEN", requires = "limits")]
+    pub fail_on: Option<crate::options::FailOn>,
 }
 
 /// `incal report`.
@@ -54,7 +57,8 @@ pub fn run(a: &Args) -> CliResult<()> {
     let opts = RenderOptions { date: None, record };
     let html = incal_report::render_html_with(&doc, &history, &opts)
         .map_err(|e| CliError::Failure(anyhow::anyhow!("{e}")))?;
-    write_text(a.output.as_deref(), &html)
+    write_text(a.output.as_deref(), &html)?;
+    crate::options::check_fail_on(&doc, a.fail_on)
 }
 
 /// The records store, checked whole, when the result has a serial and a

@@ -48,6 +48,7 @@ __all__ = [
     "read_result",
     "compare",
     "apply",
+    "export_kalibr",
     "plan",
     "simulate",
     "batch",
@@ -57,12 +58,26 @@ __all__ = [
 
 
 class IncalError(Exception):
-    """A command failed (the CLI's exit 1, or 3 for a record stored whose
-    output could not be written). ``code`` is the CLI's exit code."""
+    """A command failed (the CLI's exit 1), or stopped after writing its
+    output (exit 3: ``fail_on`` met by a verdict or a comparison, or a
+    record stored whose output could not be written). ``code`` is the
+    CLI's exit code; ``output`` what the command wrote before it stopped
+    (the result document of a ``fail_on`` stop: ``incal.Result`` of it is
+    ``error.result``)."""
 
-    def __init__(self, message: str, code: int = 1):
+    def __init__(self, message: str, code: int = 1, output: bytes = b""):
         super().__init__(message)
         self.code = code
+        self.output = output
+
+    @property
+    def result(self) -> "Optional[Result]":
+        """The result written before a ``fail_on`` stop, if any."""
+        try:
+            doc = json.loads(self.output)
+        except ValueError:
+            return None
+        return Result(doc, text=self.output.decode()) if isinstance(doc, dict) and "schema" in doc else None
 
 
 class InputError(IncalError, ValueError):
@@ -117,7 +132,7 @@ def run(words: Sequence[str], stdin: Optional[bytes] = None, array: Any = None) 
         message = err[-1] if err else f"incal exited with code {code}"
         if code == 2:
             raise InputError(message)
-        raise IncalError(message, code)
+        raise IncalError(message, code, bytes(out))
     return bytes(out), list(err)
 
 
@@ -365,6 +380,31 @@ def apply(calibration: Any, data: Any = None, **columns: Any):
     else:
         out, _ = run(["imu", "apply", "--calibration", os.fspath(calibration)] + words, stdin)
     return _read_csv(out)
+
+
+def export_kalibr(gyro: Any, accel: Any, path: Optional[str] = None) -> str:
+    """``incal export kalibr``: a gyro and an accelerometer noise result
+    (``Result`` or paths; ``incal.noise(..., quantity="gyro")`` and
+    ``quantity="accel"``) as Kalibr's ``imu.yaml`` text (SI continuous
+    time, the largest axis per sensor); written to ``path`` when given. A
+    term not identified on an axis raises :class:`InputError`."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        files = []
+        for name, r in (("gyro", gyro), ("accel", accel)):
+            if isinstance(r, Result):
+                f = os.path.join(d, f"{name}.json")
+                r.to_json(f)
+                files.append(f)
+            else:
+                files.append(os.fspath(r))
+        out, _ = run(["export", "kalibr", "--gyro", files[0], "--accel", files[1]])
+    text = out.decode()
+    if path is not None:
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(text)
+    return text
 
 
 from . import batch, plan, simulate  # noqa: E402  (they use run and _options)

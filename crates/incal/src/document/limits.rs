@@ -26,8 +26,24 @@
 //!   `conditional-pass` when `x` itself is inside and `conditional-fail`
 //!   when it is outside.
 //!
+//! A limit on a term this result does not report (a noise term not
+//! identified on a channel: the channel's slope readings name every term
+//! the fit could give) is `not-determined`: conformity cannot be stated
+//! for it, and the run is not refused. Any other name that is not a
+//! coefficient is refused (a misspelling must not pass unnoticed).
+//!
+//! # Wildcards
+//! A `*` in a name matches any run of characters without a `.`:
+//! `"*.ARW" = { max = 0.2, unit = "deg/sqrt(h)" }` limits the ARW of every
+//! channel, so one limits file serves every channel of a noise result (or
+//! every accelerometer of a gyro-free unit). It is matched against the
+//! result's coefficients and the terms it could report (a channel without
+//! the term gets `not-determined`); a name given in full takes precedence
+//! over a wildcard that also matches it; a wildcard that matches nothing
+//! is refused.
+//!
 //! The overall verdict is the worst one: `fail` before `conditional-fail`
-//! before `conditional-pass` before `pass`.
+//! before `not-determined` before `conditional-pass` before `pass`.
 
 use std::collections::BTreeMap;
 
@@ -58,6 +74,9 @@ pub enum Verdict {
     Pass,
     /// The value is inside, but value ± U95 crosses a limit.
     ConditionalPass,
+    /// The result does not report this term (not identified): no
+    /// conformity can be stated.
+    NotDetermined,
     /// The value is outside, but value ± U95 reaches inside.
     ConditionalFail,
     /// Outside the limits (wholly, with U95, under the guard-band rule).
@@ -65,11 +84,13 @@ pub enum Verdict {
 }
 
 impl Verdict {
-    /// `pass`, `conditional-pass`, `conditional-fail`, `fail`.
+    /// `pass`, `conditional-pass`, `not-determined`, `conditional-fail`,
+    /// `fail`.
     pub fn as_str(self) -> &'static str {
         match self {
             Verdict::Pass => "pass",
             Verdict::ConditionalPass => "conditional-pass",
+            Verdict::NotDetermined => "not-determined",
             Verdict::ConditionalFail => "conditional-fail",
             Verdict::Fail => "fail",
         }
@@ -298,10 +319,56 @@ pub fn judge(
     }
 }
 
+/// True when `name` matches `pattern`, where `*` stands for any run of
+/// characters without a `.`.
+fn glob(pattern: &str, name: &str) -> bool {
+    fn go(p: &[u8], n: &[u8]) -> bool {
+        match p.split_first() {
+            None => n.is_empty(),
+            Some((b'*', rest)) => {
+                // Try every length of the run, up to the next '.'.
+                let mut k = 0;
+                loop {
+                    if go(rest, &n[k..]) {
+                        return true;
+                    }
+                    if k == n.len() || n[k] == b'.' {
+                        return false;
+                    }
+                    k += 1;
+                }
+            }
+            Some((c, rest)) => n.first() == Some(c) && go(rest, &n[1..]),
+        }
+    }
+    go(pattern.as_bytes(), name.as_bytes())
+}
+
+/// The terms `doc` could report but may not have: for a noise result,
+/// every term its slope readings name on each channel (identified or
+/// not), as `(channel.term, unit)`.
+fn possible_terms(doc: &ResultDocument) -> Vec<(String, Unit)> {
+    let mut out: Vec<(String, Unit)> = Vec::new();
+    if let Some(serde_json::Value::Object(chans)) = doc.extra.get("channels") {
+        for (ch, v) in chans {
+            if let Some(serde_json::Value::Object(terms)) = v.get("slope_readings") {
+                for (t, r) in terms {
+                    if let Some(u) = r.get("unit").and_then(|u| u.as_str()) {
+                        out.push((format!("{ch}.{t}"), Unit::parse(u)));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
 /// Judge every limited coefficient of `doc` and set its `verdicts`,
-/// `verdict` and `decision_rule`. Fails (naming the key) when the file has
-/// no limits for this procedure, names a coefficient the result does not
-/// have, or gives a unit that does not fit the coefficient.
+/// `verdict` and `decision_rule` (module docs: wildcards and
+/// `not-determined`). Fails (naming the key) when the file has no limits
+/// for this procedure, names a coefficient the result cannot have, has a
+/// wildcard that matches nothing, or gives a unit that does not fit the
+/// coefficient.
 pub fn apply(doc: &mut ResultDocument, limits: &Limits) -> std::result::Result<(), String> {
     let p: Procedure = doc.procedure;
     let coefs = limits
@@ -314,32 +381,67 @@ pub fn apply(doc: &mut ResultDocument, limits: &Limits) -> std::result::Result<(
             "[{p}] is empty: no limits for this procedure (give at least one coefficient's min or max)"
         ));
     }
+    let names = doc.coefficients.names();
+    let terms = possible_terms(doc);
+    let term_unit = |name: &str| -> Option<Unit> {
+        terms
+            .iter()
+            .find(|(x, _)| x == name)
+            .map(|(_, u)| u.clone())
+    };
+    let could_be = |name: &str| term_unit(name).is_some();
+    // Every name to judge and the key of the file it comes from: names
+    // given in full first, then what the wildcards add.
+    let mut targets: BTreeMap<String, (&String, &Limit)> = BTreeMap::new();
+    for (key, l) in coefs.iter().filter(|(k, _)| !k.contains('*')) {
+        if !names.contains(key) && !could_be(key) {
+            return Err(format!(
+                "[{p}] {key}: not a coefficient of this result (it has {})",
+                names.join(", ")
+            ));
+        }
+        targets.insert(key.clone(), (key, l));
+    }
+    for (key, l) in coefs.iter().filter(|(k, _)| k.contains('*')) {
+        let mut candidates: Vec<String> = names.iter().filter(|n| glob(key, n)).cloned().collect();
+        for (n, _) in &terms {
+            if glob(key, n) && !candidates.contains(n) {
+                candidates.push(n.clone());
+            }
+        }
+        if candidates.is_empty() {
+            return Err(format!(
+                "[{p}] \"{key}\": the wildcard matches no coefficient of this result (it has {})",
+                names.join(", ")
+            ));
+        }
+        for n in candidates {
+            targets.entry(n).or_insert((key, l));
+        }
+    }
     let mut verdicts = BTreeMap::new();
-    for (name, l) in coefs {
-        let c = doc.coefficients.get(name).ok_or_else(|| {
-            format!(
-                "[{p}] {name}: not a coefficient of this result (it has {})",
-                doc.coefficients.names().join(", ")
-            )
-        })?;
-        let f = match &l.unit {
-            None => 1.0,
-            Some(u) => unit_factor(&c.unit, u).ok_or_else(|| {
-                format!(
-                    "[{p}] {name}: unit '{u}' does not fit the coefficient's unit '{}'",
-                    c.unit
-                )
-            })?,
+    for (name, (key, l)) in targets {
+        let coef = doc.coefficients.get(&name);
+        // The unit a limit converts to: the coefficient's, else (a term not
+        // reported) the term's unit in this result.
+        let unit = coef.map(|c| c.unit.clone()).or_else(|| term_unit(&name));
+        let f = match (&l.unit, &unit) {
+            (None, _) => Some(1.0),
+            (Some(u), Some(cu)) => Some(unit_factor(cu, u).ok_or_else(|| {
+                format!("[{p}] {key}: unit '{u}' does not fit the coefficient's unit '{cu}'")
+            })?),
+            // No coefficient to say the JSON unit: the limits are kept out.
+            (Some(_), None) => None,
         };
-        let (min, max) = (l.min.map(|x| x * f), l.max.map(|x| x * f));
-        verdicts.insert(
-            name.clone(),
-            CoefficientVerdict {
-                min,
-                max,
-                verdict: judge(c.value, c.u95, min, max, limits.rule),
-            },
-        );
+        let (min, max) = match f {
+            Some(f) => (l.min.map(|x| x * f), l.max.map(|x| x * f)),
+            None => (None, None),
+        };
+        let verdict = match coef {
+            Some(c) => judge(c.value, c.u95, min, max, limits.rule),
+            None => Verdict::NotDetermined,
+        };
+        verdicts.insert(name, CoefficientVerdict { min, max, verdict });
     }
     doc.verdict = verdicts.values().map(|v| v.verdict).max();
     doc.verdicts = Some(verdicts);
@@ -403,6 +505,40 @@ mod tests {
         assert!(Limits::parse("[tumbel]\nK0 = { max = 1 }\n")
             .unwrap_err()
             .contains("not a procedure"));
+    }
+
+    #[test]
+    fn wildcards_match_within_one_name_segment() {
+        assert!(glob("*.ARW", "ch1.ARW"));
+        assert!(glob("*.ARW", "gyro_x.ARW"));
+        assert!(!glob("*.ARW", "a.b.ARW"));
+        assert!(!glob("*.ARW", "ch1.ARW2"));
+        assert!(glob("ch*.K", "ch12.K"));
+        assert!(glob("K_a.*", "K_a.xx"));
+        assert!(!glob("K_a.*", "K_g.xx"));
+        assert!(glob("*", "K0") && !glob("*", "a.K0"));
+    }
+
+    #[test]
+    fn the_worst_verdict_orders_not_determined_between_the_conditionals() {
+        let mut v = [
+            Verdict::Fail,
+            Verdict::Pass,
+            Verdict::NotDetermined,
+            Verdict::ConditionalFail,
+            Verdict::ConditionalPass,
+        ];
+        v.sort();
+        assert_eq!(
+            v.map(Verdict::as_str),
+            [
+                "pass",
+                "conditional-pass",
+                "not-determined",
+                "conditional-fail",
+                "fail"
+            ]
+        );
     }
 
     #[test]
