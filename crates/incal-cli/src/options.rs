@@ -79,6 +79,23 @@ pub fn store_name(path: &std::path::Path) -> String {
     }
 }
 
+/// A procedure named by its id (`imu-ferraris`; `_` for `-` accepted), for
+/// the option or argument `what`; an unknown name lists every procedure.
+pub fn procedure_id(what: &str, text: &str) -> crate::error::CliResult<incal::document::Procedure> {
+    use incal::document::Procedure;
+    Procedure::from_id(&text.replace('_', "-")).ok_or_else(|| {
+        crate::error::CliError::Input(format!(
+            "{what}: '{}' is not a procedure (one of: {})",
+            crate::output::clip(text),
+            Procedure::ALL
+                .iter()
+                .map(|p| p.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))
+    })
+}
+
 /// A records-store error as one line naming the store once
 /// (`NAME: …`): bad input and unusable stores exit 2, a broken chain and
 /// database failures exit 1.

@@ -767,25 +767,37 @@ fn the_certificate_names_its_record_and_the_chain_head() {
     let html = ok(&["report", s(&a), "--db", s(&db)]);
     assert!(html.contains("record 1 in"), "the record of this document");
     assert!(html.contains(&head), "the chain head, whole");
-    // A result of a new instrument, judged against limits, while an
-    // incal.db sits in the working directory: a certificate with no
-    // history (not "no records of this instrument").
+    // A result of a new instrument, judged against limits: with the store
+    // named, a certificate with no history, said so (not "no records of
+    // this instrument"); with an incal.db merely lying in the working
+    // directory, no store at all.
     let c = tumble_result(&dir, "c", 8000.0, 3, Some("SN-NEW"));
     let limits = dir.join("l.toml");
     std::fs::write(&limits, "[tumble]\nK1 = { min = 9.9, max = 10.1 }\n").unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_incal"))
-        .args(["report", s(&c), "--limits", s(&limits), "-o", "c.html"])
-        .env_remove("INCAL_DB")
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let html = std::fs::read_to_string(dir.join("c.html")).unwrap();
+    let report_in_dir = |extra: &[&str]| {
+        let mut args = vec!["report", s(&c), "--limits", s(&limits), "-o", "c.html"];
+        args.extend_from_slice(extra);
+        let o = Command::new(env!("CARGO_BIN_EXE_incal"))
+            .args(&args)
+            .env_remove("INCAL_DB")
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read_to_string(dir.join("c.html")).unwrap()
+    };
+    let html = report_in_dir(&["--db", "incal.db"]);
     assert!(
         html.contains("not stored in incal.db"),
         "named as not stored"
     );
     assert!(html.contains(&head));
+    assert!(html.contains("No history: incal.db holds fewer than two calibrations"));
+    let html = report_in_dir(&[]);
+    assert!(
+        !html.contains("incal.db") && !html.contains(&head),
+        "no store unless named"
+    );
     // A store named by $INCAL_DB must exist, as one named by --db.
     let missing = dir.join("missing.db");
     let o = Command::new(env!("CARGO_BIN_EXE_incal"))

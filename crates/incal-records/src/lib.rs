@@ -871,9 +871,21 @@ impl Store {
     /// calibrations that are not superseded, with drift, repeatability and
     /// En ([`history`]). Records whose result has no such coefficient are
     /// left out; none at all, or a unit that changes between records, is
-    /// an error.
+    /// an error; so are records of more than one procedure (a tumble's K2
+    /// is K2 − K_pp, a centrifuge's is K2: [`Store::history_of`] picks one).
     pub fn history(&self, serial: &str, coefficient: &str) -> Result<History> {
-        self.history_if_any(serial, coefficient)?
+        self.history_of(serial, coefficient, None)
+    }
+
+    /// [`Store::history`] over the records of `procedure` only (a
+    /// procedure id, `tumble`), when given.
+    pub fn history_of(
+        &self,
+        serial: &str,
+        coefficient: &str,
+        procedure: Option<&str>,
+    ) -> Result<History> {
+        self.history_if_any(serial, coefficient, procedure)?
             .map_err(Error::Input)
     }
 
@@ -885,23 +897,25 @@ impl Store {
         &self,
         serial: &str,
         coefficient: &str,
+        procedure: Option<&str>,
     ) -> Result<std::result::Result<History, String>> {
         let (rows, known) = {
             let mut c = self.conn.borrow_mut();
             let mut tx = c.transaction(Mode::Read).map_err(self.db())?;
             let rows = tx
                 .query(
-                    "SELECT r.id, r.created_utc, r.document
+                    "SELECT r.id, r.created_utc, r.document, r.procedure
                      FROM records r
                      JOIN instruments i ON i.id = r.instrument_id
                      LEFT JOIN supersessions s ON s.old_id = r.id
                      WHERE i.serial = ?1 AND s.old_id IS NULL
+                       AND (CAST(?2 AS TEXT) IS NULL OR r.procedure = ?2)
                      ORDER BY r.created_utc, r.id",
-                    &[P::T(Some(serial))],
+                    &[P::T(Some(serial)), P::T(procedure)],
                 )
                 .and_then(|rows| {
                     rows.iter()
-                        .map(|r| Ok((r.i(0)?, r.t(1)?, r.t(2)?)))
+                        .map(|r| Ok((r.i(0)?, r.t(1)?, r.t(2)?, r.t(3)?)))
                         .collect::<std::result::Result<Vec<_>, DbError>>()
                 })
                 .map_err(self.db())?;
@@ -910,15 +924,18 @@ impl Store {
             (rows, known)
         };
         if rows.is_empty() {
-            return Ok(Err(if known {
-                format!("serial '{serial}': every record is superseded")
-            } else {
-                format!("serial '{serial}': no records of this instrument")
+            return Ok(Err(match (known, procedure) {
+                (true, Some(p)) => {
+                    format!("serial '{serial}': no {p} records (not superseded) of this instrument")
+                }
+                (true, None) => format!("serial '{serial}': every record is superseded"),
+                (false, _) => format!("serial '{serial}': no records of this instrument"),
             }));
         }
         let mut points: Vec<HistoryPoint> = Vec::new();
         let mut names: Vec<String> = Vec::new();
-        for (id, created_utc, text) in rows {
+        let mut procedures: Vec<String> = Vec::new();
+        for (id, created_utc, text, proc_id) in rows {
             let doc = ResultDocument::from_json(&text).map_err(|e| Error::Tampered {
                 id,
                 problem: format!("the stored document no longer reads as a result: {e}"),
@@ -931,6 +948,9 @@ impl Store {
                 }
                 continue;
             };
+            if !procedures.contains(&proc_id) {
+                procedures.push(proc_id);
+            }
             if let Some(first) = points.first() {
                 if first.unit != c.unit {
                     return Err(Error::Input(format!(
@@ -953,6 +973,13 @@ impl Store {
             return Ok(Err(format!(
                 "serial '{serial}': no calibration has a coefficient '{coefficient}' (recorded: {})",
                 names.join(", ")
+            )));
+        }
+        if procedures.len() > 1 {
+            return Err(Error::Input(format!(
+                "coefficient {coefficient} of serial '{serial}' comes from {} records: one procedure's {coefficient} is not another's; give the procedure (--procedure {})",
+                procedures.join(" and "),
+                procedures[0]
             )));
         }
         let a = history::analyse(&points);

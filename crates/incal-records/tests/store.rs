@@ -366,3 +366,51 @@ fn an_edited_instrument_model_is_caught() {
         "{e}"
     );
 }
+
+/// History never mixes procedures: a tumble's K2 (K2 − K_pp) and a
+/// centrifuge's K2 of one instrument are refused together, and each
+/// procedure's history is given on request.
+#[test]
+fn history_keeps_one_procedure() {
+    use incal::document::{Coefficient, DocumentBuilder, Procedure};
+    use incal::units::Unit;
+    let path = temp_dir("history-procedures").join("incal.db");
+    let mut s = Store::open(&path).unwrap();
+    let doc = |p: Procedure, k2: f64| {
+        let mut b = DocumentBuilder::new(p, "test");
+        b.coefficient(
+            "K2",
+            Coefficient::new("K2", k2, 1e-7, Unit::GPerG2, 20.0).unwrap(),
+        )
+        .unwrap();
+        let mut d = b.finish();
+        d.instrument.serial = Some("SN-M".into());
+        d.to_json()
+    };
+    for (p, k2, day) in [
+        (Procedure::Tumble, 1.0e-6, "2025-01-01"),
+        (Procedure::Centrifuge, 3.0e-6, "2025-02-01"),
+        (Procedure::Tumble, 1.1e-6, "2025-03-01"),
+    ] {
+        let text = doc(p, k2);
+        s.add(&NewRecord {
+            created_utc: Some(day),
+            ..NewRecord::new(&text)
+        })
+        .unwrap();
+    }
+    let e = s.history("SN-M", "K2").unwrap_err();
+    assert!(matches!(e, Error::Input(_)), "{e}");
+    assert!(
+        e.to_string()
+            .contains("comes from tumble and centrifuge records"),
+        "{e}"
+    );
+    assert!(e.to_string().contains("--procedure tumble"), "{e}");
+    let t = s.history_of("SN-M", "K2", Some("tumble")).unwrap();
+    assert_eq!(t.points.iter().map(|p| p.id).collect::<Vec<_>>(), [1, 3]);
+    let c = s.history_of("SN-M", "K2", Some("centrifuge")).unwrap();
+    assert_eq!(c.points.len(), 1);
+    let none = s.history_of("SN-M", "K2", Some("noise")).unwrap_err();
+    assert!(none.to_string().contains("no noise records"), "{none}");
+}

@@ -646,6 +646,13 @@ pub fn render_html_with(
             ));
         }
         s.push_str("</section>\n");
+    } else if let (Some(r), Some(_)) = (&opts.record, &doc.verdicts) {
+        // A store was named but holds no earlier calibration to plot: the
+        // first certificate of this instrument says so.
+        s.push_str(&format!(
+            "<section id=\"history\">\n<h2>History of this instrument</h2>\n<p class=\"note\">No history: {} holds fewer than two calibrations of this instrument by this procedure with the limited coefficients.</p>\n</section>\n",
+            esc(&r.store)
+        ));
     }
     s.push_str(&format!(
         "<footer>Written by incal-report {} from an {} document of incal {}. Self-contained: this file loads nothing from elsewhere.</footer>\n</body>\n</html>\n",

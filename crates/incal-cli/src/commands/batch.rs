@@ -105,19 +105,8 @@ struct Outcome {
 
 /// The command words of a procedure id (`imu-ferraris` → `imu ferraris`).
 pub fn command_words(id: &str) -> CliResult<Vec<String>> {
-    let id = id.replace('_', "-");
-    match Procedure::from_id(&id) {
-        Some(p) => Ok(p.as_str().split('-').map(str::to_string).collect()),
-        None => Err(CliError::Input(format!(
-            "batch: '{}' is not a procedure (one of: {})",
-            crate::output::clip(&id),
-            Procedure::ALL
-                .iter()
-                .map(|p| p.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ))),
-    }
+    let p: Procedure = crate::options::procedure_id("batch", id)?;
+    Ok(p.as_str().split('-').map(str::to_string).collect())
 }
 
 /// The recordings named by the sources and the list, in order.

@@ -154,6 +154,9 @@ pub struct HistoryArgs {
     /// Coefficient name as in the results (K0, K1, dtheta_y2, ...).
     #[arg(long, required = true)]
     pub coefficient: String,
+    /// Only the records of this procedure (tumble, centrifuge, ...): needed when the coefficient comes from records of more than one.
+    #[arg(long)]
+    pub procedure: Option<String>,
     #[command(flatten)]
     pub db: DbArgs,
     #[command(flatten)]
@@ -451,10 +454,15 @@ fn show(a: &ShowArgs) -> CliResult<()> {
 }
 
 fn history(a: &HistoryArgs) -> CliResult<()> {
+    // A procedure id (`imu-ferraris`), '_' for '-' accepted.
+    let procedure = match &a.procedure {
+        Some(p) => Some(crate::options::procedure_id("--procedure", p)?.as_str()),
+        None => None,
+    };
     let store = open(&a.db, false)?;
     store.check_chain().map_err(store_err(&a.db))?;
     let h = store
-        .history(&a.serial, &a.coefficient)
+        .history_of(&a.serial, &a.coefficient, procedure)
         .map_err(store_err(&a.db))?;
     let text = if a.out.json {
         json_text(&records::history_json(&h))

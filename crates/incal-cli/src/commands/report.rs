@@ -23,7 +23,7 @@ pub struct Args {
     /// Limits file (TOML): verdicts in the coefficient table, limits in the plots.
     #[arg(long, value_name = "FILE")]
     pub limits: Option<PathBuf>,
-    /// Records store (SQLite file or postgresql:// URL) for the history plots of the limited coefficients (default: $INCAL_DB, else incal.db; used when given or present).
+    /// Records store (SQLite file or postgresql:// URL) for the history plots of the limited coefficients and the record stamp (default: $INCAL_DB; no store is used unless named).
     #[arg(long, value_name = "PATH|URL")]
     pub db: Option<PathBuf>,
     /// With --limits: exit 3 after writing the report when the overall verdict is fail, conditional-fail or not-determined (fail), or any but pass (conditional).
@@ -62,16 +62,17 @@ pub fn run(a: &Args) -> CliResult<()> {
 }
 
 /// The records store, checked whole, when the result has a serial and a
-/// store is named (`--db`, else `$INCAL_DB`: it must exist) or present
-/// (`incal.db` in the working directory).
+/// store is named (`--db`, else `$INCAL_DB`: it must exist either way).
 fn store(
     a: &Args,
     doc: &ResultDocument,
 ) -> CliResult<Option<(incal_records::Store, incal_records::Verified)>> {
     // A store named (--db or $INCAL_DB) must exist; incal.db is used when
     // present.
+    // Only a store named (--db or $INCAL_DB) is opened: an incal.db that
+    // happens to lie in the working directory never changes a certificate.
     let (path, named) = db_choice(a.db.as_deref());
-    if doc.instrument.serial.is_none() || (!named && !path.exists()) {
+    if doc.instrument.serial.is_none() || !named {
         return Ok(None);
     }
     // Store errors name the path themselves.
@@ -100,7 +101,7 @@ fn history(store: &incal_records::Store, doc: &ResultDocument) -> CliResult<Vec<
         // A new instrument, or a coefficient not recorded before, has no
         // history to plot.
         let Ok(h) = store
-            .history_if_any(serial, name)
+            .history_if_any(serial, name, Some(doc.procedure.as_str()))
             .map_err(|e| CliError::Input(format!("{path}: {e}")))?
         else {
             continue;
