@@ -42,9 +42,9 @@ pub(crate) fn command() -> clap::Command {
 enum Command {
     /// Simulate virtual instruments on every rig, calibrate, and print estimate, truth and uncertainty.
     Demo(commands::demo::Args),
-    /// Calibrate an accelerometer from a dividing-head tumble test (seed 000, GJB 1037A).
+    /// Calibrate an accelerometer from a dividing-head tumble test (Wu et al. 2015; GJB 1037A).
     Tumble(commands::tumble::Args),
-    /// Calibrate an accelerometer on a precision centrifuge: radius, K2/K3, cross-axis and cross-coupling terms (seed 001).
+    /// Calibrate an accelerometer on a precision centrifuge: radius, K2/K3, cross-axis and cross-coupling terms (He & Yin 2017; IEEE Std 836).
     Centrifuge(commands::centrifuge::Args),
     /// Design a test plan and predict the uncertainty of every coefficient before the test.
     #[command(subcommand)]
@@ -52,7 +52,7 @@ enum Command {
     /// Simulate a rig from a known truth and write the input CSV of the matching procedure.
     #[command(subcommand)]
     Simulate(SimulateCommand),
-    /// Misalignment separation: gyro on a rate table, accelerometer on a vertical face (seed 003).
+    /// Misalignment separation: gyro on a rate table, accelerometer on a vertical face (Li et al. 2012).
     #[command(subcommand)]
     Misalign(commands::misalign::Command),
     /// Compare the coefficients of two result files: difference, per mille and En.
@@ -64,7 +64,7 @@ enum Command {
     Schema(commands::schema::Args),
     /// Write one self-contained HTML report (printable certificate) of a result file, with plots.
     Report(commands::report::Args),
-    /// Gyro-free inertial unit of six (or more) accelerometers: calibrate K0 and Ks, solve motion (seed 004).
+    /// Gyro-free inertial unit of six (or more) accelerometers: calibrate K0 and Ks, solve motion (the GFIMU note).
     #[command(subcommand)]
     Gfimu(GfimuCommand),
     /// Gyro tests: rate-transfer test on a rate table, multi-position test on a dividing head (IEEE Std 952 / 1431 / 517).

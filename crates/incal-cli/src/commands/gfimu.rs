@@ -38,7 +38,7 @@ pub struct GeometryArgs {
 /// Built-in gyro-free layouts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Layout {
-    /// The paper's six accelerometers (seed 004).
+    /// The six accelerometers of the GFIMU note's Fig. 1.
     Paper,
     /// Twelve accelerometers, two across each lever arm.
     Twelve,

@@ -156,7 +156,7 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
     a.out.emit(&doc)
 }
 
-/// Truth coefficients for simulators (default: the seed 000 instrument).
+/// Truth coefficients for simulators (default: the instrument of Wu et al. 2015).
 #[derive(clap::Args, Debug, Clone)]
 pub struct TruthArgs {
     /// Bias K0 (g).

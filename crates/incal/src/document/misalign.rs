@@ -101,7 +101,7 @@ impl GyroResult {
         let mut b = DocumentBuilder::new(
             Procedure::MisalignGyro,
             format!(
-                "Gyro misalignment on a rate table (seed 003), {}",
+                "Gyro misalignment on a rate table (Li et al. 2012), {}",
                 if opts.per_config_bias {
                     "bias per configuration"
                 } else {
@@ -197,7 +197,7 @@ impl AccelResult {
     pub fn document(&self, opts: &AccelOptions) -> Result<ResultDocument> {
         let mut b = DocumentBuilder::new(
             Procedure::MisalignAccel,
-            "Accelerometer misalignment on a vertical face (seed 003)",
+            "Accelerometer misalignment on a vertical face (Li et al. 2012)",
         );
         let j = common(
             &mut b,

@@ -52,15 +52,15 @@ pub const SCHEMA: &str = "incal.result/1";
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum Procedure {
-    /// Dividing-head tumble test (seed 000, GJB 1037A).
+    /// Dividing-head tumble test (Wu et al. 2015; GJB 1037A).
     Tumble,
-    /// Precision centrifuge (seed 001, IEEE Std 836).
+    /// Precision centrifuge (He & Yin 2017; IEEE Std 836).
     Centrifuge,
-    /// Gyro misalignment on a rate table (seed 003).
+    /// Gyro misalignment on a rate table (Li et al. 2012).
     MisalignGyro,
-    /// Accelerometer misalignment on a vertical face (seed 003).
+    /// Accelerometer misalignment on a vertical face (Li et al. 2012).
     MisalignAccel,
-    /// Gyro-free unit: K0 and Ks of every accelerometer (seed 004).
+    /// Gyro-free unit: K0 and Ks of every accelerometer (the GFIMU note).
     GfimuCalibrate,
     /// Gyro rate-transfer test on a rate table (IEEE Std 952 / 1431).
     GyroRate,

@@ -134,8 +134,8 @@ fn tumble(seed: u64) -> Result<DemoSection> {
         });
     }
     Ok(DemoSection {
-        title: "Tumble test on a dividing head (seed 000, GJB 1037A)".into(),
-        description: "Virtual accelerometer: the seed 000 instrument (K1 = 10 output/g, K0 = 8 mg, ...) with K_pp = 2 ug/g^2,\n\
+        title: "Tumble test on a dividing head (Wu et al. 2015; GJB 1037A)".into(),
+        description: "Virtual accelerometer: the instrument of Wu et al. 2015 (K1 = 10 output/g, K0 = 8 mg, ...) with K_pp = 2 ug/g^2,\n\
                       10 samples per position, output noise 1e-6, index-angle error 1 arcsec rms.\n\
                       A 1 g tumble cannot separate K_pp (pendulum) or K_oo (gate) from K0 and K2: the truth column shows\n\
                       what the plan observes (K0 + K_pp, K2 - K_pp)."
@@ -208,7 +208,7 @@ fn gfimu(seed: u64) -> Result<DemoSection> {
         ])?;
     }
     Ok(DemoSection {
-        title: "Gyro-free inertial unit: six accelerometers (seed 004, methods.md 4)".into(),
+        title: "Gyro-free inertial unit: six accelerometers (the GFIMU note)".into(),
         description: "Paper layout, lever arm 0.1 m, K1 = 1 output/g, mrad misalignments;\n\
                       six-position test with 20 samples per position, output noise 1e-4."
             .into(),
@@ -316,7 +316,7 @@ fn misalign(seed: u64) -> Result<DemoSection> {
     };
     let ra = accel::calibrate(&simulate_accel(&acfg), &aopts)?;
     Ok(DemoSection {
-        title: "Misalignment separation (seed 003)".into(),
+        title: "Misalignment separation (Li et al. 2012)".into(),
         description: "Virtual gyro on a rate table: kI = -2.9222 V/(deg/s), the paper's five configurations,\n\
                       +-20/30/40 deg/s, 2 one-turn records each, Earth rate at 45.75 deg N, noise 1 mV per sample,\n\
                       bias shifting 2 mV rms between mountings (fitted per configuration).\n\
@@ -431,7 +431,7 @@ fn centrifuge(seed: u64) -> Result<DemoSection> {
         t.insert(name.to_string(), v * eff);
     }
     Ok(DemoSection {
-        title: "Precision centrifuge: radius, nonlinearity, cross-coupling (seed 001, IEEE Std 836)".into(),
+        title: "Precision centrifuge: radius, nonlinearity, cross-coupling (He & Yin 2017; IEEE Std 836)".into(),
         description: "Virtual accelerometer (K1 = 1.3 output/g), R+ = 0.714775 m, R- = 0.705794 m (ECM offset 4.49 mm),\n\
                       IA tilt 60 arcsec, latitude 39.9 deg, 0..25 g at ip,0 ip,90 io,90 ip,45 io,45 po,45, both polarities,\n\
                       5 samples per point, output noise 2e-6; K0 and K1 known to 2 ug and 1 ppm.\n\

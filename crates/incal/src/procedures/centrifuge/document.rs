@@ -108,7 +108,7 @@ impl CentrifugeResult {
 
         let mut t = Table::new(
             "radius-by-range",
-            "Regression radius by range and model order (seed 001 Table 2)",
+            "Regression radius by range and model order (He & Yin 2017, Table 2)",
             &[
                 ("order", None),
                 ("polarity", None),
