@@ -133,3 +133,16 @@ def test_records_move_from_sqlite_to_postgresql(tmp_path, pg_url, recordings):
     with pytest.raises(incal.InputError, match="cannot connect") as e:
         incal.Records("postgresql://lab:s3cret@127.0.0.1:1/none").verify()
     assert "s3cret" not in str(e.value)
+
+
+def test_a_fail_on_verdict_keeps_and_records_the_result(recordings, tmp_path):
+    limits = tmp_path / "l.toml"
+    limits.write_text("[tumble]\nK1 = { max = 1 }\n")  # every K1 is near 10: fail
+    store = str(tmp_path / "stop.db")
+    b = incal.batch.reduce(recordings[:2], "tumble", records=store, serial_from_stem=True,
+                           mount="pendulum", limits=limits, fail_on="fail", progress=False)
+    assert [type(r).__name__ for r in b] == ["Result", "Result"]
+    assert all(r.document["verdict"] == "fail" for r in b)
+    assert sorted(b.stopped) == sorted(recordings[:2])
+    assert all("stopped by --fail-on fail" in m for m in b.stopped.values())
+    assert b.record_ids == [1, 2]

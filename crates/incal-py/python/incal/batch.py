@@ -58,11 +58,20 @@ class Batch(list):
     """The outcome of every recording, in the order given: a
     :class:`incal.Result` or a :class:`FileError` each."""
 
-    def __init__(self, paths: List[str], items: Iterable[Any], records: Optional[List[Optional[int]]] = None):
+    def __init__(
+        self,
+        paths: List[str],
+        items: Iterable[Any],
+        records: Optional[List[Optional[int]]] = None,
+        stopped: Optional[Dict[str, str]] = None,
+    ):
         super().__init__(items)
         self.paths = paths
         #: Record id of each recording when ``records`` was given (None for an error).
         self.record_ids = records
+        #: Path → message of the results a ``fail_on`` verdict stopped (they
+        #: are in the list and recorded like the others).
+        self.stopped = stopped or {}
 
     @property
     def results(self) -> Dict[str, Any]:
@@ -86,7 +95,9 @@ def _function(procedure: str) -> str:
 
 
 def _task(path: str, function: str, options: Dict[str, Any], serial_from_stem: bool):
-    """On a worker: ``("ok", document text)`` or ``("error", code, message)``."""
+    """On a worker: ``("ok", document text, None)``, ``("ok", document
+    text, message)`` for a result a ``fail_on`` verdict stopped (kept and
+    recorded like the others), or ``("error", code, message)``."""
     import incal
 
     options = dict(options)
@@ -95,8 +106,11 @@ def _task(path: str, function: str, options: Dict[str, Any], serial_from_stem: b
     try:
         r = getattr(incal, function)(path, **options)
     except incal.IncalError as e:
+        stopped = e.result if e.code == 3 else None
+        if stopped is not None:
+            return ("ok", stopped.to_json(), f"{path}: {e}")
         return ("error", e.code, str(e))
-    return ("ok", r.to_json())
+    return ("ok", r.to_json(), None)
 
 
 def reduce(
@@ -159,9 +173,12 @@ def reduce(
             own[1].close()
             own[0].close()
     items: List[Any] = []
+    stopped: Dict[str, str] = {}
     for p, o in zip(paths, outcomes):
         if o[0] == "ok":
             items.append(Result(json.loads(o[1]), text=o[1]))
+            if o[2] is not None:
+                stopped[p] = o[2]
         else:
             items.append(FileError(p, o[2], o[1]))
     ids = None
@@ -170,4 +187,4 @@ def reduce(
 
         store = records if isinstance(records, Records) else Records(records)
         ids = [None if isinstance(r, FileError) else store.add(r) for r in items]
-    return Batch(paths, items, ids)
+    return Batch(paths, items, ids, stopped)

@@ -19,6 +19,7 @@ class FileError:
 class Batch(List[Union[Result, FileError]]):
     paths: List[str]
     record_ids: Optional[List[Optional[int]]]
+    stopped: Dict[str, str]
     @property
     def results(self) -> Dict[str, Result]: ...
     @property
