@@ -364,6 +364,45 @@ struct Scanned {
     supersedes: Option<Supersession>,
 }
 
+impl ExportedRecord {
+    /// The fields its record hash covers.
+    fn fields(&self) -> ChainFields<'_> {
+        ChainFields {
+            prev_hash: &self.prev_hash,
+            id: self.id,
+            serial: &self.serial,
+            procedure: &self.procedure,
+            created_utc: &self.created_utc,
+            operator: self.operator.as_deref(),
+            station: self.station.as_deref(),
+            document_sha256: &self.sha256,
+            inputs: &self.inputs,
+            supersedes: self.supersedes.as_ref().map(|s| s.id),
+            reason: self.supersedes.as_ref().map(|s| s.reason.as_str()),
+        }
+    }
+}
+
+impl Scanned {
+    /// The fields its record hash covers, with the serial of its
+    /// instrument row.
+    fn fields<'a>(&'a self, serial: &'a str) -> ChainFields<'a> {
+        ChainFields {
+            prev_hash: &self.prev_hash,
+            id: self.id,
+            serial,
+            procedure: &self.procedure,
+            created_utc: &self.created_utc,
+            operator: self.operator.as_deref(),
+            station: self.station.as_deref(),
+            document_sha256: &self.document_sha256,
+            inputs: &self.inputs,
+            supersedes: self.supersedes.as_ref().map(|s| s.old_id),
+            reason: self.supersedes.as_ref().map(|s| s.reason.as_str()),
+        }
+    }
+}
+
 impl Store {
     /// Open the store at `path` (a file, or a `postgresql://` URL),
     /// creating it (and its tables) when it does not exist, and bring its
@@ -1190,20 +1229,7 @@ impl Store {
                     )));
                 }
             }
-            let fields = ChainFields {
-                prev_hash: &r.prev_hash,
-                id,
-                serial: &serial,
-                procedure: &r.procedure,
-                created_utc: &r.created_utc,
-                operator: r.operator.as_deref(),
-                station: r.station.as_deref(),
-                document_sha256: &r.document_sha256,
-                inputs: &r.inputs,
-                supersedes: r.supersedes.as_ref().map(|s| s.old_id),
-                reason: r.supersedes.as_ref().map(|s| s.reason.as_str()),
-            };
-            if fields.record_hash() != r.record_hash {
+            if r.fields(&serial).record_hash() != r.record_hash {
                 return Err(bad(
                     "record_hash does not match its fields (serial, procedure, time, operator, station, inputs or supersession changed)"
                         .into(),
@@ -1375,19 +1401,7 @@ impl Store {
                         r.id, r.created_utc
                     ))
                 })?;
-            let fields = ChainFields {
-                prev_hash: &r.prev_hash,
-                id: r.id,
-                serial: &r.serial,
-                procedure: &r.procedure,
-                created_utc: &r.created_utc,
-                operator: r.operator.as_deref(),
-                station: r.station.as_deref(),
-                document_sha256: &r.sha256,
-                inputs: &r.inputs,
-                supersedes: r.supersedes.as_ref().map(|s| s.id),
-                reason: r.supersedes.as_ref().map(|s| s.reason.as_str()),
-            };
+            let fields = r.fields();
             if fields.record_hash() != r.record_hash {
                 return Err(at(format!(
                     "record {}: record_hash does not match its fields",
@@ -1431,12 +1445,15 @@ impl Store {
             added += 1;
         }
         tx.commit().map_err(e)?;
-        drop(c);
-        let chain = self.verify()?;
+        // The chain was verified before and each record appended was
+        // checked as verify checks it: its head is the last one written.
         Ok(Imported {
             added,
             present,
-            chain,
+            chain: Verified {
+                records: head_id,
+                head: head_hash,
+            },
         })
     }
 }
