@@ -38,29 +38,30 @@ fn _run_array(
     use numpy::{PyReadonlyArrayDyn, PyUntypedArrayMethods};
     let mut argv: Vec<std::ffi::OsString> = vec!["incal".into()];
     argv.extend(args.into_iter().map(Into::into));
-    let contiguous = || pyo3::exceptions::PyValueError::new_err("the array is not C-contiguous");
-    let out = if let Ok(a) = array.extract::<PyReadonlyArrayDyn<'_, f64>>() {
+    /// Run on the array's bytes, in place (f64 or f32 samples).
+    fn on<T: numpy::Element + Copy>(
+        py: Python<'_>,
+        argv: &[std::ffi::OsString],
+        a: PyReadonlyArrayDyn<'_, T>,
+    ) -> PyResult<incal_cli::embed::Embedded> {
+        let contiguous =
+            || pyo3::exceptions::PyValueError::new_err("the array is not C-contiguous");
         if !a.is_c_contiguous() {
             return Err(contiguous());
         }
         let s = a.as_slice().map_err(|_| contiguous())?;
-        // SAFETY: plain f64 values viewed as their bytes (any bit pattern
-        // is a valid u8); the borrow `a` keeps the array alive and
+        // SAFETY: plain float values viewed as their bytes (any bit
+        // pattern is a valid u8); the borrow `a` keeps the array alive and
         // read-only until the call returns.
         let bytes = unsafe {
             std::slice::from_raw_parts(s.as_ptr().cast::<u8>(), std::mem::size_of_val(s))
         };
-        py.detach(|| incal_cli::embed::run_embedded_with_memory(&argv, bytes))
+        Ok(py.detach(|| incal_cli::embed::run_embedded_with_memory(argv, bytes)))
+    }
+    let out = if let Ok(a) = array.extract::<PyReadonlyArrayDyn<'_, f64>>() {
+        on(py, &argv, a)?
     } else if let Ok(a) = array.extract::<PyReadonlyArrayDyn<'_, f32>>() {
-        if !a.is_c_contiguous() {
-            return Err(contiguous());
-        }
-        let s = a.as_slice().map_err(|_| contiguous())?;
-        // SAFETY: as above, for f32.
-        let bytes = unsafe {
-            std::slice::from_raw_parts(s.as_ptr().cast::<u8>(), std::mem::size_of_val(s))
-        };
-        py.detach(|| incal_cli::embed::run_embedded_with_memory(&argv, bytes))
+        on(py, &argv, a)?
     } else {
         return Err(pyo3::exceptions::PyTypeError::new_err(
             "a float64 or float32 numpy array is needed",
