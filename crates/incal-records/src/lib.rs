@@ -495,11 +495,13 @@ impl Store {
         };
         if create {
             // Another application's SQLite file is not made a store.
-            if store.schema_version()?.is_none() && store.has_tables()? {
-                return Err(Error::Store {
-                    path: name,
-                    message: "not an incal records store (an SQLite file with other tables)".into(),
-                });
+            // (The version is asked again after the tables: another
+            // incal's first migration may have committed in between.)
+            if store.schema_version()?.is_none()
+                && store.has_tables()?
+                && store.schema_version()?.is_none()
+            {
+                return Err(store.foreign_tables());
             }
             store.sqlite_pragmas()?;
             store.migrate()?;
@@ -533,17 +535,14 @@ impl Store {
             None if how == Opening::ToWrite => {
                 return Err(Error::Store {
                     path: name,
-                    message: "no records store here (no incal tables; 'incal record add' creates them)"
-                        .into(),
+                    message:
+                        "no records store here (no incal tables; 'incal record add' creates them)"
+                            .into(),
                 })
             }
-            None if store.has_tables()? => {
-                return Err(Error::Store {
-                    path: name,
-                    message: "not an incal records store (a PostgreSQL schema with other tables: give incal a database or schema of its own)"
-                        .into(),
-                })
-            }
+            // Whether the tables are someone else's is decided in
+            // `migrate`, under its lock: checked here, another incal's
+            // migration committing between two queries looked foreign.
             _ => {}
         }
         store.migrate()?;
@@ -634,6 +633,13 @@ impl Store {
         let e = |e| db_err(&name, e);
         let mut c = self.conn.borrow_mut();
         let mut tx = c.transaction(Mode::Migrate).map_err(e)?;
+        // Under the migration lock, so a concurrent first migration has
+        // either committed all its tables or none.
+        if !tx.table_exists("schema_migrations").map_err(e)? && tx.has_tables().map_err(e)? {
+            drop(tx);
+            drop(c);
+            return Err(self.foreign_tables());
+        }
         tx.batch(SCHEMA_MIGRATIONS).map_err(e)?;
         let have = tx
             .query_one(
@@ -660,6 +666,19 @@ impl Store {
             .map_err(e)?;
         }
         tx.commit().map_err(e)
+    }
+
+    /// The refusal to make another application's database a store.
+    fn foreign_tables(&self) -> Error {
+        let what = if self.is_postgres() {
+            "a PostgreSQL schema with other tables: give incal a database or schema of its own"
+        } else {
+            "an SQLite file with other tables"
+        };
+        Error::Store {
+            path: self.path.display().to_string(),
+            message: format!("not an incal records store ({what})"),
+        }
     }
 
     /// True when the store holds any table (of anyone).
