@@ -46,6 +46,11 @@ pub enum WarningCode {
     /// An IEEE noise term (quantization, random walk, bias instability,
     /// rate random walk, rate ramp) the record cannot support: not reported.
     NoiseTermNotIdentified,
+    /// Two sets of IEEE noise terms explain the Allan variance about
+    /// equally well: the record does not separate the terms in which they
+    /// differ (e.g. bias instability and rate random walk over a short τ
+    /// range); the chosen set is reported.
+    NoiseTermsNotSeparated,
     /// The record is too short for a requested averaging time.
     ShortRecord,
     /// A result whose signs say the data follow another convention than the
@@ -89,6 +94,7 @@ impl WarningCode {
             WarningCode::InconsistentBias => "inconsistent-bias",
             WarningCode::ModelRange => "model-range",
             WarningCode::NoiseTermNotIdentified => "noise-term-not-identified",
+            WarningCode::NoiseTermsNotSeparated => "noise-terms-not-separated",
             WarningCode::ShortRecord => "short-record",
             WarningCode::SignConvention => "sign-convention",
             WarningCode::TimeRepeats => "time-repeats",

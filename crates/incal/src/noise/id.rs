@@ -1,14 +1,32 @@
-//! Power-law noise identification by the lag-1 autocorrelation
-//! (W. J. Riley and C. A. Greenhall, "Power law noise identification using
-//! the lag 1 autocorrelation", 18th EFTF, 2004): the phase data decimated
-//! by m, the quadratic trend removed, differenced d times until
-//! `δ = r1/(1 + r1) < 0.25` (or d = dmax); then `α = 2 − 2d − round(2δ)`
-//! (S_y ∝ f^α: 2 white PM, 1 flicker PM, 0 white FM, −1 flicker FM, −2
-//! random-walk FM).
+//! Power-law noise identification at every averaging time, as Stable32
+//! does it:
+//!
+//! - **lag-1 autocorrelation** (W. J. Riley and C. A. Greenhall, "Power law
+//!   noise identification using the lag 1 autocorrelation", 18th EFTF,
+//!   2004) where the decimated record has at least [`MIN_POINTS`] points:
+//!   the phase data decimated by m, differenced d times until
+//!   `δ = r1/(1 + r1) < 0.25` (or d = dmax); then `α = 2 − 2d − round(2δ)`
+//!   (S_y ∝ f^α: 2 white PM, 1 flicker PM, 0 white FM, −1 flicker FM, −2
+//!   random-walk FM). Only the mean is removed: a quadratic fitted to a few
+//!   tens of decimated points takes the low-frequency content with it and
+//!   makes random-walk phase look white (on the Cs 5071A record of
+//!   allantools' tests it turned Stable32's α = 0 at τ = 10⁴ s into 2;
+//!   without it every α of that record's 1530 Stable32 rows with enough
+//!   points is reproduced); the differences remove any trend.
+//! - **B1 ratio and R(n)** ([`b1_rn`]) where it has fewer: J. A. Barnes'
+//!   bias function B1 (the standard variance of the τ-averages over the
+//!   Allan variance; D. A. Howe, R. L. Beard, C. A. Greenhall, J. Vernotte,
+//!   W. J. Riley, "A total estimator of the Hadamard function used for GPS
+//!   operations", 32nd PTTI, 2000, Table 3 for its expected values) picks
+//!   μ, the τ exponent of the Allan variance; where μ = −2 (phase noise)
+//!   the ratio R(n) = MVAR/AVAR (IEEE Std 1139-2008) separates white PM,
+//!   flicker PM and white FM.
 
-use nalgebra::{Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
 
-/// Fewest decimated points the method is used on (Riley & Greenhall §3).
+/// Fewest decimated points the lag-1 method is used on (Riley & Greenhall
+/// §3); below it the B1 ratio and R(n) ([`b1_rn`]), as in Stable32's
+/// overlapping statistics.
 pub const MIN_POINTS: usize = 30;
 
 /// Noise exponents identified at one averaging factor.
@@ -31,28 +49,18 @@ const CHUNK: usize = if cfg!(test) { 1 << 9 } else { 1 << 15 };
 /// use small sizes so that short records cross every boundary.)
 const BLK: usize = if cfg!(test) { 1 << 6 } else { 1 << 11 };
 
-/// One averaging factor: the record decimated by `m` has `n` points at
-/// scaled times `t_i = (i − c)/c` (on [−1, 1], which keeps the normal
-/// equations well conditioned).
+/// One averaging factor: the record decimated by `m` has `n` points.
 #[derive(Clone, Copy)]
 struct Level {
     m: usize,
     n: usize,
-    c: f64,
-    sc: f64,
 }
 
 impl Level {
     fn new(len: usize, m: usize) -> Option<Level> {
         let m = m.max(1);
         let n = (len.checked_sub(1)?) / m + 1;
-        let c = (n as f64 - 1.0) / 2.0;
-        (n >= MIN_POINTS).then_some(Level {
-            m,
-            n,
-            c,
-            sc: 1.0 / c,
-        })
+        (n >= MIN_POINTS).then_some(Level { m, n })
     }
     /// Decimated indices whose samples lie in `x[a..b]`.
     fn range(&self, a: usize, b: usize) -> (usize, usize) {
@@ -71,44 +79,24 @@ impl Level {
         buf.extend((i0..i1).map(|i| x[i * self.m]));
         buf
     }
-    /// Residual of a point from the fitted quadratic `c0 + c1 t + c2 t²`.
-    /// `fi` is the index as f64 (exact), so every caller gets the same bits.
-    #[inline(always)]
-    fn resid(&self, coef: &[f64; 3], fi: f64, v: f64) -> f64 {
-        let t = (fi - self.c) * self.sc;
-        v - (coef[0] + coef[1] * t + coef[2] * t * t)
-    }
 }
 
+/// `Σ v` in four lanes (the loop vectorises), lanes added in a fixed
+/// order, so every caller gets the same bits.
 #[inline(always)]
-/// `Σ v, Σ t v, Σ t² v` over decimated points starting at index `i0`,
-/// four lanes (the loop vectorises), lanes added in a fixed order.
-fn poly_sums(lv: &Level, v: &[f64], i0: usize) -> [f64; 3] {
-    let mut a = [[0.0f64; 4]; 3];
-    let mut base = i0 as f64;
+fn lane_sum(v: &[f64]) -> f64 {
+    let mut a = [0.0f64; 4];
     let quads = v.chunks_exact(4);
     let rest = quads.remainder();
     for q in quads {
         for l in 0..4 {
-            let t = (base + l as f64 - lv.c) * lv.sc;
-            a[0][l] += q[l];
-            a[1][l] += t * q[l];
-            a[2][l] += t * t * q[l];
+            a[l] += q[l];
         }
-        base += 4.0;
     }
     for (l, &y) in rest.iter().enumerate() {
-        let t = (base + l as f64 - lv.c) * lv.sc;
-        a[0][l] += y;
-        a[1][l] += t * y;
-        a[2][l] += t * t * y;
+        a[l] += y;
     }
-    a.map(|s| (s[0] + s[1]) + (s[2] + s[3]))
-}
-
-/// [`poly_sums`], in AVX2 registers when the CPU has them (the same bits).
-fn normal_sums(lv: &Level, v: &[f64], i0: usize) -> [f64; 3] {
-    avx2_kernel!(poly_sums_avx2(lv, v, i0), poly_sums(lv, v, i0))
+    (a[0] + a[1]) + (a[2] + a[3])
 }
 
 /// The four lanes of each of three AVX2 accumulators.
@@ -121,43 +109,6 @@ fn lanes3(v: [std::arch::x86_64::__m256d; 3]) -> [[f64; 4]; 3] {
         unsafe { std::arch::x86_64::_mm256_storeu_pd(row.as_mut_ptr(), r) };
     }
     a
-}
-
-/// [`poly_sums`] in AVX2 registers: lane l takes the points k ≡ l
-/// (mod 4), with `t = (i − c)·sc` and the products `t·v`, `(t·t)·v`, as
-/// there (no FMA: the same bits).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn poly_sums_avx2(lv: &Level, v: &[f64], i0: usize) -> [f64; 3] {
-    use std::arch::x86_64::*;
-    let n = v.len();
-    let full = n / 4 * 4;
-    let (c, sc) = (_mm256_set1_pd(lv.c), _mm256_set1_pd(lv.sc));
-    let step = _mm256_set1_pd(4.0);
-    let b = i0 as f64;
-    let mut fi = _mm256_setr_pd(b, b + 1.0, b + 2.0, b + 3.0);
-    let zero = _mm256_setzero_pd();
-    let (mut a0, mut a1, mut a2) = (zero, zero, zero);
-    let mut k = 0;
-    while k < full {
-        // SAFETY: k + 4 <= full <= v.len().
-        let y = unsafe { _mm256_loadu_pd(v.as_ptr().add(k)) };
-        let t = _mm256_mul_pd(_mm256_sub_pd(fi, c), sc);
-        a0 = _mm256_add_pd(a0, y);
-        a1 = _mm256_add_pd(a1, _mm256_mul_pd(t, y));
-        a2 = _mm256_add_pd(a2, _mm256_mul_pd(_mm256_mul_pd(t, t), y));
-        fi = _mm256_add_pd(fi, step);
-        k += 4;
-    }
-    let mut a = lanes3([a0, a1, a2]);
-    let base = (i0 + full) as f64;
-    for (l, &y) in v[full..].iter().enumerate() {
-        let t = (base + l as f64 - lv.c) * lv.sc;
-        a[0][l] += y;
-        a[1][l] += t * y;
-        a[2][l] += t * t * y;
-    }
-    a.map(|s| (s[0] + s[1]) + (s[2] + s[3]))
 }
 
 #[inline(always)]
@@ -188,55 +139,6 @@ fn acf_sums(z: &[f64], prev: Option<f64>) -> [f64; 3] {
         sum(s2) + last * last,
         sum(lag) + prev.map_or(0.0, |p| p * z[0]),
     ]
-}
-
-/// `out[k]` = the residual ([`Level::resid`]) of decimated point `i0 + k`,
-/// value `v[k]`: four lanes at a time, in AVX2 registers when the CPU has
-/// them (the same operations in the same order: the same bits).
-#[inline(always)]
-fn residuals(lv: &Level, coef: &[f64; 3], v: &[f64], i0: usize, out: &mut [f64]) {
-    avx2_kernel!(
-        residuals_avx2(lv, coef, v, i0, out),
-        residuals_portable(lv, coef, v, i0, out)
-    )
-}
-
-fn residuals_portable(lv: &Level, coef: &[f64; 3], v: &[f64], i0: usize, out: &mut [f64]) {
-    for (k, (o, &y)) in out.iter_mut().zip(v).enumerate() {
-        *o = lv.resid(coef, (i0 + k) as f64, y);
-    }
-}
-
-/// [`residuals_portable`] in AVX2 registers: per lane `t = (i − c)·sc`,
-/// `y − ((c₀ + c₁t) + (c₂t)t)`, as [`Level::resid`] (no FMA).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn residuals_avx2(lv: &Level, coef: &[f64; 3], v: &[f64], i0: usize, out: &mut [f64]) {
-    use std::arch::x86_64::*;
-    let n = v.len().min(out.len());
-    let full = n / 4 * 4;
-    let (c, sc) = (_mm256_set1_pd(lv.c), _mm256_set1_pd(lv.sc));
-    let [c0, c1, c2] = coef.map(|a| _mm256_set1_pd(a));
-    let step = _mm256_set1_pd(4.0);
-    // Indices below 2^53: exact in f64, and so is every `+ 4`.
-    let b = i0 as f64;
-    let mut fi = _mm256_setr_pd(b, b + 1.0, b + 2.0, b + 3.0);
-    let mut k = 0;
-    while k < full {
-        // SAFETY: k + 4 <= full <= n <= both lengths.
-        unsafe {
-            let y = _mm256_loadu_pd(v.as_ptr().add(k));
-            let t = _mm256_mul_pd(_mm256_sub_pd(fi, c), sc);
-            let p = _mm256_add_pd(
-                _mm256_add_pd(c0, _mm256_mul_pd(c1, t)),
-                _mm256_mul_pd(_mm256_mul_pd(c2, t), t),
-            );
-            _mm256_storeu_pd(out.as_mut_ptr().add(k), _mm256_sub_pd(y, p));
-        }
-        fi = _mm256_add_pd(fi, step);
-        k += 4;
-    }
-    residuals_portable(lv, coef, &v[full..n], i0 + full, &mut out[full..n]);
 }
 
 /// `Σ z, Σ z², Σ z_{j−1} z_j` of a run of one series (`prev` the value
@@ -301,28 +203,29 @@ fn differences(r: [f64; 4]) -> [[f64; 4]; 4] {
 }
 
 /// Pass-2 state of one factor inside a segment: the last (up to four)
-/// residuals before the next block, the sums of the four series.
+/// centred values before the next block, the sums of the four series.
 struct Acf4<'a> {
     lv: &'a Level,
-    coef: [f64; 3],
+    /// The decimated record's mean, removed from every point.
+    mean: f64,
     tail: Vec<f64>,
     sums: [[f64; 3]; 4],
 }
 
 impl Acf4<'_> {
-    /// Start at decimated index `i0`: the residuals of up to four
+    /// Start at decimated index `i0`: the centred values of up to four
     /// points before it, recomputed from the record (the same bits the
     /// previous segment computed).
     fn start(&mut self, x: &[f64], i0: usize) {
         self.tail.clear();
         let lv = self.lv;
         for i in i0.saturating_sub(4)..i0 {
-            self.tail.push(lv.resid(&self.coef, i as f64, x[i * lv.m]));
+            self.tail.push(x[i * lv.m] - self.mean);
         }
     }
     /// Add the points `i0..i1` (following the tail) to the four series.
-    fn block(&mut self, v: &[f64], i0: usize, bufs: &mut [Vec<f64>; 4]) {
-        let s = avx2_or_not!(block_sums(self.lv, &self.coef, &self.tail, v, i0, bufs));
+    fn block(&mut self, v: &[f64], bufs: &mut [Vec<f64>; 4]) {
+        let s = avx2_or_not!(block_sums(self.mean, &self.tail, v, bufs));
         for (acc, s) in self.sums.iter_mut().zip(s) {
             for (a, b) in acc.iter_mut().zip(s) {
                 *a += b;
@@ -336,25 +239,21 @@ impl Acf4<'_> {
 }
 
 /// The four series' sums of one block: `bufs[0]` gets the tail and the
-/// block's residuals, `bufs[d]` their d-th differences (element k of
-/// series d is index `i0 − h + d + k`, h the tail's length; the block's
+/// block's centred values, `bufs[d]` their d-th differences (element k of
+/// series d is decimated index `i0 − h + d + k`, `i0` the block's first
+/// point and h the tail's length; the block's
 /// points start at k = h − d, or at 0 near the record's start, where
 /// series d begins at index d).
 #[inline(always)]
-fn block_sums(
-    lv: &Level,
-    coef: &[f64; 3],
-    tail: &[f64],
-    v: &[f64],
-    i0: usize,
-    bufs: &mut [Vec<f64>; 4],
-) -> [[f64; 3]; 4] {
+fn block_sums(mean: f64, tail: &[f64], v: &[f64], bufs: &mut [Vec<f64>; 4]) -> [[f64; 3]; 4] {
     let h = tail.len();
     let e = &mut bufs[0];
     e.clear();
     e.extend_from_slice(tail);
     e.resize(h + v.len(), 0.0);
-    residuals(lv, coef, v, i0, &mut e[h..]);
+    for (o, &y) in e[h..].iter_mut().zip(v) {
+        *o = y - mean;
+    }
     for d in 1..4 {
         let (lo, hi) = bufs.split_at_mut(d);
         let (src, dst) = (&lo[d - 1], &mut hi[0]);
@@ -414,14 +313,14 @@ fn per_segment<T: Send>(
     super::ordered_map(nseg, parallel, |s| f(s * SEG, ((s + 1) * SEG).min(len)))
 }
 
-/// Lag-1 autocorrelations `r1` of the quadratic-detrended decimated record
+/// Lag-1 autocorrelations `r1` of the decimated record (mean removed)
 /// and of its first three differences (Riley & Greenhall eq. 2,
 /// `Σ (z_i − μ)(z_{i+1} − μ) / Σ (z_i − μ)²`), at every factor of `ms`;
 /// `None` where the decimated record has fewer than [`MIN_POINTS`] points.
 ///
 /// Two sweeps over the record for all factors together: the first sums
-/// the quadratic's normal equations, the second forms the residuals and
-/// their differences block by block with the sums of each series.
+/// each decimated record for its mean, the second forms the centred values
+/// and their differences block by block with the sums of each series.
 fn lag1_many(x: &[f64], ms: &[usize], parallel: bool) -> Vec<Option<[f64; 4]>> {
     let all: Vec<Option<Level>> = ms.iter().map(|&m| Level::new(x.len(), m)).collect();
     let levels: Vec<Level> = all.iter().flatten().copied().collect();
@@ -429,46 +328,32 @@ fn lag1_many(x: &[f64], ms: &[usize], parallel: bool) -> Vec<Option<[f64; 4]>> {
         return vec![None; ms.len()];
     }
     let parts = per_segment(x.len(), parallel, |lo, hi| {
-        let mut out = vec![[0.0f64; 3]; levels.len()];
+        let mut out = vec![0.0f64; levels.len()];
         let mut buf = Vec::with_capacity(BLK);
         sweep(&levels, lo, hi, |k, i0, i1| {
             let lv = &levels[k];
             let v = lv.points(x, i0, i1, &mut buf);
-            let p = normal_sums(lv, v, i0);
-            for (a, b) in out[k].iter_mut().zip(p) {
-                *a += b;
-            }
+            out[k] += lane_sum(v);
         });
         out
     });
     // On the symmetric grid the odd power sums vanish and the even ones
     // have closed forms: Σt² = n(n²−1)/(12c²), Σt⁴ = n(n²−1)(3n²−7)/(240c⁴).
-    let coefs: Vec<[f64; 3]> = levels
+    // Only the mean is removed (module docs): `c0 = Σv/n`, the series
+    // centred so that the sums below do not cancel; the autocorrelation
+    // removes the (then tiny) remaining mean exactly.
+    let means: Vec<f64> = levels
         .iter()
         .enumerate()
-        .map(|(k, lv)| {
-            let nf = lv.n as f64;
-            let s2 = nf * (nf * nf - 1.0) / 12.0 * lv.sc * lv.sc;
-            let s4 = nf * (nf * nf - 1.0) * (3.0 * nf * nf - 7.0) / 240.0 * lv.sc.powi(4);
-            let a = Matrix3::new(nf, 0.0, s2, 0.0, s2, 0.0, s2, 0.0, s4);
-            let mut b = [0.0f64; 3];
-            for p in &parts {
-                for (s, v) in b.iter_mut().zip(p[k]) {
-                    *s += v;
-                }
-            }
-            a.try_inverse()
-                .map(|ai| ai * Vector3::from(b))
-                .map_or([0.0; 3], |c| [c[0], c[1], c[2]])
-        })
+        .map(|(k, lv)| parts.iter().map(|p| p[k]).sum::<f64>() / lv.n as f64)
         .collect();
     let parts = per_segment(x.len(), parallel, |lo, hi| {
         let mut st: Vec<Acf4> = levels
             .iter()
-            .zip(&coefs)
-            .map(|(lv, &coef)| Acf4 {
+            .zip(&means)
+            .map(|(lv, &mean)| Acf4 {
                 lv,
-                coef,
+                mean,
                 tail: Vec::with_capacity(4),
                 sums: [[0.0; 3]; 4],
             })
@@ -480,13 +365,12 @@ fn lag1_many(x: &[f64], ms: &[usize], parallel: bool) -> Vec<Option<[f64; 4]>> {
         let mut bufs: [Vec<f64>; 4] = Default::default();
         sweep(&levels, lo, hi, |k, i0, i1| {
             let v = levels[k].points(x, i0, i1, &mut buf);
-            st[k].block(v, i0, &mut bufs);
+            st[k].block(v, &mut bufs);
         });
         st.into_iter().map(|s| s.sums).collect::<Vec<_>>()
     });
     let mut r1s = levels.iter().enumerate().map(|(k, lv)| {
-        let coef = &coefs[k];
-        let r = |i: usize| lv.resid(coef, i as f64, x[i * lv.m]);
+        let r = |i: usize| x[i * lv.m] - means[k];
         let first = differences([r(0), r(1), r(2), r(3)]);
         let n = lv.n;
         let last = differences([r(n - 4), r(n - 3), r(n - 2), r(n - 1)]);
@@ -552,35 +436,185 @@ pub fn identify(x: &[f64], m: usize) -> Option<NoiseId> {
     identify_many(x, &[m], false).pop().flatten()
 }
 
+/// How the noise was identified at one averaging time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum IdMethod {
+    /// Lag-1 autocorrelation (at least [`MIN_POINTS`] decimated points).
+    Lag1,
+    /// The B1 ratio.
+    B1,
+    /// The B1 ratio said phase noise; R(n) chose which.
+    Rn,
+}
+
+impl IdMethod {
+    /// Key in the JSON (`lag1`, `b1`, `rn`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            IdMethod::Lag1 => "lag1",
+            IdMethod::B1 => "b1",
+            IdMethod::Rn => "rn",
+        }
+    }
+}
+
+/// Expected B1 ratio for `n` τ-averages of a noise whose Allan variance
+/// goes as τ^μ (Barnes' bias function; Howe et al. 2000, Table 3):
+/// `B1(N, μ) = N(1 − N^μ) / (2(N − 1)(1 − 2^μ))`, and
+/// `N ln N / (2(N − 1) ln 2)` at μ = 0 (flicker FM). μ = 1, 0, −1, −2
+/// are random-walk FM, flicker FM, white FM and phase noise.
+pub fn b1_expected(n: f64, mu: i32) -> f64 {
+    if mu == 0 {
+        n * n.ln() / (2.0 * (n - 1.0) * std::f64::consts::LN_2)
+    } else {
+        let m = f64::from(mu);
+        n * (1.0 - n.powf(m)) / (2.0 * (n - 1.0) * (1.0 - 2f64.powf(m)))
+    }
+}
+
+/// Expected R(n) = MVAR/AVAR of flicker PM at factor m, with the
+/// measurement bandwidth at the Nyquist frequency, `2π f_h τ = π m`
+/// (IEEE Std 1139-2008 Table: AVAR `(1.038 + 3 ln(2π f_h τ))/(4π²)`,
+/// MVAR `3 ln(256/27)/(8π²)`, both times `h₁/τ²`).
+pub fn rn_flicker_pm(m: f64) -> f64 {
+    use std::f64::consts::PI;
+    let mvar = 3.0 * (256.0f64 / 27.0).ln() / (8.0 * PI * PI);
+    let avar = (1.038 + 3.0 * (PI * m).ln()) / (4.0 * PI * PI);
+    mvar / avar
+}
+
+/// Noise exponent α at one factor `m` from the observed B1 ratio `b1`
+/// (standard variance of the τ-averages over the Allan variance) with
+/// `n_avg` non-overlapping τ-averages in the record, and the observed
+/// `rn` = MVAR/AVAR at the factor:
+///
+/// 1. μ is the first of 1, 0, −1 whose boundary with the next, the
+///    geometric mean `√(B1(N, μ)·B1(N, μ − 1))`, `b1` exceeds:
+///    `α = −μ − 1` ([`IdMethod::B1`]);
+/// 2. otherwise the noise is in the phase (μ = −2) and R(n) chooses,
+///    by the geometric means of neighbouring expected values, between
+///    white PM (`1/m`, α = 2), flicker PM ([`rn_flicker_pm`], α = 1) and
+///    white FM (1/2, α = 0: where B1 and R(n) disagree, R(n) decides)
+///    ([`IdMethod::Rn`]); where `1/m` is not below the flicker PM value
+///    (m ≤ 2, R(n) cannot tell them apart) or R(n) is missing, white PM
+///    ([`IdMethod::B1`]).
+///
+/// `None` for fewer than two averages or a ratio that is not finite.
+pub fn b1_rn(b1: f64, n_avg: usize, rn: Option<f64>, m: usize) -> Option<(i32, IdMethod)> {
+    if n_avg < 2 || !b1.is_finite() || b1 < 0.0 {
+        return None;
+    }
+    let n = n_avg as f64;
+    for mu in [1, 0, -1] {
+        if b1 > (b1_expected(n, mu) * b1_expected(n, mu - 1)).sqrt() {
+            return Some((-mu - 1, IdMethod::B1));
+        }
+    }
+    let (white, flicker) = (1.0 / m as f64, rn_flicker_pm(m as f64));
+    match rn.filter(|r| r.is_finite()) {
+        Some(r) if white < flicker && flicker < 0.5 => Some(if r > (flicker * 0.5).sqrt() {
+            (0, IdMethod::Rn)
+        } else if r > (white * flicker).sqrt() {
+            (1, IdMethod::Rn)
+        } else {
+            (2, IdMethod::Rn)
+        }),
+        _ => Some((2, IdMethod::B1)),
+    }
+}
+
+/// Where [`b1_overlapping_many`] sums directly: when the direct sums
+/// (`L − m` terms per factor) cost less than this many times `L·log₂L`.
+const B1_DIRECT_RATIO: f64 = 60.0;
+
+/// Largest estimated round-off of an FFT-based variance, relative to it,
+/// that [`b1_overlapping_many`] accepts before summing directly.
+const B1_TOL: f64 = 1e-9;
+
+/// The sample variance (divisor M − 1) of the M = L − m overlapping
+/// first differences `x_{i+m} − x_i` of phase record `x` (L points), at
+/// every factor of `ms` (`None` for fewer than two differences): the
+/// numerator of the overlapping B1 ratio (divide by `(mτ0)²` for the
+/// variance of the τ-averages of the rate). Stable32's overlapping
+/// statistics agree with this form of B1 (module docs).
+///
+/// Direct two-pass sums on a sparse grid; on a dense one, from the
+/// record less its least-squares line `u` (the centred differences are
+/// blind to a line): `Σ (u_{i+m} − u_i)² = Q(L) − Q(m) + Q(M) − 2R(m)`
+/// with `Q` the prefix sums of `u²` and `R` the autocorrelation by FFT
+/// ([`super::corr::autocorr`]), a factor whose round-off estimate
+/// exceeds [`B1_TOL`] summed directly. Same numbers serial or parallel.
+pub fn b1_overlapping_many(x: &[f64], ms: &[usize], parallel: bool) -> Vec<Option<f64>> {
+    let l = x.len();
+    let direct = |m: usize| -> Option<f64> {
+        let mm = l.checked_sub(m).filter(|&mm| mm >= 2 && m >= 1)?;
+        let mean = (x[mm..].iter().sum::<f64>() - x[..m].iter().sum::<f64>()) / mm as f64;
+        let ss: f64 = x[m..]
+            .iter()
+            .zip(x)
+            .map(|(b, a)| {
+                let d = (b - a) - mean;
+                d * d
+            })
+            .sum();
+        Some(ss / (mm - 1) as f64)
+    };
+    let cost: f64 = ms.iter().map(|&m| l.saturating_sub(m) as f64).sum();
+    let lf = l as f64;
+    if l < 4 || cost <= B1_DIRECT_RATIO * lf * lf.log2() {
+        return super::ordered_map(ms.len(), parallel, |k| direct(ms[k]));
+    }
+    // The least-squares line through (t, x_t), t = 0..L−1.
+    let tm = (lf - 1.0) / 2.0;
+    let xm = x.iter().sum::<f64>() / lf;
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    for (t, &v) in x.iter().enumerate() {
+        let dt = t as f64 - tm;
+        sxy += dt * (v - xm);
+        sxx += dt * dt;
+    }
+    let slope = sxy / sxx;
+    let u: Vec<f64> = x
+        .iter()
+        .enumerate()
+        .map(|(t, &v)| v - xm - slope * (t as f64 - tm))
+        .collect();
+    let mut q = vec![0.0; l + 1];
+    let mut p = vec![0.0; l + 1];
+    for (t, &v) in u.iter().enumerate() {
+        q[t + 1] = q[t] + v * v;
+        p[t + 1] = p[t] + v;
+    }
+    let dmax = ms.iter().copied().max().unwrap_or(0).min(l - 1);
+    let r = super::corr::autocorr(&u, dmax);
+    let noise = 16.0 * f64::EPSILON * ((l + dmax + 1).next_power_of_two() as f64).log2() * q[l];
+    super::ordered_map(ms.len(), parallel, |k| {
+        let m = ms[k];
+        let mm = l.checked_sub(m).filter(|&mm| mm >= 2 && m >= 1)?;
+        let d = q[l] - q[m] + q[mm] - 2.0 * r[m];
+        let mean = (p[l] - p[mm] - p[m]) / mm as f64;
+        let ss = d - mm as f64 * mean * mean;
+        if ss > 0.0 && noise <= B1_TOL * ss {
+            Some(ss / (mm - 1) as f64)
+        } else {
+            direct(m)
+        }
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::sim::{noise::flicker, normal, rng};
 
-    /// Riley & Greenhall's method written out: decimate, fit the quadratic
-    /// by its full normal equations, difference, mean-centred r1.
+    /// Riley & Greenhall's method written out: decimate, difference,
+    /// mean-centred r1.
     fn reference(x: &[f64], m: usize) -> Option<[f64; 4]> {
-        let v: Vec<f64> = x.iter().step_by(m).copied().collect();
-        let n = v.len();
-        if n < MIN_POINTS {
+        let mut z: Vec<f64> = x.iter().step_by(m).copied().collect();
+        if z.len() < MIN_POINTS {
             return None;
         }
-        let t: Vec<f64> = (0..n)
-            .map(|i| i as f64 / (n - 1) as f64 * 2.0 - 1.0)
-            .collect();
-        let mut a = Matrix3::zeros();
-        let mut b = Vector3::zeros();
-        for (&ti, &vi) in t.iter().zip(&v) {
-            let p = Vector3::new(1.0, ti, ti * ti);
-            a += p * p.transpose();
-            b += p * vi;
-        }
-        let c = a.try_inverse().unwrap() * b;
-        let mut z: Vec<f64> = t
-            .iter()
-            .zip(&v)
-            .map(|(&ti, &vi)| vi - (c[0] + c[1] * ti + c[2] * ti * ti))
-            .collect();
         Some(std::array::from_fn(|d| {
             if d > 0 {
                 z = z.windows(2).map(|w| w[1] - w[0]).collect();
@@ -654,22 +688,12 @@ mod tests {
             return;
         }
         let x = cumsum(white(5000, 11));
-        let lv = Level::new(x.len(), 3).unwrap();
-        let coef = [0.3, -1.7, 2.9];
         let bits = |a: &[f64]| a.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
         for n in [0, 1, 3, 4, 5, 8, 9, 31, 1000] {
             for i0 in [0, 7, 1001] {
                 let v = &x[i0..i0 + n];
-                let (mut p, mut w) = (vec![0.0; n], vec![0.0; n]);
-                residuals_portable(&lv, &coef, v, i0, &mut p);
-                // SAFETY: the CPU supports AVX2 (checked above).
-                unsafe { residuals_avx2(&lv, &coef, v, i0, &mut w) };
-                assert_eq!(bits(&p), bits(&w), "n {n}, i0 {i0}");
-                // SAFETY: as above.
-                let wide = unsafe { poly_sums_avx2(&lv, v, i0) };
-                assert_eq!(bits(&poly_sums(&lv, v, i0)), bits(&wide), "n {n}");
                 for prev in [None, Some(0.25)] {
-                    // SAFETY: as above.
+                    // SAFETY: the CPU supports AVX2 (checked above).
                     let wide = unsafe { acf_sums_avx2(v, prev) };
                     assert_eq!(bits(&acf_sums(v, prev)), bits(&wide), "n {n}");
                 }

@@ -241,11 +241,16 @@ pub struct Stability {
     pub m: Vec<usize>,
     /// τ = m·τ0 (s).
     pub taus_s: Vec<f64>,
-    /// Noise exponent α of S_y identified at each τ (Allan family);
-    /// beyond the last τ with enough points, the last identified value.
+    /// Noise exponent α of S_y identified at each τ (Allan family), by
+    /// the method in `id_method` ([`id`] module docs).
     pub alpha: Vec<Option<i32>>,
-    /// Noise exponent with up to three differences (Hadamard).
+    /// Noise exponent with up to three differences (Hadamard; where the
+    /// B1 ratio identified the noise, the Allan family's α).
     pub alpha_hadamard: Vec<Option<i32>>,
+    /// How α was identified at each τ: lag-1 autocorrelation where the
+    /// decimated record has at least [`id::MIN_POINTS`] points, the B1
+    /// ratio (and R(n) for phase noise) where it has fewer.
+    pub id_method: Vec<Option<id::IdMethod>>,
     /// Overlapping Allan deviation.
     pub oadev: DevSeries,
     /// Modified Allan deviation.
@@ -365,6 +370,26 @@ pub fn stability_with_progress(
     opts: &StabilityOptions,
     tick: &(dyn Fn(usize) + Sync),
 ) -> Result<Stability> {
+    check_record(x, opts)?;
+    stability_run(x, opts.grid.factors(x.len()), opts, tick)
+}
+
+/// As [`stability`] at the averaging factors `ms` instead of the grid's
+/// (e.g. another program's τ list; a factor too large for a deviation
+/// gives `None` there). `opts.grid` is not used. Fails as [`stability`],
+/// and on a factor of 0.
+pub fn stability_at(x: &[f64], ms: &[usize], opts: &StabilityOptions) -> Result<Stability> {
+    if ms.contains(&0) {
+        return Err(Error::InvalidValue {
+            what: "averaging factor".into(),
+            value: "0".into(),
+        });
+    }
+    check_record(x, opts)?;
+    stability_run(x, ms.to_vec(), opts, &|_| {})
+}
+
+fn check_record(x: &[f64], opts: &StabilityOptions) -> Result<()> {
     if x.len() < 5 {
         return Err(Error::Unsupported(format!(
             "noise: {} samples; at least 5 are needed for one τ",
@@ -389,7 +414,15 @@ pub fn stability_with_progress(
             value: x[k].to_string(),
         });
     }
-    let ms = opts.grid.factors(x.len());
+    Ok(())
+}
+
+fn stability_run(
+    x: &[f64],
+    ms: Vec<usize>,
+    opts: &StabilityOptions,
+    tick: &(dyn Fn(usize) + Sync),
+) -> Result<Stability> {
     let n = x.len();
     let (t0, p, par) = (opts.tau0_s, opts.confidence, opts.parallel);
     let mut st = Stability {
@@ -397,6 +430,7 @@ pub fn stability_with_progress(
         taus_s: ms.iter().map(|&m| m as f64 * t0).collect(),
         alpha: Vec::new(),
         alpha_hadamard: Vec::new(),
+        id_method: Vec::new(),
         oadev: DevSeries::default(),
         mdev: DevSeries::default(),
         ohdev: DevSeries::default(),
@@ -410,13 +444,41 @@ pub fn stability_with_progress(
         tot: tots,
         md: mvs,
     } = dev::stability_vars(x, &ms, t0, par);
-    let mut last: Option<id::NoiseId> = None;
+    // B1 and R(n) where the lag-1 method has too few points.
+    let fall: Vec<usize> = (0..ms.len()).filter(|&k| ids[k].is_none()).collect();
+    let fm: Vec<usize> = fall.iter().map(|&k| ms[k]).collect();
+    let mut b1var = vec![None; ms.len()];
+    for (&k, v) in fall.iter().zip(id::b1_overlapping_many(x, &fm, par)) {
+        b1var[k] = v;
+    }
+    let mut last: Option<(id::NoiseId, id::IdMethod)> = None;
     for (k, &m) in ms.iter().enumerate() {
-        let nid = ids[k].or(last);
-        last = nid;
+        let found = match ids[k] {
+            Some(nid) => Some((nid, id::IdMethod::Lag1)),
+            None => {
+                let mt = m as f64 * t0;
+                oas[k].filter(|o| o.var > 0.0).and_then(|o| {
+                    let b1 = b1var[k]? / (mt * mt) / o.var;
+                    let rn = mvs[k].map(|v| v.var / o.var);
+                    id::b1_rn(b1, (n - 1) / m, rn, m).map(|(a, how)| {
+                        let nid = id::NoiseId {
+                            alpha_allan: a,
+                            alpha_hadamard: a,
+                        };
+                        (nid, how)
+                    })
+                })
+            }
+        };
+        // Where neither method applies (a τ without an Allan variance),
+        // the last identified noise.
+        let found = found.or(last);
+        last = found;
+        let nid = found.map(|f| f.0);
         let (aa, ah) = (nid.map(|n| n.alpha_allan), nid.map(|n| n.alpha_hadamard));
         st.alpha.push(aa);
         st.alpha_hadamard.push(ah);
+        st.id_method.push(found.map(|f| f.1));
         let pair = |v: Option<dev::VarN>| v.map(|v| (v.var, v.n));
         let oa = oas[k];
         push(

@@ -689,7 +689,7 @@ fn noise(seed: u64) -> Result<DemoSection> {
             parallel: true,
         },
     )?;
-    let fit = terms::fit_terms(&st.taus_s, &st.oadev, &st.alpha, tau0)?;
+    let fit = terms::fit_terms(&st.taus_s, &st.oadev, &st.alpha, tau0, x.len())?;
     let slope = terms::slope_readings(&st.taus_s, &st.oadev);
     let bias_stability = [10.0, 100.0]
         .iter()

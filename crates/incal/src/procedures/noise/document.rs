@@ -2,8 +2,9 @@
 //! (`"procedure": "noise"`).
 //!
 //! Top-level `channels`: per channel `taus_s`, each deviation as
-//! `{value, lo, hi, edf, n}`, `alpha`, the IEEE term fit's model curve and
-//! the slope-line readings. Coefficients `NAME.TERM` in engineering units
+//! `{taus_s, value, lo, hi, edf, n}`, `alpha` and `id_method` (`lag1`,
+//! `b1` or `rn` at each τ), the IEEE term fit's model curve and the
+//! slope-line readings. Coefficients `NAME.TERM` in engineering units
 //! (module [`NoiseUnits`]), only the identified terms.
 
 use serde_json::{json, Value};
@@ -148,6 +149,7 @@ pub fn document(
             o.insert(
                 d.as_str().into(),
                 json!({
+                    "taus_s": st.taus_s,
                     "value": arr(&s.value, f),
                     "lo": arr(&s.lo, f),
                     "hi": arr(&s.hi, f),
@@ -157,6 +159,7 @@ pub fn document(
             );
         }
         o.insert("alpha".into(), json!(st.alpha));
+        o.insert("id_method".into(), json!(st.id_method));
         let model: Vec<Option<f64>> = st
             .taus_s
             .iter()
@@ -175,6 +178,30 @@ pub fn document(
             }
         }
         o.insert("fit_terms_oadev".into(), Value::Object(lines));
+        // The chosen model: its terms, the fit's χ² and the correlation of
+        // the fitted squares (B² and K² are strongly correlated on short
+        // records).
+        if let (Some(sq), Some((chi2, dof))) = (&c.fit.squares, c.fit.chi2) {
+            let names: Vec<&str> = sq.names().iter().map(|n| n.trim_end_matches('2')).collect();
+            let r = sq.correlation();
+            let rows: Vec<Vec<Option<f64>>> = (0..r.nrows())
+                .map(|i| {
+                    (0..r.ncols())
+                        .map(|j| Some(r[(i, j)]).filter(|v| v.is_finite()))
+                        .collect()
+                })
+                .collect();
+            o.insert(
+                "term_model".into(),
+                json!({
+                    "terms": names,
+                    "chi2": Some(chi2).filter(|v| v.is_finite()),
+                    "dof": dof,
+                    "penalty": crate::noise::terms::PENALTY,
+                    "correlation": rows,
+                }),
+            );
+        }
         let mut slope = serde_json::Map::new();
         for (j, v) in c.slope.iter().enumerate() {
             let (name, u, k) = &units.terms[j];

@@ -510,8 +510,8 @@ fn analyse(
         };
         let tick = |_: usize| progress.advance(1);
         let st = stability_with_progress(x, &opts, &tick).map_err(in_channel(k))?;
-        let fit =
-            terms::fit_terms(&st.taus_s, &st.oadev, &st.alpha, tau0).map_err(in_channel(k))?;
+        let fit = terms::fit_terms(&st.taus_s, &st.oadev, &st.alpha, tau0, x.len())
+            .map_err(in_channel(k))?;
         let slope = terms::slope_readings(&st.taus_s, &st.oadev);
         let bias_stability = o
             .stability_tau_s
