@@ -701,6 +701,68 @@ mod tests {
         }
     }
 
+    /// The variance of the overlapping first differences, written out.
+    fn diff_var(x: &[f64], m: usize) -> f64 {
+        let d: Vec<f64> = x[m..].iter().zip(x).map(|(b, a)| b - a).collect();
+        let mu = d.iter().sum::<f64>() / d.len() as f64;
+        d.iter().map(|v| (v - mu) * (v - mu)).sum::<f64>() / (d.len() - 1) as f64
+    }
+
+    #[test]
+    fn the_b1_variances_match_the_sums_written_out_on_sparse_and_dense_grids() {
+        // Random-walk phase with a large offset and a slope, plus white.
+        let w = white(5000, 21);
+        let x: Vec<f64> = cumsum(white(5000, 22))
+            .iter()
+            .zip(&w)
+            .enumerate()
+            .map(|(i, (r, e))| 1e6 + 3.0 * i as f64 + r + 0.1 * e)
+            .collect();
+        // Sparse: summed directly. Dense (every factor): by FFT.
+        let sparse = [1usize, 7, 160, 1249];
+        let all: Vec<usize> = (1..=1249).collect();
+        for ms in [&sparse[..], &all[..]] {
+            let got = b1_overlapping_many(&x, ms, true);
+            assert_eq!(got, b1_overlapping_many(&x, ms, false));
+            for (&m, g) in ms.iter().zip(&got) {
+                let want = diff_var(&x, m);
+                let g = g.unwrap();
+                assert!(((g - want) / want).abs() < 1e-9, "m {m}: {g} vs {want}");
+            }
+        }
+        assert_eq!(b1_overlapping_many(&x[..3], &[2], false), vec![None]);
+    }
+
+    #[test]
+    fn b1_and_rn_name_the_noise_by_their_expected_values() {
+        // The expected B1 of each μ is classified as that μ.
+        for n_avg in [4usize, 10, 29] {
+            for (mu, alpha) in [(1, -2), (0, -1), (-1, 0)] {
+                let b1 = b1_expected(n_avg as f64, mu);
+                assert_eq!(b1_rn(b1, n_avg, None, 1000), Some((alpha, IdMethod::B1)));
+            }
+            // Phase noise: R(n) decides.
+            let b1 = b1_expected(n_avg as f64, -2);
+            let m = 1000;
+            assert_eq!(
+                b1_rn(b1, n_avg, Some(1.0 / m as f64), m),
+                Some((2, IdMethod::Rn))
+            );
+            assert_eq!(
+                b1_rn(b1, n_avg, Some(rn_flicker_pm(m as f64)), m),
+                Some((1, IdMethod::Rn))
+            );
+            assert_eq!(b1_rn(b1, n_avg, Some(0.5), m), Some((0, IdMethod::Rn)));
+        }
+        // The closed forms at μ = 1, −1, −2 (Howe et al. Table 3).
+        let n = 12.0;
+        assert!((b1_expected(n, 1) - n / 2.0).abs() < 1e-12);
+        assert!((b1_expected(n, -1) - 1.0).abs() < 1e-12);
+        assert!((b1_expected(n, -2) - (n * n - 1.0) / (1.5 * n * (n - 1.0))).abs() < 1e-12);
+        assert_eq!(b1_rn(f64::NAN, 10, None, 10), None);
+        assert_eq!(b1_rn(1.0, 1, None, 10), None);
+    }
+
     #[test]
     fn a_record_too_short_for_a_factor_is_not_identified() {
         let x = cumsum(white(100, 9));
