@@ -604,7 +604,7 @@ fn dense_sums(
 
 /// `x` less its least-squares polynomial of degree `deg` (1 or 2) in the
 /// sample index (scaled to [−1, 1] for conditioning).
-fn detrend(x: &[f64], deg: usize) -> Vec<f64> {
+pub(crate) fn detrend(x: &[f64], deg: usize) -> Vec<f64> {
     use nalgebra::{Matrix3, Vector3};
     let n = x.len();
     if n <= deg + 1 {

@@ -565,21 +565,7 @@ pub fn b1_overlapping_many(x: &[f64], ms: &[usize], parallel: bool) -> Vec<Optio
     if l < 4 || cost <= B1_DIRECT_RATIO * lf * lf.log2() {
         return super::ordered_map(ms.len(), parallel, |k| direct(ms[k]));
     }
-    // The least-squares line through (t, x_t), t = 0..L−1.
-    let tm = (lf - 1.0) / 2.0;
-    let xm = x.iter().sum::<f64>() / lf;
-    let (mut sxy, mut sxx) = (0.0, 0.0);
-    for (t, &v) in x.iter().enumerate() {
-        let dt = t as f64 - tm;
-        sxy += dt * (v - xm);
-        sxx += dt * dt;
-    }
-    let slope = sxy / sxx;
-    let u: Vec<f64> = x
-        .iter()
-        .enumerate()
-        .map(|(t, &v)| v - xm - slope * (t as f64 - tm))
-        .collect();
+    let u = super::dev::detrend(x, 1);
     let mut q = vec![0.0; l + 1];
     let mut p = vec![0.0; l + 1];
     for (t, &v) in u.iter().enumerate() {

@@ -91,7 +91,7 @@ fn octave_correlation(alpha: Option<i32>) -> f64 {
 /// modelled covariance of the σ̂² (EDF and a Markov correlation), and with
 /// the table's 3.84 an absent term was reported in up to 15 % of simulated
 /// records. With 10 (and the ramp at [`RAMP_FACTOR`] times it), over 200
-/// seeded records of each of five mixes (`tests/noise_selection.rs`, 2¹⁶–2¹⁸
+/// seeded records of each of five mixes (`tests/noise_roundtrip.rs`, 2¹⁶–2¹⁸
 /// samples) an absent term is reported in at most 1.5 % of records and a
 /// term that dominates the top decade of τ is found in at least 96.5 %.
 pub const PENALTY: f64 = 10.0;
@@ -117,14 +117,14 @@ struct Active {
 }
 
 impl Active {
-    /// `χ² + penalty·(terms)`, the ramp counting [`RAMP_FACTOR`] terms.
-    fn score(&self, penalty: f64) -> f64 {
+    /// `χ² + PENALTY·(terms)`, the ramp counting [`RAMP_FACTOR`] terms.
+    fn score(&self) -> f64 {
         let weight: f64 = self
             .active
             .iter()
             .map(|&j| if j == 4 { RAMP_FACTOR } else { 1.0 })
             .sum();
-        self.chi2 + penalty * weight
+        self.chi2 + PENALTY * weight
     }
 }
 
@@ -334,19 +334,6 @@ pub fn fit_terms(
     tau0: f64,
     n_phase: usize,
 ) -> Result<TermFit> {
-    fit_terms_with(taus, oadev, alpha, tau0, n_phase, PENALTY)
-}
-
-/// [`fit_terms`] with another penalty per term (to measure the choice's
-/// error rates against the penalty).
-pub fn fit_terms_with(
-    taus: &[f64],
-    oadev: &DevSeries,
-    alpha: &[Option<i32>],
-    tau0: f64,
-    n_phase: usize,
-    penalty: f64,
-) -> Result<TermFit> {
     let mut obs: Vec<Obs> = Vec::new();
     for (i, &t) in taus.iter().enumerate() {
         let (Some(s), Some(e)) = (oadev.value[i], oadev.edf[i]) else {
@@ -380,8 +367,8 @@ pub fn fit_terms_with(
     }
     // Least score; on a tie the fewer terms, then the lower χ².
     let order = |a: &Active, b: &Active| {
-        a.score(penalty)
-            .total_cmp(&b.score(penalty))
+        a.score()
+            .total_cmp(&b.score())
             .then(a.active.len().cmp(&b.active.len()))
             .then(a.chi2.total_cmp(&b.chi2))
     };
@@ -415,27 +402,19 @@ pub fn fit_terms_with(
     let rival = cands
         .iter()
         .filter(|c| c.active != best.active && c.active.len() <= best.active.len())
-        .filter(|c| c.score(penalty) - best.score(penalty) < NOT_SEPARATED)
+        .filter(|c| c.score() - best.score() < NOT_SEPARATED)
         .min_by(|a, b| order(a, b));
     if let Some(r) = rival {
-        let only_best: Vec<usize> = best
-            .active
-            .iter()
-            .copied()
-            .filter(|j| !r.active.contains(j))
-            .collect();
-        let only_rival: Vec<usize> = r
-            .active
-            .iter()
-            .copied()
-            .filter(|j| !best.active.contains(j))
-            .collect();
-        let common: Vec<usize> = best
-            .active
-            .iter()
-            .copied()
-            .filter(|j| r.active.contains(j))
-            .collect();
+        // The terms of `from` that are (or are not) in `other`.
+        let pick = |from: &[usize], other: &[usize], inside: bool| -> Vec<usize> {
+            from.iter()
+                .copied()
+                .filter(|j| other.contains(j) == inside)
+                .collect()
+        };
+        let only_best = pick(&best.active, &r.active, false);
+        let only_rival = pick(&r.active, &best.active, false);
+        let common = pick(&best.active, &r.active, true);
         let beside = if common.is_empty() {
             String::new()
         } else {
@@ -447,8 +426,8 @@ pub fn fit_terms_with(
                 "the Allan variance is explained about as well by {}{beside} as by {} (criterion {:.1} against {:.1}): the record does not separate them; {} reported, {} not",
                 names(&only_rival),
                 names(&only_best),
-                r.score(penalty),
-                best.score(penalty),
+                r.score(),
+                best.score(),
                 names(&best.active),
                 names(&only_rival),
             ),
