@@ -196,11 +196,20 @@ fn bad_input_is_one_line_and_exit_2() {
         &run(&["noise", "--input", &text, "--rate-hz", "1"]),
         "t.csv:3",
     );
+    let inf = w("inf.csv", "gx\n1\ninf\n2\n3\n4\n");
+    bad(
+        &run(&["noise", "--input", &inf, "--rate-hz", "1"]),
+        "inf.csv:3",
+    );
+    // A NaN cell is a missing sample (a gap): here no stretch is long
+    // enough for one averaging time.
     let nan = w("nan.csv", "gx\n1\nNaN\n2\n3\n4\n");
     bad(
         &run(&["noise", "--input", &nan, "--rate-hz", "1"]),
-        "nan.csv:3",
+        "longest stretch between gaps and missing samples has 3 samples",
     );
+    let no_rate = w("norate.csv", "gx\n1\n2\n3\n4\n5\n6\n");
+    bad(&run(&["noise", "--input", &no_rate]), "--rate-hz");
     let empty = w("e.csv", "");
     bad(
         &run(&["noise", "--input", &empty, "--rate-hz", "1"]),

@@ -296,7 +296,7 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
         "noise" => reduce::<noise::Noise>(
             data,
             &noise::NoiseOptions {
-                rate_hz: 100.0,
+                rate_hz: Some(100.0),
                 // Sequential: a fuzzer's process stays on one thread.
                 parallel: false,
                 ..noise::NoiseOptions::default()

@@ -738,6 +738,16 @@ impl<'a> Row<'a> {
             self.bytes(col),
         )
     }
+    /// As [`Row::f64`], but an empty cell or `NaN` (any case) is a missing
+    /// sample (`None`) for a reduction that handles gaps; infinities and
+    /// text are still refused.
+    pub fn f64_or_missing(&self, col: usize) -> Result<Option<f64>> {
+        let b = self.bytes(col);
+        if b.is_empty() || b.eq_ignore_ascii_case(b"nan") {
+            return Ok(None);
+        }
+        self.f64(col).map(Some)
+    }
     /// A problem on this row.
     pub fn error(&self, message: impl Into<String>) -> InputError {
         InputError::at(&self.header.file, self.line, message)

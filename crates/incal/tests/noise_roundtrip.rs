@@ -256,3 +256,166 @@ fn quantization_and_white() {
         &[0, 1],
     );
 }
+
+// ---- Gaps and time stamps (`incal noise` reads `time_s`) ----
+
+use incal::procedures::noise::{Noise, NoiseOptions};
+use incal::procedures::{reduce_source, Silent};
+
+/// A CSV record `time_s,gx` at `rate_hz` from rate samples `y`: rows in
+/// `cut` left out (a gap in the stamps), or, with `nan`, kept with an
+/// empty cell.
+fn csv(y: &[f64], rate_hz: f64, cut: std::ops::Range<usize>, nan: bool) -> String {
+    let mut s = String::from("time_s,gx\n");
+    for (i, v) in y.iter().enumerate() {
+        let t = i as f64 / rate_hz;
+        if cut.contains(&i) {
+            if nan {
+                s.push_str(&format!("{t:.4},NaN\n"));
+            }
+        } else {
+            s.push_str(&format!("{t:.4},{v:e}\n"));
+        }
+    }
+    s
+}
+
+fn noise_doc(csv: &str, rate_hz: Option<f64>) -> incal::Result<serde_json::Value> {
+    let o = NoiseOptions {
+        rate_hz,
+        parallel: false,
+        ..Default::default()
+    };
+    let doc = reduce_source::<Noise, _>(
+        "rec.csv",
+        csv.as_bytes(),
+        &incal_io::ReadOptions::default(),
+        &o,
+        &Silent,
+    )?;
+    Ok(serde_json::to_value(&doc).unwrap())
+}
+
+fn series(doc: &serde_json::Value, name: &str, what: &str) -> Vec<Option<f64>> {
+    doc["channels"]["gx"][name][what]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64())
+        .collect()
+}
+
+fn gyro_rate(seed: u64, n: usize) -> Vec<f64> {
+    let truth = NoiseTruth {
+        n: 1.0,
+        k: 0.01,
+        ..Default::default()
+    };
+    rate_record(&truth, 1.0, n, seed)
+}
+
+#[test]
+fn a_gap_leaves_the_deviations_within_their_bounds() {
+    // 2^16 samples at 100 Hz, 6000 of them (a minute) cut out a third of the
+    // way in: at every τ the gap-aware deviations' bounds hold the
+    // deviations of the whole record, and the terms that straddled the gap
+    // are counted out (n).
+    let y = gyro_rate(11, 1 << 16);
+    let whole = noise_doc(&csv(&y, 100.0, 0..0, false), Some(100.0)).unwrap();
+    let gapped = noise_doc(&csv(&y, 100.0, 20_000..26_000, false), None).unwrap();
+    assert_eq!(
+        gapped["options"]["rate_hz"]
+            .as_f64()
+            .map(|r| (r * 1e6).round()),
+        Some(1e8)
+    );
+    let w = gapped["warnings"].to_string();
+    assert!(w.contains("time-gaps") && w.contains("spans a gap"), "{w}");
+    for d in ["oadev", "mdev", "ohdev", "tdev"] {
+        let (v, lo, hi) = (
+            series(&whole, d, "value"),
+            series(&gapped, d, "lo"),
+            series(&gapped, d, "hi"),
+        );
+        let g = series(&gapped, d, "value");
+        let mut compared = 0;
+        for k in 0..g.len() {
+            let (Some(v), Some(lo), Some(hi)) = (v[k], lo[k], hi[k]) else {
+                continue;
+            };
+            // The bounds are 68.3 % intervals of an estimate that shares
+            // 90 % of its data with the whole record's: a miss is a defect.
+            assert!(
+                lo <= v && v <= hi,
+                "{d} at k={k}: whole {v} outside [{lo}, {hi}]"
+            );
+            compared += 1;
+        }
+        assert!(compared >= 10, "{d}: {compared} taus compared");
+    }
+    let n_whole = whole["channels"]["gx"]["oadev"]["n"][0].as_u64().unwrap();
+    let n_gap = gapped["channels"]["gx"]["oadev"]["n"][0].as_u64().unwrap();
+    // τ0: the whole record has N − 1 first differences of phase... the
+    // gapped one loses the 6000 cut and the one across the gap.
+    assert_eq!(n_whole - n_gap, 6000 + 1, "terms at tau0");
+    // TOTDEV reflects the whole record: not reported across a gap.
+    assert!(series(&gapped, "totdev", "value")
+        .iter()
+        .all(Option::is_none));
+}
+
+#[test]
+fn missing_cells_and_missing_stamps_give_the_same_numbers() {
+    let y = gyro_rate(12, 20_000);
+    let stamps = noise_doc(&csv(&y, 100.0, 5000..5400, false), Some(100.0)).unwrap();
+    let cells = noise_doc(&csv(&y, 100.0, 5000..5400, true), Some(100.0)).unwrap();
+    for d in ["oadev", "mdev", "ohdev", "tdev"] {
+        assert_eq!(
+            series(&stamps, d, "value"),
+            series(&cells, d, "value"),
+            "{d}"
+        );
+        assert_eq!(series(&stamps, d, "hi"), series(&cells, d, "hi"), "{d}");
+    }
+    let w = cells["warnings"].to_string();
+    assert!(w.contains("400 missing samples"), "{w}");
+}
+
+#[test]
+fn logger_repeats_are_dropped_and_counted() {
+    let y = gyro_rate(13, 20_000);
+    let clean = csv(&y, 100.0, 0..0, false);
+    let mut lines: Vec<&str> = clean.lines().collect();
+    // A logger writes 100 rows twice, scattered over the record.
+    let mut with = Vec::new();
+    for (i, l) in lines.drain(..).enumerate() {
+        with.push(l);
+        if i > 0 && i % 150 == 0 && i <= 15_000 {
+            with.push(l);
+        }
+    }
+    let repeated = with.join("\n") + "\n";
+    let a = noise_doc(&clean, Some(100.0)).unwrap();
+    let b = noise_doc(&repeated, Some(100.0)).unwrap();
+    assert_eq!(series(&a, "oadev", "value"), series(&b, "oadev", "value"));
+    let w = b["warnings"].to_string();
+    assert!(w.contains("100 rows equal to the row before"), "{w}");
+}
+
+#[test]
+fn a_rate_the_stamps_contradict_is_refused_and_none_needs_stamps() {
+    let y = gyro_rate(14, 5000);
+    let e = noise_doc(&csv(&y, 100.0, 0..0, false), Some(200.0))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("rec.csv") && e.contains("200") && e.contains("100.0"),
+        "{e}"
+    );
+    let no_stamps: String = std::iter::once("gx".to_string())
+        .chain(y.iter().map(|v| format!("{v:e}")))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let e = noise_doc(&no_stamps, None).unwrap_err().to_string();
+    assert!(e.contains("rec.csv") && e.contains("--rate-hz"), "{e}");
+}

@@ -76,9 +76,9 @@ pub struct Args {
     /// Record: CSV with a header (optional time_s column; every other numeric column is a channel) or raw binary (--format).
     #[arg(long, value_name = "FILE")]
     pub input: PathBuf,
-    /// Sample rate in Hz (τ0 = 1/F).
+    /// Sample rate in Hz (τ0 = 1/F). Optional when the CSV has a time_s column (then the stamps' rate; when given, checked against them). Required for binary records.
     #[arg(long)]
-    pub rate_hz: f64,
+    pub rate_hz: Option<f64>,
     /// What the channels measure: sets the units of the noise terms.
     #[arg(long, value_enum, default_value = "generic")]
     pub quantity: QuantityArg,

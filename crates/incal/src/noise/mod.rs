@@ -274,6 +274,16 @@ impl Stability {
             Deviation::Totdev => &self.totdev,
         }
     }
+
+    fn series_mut(&mut self, d: Deviation) -> &mut DevSeries {
+        match d {
+            Deviation::Oadev => &mut self.oadev,
+            Deviation::Mdev => &mut self.mdev,
+            Deviation::Ohdev => &mut self.ohdev,
+            Deviation::Tdev => &mut self.tdev,
+            Deviation::Totdev => &mut self.totdev,
+        }
+    }
 }
 
 /// Rate samples whose mean is the constant [`phase_from_rate`] removes:
@@ -387,6 +397,101 @@ pub fn stability_at(x: &[f64], ms: &[usize], opts: &StabilityOptions) -> Result<
     }
     check_record(x, opts)?;
     stability_run(x, ms.to_vec(), opts, &|_| {})
+}
+
+/// The stability of a record with gaps, given as its contiguous stretches
+/// `segs` (phase records, each at least 5 points; a gap between any two):
+/// every term that would straddle a gap is left out, which is the same as
+/// pooling each stretch's sums.
+///
+/// At each τ of the grid (the factors of the longest stretch), for OADEV,
+/// MDEV, TDEV and OHDEV: `σ² = Σₛ nₛ σₛ² / Σₛ nₛ` over the stretches that
+/// hold a term (`n` = Σₛ nₛ, the terms kept), with the Satterthwaite EDF
+/// of that weighted mean of independent χ² estimates,
+/// `EDF = (Σₛ nₛ)² / Σₛ (nₛ² / EDFₛ)`, and χ² bounds from it. The noise
+/// is identified on each stretch; α at a τ is that of the longest stretch
+/// identified there. TOTDEV, which extends the record by reflection at its
+/// ends, is not defined across a gap: left empty (`None`, n = 0).
+pub fn stability_segments(
+    segs: &[Vec<f64>],
+    opts: &StabilityOptions,
+    tick: &(dyn Fn(usize) + Sync),
+) -> Result<Stability> {
+    let longest = segs.iter().map(Vec::len).max().unwrap_or(0);
+    if longest < 5 {
+        return Err(Error::Unsupported(format!(
+            "noise: the longest stretch between gaps has {longest} points; at least 5 are needed for one τ"
+        )));
+    }
+    for s in segs {
+        check_record(s, opts)?;
+    }
+    let ms = opts.grid.factors(longest);
+    // Longest first: α is taken from the first stretch that has it.
+    let mut order: Vec<usize> = (0..segs.len()).collect();
+    order.sort_by_key(|&i| std::cmp::Reverse(segs[i].len()));
+    let parts: Vec<Stability> = order
+        .iter()
+        .map(|&i| {
+            let s = &segs[i];
+            let fit: Vec<usize> = ms.iter().copied().filter(|&m| 2 * m < s.len()).collect();
+            stability_run(s, fit, opts, &|_| {})
+        })
+        .collect::<Result<_>>()?;
+    let p = opts.confidence;
+    let mut st = Stability {
+        m: ms.clone(),
+        taus_s: ms.iter().map(|&m| m as f64 * opts.tau0_s).collect(),
+        alpha: Vec::new(),
+        alpha_hadamard: Vec::new(),
+        id_method: Vec::new(),
+        oadev: DevSeries::default(),
+        mdev: DevSeries::default(),
+        ohdev: DevSeries::default(),
+        tdev: DevSeries::default(),
+        totdev: DevSeries::default(),
+    };
+    for (k, _) in ms.iter().enumerate() {
+        // Stretch parts hold a prefix of the factors: index k where present.
+        let at = |s: &Stability| (k < s.m.len()).then_some(k);
+        let first = parts
+            .iter()
+            .find_map(|s| at(s).and_then(|j| s.alpha[j].map(|_| (s, j))));
+        st.alpha.push(first.and_then(|(s, j)| s.alpha[j]));
+        st.alpha_hadamard
+            .push(first.and_then(|(s, j)| s.alpha_hadamard[j]));
+        st.id_method.push(first.and_then(|(s, j)| s.id_method[j]));
+        for d in [
+            Deviation::Oadev,
+            Deviation::Mdev,
+            Deviation::Ohdev,
+            Deviation::Tdev,
+        ] {
+            let (mut n, mut sum, mut den, mut edf_ok) = (0usize, 0.0, 0.0, true);
+            for s in &parts {
+                let Some(j) = at(s) else { continue };
+                let ser = s.series(d);
+                let (Some(v), nj) = (ser.value[j], ser.n[j]) else {
+                    continue;
+                };
+                if nj == 0 {
+                    continue;
+                }
+                n += nj;
+                sum += nj as f64 * v * v;
+                match ser.edf[j] {
+                    Some(e) if e > 0.0 => den += (nj * nj) as f64 / e,
+                    _ => edf_ok = false,
+                }
+            }
+            let pooled = (n > 0).then(|| (sum / n as f64, n));
+            let edf = (n > 0 && edf_ok && den > 0.0).then(|| (n * n) as f64 / den);
+            push(st.series_mut(d), pooled, edf, p);
+        }
+        push(&mut st.totdev, None, None, p);
+        tick(k + 1);
+    }
+    Ok(st)
 }
 
 fn check_record(x: &[f64], opts: &StabilityOptions) -> Result<()> {

@@ -490,16 +490,29 @@ pub fn slope_readings(taus: &[f64], oadev: &DevSeries) -> [Option<f64>; 5] {
 /// `u = s/√(2(n−1))` and n − 1 degrees of freedom. `None` with fewer than
 /// two windows, or when the differences overflow.
 pub fn bias_stability(x: &[f64], tau0: f64, tau: f64) -> Option<Term> {
+    bias_stability_segments(&[x], tau0, tau)
+}
+
+/// [`bias_stability`] of a record with gaps, given as its contiguous
+/// stretches (phase records): the τ-averages of every stretch, none across
+/// a gap, pooled about their common mean.
+pub fn bias_stability_segments(segs: &[&[f64]], tau0: f64, tau: f64) -> Option<Term> {
     let k = (tau / tau0).round() as usize;
     if k == 0 {
         return None;
     }
-    let n = (x.len() - 1) / k;
+    let kt = k as f64 * tau0;
+    let means: Vec<f64> = segs
+        .iter()
+        .flat_map(|x| {
+            let n = x.len().saturating_sub(1) / k;
+            (0..n).map(move |j| (x[(j + 1) * k] - x[j * k]) / kt)
+        })
+        .collect();
+    let n = means.len();
     if n < 2 {
         return None;
     }
-    let kt = k as f64 * tau0;
-    let means: Vec<f64> = (0..n).map(|j| (x[(j + 1) * k] - x[j * k]) / kt).collect();
     let mu = means.iter().sum::<f64>() / n as f64;
     let s = (means.iter().map(|m| (m - mu) * (m - mu)).sum::<f64>() / (n - 1) as f64).sqrt();
     // Samples near the f64 limit can overflow the differences: no number.

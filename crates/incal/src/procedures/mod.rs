@@ -69,6 +69,17 @@ pub trait Procedure {
         options: &Self::Options,
         progress: &dyn Progress,
     ) -> Result<ResultDocument>;
+
+    /// The options as the document records them (`options`): as given,
+    /// unless the procedure settles an option from the recording (the
+    /// noise analysis' sample rate from `time_s`): then the value used.
+    fn recorded(
+        input: &Self::Input,
+        options: &Self::Options,
+    ) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
+        let _ = input;
+        options_map(options)
+    }
 }
 
 /// Read one recording (`src`, named `name` in messages and in the
@@ -102,7 +113,7 @@ pub fn reduce_source<P: Procedure, R: Read>(
             rows: Some(summary.rows as u64),
         },
     );
-    doc.options = options_map(options)?;
+    doc.options = P::recorded(&input, options)?;
     Ok(doc)
 }
 

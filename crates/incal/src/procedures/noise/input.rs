@@ -23,26 +23,47 @@ use crate::procedures::Progress;
 pub struct Channels {
     /// Channel names (the columns' names after `--columns`).
     pub names: Vec<String>,
-    /// Samples of each channel, in the input unit.
+    /// Samples of each channel, in the input unit; `NaN` where a cell was
+    /// empty or `NaN` (a missing sample).
     pub samples: Vec<Vec<f64>>,
-    /// Rows (samples per channel).
+    /// Rows (samples per channel, duplicates dropped).
     pub rows: usize,
+    /// The sample rate used (Hz): `rate_hz` when given (checked against
+    /// the stamps), else the stamps' rate.
+    pub rate_hz: f64,
     /// The time base of the `time_s` stamps, when the record has them
     /// ([`crate::timebase`]).
     pub timebase: Option<crate::timebase::TimeBase>,
+    /// Gaps in the stamps as (index of the first sample after the gap,
+    /// sample periods missing before it), in sample order.
+    pub gaps: Vec<(usize, usize)>,
+    /// Rows dropped as exact repeats of the row before (same stamp, same
+    /// value in every channel) where the stamps do not lie on a grid.
+    pub duplicates: usize,
     /// Rows moved into time order (`sort_time`; 0 when in order).
     pub sorted: usize,
 }
 
+impl Channels {
+    /// True when a channel has a missing sample or the stamps a gap: the
+    /// deviations are then computed gap-aware.
+    pub fn has_gaps(&self) -> bool {
+        !self.gaps.is_empty() || self.samples.iter().any(|s| s.iter().any(|v| v.is_nan()))
+    }
+}
+
 /// The channels of a CSV record: the columns the header selects (every
-/// one but `time_s` when none is selected), each cell a finite number; a
-/// `time_s` column is checked against the nominal `rate_hz` (a wrong rate
-/// scales every noise coefficient) and its time base kept for warnings.
-/// With `sort_time`, rows out of time order are put in order by `time_s`
-/// instead of refused.
+/// one but `time_s` when none is selected), each cell a finite number or
+/// missing (empty or `NaN`: a gap); a `time_s` column is checked against
+/// the nominal `rate_hz` (a wrong rate scales every noise coefficient),
+/// gives the rate when none is given, and its gaps and time base are kept.
+/// Where stamps repeat off any grid, a row equal to the row before in its
+/// stamp and every channel is a logger's repeat, not a sample: dropped and
+/// counted. With `sort_time`, rows out of time order are put in order by
+/// `time_s` instead of refused.
 pub fn read<R: Read>(
     rows: &mut incal_io::Reader<R>,
-    rate_hz: f64,
+    rate_hz: Option<f64>,
     sort_time: bool,
 ) -> Result<Channels> {
     let h = rows.header();
@@ -58,11 +79,16 @@ pub fn read<R: Read>(
     }
     let names: Vec<String> = pick.iter().map(|&k| h.names()[k].clone()).collect();
     let time = h.opt_column("time_s").filter(|c| !pick.contains(c));
+    if time.is_none() && rate_hz.is_none() {
+        return Err(h
+            .error("no time_s column and no rate_hz: give the sample rate (--rate-hz)")
+            .into());
+    }
     let mut stamps = time.map(|_| Vec::new());
     let mut samples = vec![Vec::new(); pick.len()];
     while let Some(row) = rows.next_row()? {
         for (d, &k) in samples.iter_mut().zip(&pick) {
-            d.push(row.f64(k)?);
+            d.push(row.f64_or_missing(k)?.unwrap_or(f64::NAN));
         }
         if let (Some(c), Some(st)) = (time, stamps.as_mut()) {
             crate::timebase::push_stamp(st, row.f64(c)?, sort_time).map_err(|m| row.error(m))?;
@@ -77,23 +103,78 @@ pub fn read<R: Read>(
             sorted = moved;
         }
     }
-    let timebase = match &stamps {
-        Some(st) => Some(
-            crate::timebase::analyse(st, Some(rate_hz))
-                .map_err(|e| Error::Unsupported(e.to_string()))?,
-        ),
+    let analyse = |st: &[f64]| {
+        crate::timebase::analyse(st, rate_hz).map_err(|e| Error::Unsupported(e.to_string()))
+    };
+    let mut duplicates = 0;
+    let timebase = match stamps.as_mut() {
+        Some(st) => {
+            let mut tb = analyse(st)?;
+            if tb.repeats > 0 && !tb.regularised {
+                duplicates = drop_repeats(st, &mut samples);
+                if duplicates > 0 {
+                    tb = analyse(st)?;
+                }
+            }
+            Some(tb)
+        }
         None => None,
     };
+    let gaps = timebase
+        .as_ref()
+        .map(|tb| {
+            tb.gaps
+                .iter()
+                .map(|g| {
+                    (
+                        g.index,
+                        ((g.step_s / tb.period_s).round() as usize).max(2) - 1,
+                    )
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let rate_hz = rate_hz
+        .or(timebase.as_ref().map(|tb| tb.rate_hz))
+        .ok_or_else(|| Error::Unsupported("no sample rate".into()))?;
     for d in &mut samples {
         d.shrink_to_fit();
     }
     Ok(Channels {
         names,
+        rows: samples[0].len(),
         samples,
-        rows: rows.rows(),
+        rate_hz,
         timebase,
+        gaps,
+        duplicates,
         sorted,
     })
+}
+
+/// Drop every row whose stamp and channel values all equal the row
+/// before's (compared bit for bit; a missing sample equals a missing
+/// one); the number dropped.
+fn drop_repeats(stamps: &mut Vec<f64>, samples: &mut [Vec<f64>]) -> usize {
+    let n = stamps.len();
+    let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+    let keep: Vec<bool> = (0..n)
+        .map(|i| {
+            i == 0 || stamps[i] != stamps[i - 1] || samples.iter().any(|d| !same(d[i], d[i - 1]))
+        })
+        .collect();
+    let dropped = keep.iter().filter(|k| !**k).count();
+    if dropped > 0 {
+        let filter = |v: &mut Vec<f64>| {
+            let mut it = keep.iter();
+            v.retain(|_| *it.next().unwrap_or(&true));
+        };
+        filter(stamps);
+        for d in samples.iter_mut() {
+            filter(d);
+        }
+    }
+    dropped
 }
 
 /// Where the samples are: parsed columns (CSV), or the memory map of a

@@ -116,8 +116,9 @@ pub enum Format {
 /// recorded.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NoiseOptions {
-    /// Sample rate F (Hz); τ0 = 1/F.
-    pub rate_hz: f64,
+    /// Sample rate F (Hz); τ0 = 1/F. `None`: the rate of the record's
+    /// `time_s` stamps (a record without stamps then is refused).
+    pub rate_hz: Option<f64>,
     /// What the channels measure.
     pub quantity: QuantityKind,
     /// Unit of the samples: deg/s, rad/s, deg/h (gyro); g, mg, m/s2
@@ -145,7 +146,7 @@ pub struct NoiseOptions {
 impl Default for NoiseOptions {
     fn default() -> Self {
         Self {
-            rate_hz: 1.0,
+            rate_hz: None,
             quantity: QuantityKind::Generic,
             unit: None,
             data: DataKind::Rate,
@@ -164,7 +165,8 @@ impl Serialize for NoiseOptions {
     fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
         #[derive(Serialize)]
         struct Shown<'a> {
-            rate_hz: f64,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            rate_hz: Option<f64>,
             quantity: QuantityKind,
             unit: &'a str,
             data: DataKind,
@@ -249,11 +251,11 @@ impl NoiseOptions {
         }
     }
 
-    /// The array each channel is analysed as.
-    fn build(&self, factor: f64) -> Build {
+    /// The array each channel is analysed as, at sample rate `rate_hz`.
+    fn build(&self, factor: f64, rate_hz: f64) -> Build {
         Build {
             factor,
-            tau0: 1.0 / self.rate_hz,
+            tau0: 1.0 / rate_hz,
             rate: self.data == DataKind::Rate,
         }
     }
@@ -274,8 +276,8 @@ impl Procedure for Noise {
     /// quantity's, and `channels` given with (and only with) a binary
     /// format, at least 1.
     fn validate(o: &NoiseOptions) -> Result<()> {
-        if !(o.rate_hz.is_finite() && o.rate_hz > 0.0) {
-            return Err(invalid("rate_hz (a positive number, Hz)", o.rate_hz));
+        if let Some(r) = o.rate_hz.filter(|r| !(r.is_finite() && *r > 0.0)) {
+            return Err(invalid("rate_hz (a positive number, Hz)", r));
         }
         if !(o.confidence > 0.0 && o.confidence < 1.0) {
             return Err(invalid(
@@ -316,6 +318,18 @@ impl Procedure for Noise {
         input::read(rows, o.rate_hz, o.sort_time)
     }
 
+    /// The options with the sample rate used (from the stamps when none
+    /// was given).
+    fn recorded(
+        input: &Channels,
+        o: &NoiseOptions,
+    ) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
+        options_map(&NoiseOptions {
+            rate_hz: Some(input.rate_hz),
+            ..o.clone()
+        })
+    }
+
     fn reduce(
         input: &Channels,
         o: &NoiseOptions,
@@ -327,7 +341,8 @@ impl Procedure for Noise {
             &input.names,
             input.rows,
             None,
-            o.build(factor),
+            &input.gaps,
+            o.build(factor, input.rate_hz),
             o,
             progress,
         )?;
@@ -344,19 +359,37 @@ impl Procedure for Noise {
             doc.warnings
                 .push(crate::timebase::sorted_warning(input.sorted, input.rows));
         }
+        const GAP_AWARE: &str = "the deviations leave out every term that spans a gap (n at each tau counts the terms kept; tau up to a quarter of the longest stretch); TOTDEV, defined by reflecting the whole record, is not reported";
         if let Some(tb) = &input.timebase {
             let mut w = tb.warnings();
-            // The statistics take the samples as equally spaced at
-            // 1/rate_hz: say so where the stamps show gaps.
-            for x in w
-                .iter_mut()
-                .filter(|x| x.code == crate::WarningCode::TimeGaps)
-            {
-                x.message.push_str(
-                    "; the Allan statistics treat the samples as contiguous at 1/rate_hz, so every tau that spans a gap is biased",
-                );
+            for x in &mut w {
+                if x.code == crate::WarningCode::TimeGaps {
+                    x.message.push_str("; ");
+                    x.message.push_str(GAP_AWARE);
+                }
             }
             doc.warnings.extend(w);
+        }
+        if input.duplicates > 0 {
+            doc.warnings.push(crate::warning::Warning::new(
+                crate::WarningCode::TimeRepeats,
+                format!(
+                    "{} rows equal to the row before in time_s and every channel were dropped as the logger's repeats (the stamps repeat off any regular grid, so they are not a coarse clock's)",
+                    input.duplicates
+                ),
+            ));
+        }
+        for (name, col) in input.names.iter().zip(&input.samples) {
+            let missing = col.iter().filter(|v| v.is_nan()).count();
+            if missing > 0 {
+                let runs = stretches(col, &[]).len().max(1);
+                doc.warnings.push(crate::warning::Warning::new(
+                    crate::WarningCode::TimeGaps,
+                    format!(
+                        "channel {name}: {missing} missing samples (empty or NaN cells), {runs} stretches between them; {GAP_AWARE}"
+                    ),
+                ));
+            }
         }
         Ok(doc)
     }
@@ -375,8 +408,13 @@ pub fn reduce_mapped(
 ) -> Result<ResultDocument> {
     Noise::validate(o)?;
     let name = rec.name();
+    let rate_hz = o.rate_hz.ok_or_else(|| {
+        Error::Unsupported(format!(
+            "{name}: a binary record has no time_s: give the sample rate (rate_hz)"
+        ))
+    })?;
     let (quantity, unit, factor) = o.units()?;
-    let build = o.build(factor);
+    let build = o.build(factor, rate_hz);
     let pick = rec.select(selection)?;
     let read =
         input::read_mapped(rec, &pick, build, o.parallel, progress).map_err(|e| e.in_file(name))?;
@@ -387,6 +425,7 @@ pub fn reduce_mapped(
         &names,
         rec.rows(),
         read.built,
+        &[],
         build,
         o,
         progress,
@@ -464,11 +503,13 @@ impl Build {
 /// slope-line readings and bias stability (channels on rayon's threads
 /// when `o.parallel`; the same bits either way). `built`: the channels'
 /// arrays when the reading pass built them.
+#[allow(clippy::too_many_arguments)]
 fn analyse(
     d: &Samples<'_>,
     names: &[String],
     rows: usize,
     built: Option<Vec<Vec<f64>>>,
+    gaps: &[(usize, usize)],
     build: Build,
     o: &NoiseOptions,
     progress: &dyn Progress,
@@ -495,6 +536,14 @@ fn analyse(
         move |e: Error| Error::Unsupported(format!("channel {name}: {e}"))
     };
     let one = |k: usize| -> Result<ChannelResult> {
+        if let Samples::Columns(c) = d {
+            if !gaps.is_empty() || c[k].iter().any(|v| v.is_nan()) {
+                return gapped(&names[k], &c[k], gaps, build, &opts, o, &|_| {
+                    progress.advance(1)
+                })
+                .map_err(in_channel(k));
+            }
+        }
         let win = d.window_rows();
         // Read in windows, each released once read: the phase is the only
         // resident copy of the channel.
@@ -539,6 +588,92 @@ fn analyse(
     progress.finish();
     results
 }
+
+/// The contiguous stretches of a channel with gaps: split at every gap of
+/// the stamps (`gaps`: index of the first sample after it) and around
+/// every missing sample (`NaN`); as ranges of sample indices.
+pub(crate) fn stretches(col: &[f64], gaps: &[(usize, usize)]) -> Vec<std::ops::Range<usize>> {
+    let mut out = Vec::new();
+    let mut start = None;
+    let mut next_gap = gaps.iter().map(|g| g.0).peekable();
+    for (i, v) in col.iter().enumerate() {
+        let at_gap = next_gap.peek() == Some(&i);
+        if at_gap {
+            next_gap.next();
+        }
+        if at_gap || v.is_nan() {
+            if let Some(s) = start.take() {
+                out.push(s..i);
+            }
+        }
+        if !v.is_nan() && start.is_none() {
+            start = Some(i);
+        }
+    }
+    if let Some(s) = start {
+        out.push(s..col.len());
+    }
+    out
+}
+
+/// One channel with gaps: each stretch of at least `o.min_samples()`
+/// samples analysed on its own and pooled ([`crate::noise::stability_segments`]),
+/// the term fit on the pooled deviations, bias stability on the stretches'
+/// τ-averages. `samples` counts the samples analysed.
+fn gapped(
+    name: &str,
+    col: &[f64],
+    gaps: &[(usize, usize)],
+    build: Build,
+    opts: &StabilityOptions,
+    o: &NoiseOptions,
+    tick: &(dyn Fn(usize) + Sync),
+) -> Result<ChannelResult> {
+    let factor = build.factor;
+    let parts = stretches(col, gaps);
+    let longest = parts.iter().map(|r| r.len()).max().unwrap_or(0);
+    if longest < o.min_samples() {
+        return Err(Error::Unsupported(format!(
+            "the longest stretch between gaps and missing samples has {longest} samples; at least {} are needed for one averaging time",
+            o.min_samples()
+        )));
+    }
+    let xs: Vec<Vec<f64>> = parts
+        .into_iter()
+        .filter(|r| r.len() >= o.min_samples())
+        .map(|r| build.whole(r.len(), |i| col[r.start + i] * factor))
+        .collect();
+    if xs.len() > MAX_STRETCHES {
+        return Err(Error::Unsupported(format!(
+            "{} stretches between gaps: gap-aware estimation is limited to {MAX_STRETCHES}; the record is too fragmented to analyse",
+            xs.len()
+        )));
+    }
+    let st = crate::noise::stability_segments(&xs, opts, tick)?;
+    let n_phase: usize = xs.iter().map(Vec::len).sum();
+    let fit = terms::fit_terms(&st.taus_s, &st.oadev, &st.alpha, build.tau0, n_phase)?;
+    let slope = terms::slope_readings(&st.taus_s, &st.oadev);
+    let parts: Vec<&[f64]> = xs.iter().map(Vec::as_slice).collect();
+    let bias_stability = o
+        .stability_tau_s
+        .iter()
+        .map(|&t| (t, terms::bias_stability_segments(&parts, build.tau0, t)))
+        .collect();
+    Ok(ChannelResult {
+        name: name.to_string(),
+        samples: n_phase - xs.len() * usize::from(build.rate),
+        stability: st,
+        fit,
+        slope,
+        bias_stability,
+        to_input: 1.0 / factor,
+    })
+}
+
+/// The most stretches between gaps a channel is analysed in (each is a
+/// full analysis of its own; beyond this the record is a scatter of
+/// samples, not a stability record).
+pub const MAX_STRETCHES: usize = 10_000;
 
 /// The unit check of an accelerometer record (every channel's mean in g,
 /// `factor` from the input unit): a record at rest reads at most 1 g on
