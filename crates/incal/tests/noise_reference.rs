@@ -114,6 +114,23 @@ const FIX: &str = concat!(
     "/tests/fixtures/allantools-phasedat/"
 );
 
+/// The numeric rows of a Stable32 result file, including rows allantools
+/// commented out with `#`.
+fn read_rows_with_commented(name: &str) -> Vec<Vec<f64>> {
+    std::fs::read_to_string(format!("{FIX}{name}"))
+        .unwrap()
+        .lines()
+        .filter_map(|l| {
+            let r: Option<Vec<f64>> = l
+                .trim_start_matches('#')
+                .split_whitespace()
+                .map(|w| w.parse().ok())
+                .collect();
+            r.filter(|r| r.len() == 7)
+        })
+        .collect()
+}
+
 fn read_numbers(name: &str) -> Vec<Vec<f64>> {
     std::fs::read_to_string(format!("{FIX}{name}"))
         .unwrap()
@@ -233,4 +250,111 @@ fn greenhall_exact_sums_meet_the_paper_asymptotes() {
     let big_m = 993.0;
     let want = big_m / (70.0 / 36.0 - 1.0 / (big_m / 4.0));
     assert!(rel(got, want) < 1e-12, "{got} vs {want}");
+}
+
+/// The statistics beyond the default five against Stable32 1.60 on
+/// PHASE.DAT: ADEV and HDEV values, n and bounds (Greenhall's EDF for the
+/// non-overlapping estimators, as Stable32 uses); MTOTDEV and HTOTDEV
+/// values and n, and incal's bounds no narrower than Stable32's (incal uses
+/// the parent estimator's EDF, a lower bound); Theo1 values and n at every
+/// published factor (10 to 998); MTIE at every published factor.
+#[test]
+fn phase_dat_more_statistics_against_stable32() {
+    use incal::noise::{more, statistic, Statistic};
+    let x: Vec<f64> = read_numbers("PHASE.DAT")
+        .into_iter()
+        .map(|r| r[0])
+        .collect();
+    let opts = StabilityOptions {
+        tau0_s: 1.0,
+        grid: TauGrid::Octave,
+        confidence: 0.683,
+        parallel: false,
+    };
+    let st = stability(&x, &opts).unwrap();
+    for (s, file) in [
+        (Statistic::Adev, "phase_dat_adev_octave.txt"),
+        (Statistic::Hdev, "phase_dat_hdev_octave.txt"),
+    ] {
+        let got = statistic(&x, s, &st, &opts).unwrap();
+        let mut checked = 0;
+        for r in read_numbers(file) {
+            let Some(k) = got.taus_s.iter().position(|&t| t == r[1]) else {
+                continue;
+            };
+            checked += 1;
+            let tag = format!("{} m={}", s.as_str(), r[0]);
+            assert_eq!(got.dev.n[k] as f64, r[2], "{tag} n");
+            let v = got.dev.value[k].unwrap();
+            assert!(rel(v, r[5]) < 1e-4, "{tag} value {v} vs {}", r[5]);
+            let (lo, hi) = (got.dev.lo[k].unwrap(), got.dev.hi[k].unwrap());
+            assert!(rel(lo, r[4]) < 3e-3, "{tag} lo {lo} vs {}", r[4]);
+            assert!(rel(hi, r[6]) < 3e-3, "{tag} hi {hi} vs {}", r[6]);
+        }
+        assert_eq!(checked, 8, "{}", s.as_str());
+    }
+    // MTOTDEV, and HTOTDEV without Stable32's bias correction (the
+    // "nobias" run): values and n at every factor incal runs (allantools
+    // comments out the rows from m = 32, where its own code disagreed;
+    // incal agrees with them, so they are read too). Bounds: incal's
+    // relative width at least Stable32's (from the bias-corrected runs).
+    for (s, values, bounds) in [
+        (
+            Statistic::Mtotdev,
+            "phase_dat_mtotdev_octave.txt",
+            "phase_dat_mtotdev_octave.txt",
+        ),
+        (
+            Statistic::Htotdev,
+            "phase_dat_htotdev_octave_nobias.txt",
+            "phase_dat_htotdev_octave.txt",
+        ),
+    ] {
+        let got = statistic(&x, s, &st, &opts).unwrap();
+        let widths = read_rows_with_commented(bounds);
+        let mut checked = 0;
+        for r in read_rows_with_commented(values) {
+            let Some(k) = got.taus_s.iter().position(|&t| t == r[1]) else {
+                continue;
+            };
+            checked += 1;
+            let tag = format!("{} m={}", s.as_str(), r[0]);
+            assert_eq!(got.dev.n[k] as f64, r[2], "{tag} n");
+            let v = got.dev.value[k].unwrap();
+            assert!(rel(v, r[5]) < 1e-4, "{tag} value {v} vs {}", r[5]);
+            let w = widths.iter().find(|w| w[0] == r[0]).unwrap();
+            let (lo, hi) = (got.dev.lo[k].unwrap(), got.dev.hi[k].unwrap());
+            assert!(
+                (hi - lo) / v >= 0.99 * (w[6] - w[4]) / w[5],
+                "{tag}: [{lo}, {hi}] narrower than Stable32's [{}, {}]",
+                w[4],
+                w[6]
+            );
+        }
+        assert_eq!(checked, 8, "{}", s.as_str());
+    }
+    let mut checked = 0;
+    for r in read_numbers("phase_dat_theo1_alpha0.txt") {
+        let m = r[0] as usize;
+        let v = more::theo1var(&x, m, 1.0).unwrap();
+        assert!(
+            rel(v.var.sqrt(), r[5]) < 1e-4,
+            "theo1 m={m}: {} vs {}",
+            v.var.sqrt(),
+            r[5]
+        );
+        assert_eq!(0.75 * m as f64, r[1]);
+        checked += 1;
+    }
+    assert_eq!(checked, 181);
+    // (Stable32 with "Alpha = 0": no bias correction, as incal.)
+    // On the octave grid Theo1 runs at even factors to N − 1, τ = 0.75 m.
+    let th = statistic(&x, Statistic::Theo1, &st, &opts).unwrap();
+    assert_eq!(th.taus_s.first(), Some(&1.5));
+    assert_eq!(th.taus_s.last(), Some(&(0.75 * 512.0)));
+    for r in read_numbers("phase_dat_mtie.txt") {
+        let (v, n) = more::mtie(&x, r[0] as usize).unwrap();
+        assert_eq!(n as f64, r[2], "mtie m={} n", r[0]);
+        assert!(rel(v, r[3]) < 1e-4, "mtie m={}: {v} vs {}", r[0], r[3]);
+    }
 }

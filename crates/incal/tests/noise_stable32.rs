@@ -261,3 +261,89 @@ fn ocxo_frequency_at_every_stable32_tau() {
     assert!(t.agreement(true) >= 0.97);
     assert!(t.agreement(false) >= 0.75);
 }
+
+/// The non-overlapping ADEV and HDEV of every record at every τ of every
+/// Stable32 run of them: value to 1e-4, terms exact, and, where Stable32
+/// states bounds and identifies the same noise, the bounds to 3 %
+/// (Greenhall's EDF for the non-overlapping estimators).
+#[test]
+fn adev_and_hdev_of_every_record_at_every_stable32_tau() {
+    use incal::noise::{statistic, Statistic};
+    let ocxo: Vec<f64> = record("ocxo_frequency.txt.gz")
+        .iter()
+        .map(|f| (f - 1.0e7) / 1.0e7)
+        .collect();
+    let records = [
+        (
+            record("cs5071a_phase.txt.gz"),
+            vec![
+                "cs5071a_adev_decade.txt",
+                "cs5071a_hdev_decade.txt",
+                "cs5071a_adev_all.txt",
+                "cs5071a_hdev_all.txt",
+            ],
+        ),
+        (
+            record("gps_phase.txt.gz"),
+            vec!["gps_adev_decade.txt", "gps_hdev_octave.txt"],
+        ),
+        (
+            record("tic_phase.txt.gz"),
+            vec!["tic_adev.txt", "tic_hdev.txt"],
+        ),
+        (
+            phase_from_rate(&ocxo, 1.0),
+            vec!["ocxo_adev_alltau.txt", "ocxo_hdev_alltau.txt"],
+        ),
+    ];
+    let (mut rows, mut bounds, mut published, mut worst) = (0, 0, 0, 0.0f64);
+    for (x, files) in &records {
+        for file in files {
+            let s = if file.contains("adev") {
+                Statistic::Adev
+            } else {
+                Statistic::Hdev
+            };
+            let want = stable32(file);
+            let ms: Vec<usize> = want.iter().map(|r| r.m).collect();
+            let opts = StabilityOptions {
+                tau0_s: 1.0,
+                confidence: 0.683,
+                ..Default::default()
+            };
+            let st = stability_at(x, &ms, &opts).unwrap();
+            let got = statistic(x, s, &st, &opts).unwrap();
+            for (k, r) in want.iter().enumerate() {
+                let tag = format!("{file} m={}", r.m);
+                let v = got.dev.value[k].unwrap_or_else(|| panic!("{tag}: no value"));
+                assert!(rel(v, r.value) < 1e-4, "{tag}: {v} vs Stable32 {}", r.value);
+                assert_eq!(got.dev.n[k], r.n, "{tag}: terms");
+                rows += 1;
+                let alpha = if s == Statistic::Adev {
+                    st.alpha[k]
+                } else {
+                    st.alpha_hadamard[k]
+                };
+                if r.lo > 0.0 && alpha == Some(r.alpha) {
+                    let (lo, hi) = (got.dev.lo[k].unwrap(), got.dev.hi[k].unwrap());
+                    let e = rel(lo, r.lo).max(rel(hi, r.hi));
+                    assert!(
+                        e < 0.03,
+                        "{tag}: bounds [{lo}, {hi}] vs Stable32 [{}, {}]",
+                        r.lo,
+                        r.hi
+                    );
+                    worst = worst.max(e);
+                    bounds += 1;
+                }
+                published += usize::from(r.lo > 0.0);
+            }
+        }
+    }
+    println!(
+        "ADEV/HDEV: {rows} rows; {bounds} of {published} published bounds (those where α is Stable32's) to {:.2} %",
+        100.0 * worst
+    );
+    // Measured: 1471 rows, 70 bounds to 0.05 %.
+    assert!(rows >= 1400 && bounds >= 70, "{rows} rows, {bounds} bounds");
+}

@@ -77,6 +77,7 @@ pub mod corr;
 pub mod dev;
 pub mod edf;
 pub mod id;
+pub mod more;
 pub mod terms;
 
 use serde::{Deserialize, Serialize};
@@ -289,6 +290,164 @@ impl Stability {
 /// Rate samples whose mean is the constant [`phase_from_rate`] removes:
 /// the first `PHASE_REF_SAMPLES` (or all, if fewer).
 pub const PHASE_REF_SAMPLES: usize = 1 << 16;
+
+/// A statistic beyond the default five ([`more`]), named as in the
+/// document and `--deviations`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Statistic {
+    /// Non-overlapping Allan deviation.
+    Adev,
+    /// Non-overlapping Hadamard deviation.
+    Hdev,
+    /// Modified total deviation.
+    Mtotdev,
+    /// Hadamard total deviation.
+    Htotdev,
+    /// Theo1 deviation (τ = 0.75·m·τ0, no bias correction).
+    Theo1,
+    /// Maximum time interval error (phase unit; angle data).
+    Mtie,
+    /// Time interval error, rms (phase unit; angle data).
+    Tierms,
+}
+
+impl Statistic {
+    /// Every statistic, in the document's order.
+    pub const ALL: [Statistic; 7] = [
+        Statistic::Adev,
+        Statistic::Hdev,
+        Statistic::Mtotdev,
+        Statistic::Htotdev,
+        Statistic::Theo1,
+        Statistic::Mtie,
+        Statistic::Tierms,
+    ];
+    /// Key in the JSON and in `--deviations`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Statistic::Adev => "adev",
+            Statistic::Hdev => "hdev",
+            Statistic::Mtotdev => "mtotdev",
+            Statistic::Htotdev => "htotdev",
+            Statistic::Theo1 => "theo1",
+            Statistic::Mtie => "mtie",
+            Statistic::Tierms => "tierms",
+        }
+    }
+    /// The statistic named `s`.
+    pub fn parse(s: &str) -> Option<Statistic> {
+        Statistic::ALL.into_iter().find(|d| d.as_str() == s)
+    }
+    /// A time-interval error (of phase, not a frequency deviation).
+    pub fn is_time_error(self) -> bool {
+        matches!(self, Statistic::Mtie | Statistic::Tierms)
+    }
+}
+
+/// One statistic on its own τ grid.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Series {
+    /// Averaging times (s).
+    pub taus_s: Vec<f64>,
+    /// Values, bounds, EDF and terms at each τ.
+    pub dev: DevSeries,
+}
+
+/// Statistic `s` of phase record `x` on the grid of `st` (the stability
+/// of the same record; its α gives the EDF):
+/// - ADEV and HDEV at every factor of `st`, EDF from Greenhall & Riley for
+///   the non-overlapping estimators;
+/// - MTOTDEV and HTOTDEV at the factors up to N/3, with the EDF of MVAR and
+///   OHVAR respectively (a lower bound: the total estimators average
+///   more; the bounds are conservative);
+/// - Theo1 at even factors from 2 to N − 1 on the grid's spacing, τ =
+///   0.75·m·τ0, value and n only (its EDF is not implemented: no bounds);
+/// - MTIE and TIE rms at every factor of `st`, values and n only.
+///
+/// MTOTDEV, HTOTDEV and Theo1 are refused when the run would take more
+/// than [`more::MAX_WORK`] operations.
+pub fn statistic(
+    x: &[f64],
+    s: Statistic,
+    st: &Stability,
+    opts: &StabilityOptions,
+) -> Result<Series> {
+    let n = x.len();
+    let t0 = opts.tau0_s;
+    let p = opts.confidence;
+    let ms: Vec<usize> = match s {
+        Statistic::Mtotdev | Statistic::Htotdev => {
+            st.m.iter().copied().filter(|&m| 3 * m <= n).collect()
+        }
+        Statistic::Theo1 => {
+            let mut v: Vec<usize> = opts
+                .grid
+                .factors(4 * n.saturating_sub(1) + 1)
+                .into_iter()
+                .map(|m| m.max(2).next_multiple_of(2))
+                .filter(|&m| m < n)
+                .collect();
+            v.dedup();
+            v
+        }
+        _ => st.m.clone(),
+    };
+    let w = more::work(s.as_str(), n, &ms);
+    if w > more::MAX_WORK {
+        return Err(Error::Unsupported(format!(
+            "{} on {n} points at {} averaging times takes about {w:.1e} operations (limit {:.0e}): average the record down (fewer, longer samples) or choose a sparser --taus",
+            s.as_str(),
+            ms.len(),
+            more::MAX_WORK
+        )));
+    }
+    let alpha_at = |m: usize, hadamard: bool| {
+        st.m.iter().position(|&k| k == m).and_then(|k| {
+            if hadamard {
+                st.alpha_hadamard[k]
+            } else {
+                st.alpha[k]
+            }
+        })
+    };
+    let mut out = Series {
+        taus_s: Vec::new(),
+        dev: DevSeries::default(),
+    };
+    for &m in &ms {
+        let tau = m as f64 * t0;
+        let pair = |v: Option<dev::VarN>| v.map(|v| (v.var, v.n));
+        let (v, edf, tau_s) = match s {
+            Statistic::Adev => (
+                pair(more::avar(x, m, t0)),
+                alpha_at(m, false).and_then(|a| edf::greenhall(a, 2, m, n, false, false)),
+                tau,
+            ),
+            Statistic::Hdev => (
+                pair(more::hvar(x, m, t0)),
+                alpha_at(m, true).and_then(|a| edf::greenhall(a, 3, m, n, false, false)),
+                tau,
+            ),
+            Statistic::Mtotdev => (
+                pair(more::mtotvar(x, m, t0)),
+                alpha_at(m, false).and_then(|a| edf::greenhall(a, 2, m, n, true, true)),
+                tau,
+            ),
+            Statistic::Htotdev => (
+                pair(more::htotvar(x, m, t0)),
+                alpha_at(m, true).and_then(|a| edf::greenhall(a, 3, m, n, true, false)),
+                tau,
+            ),
+            Statistic::Theo1 => (pair(more::theo1var(x, m, t0)), None, 0.75 * tau),
+            Statistic::Mtie => (more::mtie(x, m).map(|(d, k)| (d * d, k)), None, tau),
+            Statistic::Tierms => (more::tierms(x, m).map(|(d, k)| (d * d, k)), None, tau),
+        };
+        out.taus_s.push(tau_s);
+        push(&mut out.dev, v, edf, p);
+    }
+    Ok(out)
+}
 
 /// The constant `c` removed from every rate sample before the running sum:
 /// the mean of the first [`PHASE_REF_SAMPLES`] samples `y(0), …`, summed in
