@@ -53,6 +53,9 @@ pub enum WarningCode {
     NoiseTermsNotSeparated,
     /// The record is too short for a requested averaging time.
     ShortRecord,
+    /// A statistic whose cost grows as N·m was computed up to an
+    /// averaging time only (the longer ones would take too long).
+    StatisticTruncated,
     /// A result whose signs say the data follow another convention than the
     /// options (e.g. a rotation in the opposite sense to `--rotation-deg`,
     /// or gravity of the other sign): the numbers are right for the options
@@ -96,6 +99,7 @@ impl WarningCode {
             WarningCode::NoiseTermNotIdentified => "noise-term-not-identified",
             WarningCode::NoiseTermsNotSeparated => "noise-terms-not-separated",
             WarningCode::ShortRecord => "short-record",
+            WarningCode::StatisticTruncated => "statistic-truncated",
             WarningCode::SignConvention => "sign-convention",
             WarningCode::TimeRepeats => "time-repeats",
             WarningCode::TimeGaps => "time-gaps",

@@ -336,7 +336,7 @@ fn phase_dat_more_statistics_against_stable32() {
     let mut checked = 0;
     for r in read_numbers("phase_dat_theo1_alpha0.txt") {
         let m = r[0] as usize;
-        let v = more::theo1var(&x, m, 1.0).unwrap();
+        let v = more::theo1var(&x, m, 1.0, false).unwrap();
         assert!(
             rel(v.var.sqrt(), r[5]) < 1e-4,
             "theo1 m={m}: {} vs {}",

@@ -419,3 +419,186 @@ fn a_rate_the_stamps_contradict_is_refused_and_none_needs_stamps() {
     let e = noise_doc(&no_stamps, None).unwrap_err().to_string();
     assert!(e.contains("rec.csv") && e.contains("--rate-hz"), "{e}");
 }
+
+// ---- The statistics beyond the default five, and the three-cornered hat ----
+
+fn doc_with(csv: &str, o: &NoiseOptions) -> incal::Result<serde_json::Value> {
+    let doc = reduce_source::<Noise, _>(
+        "rec.csv",
+        csv.as_bytes(),
+        &incal_io::ReadOptions::default(),
+        o,
+        &Silent,
+    )?;
+    Ok(serde_json::to_value(&doc).unwrap())
+}
+
+#[test]
+fn every_statistic_sits_in_the_document_on_its_own_grid() {
+    let y = gyro_rate(21, 4000);
+    let text = csv(&y, 10.0, 0..0, false);
+    let o = NoiseOptions {
+        deviations: "all".into(),
+        parallel: false,
+        ..Default::default()
+    };
+    let d = doc_with(&text, &o).unwrap();
+    let c = &d["channels"]["gx"];
+    for k in [
+        "oadev", "mdev", "ohdev", "tdev", "totdev", "adev", "hdev", "mtotdev", "htotdev", "theo1",
+    ] {
+        let s = &c[k];
+        let n = s["taus_s"].as_array().unwrap().len();
+        assert!(n > 3, "{k}: {n} taus");
+        for f in ["value", "lo", "hi", "edf", "n"] {
+            assert_eq!(s[f].as_array().unwrap().len(), n, "{k}.{f}");
+        }
+    }
+    // Rate data: no time-interval errors in `all`.
+    assert!(c.get("mtie").is_none() && c.get("tierms").is_none());
+    // Theo1 at τ = 0.75·m·τ0 for even m, to m = N − 1 (τ0 = 0.1 s).
+    let th: Vec<f64> = c["theo1"]["taus_s"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert!((th[0] - 0.75 * 2.0 * 0.1).abs() < 1e-12, "{th:?}");
+    assert!(*th.last().unwrap() > 0.75 * 2000.0 * 0.1, "{th:?}");
+    assert_eq!(d["options"]["deviations"], "all");
+    // ADEV at τ0 equals OADEV there (one term per sample either way).
+    let (a, b) = (
+        c["adev"]["value"][0].as_f64().unwrap(),
+        c["oadev"]["value"][0].as_f64().unwrap(),
+    );
+    assert!(((a - b) / b).abs() < 1e-12, "{a} vs {b}");
+    // A list selects: only what it names.
+    let o = NoiseOptions {
+        deviations: "oadev,theo1".into(),
+        parallel: false,
+        ..Default::default()
+    };
+    let d = doc_with(&text, &o).unwrap();
+    let c = &d["channels"]["gx"];
+    assert!(c.get("oadev").is_some() && c.get("theo1").is_some());
+    assert!(c.get("mdev").is_none() && c.get("adev").is_none());
+    // Angle data: MTIE and TIE rms in `all`.
+    let o = NoiseOptions {
+        deviations: "all".into(),
+        data: incal::procedures::noise::DataKind::Angle,
+        parallel: false,
+        ..Default::default()
+    };
+    let d = doc_with(&text, &o).unwrap();
+    assert!(d["channels"]["gx"]["mtie"]["value"][0].as_f64().unwrap() > 0.0);
+    // A name that is no statistic, and a statistic across a gap: refused.
+    let e = doc_with(
+        &text,
+        &NoiseOptions {
+            deviations: "oadev,allan".into(),
+            ..Default::default()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("allan") && e.contains("deviations"), "{e}");
+    let gapped = csv(&y, 10.0, 1000..1100, false);
+    let e = doc_with(
+        &gapped,
+        &NoiseOptions {
+            deviations: "oadev,theo1".into(),
+            ..Default::default()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("theo1") && e.contains("gaps"), "{e}");
+}
+
+#[test]
+fn the_three_cornered_hat_separates_three_instruments() {
+    use incal::noise::{three_cornered_hat, StabilityOptions};
+    // Three white-rate instruments of σ 1, 2 and 3 read one common
+    // disturbance of σ 10 (which the differences cancel). At τ0 each
+    // one's 68.3 % interval covers its σ in 61–76 % of 300 seeds (±3
+    // standard errors; measured 62–69 %).
+    let sigma = [1.0, 2.0, 3.0];
+    let n = 4096;
+    let covered = monte_carlo(31, 300, |seed| {
+        let common = rate_record(
+            &NoiseTruth {
+                n: 10.0,
+                ..Default::default()
+            },
+            1.0,
+            n,
+            seed,
+        );
+        let x: Vec<Vec<f64>> = sigma
+            .iter()
+            .enumerate()
+            .map(|(k, s)| {
+                let own = rate_record(
+                    &NoiseTruth {
+                        n: *s,
+                        ..Default::default()
+                    },
+                    1.0,
+                    n,
+                    seed.wrapping_mul(7).wrapping_add(k as u64 + 1),
+                );
+                let y: Vec<f64> = (0..n).map(|i| common[i] + own[i]).collect();
+                phase_from_rate(&y, 1.0)
+            })
+            .collect();
+        let opts = StabilityOptions {
+            parallel: false,
+            ..Default::default()
+        };
+        let h = three_cornered_hat([&x[0], &x[1], &x[2]], &opts).unwrap();
+        let mut hit = [false; 3];
+        for k in 0..3 {
+            let (lo, hi) = (h[k].dev.lo[0].unwrap(), h[k].dev.hi[0].unwrap());
+            hit[k] = lo <= sigma[k] && sigma[k] <= hi;
+        }
+        hit
+    });
+    let mut rates = Vec::new();
+    for k in 0..3 {
+        let rate = covered.iter().filter(|h| h[k]).count() as f64 / covered.len() as f64;
+        println!(
+            "three-cornered hat, instrument {k}: 68.3 % interval covers σ in {:.0} %",
+            100.0 * rate
+        );
+        rates.push(rate);
+    }
+    for (k, r) in rates.iter().enumerate() {
+        assert!((0.61..=0.76).contains(r), "instrument {k}: {r}");
+    }
+    // Through the procedure: exactly three channels, the document's shape.
+    let y = gyro_rate(22, 3000);
+    let z = gyro_rate(23, 3000);
+    let w = gyro_rate(24, 3000);
+    let mut text = String::from("a,b,c\n");
+    for i in 0..3000 {
+        text.push_str(&format!("{:e},{:e},{:e}\n", y[i], z[i], w[i]));
+    }
+    let o = NoiseOptions {
+        rate_hz: Some(1.0),
+        three_cornered_hat: true,
+        parallel: false,
+        ..Default::default()
+    };
+    let d = doc_with(&text, &o).unwrap();
+    for k in ["a", "b", "c"] {
+        let s = &d["three_cornered_hat"][k];
+        assert_eq!(
+            s["taus_s"].as_array().unwrap().len(),
+            s["value"].as_array().unwrap().len()
+        );
+        assert!(s["lo"][0].as_f64().is_some(), "{k}");
+    }
+    let two = "a,b\n1,2\n2,3\n3,1\n4,4\n5,2\n6,1\n";
+    let e = doc_with(two, &o).unwrap_err().to_string();
+    assert!(e.contains("exactly three channels"), "{e}");
+}

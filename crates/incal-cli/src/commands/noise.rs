@@ -91,6 +91,9 @@ pub struct Args {
     /// Averaging times: octave, decade, all, or N points per decade.
     #[arg(long, default_value = "octave")]
     pub taus: String,
+    /// Statistics reported, comma separated: oadev, mdev, ohdev, tdev, totdev, adev, hdev, mtotdev, htotdev, theo1, mtie, tierms; all = every one (mtie and tierms only with --data angle).
+    #[arg(long, default_value = "oadev,mdev,ohdev,tdev,totdev")]
+    pub deviations: String,
     /// Confidence of the deviation bounds (0 < P < 1).
     #[arg(long, default_value_t = 0.683)]
     pub confidence: f64,
@@ -109,6 +112,9 @@ pub struct Args {
     /// Put CSV rows that are out of time order in order by time_s instead of refusing them (warning time-sorted counts the rows moved).
     #[arg(long)]
     pub sort_time: bool,
+    /// Three instruments recorded together (exactly three channels, e.g. --columns a,b,c): each one's OADEV by the three-cornered hat, in three_cornered_hat.
+    #[arg(long)]
+    pub three_cornered_hat: bool,
     /// One thread (same numbers as the parallel default, bit for bit).
     #[arg(long)]
     pub sequential: bool,
@@ -189,12 +195,14 @@ pub fn run(a: &Args) -> CliResult<()> {
             DataArg::Angle => DataKind::Angle,
         },
         taus: a.taus.clone(),
+        deviations: a.deviations.clone(),
         confidence: a.confidence,
         stability_tau_s: a.stability_tau_s.clone(),
         format: a.format.into(),
         channels: a.channels,
         parallel: !a.sequential,
         sort_time: a.sort_time,
+        three_cornered_hat: a.three_cornered_hat,
     };
     let bars = Bars::new(a.quiet);
     let sample = match a.format {

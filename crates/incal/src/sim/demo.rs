@@ -702,9 +702,17 @@ fn noise(seed: u64) -> Result<DemoSection> {
         fit,
         slope,
         bias_stability,
+        more: Vec::new(),
         to_input: 1.0,
     };
-    let doc = document(&[c], &Quantity::Gyro, "deg/s", 0.683, false)?;
+    let doc = document(
+        &crate::noise::Deviation::ALL,
+        &[c],
+        &Quantity::Gyro,
+        "deg/s",
+        0.683,
+        false,
+    )?;
     let mut t = BTreeMap::new();
     t.insert("gx.ARW".to_string(), 0.06);
     t.insert("gx.bias_instability".to_string(), 0.36);

@@ -12,7 +12,7 @@ use serde_json::{json, Value};
 use crate::document::{Cell, Coefficient, DocumentBuilder, Procedure, ResultDocument, Table};
 use crate::error::Result;
 use crate::noise::terms::{Term, TermFit};
-use crate::noise::{Deviation, Stability};
+use crate::noise::{Deviation, Series, Stability, Statistic};
 use crate::units::{Unit, STANDARD_GRAVITY_M_S2};
 use crate::warning::{Warning, WarningCode};
 
@@ -95,6 +95,8 @@ pub struct ChannelResult {
     pub slope: [Option<f64>; 5],
     /// Bias stability at each requested τ (s): value in the internal unit.
     pub bias_stability: Vec<(f64, Option<Term>)>,
+    /// The statistics beyond the default five, each on its own τ grid.
+    pub more: Vec<(Statistic, Series)>,
     /// Factor from the internal rate unit back to the input unit (for the
     /// deviations, which are reported in the input unit).
     pub to_input: f64,
@@ -119,6 +121,7 @@ fn tau_label(t: f64) -> String {
 /// Build the document. `unit` is the input unit string (deviations are in
 /// it; TDEV in `unit·s`); `tables` adds a readable τ table per channel.
 pub fn document(
+    shown: &[Deviation],
     channels: &[ChannelResult],
     quantity: &Quantity,
     unit: &str,
@@ -144,7 +147,7 @@ pub fn document(
         o.insert("unit".into(), json!(unit));
         o.insert("tdev_unit".into(), json!(format!("{unit}*s")));
         o.insert("taus_s".into(), json!(st.taus_s));
-        for d in Deviation::ALL {
+        for &d in shown {
             let s = st.series(d);
             o.insert(
                 d.as_str().into(),
@@ -155,6 +158,31 @@ pub fn document(
                     "hi": arr(&s.hi, f),
                     "edf": arr(&s.edf, 1.0),
                     "n": s.n,
+                }),
+            );
+        }
+        for (s, r) in &c.more {
+            if r.left_out > 0 {
+                warnings.push(Warning::new(
+                    WarningCode::StatisticTruncated,
+                    format!(
+                        "{}: {} computed up to tau = {} s only; its cost grows as N*m and the {} longer averaging times would take too long (average the record down for them)",
+                        c.name,
+                        s.as_str(),
+                        r.taus_s.last().map_or("-".into(), |t| crate::error::short_f64(*t)),
+                        r.left_out
+                    ),
+                ));
+            }
+            o.insert(
+                s.as_str().into(),
+                json!({
+                    "taus_s": r.taus_s,
+                    "value": arr(&r.dev.value, f),
+                    "lo": arr(&r.dev.lo, f),
+                    "hi": arr(&r.dev.hi, f),
+                    "edf": arr(&r.dev.edf, 1.0),
+                    "n": r.dev.n,
                 }),
             );
         }

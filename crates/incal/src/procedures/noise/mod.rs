@@ -58,7 +58,8 @@ use serde::{Deserialize, Serialize};
 use crate::document::ResultDocument;
 use crate::error::{Error, Result};
 use crate::noise::{
-    phase_fill, phase_from_rate_with, stability_with_progress, terms, StabilityOptions, TauGrid,
+    phase_fill, phase_from_rate_with, stability_with_progress, terms, Deviation, Series, Stability,
+    StabilityOptions, Statistic, TauGrid,
 };
 use crate::procedures::{options_map, Procedure, Progress};
 use document::{ChannelResult, Quantity};
@@ -128,6 +129,11 @@ pub struct NoiseOptions {
     pub data: DataKind,
     /// Averaging times: `octave`, `decade`, `all` or N points per decade.
     pub taus: String,
+    /// The statistics reported, comma separated ([`DEFAULT_DEVIATIONS`];
+    /// `all` adds every [`Statistic`], MTIE and TIE rms only for angle
+    /// data). OADEV and the noise identification are computed whatever
+    /// the list (the term fit reads them).
+    pub deviations: String,
     /// Confidence of the deviation bounds, 0 < P < 1 (Stable32: 0.683).
     pub confidence: f64,
     /// Averaging times (s) of bias stability.
@@ -141,6 +147,10 @@ pub struct NoiseOptions {
     /// Put CSV rows that are out of time order in order by `time_s`
     /// instead of refusing them (warning `time-sorted`).
     pub sort_time: bool,
+    /// Three instruments recorded together (exactly three channels): each
+    /// one's OADEV by the three-cornered hat
+    /// ([`crate::noise::three_cornered_hat`]), in `three_cornered_hat`.
+    pub three_cornered_hat: bool,
 }
 
 impl Default for NoiseOptions {
@@ -151,12 +161,14 @@ impl Default for NoiseOptions {
             unit: None,
             data: DataKind::Rate,
             taus: "octave".into(),
+            deviations: DEFAULT_DEVIATIONS.into(),
             confidence: 0.683,
             stability_tau_s: vec![10.0, 100.0],
             format: Format::Csv,
             channels: None,
             parallel: true,
             sort_time: false,
+            three_cornered_hat: false,
         }
     }
 }
@@ -171,10 +183,14 @@ impl Serialize for NoiseOptions {
             unit: &'a str,
             data: DataKind,
             taus: &'a str,
+            #[serde(skip_serializing_if = "is_default_deviations")]
+            deviations: &'a str,
             stability_tau_s: &'a [f64],
             confidence: f64,
             #[serde(skip_serializing_if = "std::ops::Not::not")]
             sort_time: bool,
+            #[serde(skip_serializing_if = "std::ops::Not::not")]
+            three_cornered_hat: bool,
         }
         Shown {
             rate_hz: self.rate_hz,
@@ -182,12 +198,33 @@ impl Serialize for NoiseOptions {
             unit: self.unit_text(),
             data: self.data,
             taus: &self.taus,
+            deviations: &self.deviations,
             stability_tau_s: &self.stability_tau_s,
             confidence: self.confidence,
             sort_time: self.sort_time,
+            three_cornered_hat: self.three_cornered_hat,
         }
         .serialize(s)
     }
+}
+
+/// The statistics reported by default.
+pub const DEFAULT_DEVIATIONS: &str = "oadev,mdev,ohdev,tdev,totdev";
+
+fn is_default_deviations(s: &&str) -> bool {
+    *s == DEFAULT_DEVIATIONS
+}
+
+/// The statistics of a `deviations` list: the default five shown, and the
+/// others ([`crate::noise::more`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Selection {
+    /// Of OADEV, MDEV, OHDEV, TDEV, TOTDEV, those shown.
+    pub shown: Vec<Deviation>,
+    /// The other statistics, in the document's order.
+    pub more: Vec<Statistic>,
+    /// TOTDEV was asked for by name (not by the default list).
+    pub totdev_named: bool,
 }
 
 fn invalid(what: &str, value: impl ToString) -> Error {
@@ -229,6 +266,47 @@ impl NoiseOptions {
                 (Quantity::Accel, u.to_string(), f)
             }
             QuantityKind::Generic => (Quantity::Generic(u.to_string()), u.to_string(), 1.0),
+        })
+    }
+
+    /// The statistics of [`NoiseOptions::deviations`]: a comma-separated
+    /// list of oadev, mdev, ohdev, tdev, totdev, adev, hdev, mtotdev,
+    /// htotdev, theo1, mtie, tierms, or `all`.
+    pub fn selection(&self) -> Result<Selection> {
+        let mut shown = Vec::new();
+        let mut more = Vec::new();
+        for name in self.deviations.split(',').map(str::trim) {
+            if name == "all" {
+                shown.extend(Deviation::ALL);
+                more.extend(
+                    Statistic::ALL
+                        .into_iter()
+                        .filter(|s| !s.is_time_error() || self.data == DataKind::Angle),
+                );
+            } else if let Some(d) = Deviation::ALL.into_iter().find(|d| d.as_str() == name) {
+                shown.push(d);
+            } else if let Some(s) = Statistic::parse(name) {
+                more.push(s);
+            } else {
+                return Err(invalid(
+                    "deviations (a list of oadev, mdev, ohdev, tdev, totdev, adev, hdev, mtotdev, htotdev, theo1, mtie, tierms, or all)",
+                    name,
+                ));
+            }
+        }
+        let shown: Vec<Deviation> = Deviation::ALL
+            .into_iter()
+            .filter(|d| shown.contains(d))
+            .collect();
+        let more: Vec<Statistic> = Statistic::ALL
+            .into_iter()
+            .filter(|s| more.contains(s))
+            .collect();
+        Ok(Selection {
+            totdev_named: shown.contains(&Deviation::Totdev)
+                && self.deviations != DEFAULT_DEVIATIONS,
+            shown,
+            more,
         })
     }
 
@@ -286,6 +364,7 @@ impl Procedure for Noise {
             ));
         }
         o.grid()?;
+        o.selection()?;
         if let Some(t) = o
             .stability_tau_s
             .iter()
@@ -347,6 +426,7 @@ impl Procedure for Noise {
             progress,
         )?;
         let mut doc = document::document(
+            &o.selection()?.shown,
             &results,
             &quantity,
             &unit,
@@ -359,16 +439,27 @@ impl Procedure for Noise {
             doc.warnings
                 .push(crate::timebase::sorted_warning(input.sorted, input.rows));
         }
-        const GAP_AWARE: &str = "the deviations leave out every term that spans a gap (n at each tau counts the terms kept; tau up to a quarter of the longest stretch); TOTDEV, defined by reflecting the whole record, is not reported";
+        let gap_aware = format!(
+            "the deviations leave out every term that spans a gap (n at each tau counts the terms kept; tau up to a quarter of the longest stretch){}",
+            if o.selection()?.shown.contains(&Deviation::Totdev) {
+                "; TOTDEV, defined by reflecting the whole record, is not reported"
+            } else {
+                ""
+            }
+        );
         if let Some(tb) = &input.timebase {
             let mut w = tb.warnings();
             for x in &mut w {
                 if x.code == crate::WarningCode::TimeGaps {
                     x.message.push_str("; ");
-                    x.message.push_str(GAP_AWARE);
+                    x.message.push_str(&gap_aware);
                 }
             }
             doc.warnings.extend(w);
+        }
+        if o.three_cornered_hat {
+            doc.extra
+                .insert("three_cornered_hat".into(), hat(input, o, factor)?);
         }
         if input.duplicates > 0 {
             doc.warnings.push(crate::warning::Warning::new(
@@ -386,7 +477,7 @@ impl Procedure for Noise {
                 doc.warnings.push(crate::warning::Warning::new(
                     crate::WarningCode::TimeGaps,
                     format!(
-                        "channel {name}: {missing} missing samples (empty or NaN cells), {runs} stretches between them; {GAP_AWARE}"
+                        "channel {name}: {missing} missing samples (empty or NaN cells), {runs} stretches between them; {gap_aware}"
                     ),
                 ));
             }
@@ -408,6 +499,11 @@ pub fn reduce_mapped(
 ) -> Result<ResultDocument> {
     Noise::validate(o)?;
     let name = rec.name();
+    if o.three_cornered_hat {
+        return Err(Error::Unsupported(format!(
+            "{name}: the three-cornered hat reads CSV records (give the three instruments as three columns)"
+        )));
+    }
     let rate_hz = o.rate_hz.ok_or_else(|| {
         Error::Unsupported(format!(
             "{name}: a binary record has no time_s: give the sample rate (rate_hz)"
@@ -432,7 +528,14 @@ pub fn reduce_mapped(
     )
     .map_err(|e| e.in_file(name))?;
     let tables = o.grid()? != TauGrid::All;
-    let mut doc = document::document(&results, &quantity, &unit, o.confidence, tables)?;
+    let mut doc = document::document(
+        &o.selection()?.shown,
+        &results,
+        &quantity,
+        &unit,
+        o.confidence,
+        tables,
+    )?;
     let path = if name == incal_io::source::STDIN_NAME {
         "-"
     } else {
@@ -529,6 +632,7 @@ fn analyse(
         confidence: o.confidence,
         parallel: o.parallel,
     };
+    let sel = o.selection()?;
     let total = (grid.factors(rows + 1).len() * names.len()) as u64;
     progress.start("averaging times", total);
     let in_channel = |k: usize| {
@@ -538,6 +642,18 @@ fn analyse(
     let one = |k: usize| -> Result<ChannelResult> {
         if let Samples::Columns(c) = d {
             if !gaps.is_empty() || c[k].iter().any(|v| v.is_nan()) {
+                if !sel.more.is_empty() || sel.totdev_named {
+                    let names: Vec<&str> = sel
+                        .more
+                        .iter()
+                        .map(|s| s.as_str())
+                        .chain(sel.totdev_named.then_some("totdev"))
+                        .collect();
+                    return Err(in_channel(k)(Error::Unsupported(format!(
+                        "{} not defined across gaps or missing samples (gap-aware here: oadev, mdev, ohdev, tdev); drop them from --deviations, or analyse the stretches between the gaps separately",
+                        names.join(", ")
+                    ))));
+                }
                 return gapped(&names[k], &c[k], gaps, build, &opts, o, &|_| {
                     progress.advance(1)
                 })
@@ -567,6 +683,7 @@ fn analyse(
             .iter()
             .map(|&t| (t, terms::bias_stability(x, tau0, t)))
             .collect();
+        let more = more_statistics(x, &sel.more, &st, &opts).map_err(in_channel(k))?;
         Ok(ChannelResult {
             name: names[k].clone(),
             samples: rows,
@@ -574,6 +691,7 @@ fn analyse(
             fit,
             slope,
             bias_stability,
+            more,
             to_input: 1.0 / factor,
         })
     };
@@ -587,6 +705,72 @@ fn analyse(
     };
     progress.finish();
     results
+}
+
+/// The three-cornered hat of a record's three channels, as the document's
+/// `three_cornered_hat`: per channel `{taus_s, value, lo, hi, edf, n}` of
+/// its OADEV (input unit).
+fn hat(input: &Channels, o: &NoiseOptions, factor: f64) -> Result<serde_json::Value> {
+    if input.names.len() != 3 {
+        return Err(Error::Unsupported(format!(
+            "the three-cornered hat needs exactly three channels (--columns a,b,c); the record has {}: {}",
+            input.names.len(),
+            input.names.join(", ")
+        )));
+    }
+    if input.has_gaps() {
+        return Err(Error::Unsupported(
+            "the three-cornered hat is not defined across gaps or missing samples: analyse the stretches between them separately".into(),
+        ));
+    }
+    let build = o.build(factor, input.rate_hz);
+    let x: Vec<Vec<f64>> = input
+        .samples
+        .iter()
+        .map(|c| build.whole(input.rows, |r| c[r] * factor))
+        .collect();
+    let opts = StabilityOptions {
+        tau0_s: build.tau0,
+        grid: o.grid()?,
+        confidence: o.confidence,
+        parallel: o.parallel,
+    };
+    let three = crate::noise::three_cornered_hat([&x[0], &x[1], &x[2]], &opts)?;
+    let to_input = |v: &[Option<f64>]| -> Vec<Option<f64>> {
+        v.iter().map(|x| x.map(|x| x / factor)).collect()
+    };
+    let mut out = serde_json::Map::new();
+    for (name, s) in input.names.iter().zip(&three) {
+        out.insert(
+            name.clone(),
+            serde_json::json!({
+                "taus_s": s.taus_s,
+                "value": to_input(&s.dev.value),
+                "lo": to_input(&s.dev.lo),
+                "hi": to_input(&s.dev.hi),
+                "edf": s.dev.edf,
+                "n": s.dev.n,
+            }),
+        );
+    }
+    Ok(serde_json::Value::Object(out))
+}
+
+/// The statistics beyond the default five of one channel's phase `x`
+/// ([`crate::noise::statistic`]), on rayon's threads when `opts.parallel`
+/// (the same bits either way).
+fn more_statistics(
+    x: &[f64],
+    more: &[Statistic],
+    st: &Stability,
+    opts: &StabilityOptions,
+) -> Result<Vec<(Statistic, Series)>> {
+    let one = |&s: &Statistic| crate::noise::statistic(x, s, st, opts).map(|r| (s, r));
+    if opts.parallel {
+        more.par_iter().map(one).collect()
+    } else {
+        more.iter().map(one).collect()
+    }
 }
 
 /// The contiguous stretches of a channel with gaps: split at every gap of
@@ -666,6 +850,7 @@ fn gapped(
         fit,
         slope,
         bias_stability,
+        more: Vec::new(),
         to_input: 1.0 / factor,
     })
 }
