@@ -656,6 +656,54 @@ fn kalibr_export_converts_the_terms_and_refuses_what_is_missing() {
     );
     assert!(yaml.lines().all(|l| l.len() < 200));
 
+    // PX4: each Kalibr density times √(EKF rate), in QGC's parameter file.
+    let params = ok(&run(&[
+        "export",
+        "px4",
+        "--gyro",
+        p(&gj),
+        "--accel",
+        p(&aj),
+        "--ekf-rate-hz",
+        "250",
+    ]));
+    let px4: std::collections::BTreeMap<String, f64> = params
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| {
+            let f: Vec<&str> = l.split('\t').collect();
+            assert_eq!((f.len(), f[0], f[1], f[4]), (5, "1", "1", "9"), "{l}");
+            (f[2].to_string(), f[3].parse::<f64>().unwrap())
+        })
+        .collect();
+    let s = 250f64.sqrt();
+    for (name, key) in [
+        ("EKF2_GYR_NOISE", "gyroscope_noise_density"),
+        ("EKF2_ACC_NOISE", "accelerometer_noise_density"),
+        ("EKF2_GYR_B_NOISE", "gyroscope_random_walk"),
+        ("EKF2_ACC_B_NOISE", "accelerometer_random_walk"),
+    ] {
+        let (got, v) = (px4[name], read[key] * s);
+        assert!(
+            (got - v).abs() <= 1e-12 * v,
+            "{name}: {got} vs {v}\n{params}"
+        );
+    }
+    assert_eq!(px4.len(), 4, "{params}");
+    bad(
+        &run(&[
+            "export",
+            "px4",
+            "--gyro",
+            p(&gj),
+            "--accel",
+            p(&aj),
+            "--ekf-rate-hz",
+            "0",
+        ]),
+        "ekf_rate_hz",
+    );
+
     // Refusals, one line each, exit 2.
     let e = run(&["export", "kalibr", "--gyro", p(&aj), "--accel", p(&aj)]);
     refused(

@@ -259,9 +259,20 @@ def test_kalibr_yaml_reads_back_in_pyyaml(tmp_path):
     for k, v in want.items():
         assert isinstance(y[k], float), (k, y[k])
         assert y[k] == pytest.approx(v, rel=1e-12), k
+    # PX4: the same densities times sqrt(EKF rate), in QGC's parameter file.
+    params = incal.export_px4(g, a, ekf_rate_hz=250)
+    rows = [ln.split("\t") for ln in params.splitlines() if not ln.startswith("#")]
+    got = {r[2]: float(r[3]) for r in rows}
+    for name, key in [("EKF2_GYR_NOISE", "gyroscope_noise_density"),
+                      ("EKF2_ACC_NOISE", "accelerometer_noise_density"),
+                      ("EKF2_GYR_B_NOISE", "gyroscope_random_walk"),
+                      ("EKF2_ACC_B_NOISE", "accelerometer_random_walk")]:
+        assert got[name] == pytest.approx(want[key] * math.sqrt(250), rel=1e-12), name
     white = incal.noise(sim("w.csv", "--quantity", "gyro", "--arw-deg-rth", "0.2"), rate_hz=100, quantity="gyro")
     with pytest.raises(incal.InputError, match="RRW was not identified"):
         incal.export_kalibr(white, a)
+    with pytest.raises(incal.InputError, match="RRW was not identified"):
+        incal.export_px4(white, a)
 
 
 def test_fail_on_stops_with_the_result_kept(tmp_path):

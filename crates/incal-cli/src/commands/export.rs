@@ -1,7 +1,8 @@
 //! `incal export imucal RESULT.json -o cal.json`: an IMU calibration in the
 //! JSON form another tool reads ([`incal::procedures::imu::apply::to_imucal`]);
 //! `incal export kalibr --gyro G.json --accel A.json -o imu.yaml`: noise
-//! terms as Kalibr's IMU noise model ([`incal::procedures::noise::export`]).
+//! terms as Kalibr's IMU noise model, and `incal export px4 …` as PX4's
+//! EKF2 noise parameters ([`incal::procedures::noise::export`]).
 
 use std::path::PathBuf;
 
@@ -16,6 +17,18 @@ pub enum Command {
     Imucal(Args),
     /// Gyro and accelerometer noise results (incal noise --quantity gyro / accel) as Kalibr's imu.yaml: noise densities and random walks in SI units, the largest axis per sensor.
     Kalibr(KalibrArgs),
+    /// The same two noise results as PX4's EKF2 IMU noise parameters (EKF2_GYR_NOISE, EKF2_ACC_NOISE, EKF2_GYR_B_NOISE, EKF2_ACC_B_NOISE) in a QGroundControl parameter file.
+    Px4(Px4Args),
+}
+
+/// Options of `incal export px4`.
+#[derive(clap::Args, Debug)]
+pub struct Px4Args {
+    #[command(flatten)]
+    pub results: KalibrArgs,
+    /// The EKF's prediction rate in Hz (PX4: 1e6/EKF2_PREDICT_US; default 100).
+    #[arg(long, default_value_t = 100.0)]
+    pub ekf_rate_hz: f64,
 }
 
 /// Options of `incal export kalibr`.
@@ -57,6 +70,17 @@ pub fn run(c: &Command) -> CliResult<()> {
             let imu = incal::procedures::noise::export::kalibr(&gyro, &gname, &accel, &aname)
                 .map_err(|e| crate::error::CliError::Input(e.to_string()))?;
             write_text(a.output.as_deref(), &imu.to_yaml())
+        }
+        Command::Px4(p) => {
+            let a = &p.results;
+            let (gname, _, gyro) = read_document(&a.gyro)?;
+            let (aname, _, accel) = read_document(&a.accel)?;
+            let to_input = |e: incal::Error| crate::error::CliError::Input(e.to_string());
+            let imu = incal::procedures::noise::export::kalibr(&gyro, &gname, &accel, &aname)
+                .map_err(to_input)?;
+            let params =
+                incal::procedures::noise::export::px4(&imu, p.ekf_rate_hz).map_err(to_input)?;
+            write_text(a.output.as_deref(), &params.to_params())
         }
     }
 }

@@ -49,6 +49,7 @@ __all__ = [
     "compare",
     "apply",
     "export_kalibr",
+    "export_px4",
     "plan",
     "simulate",
     "batch",
@@ -382,12 +383,7 @@ def apply(calibration: Any, data: Any = None, **columns: Any):
     return _read_csv(out)
 
 
-def export_kalibr(gyro: Any, accel: Any, path: Optional[str] = None) -> str:
-    """``incal export kalibr``: a gyro and an accelerometer noise result
-    (``Result`` or paths; ``incal.noise(..., quantity="gyro")`` and
-    ``quantity="accel"``) as Kalibr's ``imu.yaml`` text (SI continuous
-    time, the largest axis per sensor); written to ``path`` when given. A
-    term not identified on an axis raises :class:`InputError`."""
+def _export(kind: str, gyro: Any, accel: Any, extra: list) -> str:
     import tempfile
 
     with tempfile.TemporaryDirectory() as d:
@@ -399,12 +395,35 @@ def export_kalibr(gyro: Any, accel: Any, path: Optional[str] = None) -> str:
                 files.append(f)
             else:
                 files.append(os.fspath(r))
-        out, _ = run(["export", "kalibr", "--gyro", files[0], "--accel", files[1]])
-    text = out.decode()
+        out, _ = run(["export", kind, "--gyro", files[0], "--accel", files[1]] + extra)
+    return out.decode()
+
+
+def _write(text: str, path: Optional[str]) -> str:
     if path is not None:
         with open(path, "w", encoding="utf-8") as f:
             f.write(text)
     return text
+
+
+def export_kalibr(gyro: Any, accel: Any, path: Optional[str] = None) -> str:
+    """``incal export kalibr``: a gyro and an accelerometer noise result
+    (``Result`` or paths; ``incal.noise(..., quantity="gyro")`` and
+    ``quantity="accel"``) as Kalibr's ``imu.yaml`` text (SI continuous
+    time, the largest axis per sensor); written to ``path`` when given. A
+    term not identified on an axis raises :class:`InputError`."""
+    return _write(_export("kalibr", gyro, accel, []), path)
+
+
+def export_px4(
+    gyro: Any, accel: Any, path: Optional[str] = None, ekf_rate_hz: float = 100.0
+) -> str:
+    """``incal export px4``: the same two noise results as PX4's EKF2 IMU
+    noise parameters (``EKF2_GYR_NOISE``, ``EKF2_ACC_NOISE``,
+    ``EKF2_GYR_B_NOISE``, ``EKF2_ACC_B_NOISE``: each continuous-time density
+    times the square root of the EKF prediction rate ``ekf_rate_hz``), as a
+    QGroundControl parameter file's text; written to ``path`` when given."""
+    return _write(_export("px4", gyro, accel, ["--ekf-rate-hz", repr(float(ekf_rate_hz))]), path)
 
 
 from . import batch, plan, simulate  # noqa: E402  (they use run and _options)

@@ -261,6 +261,93 @@ impl KalibrImu {
     }
 }
 
+/// PX4's EKF2 IMU noise parameters from the same two results.
+///
+/// EKF2 adds, per prediction step of length dt = 1/f (f the filter's
+/// prediction rate, `--ekf-rate-hz`), the variance `(EKF2_GYR_NOISE·dt)²` to
+/// each delta angle and `(EKF2_GYR_B_NOISE·dt)²` to each gyro bias state
+/// (likewise ACC for delta velocity and accelerometer bias). Over a time T
+/// that is `T·σ²·dt`, which equals the continuous-time growth `σ_c²·T`
+/// when `σ = σ_c·√f`:
+///
+/// | PX4 parameter | Kalibr value | conversion |
+/// |---|---|---|
+/// | `EKF2_GYR_NOISE` (rad/s) | `gyroscope_noise_density` | `·√f` |
+/// | `EKF2_ACC_NOISE` (m/s²) | `accelerometer_noise_density` | `·√f` |
+/// | `EKF2_GYR_B_NOISE` (rad/s²) | `gyroscope_random_walk` | `·√f` |
+/// | `EKF2_ACC_B_NOISE` (m/s³) | `accelerometer_random_walk` | `·√f` |
+///
+/// These are the sensor's own figures at rest: a floor. PX4's defaults are
+/// larger on purpose (vibration, temperature, model errors); raise them in
+/// flight tuning, never below these.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Px4Params {
+    /// (parameter name, value, unit, the Kalibr term it comes from).
+    pub params: Vec<(&'static str, f64, &'static str, KalibrTerm)>,
+    /// The prediction rate f (Hz).
+    pub ekf_rate_hz: f64,
+    /// Where the results came from.
+    pub sources: [String; 2],
+}
+
+/// [`Px4Params`] at prediction rate `ekf_rate_hz` (PX4's default 100 Hz,
+/// `EKF2_PREDICT_US` = 10 000).
+pub fn px4(imu: &KalibrImu, ekf_rate_hz: f64) -> Result<Px4Params> {
+    if !(ekf_rate_hz.is_finite() && ekf_rate_hz > 0.0) {
+        return Err(Error::InvalidValue {
+            what: "ekf_rate_hz (a positive rate, Hz)".into(),
+            value: ekf_rate_hz.to_string(),
+        });
+    }
+    let k = ekf_rate_hz.sqrt();
+    let name = |key: &str| match key {
+        "gyroscope_noise_density" => Some(("EKF2_GYR_NOISE", "rad/s")),
+        "accelerometer_noise_density" => Some(("EKF2_ACC_NOISE", "m/s^2")),
+        "gyroscope_random_walk" => Some(("EKF2_GYR_B_NOISE", "rad/s^2")),
+        "accelerometer_random_walk" => Some(("EKF2_ACC_B_NOISE", "m/s^3")),
+        _ => None,
+    };
+    let params = imu
+        .terms
+        .iter()
+        .filter_map(|t| name(t.key).map(|(n, u)| (n, t.value * k, u, t.clone())))
+        .collect();
+    Ok(Px4Params {
+        params,
+        ekf_rate_hz,
+        sources: imu.sources.clone(),
+    })
+}
+
+impl Px4Params {
+    /// A QGroundControl parameter file (`Vehicle-Id Component-Id Name
+    /// Value Type`, tab separated, type 9 = float), loaded by QGC's
+    /// "Load from file" or `param load` in the PX4 shell; `#` lines are
+    /// comments naming the source of each value.
+    pub fn to_params(&self) -> String {
+        let mut s = String::from("# PX4 EKF2 IMU noise parameters, written by incal export px4\n");
+        s.push_str(&format!(
+            "# from {} (gyro) and {} (accelerometer); per sensor the largest axis; EKF prediction rate {} Hz (value = continuous-time density x sqrt(rate))\n",
+            self.sources[0],
+            self.sources[1],
+            yaml_float(self.ekf_rate_hz)
+        ));
+        s.push_str("# Vehicle-Id\tComponent-Id\tName\tValue\tType\n");
+        for (n, v, u, t) in &self.params {
+            s.push_str(&format!(
+                "# {n}: {} {u} from {} = {} {} (axis {})\n",
+                yaml_float(*v),
+                t.from,
+                yaml_float(t.value),
+                t.unit,
+                t.channel
+            ));
+            s.push_str(&format!("1\t1\t{n}\t{}\t9\n", yaml_float(*v)));
+        }
+        s
+    }
+}
+
 /// A float as YAML 1.1 (PyYAML, which Kalibr reads with) takes it back
 /// exactly: shortest round-trip digits, always with a `.`, and an
 /// exponent with its sign (`1.5e-05` would be a string to PyYAML without
