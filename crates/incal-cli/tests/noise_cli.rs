@@ -656,6 +656,30 @@ fn kalibr_export_converts_the_terms_and_refuses_what_is_missing() {
     );
     assert!(yaml.lines().all(|l| l.len() < 200));
 
+    // The same terms in SI continuous time in each result (si_terms).
+    for (d, term, key, k) in [
+        (&gd, "ARW", "noise_density", rad / 60.0),
+        (&gd, "RRW", "random_walk", rad / 216_000.0),
+        (&ad, "VRW", "noise_density", 1e-6 * g0),
+        (&ad, "acceleration_random_walk", "random_walk", 1e-6 * g0),
+    ] {
+        for c in ["ch1", "ch2", "ch3"] {
+            let want = d["coefficients"][format!("{c}.{term}")]["value"]
+                .as_f64()
+                .unwrap()
+                * k;
+            let got = d["channels"][c]["si_terms"][key]["value"].as_f64().unwrap();
+            assert!(
+                (got - want).abs() <= 1e-12 * want,
+                "{c}.{key}: {got} vs {want}"
+            );
+        }
+    }
+    assert_eq!(
+        gd["channels"]["ch1"]["si_terms"]["noise_density"]["unit"],
+        "rad/s/sqrt(Hz)"
+    );
+
     // PX4: each Kalibr density times √(EKF rate), in QGC's parameter file.
     let params = ok(&run(&[
         "export",

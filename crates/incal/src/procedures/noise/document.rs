@@ -102,6 +102,51 @@ pub struct ChannelResult {
     pub to_input: f64,
 }
 
+/// The identified terms of a gyro or accelerometer in SI continuous-time
+/// form, the robotics tools' names (Kalibr, IEEE Std 952-2020 Annex C):
+/// `quantization` (rad; m/s), `noise_density` (rad/s/√Hz; m/s²/√Hz),
+/// `bias_instability` (rad/s; m/s²), `random_walk` (rad/s²/√Hz; m/s³/√Hz),
+/// `ramp` (rad/s²; m/s³), each `{value, u, unit}`; from the internal units
+/// (deg/s, g) by π/180 or g₀ = 9.80665 m/s². A discrete sample at rate f
+/// has σ_d = noise_density·√f and a bias step random_walk/√f. `None` for
+/// a generic quantity.
+fn si_terms(quantity: &Quantity, fit: &TermFit) -> Option<Value> {
+    let (k, units) = match quantity {
+        Quantity::Gyro => (
+            std::f64::consts::PI / 180.0,
+            [
+                "rad",
+                "rad/s/sqrt(Hz)",
+                "rad/s",
+                "rad/s^2/sqrt(Hz)",
+                "rad/s^2",
+            ],
+        ),
+        Quantity::Accel => (
+            STANDARD_GRAVITY_M_S2,
+            ["m/s", "m/s^2/sqrt(Hz)", "m/s^2", "m/s^3/sqrt(Hz)", "m/s^3"],
+        ),
+        Quantity::Generic(_) => return None,
+    };
+    let names = [
+        "quantization",
+        "noise_density",
+        "bias_instability",
+        "random_walk",
+        "ramp",
+    ];
+    let mut m = serde_json::Map::new();
+    for (j, t) in fit.terms.iter().enumerate() {
+        if let Some(t) = t {
+            m.insert(
+                names[j].into(),
+                json!({"value": t.value * k, "u": t.u * k, "unit": units[j]}),
+            );
+        }
+    }
+    Some(Value::Object(m))
+}
+
 fn arr(v: &[Option<f64>], f: f64) -> Value {
     Value::Array(
         v.iter()
@@ -239,6 +284,9 @@ pub fn document(
             );
         }
         o.insert("slope_readings".into(), Value::Object(slope));
+        if let Some(si) = si_terms(quantity, &c.fit) {
+            o.insert("si_terms".into(), si);
+        }
         chans.insert(c.name.clone(), Value::Object(o));
 
         for (j, t) in c.fit.terms.iter().enumerate() {
