@@ -265,6 +265,22 @@ pub struct Stability {
 }
 
 impl Stability {
+    /// A stability at factors `ms` (τ = m·τ0) with nothing filled in yet.
+    fn empty(ms: &[usize], tau0_s: f64) -> Self {
+        Stability {
+            m: ms.to_vec(),
+            taus_s: ms.iter().map(|&m| m as f64 * tau0_s).collect(),
+            alpha: Vec::new(),
+            alpha_hadamard: Vec::new(),
+            id_method: Vec::new(),
+            oadev: DevSeries::default(),
+            mdev: DevSeries::default(),
+            ohdev: DevSeries::default(),
+            tdev: DevSeries::default(),
+            totdev: DevSeries::default(),
+        }
+    }
+
     /// The series of deviation `d`.
     pub fn series(&self, d: Deviation) -> &DevSeries {
         match d {
@@ -689,18 +705,7 @@ pub fn stability_segments(
         })
         .collect::<Result<_>>()?;
     let p = opts.confidence;
-    let mut st = Stability {
-        m: ms.clone(),
-        taus_s: ms.iter().map(|&m| m as f64 * opts.tau0_s).collect(),
-        alpha: Vec::new(),
-        alpha_hadamard: Vec::new(),
-        id_method: Vec::new(),
-        oadev: DevSeries::default(),
-        mdev: DevSeries::default(),
-        ohdev: DevSeries::default(),
-        tdev: DevSeries::default(),
-        totdev: DevSeries::default(),
-    };
+    let mut st = Stability::empty(&ms, opts.tau0_s);
     for (k, _) in ms.iter().enumerate() {
         // Stretch parts hold a prefix of the factors: index k where present.
         let at = |s: &Stability| (k < s.m.len()).then_some(k);
@@ -780,18 +785,7 @@ fn stability_run(
 ) -> Result<Stability> {
     let n = x.len();
     let (t0, p, par) = (opts.tau0_s, opts.confidence, opts.parallel);
-    let mut st = Stability {
-        m: ms.clone(),
-        taus_s: ms.iter().map(|&m| m as f64 * t0).collect(),
-        alpha: Vec::new(),
-        alpha_hadamard: Vec::new(),
-        id_method: Vec::new(),
-        oadev: DevSeries::default(),
-        mdev: DevSeries::default(),
-        ohdev: DevSeries::default(),
-        tdev: DevSeries::default(),
-        totdev: DevSeries::default(),
-    };
+    let mut st = Stability::empty(&ms, t0);
     let ids = id::identify_many(x, &ms, par);
     let dev::StabilityVars {
         oa: oas,
