@@ -91,7 +91,7 @@ pub struct Args {
     /// Averaging times: octave, decade, all, or N points per decade.
     #[arg(long, default_value = "octave")]
     pub taus: String,
-    /// Statistics reported, comma separated: oadev, mdev, ohdev, tdev, totdev, adev, hdev, mtotdev, htotdev, theo1, mtie, tierms; all = every one (mtie and tierms only with --data angle).
+    /// Statistics reported, comma separated: oadev, mdev, ohdev, tdev, totdev, adev, hdev, mtotdev, htotdev, theo1, theoh, mtie, tierms; all = every one (mtie and tierms only with --data angle).
     #[arg(long, default_value = "oadev,mdev,ohdev,tdev,totdev")]
     pub deviations: String,
     /// Confidence of the deviation bounds (0 < P < 1).

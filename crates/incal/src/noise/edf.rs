@@ -200,6 +200,37 @@ pub fn totdev(alpha: i32, m: usize, n: usize) -> Option<f64> {
     (edf > 0.0).then_some(edf)
 }
 
+/// EDF of Theo1 at factor m (τ = 0.75·m·τ0) on N phase points, NIST SP
+/// 1065 Table 11 (Howe & Peppler, "Estimation of very long-term frequency
+/// stability using a special-purpose statistic", Proc. 2003 IEEE IFCS /
+/// EFTF), with r = 0.75·m:
+/// - white PM: `0.86(N+1)(N − 4r/3)/(N − r) · r/(r + 1.14)`;
+/// - flicker PM: `(4.798N² − 6.374Nr + 12.387r)/(√(r + 36.6)(N − r)) · r/(r + 0.3)`;
+/// - white FM: `((4.1N + 0.8)/r − (3.1N + 6.5)/N) · r^1.5/(r^1.5 + 5.2)`;
+/// - flicker FM: `(2N² − 1.3Nr − 3.5r)/(Nr) · r³/(r³ + 2.3)`;
+/// - random-walk FM: `(4.4N − 2)/(2.9r) · ((4.4N − 1)² − 8.6r(4.4N − 1) + 11.4r²)/(4.4N − 3)²`.
+///
+/// `None` where the approximation is not positive (random-walk FM beyond
+/// r ≈ 0.63N): no bounds are stated there.
+pub fn theo1(alpha: i32, m: usize, n: usize) -> Option<f64> {
+    let (nn, r) = (n as f64, 0.75 * m as f64);
+    let edf = match alpha {
+        a if a >= 2 => 0.86 * (nn + 1.0) * (nn - 4.0 * r / 3.0) / (nn - r) * (r / (r + 1.14)),
+        1 => {
+            (4.798 * nn * nn - 6.374 * nn * r + 12.387 * r) / ((r + 36.6).sqrt() * (nn - r))
+                * (r / (r + 0.3))
+        }
+        0 => ((4.1 * nn + 0.8) / r - (3.1 * nn + 6.5) / nn) * (r.powf(1.5) / (r.powf(1.5) + 5.2)),
+        -1 => (2.0 * nn * nn - 1.3 * nn * r - 3.5 * r) / (nn * r) * (r.powi(3) / (r.powi(3) + 2.3)),
+        _ => {
+            let a = 4.4 * nn - 1.0;
+            (4.4 * nn - 2.0) / (2.9 * r) * (a * a - 8.6 * r * a + 11.4 * r * r)
+                / (4.4 * nn - 3.0).powi(2)
+        }
+    };
+    (edf.is_finite() && edf > 0.0).then_some(edf)
+}
+
 /// χ² bounds of a deviation: `(σ·√(ν/χ²_{ν,(1+p)/2}), σ·√(ν/χ²_{ν,(1−p)/2}))`
 /// for confidence `p` and EDF ν (SP 1065 §5.3.2 eq. 45).
 pub fn chi2_bounds(dev: f64, edf: f64, p: f64) -> Option<(f64, f64)> {

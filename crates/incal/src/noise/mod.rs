@@ -322,6 +322,9 @@ pub enum Statistic {
     Htotdev,
     /// Theo1 deviation (τ = 0.75·m·τ0, no bias correction).
     Theo1,
+    /// TheoH: OADEV below a tenth of the record, bias-removed Theo1
+    /// (TheoBR) from there on.
+    Theoh,
     /// Maximum time interval error (phase unit; angle data).
     Mtie,
     /// Time interval error, rms (phase unit; angle data).
@@ -330,12 +333,13 @@ pub enum Statistic {
 
 impl Statistic {
     /// Every statistic, in the document's order.
-    pub const ALL: [Statistic; 7] = [
+    pub const ALL: [Statistic; 8] = [
         Statistic::Adev,
         Statistic::Hdev,
         Statistic::Mtotdev,
         Statistic::Htotdev,
         Statistic::Theo1,
+        Statistic::Theoh,
         Statistic::Mtie,
         Statistic::Tierms,
     ];
@@ -347,6 +351,7 @@ impl Statistic {
             Statistic::Mtotdev => "mtotdev",
             Statistic::Htotdev => "htotdev",
             Statistic::Theo1 => "theo1",
+            Statistic::Theoh => "theoh",
             Statistic::Mtie => "mtie",
             Statistic::Tierms => "tierms",
         }
@@ -381,10 +386,16 @@ pub struct Series {
 ///   OHVAR respectively (a lower bound: the total estimators average
 ///   more; the bounds are conservative);
 /// - Theo1 at even factors from 2 to N − 1 on the grid's spacing, τ =
-///   0.75·m·τ0, value and n only (its EDF is not implemented: no bounds);
+///   0.75·m·τ0, EDF from [`edf::theo1`] with the α identified nearest in
+///   τ;
+/// - TheoH (Howe & Tasset 2006; SP 1065 §5.2.16): OADEV of `st` at the
+///   factors below N/10, then TheoBR = k·Theo1 ([`more::theobr_bias`]) at
+///   Theo1's factors with 0.75·m ≥ N/10, Theo1's EDF (the bias factor, a
+///   mean of n + 1 ratios, is taken as exact); no TheoBR value below 120
+///   points;
 /// - MTIE and TIE rms at every factor of `st`, values and n only.
 ///
-/// MTOTDEV, HTOTDEV and Theo1 stop at the last τ within
+/// MTOTDEV, HTOTDEV, Theo1 and TheoH stop at the last τ within
 /// [`more::MAX_WORK`] operations ([`Series::left_out`] counts the rest).
 pub fn statistic(
     x: &[f64],
@@ -399,7 +410,7 @@ pub fn statistic(
         Statistic::Mtotdev | Statistic::Htotdev => {
             st.m.iter().copied().filter(|&m| 3 * m <= n).collect()
         }
-        Statistic::Theo1 => {
+        Statistic::Theo1 | Statistic::Theoh => {
             let mut v: Vec<usize> = opts
                 .grid
                 .factors(4 * n.saturating_sub(1) + 1)
@@ -408,15 +419,30 @@ pub fn statistic(
                 .filter(|&m| m < n)
                 .collect();
             v.dedup();
+            if s == Statistic::Theoh {
+                // TheoBR from a tenth of the record on.
+                v.retain(|&m| 0.75 * m as f64 >= (n / 10) as f64);
+            }
             v
         }
         _ => st.m.clone(),
     };
+    // TheoH's bias factor first, within half the budget (averaged in
+    // blocks where the exact sum would pass it).
+    let (bias, budget) = if s == Statistic::Theoh {
+        let ba = more::theobr_block(n, more::MAX_WORK / 2.0);
+        (
+            more::theobr_bias(x, ba, opts.parallel),
+            more::MAX_WORK - more::theobr_work(n / ba),
+        )
+    } else {
+        (None, more::MAX_WORK)
+    };
     // The longest prefix of the grid within the budget (only MTOTDEV,
-    // HTOTDEV and Theo1 cost N·m per τ).
+    // HTOTDEV, Theo1 and TheoH cost N·m per τ).
     let mut keep = ms.len();
     for k in 1..=ms.len() {
-        if more::work(s.as_str(), n, &ms[..k]) > more::MAX_WORK {
+        if more::work(s.as_str(), n, &ms[..k]) > budget {
             keep = k - 1;
             break;
         }
@@ -432,11 +458,34 @@ pub fn statistic(
             }
         })
     };
+    // The α identified nearest (in log τ) to Theo1's τ = 0.75·m·τ0.
+    let alpha_near = |m: usize| {
+        let target = (0.75 * m as f64).ln();
+        st.m.iter()
+            .zip(&st.alpha)
+            .filter_map(|(&k, a)| a.map(|a| (((k as f64).ln() - target).abs(), a)))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, a)| a)
+    };
     let mut out = Series {
         taus_s: Vec::new(),
         dev: DevSeries::default(),
         left_out,
     };
+    if s == Statistic::Theoh {
+        // OADEV, as computed for the main grid, below a tenth of the record.
+        for (k, &m) in st.m.iter().enumerate() {
+            if m >= n / 10 {
+                break;
+            }
+            out.taus_s.push(st.taus_s[k]);
+            out.dev.value.push(st.oadev.value[k]);
+            out.dev.lo.push(st.oadev.lo[k]);
+            out.dev.hi.push(st.oadev.hi[k]);
+            out.dev.edf.push(st.oadev.edf[k]);
+            out.dev.n.push(st.oadev.n[k]);
+        }
+    }
     for &m in ms {
         let tau = m as f64 * t0;
         let pair = |v: Option<dev::VarN>| v.map(|v| (v.var, v.n));
@@ -463,7 +512,14 @@ pub fn statistic(
             ),
             Statistic::Theo1 => (
                 pair(more::theo1var(x, m, t0, opts.parallel)),
-                None,
+                alpha_near(m).and_then(|a| edf::theo1(a, m, n)),
+                0.75 * tau,
+            ),
+            Statistic::Theoh => (
+                bias.and_then(|b| {
+                    more::theo1var(x, m, t0, opts.parallel).map(|v| (b * v.var, v.n))
+                }),
+                alpha_near(m).and_then(|a| edf::theo1(a, m, n)),
                 0.75 * tau,
             ),
             Statistic::Mtie => (more::mtie(x, m).map(|(d, k)| (d * d, k)), None, tau),

@@ -195,6 +195,70 @@ pub fn theo1var(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> 
     })
 }
 
+/// The TheoBR bias factor (Howe & Tasset, "TheoH: a hybrid,
+/// high-confidence statistic that improves on the Allan deviation",
+/// Metrologia 43, 2006; NIST SP 1065 §5.2.15): the mean ratio of OAVAR to
+/// Theo1 at the same τ,
+/// `k = (1/(n+1)) Σ_{i=0}^{n} OAVAR(m = 9+3i) / Theo1(m = 12+4i)`,
+/// n = ⌊0.1·N/3 − 3⌋, N phase points; TheoBR = k·Theo1. `None` below 120
+/// points (n < 0) or where a Theo1 term vanishes. O(N³/900) operations
+/// ([`theobr_work`]): a longer record is first averaged in blocks of `ba`
+/// points (Taylor & Howe, "Fast TheoBR: a method for long data set
+/// stability analysis", IEEE Trans. UFFC 57(9), 2010), with their
+/// correction `+ 0.00055·(ba − 1)`.
+pub fn theobr_bias(x: &[f64], ba: usize, parallel: bool) -> Option<f64> {
+    let ba = ba.max(1);
+    let avg: Vec<f64>;
+    let x = if ba > 1 {
+        avg = x
+            .chunks_exact(ba)
+            .map(|c| c.iter().sum::<f64>() / ba as f64)
+            .collect();
+        &avg[..]
+    } else {
+        x
+    };
+    let n = x.len();
+    let nb = (0.1 * n as f64 / 3.0 - 3.0).floor();
+    if nb < 0.0 {
+        return None;
+    }
+    let nb = nb as usize;
+    let ratios = super::ordered_map(nb + 1, parallel, |i| {
+        let a = super::dev::oavar(x, 9 + 3 * i, 1.0, false)?.var;
+        let t = theo1var(x, 12 + 4 * i, 1.0, false)?.var;
+        (t > 0.0).then(|| a / t)
+    });
+    let mut sum = 0.0;
+    for r in ratios {
+        sum += r?;
+    }
+    let k = sum / (nb + 1) as f64 + 0.00055 * (ba - 1) as f64;
+    k.is_finite().then_some(k)
+}
+
+/// Operations of [`theobr_bias`] on N points: Σ_{i=0}^{n} (N − 12 − 4i)·(6 + 2i),
+/// the Theo1 terms (the OAVAR terms are O(N) each).
+pub fn theobr_work(n: usize) -> f64 {
+    let nb = (0.1 * n as f64 / 3.0 - 3.0).floor();
+    if nb < 0.0 {
+        return 0.0;
+    }
+    (0..=nb as usize)
+        .map(|i| (n as f64 - 12.0 - 4.0 * i as f64).max(0.0) * (6.0 + 2.0 * i as f64) + n as f64)
+        .sum()
+}
+
+/// The block length [`theobr_bias`] averages N points in so that its work
+/// stays within `budget` operations: 1 (exact) where it fits.
+pub fn theobr_block(n: usize, budget: f64) -> usize {
+    let mut ba = 1;
+    while ba < n && theobr_work(n / ba) > budget {
+        ba += 1;
+    }
+    ba
+}
+
 /// Maximum time interval error (ITU-T G.810; SP 1065 §5.2.14): the
 /// largest peak-to-peak phase over every window of m + 1 points (τ = mτ0),
 /// by monotonic queues in O(N). Returns (MTIE, windows = N − m).

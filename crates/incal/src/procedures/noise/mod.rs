@@ -271,7 +271,7 @@ impl NoiseOptions {
 
     /// The statistics of [`NoiseOptions::deviations`]: a comma-separated
     /// list of oadev, mdev, ohdev, tdev, totdev, adev, hdev, mtotdev,
-    /// htotdev, theo1, mtie, tierms, or `all`.
+    /// htotdev, theo1, theoh, mtie, tierms, or `all`.
     pub fn selection(&self) -> Result<Selection> {
         let mut shown = Vec::new();
         let mut more = Vec::new();
@@ -289,7 +289,7 @@ impl NoiseOptions {
                 more.push(s);
             } else {
                 return Err(invalid(
-                    "deviations (a list of oadev, mdev, ohdev, tdev, totdev, adev, hdev, mtotdev, htotdev, theo1, mtie, tierms, or all)",
+                    "deviations (a list of oadev, mdev, ohdev, tdev, totdev, adev, hdev, mtotdev, htotdev, theo1, theoh, mtie, tierms, or all)",
                     name,
                 ));
             }
