@@ -34,7 +34,13 @@ use crate::warning::{Warning, WarningCode};
 /// treated as rank deficient (10 of the 16 significant digits of f64 lost).
 pub const DEFAULT_COND_LIMIT: f64 = 1e10;
 
-/// Significance level of the lack-of-fit test of [`Variance::AtLeast`].
+/// Significance level of incal's one lack-of-fit rule: the weighted
+/// residual sum against χ²_{n−p} at p < 0.05 (a) scales u by the residual
+/// scatter under [`Variance::AtLeast`], (b) earns the `lack-of-fit`
+/// warning ([`Fit::quality_warnings`]) and (c) is the condition for
+/// estimating an excess variance component
+/// ([`super::repeated::fit_means_excess`]). Below it the prior noise
+/// stands, with no warning.
 pub const LACK_OF_FIT_ALPHA: f64 = 0.05;
 
 /// Condition number beyond which a separable design earns a warning.
@@ -259,7 +265,8 @@ pub struct Fit {
 impl Fit {
     /// What an engineer must be told about this fit: a weakly conditioned
     /// plan (condition number above [`WARN_COND`], naming the worst-determined
-    /// combination) and residuals beyond the prior noise (χ² p < 0.01), with
+    /// combination) and residuals beyond the prior noise (χ² p <
+    /// [`LACK_OF_FIT_ALPHA`], the level that scales u), with
     /// `likely_causes` saying what the rig usually does to cause them.
     pub fn quality_warnings(&self, likely_causes: &str) -> Vec<Warning> {
         let mut out = Vec::new();
@@ -273,11 +280,16 @@ impl Fit {
                 ),
             ));
         }
-        if let Some(p) = self.chi2_p_value.filter(|p| *p < 0.01) {
+        if let Some(p) = self.chi2_p_value.filter(|p| *p < LACK_OF_FIT_ALPHA) {
+            let u = if self.variance_source == VarianceSource::Residuals {
+                "uncertainties are scaled up by the residual scatter"
+            } else {
+                "uncertainties keep the stated noise"
+            };
             out.push(Warning::new(
                 WarningCode::LackOfFit,
                 format!(
-                    "residuals between positions exceed the sample scatter (chi-square p = {p:.2e}): {likely_causes}; uncertainties are scaled up by the residual scatter"
+                    "residuals between positions exceed the sample scatter (chi-square p = {p:.2e}): {likely_causes}; {u}"
                 ),
             ));
         }
@@ -733,6 +745,44 @@ mod tests {
         let f = fit(&d, &y, &opts).unwrap();
         assert!((pred.u("b").unwrap() - f.estimates.u("b").unwrap()).abs() < 1e-14);
         assert!(f.chi2_p_value.is_some());
+    }
+
+    #[test]
+    fn one_rule_scales_u_and_warns_at_the_same_level() {
+        // Residuals swept from well inside to well beyond the prior noise:
+        // u is scaled exactly when the lack-of-fit warning is given, and
+        // both happen between p = 0.01 and 0.05 (the old warning level).
+        let rows: Vec<Vec<f64>> = (0..8).map(|k| vec![1.0, k as f64]).collect();
+        let d = Design::from_rows(names(&["a", "b"]), &rows).unwrap();
+        let w = DVector::from_element(8, 1.0);
+        let mut between = 0;
+        for step in 0..60 {
+            let e = 0.2 + 0.05 * step as f64;
+            let y = DVector::from_fn(8, |k, _| 1.0 + k as f64 + if k % 2 == 0 { e } else { -e });
+            let f = fit(
+                &d,
+                &y,
+                &FitOptions {
+                    weights: Some(w.clone()),
+                    variance: Variance::AtLeast { dof: 100.0 },
+                    ..FitOptions::default()
+                },
+            )
+            .unwrap();
+            let p = f.chi2_p_value.unwrap();
+            let scaled = f.variance_source == VarianceSource::Residuals;
+            let warned = f
+                .quality_warnings("test")
+                .iter()
+                .any(|w| w.code == WarningCode::LackOfFit);
+            assert_eq!(scaled, warned, "p = {p}");
+            assert_eq!(scaled, p < LACK_OF_FIT_ALPHA, "p = {p}");
+            if (0.01..0.05).contains(&p) {
+                assert!(scaled && warned, "p = {p}");
+                between += 1;
+            }
+        }
+        assert!(between > 0);
     }
 
     #[test]

@@ -20,12 +20,14 @@
 //! `Σ r_i² / (b_i + τ² g_i²) = n − p` (Paule & Mandel, J. Res. NBS 87
 //! (1982) 377; the estimator of interlaboratory key comparisons), where
 //! `b_i` is the sample-scatter variance of mean i and the residuals `r_i`
-//! come from the weighted fit at that `τ²`. Without excess (`χ²(0) ≤ n−p`)
-//! `τ² = 0` and the fit is that of [`fit_means`].
+//! come from the weighted fit at that `τ²`. The excess is estimated only
+//! when the fit at `τ² = 0` fails the lack-of-fit test at
+//! [`LACK_OF_FIT_ALPHA`] (`P(χ²_{n−p} ≥ χ²(0)) < 0.05`); otherwise `τ² = 0`
+//! and the fit is that of [`fit_means`].
 
 use nalgebra::DVector;
 
-use super::linear::{fit, Design, Fit, FitOptions, Variance};
+use super::linear::{fit, Design, Fit, FitOptions, Variance, LACK_OF_FIT_ALPHA};
 use crate::error::{Error, Result};
 
 /// Summary of the samples taken at one position.
@@ -228,7 +230,11 @@ pub fn fit_means_excess(
     let (f0, _) = run(0.0, known)?;
     let g2_max = g2.max();
     let mut tau2 = 0.0;
-    if dof > 0.0 && f0.weighted_rss > dof && g2_max > 0.0 {
+    // One rule with the lack-of-fit test: τ² is estimated only when the
+    // prior noise fails it at LACK_OF_FIT_ALPHA (χ²(0) beyond n − p alone
+    // is chance half the time).
+    let excess = f0.chi2_p_value.is_some_and(|p| p < LACK_OF_FIT_ALPHA);
+    if dof > 0.0 && excess && g2_max > 0.0 {
         // χ²(τ²) decreases with τ²: bracket, then bisect on log scale.
         let b_max = base.max();
         let cap = 1e8 * b_max / g2_max;
@@ -259,4 +265,49 @@ pub fn fit_means_excess(
         weights,
         excess_variance: Some(tau2),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn excess_variance_only_when_the_lack_of_fit_test_fails() {
+        // 12 positions, a line (dof 10), σ = 1 per sample, 1 sample each:
+        // the scatter of the means swept up from the prior. τ² > 0 exactly
+        // when the fit at τ² = 0 fails the 5 % χ² test, never merely when
+        // χ²(0) > n − p.
+        let rows: Vec<Vec<f64>> = (0..12).map(|k| vec![1.0, k as f64]).collect();
+        let d = Design::from_rows(vec!["a".into(), "b".into()], &rows).unwrap();
+        let shape = DVector::from_element(12, 1.0);
+        let mut chance_excess = 0;
+        for step in 0..40 {
+            let e = 0.7 + 0.05 * step as f64;
+            let positions: Vec<PositionStats> = (0..12)
+                .map(|k| PositionStats {
+                    n: 1,
+                    mean: 2.0 + 0.5 * k as f64 + if k % 2 == 0 { e } else { -e },
+                    std: f64::NAN,
+                })
+                .collect();
+            let f0 = fit_means(&d, &positions, Noise::Known { sigma: 1.0 })
+                .unwrap()
+                .0;
+            let p = f0.chi2_p_value.unwrap();
+            let ex = fit_means_excess(&d, &positions, Noise::Known { sigma: 1.0 }, &shape).unwrap();
+            let tau2 = ex.excess_variance.unwrap();
+            assert_eq!(
+                tau2 > 0.0,
+                p < LACK_OF_FIT_ALPHA,
+                "e = {e}, p = {p}, τ² = {tau2}"
+            );
+            if f0.weighted_rss > 10.0 && p >= LACK_OF_FIT_ALPHA {
+                chance_excess += 1;
+            }
+        }
+        assert!(
+            chance_excess > 0,
+            "the sweep must cross χ² = n − p below the 5 % level"
+        );
+    }
 }

@@ -871,6 +871,11 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
                     // (correct_static_radius); the paper's uncorrected
                     // value is kept.
                     static_uncorrected[slot] = static_r[slot];
+                    for w in f.fit.quality_warnings(
+                        "a model order too low for the speed range, a radius that changes with speed, or drift",
+                    ) {
+                        warnings.push(w.prefixed(&format!("radius regression, polarity {pol:+}")));
+                    }
                     regression[slot] = Some(f);
                 }
                 Err(e) => warnings.push(Warning::new(
