@@ -427,7 +427,7 @@ pub fn statistic(
         }
         _ => st.m.clone(),
     };
-    // TheoH's bias factor first, within half the budget (averaged in
+    // TheoH's bias factor first (Theo1: 1), within half the budget (averaged in
     // blocks where the exact sum would pass it).
     let (bias, budget) = if s == Statistic::Theoh {
         let ba = more::theobr_block(n, more::MAX_WORK / 2.0);
@@ -436,7 +436,7 @@ pub fn statistic(
             more::MAX_WORK - more::theobr_work(n / ba),
         )
     } else {
-        (None, more::MAX_WORK)
+        (Some(1.0), more::MAX_WORK)
     };
     // The longest prefix of the grid within the budget (only MTOTDEV,
     // HTOTDEV, Theo1 and TheoH cost N·m per τ).
@@ -510,12 +510,9 @@ pub fn statistic(
                 alpha_at(m, true).and_then(|a| edf::greenhall(a, 3, m, n, true, false)),
                 tau,
             ),
-            Statistic::Theo1 => (
-                pair(more::theo1var(x, m, t0, opts.parallel)),
-                alpha_near(m).and_then(|a| edf::theo1(a, m, n)),
-                0.75 * tau,
-            ),
-            Statistic::Theoh => (
+            // TheoH's TheoBR part is Theo1 times the bias factor (exactly
+            // Theo1 for a factor of 1).
+            Statistic::Theo1 | Statistic::Theoh => (
                 bias.and_then(|b| {
                     more::theo1var(x, m, t0, opts.parallel).map(|v| (b * v.var, v.n))
                 }),
