@@ -245,3 +245,56 @@ fn unreadable_input_is_bad_input_naming_the_file() {
         "{line}"
     );
 }
+
+/// Every subcommand path below `prefix`, found from the `Commands:`
+/// section of its help (so a new command is covered without a list here).
+fn command_paths(prefix: Vec<String>, out: &mut Vec<Vec<String>>) {
+    let mut args: Vec<&str> = prefix.iter().map(String::as_str).collect();
+    args.push("--help");
+    let help = ok(&run(&args));
+    out.push(prefix.clone());
+    let mut listing = false;
+    for line in help.lines() {
+        if line.starts_with("Commands:") {
+            listing = true;
+        } else if listing && line.trim().is_empty() {
+            break;
+        } else if listing {
+            let name = line.split_whitespace().next().unwrap_or("");
+            if !name.is_empty() && name != "help" {
+                let mut next = prefix.clone();
+                next.push(name.to_string());
+                command_paths(next, out);
+            }
+        }
+    }
+}
+
+/// Issue 30 item 7: product text names papers by their bibliographic
+/// reference. The internal "seed 00x" labels and the workspace-external
+/// methods note must not reach any help page, the demo or the schemas.
+#[test]
+fn product_text_names_no_internal_document() {
+    let mut paths = Vec::new();
+    command_paths(Vec::new(), &mut paths);
+    assert!(paths.len() > 20, "every command walked: {}", paths.len());
+    let mut texts: Vec<(String, String)> = paths
+        .iter()
+        .map(|p| {
+            let mut a: Vec<&str> = p.iter().map(String::as_str).collect();
+            a.push("--help");
+            (format!("incal {} --help", p.join(" ")), ok(&run(&a)))
+        })
+        .collect();
+    texts.push(("incal demo".into(), ok(&run(&["demo"]))));
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../schema");
+    for f in ["result.schema.json", "plan.schema.json"] {
+        texts.push((f.into(), std::fs::read_to_string(root.join(f)).unwrap()));
+    }
+    for (what, text) in &texts {
+        let lower = text.to_lowercase();
+        for bad in ["seed 00", "seed-00", "seed00", "methods.md"] {
+            assert!(!lower.contains(bad), "{what} says {bad:?}");
+        }
+    }
+}

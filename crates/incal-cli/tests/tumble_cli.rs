@@ -142,7 +142,7 @@ fn plan_tumble_json_contract() {
         vec![0.0, 6.0, 12.0, 18.0, 24.0, 30.0, 180.0, 330.0, 336.0, 342.0, 348.0, 354.0]
     );
     let u = v["predicted_u"].as_object().unwrap();
-    // methods.md §1: σ(K3) ≈ 6.8e-6 at a = 6°.
+    // docs/src/tumble.md: σ(K3) ≈ 6.8e-6 at a = 6°.
     let k3 = u["K3"].as_f64().unwrap();
     assert!((k3 - 6.8e-6).abs() < 0.05e-6, "{k3}");
     assert_eq!(u.len(), 6);

@@ -35,7 +35,7 @@ fn bench_fit(c: &mut Criterion) {
 
 fn bench_tumble(c: &mut Criterion) {
     let obs = simulate(&TumbleSim {
-        truth: AccelerometerModel::seed000(),
+        truth: AccelerometerModel::wu2015(),
         mount: Mount::Pendulum,
         angles_deg: TumblePlan::gjb12().angles_deg,
         samples: 10,

@@ -5,7 +5,7 @@
 //! simulators. It reads no files and prints nothing; the `incal` binary
 //! (crate `incal-cli`) does that.
 //!
-//! Every procedure follows methods.md §0: a test plan and the rig's
+//! Every procedure follows docs/src/result-document.md: a test plan and the rig's
 //! kinematics give the inputs of each observation, the error model is linear
 //! in a parameter vector (design matrix), [`estimation::fit`] solves it with
 //! covariance and rank/condition diagnostics, and a map with its Jacobian

@@ -176,7 +176,7 @@ mod tests {
 
     #[test]
     fn arcsec_per_rad_matches_methods_digest() {
-        // methods.md: 1 rad = 206264.806″
+        // 1 rad = 206264.806″
         assert!((ARCSEC_PER_RAD - 206_264.806).abs() < 1e-3);
         assert!((rad_to_arcsec(arcsec_to_rad(618.8)) - 618.8).abs() < 1e-9);
     }

@@ -1,6 +1,6 @@
 //! The covariance of K0 and K1 (e.g. from the tumble result they came
 //! from, `centrifuge --from`) enters every quantity that depends on both.
-//! Checked on the static tilt λ = E0/K1 − K0 (seed 001 eq. 4), whose
+//! Checked on the static tilt λ = E0/K1 − K0 (He & Yin 2017 eq. 4), whose
 //! variance changes by exactly `2·(∂λ/∂K0)(∂λ/∂K1)·C(K0, K1)`
 //! = `2·(λ + K0)/K1·C` (GUM, JCGM 100 eq. 13).
 

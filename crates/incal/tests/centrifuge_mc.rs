@@ -1,5 +1,5 @@
-//! Monte Carlo check of the centrifuge radius uncertainties (seed 001 §2.1
-//! eq. 7 and §2.2; methods.md §2): the u that `calibrate` reports for the
+//! Monte Carlo check of the centrifuge radius uncertainties (He & Yin 2017 §2.1
+//! eq. 7 and §2.2; docs/src/centrifuge.md): the u that `calibrate` reports for the
 //! fixture-centre radius `R = (R+ + R−)/2` (`R_centre_m` of
 //! `CentrifugeResult::joint`) is the standard deviation of `R` over repeated
 //! experiments in which both the data noise and the scale factor K1 from
@@ -49,7 +49,7 @@ fn truth() -> AccelerometerModel {
 }
 
 /// The IA-radial station only (`ip,0`, both polarities), 0–25 g, the rig
-/// of seed 001 Table 1 (R+ = 0.714775 m, R− = 0.705794 m).
+/// of He & Yin 2017 Table 1 (R+ = 0.714775 m, R− = 0.705794 m).
 fn sim(seed: u64) -> CentrifugeSim {
     CentrifugeSim {
         truth: truth(),

@@ -1,4 +1,4 @@
-//! Centrifuge round trips with honest uncertainty (methods.md §2, seed 001):
+//! Centrifuge round trips with honest uncertainty (docs/src/centrifuge.md, He & Yin 2017):
 //! simulate from a known truth with an ECM offset, IA tilt and the Earth
 //! rate, calibrate, and count how often the truth lies within the reported
 //! uncertainty.
@@ -139,7 +139,7 @@ fn every_coefficient_and_radius_within_2u_at_95_percent() {
     }
 }
 
-/// Seed 001 Table 2: a first-order regression on data with K2 ≠ 0 drifts
+/// He & Yin 2017 Table 2: a first-order regression on data with K2 ≠ 0 drifts
 /// with the range (the quadratic term leaks into the scale), while orders 2
 /// and 3 barely move, and order 3 (the truth has K3 ≠ 0) recovers the
 /// effective radius within its u.
@@ -285,7 +285,7 @@ fn earth_rate_and_sense_are_applied() {
 /// combined u of its lines equals the u of the reported coefficient, and a
 /// fixture tolerance of 1° adds the eq. 8 Δc2 as a type-B line with
 /// half-width `|dc2/dφ|·(|Δφ_net| + 1°)` (for K_ip at 45°:
-/// `|Kpp − K2|·Δφ`, seed 001 Table 3).
+/// `|Kpp − K2|·Δφ`, He & Yin 2017 Table 3).
 #[test]
 fn budget_lines_add_up_to_the_reported_u() {
     let obs = simulate(&sim(8, standard_positions()));
@@ -317,7 +317,7 @@ fn budget_lines_add_up_to_the_reported_u() {
     assert!(b.combined_u_paper_eq10.unwrap() < b.combined_u);
 }
 
-/// The fixture-centre radius `R_centre_m = (R+ + R−)/2` (seed 001 §2.2):
+/// The fixture-centre radius `R_centre_m = (R+ + R−)/2` (He & Yin 2017 §2.2):
 /// the effective truth lies within ±2u in 90–99 % of 300 trials, as for the
 /// other radii (u(K1) = 0 here; the shared-K1 term is checked by
 /// tests/centrifuge_mc.rs).

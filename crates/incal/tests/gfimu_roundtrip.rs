@@ -1,4 +1,4 @@
-//! Gyro-free unit round trips with honest uncertainty (methods.md §4):
+//! Gyro-free unit round trips with honest uncertainty (docs/src/gfimu.md):
 //! simulate from a known truth with seeds, calibrate / solve, and count how
 //! often the truth lies within the reported uncertainty.
 

@@ -1,4 +1,4 @@
-//! Misalignment round trips with honest uncertainty (seed 003): simulate
+//! Misalignment round trips with honest uncertainty (Li et al. 2012): simulate
 //! with the exact rotation chains (Earth rate included), calibrate with the
 //! linearised least squares, and count how often the truth lies within ±2u
 //! of every reported angle, γ and the azimuth over 300 seeded trials.

@@ -13,7 +13,7 @@ fn truth() -> AccelerometerModel {
     AccelerometerModel {
         delta_p_rad: arcsec_to_rad(-300.0),
         k_io: 5e-7,
-        ..AccelerometerModel::seed000()
+        ..AccelerometerModel::wu2015()
     }
 }
 

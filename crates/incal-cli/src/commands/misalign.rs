@@ -1,6 +1,6 @@
 //! `incal misalign gyro|accel`, `incal simulate misalign gyro|accel`,
 //! `incal plan misalign`, and the misalignment section of `incal demo`
-//! (seed 003; methods.md §3).
+//! (Li et al. 2012; docs/src/misalignment.md).
 
 use std::path::PathBuf;
 

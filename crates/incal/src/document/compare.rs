@@ -1,6 +1,6 @@
 //! Comparison of two result documents (`incal compare A.json B.json`):
-//! coefficient by coefficient, two results of the same procedure (seed 000 compares methods
-//! in ‰; seed 001 Table 5 uses the normalized error).
+//! coefficient by coefficient, two results of the same procedure (Wu et al. 2015 compares methods
+//! in ‰; He & Yin 2017 Table 5 uses the normalized error).
 //!
 //! For every coefficient present in both:
 //! `d = x_A − x_B`, relative difference `1000·d/|x_B|` (‰) and the

@@ -1,5 +1,5 @@
 //! The result documents of the misalignment tests (gyro on a rate table,
-//! accelerometer on a vertical face; seed 003).
+//! accelerometer on a vertical face; Li et al. 2012).
 
 use serde_json::{json, Map, Value};
 
@@ -38,7 +38,7 @@ fn joint(fit: &Fit, angles: &[&str]) -> Result<Estimates> {
     all.select(&order)
 }
 
-/// `{NAME: {"value", "u", "unit"}}` of some estimates (the seed-003
+/// `{NAME: {"value", "u", "unit"}}` of some estimates (the Li et al. 2012
 /// contract objects `angles`, `biases`).
 fn value_u_map(e: &Estimates, names: &[String], unit: &str) -> Value {
     let mut m = Map::new();

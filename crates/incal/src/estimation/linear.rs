@@ -1,5 +1,5 @@
 //! Weighted linear least squares with covariance and diagnostics: the one
-//! solver every incal procedure uses (methods.md §0).
+//! solver every incal procedure uses (docs/src/result-document.md).
 //!
 //! # Model
 //! `y = A x + e`, `E[e] = 0`, `Cov(e) = σ² W⁻¹` with `W = diag(w_i)`.
@@ -19,7 +19,7 @@
 //!   unobservable term combinations ([`Alias`]).
 //!
 //! The SVD route is used because it never squares the condition number
-//! (unlike the normal equations of seed 000 eq. 9–10) and because the null
+//! (unlike the normal equations of Wu et al. 2015 eq. 9–10) and because the null
 //! space comes for free. Reference: Björck, *Numerical Methods for Least
 //! Squares Problems* (1996), §1.2 and §2.7.
 
@@ -109,7 +109,7 @@ impl Design {
     }
 
     /// Test design: the covariance `(AᵀWA)⁻¹` the plan will give, with
-    /// `W = diag(1/σ_i²)`, before any data exists (methods.md §0 step 5).
+    /// `W = diag(1/σ_i²)`, before any data exists (docs/src/plans.md).
     ///
     /// `sigma` holds the standard deviation of each observation. Values are
     /// zero; only the covariance is meaningful. Fails like [`fit`] when the

@@ -1,4 +1,4 @@
-//! The estimation core shared by every procedure (methods.md §0):
+//! The estimation core shared by every procedure (docs/src/result-document.md):
 //! weighted linear least squares with covariance and rank/condition
 //! diagnostics ([`linear`]), test-design prediction
 //! ([`Design::predict`]), propagation to derived coefficients

@@ -1,6 +1,6 @@
-//! Pendulous accelerometer model equation (seed 000 eq. 1; GJB 1037A;
+//! Pendulous accelerometer model equation (Wu et al. 2015 eq. 1; GJB 1037A;
 //! IEEE Std 1293), extended with the terms a 1 g tumble or a centrifuge can
-//! alias (methods.md §1, §2):
+//! alias (docs/src/tumble.md, §2):
 //!
 //! ```text
 //! E = K1 (K0 + a_i + K2 a_i² + K3 a_i³ + δo a_p + δp a_o
@@ -201,9 +201,9 @@ impl Default for AccelerometerModel {
 }
 
 impl AccelerometerModel {
-    /// The instrument simulated in seed 000 §2.1, with δo = 3×10⁻³ rad
-    /// (methods.md §1: the printed 3×10⁻⁴ is a typo; Table 1 shows 618.8″).
-    pub fn seed000() -> Self {
+    /// The instrument simulated in Wu et al. 2015 §2.1, with δo = 3×10⁻³ rad
+    /// (docs/src/tumble.md: the printed 3×10⁻⁴ is a typo; Table 1 shows 618.8″).
+    pub fn wu2015() -> Self {
         Self {
             k0_g: 8e-3,
             k1_out_per_g: 10.0,
@@ -298,7 +298,7 @@ mod tests {
 
     #[test]
     fn output_is_k1_times_bracket() {
-        let m = AccelerometerModel::seed000();
+        let m = AccelerometerModel::wu2015();
         let a = SpecificForce {
             a_i: 0.5,
             a_p: 0.8,

@@ -1,5 +1,5 @@
 //! Gyro-free inertial unit: an array of N ≥ 6 single-axis accelerometers on
-//! a rigid body (seed 004; methods.md §4).
+//! a rigid body (GFIMU note; docs/src/gfimu.md).
 //!
 //! # Conventions
 //! The unit frame is right-handed with its origin at the reference point
@@ -16,7 +16,7 @@
 //! centripetal term. The N×6 matrix with rows `[l_jᵀ, (r_j × l_j)ᵀ/g]` must
 //! have rank 6 for f0 and ω̇ to be solvable ([`Geometry::check`]).
 //!
-//! The paper's layout (seed 004 Fig. 1), lever arm L: a, b at ±L on x sensing
+//! The paper's layout (GFIMU note Fig. 1), lever arm L: a, b at ±L on x sensing
 //! z; c, d at ±L on y sensing x; e, f at ±L on z sensing y.
 
 use nalgebra::{DVector, Vector3};
@@ -116,7 +116,7 @@ impl Geometry {
         })
     }
 
-    /// The paper's six-accelerometer layout (seed 004 Fig. 1) with lever
+    /// The paper's six-accelerometer layout (GFIMU note Fig. 1) with lever
     /// arm `lever_arm_m` (> 0).
     pub fn paper(lever_arm_m: f64) -> Result<Self> {
         if !(lever_arm_m.is_finite() && lever_arm_m > 0.0) {
@@ -198,7 +198,7 @@ impl Geometry {
 
     /// Design of the motion unknowns `(f0 [g], ω̇ [rad/s²])` for sensitive
     /// vectors `s_j` (nominal `l_j`, or calibrated `Ks_j` in output/g):
-    /// row j = `[s_jᵀ, (r_j × s_j)ᵀ / g]` (methods.md §4), `gravity_m_s2` = g.
+    /// row j = `[s_jᵀ, (r_j × s_j)ᵀ / g]` (docs/src/gfimu.md), `gravity_m_s2` = g.
     pub fn motion_design(&self, sensitive: &[Vector3<f64>], gravity_m_s2: f64) -> Result<Design> {
         if sensitive.len() != self.len() {
             return Err(Error::Unsupported(format!(
@@ -262,7 +262,7 @@ impl Geometry {
 }
 
 /// Two unit vectors `p, q` completing the nominal direction `l` to an
-/// orthonormal frame in the paper's axis cycle (seed 004 eq. 8–10): for
+/// orthonormal frame in the paper's axis cycle (GFIMU note eq. 8–10): for
 /// `l` along x the cross axes are y then z; along y: z then x; along z:
 /// x then y. For an oblique `l` the dominant axis decides the cycle and
 /// the next two unit axes are Gram–Schmidt orthogonalised against `l`.

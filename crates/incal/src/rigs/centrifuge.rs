@@ -1,10 +1,10 @@
-//! Precision centrifuge kinematics (seed 001 §1–2; IEEE Std 836;
-//! methods.md §2).
+//! Precision centrifuge kinematics (He & Yin 2017 §1–2; IEEE Std 836;
+//! docs/src/centrifuge.md).
 //!
 //! # Conventions
 //! * The table spins at `ω` (rad/s) about the local vertical. The
 //!   centripetal specific force at radius `R` (m) has magnitude
-//!   `a_c = R (ω² + 2 s ω Ωe sin Φ)` (m/s², seed 001 eq. 6 denominator),
+//!   `a_c = R (ω² + 2 s ω Ωe sin Φ)` (m/s², He & Yin 2017 eq. 6 denominator),
 //!   `Ωe` = [`EARTH_RATE_RAD_S`], `Φ` latitude, `s = +1` when the table
 //!   spins in Earth's sense (counter-clockwise seen from above in the
 //!   northern hemisphere), `s = −1` for the opposite sense. It points from
@@ -17,17 +17,17 @@
 //!   vertical: every horizontal input changes sign.
 //! * Tilt `λ` (rad): in planes `ip` and `io` the input axis is horizontal
 //!   up to a small tilt that adds `sin λ` g and scales its horizontal
-//!   input by `cos λ` (seed 001 eq. 4, 6). In plane `po` the input axis is
+//!   input by `cos λ` (He & Yin 2017 eq. 4, 6). In plane `po` the input axis is
 //!   the vertical one and the tilt is not modelled.
-//! * Effective centre of mass (ECM, seed 001 §2.2): the fixture turns about
+//! * Effective centre of mass (ECM, He & Yin 2017 §2.2): the fixture turns about
 //!   its centre O′ at `R = (R+ + R−)/2` from the spin axis; the ECM sits at
 //!   `r = (R+ − R−)/2` (signed) from O′, *against* the input axis (so that
 //!   with IA radial, polarity + is at `R + r = R+` and polarity − at
-//!   `R − r = R−`, methods.md §2 sign fix). The offset turns with the
+//!   `R − r = R−`, docs/src/centrifuge.md sign fix). The offset turns with the
 //!   fixture: at a horizontal-IA position `(φ0, ±)` the ECM is at
 //!   `R± (φ0) = sqrt((R ± r cos φ0)² + (r sin φ0)²)` and the radial
 //!   direction is off the nominal one by
-//!   `Δφ± = ∓ atan(r sin φ0 / (R ± r cos φ0))` (seed 001 §2.2, signs from
+//!   `Δφ± = ∓ atan(r sin φ0 / (R ± r cos φ0))` (He & Yin 2017 §2.2, signs from
 //!   the geometry). In plane `po` the offset is vertical: `R± = R`,
 //!   `Δφ = 0`.
 
@@ -148,7 +148,7 @@ pub struct Centrifuge {
 }
 
 /// Radius of the ECM and angle of the true radial direction from the
-/// nominal one at a position (module docs, seed 001 §2.2).
+/// nominal one at a position (module docs, He & Yin 2017 §2.2).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EcmGeometry {
     /// Distance of the ECM from the spin axis (m).
@@ -159,7 +159,7 @@ pub struct EcmGeometry {
 
 /// ECM radius and alignment error for fixture centre `r_centre_m` = R,
 /// signed ECM offset `offset_m` = r = (R+ − R−)/2, nominal angle φ0 and
-/// polarity ±1 (module docs; seed 001 §2.2 with the sign fixed so that
+/// polarity ±1 (module docs; He & Yin 2017 §2.2 with the sign fixed so that
 /// φ0 → 0 gives R+ and R−).
 pub fn ecm_geometry(r_centre_m: f64, offset_m: f64, phi_rad: f64, polarity: f64) -> EcmGeometry {
     let along = r_centre_m + polarity * offset_m * phi_rad.cos();
@@ -181,7 +181,7 @@ impl Centrifuge {
         0.5 * (self.r_plus_m - self.r_minus_m)
     }
 
-    /// `ω² + 2 s ω Ωe sin Φ` (rad²/s², seed 001 eq. 6).
+    /// `ω² + 2 s ω Ωe sin Φ` (rad²/s², He & Yin 2017 eq. 6).
     pub fn rate_squared(&self, omega_rad_s: f64) -> f64 {
         centripetal_rate_squared(omega_rad_s, self.latitude_rad, self.opposite_sense)
     }
@@ -226,7 +226,7 @@ impl Centrifuge {
 
 /// `ω² + 2 s ω Ωe sin Φ` with `s = −1` for `opposite_sense` (rad²/s²):
 /// the centripetal rate of a table spinning at ω relative to the Earth
-/// (seed 001 eq. 6; the Ωe² term, below 1e-9 of ω² at 1 g, is dropped).
+/// (He & Yin 2017 eq. 6; the Ωe² term, below 1e-9 of ω² at 1 g, is dropped).
 pub fn centripetal_rate_squared(omega_rad_s: f64, latitude_rad: f64, opposite_sense: bool) -> f64 {
     let s = if opposite_sense { -1.0 } else { 1.0 };
     omega_rad_s * omega_rad_s + 2.0 * s * omega_rad_s * EARTH_RATE_RAD_S * latitude_rad.sin()
@@ -263,7 +263,7 @@ mod tests {
 
     #[test]
     fn transverse_radius_is_hypot() {
-        // seed 001 §2.2.2: R3 = sqrt(R² + r²), Δφ = atan(r/R).
+        // He & Yin 2017 §2.2.2: R3 = sqrt(R² + r²), Δφ = atan(r/R).
         let c = rig();
         let (rr, r) = (c.centre_radius_m(), c.ecm_offset_m());
         let g = c.geometry(&Position::new(Plane::Ip, 90f64.to_radians(), 1).unwrap());

@@ -1,9 +1,9 @@
-//! Dividing head (indexing head) with a horizontal axis, seed 000 §1.1–1.3.
+//! Dividing head (indexing head) with a horizontal axis, Wu et al. 2015 §1.1–1.3.
 //!
 //! # Conventions
 //! The head angle θ is read on the head; θ = 0 puts IA horizontal, θ = 90°
 //! puts IA up (+1 g on IA). Looking at the head's face, the reading grows
-//! clockwise (seed 000 Fig. 1).
+//! clockwise (Wu et al. 2015 Fig. 1).
 //!
 //! * pendulum mount (OA ∥ head axis): `a_i = sin θ, a_p = cos θ, a_o = 0`
 //! * gate mount (PA ∥ head axis): `a_i = sin θ, a_o = cos θ, a_p = 0`
@@ -41,7 +41,7 @@ impl Mount {
     }
 
     /// Specific force on the instrument axes in a 1 g field at head angle
-    /// `theta_rad` (seed 000 §1.3).
+    /// `theta_rad` (Wu et al. 2015 §1.3).
     pub fn specific_force(self, theta_rad: f64) -> SpecificForce {
         let (s, c) = theta_rad.sin_cos();
         match self {

@@ -1,20 +1,20 @@
 //! Single-axis rate table carrying a fixture and a gyro, and the vertical
-//! reference face of the accelerometer test (seed 003 §2–3, methods.md §3).
+//! reference face of the accelerometer test (Li et al. 2012 §2–3, docs/src/misalignment.md).
 //!
 //! # Conventions
 //! Rotations are *passive* (they transform vector components into the
-//! rotated frame), as in seed 003 eq. 3:
+//! rotated frame), as in Li et al. 2012 eq. 3:
 //! `Px(a) = [[1,0,0],[0,c,s],[0,−s,c]]`, `Py(a) = [[c,0,−s],[0,1,0],[s,0,c]]`,
 //! `Pz(a) = [[c,s,0],[−s,c,0],[0,0,1]]`.
 //!
-//! Gyro chain (seed 003 eq. 3), reference frame z up along the table axis,
+//! Gyro chain (Li et al. 2012 eq. 3), reference frame z up along the table axis,
 //! y north: `ω_body = P2 · Px(α) · P1 · Pz(β) · P0 · Pz(γ) · ω_ref`, with
 //! `P0 = Px(Δθx0) Py(Δθy0)` (table face vs spin axis),
 //! `P1 = Py(Δθy1) Pz(Δθz1)` (fixture face), `P2 = Py(Δθy2) Pz(Δθz2)` (gyro
 //! input axis vs its mounting face), γ the table angle, β the fixture on the
 //! table, α the gyro on the fixture, and
 //! `ω_ref = [0, Ωe cos φ, ω + Ωe sin φ]`. The input axis is body x.
-//! To first order in the small angles and Ωe (seed 003 after eq. 3):
+//! To first order in the small angles and Ωe (Li et al. 2012 after eq. 3):
 //!
 //! ```text
 //! ω_I = Ωe cos φ sin(γ + β) − ω [Δθy0 cos β − Δθx0 sin β + Δθy1
@@ -78,7 +78,7 @@ pub fn apply(a: &Mat3, v: [f64; 3]) -> [f64; 3] {
     [0, 1, 2].map(|i| a[i][0] * v[0] + a[i][1] * v[1] + a[i][2] * v[2])
 }
 
-/// The small mounting angles of the gyro test (rad), seed 003 §2.
+/// The small mounting angles of the gyro test (rad), Li et al. 2012 §2.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct GyroMounting {
     /// Table face vs spin axis, about x (rad).
@@ -119,7 +119,7 @@ pub fn gyro_rates_deg_s(
 }
 
 /// Factors of the five separable angles in the linearised input rate
-/// `ω_I = ω · Σ f_k θ_k` (seed 003 eq. 4; methods.md §3), in the order
+/// `ω_I = ω · Σ f_k θ_k` (Li et al. 2012 eq. 4; docs/src/misalignment.md), in the order
 /// `Δθy0, Δθx0, Δθy1, Δθy2, Δθz2`:
 /// `f = [−cos β, sin β, −1, −cos α, sin α]`.
 pub fn gyro_factors(alpha_rad: f64, beta_rad: f64) -> [f64; 5] {
@@ -129,7 +129,7 @@ pub fn gyro_factors(alpha_rad: f64, beta_rad: f64) -> [f64; 5] {
 }
 
 /// The small angles of the accelerometer test on a vertical face (rad),
-/// seed 003 §3.
+/// Li et al. 2012 §3.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct FaceMounting {
     /// Verticality error of the reference face, about y (rad).
@@ -145,7 +145,7 @@ pub struct FaceMounting {
 /// Specific force along the accelerometer's axes (g) with the instrument
 /// turned by `beta_rad` about the horizontal normal (body x = IA) of the
 /// vertical face: `a = Py(Δθy2) Pz(Δθz2) · Px(β) · Py(Δθy1) Py(Δθy0) · [0,0,1]`
-/// (passive, seed 003 §3), to first order
+/// (passive, Li et al. 2012 §3), to first order
 /// `a_I = −Δθy0 − Δθy1 + Δθz2 sin β − Δθy2 cos β`.
 pub fn face_specific_force_g(m: &FaceMounting, beta_rad: f64) -> [f64; 3] {
     let p2 = mul(&py(m.dtheta_y2), &pz(m.dtheta_z2));

@@ -90,7 +90,7 @@ fn tumble(seed: u64) -> Result<DemoSection> {
         delta_p_rad: arcsec_to_rad(-300.0),
         k_io: 5e-7,
         k_pp: 2e-6,
-        ..AccelerometerModel::seed000()
+        ..AccelerometerModel::wu2015()
     };
     let cases = [
         (
@@ -361,7 +361,7 @@ pub fn centrifuge_truth() -> AccelerometerModel {
     }
 }
 
-/// The centrifuge scenario's rig: seed 001's radii (ECM offset 4.49 mm),
+/// The centrifuge scenario's rig: He & Yin 2017's radii (ECM offset 4.49 mm),
 /// IA tilt 60″, latitude 39.9° N, standard gravity.
 pub fn centrifuge_rig() -> crate::rigs::centrifuge::Centrifuge {
     crate::rigs::centrifuge::Centrifuge {

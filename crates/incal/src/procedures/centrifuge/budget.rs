@@ -1,4 +1,4 @@
-//! Cross-coupling algebra and uncertainty budgets (seed 001 eq. 2, 3, 8, 10).
+//! Cross-coupling algebra and uncertainty budgets (He & Yin 2017 eq. 2, 3, 8, 10).
 //!
 //! In a plane with axes `a` (first) and `b` (second), the quadratic
 //! coefficient of the output against the centripetal input at nominal
@@ -36,7 +36,7 @@ pub fn delta_c2(k_aa: f64, k_bb: f64, k_ab: f64, phi0_rad: f64, dphi_rad: f64) -
 }
 
 /// ECM offset and fixture-centre radius from the IA-radial radii
-/// (seed 001 §2.2): `(R, r) = ((R+ + R−)/2, (R+ − R−)/2)`, r signed.
+/// (He & Yin 2017 §2.2): `(R, r) = ((R+ + R−)/2, (R+ − R−)/2)`, r signed.
 pub fn ecm_offset(r_plus_m: f64, r_minus_m: f64) -> (f64, f64) {
     (0.5 * (r_plus_m + r_minus_m), 0.5 * (r_plus_m - r_minus_m))
 }

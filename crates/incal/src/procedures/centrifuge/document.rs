@@ -1,4 +1,4 @@
-//! The result document of a centrifuge calibration (seed 001).
+//! The result document of a centrifuge calibration (He & Yin 2017).
 
 use serde_json::{json, Map, Value};
 
@@ -35,7 +35,7 @@ impl CentrifugeResult {
     /// (those the data supports, g units) and the radii `R_plus_m`,
     /// `R_minus_m` (regression), `R_plus_static_m`, `R_minus_static_m`,
     /// `R_centre_m`, `ecm_offset_m` and the static tilt `tilt_rad`, all with the
-    /// joint covariance of [`CentrifugeResult::joint`]; the seed-001
+    /// joint covariance of [`CentrifugeResult::joint`]; the He & Yin 2017
     /// contract objects `radius` and `alignment`; radius-by-range, stations,
     /// the station points (input, mean E/K1, residual) and budgets as tables.
     pub fn document(&self, opts: &CentrifugeOptions) -> Result<ResultDocument> {
@@ -88,7 +88,7 @@ impl CentrifugeResult {
             json!(opts.alignment_tolerance_rad.to_degrees()),
         );
 
-        // Seed 001 contract objects.
+        // He & Yin 2017 contract objects.
         let reg = |k: usize| self.regression[k].as_ref().map(|f| f.radius_m);
         b.extra(
             "radius",

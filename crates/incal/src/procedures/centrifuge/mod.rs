@@ -1,7 +1,7 @@
 //! Centrifuge calibration of a pendulous accelerometer: test radius,
 //! input-axis nonlinearity, cross-axis nonlinearity and cross-coupling
-//! with ECM alignment errors and an uncertainty budget (seed 001;
-//! IEEE Std 836; methods.md §2).
+//! with ECM alignment errors and an uncertainty budget (He & Yin 2017;
+//! IEEE Std 836; docs/src/centrifuge.md).
 //!
 //! # Pipeline
 //! 1. Samples with the same plane, angle, polarity and rate form a point;
@@ -12,10 +12,10 @@
 //!    (eq. 4), static radius per polarity (eq. 5–6) and the
 //!    regression–iteration radii R± (eq. 7) — see [`radius`]. A table of
 //!    regression radii for model orders 1–3 over growing input ranges shows
-//!    whether the model is adequate (seed 001 Table 2: order 1 drifts).
+//!    whether the model is adequate (He & Yin 2017 Table 2: order 1 drifts).
 //! 3. The regression radii give the ECM offset `r = (R+ − R−)/2` and, at
 //!    every position, the ECM radius and alignment error Δφ
-//!    ([`crate::rigs::centrifuge`], seed 001 §2.2).
+//!    ([`crate::rigs::centrifuge`], He & Yin 2017 §2.2).
 //! 4. Every station is fitted with the polarity model of eq. 9, against
 //!    the centripetal input `x` (g) computed with those radii:
 //!    `E/K1 = b± ± s± x + c2 x² ± q (w± x)² (+ ± c3 (w± x)³)` (`±` =
@@ -450,7 +450,7 @@ fn station_label(plane: Plane, phi_rad: f64) -> String {
     format!("{},{}", plane.name(), d)
 }
 
-/// One cell of the radius-versus-range table (seed 001 Table 2).
+/// One cell of the radius-versus-range table (He & Yin 2017 Table 2).
 #[derive(Debug, Clone, PartialEq)]
 pub struct RadiusRangeRow {
     /// Model order.
@@ -583,7 +583,7 @@ pub struct CentrifugeResult {
     ///   [`radius::eq6_radius`], divided by the nonlinearity factor
     ///   `1 ± K2 a_g + K3 a_g²` of [`correct_static_radius`] with that
     ///   polarity's regression K2, K3 when there is a regression);
-    /// * `R_centre_m = (R+ + R−)/2` (m, seed 001 §2.2; the one regression
+    /// * `R_centre_m = (R+ + R−)/2` (m, He & Yin 2017 §2.2; the one regression
     ///   radius when only one polarity was measured);
     /// * `ecm_offset_m = (R+ − R−)/2` (m, signed; both polarities only);
     /// * `tilt_rad`: λ = E0/K1 − K0 (rad, eq. 4).
@@ -1062,7 +1062,7 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
 }
 
 /// Regression radius for orders 1–3 on the data up to ⅓, ⅔ and all of the
-/// largest input (seed 001 Table 2 uses 7, 14 and 25 g).
+/// largest input (He & Yin 2017 Table 2 uses 7, 14 and 25 g).
 fn range_table(
     points: &[SpeedPoint],
     pol: i8,

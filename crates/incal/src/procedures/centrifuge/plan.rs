@@ -1,7 +1,7 @@
 //! Centrifuge test plans and their predicted uncertainties.
 //!
 //! A plan (fixture positions × nominal centripetal levels × samples per
-//! point, seed 001 §3) is judged by running the reduction itself on the
+//! point, He & Yin 2017 §3) is judged by running the reduction itself on the
 //! noise-free outputs of the expected instrument with a deterministic
 //! scatter of exactly the output noise σ at every point
 //! ([`super::sim::plan`]): every u it reports (coefficients and radius

@@ -1,10 +1,10 @@
-//! Tilt and test radius from the input-axis-radial runs (seed 001 §2.1).
+//! Tilt and test radius from the input-axis-radial runs (He & Yin 2017 §2.1).
 //!
-//! * Static tilt (seed 001 eq. 4): `λ = E0/K1 − K0` (rad; accelerations in
+//! * Static tilt (He & Yin 2017 eq. 4): `λ = E0/K1 − K0` (rad; accelerations in
 //!   g_L units), `E0` the mean at-rest output over both polarities (two
 //!   table positions 180° apart).
-//! * Static back-calculated radius (eq. 5–6, typo fixed as in methods.md
-//!   §2): at the speed ω_g nearest 1 g, `a_g = E_a/K1 − K0` and
+//! * Static back-calculated radius (eq. 5–6, typo fixed;
+//!   docs/src/centrifuge.md): at the speed ω_g nearest 1 g, `a_g = E_a/K1 − K0` and
 //!   `R = s (a_g − sin λ) g_L / ((ω_g² + 2ω_g Ωe sin Φ) cos λ)` with polarity
 //!   `s = ±1`. Its uncertainty is propagated by GUM from `u(K0), u(K1),
 //!   u(E_a), u(E0)`; this differs from the paper's eq. 6 uncertainty, which
@@ -13,7 +13,7 @@
 //!   precision centrifuge is known to 1e-6 or better; add it to the table's
 //!   own budget). [`super::calibrate`] adds the nonlinearity envelope at
 //!   ~1 g (uniform, half-width `|K2 a_g² + K3 a_g³|` from the regression)
-//!   as a type-B component, as seed 001 §2.1.1 suggests; without it the
+//!   as a type-B component, as He & Yin 2017 §2.1.1 suggests; without it the
 //!   static radius is biased by K2·(1 g)², a few ppm.
 //! * Regression–iteration radius (eq. 7), per polarity:
 //!   `E/K1 = b + (1 + c) a_i + K2 a_i² (+ K3 a_i³)` with
@@ -77,7 +77,7 @@ pub struct RadiusContext {
     pub known_sigma: Option<f64>,
 }
 
-/// Static tilt `λ = E0/K1 − K0` (rad; seed 001 eq. 4, small angle), with
+/// Static tilt `λ = E0/K1 − K0` (rad; He & Yin 2017 eq. 4, small angle), with
 /// `E0` the mean at-rest output, `K1` in output/g, `K0` in g.
 pub fn tilt_at(k0_g: f64, k1: f64, e0: f64) -> f64 {
     e0 / k1 - k0_g
@@ -98,7 +98,7 @@ pub(crate) fn sem(s: &PositionStats, known_sigma: Option<f64>) -> f64 {
 }
 
 /// Static tilt λ (rad) from at-rest samples of the IA-radial station
-/// (seed 001 eq. 4, [`tilt_at`]). `samples` are raw outputs. The
+/// (He & Yin 2017 eq. 4, [`tilt_at`]). `samples` are raw outputs. The
 /// uncertainty is propagated from `u(K0)`, `u(K1)` and `u(E0) = s/√n` by
 /// [`Estimates::map`] (inputs independent):
 /// `u²(λ) = u²(K0) + (u(E0)/K1)² + (E0 u(K1)/K1²)²`.
@@ -125,7 +125,7 @@ pub fn static_tilt(samples: &[f64], ctx: &RadiusContext) -> Result<ValueU> {
     })
 }
 
-/// Static back-calculated radius (m) of seed 001 eq. 5–6 (typo fixed):
+/// Static back-calculated radius (m) of He & Yin 2017 eq. 5–6 (typo fixed):
 /// `λ = E0/K1 − K0`, `a_g = E_a/K1 − K0`,
 /// `R = s (a_g − sin λ) g_L / (rate² cos λ)` with `rate² = ω² + 2ωΩe sinΦ`
 /// (rad²/s², [`centripetal_rate_squared`]), polarity `s = ±1`, `g_L` in
@@ -266,7 +266,7 @@ impl Default for RadiusIteration {
     }
 }
 
-/// Regression–iteration radius for one polarity (module docs, seed 001
+/// Regression–iteration radius for one polarity (module docs, He & Yin 2017
 /// eq. 7) with the default [`RadiusIteration`].
 /// `points` are the IA-radial points of that polarity (static ones
 /// included: they pin the bias), `r0_m` the starting radius (m),

@@ -253,7 +253,7 @@ impl RigPlan {
     }
 }
 
-/// The standard plan of seed 001: IA radial (`ip,0`), PA radial (`ip,90`),
+/// The standard plan of He & Yin 2017: IA radial (`ip,0`), PA radial (`ip,90`),
 /// OA radial (`io,90`) and the 45° cross positions `ip,45`, `io,45`,
 /// `po,45`, each in both polarities.
 pub fn standard_positions() -> Vec<Position> {

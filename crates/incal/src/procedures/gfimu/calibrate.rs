@@ -1,5 +1,5 @@
-//! Multi-position static calibration of a gyro-free unit (seed 004 §"试验过程";
-//! methods.md §4).
+//! Multi-position static calibration of a gyro-free unit (GFIMU note §"试验过程";
+//! docs/src/gfimu.md).
 //!
 //! # Plan
 //! The unit is set in static positions with a known specific force `f`
@@ -10,7 +10,7 @@
 //! `+x` means a specific force of +1 g along the unit's x axis: the x axis
 //! points **up** (the reading an accelerometer gives when its input axis
 //! points up). The paper's "x axis along gravity" is ambiguous; this is the
-//! convention of methods.md §4.
+//! convention of docs/src/gfimu.md.
 //!
 //! # Estimation
 //! Per accelerometer, the position means `Ē_i` are fitted with
@@ -24,7 +24,7 @@
 //! # Derived coefficients
 //! With the nominal direction `l` and the cross axes `p, q` of
 //! [`crate::models::gfimu::cross_axes`] (paper's cycle):
-//! `k1 = Ksᵀl`, `k2 = Ksᵀp`, `k3 = Ksᵀq` (seed 004 eq. 8–10, output/g),
+//! `k1 = Ksᵀl`, `k2 = Ksᵀp`, `k3 = Ksᵀq` (GFIMU note eq. 8–10, output/g),
 //! scale factor `|Ks|`, small misalignments `α_p = atan2(k2, k1)`,
 //! `α_q = atan2(k3, k1)` (rad) and the angle between Ks and l,
 //! `θ = atan2(√(k2²+k3²), k1)` (rad), all with GUM propagation
@@ -71,7 +71,7 @@ pub struct CalibrateOptions {
 }
 
 /// The three six-position estimates of K0 (x, y, z pairs) and their
-/// agreement: the check of seed 004 `K0 = (E1+E2)/2 = (E3+E4)/2 = (E5+E6)/2`.
+/// agreement: the check of GFIMU note `K0 = (E1+E2)/2 = (E3+E4)/2 = (E5+E6)/2`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct K0Consistency {
     /// `(E1+E2)/2, (E3+E4)/2, (E5+E6)/2` (output).
@@ -145,7 +145,7 @@ impl GfimuCalibration {
 }
 
 /// Paper's closed forms for one accelerometer from the six-position means
-/// `E = [E1..E6]` (+x, −x, +y, −y, +z, −z; seed 004, methods.md §4).
+/// `E = [E1..E6]` (+x, −x, +y, −y, +z, −z; GFIMU note, docs/src/gfimu.md).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SixPosition {
     /// `(E1+E2)/2, (E3+E4)/2, (E5+E6)/2` (output).

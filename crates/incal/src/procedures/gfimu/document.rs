@@ -1,4 +1,4 @@
-//! The result document of a gyro-free unit calibration (seed 004).
+//! The result document of a gyro-free unit calibration (GFIMU note).
 
 use serde_json::{json, Map, Value};
 
@@ -27,7 +27,7 @@ impl GfimuCalibration {
     /// `NAME.Ks_x`, `NAME.Ks_y`, `NAME.Ks_z` (output/g) and the derived
     /// `NAME.scale_factor`, `NAME.k1…k3` (output/g), `NAME.*_rad` (rad),
     /// each accelerometer one correlation block (independent data). The
-    /// `accelerometers` object keeps the seed-004 contract that
+    /// `accelerometers` object keeps the GFIMU note's contract that
     /// `gfimu solve --calibration` reads. `geometry` describes the array.
     pub fn document(&self, geometry: &str, known_noise: bool) -> Result<ResultDocument> {
         let mut b = DocumentBuilder::new(

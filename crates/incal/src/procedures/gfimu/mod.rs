@@ -1,9 +1,9 @@
-//! Six-accelerometer gyro-free inertial unit (seed 004; methods.md §4):
+//! Six-accelerometer gyro-free inertial unit (GFIMU note; docs/src/gfimu.md):
 //! multi-position calibration of every accelerometer's equivalent bias K0
 //! and equivalent sensitive-direction vector Ks ([`calibrate`]), and the
 //! compensated angular-motion solution ([`solve`]).
 //!
-//! # Model (seed 004 eq. 8, methods.md §4)
+//! # Model (GFIMU note eq. 8, docs/src/gfimu.md)
 //! Accelerometer j reads
 //!
 //! ```text

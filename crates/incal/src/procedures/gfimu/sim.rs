@@ -1,4 +1,4 @@
-//! Gyro-free unit simulator (methods.md §4): static positions for the
+//! Gyro-free unit simulator (docs/src/gfimu.md): static positions for the
 //! calibration and a rigid-body motion on a rate table for the motion
 //! solution, with every accelerometer's truth K0, Ks and white output noise.
 //!

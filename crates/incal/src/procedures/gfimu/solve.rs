@@ -1,5 +1,5 @@
 //! Compensation and angular-motion solution of a gyro-free unit
-//! (methods.md §4; the seed's paper stops after writing the six equations).
+//! (docs/src/gfimu.md; the seed's paper stops after writing the six equations).
 //!
 //! # Model
 //! With calibrated `K0_j, Ks_j` and the geometry, accelerometer j reads

@@ -1,5 +1,5 @@
-//! Accelerometer misalignment on a vertical reference face (seed 003 §3;
-//! methods.md §3).
+//! Accelerometer misalignment on a vertical reference face (Li et al. 2012 §3;
+//! docs/src/misalignment.md).
 //!
 //! # Model
 //! IA horizontal, the instrument turned by β about the horizontal normal of
@@ -18,7 +18,7 @@
 //!
 //! Least squares over any ≥ 3 distinct β; at the paper's 0/90/180/270° it
 //! gives `Δθy2 = (V(180°) − V(0))/(2kI)`, `Δθz2 = (V(90°) − V(270°))/(2kI)`
-//! (seed 003 eq. 10–13) with one degree of freedom for the uncertainty.
+//! (Li et al. 2012 eq. 10–13) with one degree of freedom for the uncertainty.
 //! Repeated rows at one β are samples ([`fit_means`]).
 
 use std::collections::BTreeMap;

@@ -1,4 +1,4 @@
-//! Whole-revolution averaging of raw rate-table records (seed 003 §2:
+//! Whole-revolution averaging of raw rate-table records (Li et al. 2012 §2:
 //! "通过整周期采样, 三角函数项在整周平均值为0").
 //!
 //! On a turning table the gyro also senses the horizontal Earth rate,

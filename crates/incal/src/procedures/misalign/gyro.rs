@@ -1,9 +1,9 @@
-//! Gyro misalignment on a single-axis rate table (seed 003 §2; methods.md §3).
+//! Gyro misalignment on a single-axis rate table (Li et al. 2012 §2; docs/src/misalignment.md).
 //!
 //! # Model
 //! Whole-revolution mean output at gyro angle α on the fixture, fixture
-//! angle β on the table and signed table rate ω (seed 003 eq. 4, linearised;
-//! re-derived in methods.md §3):
+//! angle β on the table and signed table rate ω (Li et al. 2012 eq. 4, linearised;
+//! re-derived in docs/src/misalignment.md):
 //!
 //! ```text
 //! V(α, β, ω) = V0 + kI ω [ −Δθy0 cos β + Δθx0 sin β − Δθy1
@@ -84,7 +84,7 @@ impl GyroConfig {
     }
 
     /// The paper's five configurations (α, β) = (0,0), (0,180°),
-    /// (180°,180°), (90°,180°), (0,90°) (seed 003 eq. 5–9).
+    /// (180°,180°), (90°,180°), (0,90°) (Li et al. 2012 eq. 5–9).
     pub fn paper() -> Vec<GyroConfig> {
         [
             (0.0, 0.0),

@@ -1,4 +1,4 @@
-//! Misalignment separation (seed 003; methods.md §3): a gyro on a single-axis
+//! Misalignment separation (Li et al. 2012; docs/src/misalignment.md): a gyro on a single-axis
 //! rate table turned to several fixture/table configurations at forward and
 //! reverse rates ([`gyro`]), raw time series averaged over whole table
 //! revolutions ([`averaging`]), and an accelerometer turned about the
@@ -9,14 +9,14 @@
 //! fits it with [`crate::estimation::fit_means`]; the total misalignment
 //! and its azimuth come from [`crate::estimation::Estimates::map`].
 //!
-//! # Misalignment and azimuth (seed 003 eq. 1)
+//! # Misalignment and azimuth (Li et al. 2012 eq. 1)
 //! The input axis, seen in its mounting-face frame (normal x, face axes
 //! y, z), is `[1, Δθz2, −Δθy2]` to first order (`P2 = Py(Δθy2) Pz(Δθz2)`,
 //! [`crate::rigs::rate_table`]). The total misalignment is
 //! `γ = sqrt(Δθy2² + Δθz2²)` and its azimuth, the direction of the axis'
 //! projection on the face measured from face y towards face z, is
 //! `ψ = atan2(−Δθy2, Δθz2)` in [0, 2π), so that `Δθy2 = −γ sin ψ`,
-//! `Δθz2 = γ cos ψ`: seed 003's `Δαx = −Δα sin β`, `Δαy = Δα cos β` with
+//! `Δθz2 = γ cos ψ`: Li et al. 2012's `Δαx = −Δα sin β`, `Δαy = Δα cos β` with
 //! its face axes (X, Y) taken as (y, z). Jacobians:
 //! `∂γ/∂(Δθy2, Δθz2) = (Δθy2, Δθz2)/γ`,
 //! `∂ψ/∂(Δθy2, Δθz2) = (−Δθz2, Δθy2)/γ²`.
@@ -115,7 +115,7 @@ pub fn small_gamma_warning(gamma: f64, u_gamma: f64) -> Option<crate::Warning> {
 pub const LINEAR_ANGLE_LIMIT_RAD: f64 = 0.02;
 
 /// A `model-range` warning naming every fitted angle beyond
-/// [`LINEAR_ANGLE_LIMIT_RAD`]: the linearised model (seed 003 after eq. 3)
+/// [`LINEAR_ANGLE_LIMIT_RAD`]: the linearised model (Li et al. 2012 after eq. 3)
 /// then biases the estimates by more than 1 % of their size.
 pub fn large_angle_warning(angles: &crate::estimation::Estimates) -> Option<crate::Warning> {
     let big: Vec<String> = angles

@@ -1,5 +1,5 @@
 //! Misalignment test plans and their predicted uncertainties before the
-//! test (methods.md §0 step 5, §3): the design of [`super::gyro::design`]
+//! test (docs/src/plans.md, §3): the design of [`super::gyro::design`]
 //! or [`super::accel::design`] through [`Design::predict`].
 //!
 //! The predicted u of γ depends on the (unknown) direction of the

@@ -1,4 +1,4 @@
-//! Misalignment simulators (seed 003): a gyro on a rate table with Earth
+//! Misalignment simulators (Li et al. 2012): a gyro on a rate table with Earth
 //! rate, and an accelerometer on a vertical reference face. The kinematics
 //! are the exact rotation chains of [`crate::rigs::rate_table`], not the
 //! linearised model the procedures fit, so a round trip also checks the

@@ -1,12 +1,12 @@
 //! Tumble test of a pendulous accelerometer on a dividing head
-//! (seed 000; GJB 1037A 12-point; IEEE Std 1293 §10.4; methods.md §1).
+//! (Wu et al. 2015; GJB 1037A 12-point; IEEE Std 1293 §10.4; docs/src/tumble.md).
 //!
 //! # Model
 //! With the mount kinematics of [`Mount`], the output at head angle θ is
 //! `E(θ) = Σ_t p_t φ_t(a(θ))` with the regressors `φ_t` of
 //! [`Term::regressor`] and the linear parameters
 //! `p_K1 = K1`, `p_t = K1·K_t` for every other term t. This is exactly
-//! linear (no small-signal approximation): seed 000's Fourier coefficients
+//! linear (no small-signal approximation): Wu et al. 2015's Fourier coefficients
 //! A0…B3 (eq. 4–6) are a fixed linear transform of the same p when the
 //! default six terms are fitted, so least squares over the same angles gives
 //! the same K's.
@@ -22,7 +22,7 @@
 //! IA-horizontal positions). `σ_ε` is estimated from the residuals by
 //! [`crate::estimation::fit_means_excess`] (Paule–Mandel) and reported, so
 //! the uncertainty is honest when the head is worse than assumed, and the
-//! lab learns the head's index error (seed 000 §3 leaves it unsolved).
+//! lab learns the head's index error (Wu et al. 2015 §3 leaves it unsolved).
 //!
 //! # Aliasing
 //! In a 1 g field `a_i² + a_p² = 1` (pendulum) and `a_i² + a_o² = 1`
@@ -63,7 +63,7 @@ pub struct Observation {
 }
 
 /// Default terms of a mount: K0, K1, K2, K3, the misalignment and the
-/// cross-coupling the mount senses (seed 000 eq. 2 and 11).
+/// cross-coupling the mount senses (Wu et al. 2015 eq. 2 and 11).
 pub fn default_terms(mount: Mount) -> Vec<Term> {
     match mount {
         Mount::Pendulum => vec![

@@ -1,8 +1,8 @@
-//! Tumble test plans and their predicted uncertainties (methods.md §1;
-//! seed 000 §2.2 and Table 3).
+//! Tumble test plans and their predicted uncertainties (docs/src/tumble.md;
+//! Wu et al. 2015 §2.2 and Table 3).
 //!
 //! * GJB 1037A 12-point plan: θ = 0°, 30°, …, 330°.
-//! * Small-angle 12-point plan with step a (seed 000 §2.2):
+//! * Small-angle 12-point plan with step a (Wu et al. 2015 §2.2):
 //!   0, a, 2a, 3a, 4a, 5a, 180°, 360°−5a, …, 360°−a. Largest input `sin 5a`
 //!   for a ≤ 18°.
 //! * N-point plan: N equally spaced angles.
@@ -151,11 +151,11 @@ impl TumblePlan {
 }
 
 /// Predicted standard uncertainty of every coefficient before the test
-/// (methods.md §0 step 5): a nominal instrument (scale factor `k1`, every
+/// (docs/src/plans.md): a nominal instrument (scale factor `k1`, every
 /// other coefficient 0) on `mount`, with `noise` the standard deviation of
 /// one position's averaged output and `index_error_rad` the standard
 /// deviation of the head's angle error, which acts as extra output noise
-/// `∂E/∂θ · ε ≈ K1 cos θ · ε` (methods.md §1).
+/// `∂E/∂θ · ε ≈ K1 cos θ · ε` (docs/src/tumble.md).
 pub fn predict(
     mount: Mount,
     terms: &[Term],

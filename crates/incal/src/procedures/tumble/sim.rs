@@ -5,7 +5,7 @@
 //! (the head stops at θ + ε), then `samples` outputs
 //! `E = E_truth(θ + ε) + n`, `n ~ N(0, σ_n²)`. With two passes the second
 //! visits the angles in reverse order (counter-clockwise) with fresh index
-//! errors, labelled `cw` and `ccw` as in seed 000 §2.2.
+//! errors, labelled `cw` and `ccw` as in Wu et al. 2015 §2.2.
 
 use crate::error::{Error, Result};
 use crate::models::AccelerometerModel;

@@ -1,4 +1,4 @@
-//! Seed 001 (centrifuge cross-coupling, He & Yin 2017) reproduced: the ECM
+//! He & Yin 2017 (centrifuge cross-coupling) reproduced: the ECM
 //! offset and alignment error from Table 1, Δc2 of Tables 3–4 (eq. 8) and
 //! K_ip of Table 5 (eq. 3). The paper's coefficients are in
 //! (m/s²)/(m/s²)²; the algebra is unit-free, so they are used as printed.
@@ -27,7 +27,7 @@ fn table1_ecm_offset() {
 
 /// Table 1 → Δφ ≈ 4.49×10⁻³ rad at φ0 = 45°. The paper's polarity-+
 /// formula `atan(r sinφ0/(R − r cosφ0))` is, with the sign fixed by the
-/// geometry (methods.md §2), the polarity − one: 4.49×10⁻³ (±0.005×10⁻³);
+/// geometry (docs/src/centrifuge.md), the polarity − one: 4.49×10⁻³ (±0.005×10⁻³);
 /// polarity + (`R + r cosφ0`) gives 4.45×10⁻³ with the opposite sign.
 #[test]
 fn table1_alignment_error_at_45_degrees() {

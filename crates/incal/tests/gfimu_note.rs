@@ -1,7 +1,7 @@
-//! Seed 004 (six-accelerometer gyro-free unit), methods.md §4.
+//! The GFIMU note (six-accelerometer gyro-free unit), docs/src/gfimu.md.
 //!
 //! The paper publishes no numerical tables (its mathematics was lost in text
-//! extraction and methods.md §4 reconstructs it), so "the paper's numbers"
+//! extraction and docs/src/gfimu.md reconstructs it), so "the paper's numbers"
 //! here are its closed-form six-position formulas: the least-squares
 //! calibration must reproduce them exactly (to rounding, 1e-12 relative)
 //! on the same data.
@@ -45,7 +45,7 @@ const SENSING: [usize; 6] = [2, 2, 0, 0, 1, 1];
 /// paper's `K0 = mean of (E1+E2)/2, (E3+E4)/2, (E5+E6)/2`,
 /// `Ks = [(E1−E2), (E3−E4), (E5−E6)]/2g`, the paper's k1 = Ks along the
 /// sensing axis, and its cross terms k2, k3 averaged over the position and
-/// the opposite position (seed 004, formulas for accelerometers a–f).
+/// the opposite position (GFIMU note, formulas for accelerometers a–f).
 #[test]
 fn closed_forms_agree_with_least_squares_on_noisy_data() {
     let g = Geometry::paper(0.1).unwrap();

@@ -1,6 +1,6 @@
-//! Seed 003 (misalignment separation) reproduced: Table 1 (gyro on a rate
+//! Li et al. 2012 (misalignment separation) reproduced: Table 1 (gyro on a rate
 //! table, three rates) and Table 2 (accelerometer on a vertical face, three
-//! runs), by least squares on the linearised models of methods.md §3.
+//! runs), by least squares on the linearised models of docs/src/misalignment.md.
 //!
 //! Tolerance: the paper prints 0.1″; every value must round to the printed
 //! figure, |ours − printed| ≤ 0.05″ (stricter than the 0.1″).
@@ -13,7 +13,7 @@ use incal::procedures::misalign::plan::predict_gyro;
 use incal::units::rad_to_arcsec;
 use incal::Error;
 
-/// Seed 003 Table 1: V_n(+ω), V_n(−ω) for the five configurations
+/// Li et al. 2012 Table 1: V_n(+ω), V_n(−ω) for the five configurations
 /// (α, β) = (0,0), (0,180°), (180°,180°), (90°,180°), (0,90°), kI = −2.9222
 /// V/(°/s); then the printed Δθy0, Δθx0, Δθy1, Δθy2, Δθz2, γ (″).
 /// One Table 1 row: rate (°/s), (V+, V−) per configuration, printed angles.
@@ -111,7 +111,7 @@ fn table1_gyro_all_rates() {
 }
 
 /// The least-squares estimates equal the paper's closed forms
-/// (methods.md §3, corrected Δθz2 line) to rounding.
+/// (docs/src/misalignment.md, corrected Δθz2 line) to rounding.
 #[test]
 fn table1_least_squares_equals_closed_forms() {
     for (k, &(w, v, _)) in TABLE1.iter().enumerate() {
@@ -171,7 +171,7 @@ fn table1_all_rates_per_config_bias() {
     }
 }
 
-/// Seed 003 Table 2: V(0), V(π), V(π/2), V(3π/2) per run, kI = 1.299 V/g,
+/// Li et al. 2012 Table 2: V(0), V(π), V(π/2), V(3π/2) per run, kI = 1.299 V/g,
 /// then the printed Δθy2, Δθz2, γ (″).
 const TABLE2: [([f64; 4], [f64; 3]); 3] = [
     (
@@ -215,7 +215,7 @@ fn table2_accel_all_runs() {
                 "{name} = {ours:.3}″, Table 2 prints {p}″"
             );
         }
-        // Closed forms of seed 003 eq. 10–13.
+        // Closed forms of Li et al. 2012 eq. 10–13.
         let y2 = (v[1] - v[0]) / (2.0 * 1.299);
         let z2 = (v[2] - v[3]) / (2.0 * 1.299);
         assert!((r.angles.value("dtheta_y2").unwrap() - y2).abs() < 1e-15);

@@ -1,5 +1,5 @@
-//! Seed 000 (small-angle 12-point tumble) reproduced: Table 3 (step vs
-//! range) and the predicted uncertainties of methods.md §1.
+//! Wu et al. 2015 (small-angle 12-point tumble) reproduced: Table 3 (step vs
+//! range) and the predicted uncertainties of docs/src/tumble.md.
 
 use incal::models::{AccelerometerModel, Term};
 use incal::procedures::tumble::plan::{predict, TumblePlan};
@@ -7,7 +7,7 @@ use incal::procedures::tumble::{calibrate, default_terms, TumbleOptions};
 use incal::rigs::Mount;
 use incal::sim::tumble::{simulate, TumbleSim};
 
-/// Seed 000 Table 3: step a → largest input (g, three decimals) and the
+/// Wu et al. 2015 Table 3: step a → largest input (g, three decimals) and the
 /// range it serves. The 25° row is not a small-angle plan (5a > 90°) and the
 /// 30° row is the GJB plan.
 #[test]
@@ -37,7 +37,7 @@ fn table3_step_versus_range() {
     let gjb = TumblePlan::for_range(1.0, 1.0).unwrap();
     assert_eq!(gjb.step_deg, 30.0);
     assert_eq!(format!("{:.3}", gjb.max_input_g()), "1.000");
-    // Seed 000 §2.2's listing for a = 2°.
+    // Wu et al. 2015 §2.2's listing for a = 2°.
     assert_eq!(
         TumblePlan::small_angle(2.0).unwrap().angles_deg,
         vec![0.0, 2.0, 4.0, 6.0, 8.0, 10.0, 180.0, 350.0, 352.0, 354.0, 356.0, 358.0]
@@ -51,7 +51,7 @@ fn rounds_to(x: f64, figure: f64, sig: i32) -> bool {
     (x - figure).abs() <= 0.5 * unit * (1.0 + 1e-9)
 }
 
-/// methods.md §1: K1 = 10, 12 points, σ = 1e-7 per position. The digest
+/// docs/src/tumble.md: K1 = 10, 12 points, σ = 1e-7 per position. The digest
 /// gives σ(K3), σ(Kip) to two significant figures (5×10⁻⁵ to one); the
 /// prediction must round to every figure. Three of them are rounded by more
 /// than 2 % (1.557e-3 → 1.6e-3, 1.2499e-5 → 1.2e-5, and 1.633e-8 → 1.6e-8,
@@ -125,12 +125,12 @@ fn gjb_prediction_is_the_dft() {
     assert!((p.u("K1").unwrap() - 1e-7 * (10.0f64 / 6.0).sqrt()).abs() < 1e-18);
 }
 
-/// Seed 000 Table 1 setting (truth of §2.1 with δo = 3e-3 rad, one sample
+/// Wu et al. 2015 Table 1 setting (truth of §2.1 with δo = 3e-3 rad, one sample
 /// per position, σ = 1e-7): every plan recovers the truth within a few of
 /// its own reported uncertainties, and δo ≈ 618.8″ as the paper prints.
 #[test]
 fn table1_setting_recovers_truth() {
-    let truth = AccelerometerModel::seed000();
+    let truth = AccelerometerModel::wu2015();
     for plan in [
         TumblePlan::small_angle(2.0).unwrap(),
         TumblePlan::small_angle(8.0).unwrap(),
@@ -172,9 +172,9 @@ fn table1_setting_recovers_truth() {
     }
 }
 
-/// Seed 000's own route, computed independently: the Fourier normal
+/// Wu et al. 2015's own route, computed independently: the Fourier normal
 /// equations (eq. 9–10) for A0, A1, A2, B1, B2, B3 solved by LU, then
-/// eq. 6 (pendulum) / eq. 12 (gate) with methods.md's K1 factor restored:
+/// eq. 6 (pendulum) / eq. 12 (gate) with the K1 factor (docs/src/tumble.md) restored:
 /// K1 = B1 + 3B3, K0 = (A0 + A2)/K1, K2 = −2A2/K1, K3 = −4B3/K1,
 /// δ = A1/K1, Kip (Kio) = 2B2/K1. The core's exact fit must agree on
 /// every plan, GJB and small-angle alike.
@@ -184,7 +184,7 @@ fn fourier_route_of_the_paper_agrees_with_the_core() {
     let truth = AccelerometerModel {
         delta_p_rad: -1.5e-3,
         k_io: 4e-7,
-        ..AccelerometerModel::seed000()
+        ..AccelerometerModel::wu2015()
     };
     for mount in [Mount::Pendulum, Mount::Gate] {
         for plan in [
