@@ -112,7 +112,7 @@ pub fn input_file(role: &str, path: &str, bytes_sha256: String, rows: Option<usi
 }
 
 pub use crate::io::write_text;
-pub use incal_report::format::{dof_text, sig};
+pub use incal_report::format::{dof_text, measured, shown_name, sig};
 pub use incal_report::text::{render, render_plan, render_table, table};
 
 /// Pretty JSON of any serializable value, with a final newline.

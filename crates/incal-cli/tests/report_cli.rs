@@ -166,8 +166,8 @@ fn every_procedure_gets_a_complete_self_contained_report() {
 
         // Every coefficient, in order, with a verdict column.
         let names: Vec<String> = page
-            .select(&sel("table.coefficients tbody td:first-child"))
-            .map(|c| c.text().collect())
+            .select(&sel("table.coefficients tbody td:first-child span"))
+            .map(|c| c.value().attr("data-name").unwrap_or_default().to_string())
             .collect();
         let typed = incal::document::ResultDocument::from_json(
             &std::fs::read_to_string(dir.join(&json)).unwrap(),

@@ -50,6 +50,103 @@ pub fn trimmed(x: f64, digits: usize) -> String {
     }
 }
 
+/// The decimal exponent of the last digit shown for a standard
+/// uncertainty `u` with two significant digits (GUM 7.2.6): `u = 0.0141`
+/// → −3. `None` when `u` is not a positive finite number.
+fn last_place(u: f64) -> Option<i32> {
+    if !(u.is_finite() && u > 0.0) {
+        return None;
+    }
+    // Rounding may carry into a new digit (0.0996 → 0.10): recompute.
+    let e = u.log10().floor() as i32;
+    let rounded = round_at(u, e - 1);
+    Some(rounded.log10().floor() as i32 - 1)
+}
+
+/// `x` rounded to a multiple of `10^place`.
+fn round_at(x: f64, place: i32) -> f64 {
+    if place >= 0 {
+        let f = 10f64.powi(place);
+        (x / f).round() * f
+    } else {
+        let f = 10f64.powi(-place);
+        (x * f).round() / f
+    }
+}
+
+/// `x` written with its last digit at `10^place`: plain while that fits
+/// in a readable width, else scientific with the exponent of `x` (or of
+/// the last digit's leading place when `x` is smaller).
+fn at_place(x: f64, place: i32) -> String {
+    if !x.is_finite() {
+        return "-".into();
+    }
+    let r = round_at(x, place);
+    let e = if r == 0.0 {
+        place
+    } else {
+        r.abs().log10().floor() as i32
+    };
+    if (-4..7).contains(&e) && place >= -12 {
+        let dec = (-place).max(0) as usize;
+        return format!("{r:.dec$}");
+    }
+    let e = e.max(place);
+    let dec = (e - place).max(0) as usize;
+    format!("{:.dec$}e{e}", r / 10f64.powi(e))
+}
+
+/// A measured value for people (GUM 7.2.6): the standard uncertainty `u`
+/// with two significant digits, the value to the same decimal place, the
+/// expanded uncertainty `u95` with two significant digits: `(value, u,
+/// U95)`. The value shown then differs from `value` by at most half a
+/// unit of u's second digit, under 5 % of u (so under a tenth of U95 for
+/// any k95 ≥ 1). Without a positive finite `u` (a term fixed by
+/// construction), the value has seven significant digits.
+pub fn measured(value: f64, u: f64, u95: f64) -> (String, String, String) {
+    let two = |x: f64| match last_place(x) {
+        Some(p) => at_place(x, p),
+        None if x == 0.0 => "0".into(),
+        None => sig(x, 2),
+    };
+    let v = match last_place(u) {
+        Some(p) => at_place(value, p),
+        None => sig(value, 7),
+    };
+    (v, two(u), two(u95))
+}
+
+/// A coefficient's name as shown beside the unit `shown`: a trailing unit
+/// suffix (`tilt_rad`, `R_plus_m`) is dropped when the unit shown is not
+/// that unit, so a name never contradicts its column.
+pub fn shown_name(name: &str, shown: &str) -> String {
+    const SUFFIXES: [(&str, &str); 9] = [
+        ("_rad", "rad"),
+        ("_deg", "deg"),
+        ("_m", "m"),
+        ("_s", "s"),
+        ("_hz", "Hz"),
+        ("_g", "g"),
+        ("_m_s2", "m/s^2"),
+        ("_deg_s", "deg/s"),
+        ("_rad_s", "rad/s"),
+    ];
+    // Longest suffix first: `_rad_s` before `_s`.
+    let mut hit: Option<(&str, &str)> = None;
+    for (suf, unit) in SUFFIXES {
+        if name.len() > suf.len()
+            && name.ends_with(suf)
+            && hit.is_none_or(|(h, _)| suf.len() > h.len())
+        {
+            hit = Some((suf, unit));
+        }
+    }
+    match hit {
+        Some((suf, unit)) if unit != shown => name[..name.len() - suf.len()].to_string(),
+        _ => name.to_string(),
+    }
+}
+
 /// Degrees of freedom for people: whole numbers from 10 up, one decimal
 /// below unless whole, `inf` for a known variance (`None`).
 pub fn dof_text(dof: Option<f64>) -> String {
@@ -128,5 +225,41 @@ mod tests {
         assert_eq!(utc_text(951_782_400), "2000-02-29 00:00 UTC");
         assert_eq!(utc_text(1_767_225_600 + 3_723), "2026-01-01 01:02 UTC");
         assert_eq!(utc_text(-86_400), "1969-12-31 00:00 UTC");
+    }
+
+    #[test]
+    fn digits_follow_the_uncertainty() {
+        // GUM 7.2.6: u with two significant digits, the value to its place.
+        assert_eq!(
+            measured(10.000_000_12, 3.63e-7, 7.2e-7),
+            ("10.00000012".into(), "3.6e-7".into(), "7.2e-7".into())
+        );
+        assert_eq!(
+            measured(7999.98612, 0.0141, 0.0279),
+            ("7999.986".into(), "0.014".into(), "0.028".into())
+        );
+        // Rounding that carries into a new digit keeps two digits.
+        assert_eq!(measured(1.23456, 0.0996, 0.197).1, "0.10");
+        assert_eq!(measured(1.23456, 0.0996, 0.197).0, "1.23");
+        // A value smaller than its uncertainty.
+        assert_eq!(measured(0.000_12, 0.0031, 0.0062).0, "0.0001");
+        // Large and tiny magnitudes go scientific, with the value's exponent.
+        assert_eq!(measured(1.2344e-9, 3.1e-11, 6.2e-11).0, "1.234e-9");
+        assert_eq!(measured(123_456_789.0, 1234.0, 2468.0).0, "1.234568e8");
+        // No uncertainty (fixed by construction): seven digits.
+        assert_eq!(
+            measured(1.5, 0.0, 0.0),
+            ("1.500000".into(), "0".into(), "0".into())
+        );
+    }
+
+    #[test]
+    fn names_drop_a_unit_suffix_that_contradicts_the_unit_shown() {
+        assert_eq!(shown_name("tilt_rad", "arcsec"), "tilt");
+        assert_eq!(shown_name("R_plus_m", "mm"), "R_plus");
+        assert_eq!(shown_name("R_plus_m", "m"), "R_plus_m");
+        assert_eq!(shown_name("bias_rad_s", "deg/s"), "bias");
+        assert_eq!(shown_name("K1", "output/g"), "K1");
+        assert_eq!(shown_name("_m", "mm"), "_m");
     }
 }

@@ -35,7 +35,7 @@ use incal::document::{Cell, ResultDocument, Table};
 use incal::units::Unit;
 use serde_json::Value;
 
-use format::{dof_text, esc, sig, trimmed};
+use format::{dof_text, esc, measured, shown_name, sig, trimmed};
 
 /// One stored calibration of an instrument: a point of a history plot.
 #[derive(Debug, Clone, PartialEq)]
@@ -391,6 +391,10 @@ fn header_html(doc: &ResultDocument, date: &str, record: Option<&RecordStamp>) -
                         .map(|x| x.as_str().map_or_else(|| x.to_string(), str::to_string))
                         .collect::<Vec<_>>()
                         .join(", "),
+                    // Options are typed numbers: no 17-digit float noise.
+                    Value::Number(n) if n.is_f64() => {
+                        n.as_f64().map_or(n.to_string(), |x| trimmed(x, 10))
+                    }
                     other => other.to_string(),
                 };
                 vec![text_cell(k), text_cell(&text)]
@@ -419,11 +423,19 @@ fn coefficients_html(doc: &ResultDocument) -> String {
         .zip(&judged)
         .map(|((name, c), j)| {
             let (scale, label) = c.unit.engineering_for(c.value);
+            let (value, u, u95) = measured(c.value * scale, c.u * scale, c.u95 * scale);
             let mut row = vec![
-                (false, format!("<span class=\"name\">{}</span>", esc(name))),
-                num_cell(sig(c.value * scale, 7)),
-                num_cell(sig(c.u * scale, 3)),
-                num_cell(sig(c.u95 * scale, 3)),
+                (
+                    false,
+                    format!(
+                        "<span class=\"name\" data-name=\"{}\">{}</span>",
+                        esc(name),
+                        esc(&shown_name(name, label))
+                    ),
+                ),
+                num_cell(value),
+                num_cell(u),
+                num_cell(u95),
                 num_cell(dof_text(c.dof)),
                 num_cell(format!("{:.3}", c.k95)),
                 text_cell(label),
@@ -629,8 +641,9 @@ pub fn render_html_with(
                     vec![
                         num_cell(p.id.to_string()),
                         text_cell(&p.created_utc),
-                        num_cell(sig(p.value * scale, 7)),
-                        num_cell(sig(p.u95 * scale, 3)),
+                        // Only U95 is kept here: the value to its second digit.
+                        num_cell(measured(p.value * scale, p.u95 * scale, 0.0).0),
+                        num_cell(measured(0.0, p.u95 * scale, 0.0).1),
                     ]
                 })
                 .collect();

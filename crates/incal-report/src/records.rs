@@ -7,7 +7,7 @@
 use incal_records::{History, RecordSummary, StoredRecord, Verified};
 use serde_json::{json, Value};
 
-use crate::format::{dof_text, sig};
+use crate::format::{dof_text, measured, sig};
 use crate::text::table;
 
 /// `{"records": [{id, serial, procedure, created_utc, sha256, operator,
@@ -182,12 +182,13 @@ pub fn history_text(h: &History) -> String {
         .points
         .iter()
         .map(|p| {
+            let (value, u, u95) = measured(p.value * scale, p.u * scale, p.u95 * scale);
             vec![
                 p.id.to_string(),
                 p.created_utc.clone(),
-                sig(p.value * scale, 7),
-                sig(p.u * scale, 3),
-                sig(p.u95 * scale, 3),
+                value,
+                u,
+                u95,
                 dof(p.dof),
                 label.to_string(),
             ]

@@ -7,7 +7,7 @@
 use incal::document::plan::PlanDocument;
 use incal::document::{Cell, ResultDocument, Table};
 
-use crate::format::{dof_text, sig, trimmed};
+use crate::format::{dof_text, measured, shown_name, sig, trimmed};
 
 /// The readable report of any result document: title, instrument and
 /// inputs, coefficients (value, u, U95, dof in engineering units), fits,
@@ -42,11 +42,12 @@ pub fn render(doc: &ResultDocument) -> String {
         .iter()
         .map(|(name, c)| {
             let (scale, label) = c.unit.engineering_for(c.value);
+            let (value, u, u95) = measured(c.value * scale, c.u * scale, c.u95 * scale);
             let mut row = vec![
-                name.to_string(),
-                sig(c.value * scale, 7),
-                sig(c.u * scale, 3),
-                sig(c.u95 * scale, 3),
+                shown_name(name, label),
+                value,
+                u,
+                u95,
                 dof_text(c.dof),
                 format!("{:.3}", c.k95),
                 label.to_string(),
@@ -286,11 +287,16 @@ pub fn render_comparison(c: &incal::document::compare::DocumentComparison) -> St
             let unit = incal::units::Unit::parse(r["unit"].as_str().unwrap_or(""));
             let (scale, label) = unit.engineering_for(x.abs().max(y.abs()));
             let en = f(&r["En"]);
+            let (ua, ub) = (
+                f(&r["u_a"]).unwrap_or(f64::NAN),
+                f(&r["u_b"]).unwrap_or(f64::NAN),
+            );
+            let d = f(&r["difference"]).unwrap_or(f64::NAN);
             rows.push(vec![
-                name.to_string(),
-                sig(x * scale, 7),
-                sig(y * scale, 7),
-                sig(f(&r["difference"]).unwrap_or(f64::NAN) * scale, 3),
+                shown_name(name, label),
+                measured(x * scale, ua * scale, 0.0).0,
+                measured(y * scale, ub * scale, 0.0).0,
+                measured(d * scale, ua.hypot(ub) * scale, 0.0).0,
                 f(&r["relative_per_mille"]).map_or("-".into(), |v| sig(v, 3)),
                 en.map_or("-".into(), |e| sig(e, 3)),
                 match en {

@@ -160,11 +160,18 @@ fn every_section_table_and_plot_is_present() {
         0,
         "no history given"
     );
+    // Every coefficient by its JSON name; shown without a unit suffix that
+    // contradicts the unit column (misalignment_rad is shown in arcsec).
     let names: Vec<String> = parsed
+        .select(&sel("table.coefficients tbody tr td:first-child span"))
+        .map(|c| c.value().attr("data-name").unwrap().to_string())
+        .collect();
+    assert_eq!(names, doc.coefficients.names());
+    let shown: Vec<String> = parsed
         .select(&sel("table.coefficients tbody tr td:first-child"))
         .map(|c| c.text().collect())
         .collect();
-    assert_eq!(names, doc.coefficients.names());
+    assert_eq!(shown, ["a.K0", "b.K0", "a.misalignment", "b.misalignment"]);
     assert_eq!(
         parsed
             .select(&sel("div.doc-table[data-table=\"positions\"] table"))
@@ -284,7 +291,8 @@ fn history_plots_show_every_calibration_and_the_limits() {
         .map(|r| r.text().collect::<Vec<_>>().join("|"))
         .collect();
     assert_eq!(rows.len(), 6);
-    assert_eq!(rows[0], "10|2026-01-01T00:00:00Z|8000.000|0.500");
+    // The value to the second digit of its U95 (GUM 7.2.6).
+    assert_eq!(rows[0], "10|2026-01-01T00:00:00Z|8000.00|0.50");
     assert!(html.contains("History of K&lt;2&gt;"));
 }
 
@@ -338,4 +346,69 @@ fn verdicts_show_in_the_coefficient_table_and_the_header() {
             .count(),
         2
     );
+}
+
+mod digits {
+    //! GUM 7.2.6 on every display: each value shown in the text and HTML
+    //! coefficient tables differs from the JSON value (in the unit shown)
+    //! by less than a tenth of the U95 shown beside it.
+    use super::*;
+    use proptest::prelude::*;
+
+    /// `(name, value, U95)` parsed from the coefficient table of the text
+    /// report.
+    fn text_rows(text: &str) -> Vec<(String, f64, f64)> {
+        text.lines()
+            .skip_while(|l| !l.starts_with("name "))
+            .skip(2)
+            .take_while(|l| !l.starts_with("u: "))
+            .map(|l| {
+                let c: Vec<&str> = l.split_whitespace().collect();
+                (
+                    c[0].to_string(),
+                    c[1].parse().unwrap(),
+                    c[3].parse().unwrap(),
+                )
+            })
+            .collect()
+    }
+
+    fn html_rows(html: &str) -> Vec<(String, f64, f64)> {
+        let d = Html::parse_document(html);
+        d.select(&sel("table.coefficients tbody tr"))
+            .map(|tr| {
+                let c: Vec<String> = tr.select(&sel("td")).map(|t| t.text().collect()).collect();
+                (c[0].clone(), c[1].parse().unwrap(), c[3].parse().unwrap())
+            })
+            .collect()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+        #[test]
+        fn every_value_shown_is_within_a_tenth_of_its_u95(
+            mant in -9.99f64..9.99, exp in -12i32..7, rel_u in -9.0f64..1.0,
+            dof in 2.0f64..500.0, unit in 0usize..4,
+        ) {
+            let value = mant * 10f64.powi(exp);
+            let u = (value.abs().max(1e-300) * 10f64.powf(rel_u)).max(1e-300);
+            let unit = [Unit::G, Unit::Rad, Unit::M, Unit::Output][unit].clone();
+            let mut b = DocumentBuilder::new(Procedure::Tumble, "digits".to_string());
+            let c = Coefficient::new("X_rad", value, u, unit.clone(), dof).unwrap();
+            let (scale, _) = unit.engineering_for(value);
+            let (v, u95) = (c.value * scale, c.u95 * scale);
+            b.coefficient("X_rad", c).unwrap();
+            let doc = b.finish();
+            let text = incal_report::text::render(&doc);
+            let html = fixed(&doc, &[]);
+            for (what, rows) in [("text", text_rows(&text)), ("html", html_rows(&html))] {
+                prop_assert_eq!(rows.len(), 1, "{}: {}", what, text);
+                let (_, shown, shown_u95) = &rows[0];
+                prop_assert!(
+                    (shown - v).abs() < 0.1 * shown_u95,
+                    "{}: shown {} for {} with U95 {} (shown {})", what, shown, v, u95, shown_u95
+                );
+            }
+        }
+    }
 }

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use incal::sim::demo::{sections, DemoCase};
 
 use crate::error::{core, CliResult};
-use crate::output::{dof_text, render_table, sig, table, write_text};
+use crate::output::{dof_text, measured, render_table, shown_name, sig, table, write_text};
 
 /// Options of `incal demo`.
 #[derive(clap::Args, Debug)]
@@ -36,11 +36,13 @@ fn truth_table(c: &DemoCase) -> String {
         .map(|&(name, k)| {
             let (scale, label) = k.unit.engineering_for(k.value);
             let truth = c.truth.get(name).copied();
+            let (value, _, u95) = measured(k.value * scale, k.u * scale, k.u95 * scale);
             vec![
-                name.to_string(),
-                sig(k.value * scale, 7),
-                truth.map_or("-".into(), |t| sig(t * scale, 7)),
-                sig(k.u95 * scale, 3),
+                shown_name(name, label),
+                value,
+                // The truth to the estimate's decimal place.
+                truth.map_or("-".into(), |t| measured(t * scale, k.u * scale, 0.0).0),
+                u95,
                 dof_text(k.dof),
                 truth.map_or("-".into(), |t| {
                     if k.u95 > 0.0 {
