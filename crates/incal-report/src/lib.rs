@@ -26,6 +26,7 @@
 //! Every text from the document is escaped. The renderer is pure: no file,
 //! no network (it reads the clock only for the default date).
 
+pub mod certificate;
 pub mod format;
 pub mod plots;
 pub mod records;
@@ -81,6 +82,9 @@ pub struct RenderOptions {
     pub date: Option<String>,
     /// The records store the report was checked against, if any.
     pub record: Option<RecordStamp>,
+    /// Render as a calibration certificate (laboratory, number, dates,
+    /// traceability, decision rule, authorisation; [`certificate`]).
+    pub certificate: Option<certificate::Certificate>,
 }
 
 /// Where the reported document is kept: its record in a store, and the
@@ -346,7 +350,15 @@ fn header_html(doc: &ResultDocument, date: &str, record: Option<&RecordStamp>) -
         &["item".to_string(), "value".to_string()],
         &rows,
     ));
-    s.push_str("</div>\n<h3>Inputs</h3>\n");
+    s.push_str("</div>\n");
+    s.push_str(&inputs_options_html(doc));
+    s.push_str("</header>\n");
+    s
+}
+
+/// The input files (path, SHA-256, rows) and the options of a result.
+fn inputs_options_html(doc: &ResultDocument) -> String {
+    let mut s = String::from("<h3>Inputs</h3>\n");
     if doc.inputs.is_empty() {
         s.push_str("<p class=\"note\">No input file recorded.</p>\n");
     } else {
@@ -406,7 +418,6 @@ fn header_html(doc: &ResultDocument, date: &str, record: Option<&RecordStamp>) -
             &rows,
         ));
     }
-    s.push_str("</header>\n");
     s
 }
 
@@ -594,12 +605,51 @@ pub fn render_html_with(
         .serial
         .as_deref()
         .map_or(String::new(), |x| format!(" {x}"));
+    let cert = opts.certificate.as_ref();
+    let css = match cert {
+        Some(c) => format!("{CSS}{}", certificate::print_css(&c.number)),
+        None => CSS.to_string(),
+    };
+    let title = match cert {
+        Some(c) => format!("Calibration certificate {}{who}: {}", c.number, doc.title),
+        None => format!("incal {}{who}: {}", doc.procedure, doc.title),
+    };
     s.push_str(&format!(
-        "<title>{}</title>\n<style>{CSS}</style>\n</head>\n<body>\n",
-        esc(&format!("incal {}{who}: {}", doc.procedure, doc.title))
+        "<title>{}</title>\n<style>{css}</style>\n</head>\n<body>\n",
+        esc(&title)
     ));
-    s.push_str(&header_html(doc, &date, opts.record.as_ref()));
-    s.push_str(&coefficients_html(doc));
+    match cert {
+        Some(c) => {
+            let record = opts.record.as_ref().map(|r| {
+                let held = match r.id {
+                    Some(id) => format!("record {id} in {}", esc(&r.store)),
+                    None => format!("not stored in {}", esc(&r.store)),
+                };
+                format!(
+                    "{held}; chain head <span class=\"hash\">{}</span> ({} records, checked whole)",
+                    esc(&r.head),
+                    r.records
+                )
+            });
+            s.push_str(&certificate::front_html(
+                doc,
+                c,
+                &coefficients_html(doc),
+                record,
+            ));
+            s.push_str("<section id=\"annex-inputs\" class=\"annex-start\">\n<h2>Annex A: inputs and options</h2>\n");
+            s.push_str(&inputs_options_html(doc));
+            s.push_str(&format!(
+                "<p class=\"note\">Computed by incal {} ({}).</p>\n</section>\n",
+                esc(&doc.incal_version),
+                esc(&doc.schema)
+            ));
+        }
+        None => {
+            s.push_str(&header_html(doc, &date, opts.record.as_ref()));
+            s.push_str(&coefficients_html(doc));
+        }
+    }
     s.push_str(&fits_html(doc));
     s.push_str(&notes_html(doc));
 
@@ -665,6 +715,12 @@ pub fn render_html_with(
         s.push_str(&format!(
             "<section id=\"history\">\n<h2>History of this instrument</h2>\n<p class=\"note\">No history: {} holds fewer than two calibrations of this instrument by this procedure with the limited coefficients.</p>\n</section>\n",
             esc(&r.store)
+        ));
+    }
+    if let Some(c) = cert {
+        s.push_str(&format!(
+            "<p id=\"end-of-certificate\">End of certificate {}</p>\n",
+            esc(&c.number)
         ));
     }
     s.push_str(&format!(

@@ -108,6 +108,7 @@ fn fixed(doc: &ResultDocument, history: &[HistorySeries]) -> String {
         &RenderOptions {
             date: Some("2026-01-02 03:04 UTC".into()),
             record: None,
+            certificate: None,
         },
     )
     .unwrap()

@@ -29,6 +29,21 @@ pub struct Args {
     /// With --limits: exit 3 after writing the report when the overall verdict is fail, conditional-fail or not-determined (fail), or any but pass (conditional).
     #[arg(long, value_enum, value_name = "WHEN", requires = "limits")]
     pub fail_on: Option<crate::options::FailOn>,
+    /// Laboratory profile (TOML: [lab] name, address, accreditation; [[signatory]] name, role; [[standard]] rig, id, certificate, due): write a calibration certificate.
+    #[arg(long, value_name = "FILE")]
+    pub lab: Option<PathBuf>,
+    /// With --lab: the customer named on the certificate.
+    #[arg(long, value_name = "TEXT", requires = "lab")]
+    pub customer: Option<String>,
+    /// With --lab: the date of calibration, YYYY-MM-DD (default: the date the result was recorded in the store named by --db).
+    #[arg(long, value_name = "YYYY-MM-DD", requires = "lab")]
+    pub date: Option<String>,
+    /// With --lab: the environmental conditions during the calibration (e.g. "23.0 +- 0.5 degC, 45 % RH").
+    #[arg(long, value_name = "TEXT", requires = "lab")]
+    pub environment: Option<String>,
+    /// Also print the HTML to PDF next to --output (REPORT.pdf) with headless Chromium (it must be installed).
+    #[arg(long, requires = "output")]
+    pub pdf: bool,
 }
 
 /// `incal report`.
@@ -37,6 +52,27 @@ pub fn run(a: &Args) -> CliResult<()> {
     if let Some(l) = &a.limits {
         apply_limits(&mut doc, l)?;
     }
+    let profile = match &a.lab {
+        Some(p) => {
+            let (name, text) = crate::io::read_text(p)?;
+            Some(
+                incal_report::certificate::LabProfile::parse(&text)
+                    .map_err(|e| CliError::Input(format!("{name}: {e}")))?,
+            )
+        }
+        None => None,
+    };
+    if let Some(d) = &a.date {
+        if !incal_report::certificate::is_date(d) {
+            return Err(CliError::Input(format!(
+                "--date: '{}' is not a date YYYY-MM-DD",
+                incal_io::clip(d)
+            )));
+        }
+    }
+    // What the store says about this very document: its record, when it
+    // was stored and what it corrects.
+    let mut stored: Option<incal_records::StoredRecord> = None;
     let (history, record) = match store(a, &doc)? {
         Some((store, chain)) => {
             let serial = doc.instrument.serial.as_deref().unwrap_or_default();
@@ -44,6 +80,13 @@ pub fn run(a: &Args) -> CliResult<()> {
                 .find(serial, &text)
                 .map_err(|e| CliError::Failure(anyhow::anyhow!("{e}")))?
                 .map(|(id, _)| id);
+            if let Some(id) = id {
+                stored = Some(
+                    store
+                        .show(id)
+                        .map_err(|e| CliError::Failure(anyhow::anyhow!("{e}")))?,
+                );
+            }
             let record = RecordStamp {
                 store: store.path().display().to_string(),
                 id,
@@ -54,11 +97,117 @@ pub fn run(a: &Args) -> CliResult<()> {
         }
         None => (Vec::new(), None),
     };
-    let opts = RenderOptions { date: None, record };
+    let certificate = profile.map(|profile| certificate(a, profile, &text, stored.as_ref()));
+    let opts = RenderOptions {
+        date: None,
+        record,
+        certificate,
+    };
     let html = incal_report::render_html_with(&doc, &history, &opts)
         .map_err(|e| CliError::Failure(anyhow::anyhow!("{e}")))?;
     write_text(a.output.as_deref(), &html)?;
+    if a.pdf {
+        if let Some(out) = &a.output {
+            print_pdf(out)?;
+        }
+    }
     crate::options::check_fail_on(&doc, a.fail_on)
+}
+
+/// The certificate's own data: its number (from the record id when the
+/// document is stored, else from the document's SHA-256, so the same
+/// result always gets the same number), the dates and what it replaces.
+fn certificate(
+    a: &Args,
+    profile: incal_report::certificate::LabProfile,
+    text: &str,
+    stored: Option<&incal_records::StoredRecord>,
+) -> incal_report::certificate::Certificate {
+    use sha2::{Digest, Sha256};
+    let prefix = profile.lab.certificate_prefix.clone().unwrap_or_default();
+    let number_of = |id: i64| format!("{prefix}{id:06}");
+    let number = match stored {
+        Some(r) => number_of(r.id),
+        None => {
+            let h = Sha256::digest(text.as_bytes());
+            let hex: String = h.iter().take(6).map(|b| format!("{b:02x}")).collect();
+            format!("{prefix}{}", hex.to_uppercase())
+        }
+    };
+    let (calibration_date, source) = match (&a.date, stored) {
+        (Some(d), _) => (Some(d.clone()), "as given".to_string()),
+        (None, Some(r)) => (
+            Some(r.created_utc.chars().take(10).collect()),
+            format!("the date record {} was stored", r.id),
+        ),
+        (None, None) => (None, String::new()),
+    };
+    let today: String = incal_report::format::now_utc_text()
+        .chars()
+        .take(10)
+        .collect();
+    incal_report::certificate::Certificate {
+        profile,
+        number,
+        customer: a.customer.clone(),
+        calibration_date,
+        calibration_date_source: source,
+        issue_date: today,
+        environment: a.environment.clone(),
+        replaces: stored
+            .and_then(|r| r.supersedes.as_ref())
+            .map(|s| (number_of(s.old_id), s.reason.clone())),
+    }
+}
+
+/// Print `html` (a file just written) to `html` with `.pdf`, through
+/// headless Chromium with the page margins of the print stylesheet.
+fn print_pdf(html: &std::path::Path) -> CliResult<()> {
+    let browser = ["chromium", "chromium-browser", "google-chrome"]
+        .into_iter()
+        .find(|b| {
+            std::process::Command::new(b)
+                .arg("--version")
+                .stdout(std::process::Stdio::null())
+                .stderr(std::process::Stdio::null())
+                .status()
+                .is_ok_and(|s| s.success())
+        })
+        .ok_or_else(|| {
+            CliError::Failure(anyhow::anyhow!(
+                "--pdf: headless Chromium is not installed (apt-get install chromium); the HTML was written"
+            ))
+        })?;
+    let abs = std::fs::canonicalize(html)
+        .map_err(|e| CliError::Failure(anyhow::anyhow!("{}: {e}", html.display())))?;
+    let pdf = abs.with_extension("pdf");
+    let profile = std::env::temp_dir().join(format!("incal-chromium-{}", std::process::id()));
+    let status = std::process::Command::new(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--disable-extensions",
+            "--no-pdf-header-footer",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .arg(format!("--print-to-pdf={}", pdf.display()))
+        .arg(format!("file://{}", abs.display()))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status();
+    let _ = std::fs::remove_dir_all(&profile);
+    match status {
+        Ok(s) if s.success() && pdf.metadata().is_ok_and(|m| m.len() > 0) => Ok(()),
+        _ => Err(CliError::Failure(anyhow::anyhow!(
+            "--pdf: {browser} printed no {}",
+            pdf.display()
+        ))),
+    }
 }
 
 /// The records store, checked whole, when the result has a serial and a
