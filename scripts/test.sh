@@ -3,7 +3,8 @@
 # from this checkout and installed in a virtualenv of its own
 # (target/py-venv), tested with pytest against the CLI built by the Rust
 # tests. Needs cargo, python3 (3.9 or later) with venv, and the PostgreSQL
-# 15 server binaries (installed here with apt-get when run as root); pip
+# 15 server binaries and, for the certificate PDF checks, chromium and
+# poppler-utils (installed here with apt-get when run as root); pip
 # fetches maturin, pytest, numpy, pandas, imucal and dask from PyPI.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,6 +20,21 @@ if [ ! -x "$pg_bin/postgres" ]; then
         echo "scripts/test.sh: no PostgreSQL server in $pg_bin: install postgresql-15 (or set INCAL_PG_BIN)" >&2
         exit 1
     fi
+fi
+
+# The certificate test prints every procedure's certificate to PDF with
+# headless Chromium and checks its pages (poppler's pdftotext, pdftoppm):
+# installed here when run as root; without them those checks are skipped
+# (said on stderr), with them a missing piece is a failure.
+if ! command -v chromium >/dev/null || ! command -v pdftoppm >/dev/null; then
+    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+        echo "== installing chromium and poppler-utils (certificate PDF checks)"
+        { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium poppler-utils >/dev/null; } \
+            || echo "scripts/test.sh: could not install chromium: certificate PDF checks skipped" >&2
+    fi
+fi
+if command -v chromium >/dev/null && command -v pdftoppm >/dev/null; then
+    export INCAL_REQUIRE_CHROMIUM=1
 fi
 
 echo "== Rust: cargo test --workspace --locked"

@@ -144,14 +144,30 @@ impl LabProfile {
                 None => msg,
             }
         })?;
-        // Lines of the tables, for the checks below: the n-th `[[name]]`.
-        let nth_line = |table: &str, n: usize| -> String {
+        // Where a key of the n-th `[[table]]` is (its own line, else the
+        // table's), for the checks below.
+        let nth_line = |table: &str, n: usize, key: &str| -> String {
             let head = format!("[[{table}]]");
-            text.lines()
+            let lines: Vec<&str> = text.lines().collect();
+            let Some(start) = lines
+                .iter()
                 .enumerate()
                 .filter(|(_, l)| l.trim_start().starts_with(&head))
                 .nth(n)
-                .map_or(String::new(), |(k, _)| format!("line {}: ", k + 1))
+                .map(|(k, _)| k)
+            else {
+                return String::new();
+            };
+            let at = lines[start + 1..]
+                .iter()
+                .take_while(|l| !l.trim_start().starts_with('['))
+                .position(|l| {
+                    l.trim_start()
+                        .strip_prefix(key)
+                        .is_some_and(|r| r.trim_start().starts_with('='))
+                })
+                .map_or(start, |k| start + 1 + k);
+            format!("line {}: ", at + 1)
         };
         if p.lab.name.trim().is_empty() {
             return Err("[lab] name: empty (the laboratory's name is on every certificate)".into());
@@ -169,27 +185,32 @@ impl LabProfile {
             if s.name.trim().is_empty() {
                 return Err(format!(
                     "{}[[signatory]] name: empty",
-                    nth_line("signatory", k)
+                    nth_line("signatory", k, "name")
                 ));
             }
         }
         for (k, s) in p.standard.iter().enumerate() {
-            let at = nth_line("standard", k);
+            let at = |key: &str| nth_line("standard", k, key);
             if !RIGS.contains(&s.rig.as_str()) {
                 return Err(format!(
-                    "{at}[[standard]] rig: '{}' is not a rig ({})",
+                    "{}[[standard]] rig: '{}' is not a rig ({})",
+                    at("rig"),
                     clip(&s.rig),
                     RIGS.join(", ")
                 ));
             }
             if !is_date(&s.due) {
                 return Err(format!(
-                    "{at}[[standard]] due: '{}' is not a date YYYY-MM-DD",
+                    "{}[[standard]] due: '{}' is not a date YYYY-MM-DD",
+                    at("due"),
                     clip(&s.due)
                 ));
             }
             if s.id.trim().is_empty() || s.certificate.trim().is_empty() {
-                return Err(format!("{at}[[standard]]: give its id and certificate"));
+                return Err(format!(
+                    "{}[[standard]]: give its id and certificate",
+                    at("id")
+                ));
             }
         }
         Ok(p)
@@ -516,12 +537,12 @@ due = "2027-03-31"
         assert_eq!(p.standard[0].rig, "dividing-head");
         let bad = LAB.replace("dividing-head", "dividing head");
         let e = LabProfile::parse(&bad).unwrap_err();
-        assert!(e.starts_with("line 8: [[standard]] rig:"), "{e}");
+        assert!(e.starts_with("line 9: [[standard]] rig:"), "{e}");
         let e = LabProfile::parse(&LAB.replace("2027-03-31", "2027-02-30")).unwrap_err();
-        assert!(e.contains("line 8") && e.contains("due"), "{e}");
+        assert!(e.starts_with("line 12: [[standard]] due:"), "{e}");
         let e = LabProfile::parse(&LAB.replace("role = \"Head\"", "role = \"Head\"\nrank = 1"))
             .unwrap_err();
-        assert!(e.starts_with("line 7:") && e.contains("rank"), "{e}");
+        assert!(e.starts_with("line 8:") && e.contains("rank"), "{e}");
         let e = LabProfile::parse(
             &LAB.replace("[[signatory]]\nname = \"Li Wei\"\nrole = \"Head\"\n", ""),
         )

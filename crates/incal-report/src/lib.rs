@@ -723,11 +723,13 @@ pub fn render_html_with(
             esc(&c.number)
         ));
     }
-    s.push_str(&format!(
-        "<footer>Written by incal-report {} from an {} document of incal {}. Self-contained: this file loads nothing from elsewhere.</footer>\n</body>\n</html>\n",
-        env!("CARGO_PKG_VERSION"),
-        esc(&doc.schema),
-        esc(&doc.incal_version)
-    ));
+    if cert.is_none() {
+        s.push_str(&format!(
+            "<footer>Written by incal-report {} from an {} document of incal {}. Self-contained: this file loads nothing from elsewhere.</footer>\n</body>\n</html>\n",
+            env!("CARGO_PKG_VERSION"),
+            esc(&doc.schema),
+            esc(&doc.incal_version)
+        ));
+    }
     Ok(s)
 }
