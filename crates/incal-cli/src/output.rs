@@ -62,8 +62,22 @@ impl ResultArgs {
     /// Put the instrument identity into `doc`, render it (JSON or text)
     /// and write it to `--output` or standard output.
     pub fn emit(&self, mut doc: ResultDocument) -> CliResult<()> {
-        doc.instrument.serial = self.serial.clone();
-        doc.instrument.model = self.model.clone();
+        // A chained result (centrifuge --from) already names its instrument:
+        // --serial may repeat it, never contradict it.
+        match (&doc.instrument.serial, &self.serial) {
+            (Some(had), Some(given)) if had != given => {
+                return Err(crate::error::CliError::Input(format!(
+                    "--serial {}: the chained result is of serial {} (a result of another instrument cannot be chained)",
+                    incal_io::clip(given),
+                    incal_io::clip(had)
+                )))
+            }
+            (_, Some(given)) => doc.instrument.serial = Some(given.clone()),
+            _ => {}
+        }
+        if self.model.is_some() {
+            doc.instrument.model = self.model.clone();
+        }
         for kv in &self.meta {
             let (k, v) = kv
                 .split_once('=')

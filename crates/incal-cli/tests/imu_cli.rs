@@ -28,6 +28,9 @@ fn ferraris_reproduces_imucal_with_its_keys() {
         &session,
         "--rate-hz",
         "204.8",
+        // imucal's g (incal's default is the standard 9.80665).
+        "--gravity-m-s2",
+        "9.81",
         "--json",
     ]));
     let want: serde_json::Value =
@@ -50,6 +53,23 @@ fn ferraris_reproduces_imucal_with_its_keys() {
     }
     assert_eq!(v["coefficients"]["K_a.xx"]["unit"], "output/(m/s^2)");
     assert_eq!(v["coefficients"]["K_g.xx"]["unit"], "output/(deg/s)");
+    // Issue 30: the off-diagonal elements of K_a and K_g are zero by the
+    // method's construction: not listed as coefficients with u = 0, said
+    // in a decision, kept (as 0) in the matrices imucal reads.
+    for name in ["K_a.xy", "K_a.zx", "K_g.yz", "K_g.xz"] {
+        assert!(v["coefficients"].get(name).is_none(), "{name}");
+    }
+    assert!(v["coefficients"]
+        .as_object()
+        .unwrap()
+        .values()
+        .all(|c| c["u"].as_f64().unwrap() > 0.0));
+    assert!(v["decisions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|d| d["code"] == "fixed-by-model"));
+    assert_eq!(v["K_a"][0][1], 0.0);
     assert!(
         !warnings_with(&v, "sign-convention").is_empty(),
         "{}",
@@ -236,6 +256,11 @@ fn autocal_contract_keys_and_round_trip() {
             let c = &v["coefficients"][name];
             let (x, u95) = (c["value"].as_f64().unwrap(), c["U95"].as_f64().unwrap());
             let mut want = t["imu_tk"][tri][m][i][j].as_f64().unwrap();
+            if name == "gyr.s_z" {
+                // Gyro scales in (deg/s)/output; imu_tk's K in (rad/s)/output.
+                assert_eq!(c["unit"], "(deg/s)/output");
+                want = want.to_degrees();
+            }
             if name == "acc.m_yz" {
                 want = -want; // T_xy = -m_yz
             }
@@ -359,16 +384,41 @@ fn multipos_labels_or_directions_and_apply() {
     let mut lines = out.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "time_s,acc_x_m_s2,acc_y_m_s2,acc_z_m_s2,gyr_x_deg_s,gyr_y_deg_s,gyr_z_deg_s"
+        "time_s,acc_x_m_s2,acc_y_m_s2,acc_z_m_s2,gyr_x_deg_s,gyr_y_deg_s,gyr_z_deg_s,position,fx,fy,fz"
     );
     let mut mean_norm = 0.0;
     let mut n = 0.0;
     for l in lines.take(300) {
-        let f: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+        let f: Vec<f64> = l.split(',').take(7).map(|x| x.parse().unwrap()).collect();
         mean_norm += (f[1] * f[1] + f[2] * f[2] + f[3] * f[3]).sqrt();
         n += 1.0;
     }
-    assert!((mean_norm / n - 9.81).abs() < 0.01, "{}", mean_norm / n);
+    assert!((mean_norm / n - 9.80665).abs() < 0.01, "{}", mean_norm / n);
+    // Issue 30: every other column (the label here, a temperature and a
+    // quoted note below) is carried through, as read.
+    assert!(out.lines().nth(1).unwrap().contains(",x_p,"), "{out:.300}");
+    let extra = tmp("mp_extra.csv");
+    std::fs::write(
+        &extra,
+        "time_s,acc_x,temperature_c,acc_y,acc_z,gyr_x,gyr_y,gyr_z,note\n0,2038.7,23.5,-52.5,-28.0,0.1,0.2,0.3,\"a, b\"\n",
+    )
+    .unwrap();
+    let o = run(&[
+        "imu",
+        "apply",
+        "--calibration",
+        cal.to_str().unwrap(),
+        "--input",
+        extra.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8(o.stdout).unwrap();
+    let mut lines = out.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "time_s,acc_x_m_s2,acc_y_m_s2,acc_z_m_s2,gyr_x_deg_s,gyr_y_deg_s,gyr_z_deg_s,temperature_c,note"
+    );
+    assert!(lines.next().unwrap().ends_with(",23.5,\"a, b\""), "{out}");
 }
 
 #[test]
@@ -500,4 +550,31 @@ fn export_imucal_copies_a_ferraris_calibration_verbatim() {
     }
     assert_eq!(out["_format_version"], "2.0.0");
     assert_eq!(out["from_acc_unit"], "a.u.");
+}
+
+/// Issue 30: one default gravity, the standard 9.80665 m/s² (it was 9.81
+/// for the IMU commands and 9.80665 elsewhere).
+#[test]
+fn every_imu_command_defaults_to_standard_gravity() {
+    for cmd in [
+        &["imu", "ferraris"][..],
+        &["imu", "multipos"],
+        &["imu", "autocal"],
+        &["simulate", "imu"],
+        &["centrifuge"],
+        &["plan", "centrifuge"],
+    ] {
+        let mut args = cmd.to_vec();
+        args.push("--help");
+        let help = String::from_utf8(run(&args).stdout).unwrap();
+        let at = help
+            .find("--gravity-m-s2")
+            .unwrap_or_else(|| panic!("{cmd:?}"));
+        let rest = &help[at..];
+        let default = &rest[rest.find("[default: ").unwrap()..];
+        assert!(
+            default.starts_with("[default: 9.80665]"),
+            "{cmd:?}: {default:.40}"
+        );
+    }
 }

@@ -450,3 +450,61 @@ fn snapshots_of_plans_compare_and_demo() {
     insta::assert_snapshot!("demo_text", ok(&run_in(&dir, &["demo"])));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 30: `centrifuge --from t.json` kept K0 and K1 but dropped the
+/// instrument's serial. The chained result's instrument is kept; `--serial`
+/// may repeat it and is refused when it names another instrument.
+#[test]
+fn centrifuge_from_keeps_the_tumble_results_instrument() {
+    let dir = workdir("from-serial");
+    simulate(
+        &dir,
+        "t.csv",
+        &["tumble", "--k0", "1.2e-4", "--k1", "1.3", "--seed", "21"],
+    );
+    ok(&run_in(
+        &dir,
+        &[
+            "tumble",
+            "--mount",
+            "pendulum",
+            "--input",
+            "t.csv",
+            "--serial",
+            "SN-5",
+            "--model",
+            "QA-1",
+            "--meta",
+            "operator=lee",
+            "--json",
+            "-o",
+            "t.json",
+        ],
+    ));
+    simulate(&dir, "c.csv", &["centrifuge", "--seed", "22"]);
+    let base = [
+        "centrifuge",
+        "--input",
+        "c.csv",
+        "--radius-m",
+        "0.71",
+        "--latitude-deg",
+        "39.9",
+        "--from",
+        "t.json",
+        "--json",
+    ];
+    let v: Value = serde_json::from_str(&ok(&run_in(&dir, &base))).unwrap();
+    assert_eq!(v["instrument"]["serial"], "SN-5");
+    assert_eq!(v["instrument"]["model"], "QA-1");
+    assert_eq!(v["instrument"]["operator"], "lee");
+    let mut same = base.to_vec();
+    same.extend_from_slice(&["--serial", "SN-5"]);
+    let v: Value = serde_json::from_str(&ok(&run_in(&dir, &same))).unwrap();
+    assert_eq!(v["instrument"]["serial"], "SN-5");
+    let mut other = base.to_vec();
+    other.extend_from_slice(&["--serial", "SN-6"]);
+    let o = run_in(&dir, &other);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--serial SN-6: the chained result is of serial SN-5"));
+}

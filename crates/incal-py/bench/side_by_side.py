@@ -94,7 +94,7 @@ def ferraris():
         cal = FerrarisCalibration(grav=9.81, expected_angle=-360)
         return cal.compute(regions, sampling_rate_hz=204.8, from_acc_unit="a.u.", from_gyr_unit="a.u.")
 
-    t_incal, r = best(lambda: incal.imu_ferraris(SESSION, rate_hz=204.8), 5)
+    t_incal, r = best(lambda: incal.imu_ferraris(SESSION, rate_hz=204.8, gravity_m_s2=9.81), 5)
     t_imucal, c = best(theirs, 5)
     worst = 0.0
     for k in ["K_a", "R_a", "b_a", "K_g", "R_g", "K_ga", "b_g"]:

@@ -177,8 +177,8 @@ pub fn sorted_warning(moved: usize, rows: usize) -> crate::warning::Warning {
 }
 
 /// Put `v` in `order` ([`time_order`]).
-pub fn permute<T: Copy>(v: &mut Vec<T>, order: &[usize]) {
-    *v = order.iter().map(|&k| v[k]).collect();
+pub fn permute<T: Clone>(v: &mut Vec<T>, order: &[usize]) {
+    *v = order.iter().map(|&k| v[k].clone()).collect();
 }
 
 /// A duration in a message: 4 decimals, scientific when huge.

@@ -40,7 +40,7 @@ pub struct FerrarisArgs {
     #[arg(long)]
     pub rate_hz: f64,
     /// Gravity (m/s^2); negative when the positive axis is the one reading -g (imucal's convention).
-    #[arg(long, default_value_t = 9.81, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = incal::units::STANDARD_GRAVITY_M_S2, allow_hyphen_values = true)]
     pub gravity_m_s2: f64,
     /// Angle of each rotation section (deg); negative is clockwise seen from the axis tip (imucal's default -360).
     #[arg(long, default_value_t = -360.0, allow_hyphen_values = true)]
@@ -84,7 +84,7 @@ pub struct AutocalArgs {
     #[arg(long)]
     pub rate_hz: f64,
     /// Gravity magnitude (m/s^2): the calibrated accelerometer output is in this unit.
-    #[arg(long, default_value_t = 9.81)]
+    #[arg(long, default_value_t = incal::units::STANDARD_GRAVITY_M_S2)]
     pub gravity_m_s2: f64,
     /// Duration of the still start (s): its variance sets the static threshold, its gyro mean the gyro bias.
     #[arg(long, default_value_t = 50.0)]
@@ -213,7 +213,7 @@ pub struct SimArgs {
     #[arg(long, default_value_t = 6.0)]
     pub rotation_s: f64,
     /// Gravity (m/s^2).
-    #[arg(long, default_value_t = 9.81)]
+    #[arg(long, default_value_t = incal::units::STANDARD_GRAVITY_M_S2)]
     pub gravity_m_s2: f64,
     /// Accelerometer white noise, one sample (output units).
     #[arg(long, default_value_t = 3.0)]
@@ -321,7 +321,7 @@ pub struct MultiposArgs {
     #[arg(long)]
     pub rate_hz: f64,
     /// Gravity (m/s^2).
-    #[arg(long, default_value_t = 9.81)]
+    #[arg(long, default_value_t = incal::units::STANDARD_GRAVITY_M_S2)]
     pub gravity_m_s2: f64,
     /// Accelerometer matrix: full or upper (triangular).
     #[arg(long, value_enum, default_value = "full")]
@@ -376,6 +376,16 @@ pub struct ApplyArgs {
 /// the raw series read row by row through the input layer, every row
 /// written as soon as it is calibrated (numbers in shortest round-trip
 /// form).
+/// A CSV field: quoted (quotes doubled) when it holds a comma, a quote or
+/// a line break, as RFC 4180 and pandas read it.
+fn csv_cell(s: &str) -> std::borrow::Cow<'_, str> {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\"")).into()
+    } else {
+        s.into()
+    }
+}
+
 pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
     let (cal_name, _, doc) = crate::documents::read_document(&a.calibration)?;
     let cal = ImuCalibration::from_document(&doc).map_err(|e| in_file(&cal_name, e))?;
@@ -390,7 +400,12 @@ pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
     let out_name = crate::io::output_name(a.output.as_deref());
     let wfail =
         |e: std::io::Error| CliError::Failure(anyhow::anyhow!("{out_name}: cannot write: {e}"));
-    let mut line = cols.output_header().join(",");
+    let mut line = cols
+        .output_header()
+        .iter()
+        .map(|h| csv_cell(h))
+        .collect::<Vec<_>>()
+        .join(",");
     line.push('\n');
     w.write_all(line.as_bytes()).map_err(wfail)?;
     let mut fmt = ryu::Buffer::new();
@@ -411,6 +426,10 @@ pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
                 line.push(',');
                 line.push_str(fmt.format(*x));
             }
+        }
+        for cell in &r.extra {
+            line.push(',');
+            line.push_str(&csv_cell(cell));
         }
         line.push('\n');
         w.write_all(line.as_bytes()).map_err(wfail)

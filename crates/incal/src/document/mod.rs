@@ -510,6 +510,10 @@ pub enum DecisionCode {
     NotDetermined,
     /// An input taken from another result (`--from`).
     ChainedInput,
+    /// Terms the model fixes by construction (e.g. the off-diagonal
+    /// elements of a diagonal gain matrix): not estimated, so not listed
+    /// as coefficients.
+    FixedByModel,
 }
 
 /// A decision the tool made, with its reason.

@@ -628,7 +628,7 @@ fn imu(seed: u64) -> Result<DemoSection> {
         for (k, ax) in ["x", "y", "z"].iter().enumerate() {
             at.insert(format!("acc.s_{ax}"), a.scale[k]);
             at.insert(format!("acc.b_{ax}"), a.bias[k]);
-            at.insert(format!("gyr.s_{ax}"), g.scale[k]);
+            at.insert(format!("gyr.s_{ax}"), g.scale[k].to_degrees()); // (deg/s)/output
             at.insert(format!("gyr.b_{ax}"), g.bias[k]);
         }
     }
@@ -641,7 +641,7 @@ fn imu(seed: u64) -> Result<DemoSection> {
             .into(),
         cases: vec![
             DemoCase {
-                heading: "Ferraris (imucal's definitions; the off-diagonal zeros of K_a, K_g have no truth line)".into(),
+                heading: "Ferraris (imucal's definitions)".into(),
                 document: fr.document()?,
                 truth: ft,
                 tables: Vec::new(),

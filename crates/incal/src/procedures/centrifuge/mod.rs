@@ -366,6 +366,9 @@ impl super::Procedure for CentrifugeTest {
                 sha256: f.sha256.clone(),
                 rows: None,
             });
+            // The instrument is the tumble result's: a chained result keeps
+            // its serial, model and --meta pairs.
+            doc.instrument = f.document.instrument.clone();
             doc.decisions.push(crate::document::Decision {
                 code: crate::document::DecisionCode::ChainedInput,
                 message: format!(

@@ -204,11 +204,23 @@ impl ImuCalibration {
             (Some(_), true) => Some([h.column("gyr_x")?, h.column("gyr_y")?, h.column("gyr_z")?]),
             _ => None,
         };
+        let time = h.opt_column("time_s");
+        // Every other column (labels, temperature, a trigger, raw gyro
+        // columns a gyro-less calibration does not use) is copied as read.
+        let used: Vec<usize> = time
+            .into_iter()
+            .chain(acc)
+            .chain(gyr.into_iter().flatten())
+            .collect();
+        let extra: Vec<usize> = (0..h.width()).filter(|k| !used.contains(k)).collect();
+        let extra_names = extra.iter().map(|&k| h.names()[k].clone()).collect();
         Ok(ApplyColumns {
-            time: h.opt_column("time_s"),
+            time,
             acc,
             gyr,
             gyr_unit: self.gyr_unit,
+            extra,
+            extra_names,
         })
     }
 
@@ -224,12 +236,22 @@ impl ImuCalibration {
             Some([x, y, z]) => self.gyr(&V3::new(row.f64(x)?, row.f64(y)?, row.f64(z)?), &f),
             None => None,
         };
-        Ok(CalibratedRow { time, acc: f, gyr })
+        let extra = cols
+            .extra
+            .iter()
+            .map(|&k| row.text(k).to_string())
+            .collect();
+        Ok(CalibratedRow {
+            time,
+            acc: f,
+            gyr,
+            extra,
+        })
     }
 }
 
 /// Where a raw recording holds what [`ImuCalibration`] reads.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ApplyColumns {
     /// `time_s`, when present.
     pub time: Option<usize>,
@@ -238,6 +260,10 @@ pub struct ApplyColumns {
     /// `gyr_x`, `gyr_y`, `gyr_z`, when read.
     pub gyr: Option<[usize; 3]>,
     gyr_unit: &'static str,
+    /// Every other column, copied to the output after the calibrated ones.
+    pub extra: Vec<usize>,
+    /// Their names.
+    pub extra_names: Vec<String>,
 }
 
 impl ApplyColumns {
@@ -254,12 +280,13 @@ impl ApplyColumns {
             let u = self.gyr_unit;
             h.extend(["x", "y", "z"].map(|a| format!("gyr_{a}_{u}")));
         }
+        h.extend(self.extra_names.iter().cloned());
         h
     }
 }
 
 /// One calibrated row.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct CalibratedRow {
     /// `time_s` as read, when the recording has it.
     pub time: Option<f64>,
@@ -267,6 +294,8 @@ pub struct CalibratedRow {
     pub acc: V3,
     /// Angular rate (deg/s, rad/s for an autocalibration), when calibrated.
     pub gyr: Option<V3>,
+    /// The other columns of the row, as read.
+    pub extra: Vec<String>,
 }
 
 /// A calibration in the JSON form imucal's `load_calibration_info` reads

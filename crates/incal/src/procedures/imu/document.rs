@@ -68,7 +68,28 @@ impl FerrarisResult {
                 o.rotation_deg, o.gravity
             ),
         );
-        b.estimates(&self.estimates, "", ferraris_unit)?;
+        // K_a and K_g are diagonal by the method's construction (Ferraris
+        // et al. 1995): their off-diagonal elements are zeros, not
+        // estimates, and are not listed (the matrices below keep them).
+        let fixed = |n: &str| {
+            n.strip_prefix("K_a.")
+                .or_else(|| n.strip_prefix("K_g."))
+                .is_some_and(|ij| ij.len() == 2 && ij[..1] != ij[1..])
+        };
+        let kept: Vec<&str> = self
+            .estimates
+            .names()
+            .iter()
+            .map(String::as_str)
+            .filter(|n| !fixed(n))
+            .collect();
+        b.estimates(&self.estimates.select(&kept)?, "", ferraris_unit)?;
+        if kept.len() < self.estimates.names().len() {
+            b.decision(
+                crate::document::DecisionCode::FixedByModel,
+                "K_a and K_g are diagonal by construction (Ferraris et al. 1995; the misalignments are in R_a, R_g): their off-diagonal elements are 0, not estimated, and not listed as coefficients",
+            );
+        }
         b.option("rate_hz", json!(o.rate_hz));
         b.option("gravity_m_s2", json!(o.gravity));
         b.option("rotation_deg", json!(o.rotation_deg));
@@ -93,14 +114,15 @@ impl FerrarisResult {
     }
 }
 
-/// Unit of an autocalibration parameter (`acc.s_x` → `(m/s^2)/output`).
+/// Unit of an autocalibration parameter (`acc.s_x` → `(m/s^2)/output`;
+/// gyro scales in `(deg/s)/output`, the gyro unit of every IMU procedure).
 pub fn autocal_unit(name: &str) -> Result<Unit> {
     let (triad, p) = name.split_once('.').unwrap_or(("", name));
     Ok(Unit::Other(
         match (triad, p.split('_').next().unwrap_or("")) {
             (_, "m") => "1",
             ("acc", "s") => "(m/s^2)/output",
-            ("gyr", "s") => "(rad/s)/output",
+            ("gyr", "s") => "(deg/s)/output",
             _ => "output",
         }
         .into(),
@@ -138,7 +160,23 @@ impl AutocalResult {
                 }
             ),
         );
-        b.estimates(&self.estimates, "", autocal_unit)?;
+        // One gyro unit across the IMU procedures: the gyro scales in
+        // (deg/s)/output as Ferraris and multipos give theirs; the imu_tk
+        // matrices at the top level stay in rad/s, as imu_tk writes them.
+        let deg = 180.0 / std::f64::consts::PI;
+        let factor = nalgebra::DVector::from_iterator(
+            self.estimates.len(),
+            self.estimates
+                .names()
+                .iter()
+                .map(|n| if n.starts_with("gyr.s_") { deg } else { 1.0 }),
+        );
+        let shown = self.estimates.map(
+            self.estimates.names().to_vec(),
+            |x| x.component_mul(&factor),
+            |_| nalgebra::DMatrix::from_diagonal(&factor),
+        )?;
+        b.estimates(&shown, "", autocal_unit)?;
         b.fit(FitSummary::of(
             "acc",
             &self.acc_fit,

@@ -59,7 +59,7 @@ pub const QUANTITIES: [&str; 7] = ["K_a", "R_a", "b_a", "K_g", "R_g", "K_ga", "b
 pub struct FerrarisOptions {
     /// Sample rate F_s (Hz).
     pub rate_hz: f64,
-    /// Gravity g (m/s²; imucal default 9.81; negative flips the sign
+    /// Gravity g (m/s²; default the standard 9.80665, imucal uses 9.81; negative flips the sign
     /// convention of the positions).
     #[serde(rename = "gravity_m_s2")]
     pub gravity: f64,
