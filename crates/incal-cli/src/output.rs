@@ -158,11 +158,40 @@ pub struct PlanOut {
     /// Write to this file instead of standard output.
     #[arg(long, short = 'o', value_name = "FILE")]
     pub output: Option<PathBuf>,
+    /// Also write the run sheet for the operator: a CSV of the positions, speeds or rates in the order they are run (step, settings, samples).
+    #[arg(long, value_name = "FILE")]
+    pub run_sheet: Option<PathBuf>,
 }
 
 impl PlanOut {
-    /// Render the plan document (JSON or text) and write it.
+    /// Render the plan document (JSON or text) and write it, and the run
+    /// sheet when asked.
     pub fn emit(&self, doc: &incal::document::plan::PlanDocument) -> CliResult<()> {
+        if let Some(path) = &self.run_sheet {
+            let (header, rows) = doc.run_sheet().ok_or_else(|| {
+                crate::error::usage(format!(
+                    "--run-sheet: a {} plan lists no settings to run",
+                    doc.procedure
+                ))
+            })?;
+            let mut csv = header.join(",");
+            csv.push('\n');
+            for r in rows {
+                let cells: Vec<String> = r
+                    .iter()
+                    .map(|c| {
+                        if c.contains([',', '"']) {
+                            format!("\"{}\"", c.replace('"', "\"\""))
+                        } else {
+                            c.clone()
+                        }
+                    })
+                    .collect();
+                csv.push_str(&cells.join(","));
+                csv.push('\n');
+            }
+            write_text(Some(path), &csv)?;
+        }
         let text = if self.json {
             json_text(&serde_json::to_value(doc).unwrap_or(serde_json::Value::Null))
         } else {

@@ -508,3 +508,232 @@ fn centrifuge_from_keeps_the_tumble_results_instrument() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--serial SN-6: the chained result is of serial SN-5"));
 }
+
+/// Issue 30: a plan states u, the dof its reduction will have and U95,
+/// and the dof is the one the reduction of a simulated run of that very
+/// plan reports.
+#[test]
+fn plans_predict_the_dof_and_u95_their_reduction_reports() {
+    let dir = workdir("plan-dof");
+    // (plan words, simulate words, reduce words before --input)
+    let cases: Vec<(Vec<&str>, Vec<&str>, Vec<&str>)> = vec![
+        (
+            vec![
+                "plan",
+                "tumble",
+                "--k1",
+                "10",
+                "--noise",
+                "1e-6",
+                "--samples",
+                "10",
+            ],
+            // Seed 2: a run whose 5 % lack-of-fit test passes (seed 1 is one
+            // of the 5 % that fail; then u and dof come from the residuals).
+            vec![
+                "tumble",
+                "--samples",
+                "10",
+                "--index-error-arcsec",
+                "0",
+                "--seed",
+                "2",
+            ],
+            vec!["tumble", "--mount", "pendulum"],
+        ),
+        (
+            vec!["plan", "tumble", "--k1", "10", "--noise", "1e-6"],
+            vec!["tumble", "--samples", "1"],
+            vec!["tumble", "--mount", "pendulum"],
+        ),
+        (
+            vec![
+                "plan",
+                "gyro-rate",
+                "--k1",
+                "0.02",
+                "--noise",
+                "1e-4",
+                "--rates-deg-s",
+                "10,-10,50,-50,100,-100",
+                "--samples",
+                "4",
+            ],
+            vec![
+                "gyro-rate",
+                "--rates-deg-s",
+                "10,-10,50,-50,100,-100",
+                "--samples",
+                "4",
+            ],
+            vec!["gyro", "rate", "--latitude-deg", "0"],
+        ),
+    ];
+    let more: Vec<(Vec<&str>, Vec<&str>, Vec<&str>)> = vec![
+        (
+            vec![
+                "plan",
+                "gyro-positions",
+                "--k1",
+                "0.02",
+                "--noise",
+                "1e-4",
+                "--latitude-deg",
+                "45",
+                "--azimuths-deg",
+                "90",
+                "--samples",
+                "4",
+            ],
+            vec!["gyro-positions", "--samples", "4", "--seed", "2"],
+            vec![
+                "gyro",
+                "positions",
+                "--latitude-deg",
+                "45",
+                "--azimuth-deg",
+                "90",
+                "--k1",
+                "0.02",
+                "--axial",
+                "sa",
+            ],
+        ),
+        (
+            vec!["plan", "gfimu", "--noise", "1e-4", "--samples", "5"],
+            vec!["gfimu", "--seed", "3", "--samples", "5"],
+            vec!["gfimu", "calibrate"],
+        ),
+    ];
+    for (plan, sim, reduce) in cases.into_iter().chain(more) {
+        let key = if reduce[0] == "gfimu" {
+            "a.K0"
+        } else if reduce[1] == "positions" {
+            "B"
+        } else {
+            "K1"
+        };
+        let p: Value =
+            serde_json::from_str(&ok(&run_in(&dir, &[&plan[..], &["--json"]].concat()))).unwrap();
+        let dof = p["predicted_dof"]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{plan:?}: {p}"));
+        for (name, u) in p["predicted_u"].as_object().unwrap() {
+            let u95 = p["predicted_U95"][name].as_f64().unwrap();
+            let ratio = u95 / u.as_f64().unwrap();
+            assert!(ratio > 1.95 && ratio < 13.0, "{plan:?} {name}: k95 {ratio}");
+        }
+        let mut args = vec!["simulate"];
+        args.extend_from_slice(&sim);
+        args.extend_from_slice(&["-o", "run.csv"]);
+        ok(&run_in(&dir, &args));
+        let mut args = reduce.clone();
+        args.extend_from_slice(&["--input", "run.csv", "--json"]);
+        let r: Value = serde_json::from_str(&ok(&run_in(&dir, &args))).unwrap();
+        let got = r["coefficients"][key]["dof"].as_f64();
+        assert_eq!(got, Some(dof), "{plan:?}: the reduction's dof");
+        // The readable plan shows the same three columns.
+        let text = ok(&run_in(&dir, &plan));
+        assert!(
+            text.contains("term") && text.contains(" dof ") && text.contains("U95"),
+            "{text}"
+        );
+    }
+}
+
+/// Issue 30: `--run-sheet` writes the settings in run order for the
+/// operator, a plain CSV (no comment lines) that pandas reads as it is.
+#[test]
+fn plans_write_a_run_sheet_for_the_operator() {
+    let dir = workdir("run-sheet");
+    let sheet = |args: &[&str]| -> Vec<String> {
+        let mut a = args.to_vec();
+        a.extend_from_slice(&["--run-sheet", "rs.csv"]);
+        ok(&run_in(&dir, &a));
+        std::fs::read_to_string(dir.join("rs.csv"))
+            .unwrap()
+            .lines()
+            .map(str::to_string)
+            .collect()
+    };
+    let t = sheet(&["plan", "tumble"]);
+    assert_eq!(t[0], "step,angle_deg,samples");
+    assert_eq!(t.len(), 13);
+    assert_eq!(t[1], "1,0,1");
+    assert_eq!(t[12], "12,330,1");
+    let c = sheet(&[
+        "plan",
+        "centrifuge",
+        "--k1",
+        "1.3",
+        "--noise",
+        "1e-5",
+        "--radius-m",
+        "0.7",
+    ]);
+    assert_eq!(c[0], "step,position,polarity,level_g,speed_rpm,samples");
+    assert_eq!(c.len(), 1 + 6 * 2 * 10, "positions x polarities x levels");
+    // 1 g at 0.7 m: ω = √(9.80665/0.7) rad/s = 35.742 rpm.
+    assert_eq!(c[2], "2,ip:0,+,1,35.742,5");
+    let m = sheet(&[
+        "plan",
+        "misalign",
+        "--noise",
+        "1e-4",
+        "--scale-factor",
+        "-2.9",
+    ]);
+    assert_eq!(m[0], "step,alpha_deg,beta_deg,rate_deg_s,samples");
+    assert_eq!(
+        m.len(),
+        31,
+        "5 configurations x 3 rates, forward and reverse"
+    );
+    assert_eq!(&m[1..3], ["1,0,0,20,1", "2,0,0,-20,1"]);
+    for plan in [
+        &[
+            "plan",
+            "gyro-positions",
+            "--k1",
+            "0.02",
+            "--noise",
+            "1e-4",
+            "--latitude-deg",
+            "45",
+        ][..],
+        &[
+            "plan",
+            "gyro-rate",
+            "--k1",
+            "0.02",
+            "--noise",
+            "1e-4",
+            "--rates-deg-s",
+            "10,-10,50,-50",
+        ],
+        &["plan", "gfimu", "--noise", "1e-4"],
+        &[
+            "plan",
+            "misalign",
+            "--instrument",
+            "accel",
+            "--noise",
+            "1e-4",
+            "--scale-factor",
+            "1.3",
+        ],
+    ] {
+        let s = sheet(plan);
+        assert!(
+            s[0].starts_with("step,") && s[0].ends_with(",samples"),
+            "{plan:?}: {}",
+            s[0]
+        );
+        assert!(
+            s.len() > 2 && s.iter().all(|l| !l.starts_with('#')),
+            "{plan:?}"
+        );
+        let width = s[0].split(',').count();
+        assert!(s.iter().all(|l| l.split(',').count() == width), "{plan:?}");
+    }
+}

@@ -255,16 +255,32 @@ pub fn render_plan(doc: &PlanDocument) -> String {
         s.push_str(&format!("{k}: {}\n", plan_value(v)));
     }
     if let (Some(u), Some(units)) = (&doc.predicted_u, &doc.units) {
-        s.push_str("\nPredicted standard uncertainty\n");
+        s.push_str("\nPredicted uncertainty\n");
         let rows: Vec<Vec<String>> = u
             .iter()
             .map(|(name, &u)| {
                 let unit = incal::units::Unit::parse(units.get(name).map_or("", |s| s.as_str()));
                 let (scale, label) = unit.engineering_for(u);
-                vec![name.clone(), sig(u * scale, 3), label.to_string()]
+                let u95 = doc
+                    .predicted_u95
+                    .as_ref()
+                    .and_then(|m| m.get(name))
+                    .copied();
+                let (_, u_text, u95_text) =
+                    measured(0.0, u * scale, u95.map_or(f64::NAN, |x| x * scale));
+                vec![
+                    shown_name(name, label),
+                    u_text,
+                    doc.predicted_dof.map_or("-".into(), |d| dof_text(Some(d))),
+                    if u95.is_some() { u95_text } else { "-".into() },
+                    label.to_string(),
+                ]
             })
             .collect();
-        s.push_str(&table(&["term", "predicted u", "unit"], &rows));
+        s.push_str(&table(&["term", "u", "dof", "U95", "unit"], &rows));
+        if doc.predicted_dof.is_some() {
+            s.push_str("dof: of the reduction's variance (pooled scatter of repeated samples, else the fit's residuals); U95 = k95 u\n");
+        }
     }
     for n in &doc.notes {
         s.push_str(&format!("note: {n}\n"));

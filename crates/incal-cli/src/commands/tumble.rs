@@ -9,7 +9,7 @@ use incal::procedures::tumble::plan::{plan_document, TumblePlan, TumblePlanOptio
 use incal::procedures::tumble::{default_terms, Tumble, TumbleOptions};
 use incal::procedures::Silent;
 use incal::rigs::Mount;
-use incal::sim::tumble::{simulate as sim_tumble, TumbleSim};
+use incal::sim::tumble::TumbleSim;
 use incal::units::arcsec_to_rad;
 
 use crate::error::{core, usage, CliResult};
@@ -263,8 +263,11 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         seed: a.seed,
     };
     cfg.validate().map_err(core)?;
-    let obs = sim_tumble(&cfg);
+    // Streamed: rows are written as they are drawn, in constant memory.
     crate::io::write_stream(a.output.as_deref(), |out| {
-        incal::procedures::tumble::input::write(&obs, out).map(|_| ())
+        incal::procedures::tumble::input::write_each(cfg.passes > 1, out, |row| {
+            incal::procedures::tumble::sim::for_each(&cfg, row)
+        })
+        .map(|_| ())
     })
 }

@@ -43,6 +43,20 @@ pub struct PlanDocument {
     /// Unit of each term of `predicted_u`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub units: Option<BTreeMap<String, String>>,
+    /// Degrees of freedom the reduction of this plan will give the
+    /// coefficients: `P (S − 1)` from the pooled scatter of `S > 1`
+    /// samples at each of `P` positions, else `P − p` from the residuals
+    /// of the `p`-term fit ([`PlanDocument::expect_dof`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub predicted_dof: Option<f64>,
+    /// Predicted expanded uncertainty `U95 = k95 u` of each term, with k95
+    /// the Student t quantile for `predicted_dof` (JCGM 100 Annex G).
+    #[serde(
+        rename = "predicted_U95",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub predicted_u95: Option<BTreeMap<String, f64>>,
     /// Notes for the operator (what was assumed, what is not predicted).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
@@ -59,6 +73,8 @@ const RESERVED: &[&str] = &[
     "options",
     "predicted_u",
     "units",
+    "predicted_dof",
+    "predicted_U95",
     "notes",
 ];
 
@@ -72,6 +88,8 @@ impl PlanDocument {
             options: BTreeMap::new(),
             predicted_u: None,
             units: None,
+            predicted_dof: None,
+            predicted_u95: None,
             notes: Vec::new(),
             plan: BTreeMap::new(),
         }
@@ -110,6 +128,179 @@ impl PlanDocument {
             .get_or_insert_with(BTreeMap::new)
             .insert(term.to_string(), unit.to_string());
         Ok(self)
+    }
+
+    /// The degrees of freedom the reduction will have, from `positions`
+    /// (distinct settings), `samples` per position and `parameters`
+    /// fitted: `positions (samples − 1)` when `samples > 1` (the pooled
+    /// scatter), else `positions − parameters` (the residuals). Sets
+    /// `predicted_dof` and every term's `predicted_U95`; call it after the
+    /// last [`PlanDocument::predict`].
+    pub fn expect_dof(&mut self, positions: usize, samples: usize, parameters: usize) -> &mut Self {
+        let dof = if samples > 1 {
+            (positions * (samples - 1)) as f64
+        } else {
+            positions.saturating_sub(parameters) as f64
+        };
+        if dof < 1.0 {
+            return self;
+        }
+        let k = crate::estimation::coverage_factor(dof, 0.95);
+        self.predicted_dof = Some(dof);
+        self.predicted_u95 = self
+            .predicted_u
+            .as_ref()
+            .map(|u| u.iter().map(|(n, &x)| (n.clone(), k * x)).collect());
+        self
+    }
+
+    /// The run sheet of the plan, for the operator: the settings in the
+    /// order they are run (`step` from 1, then the procedure's settings and
+    /// the samples to take), from the plan's own keys. `None` for a plan
+    /// that lists no settings.
+    pub fn run_sheet(&self) -> Option<(Vec<String>, Vec<Vec<String>>)> {
+        let nums = |key: &str, from: &BTreeMap<String, Value>| -> Vec<f64> {
+            from.get(key)
+                .and_then(Value::as_array)
+                .map(|a| a.iter().filter_map(Value::as_f64).collect())
+                .unwrap_or_default()
+        };
+        let texts = |key: &str, from: &BTreeMap<String, Value>| -> Vec<String> {
+            from.get(key)
+                .and_then(Value::as_array)
+                .map(|a| {
+                    a.iter()
+                        .map(|x| x.as_str().map_or_else(|| x.to_string(), str::to_string))
+                        .collect()
+                })
+                .unwrap_or_default()
+        };
+        let samples = self
+            .plan
+            .get("samples")
+            .or_else(|| self.options.get("samples"))
+            .and_then(Value::as_u64)
+            .unwrap_or(1)
+            .to_string();
+        let num = |x: f64| {
+            let s = format!("{x}");
+            if s == "-0" {
+                "0".into()
+            } else {
+                s
+            }
+        };
+        let (columns, rows): (Vec<&str>, Vec<Vec<String>>) = match self.procedure {
+            Procedure::Tumble => (
+                vec!["angle_deg"],
+                nums("angles_deg", &self.plan)
+                    .into_iter()
+                    .map(|a| vec![num(a)])
+                    .collect(),
+            ),
+            Procedure::GyroRate => (
+                vec!["rate_deg_s"],
+                nums("rates_deg_s", &self.plan)
+                    .into_iter()
+                    .map(|r| vec![num(r)])
+                    .collect(),
+            ),
+            Procedure::GyroPositions => (
+                vec!["azimuth_deg", "angle_deg"],
+                nums("azimuths_deg", &self.plan)
+                    .into_iter()
+                    .flat_map(|az| {
+                        nums("angles_deg", &self.plan)
+                            .into_iter()
+                            .map(move |a| vec![num(az), num(a)])
+                    })
+                    .collect(),
+            ),
+            Procedure::GfimuCalibrate => (
+                vec!["g_x", "g_y", "g_z"],
+                self.plan
+                    .get("positions")
+                    .and_then(Value::as_array)
+                    .map(|ps| {
+                        ps.iter()
+                            .map(|p| {
+                                p.as_array()
+                                    .map(|v| v.iter().filter_map(Value::as_f64).map(num).collect())
+                                    .unwrap_or_default()
+                            })
+                            .collect()
+                    })
+                    .unwrap_or_default(),
+            ),
+            Procedure::Centrifuge => {
+                let radius = self.plan.get("radius_m").and_then(Value::as_f64);
+                let g = self
+                    .options
+                    .get("gravity_m_s2")
+                    .and_then(Value::as_f64)
+                    .unwrap_or(crate::units::STANDARD_GRAVITY_M_S2);
+                let levels = nums("levels_g", &self.plan);
+                let polarities: &[&str] =
+                    if self.plan.get("single_polarity") == Some(&Value::Bool(true)) {
+                        &["+"]
+                    } else {
+                        &["+", "-"]
+                    };
+                let mut rows = Vec::new();
+                for p in texts("positions", &self.plan) {
+                    for pol in polarities {
+                        for &l in &levels {
+                            // ω = √(a/R): the table speed for the nominal level.
+                            let rpm = radius.filter(|r| *r > 0.0).map_or(String::new(), |r| {
+                                let w = (l * g / r).sqrt();
+                                format!("{:.3}", w * 60.0 / (2.0 * std::f64::consts::PI))
+                            });
+                            rows.push(vec![p.clone(), pol.to_string(), num(l), rpm]);
+                        }
+                    }
+                }
+                (vec!["position", "polarity", "level_g", "speed_rpm"], rows)
+            }
+            Procedure::MisalignGyro => {
+                let rates = nums("rates_deg_s", &self.options);
+                let mut rows = Vec::new();
+                // Each configuration (α:β) at every rate, forward then
+                // reverse.
+                for c in texts("configs", &self.options) {
+                    let (a, b) = c.split_once(':').unwrap_or((c.as_str(), ""));
+                    for &r in &rates {
+                        for sr in [r, -r] {
+                            rows.push(vec![a.trim().to_string(), b.trim().to_string(), num(sr)]);
+                        }
+                    }
+                }
+                (vec!["alpha_deg", "beta_deg", "rate_deg_s"], rows)
+            }
+            Procedure::MisalignAccel => (
+                vec!["beta_deg"],
+                nums("betas_deg", &self.options)
+                    .into_iter()
+                    .map(|b| vec![num(b)])
+                    .collect(),
+            ),
+            _ => return None,
+        };
+        if rows.is_empty() {
+            return None;
+        }
+        let mut header = vec!["step".to_string()];
+        header.extend(columns.iter().map(|c| c.to_string()));
+        header.push("samples".into());
+        let rows = rows
+            .into_iter()
+            .enumerate()
+            .map(|(k, mut r)| {
+                r.insert(0, (k + 1).to_string());
+                r.push(samples.clone());
+                r
+            })
+            .collect();
+        Some((header, rows))
     }
 
     /// Add a note for the operator.

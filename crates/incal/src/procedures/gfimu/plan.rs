@@ -109,6 +109,8 @@ pub fn plan_document(o: &GfimuPlanOptions) -> Result<PlanDocument> {
             doc.predict(&format!("{}.{term}", acc.name), acc.linear.u_at(k), unit)?;
         }
     }
+    // Each accelerometer is its own fit of the same positions.
+    doc.expect_dof(o.positions.len(), o.samples, super::LINEAR_TERMS.len());
     doc.set("plan", json!("gfimu"))?;
     doc.set("geometry", json!(label))?;
     doc.set(

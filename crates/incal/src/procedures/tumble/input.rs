@@ -60,22 +60,32 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>) -> Result<Vec<Observation>>
 /// `pass` when any observation has one). The angle is written to 1e-9 deg
 /// (the head's angle as set), the output in full (shortest round-trip).
 pub fn write<W: std::io::Write>(obs: &[Observation], out: W) -> std::io::Result<W> {
-    use incal_io::{Cell, CsvWriter};
     let passes = obs.iter().any(|o| o.pass.is_some());
+    write_each(passes, out, |row| obs.iter().cloned().try_for_each(row))
+}
+
+/// The CSV of observations produced one at a time by `each` (the pass
+/// column when `passes`), in constant memory: the simulator's writer.
+pub fn write_each<W: std::io::Write>(
+    passes: bool,
+    out: W,
+    each: impl FnOnce(&mut dyn FnMut(Observation) -> std::io::Result<()>) -> std::io::Result<()>,
+) -> std::io::Result<W> {
+    use incal_io::{Cell, CsvWriter};
     let header: &[&str] = if passes {
         &["angle_deg", "output", "pass"]
     } else {
         &["angle_deg", "output"]
     };
     let mut w = CsvWriter::new(out, header)?;
-    for o in obs {
+    each(&mut |o: Observation| {
         let angle = (o.angle_rad.to_degrees() * 1e9).round() / 1e9;
         w.cell(Cell::Num(angle))?;
         w.cell(Cell::Num(o.output))?;
         if passes {
             w.cell(Cell::Text(o.pass.as_deref().unwrap_or("")))?;
         }
-        w.end_row()?;
-    }
+        w.end_row()
+    })?;
     w.finish()
 }

@@ -350,6 +350,14 @@ pub fn plan_document(
             for (k, n) in p.names().iter().enumerate() {
                 d.predict(n, p.u_at(k), Term::parse(n)?.unit().as_str())?;
             }
+            // An index error shows as scatter beyond the samples': the
+            // reduction then takes u and dof from the residuals.
+            let samples = if o.index_error_arcsec > 0.0 {
+                1
+            } else {
+                o.samples
+            };
+            d.expect_dof(plan.angles_deg.len(), samples, p.len());
             d.set("k1", json!(k1))?;
             d.set("noise", json!(noise))?;
             d.set("samples", json!(o.samples))?;

@@ -84,8 +84,22 @@ impl TumbleSim {
 
 /// Simulate the observations (deterministic for a given seed).
 pub fn simulate(cfg: &TumbleSim) -> Vec<Observation> {
-    let mut r = rng(cfg.seed);
     let mut out = Vec::with_capacity(cfg.angles_deg.len() * cfg.samples.max(1) * cfg.passes.max(1));
+    let _ = for_each(cfg, |o| {
+        out.push(o);
+        Ok(())
+    });
+    out
+}
+
+/// Each simulated observation in turn, in the order [`simulate`] gives
+/// them, without holding them: a simulation of any allowed size in
+/// constant memory. Stops at the first error of `f`.
+pub fn for_each(
+    cfg: &TumbleSim,
+    mut f: impl FnMut(Observation) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    let mut r = rng(cfg.seed);
     for pass in 0..cfg.passes.max(1) {
         let label = match (cfg.passes > 1, pass) {
             (false, _) => None,
@@ -103,13 +117,13 @@ pub fn simulate(cfg: &TumbleSim) -> Vec<Observation> {
             let eps = normal(&mut r, cfg.index_error_rad);
             let e0 = cfg.truth.output(&cfg.mount.specific_force(theta + eps));
             for _ in 0..cfg.samples.max(1) {
-                out.push(Observation {
+                f(Observation {
                     angle_rad: theta,
                     output: e0 + normal(&mut r, cfg.noise),
                     pass: label.clone(),
-                });
+                })?;
             }
         }
     }
-    out
+    Ok(())
 }

@@ -185,6 +185,11 @@ pub fn plan_document(o: &PositionsPlanOptions) -> Result<PlanDocument> {
         };
         d.predict(n, c.u_at(k), unit)?;
     }
+    d.expect_dof(
+        o.angles_deg.len() * o.azimuths_deg.len(),
+        o.samples,
+        c.len(),
+    );
     set_warnings(&mut d, &p.warnings)?;
     Ok(d)
 }

@@ -190,6 +190,8 @@ pub fn plan_document(o: &RatePlanOptions) -> Result<PlanDocument> {
             d.predict(n, c.u_at(k), coefficient_unit(n))?;
         }
     }
+    let fitted = c.names().iter().filter(|n| !n.starts_with("K1_")).count();
+    d.expect_dof(o.rates_deg_s.len(), o.samples, fitted);
     set_warnings(&mut d, &p.warnings)?;
     Ok(d)
 }
