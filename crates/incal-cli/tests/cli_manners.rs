@@ -298,3 +298,102 @@ fn product_text_names_no_internal_document() {
         }
     }
 }
+
+/// Issue 30: every CSV incal writes is read by `pandas.read_csv(path)`
+/// with default arguments: a header, then rows as wide as it, no comment
+/// lines before or after (truth and run notes go to a side file, the JSON
+/// or standard error).
+#[test]
+fn every_csv_incal_writes_is_plain() {
+    let dir = workdir("plain-csv");
+    let sims: Vec<Vec<&str>> = vec![
+        vec!["tumble", "--passes", "2"],
+        vec!["centrifuge"],
+        vec!["misalign", "gyro"],
+        vec!["misalign", "accel"],
+        vec!["gfimu", "--truth-out", "gfimu_truth.json"],
+        vec!["gfimu", "--kind", "motion"],
+        vec!["gyro-rate"],
+        vec!["gyro-positions"],
+        vec![
+            "imu",
+            "--sequence",
+            "ferraris",
+            "--static-s",
+            "0.5",
+            "--rotation-s",
+            "1",
+        ],
+        vec![
+            "noise",
+            "--rate-hz",
+            "10",
+            "--duration-s",
+            "10",
+            "--seed",
+            "1",
+            "--format",
+            "csv",
+        ],
+    ];
+    let plain = |what: &str, text: &str| {
+        let mut lines = text.lines();
+        let width = lines.next().unwrap().split(',').count();
+        for (k, l) in lines.enumerate() {
+            assert!(!l.starts_with('#'), "{what}: line {}: {l}", k + 2);
+            assert_eq!(l.split(',').count(), width, "{what}: line {}: {l}", k + 2);
+        }
+    };
+    for (k, sim) in sims.iter().enumerate() {
+        let out = format!("s{k}.csv");
+        let mut args = vec!["simulate"];
+        args.extend_from_slice(sim);
+        args.extend_from_slice(&["-o", &out]);
+        let o = run_in(&dir, &args);
+        assert!(o.status.success(), "{sim:?}: {}", stderr(&o));
+        plain(
+            &format!("{sim:?}"),
+            &std::fs::read_to_string(dir.join(&out)).unwrap(),
+        );
+    }
+    // The gyro-free unit's truth is beside the CSV.
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("gfimu_truth.json")).unwrap())
+            .unwrap();
+    assert!(truth["notes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|n| n.as_str().unwrap().starts_with("truth a:")));
+    // A streamed gyro-free solution: rows only, mode on stderr.
+    ok(&run_in(
+        &dir,
+        &["simulate", "gfimu", "--seed", "3", "-o", "static.csv"],
+    ));
+    ok(&run_in(
+        &dir,
+        &[
+            "gfimu",
+            "calibrate",
+            "--input",
+            "static.csv",
+            "--json",
+            "-o",
+            "cal.json",
+        ],
+    ));
+    let o = run_in(
+        &dir,
+        &[
+            "gfimu",
+            "solve",
+            "--calibration",
+            "cal.json",
+            "--input",
+            "s5.csv",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    plain("gfimu solve", &stdout(&o));
+    assert!(stderr(&o).contains("note: solution mode"), "{}", stderr(&o));
+}

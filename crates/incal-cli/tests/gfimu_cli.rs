@@ -446,7 +446,11 @@ fn simulate_motion_turning_gravity_and_oscillation() {
     ]);
     let turned = simulate(&args);
     assert_ne!(plain, turned);
-    assert!(turned.contains("# f0 frame: table"));
+    // How it was simulated is in the truth file beside the CSV.
+    let t = write_unique("turned_truth.json", "");
+    args.extend(["--truth-out", t.to_str().unwrap()]);
+    simulate(&args);
+    assert!(std::fs::read_to_string(&t).unwrap().contains("f0 frame: table"));
     refuses(
         &[
             "simulate",
@@ -605,9 +609,8 @@ fn solve_stopped_midway_closes_its_output() {
                 assert!(last["summary"]["error"].as_str().unwrap().contains(&at));
                 assert_eq!(text.lines().count(), 51);
             }
-            _ => assert!(text
-                .lines()
-                .any(|l| l.starts_with("# error: ") && l.contains(&at))),
+            // The CSV stays rows only (the reason is on stderr, above).
+            _ => assert!(text.lines().all(|l| !l.starts_with('#')), "{text}"),
         }
     }
 }

@@ -206,6 +206,9 @@ pub struct SimArgs {
     /// Write the CSV here instead of standard output.
     #[arg(long, short = 'o', value_name = "FILE")]
     pub output: Option<PathBuf>,
+    /// Write the truth (every accelerometer's K0 and Ks, and how the run was simulated) to this JSON file; the CSV holds only the header and the rows.
+    #[arg(long, value_name = "FILE")]
+    pub truth_out: Option<PathBuf>,
 }
 
 /// Options of `incal plan gfimu`.
@@ -289,7 +292,17 @@ pub fn run_solve(a: &SolveArgs) -> CliResult<()> {
         .as_mut()
         .map(|s| &mut s.file as &mut dyn incal::procedures::gfimu::stream::Scratch);
     match solve_stream(series, solver, format, &mut out, scratch) {
-        Ok(_) => Ok(()),
+        Ok(s) => {
+            // The CSV is rows only (pandas reads it as it is): its mode and
+            // warnings go to standard error, as imu apply's do.
+            if format == SolutionFormat::Csv {
+                crate::embed::stderr_line(&format!("note: solution mode {}", s.mode));
+                for w in &s.warnings {
+                    crate::embed::stderr_line(&format!("warning [{}]: {}", w.code, w.message));
+                }
+            }
+            Ok(())
+        }
         Err(StreamError::Input(e)) => Err(core(e)),
         Err(e @ StreamError::Write(_)) => Err(CliError::Failure(anyhow::anyhow!("{e}"))),
     }
@@ -357,6 +370,10 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         seed: a.seed,
     };
     cfg.validate().map_err(core)?;
+    if let Some(p) = &a.truth_out {
+        let truth = serde_json::json!({ "notes": cfg.notes() });
+        crate::io::write_text(Some(p), &crate::output::json_text(&truth))?;
+    }
     crate::io::write_stream(a.output.as_deref(), |out| cfg.write(out).map(|_| ()))
 }
 

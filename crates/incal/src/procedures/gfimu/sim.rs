@@ -564,7 +564,9 @@ impl GfimuSim {
         self.validate().map_err(invalid)?;
         let g = &self.array.geometry;
         let truth = self.truth();
-        let notes = self.notes();
+        // Rows only, so any CSV reader takes the file as it is; the truth
+        // is in [`GfimuSim::notes`] (the CLI's --truth-out).
+        let notes: Vec<String> = Vec::new();
         match &self.kind {
             SimKind::Static { samples } => {
                 let data =

@@ -38,7 +38,7 @@ use crate::warning::Warning;
 /// The form of a streamed solution (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SolutionFormat {
-    /// CSV with `#` trailer lines.
+    /// CSV: the header and one row per sample, nothing else.
     Csv,
     /// One JSON object.
     Json,
@@ -240,21 +240,14 @@ fn head(buf: &mut Vec<u8>, file: &str, format: SolutionFormat, d: &Diagnostics) 
 }
 
 /// What comes after the last sample (and, in a JSON document, after the
-/// `uncertainty` array): the CSV trailer comments, the JSON object's mode
-/// and warnings, or the JSON-lines summary; with `error`, the reason the
-/// run stopped early (`# error:`, `"error"`).
+/// `uncertainty` array): the JSON object's mode and warnings, or the
+/// JSON-lines summary; with `error`, the reason the run stopped early
+/// (`"error"`). The CSV form has nothing after its rows, so any CSV
+/// reader takes it as it is: its mode and warnings are in [`Solved`] and
+/// the reason for an early stop in the error.
 fn tail(buf: &mut Vec<u8>, format: SolutionFormat, solver: &Solver, error: Option<&str>) {
     match format {
-        SolutionFormat::Csv => {
-            let mut t = format!("# mode: {}\n", solver.mode().name());
-            for x in solver.warnings() {
-                t.push_str(&format!("# warning: {x}\n"));
-            }
-            if let Some(e) = error {
-                t.push_str(&format!("# error: {e}\n"));
-            }
-            buf.extend_from_slice(t.as_bytes());
-        }
+        SolutionFormat::Csv => {}
         SolutionFormat::Json => {
             buf.extend_from_slice(b",\n  \"mode\": ");
             push_json(buf, solver.mode().name());
@@ -475,7 +468,7 @@ pub fn solve_stream<R: Read + Send, W: Write>(
     format: SolutionFormat,
     out: &mut W,
     scratch: Option<&mut dyn Scratch>,
-) -> std::result::Result<incal_io::Summary, StreamError> {
+) -> std::result::Result<Solved, StreamError> {
     let name = series.file().to_string();
     let stride = series.cols.len();
     let mut buf = Vec::with_capacity(4096);
@@ -573,7 +566,24 @@ pub fn solve_stream<R: Read + Send, W: Write>(
     tail(&mut buf, format, &solver, error.as_deref());
     out.write_all(&buf)?;
     out.flush()?;
-    outcome
+    outcome.map(|summary| Solved {
+        summary,
+        mode: solver.mode().name().to_string(),
+        warnings: solver.warnings().to_vec(),
+    })
+}
+
+/// A finished solve: what the input layer records of the series (rows,
+/// SHA-256), the solution mode and the warnings (the JSON forms carry the
+/// last two in the output; a front end says them beside a CSV).
+#[derive(Debug, Clone)]
+pub struct Solved {
+    /// Rows and SHA-256 of the series.
+    pub summary: incal_io::Summary,
+    /// The solution mode's name.
+    pub mode: String,
+    /// Warnings of the run.
+    pub warnings: Vec<crate::Warning>,
 }
 
 #[cfg(test)]
@@ -605,7 +615,7 @@ mod tests {
             Solver::new(g, &truth.calibration(Some(1e-4)), &SolveOptions::default()).unwrap();
         let s = MotionSeries::open("m.csv", csv, &Default::default(), g).unwrap();
         let mut out = Vec::new();
-        let r = solve_stream(s, solver, format, &mut out, None);
+        let r = solve_stream(s, solver, format, &mut out, None).map(|s| s.summary);
         (String::from_utf8(out).unwrap(), r)
     }
 
@@ -627,7 +637,9 @@ mod tests {
         assert_eq!(lines.lines().count(), 202);
         let (text, _) = run(&csv, &array, &truth, SolutionFormat::Csv);
         assert!(text.starts_with(SOLUTION_CSV_HEADER));
-        assert_eq!(text.lines().filter(|l| !l.starts_with('#')).count(), 202);
+        // A plain CSV: the header and one row per sample, nothing else.
+        assert_eq!(text.lines().count(), 202);
+        assert!(text.lines().all(|l| !l.starts_with('#')));
     }
 
     /// A bad row stops the run at its line; the document before it stays
