@@ -450,7 +450,9 @@ fn simulate_motion_turning_gravity_and_oscillation() {
     let t = write_unique("turned_truth.json", "");
     args.extend(["--truth-out", t.to_str().unwrap()]);
     simulate(&args);
-    assert!(std::fs::read_to_string(&t).unwrap().contains("f0 frame: table"));
+    assert!(std::fs::read_to_string(&t)
+        .unwrap()
+        .contains("f0 frame: table"));
     refuses(
         &[
             "simulate",

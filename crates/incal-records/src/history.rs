@@ -75,6 +75,12 @@ pub struct Drift {
     pub variance_source: VarianceSource,
     /// Lack-of-fit p-value `P(χ²_{n−2} ≥ Σ w r²)` (n > 2 only).
     pub chi2_p_value: Option<f64>,
+    /// The line's value at the first calibration (the value's unit).
+    #[serde(skip)]
+    pub intercept: f64,
+    /// Covariance of (intercept, slope), for the line's band.
+    #[serde(skip)]
+    pub covariance: [[f64; 2]; 2],
 }
 
 /// The repeatability (module docs).
@@ -187,6 +193,11 @@ pub fn drift(points: &[HistoryPoint]) -> Result<Drift, String> {
         unit: format!("{}/day", points[0].unit),
         variance_source: f.variance_source,
         chi2_p_value: f.chi2_p_value.and_then(finite),
+        intercept: f.estimates.values()[0],
+        covariance: {
+            let c = f.estimates.covariance();
+            [[c[(0, 0)], c[(0, 1)]], [c[(1, 0)], c[(1, 1)]]]
+        },
     })
 }
 

@@ -65,6 +65,23 @@ pub struct HistorySeries {
     pub min: Option<f64>,
     /// Upper limit, if any.
     pub max: Option<f64>,
+    /// The drift line fitted to the points, if any.
+    pub drift: Option<DriftLine>,
+}
+
+/// A drift line `y(t) = intercept + rate·t`, `t` in days since the first
+/// calibration, with the covariance of (intercept, rate) and the coverage
+/// factor of its band (JSON unit per day for the rate).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DriftLine {
+    /// Value at the first calibration.
+    pub intercept: f64,
+    /// Slope per day.
+    pub rate_per_day: f64,
+    /// Covariance of (intercept, rate).
+    pub covariance: [[f64; 2]; 2],
+    /// k95 of the band (Student t for the drift's dof).
+    pub k95: f64,
 }
 
 /// Why a report could not be written.

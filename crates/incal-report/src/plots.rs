@@ -80,6 +80,8 @@ pub enum Style {
     Dots,
     /// A line through the points in the order of x.
     Line,
+    /// A thin dashed line (a band's edge).
+    Dashed,
 }
 
 /// A series of a plot; series with the same `key` share a colour and one
@@ -636,18 +638,39 @@ pub fn coefficient_plots(
     out
 }
 
-/// The history plot of one coefficient: value ±U95 of each calibration in
-/// order, with its limits.
+/// The history plot of one coefficient: value ±U95 of each calibration
+/// against its date (days since the first calibration), with the drift
+/// line and its ±U95 band when there is one, and the limits. Without
+/// readable dates the calibrations are spaced evenly, by record id.
 pub fn history_plot(h: &HistorySeries) -> Plot {
     let mag = h.points.iter().fold(0.0, |m, p| f64::max(m, p.value.abs()));
     let (s, l) = display_unit(Some(&h.unit), mag);
+    let first = h
+        .points
+        .first()
+        .map(|p| p.created_utc.clone())
+        .unwrap_or_default();
+    let days: Option<Vec<f64>> = h
+        .points
+        .iter()
+        .map(|p| {
+            let a = incal_records::time::parse_utc(&first).ok()?;
+            let b = incal_records::time::parse_utc(&p.created_utc).ok()?;
+            Some((b - a) as f64 / 86_400.0)
+        })
+        .collect();
+    let dated = days.as_ref().is_some_and(|d| d.iter().any(|x| *x != 0.0));
+    let x_of = |i: usize| match (&days, dated) {
+        (Some(d), true) => d[i],
+        _ => i as f64,
+    };
     let points = h
         .points
         .iter()
         .enumerate()
         .filter(|(_, p)| p.value.is_finite())
         .map(|(i, p)| Pt {
-            x: i as f64,
+            x: x_of(i),
             y: p.value * s,
             bar: p.u95.is_finite().then_some(p.u95 * s),
         })
@@ -661,15 +684,50 @@ pub fn history_plot(h: &HistorySeries) -> Plot {
             limit: true,
         })
         .collect();
-    Plot {
-        kind: "history",
-        source: h.coefficient.clone(),
-        title: format!("History of {}", h.coefficient),
-        x_desc: "calibration (record id)".into(),
-        y_desc: with_unit(&h.coefficient, &l),
-        x_axis: XAxis::Categories(h.points.iter().map(|p| format!("#{}", p.id)).collect()),
-        dodge: false,
-        series: vec![Series {
+    let mut series = Vec::new();
+    let mut drift_note = String::new();
+    match (&h.drift, dated) {
+        (Some(d), true) => {
+            let t_end = days
+                .as_ref()
+                .map_or(0.0, |v| v.iter().fold(0.0, |m, x| f64::max(m, *x)));
+            let line = |t: f64| d.intercept + d.rate_per_day * t;
+            let half = |t: f64| {
+                let c = &d.covariance;
+                d.k95
+                    * (c[0][0] + 2.0 * t * c[0][1] + t * t * c[1][1])
+                        .max(0.0)
+                        .sqrt()
+            };
+            let ts: Vec<f64> = (0..=40).map(|k| t_end * k as f64 / 40.0).collect();
+            let curve = |f: &dyn Fn(f64) -> f64| -> Vec<Pt> {
+                ts.iter()
+                    .map(|&t| Pt {
+                        x: t,
+                        y: f(t) * s,
+                        bar: None,
+                    })
+                    .filter(|p| p.y.is_finite())
+                    .collect()
+            };
+            series.push(Series {
+                key: 1,
+                style: Style::Line,
+                points: curve(&line),
+            });
+            for sign in [-1.0, 1.0] {
+                series.push(Series {
+                    key: 1,
+                    style: Style::Dashed,
+                    points: curve(&|t| line(t) + sign * half(t)),
+                });
+            }
+            drift_note = format!(
+                "; line: the drift, {} {l}/day, dashed: its ±U95 band",
+                trimmed(d.rate_per_day * s, 3)
+            );
+        }
+        _ => series.push(Series {
             key: 0,
             style: Style::Line,
             points: h
@@ -678,23 +736,45 @@ pub fn history_plot(h: &HistorySeries) -> Plot {
                 .enumerate()
                 .filter(|(_, p)| p.value.is_finite())
                 .map(|(i, p)| Pt {
-                    x: i as f64,
+                    x: x_of(i),
                     y: p.value * s,
                     bar: None,
                 })
                 .collect(),
-        }]
-        .into_iter()
-        .chain([Series {
-            key: 0,
-            style: Style::Dots,
-            points,
-        }])
-        .collect(),
+        }),
+    }
+    series.push(Series {
+        key: 0,
+        style: Style::Dots,
+        points,
+    });
+    let (x_desc, x_axis) = if dated {
+        (
+            format!(
+                "days since the first calibration ({})",
+                first.chars().take(10).collect::<String>()
+            ),
+            XAxis::Numeric,
+        )
+    } else {
+        (
+            "calibration (record id)".to_string(),
+            XAxis::Categories(h.points.iter().map(|p| format!("#{}", p.id)).collect()),
+        )
+    };
+    Plot {
+        kind: "history",
+        source: h.coefficient.clone(),
+        title: format!("History of {}", h.coefficient),
+        x_desc,
+        y_desc: with_unit(&h.coefficient, &l),
+        x_axis,
+        dodge: false,
+        series,
         legend: Vec::new(),
         hlines,
         caption: format!(
-            "{} of this instrument in every stored calibration, oldest first, with ±U95 bars{}.",
+            "{} of this instrument in every stored calibration, by date, with ±U95 bars{drift_note}{}.",
             h.coefficient,
             match (h.min, h.max) {
                 (None, None) => "; no limits given".to_string(),
@@ -747,14 +827,23 @@ fn size(p: &Plot) -> (u32, u32) {
     }
 }
 
-/// A tick label: 4 significant digits, and 0 for a tick within a
+/// A tick label: enough significant digits that neighbouring ticks (about
+/// an eighth of the span apart) read differently — at least 4, so a
+/// coefficient at 618.79″ spanning 0.004″ reads 618.7915, 618.7920, …
+/// rather than "618.8" on every tick — and 0 for a tick within a
 /// millionth of the span of zero (not `-1.1e-19`).
 fn tick(v: f64, span: f64) -> String {
     if v.abs() <= 1e-6 * span.abs() {
-        "0".into()
-    } else {
-        trimmed(v, 4)
+        return "0".into();
     }
+    let step = span.abs() / 8.0;
+    let digits = if step > 0.0 && step.is_finite() {
+        let lead = v.abs().max(step).log10().floor();
+        (lead - step.log10().floor() + 1.0).clamp(4.0, 10.0) as usize
+    } else {
+        4
+    };
+    trimmed(v, digits)
 }
 
 /// The plot as one `<svg>` element (no XML declaration, no namespace
@@ -861,6 +950,16 @@ pub fn render_svg(p: &Plot) -> Result<String, ReportError> {
                         .draw_series(LineSeries::new(
                             s.points.iter().map(|q| (q.x, q.y)),
                             colour.stroke_width(2),
+                        ))
+                        .map_err(plot_err)?;
+                }
+                Style::Dashed => {
+                    chart
+                        .draw_series(DashedLineSeries::new(
+                            s.points.iter().map(|q| (q.x, q.y)),
+                            6,
+                            4,
+                            colour.stroke_width(1),
                         ))
                         .map_err(plot_err)?;
                 }
@@ -1062,6 +1161,22 @@ pub fn allan_plots(doc: &ResultDocument) -> Vec<Plot> {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn ticks_of_a_narrow_span_read_differently() {
+        let span = 0.004;
+        let labels: Vec<String> = (0..8)
+            .map(|k| tick(618.7900 + k as f64 * 0.0005, span))
+            .collect();
+        let mut unique = labels.clone();
+        unique.dedup();
+        assert_eq!(unique.len(), labels.len(), "{labels:?}");
+        assert_eq!(labels[3], "618.7915");
+        // A wide span keeps 4 digits; a tick at zero reads 0.
+        assert_eq!(tick(1234.5678, 5000.0), "1235");
+        assert_eq!(tick(1e-19, 1.0), "0");
+    }
+
     use super::*;
     use incal::document::Column;
 

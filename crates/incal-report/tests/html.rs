@@ -260,6 +260,13 @@ fn history_plots_show_every_calibration_and_the_limits() {
             .collect(),
         min,
         max,
+        // A drift line on the limited coefficient only.
+        drift: min.map(|_: f64| incal_report::DriftLine {
+            intercept: 8e-3,
+            rate_per_day: 1e-6,
+            covariance: [[1e-14, 0.0], [0.0, 1e-15]],
+            k95: 2.0,
+        }),
     };
     let history = [
         series("K0", Some(7.9e-3), Some(8.1e-3)),
@@ -285,8 +292,22 @@ fn history_plots_show_every_calibration_and_the_limits() {
     };
     assert_eq!(red(&figures[0]), 2);
     assert_eq!(red(&figures[1]), 0);
-    // Record ids on the axis, values in µg in the table.
-    assert!(figures[0].text().any(|t| t.trim() == "#12"));
+    // Against the date (days since the first), with the drift line and
+    // its band where there is a drift; values in µg in the table.
+    assert!(figures[0]
+        .text()
+        .any(|t| t.contains("days since the first calibration (2026-01-01)")));
+    let caption = |f: &scraper::ElementRef| {
+        f.select(&sel("figcaption"))
+            .flat_map(|c| c.text())
+            .collect::<String>()
+    };
+    assert!(
+        caption(&figures[0]).contains("the drift, 1 ug/day"),
+        "{}",
+        caption(&figures[0])
+    );
+    assert!(!caption(&figures[1]).contains("drift"));
     let rows: Vec<String> = section
         .select(&sel("table.history tbody tr"))
         .map(|r| r.text().collect::<Vec<_>>().join("|"))

@@ -273,6 +273,12 @@ fn history(store: &incal_records::Store, doc: &ResultDocument) -> CliResult<Vec<
                 .collect(),
             min: v.min,
             max: v.max,
+            drift: h.drift.as_ref().map(|d| incal_report::DriftLine {
+                intercept: d.intercept,
+                rate_per_day: d.value,
+                covariance: d.covariance,
+                k95: incal::estimation::coverage_factor(d.dof.unwrap_or(f64::INFINITY), 0.95),
+            }),
         });
     }
     Ok(out)
