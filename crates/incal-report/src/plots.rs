@@ -293,8 +293,14 @@ pub fn table_plots(t: &Table) -> Vec<Plot> {
         Some(k) => with_unit(&t.columns[k].name, &x_label),
         None => "row".to_string(),
     };
-    let series_cols: Vec<usize> = (0..lead_end).filter(|&k| Some(k) != x_col).collect();
     let all: Vec<usize> = (0..t.rows.len()).collect();
+    // A lead column with a different value on every row (the nominal rate
+    // beside the measured input rate) is another name for the abscissa,
+    // not a series: as series it would give one single-point plot per row.
+    let series_cols: Vec<usize> = (0..lead_end)
+        .filter(|&k| Some(k) != x_col)
+        .filter(|&k| t.rows.len() < 2 || group_rows(t, &all, &[k]).1.iter().any(|g| g.len() > 1))
+        .collect();
     let (labels, _) = group_rows(t, &all, &series_cols);
     let layout = Layout {
         x_col,
@@ -1161,6 +1167,49 @@ pub fn allan_plots(doc: &ResultDocument) -> Vec<Plot> {
 
 #[cfg(test)]
 mod tests {
+
+    /// A table whose nominal and measured abscissae both differ on every
+    /// row (gyro rate: `rate`, `input_rate`) gives one residual and one
+    /// fitted plot, not one single-point panel per rate.
+    #[test]
+    fn a_column_unique_per_row_is_not_a_series() {
+        let mut t = Table::new(
+            "positions",
+            "Positions",
+            &[
+                ("rate", None),
+                ("input_rate", None),
+                ("run", None),
+                ("n", None),
+                ("mean", None),
+                ("std", None),
+                ("residual", None),
+            ],
+        );
+        for k in 0..10 {
+            let r = (k as f64 - 4.5) * 20.0;
+            t.push(vec![
+                Cell::num(r),
+                Cell::num(r * 0.99998),
+                Cell::Null,
+                Cell::num(4.0),
+                Cell::num(r * 0.02),
+                Cell::num(1e-5),
+                Cell::num(1e-6 * (k as f64 - 5.0)),
+            ])
+            .unwrap();
+        }
+        let plots = table_plots(&t);
+        assert_eq!(
+            plots.len(),
+            2,
+            "{:?}",
+            plots.iter().map(|p| &p.title).collect::<Vec<_>>()
+        );
+        assert!(plots
+            .iter()
+            .all(|p| p.series.iter().map(|s| s.points.len()).sum::<usize>() >= 10));
+    }
 
     #[test]
     fn ticks_of_a_narrow_span_read_differently() {
