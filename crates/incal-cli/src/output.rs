@@ -174,22 +174,20 @@ impl PlanOut {
                     doc.procedure
                 ))
             })?;
-            let mut csv = header.join(",");
-            csv.push('\n');
-            for r in rows {
-                let cells: Vec<String> = r
-                    .iter()
-                    .map(|c| {
-                        if c.contains([',', '"']) {
-                            format!("\"{}\"", c.replace('"', "\"\""))
-                        } else {
-                            c.clone()
-                        }
-                    })
-                    .collect();
-                csv.push_str(&cells.join(","));
-                csv.push('\n');
-            }
+            // incal-io's writer: the same quoting as every CSV incal writes.
+            let hdr: Vec<&str> = header.iter().map(String::as_str).collect();
+            let bytes = (|| {
+                let mut w = incal_io::writer::CsvWriter::new(Vec::new(), &hdr)?;
+                for r in &rows {
+                    for c in r {
+                        w.cell(incal_io::writer::Cell::Text(c))?;
+                    }
+                    w.end_row()?;
+                }
+                w.finish()
+            })()
+            .map_err(|e| crate::error::CliError::Failure(anyhow::anyhow!("--run-sheet: {e}")))?;
+            let csv = String::from_utf8_lossy(&bytes);
             write_text(Some(path), &csv)?;
         }
         let text = if self.json {
