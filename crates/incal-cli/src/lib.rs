@@ -57,7 +57,7 @@ enum Command {
     Misalign(commands::misalign::Command),
     /// Compare the coefficients of two result files: difference, per mille and En.
     Compare(commands::compare::Args),
-    /// Export a result in another tool's format: imucal's calibration JSON.
+    /// Export a result in another tool's format: imucal's calibration JSON, Kalibr's imu.yaml, PX4 and ArduPilot parameters.
     #[command(subcommand)]
     Export(commands::export::Command),
     /// Print the JSON Schema of the result document (incal.result/1), or with --plan of the plan document (incal.plan/1).
@@ -80,6 +80,9 @@ enum Command {
     /// IMU triad calibration: Ferraris (imucal), least squares over known orientations, autocalibration (Tedaldi / imu_tk), apply.
     #[command(subcommand)]
     Imu(commands::imu::Command),
+    /// Thermal calibration: coefficients as polynomials in temperature from soak plateaus (fit) or a chamber ramp (ramp), and compensation (apply).
+    #[command(subcommand)]
+    Thermal(commands::thermal::Command),
 }
 
 #[derive(Subcommand, Debug)]
@@ -104,6 +107,8 @@ enum PlanCommand {
     GyroRate(commands::gyro::PlanRateArgs),
     /// Gyro multi-position plan: predicted u of every drift term for head angles and azimuths.
     GyroPositions(commands::gyro::PlanPositionsArgs),
+    /// Thermal plateau plan: predicted u of every polynomial coefficient for a set of plateau temperatures.
+    Thermal(commands::thermal::PlanArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -125,6 +130,8 @@ enum SimulateCommand {
     Noise(commands::noise::SimArgs),
     /// IMU session (three accelerometers, three gyros): Ferraris sequence, random orientations or static positions.
     Imu(commands::imu::SimArgs),
+    /// Thermal chamber ramp (hold, heat, hold, cool, hold) with a lagging sensor whose biases follow known polynomials with hysteresis; writes the input CSV of `incal thermal ramp`.
+    Thermal(commands::thermal::SimArgs),
 }
 
 fn run(cli: Cli) -> CliResult<()> {
@@ -164,6 +171,9 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Imu(commands::imu::Command::Apply(a)) => commands::imu::run_apply(&a),
         Command::Simulate(SimulateCommand::Imu(a)) => commands::imu::simulate(&a),
         Command::Simulate(SimulateCommand::Noise(a)) => commands::noise::simulate(&a),
+        Command::Simulate(SimulateCommand::Thermal(a)) => commands::thermal::simulate(&a),
+        Command::Plan(PlanCommand::Thermal(a)) => commands::thermal::plan(&a),
+        Command::Thermal(c) => commands::thermal::run(&c),
     }
 }
 

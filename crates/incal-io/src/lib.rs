@@ -26,8 +26,8 @@ pub mod writer;
 pub use columns::{ColumnEntry, ColumnMap};
 pub use error::{clip, InputError, Result};
 pub use reader::{
-    hex, parse_delimiter, parse_f64, Header, ReadOptions, Reader, Row, Summary, MAX_ABS_VALUE,
-    MAX_LINE_BYTES,
+    hex, parse_delimiter, parse_f64, Condition, Header, ReadOptions, Reader, Row, Summary,
+    CONDITION_COLUMNS, MAX_ABS_VALUE, MAX_LINE_BYTES,
 };
 pub use source::{
     display_name, is_dash, open, read_hashed, read_table, stream, stream_table, with_stdin,

@@ -170,7 +170,7 @@ impl Header {
 }
 
 /// What a finished read records of its file.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Summary {
     /// The file as the user named it.
     pub file: String,
@@ -181,6 +181,29 @@ pub struct Summary {
     pub rows: usize,
     /// Bytes read.
     pub bytes: u64,
+    /// The environmental columns of the file ([`CONDITION_COLUMNS`]) that
+    /// it has, summarised over its rows.
+    pub conditions: Vec<Condition>,
+}
+
+/// Columns summarised as the environment of a recording, whatever the
+/// procedure reads: the temperature (°C) and relative humidity (%).
+pub const CONDITION_COLUMNS: [&str; 2] = ["temperature_c", "humidity_pct"];
+
+/// One environmental column summarised over the rows (cells that are not
+/// finite numbers are left out).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Condition {
+    /// Column name.
+    pub name: String,
+    /// Number of values summarised.
+    pub count: usize,
+    /// Mean.
+    pub mean: f64,
+    /// Smallest value.
+    pub min: f64,
+    /// Largest value.
+    pub max: f64,
 }
 
 /// Where the cells of the current row live.
@@ -210,6 +233,7 @@ pub struct Reader<R> {
     cells: Cells,
     row_line: usize,
     rows: usize,
+    conditions: Vec<(usize, Condition)>,
 }
 
 /// One data row; cells are trimmed text of the file.
@@ -251,8 +275,26 @@ impl<R: Read> Reader<R> {
             cells: Cells::Buffer,
             row_line: 0,
             rows: 0,
+            conditions: Vec::new(),
         };
         r.read_header(opts)?;
+        r.conditions = CONDITION_COLUMNS
+            .iter()
+            .filter_map(|n| {
+                r.header.opt_column(n).map(|k| {
+                    (
+                        k,
+                        Condition {
+                            name: n.to_string(),
+                            count: 0,
+                            mean: 0.0,
+                            min: f64::INFINITY,
+                            max: f64::NEG_INFINITY,
+                        },
+                    )
+                })
+            })
+            .collect();
         Ok(r)
     }
 
@@ -289,6 +331,20 @@ impl<R: Read> Reader<R> {
                 ));
             }
             self.rows += 1;
+            for (k, c) in &mut self.conditions {
+                let (a, b) = self.fields[*k];
+                let data = match self.cells {
+                    Cells::Buffer => &self.buf,
+                    Cells::Scratch => &self.scratch,
+                };
+                if let Some(v) = parse_f64(&data[a as usize..b as usize]).filter(|v| v.is_finite())
+                {
+                    c.count += 1;
+                    c.mean += (v - c.mean) / c.count as f64;
+                    c.min = c.min.min(v);
+                    c.max = c.max.max(v);
+                }
+            }
             return Ok(Some(Row {
                 header: &self.header,
                 data: match self.cells {
@@ -319,6 +375,12 @@ impl<R: Read> Reader<R> {
             sha256: self.hasher.map(|h| hex(&h.finalize())).unwrap_or_default(),
             rows: self.rows,
             bytes: self.bytes,
+            conditions: self
+                .conditions
+                .into_iter()
+                .map(|(_, c)| c)
+                .filter(|c| c.count > 0)
+                .collect(),
         })
     }
 

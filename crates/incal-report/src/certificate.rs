@@ -261,6 +261,7 @@ pub fn rig_of(p: Procedure) -> Option<&'static str> {
         | Procedure::GyroRate
         | Procedure::ImuFerraris => Some("rate-table"),
         Procedure::Noise | Procedure::ImuAutocal => None,
+        Procedure::Thermal => Some("thermal-chamber"),
     }
 }
 
@@ -277,6 +278,7 @@ pub fn method_of(p: Procedure) -> &'static str {
         Procedure::Noise => "Noise analysis of a static record: IEEE Std 952-1997 Annex C; W. J. Riley, Handbook of Frequency Stability Analysis, NIST Special Publication 1065, 2008",
         Procedure::ImuFerraris => "Six positions and three rotations: Ferraris F., Grimaldi U., Parvis M., Procedure for effortless in-field calibration of three-axis rate gyros and accelerometers, Sensors and Materials, 1995, vol. 7, no. 5, pp. 311-330",
         Procedure::ImuMultipos => "Least squares over known static orientations of the triad (model of IEEE Std 1293-2018 per axis)",
+        Procedure::Thermal => "Coefficients as polynomials in temperature from soak plateaus or a chamber ramp: IEEE Std 1293-2018 and IEEE Std 952-1997 (temperature sensitivity of bias and scale factor); Niu X., Li Y., Zhang H., Wang Q., Ban Y., Fast thermal calibration of low-grade inertial sensors and inertial measurement units, Sensors, 2013, vol. 13, no. 9, pp. 12192-12217",
         Procedure::ImuAutocal => "Calibration without a fixture: Tedaldi D., Pretto A., Menegatti E., A robust and easy to implement method for IMU calibration without external equipments, Proc. IEEE ICRA 2014, pp. 3042-3049",
     }
 }

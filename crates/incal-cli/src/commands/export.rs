@@ -17,18 +17,62 @@ pub enum Command {
     Imucal(Args),
     /// Gyro and accelerometer noise results (incal noise --quantity gyro / accel) as Kalibr's imu.yaml: noise densities and random walks in SI units, the largest axis per sensor.
     Kalibr(KalibrArgs),
-    /// The same two noise results as PX4's EKF2 IMU noise parameters (EKF2_GYR_NOISE, EKF2_ACC_NOISE, EKF2_GYR_B_NOISE, EKF2_ACC_B_NOISE) in a QGroundControl parameter file.
+    /// PX4 parameters in a QGroundControl parameter file: a thermal model (MODEL.json) as thermal compensation (TC_A0_* or TC_G0_*), or two noise results (--gyro, --accel) as EKF2 IMU noise (EKF2_GYR_NOISE, EKF2_ACC_NOISE, EKF2_GYR_B_NOISE, EKF2_ACC_B_NOISE).
     Px4(Px4Args),
+    /// A thermal model (incal thermal ramp or fit) as ArduPilot's IMU temperature calibration (INS_TCALn_*), NAME,VALUE lines.
+    Ardupilot(ArdupilotArgs),
 }
 
 /// Options of `incal export px4`.
 #[derive(clap::Args, Debug)]
 pub struct Px4Args {
-    #[command(flatten)]
-    pub results: KalibrArgs,
-    /// The EKF's prediction rate in Hz (PX4: 1e6/EKF2_PREDICT_US; default 100).
+    /// A thermal model (a result of incal thermal ramp or fit): written as TC_* thermal compensation parameters.
+    #[arg(value_name = "MODEL.json", conflicts_with_all = ["gyro", "accel"])]
+    pub model: Option<PathBuf>,
+    /// The gyro noise result (incal noise --quantity gyro --json), for EKF2 noise parameters.
+    #[arg(long, value_name = "FILE", requires = "accel")]
+    pub gyro: Option<PathBuf>,
+    /// The accelerometer noise result (incal noise --quantity accel --json), recorded at the same rate.
+    #[arg(long, value_name = "FILE", requires = "gyro")]
+    pub accel: Option<PathBuf>,
+    /// Write to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// The EKF's prediction rate in Hz (PX4: 1e6/EKF2_PREDICT_US; default 100; noise parameters only).
     #[arg(long, default_value_t = 100.0)]
     pub ekf_rate_hz: f64,
+    #[command(flatten)]
+    pub thermal: ThermalExportArgs,
+    /// TC_x0_ID: the device id of the sensor the compensation is for (PX4 matches it against the sensor's).
+    #[arg(long, default_value_t = 0)]
+    pub device_id: u32,
+    /// Write c0 (the value at T_ref) as X0; by default X0 = 0 and the offset at T_ref stays with the sensor's regular calibration.
+    #[arg(long)]
+    pub with_offset: bool,
+}
+
+/// Options shared by the thermal exports.
+#[derive(clap::Args, Debug)]
+pub struct ThermalExportArgs {
+    /// The model's channels for the X, Y and Z axes (default: the channels whose names end in x, y, z, or the only three).
+    #[arg(long, value_delimiter = ',', value_name = "X,Y,Z")]
+    pub axes: Option<Vec<String>>,
+}
+
+/// Options of `incal export ardupilot`.
+#[derive(clap::Args, Debug)]
+pub struct ArdupilotArgs {
+    /// A thermal model (a result of incal thermal ramp or fit).
+    #[arg(value_name = "MODEL.json")]
+    pub model: PathBuf,
+    #[command(flatten)]
+    pub thermal: ThermalExportArgs,
+    /// Which IMU (n in INS_TCALn_*), 1 to 3.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..=3))]
+    pub imu: u8,
+    /// Write to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
 }
 
 /// Options of `incal export kalibr`.
@@ -72,15 +116,50 @@ pub fn run(c: &Command) -> CliResult<()> {
             write_text(a.output.as_deref(), &imu.to_yaml())
         }
         Command::Px4(p) => {
-            let a = &p.results;
-            let (gname, _, gyro) = read_document(&a.gyro)?;
-            let (aname, _, accel) = read_document(&a.accel)?;
+            if let Some(m) = &p.model {
+                let (name, _, doc) = read_document(m)?;
+                let model =
+                    incal::procedures::thermal::Model::of(&doc).map_err(|e| in_file(&name, e))?;
+                let params = incal::procedures::thermal::export::px4(
+                    &model,
+                    p.thermal.axes.as_deref(),
+                    p.device_id,
+                    p.with_offset,
+                )
+                .map_err(|e| in_file(&name, e))?;
+                return write_text(
+                    p.output.as_deref(),
+                    &incal::procedures::thermal::export::px4_text(&params, &name),
+                );
+            }
+            let (Some(g), Some(acc)) = (&p.gyro, &p.accel) else {
+                return Err(crate::error::usage(
+                    "export px4: give a thermal MODEL.json, or --gyro and --accel noise results",
+                ));
+            };
+            let (gname, _, gyro) = read_document(g)?;
+            let (aname, _, accel) = read_document(acc)?;
             let to_input = |e: incal::Error| crate::error::CliError::Input(e.to_string());
             let imu = incal::procedures::noise::export::kalibr(&gyro, &gname, &accel, &aname)
                 .map_err(to_input)?;
             let params =
                 incal::procedures::noise::export::px4(&imu, p.ekf_rate_hz).map_err(to_input)?;
-            write_text(a.output.as_deref(), &params.to_params())
+            write_text(p.output.as_deref(), &params.to_params())
+        }
+        Command::Ardupilot(a) => {
+            let (name, _, doc) = read_document(&a.model)?;
+            let model =
+                incal::procedures::thermal::Model::of(&doc).map_err(|e| in_file(&name, e))?;
+            let params = incal::procedures::thermal::export::ardupilot(
+                &model,
+                a.thermal.axes.as_deref(),
+                a.imu,
+            )
+            .map_err(|e| in_file(&name, e))?;
+            write_text(
+                a.output.as_deref(),
+                &incal::procedures::thermal::export::ardupilot_text(&params, &name),
+            )
         }
     }
 }

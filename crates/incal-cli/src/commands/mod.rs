@@ -13,4 +13,5 @@ pub mod noise;
 pub mod record;
 pub mod report;
 pub mod schema;
+pub mod thermal;
 pub mod tumble;

@@ -74,11 +74,15 @@ pub enum Procedure {
     ImuMultipos,
     /// IMU triad, autocalibration without a fixture (Tedaldi et al. 2014).
     ImuAutocal,
+    /// Thermal model: coefficients as polynomials in temperature, from
+    /// soak plateaus or a chamber ramp (IEEE Std 1293 / 952; Niu et al.
+    /// 2013).
+    Thermal,
 }
 
 impl Procedure {
     /// Every procedure, in the order of the CLI's help.
-    pub const ALL: [Procedure; 11] = [
+    pub const ALL: [Procedure; 12] = [
         Procedure::Tumble,
         Procedure::Centrifuge,
         Procedure::MisalignGyro,
@@ -90,6 +94,7 @@ impl Procedure {
         Procedure::ImuFerraris,
         Procedure::ImuMultipos,
         Procedure::ImuAutocal,
+        Procedure::Thermal,
     ];
 
     /// The procedure with id `id`, if any.
@@ -111,6 +116,7 @@ impl Procedure {
             Procedure::ImuFerraris => "imu-ferraris",
             Procedure::ImuMultipos => "imu-multipos",
             Procedure::ImuAutocal => "imu-autocal",
+            Procedure::Thermal => "thermal",
         }
     }
 }
@@ -514,6 +520,9 @@ pub enum DecisionCode {
     /// elements of a diagonal gain matrix): not estimated, so not listed
     /// as coefficients.
     FixedByModel,
+    /// The degree of a model chosen from the data (the thermal
+    /// polynomials' degree rule), with the tests behind it.
+    ModelDegree,
 }
 
 /// A decision the tool made, with its reason.

@@ -17,6 +17,7 @@ pub mod gyro;
 pub mod imu;
 pub mod misalign;
 pub mod noise;
+pub mod thermal;
 pub mod tumble;
 
 use std::io::Read;
@@ -114,7 +115,29 @@ pub fn reduce_source<P: Procedure, R: Read>(
         },
     );
     doc.options = P::recorded(&input, options)?;
+    record_environment(&mut doc, &summary.conditions);
     Ok(doc)
+}
+
+/// Record the environmental columns a recording had (its `temperature_c`
+/// and `humidity_pct`, summarised by the input layer) as the document's
+/// `environment`: `{NAME: {mean, min, max, count}}`. The certificate states
+/// them and the thermal fit takes each result's temperature from them.
+pub fn record_environment(doc: &mut ResultDocument, conditions: &[incal_io::Condition]) {
+    if conditions.is_empty() {
+        return;
+    }
+    let m: serde_json::Map<String, serde_json::Value> = conditions
+        .iter()
+        .map(|c| {
+            (
+                c.name.clone(),
+                serde_json::json!({"mean": c.mean, "min": c.min, "max": c.max, "count": c.count}),
+            )
+        })
+        .collect();
+    doc.extra
+        .insert("environment".into(), serde_json::Value::Object(m));
 }
 
 /// The options as the document's `options` object.

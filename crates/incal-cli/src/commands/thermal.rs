@@ -1,0 +1,299 @@
+//! `incal thermal fit|ramp|apply`, `incal simulate thermal` and
+//! `incal plan thermal`: arguments in, the core's
+//! [`incal::procedures::thermal`] does the rest.
+
+use std::path::PathBuf;
+
+use incal::procedures::thermal::{
+    self, apply, plan, ramp::Ramp, ramp::RampOptions, sim::RampSim, soak, Degree,
+};
+use incal::procedures::Silent;
+
+use crate::commands::noise::QuantityArg;
+use crate::documents::read_document;
+use crate::error::{core, in_file, usage, CliError, CliResult};
+use crate::input::ReadArgs;
+use crate::output::ResultArgs;
+
+/// `incal thermal …`.
+#[derive(clap::Subcommand, Debug)]
+pub enum Command {
+    /// Soak (plateau) calibration: result documents of one instrument and one procedure, each at its own temperature, into a polynomial in (T - T_ref) per coefficient (NAME.c0, NAME.c1, ...).
+    Fit(FitArgs),
+    /// Ramp calibration: a static recording with the sensor's temperature_c while the chamber heats and cools, into the bias polynomial of every channel, the hysteresis between the branches and the sensor's lag behind chamber_c.
+    Ramp(RampArgs),
+    /// Compensate raw data with its temperature_c column by a thermal model (temperature clamped to the valid range).
+    Apply(ApplyArgs),
+}
+
+fn parse_degree(s: &str) -> Result<Degree, String> {
+    Degree::parse(s)
+}
+
+/// `incal thermal fit`.
+#[derive(clap::Args, Debug)]
+pub struct FitArgs {
+    /// Result documents (JSON) of one instrument and one procedure; each one's temperature is its instrument.temperature_c (--meta temperature_c=T) or the mean of its recording's temperature_c column.
+    #[arg(required = true, value_name = "RESULT.json")]
+    pub results: Vec<PathBuf>,
+    /// Reference temperature T_ref of the polynomials, degC.
+    #[arg(long, default_value_t = thermal::DEFAULT_T_REF_C)]
+    pub t_ref_c: f64,
+    /// Degree of the polynomials: auto (the degree rule: the smallest degree whose lack-of-fit p >= 0.05, at most min(3, plateaus - 2)) or 0 to 3.
+    #[arg(long, default_value = "auto", value_parser = parse_degree)]
+    pub degree: Degree,
+    #[command(flatten)]
+    pub result: ResultArgs,
+}
+
+/// `incal thermal ramp`.
+#[derive(clap::Args, Debug)]
+pub struct RampArgs {
+    /// Recording: CSV with temperature_c (the sensor's temperature, degC), optional chamber_c and time_s, and the channels (every other column, or --columns).
+    #[arg(long, value_name = "FILE")]
+    pub input: PathBuf,
+    /// Sample rate, Hz (the time base when there is no time_s column; the block length in rows).
+    #[arg(long)]
+    pub rate_hz: f64,
+    /// What the channels measure: their unit (gyro deg/s, accel g, generic 1).
+    #[arg(long, value_enum, default_value = "generic")]
+    pub quantity: QuantityArg,
+    /// Reference temperature T_ref of the polynomials, degC.
+    #[arg(long, default_value_t = thermal::DEFAULT_T_REF_C)]
+    pub t_ref_c: f64,
+    /// Degree of the polynomials: auto (the degree rule) or 0 to 3.
+    #[arg(long, default_value = "auto", value_parser = parse_degree)]
+    pub degree: Degree,
+    /// Length of the blocks the rows are averaged in, s.
+    #[arg(long, default_value_t = 10.0)]
+    pub block_s: f64,
+    /// Fit a dT/dt term as well (thermal.NAME.rate_term, in unit per degC/s).
+    #[arg(long)]
+    pub rate_term: bool,
+    #[command(flatten)]
+    pub read: ReadArgs,
+    #[command(flatten)]
+    pub result: ResultArgs,
+}
+
+/// `incal thermal apply`.
+#[derive(clap::Args, Debug)]
+pub struct ApplyArgs {
+    /// The thermal model (a result of incal thermal ramp or fit, JSON).
+    #[arg(value_name = "MODEL.json")]
+    pub model: PathBuf,
+    /// Raw data: CSV with temperature_c and columns named like the model's channels (- reads standard input).
+    #[arg(long, value_name = "FILE")]
+    pub input: PathBuf,
+    /// Write the compensated CSV here instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+/// `incal thermal`.
+pub fn run(c: &Command) -> CliResult<()> {
+    match c {
+        Command::Fit(a) => run_fit(a),
+        Command::Ramp(a) => {
+            let o = RampOptions {
+                rate_hz: a.rate_hz,
+                quantity: a.quantity.into(),
+                t_ref_c: a.t_ref_c,
+                degree: a.degree,
+                block_s: a.block_s,
+                rate_term: a.rate_term,
+            };
+            crate::run::reduce::<Ramp>(&a.input, &a.read, &o, &a.result, &Silent)
+        }
+        Command::Apply(a) => run_apply(a),
+    }
+}
+
+fn run_fit(a: &FitArgs) -> CliResult<()> {
+    let mut inputs = Vec::with_capacity(a.results.len());
+    for p in &a.results {
+        let (name, sha256, doc) = read_document(p)?;
+        inputs.push(soak::SoakInput { name, sha256, doc });
+    }
+    let o = soak::SoakOptions {
+        t_ref_c: a.t_ref_c,
+        degree: a.degree,
+    };
+    let doc = soak::fit_documents(&inputs, &o).map_err(core)?;
+    a.result.emit(doc)
+}
+
+fn run_apply(a: &ApplyArgs) -> CliResult<()> {
+    let (name, _, doc) = read_document(&a.model)?;
+    let model = thermal::Model::of(&doc).map_err(|e| in_file(&name, e))?;
+    let src = incal_io::open(&a.input)?;
+    let src_name = src.name.clone();
+    let mut summary = None;
+    crate::io::write_stream(a.output.as_deref(), |out| {
+        match apply::apply(&model, &src_name, src.reader, out) {
+            Ok(s) => {
+                summary = Some(s);
+                Ok(())
+            }
+            Err(e) => Err(std::io::Error::other(e.to_string())),
+        }
+    })
+    .map_err(|e| match e {
+        CliError::Failure(f) => CliError::Input(f.to_string()),
+        other => other,
+    })?;
+    if let Some(s) = summary {
+        if s.clamped > 0 {
+            eprintln!(
+                "warning[model-range]: {} of {} rows lie outside the model's valid temperature range: their temperature was clamped to it",
+                s.clamped, s.rows
+            );
+        }
+    }
+    Ok(())
+}
+
+/// `incal simulate thermal`.
+#[derive(clap::Args, Debug)]
+pub struct SimArgs {
+    /// What the channels measure: gyro (deg/s, channels gx,gy,gz) or accel (g, channels ax,ay,az).
+    #[arg(long, value_enum, default_value = "gyro")]
+    pub quantity: QuantityArg,
+    /// Low temperature of the chamber profile, degC.
+    #[arg(long, default_value_t = -20.0)]
+    pub t_low_c: f64,
+    /// High temperature of the chamber profile, degC.
+    #[arg(long, default_value_t = 60.0)]
+    pub t_high_c: f64,
+    /// Ramp rate of the chamber, degC/min.
+    #[arg(long, default_value_t = 1.0)]
+    pub ramp_c_per_min: f64,
+    /// Hold at the start, at the top and at the end, s.
+    #[arg(long, default_value_t = 1800.0)]
+    pub hold_s: f64,
+    /// The sensor's first-order lag behind the chamber, s.
+    #[arg(long, default_value_t = 120.0)]
+    pub lag_s: f64,
+    /// Sample rate, Hz.
+    #[arg(long, default_value_t = 10.0)]
+    pub rate_hz: f64,
+    /// Noise of the temperature reading, degC.
+    #[arg(long, default_value_t = 0.0)]
+    pub temperature_noise_c: f64,
+    /// Reference temperature of the truth polynomials, degC.
+    #[arg(long, default_value_t = thermal::DEFAULT_T_REF_C)]
+    pub t_ref_c: f64,
+    /// Random seed.
+    #[arg(long)]
+    pub seed: u64,
+    /// Write the truth (polynomials, hysteresis, lag) as JSON to this file.
+    #[arg(long, value_name = "FILE")]
+    pub truth_out: Option<PathBuf>,
+    /// Output CSV (- = standard output).
+    #[arg(long, short = 'o')]
+    pub output: PathBuf,
+}
+
+/// `incal simulate thermal`.
+pub fn simulate(a: &SimArgs) -> CliResult<()> {
+    let gyro = match a.quantity {
+        QuantityArg::Gyro => true,
+        QuantityArg::Accel => false,
+        QuantityArg::Generic => return Err(usage("--quantity: gyro or accel")),
+    };
+    let names: Vec<String> = if gyro {
+        ["gx", "gy", "gz"]
+    } else {
+        ["ax", "ay", "az"]
+    }
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let cfg = RampSim {
+        channels: thermal::sim::default_channels(&names, gyro),
+        unit: if gyro { "deg/s" } else { "g" }.into(),
+        t_ref_c: a.t_ref_c,
+        t_low_c: a.t_low_c,
+        t_high_c: a.t_high_c,
+        ramp_c_per_min: a.ramp_c_per_min,
+        hold_s: a.hold_s,
+        lag_s: a.lag_s,
+        rate_hz: a.rate_hz,
+        temperature_noise_c: a.temperature_noise_c,
+        seed: a.seed,
+    };
+    cfg.validate().map_err(core)?;
+    if let Some(p) = &a.truth_out {
+        crate::io::write_text(Some(p), &crate::output::json_text(&cfg.truth_json()))?;
+    }
+    crate::io::write_stream(Some(&a.output), |out| {
+        cfg.write(out)
+            .map_err(|e| std::io::Error::other(e.to_string()))
+    })
+}
+
+/// `incal plan thermal`.
+#[derive(clap::Args, Debug)]
+pub struct PlanArgs {
+    /// Plateau temperatures, degC, comma separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        required = true,
+        allow_negative_numbers = true
+    )]
+    pub plateaus_c: Vec<f64>,
+    /// Standard uncertainty of the coefficient at one plateau (from the reduction's own plan), in its unit.
+    #[arg(long)]
+    pub u: f64,
+    /// Degree of the polynomial (0 to 3).
+    #[arg(long)]
+    pub degree: usize,
+    /// Reference temperature T_ref, degC.
+    #[arg(long, default_value_t = thermal::DEFAULT_T_REF_C)]
+    pub t_ref_c: f64,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `incal plan thermal`.
+pub fn plan(a: &PlanArgs) -> CliResult<()> {
+    let (u, dof) = plan::predict(&a.plateaus_c, a.u, a.degree, a.t_ref_c).map_err(core)?;
+    let unit = |k: usize| match k {
+        0 => "unit".to_string(),
+        1 => "unit/degC".to_string(),
+        k => format!("unit/degC^{k}"),
+    };
+    if a.json {
+        let terms: Vec<serde_json::Value> = u
+            .iter()
+            .enumerate()
+            .map(|(k, v)| serde_json::json!({"name": format!("c{k}"), "u": v, "unit": unit(k)}))
+            .collect();
+        let v = serde_json::json!({
+            "plateaus_c": a.plateaus_c,
+            "degree": a.degree,
+            "t_ref_c": a.t_ref_c,
+            "u_plateau": a.u,
+            "residual_dof": dof,
+            "terms": terms,
+        });
+        return crate::io::write_text(None, &crate::output::json_text(&v));
+    }
+    let mut s = format!(
+        "Thermal plateau plan: {} plateaus, degree {}, T_ref {} degC, u per plateau {}\nresidual dof {dof}\n\nterm  predicted u\n",
+        a.plateaus_c.len(),
+        a.degree,
+        a.t_ref_c,
+        crate::output::sig(a.u, 2)
+    );
+    for (k, v) in u.iter().enumerate() {
+        s.push_str(&format!(
+            "c{k}    {} {}\n",
+            crate::output::sig(*v, 2),
+            unit(k)
+        ));
+    }
+    crate::io::write_text(None, &s)
+}

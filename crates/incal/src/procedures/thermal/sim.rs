@@ -1,0 +1,256 @@
+//! Thermal simulator: a chamber profile, a sensor that lags it, and
+//! channels whose bias follows known polynomials in the sensor's
+//! temperature with hysteresis, written in the input format of
+//! [`super::ramp`] (`incal simulate thermal`).
+//!
+//! # Profile
+//! The chamber holds `t_low_c` for `hold_s`, ramps to `t_high_c` at
+//! `ramp_c_per_min`, holds `hold_s`, ramps back and holds `hold_s`. The
+//! sensor follows as a first-order lag `dT_s/dt = (T_c − T_s)/τ`,
+//! integrated exactly per sample for a chamber linear over the step:
+//! `T_s ← T_c − sτ + (T_s0 − T_c0 + sτ) e^{−Δt/τ}`, `s` the chamber's
+//! slope over the step.
+//!
+//! # Channels
+//! `y = Σ c_k (T_s − T_ref)^k + (h/2) b + n`, `n ~ N(0, σ²)`, where the
+//! branch `b` is +1 once the sensor heats faster than a quarter of the
+//! ramp rate, −1 once it cools as fast, and keeps its value through a
+//! hold (0 before the first movement). The written `temperature_c` is
+//! `T_s` plus `N(0, σ_T²)`.
+
+use std::io::Write;
+
+use serde::Serialize;
+
+use super::poly;
+use crate::error::{Error, Result};
+use crate::sim::{normal, rng};
+
+/// The truth of one channel.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ChannelTruth {
+    /// Column name.
+    pub name: String,
+    /// `c_0…c_d` about `T_ref` (unit per °C^k).
+    pub c: Vec<f64>,
+    /// Heating branch minus cooling branch.
+    pub hysteresis: f64,
+    /// White noise σ of one sample.
+    pub noise: f64,
+}
+
+/// A simulated chamber ramp.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RampSim {
+    /// Channels.
+    pub channels: Vec<ChannelTruth>,
+    /// Unit of the channels (for the truth file).
+    pub unit: String,
+    /// `T_ref` of the truth polynomials, °C.
+    pub t_ref_c: f64,
+    /// Low temperature, °C.
+    pub t_low_c: f64,
+    /// High temperature, °C.
+    pub t_high_c: f64,
+    /// Ramp rate of the chamber, °C/min.
+    pub ramp_c_per_min: f64,
+    /// Hold at each end, s.
+    pub hold_s: f64,
+    /// Sensor lag τ behind the chamber, s.
+    pub lag_s: f64,
+    /// Sample rate, Hz.
+    pub rate_hz: f64,
+    /// Noise of the temperature reading, °C.
+    pub temperature_noise_c: f64,
+    /// Random seed.
+    pub seed: u64,
+}
+
+impl RampSim {
+    /// Duration of the profile, s.
+    pub fn duration_s(&self) -> f64 {
+        let ramp = (self.t_high_c - self.t_low_c).abs() / (self.ramp_c_per_min / 60.0);
+        3.0 * self.hold_s + 2.0 * ramp
+    }
+
+    /// Rows the simulation writes.
+    pub fn rows(&self) -> u64 {
+        (self.duration_s() * self.rate_hz).floor() as u64
+    }
+
+    /// Refuse what cannot be simulated.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |what: &str, v: f64| {
+            Err(Error::InvalidValue {
+                what: what.into(),
+                value: v.to_string(),
+            })
+        };
+        if !(self.rate_hz.is_finite() && self.rate_hz > 0.0) {
+            return bad("rate_hz (above 0)", self.rate_hz);
+        }
+        if !(self.ramp_c_per_min.is_finite() && self.ramp_c_per_min > 0.0) {
+            return bad("ramp_c_per_min (above 0)", self.ramp_c_per_min);
+        }
+        if !(self.hold_s.is_finite() && self.hold_s >= 0.0) {
+            return bad("hold_s (0 or more)", self.hold_s);
+        }
+        if !(self.lag_s.is_finite() && self.lag_s >= 0.0) {
+            return bad("lag_s (0 or more)", self.lag_s);
+        }
+        if !(self.temperature_noise_c.is_finite() && self.temperature_noise_c >= 0.0) {
+            return bad("temperature noise (0 or more)", self.temperature_noise_c);
+        }
+        for t in [self.t_low_c, self.t_high_c, self.t_ref_c] {
+            if !(t.is_finite() && (-273.15..=1000.0).contains(&t)) {
+                return bad("temperature (degC)", t);
+            }
+        }
+        if self.t_high_c <= self.t_low_c {
+            return bad("t_high_c (above t_low_c)", self.t_high_c);
+        }
+        if self.channels.is_empty() {
+            return Err(Error::TooFew {
+                what: "channels".into(),
+                needed: 1,
+                got: 0,
+            });
+        }
+        for c in &self.channels {
+            if c.c.is_empty() || c.c.len() > super::MAX_DEGREE + 1 {
+                return Err(Error::Unsupported(format!(
+                    "channel {}: 1 to {} polynomial coefficients",
+                    c.name,
+                    super::MAX_DEGREE + 1
+                )));
+            }
+            if c.c.iter().any(|v| !v.is_finite()) || !c.hysteresis.is_finite() {
+                return bad("truth coefficient", f64::NAN);
+            }
+            if !(c.noise.is_finite() && c.noise > 0.0) {
+                return bad("channel noise (above 0)", c.noise);
+            }
+        }
+        crate::sim::check_rows(&[("duration_s", self.duration_s()), ("rate_hz", self.rate_hz)])
+    }
+
+    /// The chamber temperature at time `t` (s).
+    pub fn chamber_c(&self, t: f64) -> f64 {
+        let ramp = (self.t_high_c - self.t_low_c) / (self.ramp_c_per_min / 60.0);
+        let h = self.hold_s;
+        if t < h {
+            self.t_low_c
+        } else if t < h + ramp {
+            self.t_low_c + (t - h) * self.ramp_c_per_min / 60.0
+        } else if t < 2.0 * h + ramp {
+            self.t_high_c
+        } else if t < 2.0 * h + 2.0 * ramp {
+            self.t_high_c - (t - 2.0 * h - ramp) * self.ramp_c_per_min / 60.0
+        } else {
+            self.t_low_c
+        }
+    }
+
+    /// Write the recording (`time_s,chamber_c,temperature_c,<channels>`).
+    pub fn write<W: Write>(&self, out: W) -> Result<()> {
+        self.validate()?;
+        let io = |e: std::io::Error| Error::Unsupported(format!("writing the simulation: {e}"));
+        let mut header = vec!["time_s", "chamber_c", "temperature_c"];
+        header.extend(self.channels.iter().map(|c| c.name.as_str()));
+        let mut w = incal_io::writer::CsvWriter::new(out, &header).map_err(io)?;
+        let mut r = rng(self.seed);
+        let dt = 1.0 / self.rate_hz;
+        let decay = if self.lag_s > 0.0 {
+            (-dt / self.lag_s).exp()
+        } else {
+            0.0
+        };
+        let threshold = 0.25 * self.ramp_c_per_min / 60.0;
+        let mut ts = self.t_low_c;
+        let mut branch = 0.0;
+        let mut cells = Vec::with_capacity(header.len());
+        for i in 0..self.rows() {
+            let t = i as f64 * dt;
+            let tc = self.chamber_c(t);
+            if i > 0 {
+                let before = ts;
+                // Exact for a chamber linear over the step (first-order
+                // hold): T_s = T_c − sτ + (T_s0 − T_c0 + sτ) e^{−Δt/τ}.
+                let tc0 = self.chamber_c(t - dt);
+                let s_tau = (tc - tc0) / dt * self.lag_s;
+                ts = tc - s_tau + (ts - tc0 + s_tau) * decay;
+                let rate = (ts - before) / dt;
+                if rate > threshold {
+                    branch = 1.0;
+                } else if rate < -threshold {
+                    branch = -1.0;
+                }
+            }
+            cells.clear();
+            let reading = ts + normal(&mut r, self.temperature_noise_c);
+            cells.extend([t, tc, reading]);
+            for c in &self.channels {
+                let y = poly(&c.c, self.t_ref_c, ts)
+                    + 0.5 * c.hysteresis * branch
+                    + normal(&mut r, c.noise);
+                cells.push(y);
+            }
+            let row: Vec<incal_io::writer::Cell> = cells
+                .iter()
+                .map(|&x| incal_io::writer::Cell::Num(x))
+                .collect();
+            w.row(&row).map_err(io)?;
+        }
+        w.finish().map_err(io)?;
+        Ok(())
+    }
+
+    /// The truth as JSON (`--truth-out`): `t_ref_c`, `lag_s`, `unit` and
+    /// per channel `c`, `hysteresis`, `noise`.
+    pub fn truth_json(&self) -> serde_json::Value {
+        let channels: serde_json::Map<String, serde_json::Value> = self
+            .channels
+            .iter()
+            .map(|c| {
+                (
+                    c.name.clone(),
+                    serde_json::json!({"c": c.c, "hysteresis": c.hysteresis, "noise": c.noise}),
+                )
+            })
+            .collect();
+        serde_json::json!({
+            "t_ref_c": self.t_ref_c,
+            "lag_s": self.lag_s,
+            "unit": self.unit,
+            "channels": channels,
+        })
+    }
+}
+
+/// A default truth for `n` channels called `names`: biases with a
+/// quadratic temperature dependence and hysteresis, in `unit` at the
+/// magnitudes of a MEMS sensor (`deg/s` gyro or `g` accelerometer).
+pub fn default_channels(names: &[String], gyro: bool) -> Vec<ChannelTruth> {
+    names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| {
+            let s = 1.0 + 0.3 * i as f64;
+            if gyro {
+                ChannelTruth {
+                    name: n.clone(),
+                    c: vec![0.05 * s, 2e-3 * s, -3e-5 * s],
+                    hysteresis: 0.01 * s,
+                    noise: 0.02,
+                }
+            } else {
+                ChannelTruth {
+                    name: n.clone(),
+                    c: vec![1e-3 * s, 5e-5 * s, -6e-7 * s],
+                    hysteresis: 2e-4 * s,
+                    noise: 5e-4,
+                }
+            }
+        })
+        .collect()
+}
