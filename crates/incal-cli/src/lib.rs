@@ -195,8 +195,9 @@ pub fn restore_sigpipe() {
 fn allow_negative_values(cmd: clap::Command) -> clap::Command {
     // Command-level, so it also reaches the args clap builds lazily.
     // Not `batch`: its recordings are positional and its procedure's
-    // options follow `--`.
-    if cmd.get_name() == "batch" {
+    // options follow `--`; not `thermal fit`, whose results are
+    // positional too (a flag after them must stay a flag).
+    if cmd.get_name() == "batch" || cmd.get_name() == "fit" {
         return cmd;
     }
     cmd.allow_hyphen_values(true)

@@ -247,6 +247,31 @@ pub struct Certificate {
     pub replaces: Option<(String, String)>,
 }
 
+/// The environment the recording itself recorded (its `temperature_c` and
+/// `humidity_pct` columns, summarised in the result's `environment`):
+/// `temperature 20.1 degC (19.8 to 20.4), relative humidity 45 % (…), from
+/// the recording`.
+pub fn recorded_environment(doc: &incal::document::ResultDocument) -> Option<String> {
+    let env = doc.extra.get("environment")?.as_object()?;
+    let part = |key: &str, what: &str, unit: &str| {
+        let e = env.get(key)?;
+        let (m, lo, hi) = (
+            e.get("mean")?.as_f64()?,
+            e.get("min")?.as_f64()?,
+            e.get("max")?.as_f64()?,
+        );
+        Some(format!("{what} {m:.1} {unit} ({lo:.1} to {hi:.1})"))
+    };
+    let parts: Vec<String> = [
+        part("temperature_c", "temperature", "degC"),
+        part("humidity_pct", "relative humidity", "%"),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    (!parts.is_empty()).then(|| format!("{}, from the recording", parts.join(", ")))
+}
+
 /// The rig whose reference standards make a procedure traceable (`None`:
 /// the result rests on the instrument's own record, as for noise).
 pub fn rig_of(p: Procedure) -> Option<&'static str> {
@@ -381,9 +406,10 @@ pub(crate) fn front_html(
     s.push_str(&row(
         "environment",
         "Environmental conditions",
-        &match &c.environment {
-            Some(e) => esc(e),
-            None => "<span class=\"missing\">not recorded</span>".into(),
+        &match (&c.environment, recorded_environment(doc)) {
+            (Some(e), _) => esc(e),
+            (None, Some(e)) => esc(&e),
+            (None, None) => "<span class=\"missing\">not recorded</span>".into(),
         },
     ));
     if let Some(r) = record_html {

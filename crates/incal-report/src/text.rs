@@ -9,6 +9,52 @@ use incal::document::{Cell, ResultDocument, Table};
 
 use crate::format::{dof_text, measured, shown_name, sig, trimmed};
 
+/// The thermal model's ranges, hysteresis and lag (a thermal result's
+/// `thermal` and `lag`), one line each; empty for other results.
+fn thermal_text(doc: &ResultDocument) -> String {
+    let mut s = String::new();
+    let vu = |v: &serde_json::Value| -> Option<String> {
+        let (x, u, u95) = (
+            v.get("value")?.as_f64()?,
+            v.get("u")?.as_f64()?,
+            v.get("U95")?.as_f64()?,
+        );
+        let (x, u, u95) = measured(x, u, u95);
+        Some(format!(
+            "{x} (u {u}, U95 {u95}) {}",
+            v.get("unit").and_then(|u| u.as_str()).unwrap_or("")
+        ))
+    };
+    if let Some(m) = doc.extra.get("thermal").and_then(|m| m.as_object()) {
+        s.push_str(
+            "
+Thermal model
+",
+        );
+        for (name, e) in m {
+            let num = |k: &str| e.get(k).and_then(|v| v.as_f64()).unwrap_or(f64::NAN);
+            s.push_str(&format!(
+                "{name}: degree {}, T_ref {} degC, valid {} to {} degC",
+                e.get("degree").and_then(|d| d.as_u64()).unwrap_or(0),
+                trimmed(num("t_ref_c"), 4),
+                trimmed(num("t_min_c"), 4),
+                trimmed(num("t_max_c"), 4)
+            ));
+            if let Some(h) = e.get("hysteresis").and_then(vu) {
+                s.push_str(&format!("; hysteresis (heating - cooling) {h}"));
+            }
+            if let Some(r) = e.get("rate_term").and_then(vu) {
+                s.push_str(&format!("; dT/dt term {r}"));
+            }
+            s.push('\n');
+        }
+    }
+    if let Some(l) = doc.extra.get("lag").and_then(vu) {
+        s.push_str(&format!("sensor lag behind the chamber: {l}\n"));
+    }
+    s
+}
+
 /// The readable report of any result document: title, instrument and
 /// inputs, coefficients (value, u, U95, dof in engineering units), fits,
 /// decisions, warnings, then every table of the procedure.
@@ -80,6 +126,7 @@ pub fn render(doc: &ResultDocument) -> String {
     s.push_str(
         "u: standard uncertainty; U95 = k95 u covers the value with 95 % probability (k95: Student t for dof; inf: known variance)\n",
     );
+    s.push_str(&thermal_text(doc));
     if let (Some(v), Some(rule)) = (doc.verdict, doc.decision_rule) {
         let rule = match rule {
             incal::document::limits::DecisionRule::Simple => {

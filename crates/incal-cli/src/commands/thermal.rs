@@ -37,7 +37,7 @@ pub struct FitArgs {
     #[arg(required = true, value_name = "RESULT.json")]
     pub results: Vec<PathBuf>,
     /// Reference temperature T_ref of the polynomials, degC.
-    #[arg(long, default_value_t = thermal::DEFAULT_T_REF_C)]
+    #[arg(long, default_value_t = thermal::DEFAULT_T_REF_C, allow_hyphen_values = true)]
     pub t_ref_c: f64,
     /// Degree of the polynomials: auto (the degree rule: the smallest degree whose lack-of-fit p >= 0.05, at most min(3, plateaus - 2)) or 0 to 3.
     #[arg(long, default_value = "auto", value_parser = parse_degree)]

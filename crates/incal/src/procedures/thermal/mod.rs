@@ -313,6 +313,7 @@ pub fn supported_degree(t_c: &[f64], extras: usize) -> Option<usize> {
 /// Fit with the degree `degree` (fixed, refused when the distinct
 /// temperatures cannot give it, naming `what.c<d>`) or chosen by the
 /// degree rule (module docs). Returns the fit and the trials.
+#[allow(clippy::too_many_arguments)]
 pub fn fit_with_degree(
     what: &str,
     t_c: &[f64],
@@ -545,8 +546,8 @@ mod tests {
         let c = [1e-3, 2e-5, -3e-7];
         let y: Vec<f64> = t.iter().map(|&t| poly(&c, 25.0, t)).collect();
         let f = fit_poly(&t, &y, &[1e-6; 7], &[], 25.0, 2, f64::INFINITY).unwrap();
-        for k in 0..3 {
-            assert!((f.values[k] - c[k]).abs() < 1e-9 * c[k].abs().max(1e-12) + 1e-15);
+        for (k, ck) in c.iter().enumerate() {
+            assert!((f.values[k] - ck).abs() < 1e-9 * ck.abs().max(1e-12) + 1e-15);
         }
         // G Σ Gᵀ is the covariance when the variance factor is 1.
         let sigma = DMatrix::from_diagonal_element(7, 7, 1e-12);

@@ -441,7 +441,7 @@ pub fn reduce(input: &RampInput, o: &RampOptions) -> Result<ResultDocument> {
         selection.insert(name.clone(), json!(trials));
         let mut tab = Table::new(
             &format!("ramp.{name}"),
-            &format!("{name}: block means against the sensor temperature"),
+            &format!("{name}: block means against the sensor temperature (consecutive blocks of a branch merged)"),
             &[
                 ("temperature_c", Some(Unit::Other("degC".into()))),
                 ("branch", None),
@@ -451,23 +451,42 @@ pub fn reduce(input: &RampInput, o: &RampOptions) -> Result<ResultDocument> {
                 ("residual", Some(unit.clone())),
             ],
         );
-        for (j, &i) in keep.iter().enumerate() {
-            let fitted: f64 = (0..f.values.len())
-                .map(|k| f.values[k] * regressor(&f, &ek, j, k, tk[j]))
-                .sum();
-            let (poly_only, _) = f.eval(tk[j]);
+        // At most about 60 rows: consecutive blocks of one branch merged
+        // (weighted means), so a report stays readable.
+        let group = keep.len().div_ceil(60).max(1);
+        let mut j = 0;
+        while j < keep.len() {
+            let br = branch[keep[j]];
+            let mut end = j;
+            while end < keep.len() && end - j < group && branch[keep[end]] == br {
+                end += 1;
+            }
+            let (mut sw, mut st, mut sy, mut sr) = (0.0, 0.0, 0.0, 0.0);
+            for q in j..end {
+                let w = 1.0 / (u[q] * u[q]);
+                let fitted: f64 = (0..f.values.len())
+                    .map(|k| f.values[k] * regressor(&f, &ek, q, k, tk[q]))
+                    .sum();
+                sw += w;
+                st += w * tk[q];
+                sy += w * y[q];
+                sr += w * (y[q] - fitted);
+            }
+            let t_mean = st / sw;
+            let (poly_only, _) = f.eval(t_mean);
             tab.push(vec![
-                Cell::num(tk[j]),
-                Cell::text(match branch[i] {
+                Cell::num(t_mean),
+                Cell::text(match br {
                     1 => "heating",
                     -1 => "cooling",
                     _ => "start",
                 }),
-                Cell::num(y[j]),
-                Cell::num(u[j]),
+                Cell::num(sy / sw),
+                Cell::num(sw.sqrt().recip()),
                 Cell::num(poly_only),
-                Cell::num(y[j] - fitted),
+                Cell::num(sr / sw),
             ])?;
+            j = end;
         }
         b.table(tab);
         b.table(super::soak::compensated_table(name, &unit, &f)?);
@@ -529,7 +548,7 @@ fn lag(
     let f = fit(&design, &DVector::from_vec(rate), &FitOptions::default())
         .map_err(|_| "the chamber and the sensor never differ: no lag to see".to_string())?;
     let (k, uk) = f.estimates.get("inverse_lag").ok_or("no slope")?;
-    if !(k > 0.0) || k < 3.0 * uk {
+    if k.is_nan() || k <= 0.0 || k < 3.0 * uk {
         return Err(format!(
             "the sensor does not follow the chamber measurably (1/tau = {k:.3e} +/- {uk:.1e} 1/s)"
         ));

@@ -1,0 +1,282 @@
+//! `incal thermal fit|ramp|apply`, `incal simulate thermal`, `incal plan
+//! thermal` and `incal export px4|ardupilot MODEL.json` from outside: the
+//! interface the issue fixes, and bad input refused in one line.
+
+mod common;
+
+use common::*;
+
+fn ramp_model(dir: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    let csv = dir.join("ramp.csv");
+    let truth = dir.join("truth.json");
+    ok(&run(&[
+        "simulate",
+        "thermal",
+        "--seed",
+        "4",
+        "--rate-hz",
+        "1",
+        "--hold-s",
+        "600",
+        "--ramp-c-per-min",
+        "2",
+        "--temperature-noise-c",
+        "0.01",
+        "--truth-out",
+        p(&truth),
+        "-o",
+        p(&csv),
+    ]));
+    let model = dir.join("model.json");
+    ok(&run(&[
+        "thermal",
+        "ramp",
+        "--input",
+        p(&csv),
+        "--rate-hz",
+        "1",
+        "--quantity",
+        "gyro",
+        "--json",
+        "-o",
+        p(&model),
+    ]));
+    (csv, model)
+}
+
+#[test]
+fn a_simulated_ramp_reduces_to_the_contract_and_compensates() {
+    let dir = workdir("thermal_ramp");
+    let (csv, model) = ramp_model(&dir);
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    assert_eq!(v["procedure"], "thermal");
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("truth.json")).unwrap()).unwrap();
+    for ch in ["gx", "gy", "gz"] {
+        let t = &v["thermal"][ch];
+        let d = t["degree"].as_u64().unwrap();
+        assert_eq!(t["t_ref_c"], 25.0);
+        assert!(t["t_min_c"].as_f64().unwrap() < -19.0);
+        assert!(t["t_max_c"].as_f64().unwrap() > 59.0);
+        assert!(t["hysteresis"]["u"].as_f64().unwrap() > 0.0);
+        for k in 0..=d {
+            let c = &v["coefficients"][format!("{ch}.c{k}")];
+            assert!(c["value"].is_f64(), "{ch}.c{k}");
+        }
+        assert_eq!(v["coefficients"][format!("{ch}.c1")]["unit"], "deg/s/degC");
+        let c1 = v["coefficients"][format!("{ch}.c1")]["value"]
+            .as_f64()
+            .unwrap();
+        let t1 = truth["channels"][ch]["c"][1].as_f64().unwrap();
+        assert!(
+            (c1 - t1).abs() < 5.0 * v["coefficients"][format!("{ch}.c1")]["u"].as_f64().unwrap()
+        );
+    }
+    assert!(v["lag"]["value"].as_f64().unwrap() > 100.0);
+    assert!(v["correlation"]["names"].as_array().unwrap().len() >= 9);
+
+    let out = dir.join("comp.csv");
+    let o = run(&[
+        "thermal",
+        "apply",
+        p(&model),
+        "--input",
+        p(&csv),
+        "-o",
+        p(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let raw = std::fs::read_to_string(&csv).unwrap();
+    let comp = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(raw.lines().next(), comp.lines().next(), "same header");
+    assert_eq!(raw.lines().count(), comp.lines().count(), "every row");
+
+    // The text form shows the coefficients with their units.
+    let text = ok(&run(&[
+        "thermal",
+        "ramp",
+        "--input",
+        p(&csv),
+        "--rate-hz",
+        "1",
+        "--quantity",
+        "gyro",
+    ]));
+    assert!(
+        text.contains("gx.c1") && text.contains("deg/s/degC"),
+        "{text}"
+    );
+}
+
+#[test]
+fn the_exports_write_the_flight_stacks_parameters() {
+    let dir = workdir("thermal_export");
+    let (_, model) = ramp_model(&dir);
+    let px4 = ok(&run(&["export", "px4", p(&model), "--device-id", "3"]));
+    for name in [
+        "TC_G_ENABLE",
+        "TC_G0_ID",
+        "TC_G0_TMIN",
+        "TC_G0_TMAX",
+        "TC_G0_TREF",
+        "TC_G0_X3_2",
+    ] {
+        assert!(
+            px4.lines().any(|l| l.split('\t').nth(2) == Some(name)),
+            "{name}: {px4}"
+        );
+    }
+    let ap = ok(&run(&["export", "ardupilot", p(&model), "--imu", "2"]));
+    for name in [
+        "INS_TCAL2_ENABLE,1",
+        "INS_TCAL2_TMIN,",
+        "INS_TCAL2_GYR1_X,",
+        "INS_TCAL2_GYR3_Z,",
+    ] {
+        assert!(ap.lines().any(|l| l.starts_with(name)), "{name}: {ap}");
+    }
+    // Axes that are not in the model are named.
+    refused(
+        &run(&["export", "px4", p(&model), "--axes", "a,b,c"]),
+        &["model.json", "a"],
+    );
+    // A model with no flight-stack unit is refused.
+    let csv = dir.join("ramp.csv");
+    let generic = dir.join("generic.json");
+    ok(&run(&[
+        "thermal",
+        "ramp",
+        "--input",
+        p(&csv),
+        "--rate-hz",
+        "1",
+        "--json",
+        "-o",
+        p(&generic),
+    ]));
+    refused(
+        &run(&["export", "ardupilot", p(&generic)]),
+        &["generic.json", "unit"],
+    );
+    // The noise form of export px4 still needs both results.
+    assert_eq!(run(&["export", "px4"]).status.code(), Some(2));
+}
+
+/// A tumble recording with a temperature_c column at `t_c`.
+fn tumble_at(dir: &std::path::Path, seed: u64, t_c: f64) -> std::path::PathBuf {
+    let o = run(&[
+        "simulate",
+        "tumble",
+        "--mount",
+        "pendulum",
+        "--seed",
+        &seed.to_string(),
+    ]);
+    let text = ok(&o);
+    let mut lines = text.lines();
+    let mut s = format!("{},temperature_c\n", lines.next().unwrap());
+    for l in lines {
+        s.push_str(&format!("{l},{t_c}\n"));
+    }
+    let csv = dir.join(format!("tumble_{seed}.csv"));
+    std::fs::write(&csv, s).unwrap();
+    let json = dir.join(format!("tumble_{seed}.json"));
+    ok(&run(&[
+        "tumble",
+        "--mount",
+        "pendulum",
+        "--input",
+        p(&csv),
+        "--serial",
+        "A7",
+        "--json",
+        "-o",
+        p(&json),
+    ]));
+    json
+}
+
+#[test]
+fn soak_results_fit_into_polynomials_per_coefficient() {
+    let dir = workdir("thermal_fit");
+    let temps = [-20.0, 5.0, 25.0, 45.0, 70.0];
+    let docs: Vec<_> = temps
+        .iter()
+        .enumerate()
+        .map(|(i, &t)| tumble_at(&dir, 30 + i as u64, t))
+        .collect();
+    let first: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&docs[0]).unwrap()).unwrap();
+    assert_eq!(first["environment"]["temperature_c"]["mean"], -20.0);
+    let mut args = vec!["thermal", "fit"];
+    args.extend(docs.iter().map(|d| p(d)));
+    args.extend(["--t-ref-c", "-5", "--json"]);
+    let v = json_of(&run(&args));
+    assert_eq!(v["procedure"], "thermal");
+    assert_eq!(v["instrument"]["serial"], "A7");
+    let th = v["thermal"].as_object().unwrap();
+    for name in ["K0", "K1"] {
+        let e = &th[name];
+        assert_eq!(e["t_min_c"], -20.0);
+        assert_eq!(e["t_max_c"], 70.0);
+        assert_eq!(e["t_ref_c"], -5.0);
+        assert!(e["degree"].as_u64().unwrap() <= 3);
+        assert!(v["coefficients"][format!("{name}.c0")]["value"].is_f64());
+    }
+    // A degree the plateaus cannot give is refused naming the term.
+    let mut args = vec!["thermal", "fit"];
+    args.extend(docs[..3].iter().map(|d| p(d)));
+    args.extend(["--degree", "3"]);
+    refused(&run(&args), &["K0.c3"]);
+    // A result without a temperature is refused naming the file.
+    let bare = dir.join("bare.json");
+    let mut doc = first.clone();
+    doc.as_object_mut().unwrap().remove("environment");
+    std::fs::write(&bare, doc.to_string()).unwrap();
+    refused(
+        &run(&["thermal", "fit", p(&bare), p(&docs[1])]),
+        &["bare.json", "temperature_c"],
+    );
+}
+
+#[test]
+fn plans_and_bad_input_are_answered_in_one_line() {
+    let o = ok(&run(&[
+        "plan",
+        "thermal",
+        "--plateaus-c",
+        "-40,-10,25,60,85",
+        "--u",
+        "1e-5",
+        "--degree",
+        "2",
+    ]));
+    assert!(o.contains("c2"), "{o}");
+    refused(
+        &run(&[
+            "plan",
+            "thermal",
+            "--plateaus-c",
+            "-40,25,85",
+            "--u",
+            "1e-5",
+            "--degree",
+            "3",
+        ]),
+        &["c3"],
+    );
+    let dir = workdir("thermal_bad");
+    let bad = dir.join("no_temp.csv");
+    std::fs::write(&bad, "time_s,gx\n0,1\n1,2\n").unwrap();
+    refused(
+        &run(&["thermal", "ramp", "--input", p(&bad), "--rate-hz", "1"]),
+        &["no_temp.csv", "temperature_c"],
+    );
+    let text = dir.join("text.csv");
+    std::fs::write(&text, "temperature_c,gx\n20,1\nhot,2\n").unwrap();
+    refused(
+        &run(&["thermal", "ramp", "--input", p(&text), "--rate-hz", "1"]),
+        &["text.csv:3", "temperature_c"],
+    );
+}
