@@ -29,6 +29,9 @@ pub struct ResultArgs {
     /// Further identity or conditions, KEY=VALUE (repeatable), e.g. --meta operator=lee --meta temperature_c=23.
     #[arg(long = "meta", value_name = "KEY=VALUE")]
     pub meta: Vec<String>,
+    /// The instrument's output unit (V, mA, counts, LSB, ...): every unit that says "output" (output, output/g, output/(deg/s)) is written with it (K1 in V/g), and limits may use it (V/g, mV/g). Values are unchanged.
+    #[arg(long, value_name = "UNIT")]
+    pub output_unit: Option<String>,
     /// Limits file (TOML): judge every limited coefficient (pass, conditional-pass, not-determined, conditional-fail, fail).
     #[arg(long, value_name = "FILE")]
     pub limits: Option<PathBuf>,
@@ -91,6 +94,9 @@ impl ResultArgs {
             doc.instrument
                 .meta
                 .insert(k.to_string(), v.trim().to_string());
+        }
+        if let Some(u) = &self.output_unit {
+            doc.declare_output_unit(u).map_err(usage)?;
         }
         if let Some(l) = &self.limits {
             apply_limits(&mut doc, l)?;

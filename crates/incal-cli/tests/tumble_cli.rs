@@ -283,3 +283,82 @@ fn bad_input_exits_2_with_one_line() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr_line(&o).contains("/nonexistent/x.csv"));
 }
+
+#[test]
+fn a_declared_output_unit_names_k1_and_its_limits() {
+    let csv = simulate(&["--mount", "pendulum", "--seed", "12"]);
+    let f = write("output_unit.csv", &csv);
+    let o = run(&[
+        "tumble",
+        "--mount",
+        "pendulum",
+        "--input",
+        f.to_str().unwrap(),
+        "--output-unit",
+        "V",
+        "--json",
+    ]);
+    let v = json_of(&o);
+    assert_eq!(v["coefficients"]["K1"]["unit"], "V/g");
+    assert_eq!(v["coefficients"]["K0"]["unit"], "g", "not an output unit");
+    assert_eq!(v["options"]["output_unit"], "V");
+    let cols = v["tables"][0]["columns"].as_array().unwrap();
+    assert!(cols.iter().any(|c| c["unit"] == "V"), "{cols:?}");
+    assert!(!v.to_string().contains("\"output/g\""));
+    // Limits in V/g and in mV/g judge it; one in output/g no longer fits.
+    let k1 = v["coefficients"]["K1"]["value"].as_f64().unwrap();
+    for (unit, scale) in [("V/g", 1.0), ("mV/g", 1e3)] {
+        let l = write(
+            &format!("ou_{}.toml", unit.replace('/', "_")),
+            &format!(
+                "[tumble]\nK1 = {{ min = {}, max = {}, unit = \"{unit}\" }}\n",
+                (k1 - 0.01) * scale,
+                (k1 + 0.01) * scale
+            ),
+        );
+        let o = run(&[
+            "tumble",
+            "--mount",
+            "pendulum",
+            "--input",
+            f.to_str().unwrap(),
+            "--output-unit",
+            "V",
+            "--limits",
+            l.to_str().unwrap(),
+            "--json",
+        ]);
+        let v = json_of(&o);
+        assert_eq!(v["verdicts"]["K1"]["verdict"], "pass", "{unit}");
+    }
+    let l = write(
+        "ou_output.toml",
+        "[tumble]\nK1 = { min = 0, max = 100, unit = \"output/g\" }\n",
+    );
+    refused(
+        &run(&[
+            "tumble",
+            "--mount",
+            "pendulum",
+            "--input",
+            f.to_str().unwrap(),
+            "--output-unit",
+            "V",
+            "--limits",
+            l.to_str().unwrap(),
+        ]),
+        &["output/g", "V/g"],
+    );
+    refused(
+        &run(&[
+            "tumble",
+            "--mount",
+            "pendulum",
+            "--input",
+            f.to_str().unwrap(),
+            "--output-unit",
+            "two words",
+        ]),
+        &["--output-unit"],
+    );
+}

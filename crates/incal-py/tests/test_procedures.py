@@ -60,6 +60,12 @@ CASES = [
         ["noise", "--duration-s", "200", "--rate-hz", "100", "--seed", "3", "--format", "csv"],
         {"rate_hz": 100},
     ),
+    (
+        "thermal_ramp",
+        ["thermal", "ramp"],
+        ["thermal", "--seed", "3", "--rate-hz", "1", "--hold-s", "300", "--ramp-c-per-min", "4"],
+        {"rate_hz": 1, "quantity": "gyro"},
+    ),
 ]
 
 
@@ -288,3 +294,30 @@ def test_fail_on_stops_with_the_result_kept(tmp_path):
     assert e.value.code == 3
     assert e.value.result.document["verdict"] == "fail"
     assert e.value.result.coefficients == r.coefficients
+
+
+def test_thermal_ramp_fit_apply_and_exports(tmp_path):
+    data, truth = incal.simulate.thermal(seed=5, rate_hz=1, hold_s=300, ramp_c_per_min=4)
+    assert list(data.columns[:3]) == ["time_s", "chamber_c", "temperature_c"]
+    assert truth["lag_s"] == 120.0
+    model = incal.thermal_ramp(data, rate_hz=1, quantity="gyro")
+    assert model.procedure == "thermal"
+    c1 = model.coefficients["gx.c1"]
+    assert abs(c1["value"] - truth["channels"]["gx"]["c"][1]) < 5 * c1["u"]
+    fixed = incal.thermal_apply(model, data)
+    assert list(fixed.columns) == list(data.columns)
+    assert len(fixed) == len(data)
+    px4 = incal.export_thermal(model, "px4", device_id=3)
+    assert "TC_G0_ID\t3\t6" in px4
+    ap = incal.export_thermal(model, "ardupilot", imu=2, path=str(tmp_path / "t.parm"))
+    assert (tmp_path / "t.parm").read_text() == ap and "INS_TCAL2_GYR1_X," in ap
+    # Soak: tumble results at three temperatures, by meta.
+    docs = []
+    for i, t in enumerate([-10, 25, 60]):
+        d, _ = incal.simulate.tumble(seed=40 + i)
+        docs.append(incal.tumble(d, mount="pendulum", meta=[f"temperature_c={t}"]))
+    soak = incal.thermal_fit(docs, t_ref_c=20)
+    assert soak.document["thermal"]["K1"]["t_ref_c"] == 20
+    assert "K1.c0" in soak.coefficients
+    with pytest.raises(incal.InputError, match="K0.c3"):
+        incal.thermal_fit(docs, degree=3)

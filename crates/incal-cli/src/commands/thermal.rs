@@ -159,12 +159,15 @@ pub struct SimArgs {
     /// What the channels measure: gyro (deg/s, channels gx,gy,gz) or accel (g, channels ax,ay,az).
     #[arg(long, value_enum, default_value = "gyro")]
     pub quantity: QuantityArg,
-    /// Low temperature of the chamber profile, degC.
+    /// Low temperature of the ramp profile (hold, heat, hold, cool, hold), degC.
     #[arg(long, default_value_t = -20.0)]
     pub t_low_c: f64,
     /// High temperature of the chamber profile, degC.
     #[arg(long, default_value_t = 60.0)]
     pub t_high_c: f64,
+    /// A soak sequence instead of the ramp: the chamber's plateaus in order, degC, comma separated (e.g. -40,-10,25,60,85,25); each held --hold-s, moved between at --ramp-c-per-min.
+    #[arg(long, value_delimiter = ',', conflicts_with_all = ["t_low_c", "t_high_c"])]
+    pub plateaus_c: Option<Vec<f64>>,
     /// Ramp rate of the chamber, degC/min.
     #[arg(long, default_value_t = 1.0)]
     pub ramp_c_per_min: f64,
@@ -189,9 +192,9 @@ pub struct SimArgs {
     /// Write the truth (polynomials, hysteresis, lag) as JSON to this file.
     #[arg(long, value_name = "FILE")]
     pub truth_out: Option<PathBuf>,
-    /// Output CSV (- = standard output).
+    /// Output CSV (default: standard output).
     #[arg(long, short = 'o')]
-    pub output: PathBuf,
+    pub output: Option<PathBuf>,
 }
 
 /// `incal simulate thermal`.
@@ -213,8 +216,10 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         channels: thermal::sim::default_channels(&names, gyro),
         unit: if gyro { "deg/s" } else { "g" }.into(),
         t_ref_c: a.t_ref_c,
-        t_low_c: a.t_low_c,
-        t_high_c: a.t_high_c,
+        waypoints_c: match &a.plateaus_c {
+            Some(p) => p.clone(),
+            None => vec![a.t_low_c, a.t_high_c, a.t_low_c],
+        },
         ramp_c_per_min: a.ramp_c_per_min,
         hold_s: a.hold_s,
         lag_s: a.lag_s,
@@ -226,7 +231,7 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
     if let Some(p) = &a.truth_out {
         crate::io::write_text(Some(p), &crate::output::json_text(&cfg.truth_json()))?;
     }
-    crate::io::write_stream(Some(&a.output), |out| {
+    crate::io::write_stream(a.output.as_deref(), |out| {
         cfg.write(out)
             .map_err(|e| std::io::Error::other(e.to_string()))
     })

@@ -45,6 +45,10 @@ __all__ = [
     "imu_autocal",
     "gfimu_calibrate",
     "noise",
+    "thermal_ramp",
+    "thermal_fit",
+    "thermal_apply",
+    "export_thermal",
     "read_result",
     "compare",
     "apply",
@@ -346,6 +350,64 @@ imu_multipos = _procedure("imu_multipos", ["imu", "multipos"], "IMU triad, least
 imu_autocal = _procedure("imu_autocal", ["imu", "autocal"], "IMU triad, autocalibration without a fixture.")
 gfimu_calibrate = _procedure("gfimu_calibrate", ["gfimu", "calibrate"], "Gyro-free unit: K0 and Ks of every accelerometer.")
 noise = _procedure("noise", ["noise"], "Noise and stability: Allan family, IEEE 952 terms, bias stability.")
+thermal_ramp = _procedure(
+    "thermal_ramp",
+    ["thermal", "ramp"],
+    "Thermal ramp: bias polynomials in temperature, hysteresis and lag from a chamber ramp.",
+)
+
+
+def _as_files(d: str, items: Sequence[Any], stem: str) -> List[str]:
+    files = []
+    for i, r in enumerate(items):
+        if isinstance(r, Result):
+            f = os.path.join(d, f"{stem}{i}.json")
+            r.to_json(f)
+            files.append(f)
+        else:
+            files.append(os.fspath(r))
+    return files
+
+
+def thermal_fit(results: Sequence[Any], **options: Any) -> Result:
+    """``incal thermal fit``: results (``Result`` or paths) of one instrument
+    and one procedure, each at its own temperature (``meta`` ``temperature_c``
+    or a ``temperature_c`` column of its recording), into a polynomial in
+    (T - T_ref) per coefficient (``NAME.c0``, ``NAME.c1``, ...)."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        files = _as_files(d, results, "plateau")
+        out, err = run(["thermal", "fit"] + files + ["--json"] + _options(options))
+    return Result(json.loads(out), err, out.decode())
+
+
+def thermal_apply(model: Any, data: Any = None, **columns: Any):
+    """``incal thermal apply``: a thermal model (``Result`` or path) applied
+    to raw data with a ``temperature_c`` column (path, DataFrame or arrays);
+    a pandas DataFrame."""
+    import tempfile
+
+    words, stdin = _data(data, columns)
+    with tempfile.TemporaryDirectory() as d:
+        (path,) = _as_files(d, [model], "model")
+        out, _ = run(["thermal", "apply", path] + words, stdin)
+    return _read_csv(out)
+
+
+def export_thermal(model: Any, stack: str = "px4", path: Optional[str] = None, **options: Any) -> str:
+    """``incal export px4|ardupilot MODEL.json``: a thermal model (``Result``
+    or path) as PX4's ``TC_*`` or ArduPilot's ``INS_TCALn_*`` parameters;
+    written to ``path`` when given. Options: ``axes``, ``device_id``,
+    ``with_offset`` (PX4), ``imu`` (ArduPilot)."""
+    import tempfile
+
+    if stack not in ("px4", "ardupilot"):
+        raise InputError(f"export_thermal: stack '{stack}' is not px4 or ardupilot")
+    with tempfile.TemporaryDirectory() as d:
+        (f,) = _as_files(d, [model], "model")
+        out, _ = run(["export", stack, f] + _options(options))
+    return _write(out.decode(), path)
 
 
 def read_result(path: str) -> Result:

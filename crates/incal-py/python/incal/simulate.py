@@ -19,6 +19,7 @@ __all__ = [
     "gyro_rate",
     "gyro_positions",
     "imu",
+    "thermal",
 ]
 
 
@@ -29,7 +30,7 @@ def _frame(csv: bytes):
 
 def _simulator(words: List[str], name: str):
     def simulate(**options: Any) -> Tuple[Any, List[str]]:
-        if words == ["gfimu"]:
+        if words in (["gfimu"], ["thermal"]):
             # The gyro-free unit's truth is written beside the CSV (the
             # CSV holds rows only): read back from a temporary file.
             import json
@@ -41,7 +42,8 @@ def _simulator(words: List[str], name: str):
             try:
                 out, _ = run(["simulate"] + words + _options(options) + ["--truth-out", path])
                 with open(path) as f:
-                    notes = json.load(f)["notes"]
+                    truth = json.load(f)
+                notes = truth["notes"] if words == ["gfimu"] else truth
             finally:
                 os.unlink(path)
             return _read_csv(out), notes
@@ -61,3 +63,8 @@ gfimu = _simulator(["gfimu"], "gfimu")
 gyro_rate = _simulator(["gyro-rate"], "gyro_rate")
 gyro_positions = _simulator(["gyro-positions"], "gyro_positions")
 imu = _simulator(["imu"], "imu")
+thermal = _simulator(["thermal"], "thermal")
+thermal.__doc__ = (
+    "``incal simulate thermal``: (DataFrame with time_s, chamber_c, temperature_c and the "
+    "channels, truth dict: t_ref_c, lag_s, unit and per channel c, hysteresis, noise)."
+)

@@ -271,6 +271,21 @@ fn unit_factor(json: &Unit, unit: &str) -> Option<f64> {
     if unit == label {
         return Some(1.0 / scale);
     }
+    // An SI prefix on a declared output unit (mV/g for V/g, mA for A).
+    let js = json.as_str();
+    for (p, f) in [
+        ("n", 1e-9),
+        ("u", 1e-6),
+        ("µ", 1e-6),
+        ("m", 1e-3),
+        ("k", 1e3),
+    ] {
+        if let Some(rest) = unit.strip_prefix(p) {
+            if rest == js && !js.is_empty() && js.starts_with(|c: char| c.is_ascii_uppercase()) {
+                return Some(f);
+            }
+        }
+    }
     let rad = std::f64::consts::PI / 180.0;
     match (json, unit) {
         (Unit::Rad, "deg") => Some(rad),

@@ -695,6 +695,106 @@ impl ResultDocument {
         let (ca, cb) = (self.coefficients.get(a)?, self.coefficients.get(b)?);
         Some(self.correlation.matrix[ia][ib] * ca.u * cb.u)
     }
+
+    /// Declare the instrument's output unit (`--output-unit V`): every
+    /// unit that names the generic `output` (`output`, `output/g`,
+    /// `output/(deg/s)`, …) in the coefficients, the fits' residuals, the
+    /// tables' columns and the procedure objects is written with `unit`
+    /// instead (`V`, `V/g`, `V/(deg/s)`), and `options.output_unit`
+    /// records it. Values are unchanged: the recording was already in that
+    /// unit; only its name is now known, so limits in it (`V/g`, `mV/g`)
+    /// apply. Refuses an empty unit, one with spaces, commas or quotes, and
+    /// a document whose output unit is already declared otherwise.
+    pub fn declare_output_unit(&mut self, unit: &str) -> std::result::Result<(), String> {
+        let ok = !unit.is_empty()
+            && unit.len() <= 24
+            && unit
+                .chars()
+                .all(|c| c.is_alphanumeric() || "%/._^()-*µ".contains(c));
+        if !ok {
+            return Err(format!(
+                "--output-unit '{}': a unit such as V, mA, counts or LSB (letters, digits and % / . _ ^ ( ) - *, at most 24)",
+                incal_io::clip(unit)
+            ));
+        }
+        if let Some(had) = self.options.get("output_unit").and_then(Value::as_str) {
+            if had != unit {
+                return Err(format!(
+                    "--output-unit {unit}: the result already has output unit {had}"
+                ));
+            }
+            return Ok(());
+        }
+        let swap = |u: &Unit| -> Option<Unit> {
+            let s = u.as_str();
+            contains_word(s, "output").then(|| Unit::parse(&replace_word(s, "output", unit)))
+        };
+        for (_, c) in self.coefficients.0.iter_mut() {
+            if let Some(n) = swap(&c.unit) {
+                c.unit = n;
+            }
+        }
+        for f in &mut self.fits {
+            if let Some(n) = swap(&f.residual_unit) {
+                f.residual_unit = n;
+            }
+        }
+        for t in &mut self.tables {
+            for c in &mut t.columns {
+                if let Some(n) = c.unit.as_ref().and_then(swap) {
+                    c.unit = Some(n);
+                }
+            }
+        }
+        fn walk(v: &mut Value, unit: &str) {
+            match v {
+                Value::Object(m) => {
+                    for (k, x) in m.iter_mut() {
+                        match x {
+                            Value::String(s) if k == "unit" && contains_word(s, "output") => {
+                                *s = replace_word(s, "output", unit);
+                            }
+                            _ => walk(x, unit),
+                        }
+                    }
+                }
+                Value::Array(a) => a.iter_mut().for_each(|x| walk(x, unit)),
+                _ => {}
+            }
+        }
+        for v in self.extra.values_mut() {
+            walk(v, unit);
+        }
+        self.options
+            .insert("output_unit".into(), Value::String(unit.to_string()));
+        Ok(())
+    }
+}
+
+/// True when `word` appears in `s` as a whole word (not inside a longer
+/// identifier).
+fn contains_word(s: &str, word: &str) -> bool {
+    replace_word(s, word, "\u{0}") != s
+}
+
+/// `s` with every whole-word `word` replaced by `by`.
+fn replace_word(s: &str, word: &str, by: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut rest = s;
+    while let Some(i) = rest.find(word) {
+        let before = rest[..i].chars().next_back();
+        let after = rest[i + word.len()..].chars().next();
+        let edge = |c: Option<char>| c.is_none_or(|c| !(c.is_alphanumeric() || c == '_'));
+        out.push_str(&rest[..i]);
+        if edge(before) && edge(after) {
+            out.push_str(by);
+        } else {
+            out.push_str(word);
+        }
+        rest = &rest[i + word.len()..];
+    }
+    out.push_str(rest);
+    out
 }
 
 /// The JSON Schema of [`ResultDocument`] (the file
@@ -896,6 +996,24 @@ mod tests {
             6.0,
         )
         .unwrap()
+    }
+
+    #[test]
+    fn a_declared_output_unit_renames_only_whole_words() {
+        assert_eq!(replace_word("output/(deg/s)", "output", "V"), "V/(deg/s)");
+        assert_eq!(replace_word("outputs/g", "output", "V"), "outputs/g");
+        assert!(!contains_word("g/g^2", "output"));
+        let mut b = DocumentBuilder::new(Procedure::Tumble, "t");
+        b.estimates(&block(), "", term_unit).unwrap();
+        let mut doc = b.finish();
+        doc.declare_output_unit("mA").unwrap();
+        assert_eq!(doc.coefficients.get("K1").unwrap().unit.as_str(), "mA/g");
+        assert_eq!(doc.coefficients.get("K0").unwrap().unit.as_str(), "g");
+        assert!(doc.declare_output_unit("V").is_err(), "already mA");
+        assert!(doc.declare_output_unit("mA").is_ok());
+        let mut d2 = doc.clone();
+        d2.options.clear();
+        assert!(d2.declare_output_unit("two words").is_err());
     }
 
     #[test]

@@ -4,8 +4,9 @@
 //! [`super::ramp`] (`incal simulate thermal`).
 //!
 //! # Profile
-//! The chamber holds `t_low_c` for `hold_s`, ramps to `t_high_c` at
-//! `ramp_c_per_min`, holds `hold_s`, ramps back and holds `hold_s`. The
+//! The chamber holds each of its set points `hold_s` and moves between
+//! them at `ramp_c_per_min`: a ramp is low, high, low; a soak sequence
+//! steps through plateaus (and may return). The
 //! sensor follows as a first-order lag `dT_s/dt = (T_c − T_s)/τ`,
 //! integrated exactly per sample for a chamber linear over the step:
 //! `T_s ← T_c − sτ + (T_s0 − T_c0 + sτ) e^{−Δt/τ}`, `s` the chamber's
@@ -48,10 +49,10 @@ pub struct RampSim {
     pub unit: String,
     /// `T_ref` of the truth polynomials, °C.
     pub t_ref_c: f64,
-    /// Low temperature, °C.
-    pub t_low_c: f64,
-    /// High temperature, °C.
-    pub t_high_c: f64,
+    /// The chamber's set points in order, °C: held `hold_s` each, moved
+    /// between at `ramp_c_per_min`. A ramp is `[low, high, low]`; a soak
+    /// sequence the plateaus (`[-40, -10, 25, 60, 85, 25]`).
+    pub waypoints_c: Vec<f64>,
     /// Ramp rate of the chamber, °C/min.
     pub ramp_c_per_min: f64,
     /// Hold at each end, s.
@@ -67,10 +68,29 @@ pub struct RampSim {
 }
 
 impl RampSim {
+    /// The profile's segments: `(start_s, duration_s, from_c, to_c)`,
+    /// holds (from = to) and moves alternating.
+    fn segments(&self) -> Vec<(f64, f64, f64, f64)> {
+        let mut out = Vec::new();
+        let mut t = 0.0;
+        for (i, &w) in self.waypoints_c.iter().enumerate() {
+            if i > 0 {
+                let from = self.waypoints_c[i - 1];
+                let d = (w - from).abs() / (self.ramp_c_per_min / 60.0);
+                out.push((t, d, from, w));
+                t += d;
+            }
+            out.push((t, self.hold_s, w, w));
+            t += self.hold_s;
+        }
+        out
+    }
+
     /// Duration of the profile, s.
     pub fn duration_s(&self) -> f64 {
-        let ramp = (self.t_high_c - self.t_low_c).abs() / (self.ramp_c_per_min / 60.0);
-        3.0 * self.hold_s + 2.0 * ramp
+        self.segments()
+            .last()
+            .map_or(0.0, |(start, d, _, _)| start + d)
     }
 
     /// Rows the simulation writes.
@@ -101,13 +121,17 @@ impl RampSim {
         if !(self.temperature_noise_c.is_finite() && self.temperature_noise_c >= 0.0) {
             return bad("temperature noise (0 or more)", self.temperature_noise_c);
         }
-        for t in [self.t_low_c, self.t_high_c, self.t_ref_c] {
+        for &t in self.waypoints_c.iter().chain([&self.t_ref_c]) {
             if !(t.is_finite() && (-273.15..=1000.0).contains(&t)) {
                 return bad("temperature (degC)", t);
             }
         }
-        if self.t_high_c <= self.t_low_c {
-            return bad("t_high_c (above t_low_c)", self.t_high_c);
+        if self.waypoints_c.len() < 2 {
+            return Err(Error::TooFew {
+                what: "chamber set points".into(),
+                needed: 2,
+                got: self.waypoints_c.len(),
+            });
         }
         if self.channels.is_empty() {
             return Err(Error::TooFew {
@@ -136,19 +160,17 @@ impl RampSim {
 
     /// The chamber temperature at time `t` (s).
     pub fn chamber_c(&self, t: f64) -> f64 {
-        let ramp = (self.t_high_c - self.t_low_c) / (self.ramp_c_per_min / 60.0);
-        let h = self.hold_s;
-        if t < h {
-            self.t_low_c
-        } else if t < h + ramp {
-            self.t_low_c + (t - h) * self.ramp_c_per_min / 60.0
-        } else if t < 2.0 * h + ramp {
-            self.t_high_c
-        } else if t < 2.0 * h + 2.0 * ramp {
-            self.t_high_c - (t - 2.0 * h - ramp) * self.ramp_c_per_min / 60.0
-        } else {
-            self.t_low_c
+        let segs = self.segments();
+        for &(start, d, from, to) in &segs {
+            if t < start + d {
+                return if d > 0.0 {
+                    from + (to - from) * ((t - start) / d).clamp(0.0, 1.0)
+                } else {
+                    to
+                };
+            }
         }
+        self.waypoints_c.last().copied().unwrap_or(0.0)
     }
 
     /// Write the recording (`time_s,chamber_c,temperature_c,<channels>`).
@@ -166,7 +188,7 @@ impl RampSim {
             0.0
         };
         let threshold = 0.25 * self.ramp_c_per_min / 60.0;
-        let mut ts = self.t_low_c;
+        let mut ts = self.waypoints_c[0];
         let mut branch = 0.0;
         let mut cells = Vec::with_capacity(header.len());
         for i in 0..self.rows() {
