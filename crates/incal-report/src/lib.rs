@@ -679,7 +679,11 @@ pub fn render_html_with(
     }
     s.push_str("</section>\n");
 
-    let mut figures: Vec<plots::Plot> = doc.tables.iter().flat_map(plots::table_plots).collect();
+    let mut figures: Vec<plots::Plot> = if doc.procedure == incal::document::Procedure::Thermal {
+        plots::thermal_plots(doc)
+    } else {
+        doc.tables.iter().flat_map(plots::table_plots).collect()
+    };
     figures.extend(plots::allan_plots(doc));
     let limits = |n: &str| verdict_of(doc, Some(n)).map(|j| (j.min, j.max));
     figures.extend(plots::coefficient_plots(doc, figures.is_empty(), &limits));

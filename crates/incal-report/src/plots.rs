@@ -1165,6 +1165,161 @@ pub fn allan_plots(doc: &ResultDocument) -> Vec<Plot> {
     out
 }
 
+/// The plots of a thermal model: per coefficient or channel, its points
+/// (plateaus or ramp blocks, bars ±U95 of each) against temperature with
+/// the fitted polynomial drawn as a curve and its ±U95 band (from the
+/// `model.NAME` table), then the residuals against temperature.
+pub fn thermal_plots(doc: &ResultDocument) -> Vec<Plot> {
+    let Some(map) = doc.extra.get("thermal").and_then(|m| m.as_object()) else {
+        return Vec::new();
+    };
+    let find = |id: &str| doc.tables.iter().find(|t| t.id == id);
+    let mut out = Vec::new();
+    for name in map.keys() {
+        let points = find(&format!("plateaus.{name}")).or_else(|| find(&format!("ramp.{name}")));
+        let model = find(&format!("model.{name}"));
+        let (Some(pts), Some(model)) = (points, model) else {
+            continue;
+        };
+        let (Some(pt_t), Some(pt_u), Some(pt_r)) = (
+            column(pts, "temperature_c"),
+            column(pts, "u"),
+            column(pts, "residual"),
+        ) else {
+            continue;
+        };
+        let Some(pt_y) = column(pts, "value").or_else(|| column(pts, "mean")) else {
+            continue;
+        };
+        let (Some(m_t), Some(m_y), Some(m_u95)) = (
+            column(model, "temperature_c"),
+            column(model, "polynomial"),
+            column(model, "U95"),
+        ) else {
+            continue;
+        };
+        let unit = pts.columns[pt_y].unit.clone();
+        let k = incal::estimation::coverage_factor(f64::INFINITY, 0.95);
+        let rows: Vec<(f64, f64, f64, f64)> = pts
+            .rows
+            .iter()
+            .filter_map(|r| {
+                Some((
+                    number(&r[pt_t])?,
+                    number(&r[pt_y])?,
+                    number(&r[pt_u])?,
+                    number(&r[pt_r])?,
+                ))
+            })
+            .collect();
+        let curve: Vec<(f64, f64, f64)> = model
+            .rows
+            .iter()
+            .filter_map(|r| Some((number(&r[m_t])?, number(&r[m_y])?, number(&r[m_u95])?)))
+            .collect();
+        if rows.is_empty() || curve.is_empty() {
+            continue;
+        }
+        let mag = rows.iter().map(|r| r.1.abs()).fold(0.0, f64::max);
+        let (scale, label) = display_unit(unit.as_ref(), mag);
+        let line = |f: &dyn Fn(&(f64, f64, f64)) -> f64| -> Vec<Pt> {
+            curve
+                .iter()
+                .map(|c| Pt {
+                    x: c.0,
+                    y: f(c) * scale,
+                    bar: None,
+                })
+                .collect()
+        };
+        let series = vec![
+            Series {
+                key: 0,
+                style: Style::Dots,
+                points: rows
+                    .iter()
+                    .map(|r| Pt {
+                        x: r.0,
+                        y: r.1 * scale,
+                        bar: Some(k * r.2 * scale),
+                    })
+                    .collect(),
+            },
+            Series {
+                key: 1,
+                style: Style::Line,
+                points: line(&|c| c.1),
+            },
+            Series {
+                key: 2,
+                style: Style::Dashed,
+                points: line(&|c| c.1 + c.2),
+            },
+            Series {
+                key: 2,
+                style: Style::Dashed,
+                points: line(&|c| c.1 - c.2),
+            },
+        ];
+        out.push(Plot {
+            kind: "fitted",
+            source: name.clone(),
+            title: format!("{name} against temperature"),
+            x_desc: "temperature (degC)".into(),
+            y_desc: with_unit(name, &label),
+            x_axis: XAxis::Numeric,
+            dodge: false,
+            series,
+            legend: vec![
+                format!("{} (bars: +-U95)", pts.title),
+                "fitted polynomial".into(),
+                "polynomial +- U95".into(),
+            ],
+            hlines: Vec::new(),
+            caption: format!(
+                "{name} at each point of table {} against temperature, bars +-U95 of the point; the polynomial of degree {} fitted to them, drawn as a curve over the valid range, with its expanded uncertainty band (table {}).",
+                pts.id,
+                map[name]["degree"].as_u64().unwrap_or(0),
+                model.id
+            ),
+            log_log: false,
+        });
+        let rmag = rows.iter().map(|r| r.3.abs().max(r.2)).fold(0.0, f64::max);
+        let (rs, rl) = display_unit(unit.as_ref(), rmag);
+        out.push(Plot {
+            kind: "residual",
+            source: pts.id.clone(),
+            title: format!("{name}: residual after compensation"),
+            x_desc: "temperature (degC)".into(),
+            y_desc: with_unit("residual", &rl),
+            x_axis: XAxis::Numeric,
+            dodge: false,
+            series: vec![Series {
+                key: 0,
+                style: Style::Dots,
+                points: rows
+                    .iter()
+                    .map(|r| Pt {
+                        x: r.0,
+                        y: r.3 * rs,
+                        bar: Some(k * r.2 * rs),
+                    })
+                    .collect(),
+            }],
+            legend: Vec::new(),
+            hlines: vec![HLine {
+                y: 0.0,
+                limit: false,
+            }],
+            caption: format!(
+                "What is left of {name} after the polynomial is taken off (point minus model) over the valid range, bars +-U95 of the point: the compensation's residual."
+            ),
+            log_log: false,
+        });
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
 
