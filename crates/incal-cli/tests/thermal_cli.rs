@@ -280,3 +280,78 @@ fn plans_and_bad_input_are_answered_in_one_line() {
         &["text.csv:3", "temperature_c"],
     );
 }
+
+#[test]
+fn history_keeps_one_temperature_when_asked_and_says_when_it_mixes() {
+    let dir = workdir("thermal_history");
+    let db = dir.join("t.db");
+    for (i, (t, date)) in [
+        (-20.0, "2026-01-05"),
+        (25.0, "2026-02-05"),
+        (70.0, "2026-03-05"),
+        (25.0, "2026-04-05"),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let f = tumble_at(&dir, 50 + i as u64, *t);
+        ok(&run(&[
+            "record",
+            "add",
+            p(&f),
+            "--db",
+            p(&db),
+            "--created-utc",
+            date,
+        ]));
+    }
+    let all = json_of(&run(&[
+        "record",
+        "history",
+        "--serial",
+        "A7",
+        "--coefficient",
+        "K1",
+        "--db",
+        p(&db),
+        "--json",
+    ]));
+    assert_eq!(all["points"].as_array().unwrap().len(), 4);
+    assert_eq!(all["points"][0]["temperature_c"], -20.0);
+    assert!(
+        all["notes"].to_string().contains("-20 to 70 degC"),
+        "{}",
+        all["notes"]
+    );
+    let at25 = json_of(&run(&[
+        "record",
+        "history",
+        "--serial",
+        "A7",
+        "--coefficient",
+        "K1",
+        "--db",
+        p(&db),
+        "--at-temperature-c",
+        "25",
+        "--json",
+    ]));
+    let pts = at25["points"].as_array().unwrap();
+    assert_eq!(pts.len(), 2);
+    assert!(pts.iter().all(|p| p["temperature_c"] == 25.0));
+    refused(
+        &run(&[
+            "record",
+            "history",
+            "--serial",
+            "A7",
+            "--coefficient",
+            "K1",
+            "--db",
+            p(&db),
+            "--at-temperature-c",
+            "-40",
+        ]),
+        &["within 2 degC of -40"],
+    );
+}

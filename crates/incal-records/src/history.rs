@@ -57,6 +57,9 @@ pub struct HistoryPoint {
     pub dof: Option<f64>,
     /// Unit of value, u and U95.
     pub unit: Unit,
+    /// The temperature the calibration was made at, °C (its
+    /// `temperature_c`: `--meta` or the recording's column), when known.
+    pub temperature_c: Option<f64>,
 }
 
 /// The drift rate (module docs).
@@ -265,6 +268,7 @@ mod tests {
             u95: k95 * u,
             dof,
             unit: Unit::G,
+            temperature_c: None,
         }
     }
 

@@ -203,6 +203,10 @@ pub struct Supersession {
     pub created_utc: String,
 }
 
+/// Calibrations of one coefficient spread over more than this (°C) earn a
+/// note in its history: their differences may be temperature, not drift.
+pub const TEMPERATURE_SPREAD_C: f64 = 5.0;
+
 /// One stored record in full ([`Store::show`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StoredRecord {
@@ -932,7 +936,7 @@ impl Store {
     /// an error; so are records of more than one procedure (a tumble's K2
     /// is K2 − K_pp, a centrifuge's is K2: [`Store::history_of`] picks one).
     pub fn history(&self, serial: &str, coefficient: &str) -> Result<History> {
-        self.history_of(serial, coefficient, None)
+        self.history_of(serial, coefficient, None, None)
     }
 
     /// [`Store::history`] over the records of `procedure` only (a
@@ -942,8 +946,9 @@ impl Store {
         serial: &str,
         coefficient: &str,
         procedure: Option<&str>,
+        temperature: Option<(f64, f64)>,
     ) -> Result<History> {
-        self.history_if_any(serial, coefficient, procedure)?
+        self.history_if_any(serial, coefficient, procedure, temperature)?
             .map_err(Error::Input)
     }
 
@@ -951,11 +956,17 @@ impl Store {
     /// instrument, every one superseded, none with the coefficient) as
     /// `Ok(Err(why))` rather than an error: a report plots the histories
     /// there are.
+    ///
+    /// With `temperature = Some((t, tol))` only the records made within
+    /// `tol` °C of `t` count (a coefficient that moves with temperature
+    /// drifts only at one temperature); without it, records spread over
+    /// more than [`TEMPERATURE_SPREAD_C`] earn a note.
     pub fn history_if_any(
         &self,
         serial: &str,
         coefficient: &str,
         procedure: Option<&str>,
+        temperature: Option<(f64, f64)>,
     ) -> Result<std::result::Result<History, String>> {
         let (rows, known) = {
             let mut c = self.conn.borrow_mut();
@@ -993,6 +1004,7 @@ impl Store {
         let mut points: Vec<HistoryPoint> = Vec::new();
         let mut names: Vec<String> = Vec::new();
         let mut procedures: Vec<String> = Vec::new();
+        let mut skipped_by_temperature = 0usize;
         for (id, created_utc, text, proc_id) in rows {
             let doc = ResultDocument::from_json(&text).map_err(|e| Error::Tampered {
                 id,
@@ -1006,6 +1018,13 @@ impl Store {
                 }
                 continue;
             };
+            let temperature_c = incal::procedures::thermal::soak::temperature_of(&doc).ok();
+            if let Some((t, tol)) = temperature {
+                if !temperature_c.is_some_and(|x| (x - t).abs() <= tol) {
+                    skipped_by_temperature += 1;
+                    continue;
+                }
+            }
             if !procedures.contains(&proc_id) {
                 procedures.push(proc_id);
             }
@@ -1025,7 +1044,14 @@ impl Store {
                 u95: c.u95,
                 dof: c.dof,
                 unit: c.unit.clone(),
+                temperature_c,
             });
+        }
+        if points.is_empty() && skipped_by_temperature > 0 {
+            let (t, tol) = temperature.unwrap_or_default();
+            return Ok(Err(format!(
+                "serial '{serial}': no calibration with {coefficient} within {tol} degC of {t} degC ({skipped_by_temperature} at other or unknown temperatures)"
+            )));
         }
         if points.is_empty() {
             return Ok(Err(format!(
@@ -1040,7 +1066,18 @@ impl Store {
                 procedures[0]
             )));
         }
-        let a = history::analyse(&points);
+        let mut a = history::analyse(&points);
+        let temps: Vec<f64> = points.iter().filter_map(|p| p.temperature_c).collect();
+        let (lo, hi) = temps
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+                (a.min(*t), b.max(*t))
+            });
+        if temperature.is_none() && hi - lo > TEMPERATURE_SPREAD_C {
+            a.notes.push(format!(
+                "the calibrations were made from {lo} to {hi} degC: a coefficient that moves with temperature shows that as drift; give --at-temperature-c to keep one temperature, or fit the thermal model (incal thermal fit)"
+            ));
+        }
         Ok(Ok(History {
             serial: serial.to_string(),
             coefficient: coefficient.to_string(),

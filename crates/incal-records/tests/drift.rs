@@ -80,6 +80,7 @@ fn simulated(rng: &mut Rng, rate: f64, extra_sd: f64) -> Vec<HistoryPoint> {
             u95: 1.96 * u,
             dof: None,
             unit: incal::units::Unit::G,
+            temperature_c: None,
         })
         .collect()
 }

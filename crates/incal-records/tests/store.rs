@@ -407,10 +407,12 @@ fn history_keeps_one_procedure() {
         "{e}"
     );
     assert!(e.to_string().contains("--procedure tumble"), "{e}");
-    let t = s.history_of("SN-M", "K2", Some("tumble")).unwrap();
+    let t = s.history_of("SN-M", "K2", Some("tumble"), None).unwrap();
     assert_eq!(t.points.iter().map(|p| p.id).collect::<Vec<_>>(), [1, 3]);
-    let c = s.history_of("SN-M", "K2", Some("centrifuge")).unwrap();
+    let c = s
+        .history_of("SN-M", "K2", Some("centrifuge"), None)
+        .unwrap();
     assert_eq!(c.points.len(), 1);
-    let none = s.history_of("SN-M", "K2", Some("noise")).unwrap_err();
+    let none = s.history_of("SN-M", "K2", Some("noise"), None).unwrap_err();
     assert!(none.to_string().contains("no noise records"), "{none}");
 }

@@ -7,7 +7,7 @@
 use incal_records::{History, RecordSummary, StoredRecord, Verified};
 use serde_json::{json, Value};
 
-use crate::format::{dof_text, measured, sig};
+use crate::format::{dof_text, measured, sig, trimmed};
 use crate::text::table;
 
 /// `{"records": [{id, serial, procedure, created_utc, sha256, operator,
@@ -140,6 +140,7 @@ pub fn history_json(h: &History) -> Value {
                 "u": num(Some(p.u)),
                 "U95": num(Some(p.u95)),
                 "dof": num(p.dof),
+                "temperature_c": num(p.temperature_c),
             })
         })
         .collect();
@@ -191,11 +192,21 @@ pub fn history_text(h: &History) -> String {
                 u95,
                 dof(p.dof),
                 label.to_string(),
+                p.temperature_c.map_or("-".into(), |t| trimmed(t, 4)),
             ]
         })
         .collect();
     s.push_str(&table(
-        &["id", "created_utc", "value", "u", "U95", "dof", "unit"],
+        &[
+            "id",
+            "created_utc",
+            "value",
+            "u",
+            "U95",
+            "dof",
+            "unit",
+            "temperature_c",
+        ],
         &rows,
     ));
     s.push('\n');

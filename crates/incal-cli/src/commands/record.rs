@@ -157,6 +157,12 @@ pub struct HistoryArgs {
     /// Only the records of this procedure (tumble, centrifuge, ...): needed when the coefficient comes from records of more than one.
     #[arg(long)]
     pub procedure: Option<String>,
+    /// Only the calibrations made near this temperature, degC (their temperature_c: --meta or the recording's column); a coefficient that moves with temperature drifts only at one temperature.
+    #[arg(long, allow_hyphen_values = true)]
+    pub at_temperature_c: Option<f64>,
+    /// With --at-temperature-c: how near, degC.
+    #[arg(long, default_value_t = 2.0, requires = "at_temperature_c")]
+    pub within_c: f64,
     #[command(flatten)]
     pub db: DbArgs,
     #[command(flatten)]
@@ -462,7 +468,12 @@ fn history(a: &HistoryArgs) -> CliResult<()> {
     let store = open(&a.db, false)?;
     store.check_chain().map_err(store_err(&a.db))?;
     let h = store
-        .history_of(&a.serial, &a.coefficient, procedure)
+        .history_of(
+            &a.serial,
+            &a.coefficient,
+            procedure,
+            a.at_temperature_c.map(|t| (t, a.within_c)),
+        )
         .map_err(store_err(&a.db))?;
     let text = if a.out.json {
         json_text(&records::history_json(&h))

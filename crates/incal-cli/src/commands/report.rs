@@ -250,7 +250,7 @@ fn history(store: &incal_records::Store, doc: &ResultDocument) -> CliResult<Vec<
         // A new instrument, or a coefficient not recorded before, has no
         // history to plot.
         let Ok(h) = store
-            .history_if_any(serial, name, Some(doc.procedure.as_str()))
+            .history_if_any(serial, name, Some(doc.procedure.as_str()), None)
             .map_err(|e| CliError::Input(format!("{path}: {e}")))?
         else {
             continue;
