@@ -379,3 +379,55 @@ fn a_soak_sequence_in_one_static_recording_recovers_the_polynomial() {
     assert!(degree_hits * 100 >= 80 * runs, "{degree_hits}/{runs}");
     assert!((0.88..=1.0).contains(&rate), "{rate}");
 }
+
+#[test]
+fn the_ramp_plan_predicts_the_monte_carlo_scatter() {
+    let cfg = ramp_sim(1, 0.01);
+    let plan = plan::RampPlan {
+        profile: cfg.clone(),
+        noise: 0.02,
+        block_s: 10.0,
+        degree: 2,
+    };
+    let (pred, hyst, dof) = plan::predict_ramp(&plan).unwrap();
+    assert!(dof > 100);
+    let hyst = hyst.expect("both branches");
+    let runs = 120u64;
+    let mut sum2 = [0.0; 4];
+    for s in 0..runs {
+        let mut c = cfg.clone();
+        c.seed = trial_seed(41, s);
+        let mut csv = Vec::new();
+        c.write(&mut csv).unwrap();
+        let o = ramp::RampOptions {
+            rate_hz: c.rate_hz,
+            degree: Degree::Fixed(2),
+            ..Default::default()
+        };
+        let doc = reduce_source::<ramp::Ramp, _>(
+            "r.csv",
+            csv.as_slice(),
+            &incal_io::ReadOptions::default(),
+            &o,
+            &Silent,
+        )
+        .unwrap();
+        for (k, t) in c.channels[0].c.iter().enumerate() {
+            sum2[k] += (doc.coefficients.get(&format!("gx.c{k}")).unwrap().value - t).powi(2);
+        }
+        sum2[3] += (doc.extra["thermal"]["gx"]["hysteresis"]["value"]
+            .as_f64()
+            .unwrap()
+            - 0.01)
+            .powi(2);
+    }
+    for (k, p) in pred.iter().chain([&hyst]).enumerate() {
+        let mc = (sum2[k] / runs as f64).sqrt();
+        let r = p / mc;
+        eprintln!("ramp plan term {k}: predicted {p:.3e}, Monte Carlo {mc:.3e}");
+        assert!(
+            (0.8..=1.2).contains(&r),
+            "term {k}: predicted {p} Monte Carlo {mc}"
+        );
+    }
+}

@@ -240,22 +240,46 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
 /// `incal plan thermal`.
 #[derive(clap::Args, Debug)]
 pub struct PlanArgs {
-    /// Plateau temperatures, degC, comma separated.
+    /// Plateau temperatures, degC, comma separated (a soak plan; with --u).
     #[arg(
         long,
         value_delimiter = ',',
-        required = true,
-        allow_negative_numbers = true
+        allow_negative_numbers = true,
+        required_unless_present = "ramp_c_per_min"
     )]
-    pub plateaus_c: Vec<f64>,
+    pub plateaus_c: Option<Vec<f64>>,
     /// Standard uncertainty of the coefficient at one plateau (from the reduction's own plan), in its unit.
+    #[arg(long, required_unless_present = "ramp_c_per_min")]
+    pub u: Option<f64>,
+    /// A ramp plan instead: the chamber's ramp rate, degC/min (with --t-low-c, --t-high-c, --hold-s, --lag-s, --rate-hz, --noise, --block-s).
+    #[arg(long, conflicts_with_all = ["plateaus_c", "u"])]
+    pub ramp_c_per_min: Option<f64>,
+    /// Ramp plan: low temperature, degC.
+    #[arg(long, default_value_t = -20.0, allow_hyphen_values = true)]
+    pub t_low_c: f64,
+    /// Ramp plan: high temperature, degC.
+    #[arg(long, default_value_t = 60.0, allow_hyphen_values = true)]
+    pub t_high_c: f64,
+    /// Ramp plan: hold at each end, s.
+    #[arg(long, default_value_t = 1800.0)]
+    pub hold_s: f64,
+    /// Ramp plan: the sensor's lag behind the chamber, s.
+    #[arg(long, default_value_t = 120.0)]
+    pub lag_s: f64,
+    /// Ramp plan: sample rate, Hz.
+    #[arg(long, default_value_t = 10.0)]
+    pub rate_hz: f64,
+    /// Ramp plan: white noise of one sample, in the channel's unit.
     #[arg(long)]
-    pub u: f64,
+    pub noise: Option<f64>,
+    /// Ramp plan: block length, s.
+    #[arg(long, default_value_t = 10.0)]
+    pub block_s: f64,
     /// Degree of the polynomial (0 to 3).
     #[arg(long)]
     pub degree: usize,
     /// Reference temperature T_ref, degC.
-    #[arg(long, default_value_t = thermal::DEFAULT_T_REF_C)]
+    #[arg(long, default_value_t = thermal::DEFAULT_T_REF_C, allow_hyphen_values = true)]
     pub t_ref_c: f64,
     /// Print JSON.
     #[arg(long)]
@@ -264,41 +288,85 @@ pub struct PlanArgs {
 
 /// `incal plan thermal`.
 pub fn plan(a: &PlanArgs) -> CliResult<()> {
-    let (u, dof) = plan::predict(&a.plateaus_c, a.u, a.degree, a.t_ref_c).map_err(core)?;
+    let (u, hysteresis, dof, what) = match (a.ramp_c_per_min, &a.plateaus_c, a.u) {
+        (Some(rate), _, _) => {
+            let noise = a.noise.ok_or_else(|| {
+                usage("--noise: the white noise of one sample is needed for a ramp plan")
+            })?;
+            let plan = plan::RampPlan {
+                profile: RampSim {
+                    channels: Vec::new(),
+                    unit: String::new(),
+                    t_ref_c: a.t_ref_c,
+                    waypoints_c: vec![a.t_low_c, a.t_high_c, a.t_low_c],
+                    ramp_c_per_min: rate,
+                    hold_s: a.hold_s,
+                    lag_s: a.lag_s,
+                    rate_hz: a.rate_hz,
+                    temperature_noise_c: 0.0,
+                    seed: 0,
+                },
+                noise,
+                block_s: a.block_s,
+                degree: a.degree,
+            };
+            let (u, h, dof) = plan::predict_ramp(&plan).map_err(core)?;
+            let what = format!(
+                "Thermal ramp plan: {} to {} degC at {} degC/min, holds {} s, lag {} s, {} Hz, noise {} per sample, blocks of {} s; degree {}, T_ref {} degC",
+                a.t_low_c, a.t_high_c, rate, a.hold_s, a.lag_s, a.rate_hz, crate::output::sig(noise, 2), a.block_s, a.degree, a.t_ref_c
+            );
+            (u, h, dof, what)
+        }
+        (None, Some(p), Some(up)) => {
+            let (u, dof) = plan::predict(p, up, a.degree, a.t_ref_c).map_err(core)?;
+            let what = format!(
+                "Thermal plateau plan: {} plateaus, degree {}, T_ref {} degC, u per plateau {}",
+                p.len(),
+                a.degree,
+                a.t_ref_c,
+                crate::output::sig(up, 2)
+            );
+            (u, None, dof, what)
+        }
+        _ => {
+            return Err(usage(
+                "plan thermal: give --plateaus-c and --u, or a ramp (--ramp-c-per-min, --noise)",
+            ))
+        }
+    };
     let unit = |k: usize| match k {
         0 => "unit".to_string(),
         1 => "unit/degC".to_string(),
         k => format!("unit/degC^{k}"),
     };
     if a.json {
-        let terms: Vec<serde_json::Value> = u
+        let mut terms: Vec<serde_json::Value> = u
             .iter()
             .enumerate()
             .map(|(k, v)| serde_json::json!({"name": format!("c{k}"), "u": v, "unit": unit(k)}))
             .collect();
+        if let Some(h) = hysteresis {
+            terms.push(serde_json::json!({"name": "hysteresis", "u": h, "unit": "unit"}));
+        }
         let v = serde_json::json!({
-            "plateaus_c": a.plateaus_c,
+            "plan": what,
             "degree": a.degree,
             "t_ref_c": a.t_ref_c,
-            "u_plateau": a.u,
             "residual_dof": dof,
             "terms": terms,
         });
         return crate::io::write_text(None, &crate::output::json_text(&v));
     }
-    let mut s = format!(
-        "Thermal plateau plan: {} plateaus, degree {}, T_ref {} degC, u per plateau {}\nresidual dof {dof}\n\nterm  predicted u\n",
-        a.plateaus_c.len(),
-        a.degree,
-        a.t_ref_c,
-        crate::output::sig(a.u, 2)
-    );
+    let mut s = format!("{what}\nresidual dof {dof}\n\nterm        predicted u\n");
     for (k, v) in u.iter().enumerate() {
         s.push_str(&format!(
-            "c{k}    {} {}\n",
+            "c{k}          {} {}\n",
             crate::output::sig(*v, 2),
             unit(k)
         ));
+    }
+    if let Some(h) = hysteresis {
+        s.push_str(&format!("hysteresis  {} unit\n", crate::output::sig(h, 2)));
     }
     crate::io::write_text(None, &s)
 }

@@ -251,6 +251,47 @@ impl ProcedureShape for Ramp {
     }
 }
 
+/// The blocks as the fit sees them: mean temperature, rows, and branch
+/// (+1 heating, −1 cooling, 0 before the first movement).
+pub fn block_design(input: &RampInput) -> Result<(Vec<f64>, Vec<usize>, Vec<i8>)> {
+    let blocks = &input.blocks;
+    if blocks.len() < 4 {
+        return Err(Error::TooFew {
+            what: "blocks (a longer recording, or a shorter --block-s)".into(),
+            needed: 4,
+            got: blocks.len(),
+        });
+    }
+    let t_s: Vec<f64> = blocks.iter().map(|b| b.time.mean).collect();
+    let temp: Vec<f64> = blocks.iter().map(|b| b.temp.mean).collect();
+    let branch = branches(&central_rate(&t_s, &temp));
+    let n = blocks.iter().map(|b| b.temp.n).collect();
+    Ok((temp, n, branch))
+}
+
+/// True when a heating and a cooling branch each have 3 blocks or more
+/// and cover a common range (over a fifth of the whole): the hysteresis
+/// can then be separated from the polynomial.
+pub fn both_branches(temp: &[f64], branch: &[i8]) -> bool {
+    let count = |s: i8| branch.iter().filter(|&&b| b == s).count();
+    let range = |s: i8| {
+        temp.iter()
+            .zip(branch)
+            .filter(|(_, b)| **b == s)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (t, _)| {
+                (lo.min(*t), hi.max(*t))
+            })
+    };
+    let (hl, hh) = range(1);
+    let (cl, ch) = range(-1);
+    let (lo, hi) = temp
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+            (a.min(*t), b.max(*t))
+        });
+    count(1) >= 3 && count(-1) >= 3 && hh.min(ch) - hl.max(cl) > 0.2 * (hi - lo)
+}
+
 /// Heating (+1), cooling (−1) or neither yet (0) for each block, from
 /// `dT/dt` (module docs).
 pub fn branches(rate: &[f64]) -> Vec<i8> {
@@ -311,23 +352,7 @@ pub fn reduce(input: &RampInput, o: &RampOptions) -> Result<ResultDocument> {
     let branch = branches(&rate);
     let heating = branch.iter().filter(|&&b| b == 1).count();
     let cooling = branch.iter().filter(|&&b| b == -1).count();
-    let range = |s: i8| {
-        temp.iter()
-            .zip(&branch)
-            .filter(|(_, b)| **b == s)
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (t, _)| {
-                (lo.min(*t), hi.max(*t))
-            })
-    };
-    let (hl, hh) = range(1);
-    let (cl, ch) = range(-1);
-    let (lo, hi) = temp
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
-            (a.min(*t), b.max(*t))
-        });
-    let overlap = hh.min(ch) - hl.max(cl);
-    let both = heating >= 3 && cooling >= 3 && overlap > 0.2 * (hi - lo);
+    let both = both_branches(&temp, &branch);
 
     let mut b = DocumentBuilder::new(
         Procedure::Thermal,
