@@ -564,18 +564,89 @@ pub fn coefficient_plots(
     fallback: bool,
     limits: &dyn Fn(&str) -> Option<Limits>,
 ) -> Vec<Plot> {
-    // Groups keyed by (suffix, unit), in the order of first appearance.
-    let mut groups: Vec<(String, Unit, Vec<&str>)> = Vec::new();
+    // Groups in the order of first appearance: a matrix or vector
+    // (`R_a.xy`, `b_a.x`: axis components) is one group per name, its
+    // diagonal apart from its off-diagonal elements; any other
+    // `GROUP.NAME` (`gx.ARW`, `a.K0`) is one group per NAME across groups.
+    // Each in one unit.
+    struct Group<'a> {
+        key: String,
+        title: String,
+        by_prefix: bool,
+        unit: Unit,
+        names: Vec<&'a str>,
+    }
+    let axis =
+        |s: &str| (1..=2).contains(&s.len()) && s.chars().all(|c| matches!(c, 'x' | 'y' | 'z'));
+    let mut groups: Vec<Group> = Vec::new();
     for (name, c) in doc.coefficients.iter() {
-        let Some((_, suffix)) = name.rsplit_once('.') else {
+        let Some((prefix, suffix)) = name.rsplit_once('.') else {
             continue;
         };
-        match groups
-            .iter_mut()
-            .find(|(s, u, _)| s == suffix && *u == c.unit)
-        {
-            Some(g) => g.2.push(name),
-            None => groups.push((suffix.to_string(), c.unit.clone(), vec![name])),
+        let (key, title, by_prefix) = if axis(suffix) {
+            let part = match suffix.len() {
+                1 => "",
+                _ if suffix[..1] == suffix[1..] => " (diagonal)",
+                _ => " (off-diagonal)",
+            };
+            (format!("{prefix}.{part}"), format!("{prefix}{part}"), true)
+        } else {
+            (format!("*.{suffix}"), suffix.to_string(), false)
+        };
+        match groups.iter_mut().find(|g| g.key == key && g.unit == c.unit) {
+            Some(g) => g.names.push(name),
+            None => groups.push(Group {
+                key,
+                title,
+                by_prefix,
+                unit: c.unit.clone(),
+                names: vec![name],
+            }),
+        }
+    }
+    // Values decades apart (a sensing axis near 1 beside cross-axis terms
+    // near 1e-3) are not read on one axis: split where sorted magnitudes
+    // jump by more than 1.5 decades.
+    let mut split: Vec<Group> = Vec::new();
+    for g in groups {
+        let mut order: Vec<(f64, &str)> = g
+            .names
+            .iter()
+            .filter_map(|n| {
+                doc.coefficients
+                    .get(n)
+                    .map(|c| (c.value.abs().max(1e-300).log10(), *n))
+            })
+            .collect();
+        order.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut cuts = vec![0];
+        for i in 1..order.len() {
+            if order[i].0 - order[i - 1].0 > 1.5 {
+                cuts.push(i);
+            }
+        }
+        if cuts.len() == 1 {
+            split.push(g);
+            continue;
+        }
+        cuts.push(order.len());
+        for w in cuts.windows(2) {
+            let members: Vec<&str> = order[w[0]..w[1]].iter().map(|(_, n)| *n).collect();
+            // Keep the document's order within each part.
+            let names: Vec<&str> = g
+                .names
+                .iter()
+                .copied()
+                .filter(|n| members.contains(n))
+                .collect();
+            let top = order[w[1] - 1].0.round() as i64;
+            split.push(Group {
+                key: format!("{} ~1e{top}", g.key),
+                title: format!("{} (about 1e{top})", g.title),
+                by_prefix: g.by_prefix,
+                unit: g.unit.clone(),
+                names,
+            });
         }
     }
     let common_limits = |names: &[&str]| -> Option<Limits> {
@@ -585,28 +656,33 @@ pub fn coefficient_plots(
             .all(|n| limits(n) == Some(first))
             .then_some(first)
     };
-    let mut out: Vec<Plot> = groups
+    let mut out: Vec<Plot> = split
         .iter()
-        .filter(|(_, _, names)| names.len() >= 2)
-        .filter_map(|(suffix, _, names)| {
-            let labels = names
-                .iter()
-                .map(|n| n.rsplit_once('.').map_or(*n, |(p, _)| p).to_string())
-                .collect();
+        .filter(|g| g.names.len() >= 2)
+        .filter_map(|g| {
+            let names = &g.names;
+            let part = |n: &&str| -> String {
+                match n.rsplit_once('.') {
+                    Some((p, s)) => if g.by_prefix { s } else { p }.to_string(),
+                    None => n.to_string(),
+                }
+            };
+            let labels: Vec<String> = names.iter().map(part).collect();
             coefficient_plot(
                 doc,
                 names,
-                labels,
+                labels.clone(),
                 common_limits(names),
-                format!("*.{suffix}"),
-                suffix.clone(),
+                g.key.clone(),
+                g.title.clone(),
                 format!(
-                    "{suffix} of every {} with its ±U95 (k95·u of each coefficient){}.",
-                    names
-                        .iter()
-                        .map(|n| n.rsplit_once('.').map_or(*n, |(p, _)| p))
-                        .collect::<Vec<_>>()
-                        .join(", "),
+                    "{} {} with their ±U95 (k95·u of each coefficient){}.",
+                    if g.by_prefix { "The elements" } else { "Every" },
+                    if g.by_prefix {
+                        format!("{} of {}", labels.join(", "), g.title)
+                    } else {
+                        format!("{} of {}", g.title, labels.join(", "))
+                    },
                     if common_limits(names).is_some() {
                         "; red lines: its limits"
                     } else {
@@ -1364,6 +1440,37 @@ mod tests {
         assert!(plots
             .iter()
             .all(|p| p.series.iter().map(|s| s.points.len()).sum::<usize>() >= 10));
+    }
+
+    /// A matrix is plotted per matrix, its diagonal apart from its
+    /// off-diagonal elements; a term shared by units is split where its
+    /// values are decades apart (a sensing axis beside cross-axis terms).
+    #[test]
+    fn coefficients_decades_apart_or_of_a_matrix_get_their_own_axis() {
+        use incal::document::{Coefficient, DocumentBuilder, Procedure};
+        let mut b = DocumentBuilder::new(Procedure::ImuFerraris, "t");
+        for (n, v) in [
+            ("R.xx", 1.0),
+            ("R.yy", 0.999),
+            ("R.xy", 1e-3),
+            ("R.yx", -2e-3),
+            ("a.Ks_x", 1.0),
+            ("b.Ks_x", 1e-3),
+            ("c.Ks_x", -2e-3),
+        ] {
+            b.coefficient(n, Coefficient::new(n, v, 1e-5, Unit::One, 10.0).unwrap())
+                .unwrap();
+        }
+        let doc = b.finish();
+        let titles: Vec<String> = coefficient_plots(&doc, false, &|_| None)
+            .into_iter()
+            .map(|p| p.title)
+            .collect();
+        assert_eq!(
+            titles,
+            ["R (diagonal)", "R (off-diagonal)", "Ks_x (about 1e-3)"],
+            "{titles:?}"
+        );
     }
 
     #[test]
