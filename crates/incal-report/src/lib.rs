@@ -198,7 +198,7 @@ footer { margin-top: 2em; font-size: 0.8em; color: #555; border-top: 1px solid #
 @media print {
   @page { size: A4; margin: 15mm; }
   body { margin: 0; max-width: none; padding: 0; font-size: 9pt; }
-  section { page-break-before: always; break-before: page; }
+  section { page-break-before: auto; break-before: auto; margin-top: 1.5em; }
   h2 { margin-top: 0; }
   h2, h3 { page-break-after: avoid; break-after: avoid; }
   thead { display: table-header-group; }

@@ -1107,6 +1107,28 @@ pub fn figure_html(p: &Plot, index: usize) -> Result<String, ReportError> {
     Ok(s)
 }
 
+/// The legend of an IEEE Std 952 term line: its letter, and the term as
+/// the result reports it, in the term's unit with U95 (`N: ARW 0.0500
+/// +- 0.0005 deg/sqrt(h)`).
+fn term_legend(doc: &ResultDocument, channel: &str, letter: &str) -> String {
+    let names: &[&str] = match letter {
+        "Q" => &["quantization", "Q"],
+        "N" => &["ARW", "VRW", "N"],
+        "B" => &["bias_instability", "B"],
+        "K" => &["RRW", "acceleration_random_walk", "K"],
+        "R" => &["rate_ramp", "acceleration_ramp", "R"],
+        _ => &[],
+    };
+    for n in names {
+        if let Some(c) = doc.coefficients.get(&format!("{channel}.{n}")) {
+            let (scale, label) = c.unit.engineering_for(c.value);
+            let (v, _, u95) = crate::format::measured(c.value * scale, c.u * scale, c.u95 * scale);
+            return format!("term {letter}: {n} {v} +- {u95} {label} (U95)");
+        }
+    }
+    format!("term {letter}")
+}
+
 /// The Allan plot of each channel of a noise result (`channels` in the
 /// document): OADEV against τ on log–log axes with its confidence bounds as
 /// bars, the fitted IEEE 952 model and each identified term's line.
@@ -1199,13 +1221,38 @@ pub fn allan_plots(doc: &ResultDocument) -> Vec<Plot> {
             for (t, v) in terms {
                 let pts = line(v);
                 if !pts.is_empty() {
-                    legend.push(format!("term {t}"));
+                    legend.push(term_legend(doc, name, t));
                     series.push(Series {
                         key: legend.len() - 1,
                         style: Style::Line,
                         points: pts,
                     });
                 }
+            }
+        }
+        // The other deviations of the same unit, as lines (TDEV, in the
+        // unit times s, has its own axis in the tables).
+        for dev in ["mdev", "ohdev", "totdev"] {
+            let d = &c[dev];
+            let taus_d = nums(&d["taus_s"]);
+            let pts: Vec<Pt> = nums(&d["value"])
+                .iter()
+                .zip(&taus_d)
+                .filter_map(|(y, t)| {
+                    Some(Pt {
+                        x: t.as_ref()?.log10(),
+                        y: y.as_ref()?.log10(),
+                        bar: None,
+                    })
+                })
+                .collect();
+            if pts.len() >= 2 {
+                legend.push(dev.to_uppercase());
+                series.push(Series {
+                    key: legend.len() - 1,
+                    style: Style::Dashed,
+                    points: pts,
+                });
             }
         }
         // Term lines far below the data would squash the plot: keep them
@@ -1225,14 +1272,14 @@ pub fn allan_plots(doc: &ResultDocument) -> Vec<Plot> {
             source: name.clone(),
             title: format!("{name}: Allan deviation"),
             x_desc: "averaging time tau (s)".into(),
-            y_desc: format!("OADEV ({unit})"),
+            y_desc: format!("deviation ({unit})"),
             x_axis: XAxis::Numeric,
             dodge: false,
             series,
             legend,
             hlines: Vec::new(),
             caption: format!(
-                "Overlapping Allan deviation against averaging time, log-log; bars: chi-square bounds at {} % confidence with the equivalent degrees of freedom of the identified noise (Greenhall & Riley); lines: the IEEE Std 952 model fitted by weighted least squares and each identified term.",
+                "Overlapping Allan deviation against averaging time, log-log; bars: chi-square bounds at {} % confidence with the equivalent degrees of freedom of the identified noise (Greenhall & Riley); lines: the IEEE Std 952 model fitted by weighted least squares and each identified term (its value in the term's unit in the legend); dashed: the other deviations of the same unit (MDEV, OHDEV, TOTDEV).",
                 trimmed(100.0 * conf, 3)
             ),
             log_log: true,
