@@ -682,7 +682,10 @@ pub fn render_html_with(
     let mut figures: Vec<plots::Plot> = if doc.procedure == incal::document::Procedure::Thermal {
         plots::thermal_plots(doc)
     } else {
-        doc.tables.iter().flat_map(plots::table_plots).collect()
+        doc.tables
+            .iter()
+            .flat_map(|t| plots::table_plots_with(t, plots::model_curve(doc, &t.id).as_ref()))
+            .collect()
     };
     figures.extend(plots::allan_plots(doc));
     let limits = |n: &str| verdict_of(doc, Some(n)).map(|j| (j.min, j.max));

@@ -273,6 +273,34 @@ fn group_rows(t: &Table, rows: &[usize], cols: &[usize]) -> (Vec<String>, Vec<Ve
 /// A table with more than six series is split into panels by its first
 /// series column (e.g. one pair of plots per centrifuge station).
 pub fn table_plots(t: &Table) -> Vec<Plot> {
+    table_plots_with(t, None)
+}
+
+/// A fitted model evaluated on a fine grid of a table's abscissa, in the
+/// table's units: `(x, y, U95 of y)` (a result's `model_curves.TABLE`).
+pub type Curve = Vec<(f64, f64, f64)>;
+
+/// The model curve a result gives for table `id` (`model_curves.ID`:
+/// `{"x": [...], "y": [...], "U95": [...]}`), if any.
+pub fn model_curve(doc: &ResultDocument, id: &str) -> Option<Curve> {
+    let c = doc.extra.get("model_curves")?.get(id)?;
+    let arr = |k: &str| -> Option<Vec<f64>> {
+        c.get(k)?.as_array()?.iter().map(|v| v.as_f64()).collect()
+    };
+    let (x, y, u) = (arr("x")?, arr("y")?, arr("U95")?);
+    (x.len() == y.len() && y.len() == u.len() && x.len() >= 2).then(|| {
+        x.into_iter()
+            .zip(y)
+            .zip(u)
+            .map(|((x, y), u)| (x, y, u))
+            .collect()
+    })
+}
+
+/// As [`table_plots`], with the fitted model drawn as `curve` (the model
+/// on a fine grid, with its U95 band) instead of straight lines between
+/// the fitted values.
+pub fn table_plots_with(t: &Table, curve: Option<&Curve>) -> Vec<Plot> {
     if column(t, "residual").is_none() {
         return Vec::new();
     }
@@ -309,7 +337,7 @@ pub fn table_plots(t: &Table) -> Vec<Plot> {
         series_cols: series_cols.clone(),
     };
     if labels.len() <= MAX_SERIES || series_cols.len() < 2 {
-        return rows_plots(t, &all, &layout, None);
+        return rows_plots(t, &all, &layout, None, curve);
     }
     let panel_col = series_cols[0];
     let (panels, panel_rows) = group_rows(t, &all, &[panel_col]);
@@ -320,12 +348,18 @@ pub fn table_plots(t: &Table) -> Vec<Plot> {
     panels
         .iter()
         .zip(&panel_rows)
-        .flat_map(|(p, rows)| rows_plots(t, rows, &layout, Some(p.as_str())))
+        .flat_map(|(p, rows)| rows_plots(t, rows, &layout, Some(p.as_str()), None))
         .collect()
 }
 
 /// The residual and fitted plots of `rows` of a table.
-fn rows_plots(t: &Table, rows: &[usize], lay: &Layout, panel: Option<&str>) -> Vec<Plot> {
+fn rows_plots(
+    t: &Table,
+    rows: &[usize],
+    lay: &Layout,
+    panel: Option<&str>,
+    curve: Option<&Curve>,
+) -> Vec<Plot> {
     let Some(res) = column(t, "residual") else {
         return Vec::new();
     };
@@ -467,17 +501,55 @@ fn rows_plots(t: &Table, rows: &[usize], lay: &Layout, panel: Option<&str>) -> V
                 }
             }
             fitted.sort_by(|a, b| a.x.total_cmp(&b.x));
-            series.push(Series {
-                key,
-                style: Style::Line,
-                points: fitted,
-            });
+            if curve.is_none() {
+                series.push(Series {
+                    key,
+                    style: Style::Line,
+                    points: fitted,
+                });
+            }
             series.push(Series {
                 key,
                 style: Style::Dots,
                 points: data,
             });
         }
+        let mut legend = legend;
+        let line_text = match curve {
+            Some(c) => {
+                let key = legend.len().max(1);
+                if legend.is_empty() {
+                    legend.push("data".into());
+                }
+                legend.push("fitted model +- U95".into());
+                let pts = |f: &dyn Fn(&(f64, f64, f64)) -> f64| -> Vec<Pt> {
+                    c.iter()
+                        .map(|p| Pt {
+                            x: p.0 * lay.x_scale,
+                            y: f(p) * ms,
+                            bar: None,
+                        })
+                        .collect()
+                };
+                series.push(Series {
+                    key,
+                    style: Style::Line,
+                    points: pts(&|p| p.1),
+                });
+                series.push(Series {
+                    key,
+                    style: Style::Dashed,
+                    points: pts(&|p| p.1 + p.2),
+                });
+                series.push(Series {
+                    key,
+                    style: Style::Dashed,
+                    points: pts(&|p| p.1 - p.2),
+                });
+                "the fitted model evaluated on a fine grid of the abscissa (its curve), dashed: its ±U95 band"
+            }
+            None => "the fitted model (line through mean − residual at the same abscissae, in order of the abscissa; straight between them, not the model's curve)",
+        };
         out.push(Plot {
             kind: "fitted",
             source,
@@ -490,7 +562,7 @@ fn rows_plots(t: &Table, rows: &[usize], lay: &Layout, panel: Option<&str>) -> V
             legend,
             hlines: Vec::new(),
             caption: format!(
-                "Data (dots: the mean of each row of table {}{in_panel}) and the fitted model (line through mean − residual at the same abscissae, in order of {x_desc}; straight between them, not the model's curve).{series_text} {bar_text}",
+                "Data (dots: the mean of each row of table {}{in_panel}) against {x_desc} and {line_text}.{series_text} {bar_text}",
                 t.id
             ),
             log_log: false,

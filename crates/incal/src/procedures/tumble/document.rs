@@ -41,6 +41,41 @@ fn term_table(id: &str, title: &str, e: &Estimates) -> Result<Table> {
 }
 
 impl TumbleResult {
+    /// The fitted model `E(θ) = a(θ)ᵀ p̂` on a grid of 1° (at least 61
+    /// points) over the angles tested, with `U95 = k95 sqrt(a(θ)ᵀ C a(θ))`
+    /// of the linear fit: the report draws it as the model's curve.
+    fn model_curve(&self) -> Result<Option<serde_json::Value>> {
+        let (lo, hi) = self
+            .positions
+            .iter()
+            .map(|p| p.angle_rad)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+                (a.min(t), b.max(t))
+            });
+        if hi.is_nan() || lo.is_nan() || hi <= lo {
+            return Ok(None);
+        }
+        let n = (((hi - lo).to_degrees()).ceil() as usize).clamp(60, 720) + 1;
+        let grid: Vec<f64> = (0..n)
+            .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
+            .collect();
+        let d = super::design(self.mount, &self.terms, &grid)?;
+        let e = &self.fit.estimates;
+        let k = e.coverage_factor(0.95);
+        let (mut xs, mut ys, mut us) = (Vec::new(), Vec::new(), Vec::new());
+        for (i, t) in grid.iter().enumerate() {
+            let row = d.matrix().row(i).transpose();
+            let y = (row.transpose() * e.values())[(0, 0)];
+            let var = (row.transpose() * e.covariance() * &row)[(0, 0)];
+            if y.is_finite() && var.is_finite() {
+                xs.push(t.to_degrees());
+                ys.push(y);
+                us.push(k * var.max(0.0).sqrt());
+            }
+        }
+        Ok(Some(json!({"x": xs, "y": ys, "U95": us})))
+    }
+
     /// The result document (coefficients K0, K1, K2, … in g units, K1 in
     /// output/g, angles in rad; positions, pass comparisons; warnings).
     pub fn document(&self, known_noise: bool) -> Result<ResultDocument> {
@@ -108,6 +143,9 @@ impl TumbleResult {
             pos.push(row)?;
         }
         b.table(pos);
+        if let Some(curve) = self.model_curve()? {
+            b.extra("model_curves", json!({ "positions": curve }))?;
+        }
         for p in &self.passes {
             let pair = format!("{}-{}", p.other, p.reference);
             b.table(term_table(
