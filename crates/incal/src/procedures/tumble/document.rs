@@ -41,7 +41,7 @@ fn term_table(id: &str, title: &str, e: &Estimates) -> Result<Table> {
 }
 
 impl TumbleResult {
-    /// The fitted model `E(θ) = a(θ)ᵀ p̂` on a grid of 1° (at least 61
+    /// The fitted model `E(θ) = a(θ)ᵀ p̂` on a grid of 3° (61 to 181
     /// points) over the angles tested, with `U95 = k95 sqrt(a(θ)ᵀ C a(θ))`
     /// of the linear fit: the report draws it as the model's curve.
     fn model_curve(&self) -> Result<Option<serde_json::Value>> {
@@ -55,7 +55,7 @@ impl TumbleResult {
         if hi.is_nan() || lo.is_nan() || hi <= lo {
             return Ok(None);
         }
-        let n = (((hi - lo).to_degrees()).ceil() as usize).clamp(60, 720) + 1;
+        let n = (((hi - lo).to_degrees() / 3.0).ceil() as usize).clamp(60, 180) + 1;
         let grid: Vec<f64> = (0..n)
             .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
             .collect();
