@@ -196,19 +196,21 @@ pub fn history_text(h: &History) -> String {
             ]
         })
         .collect();
-    s.push_str(&table(
-        &[
-            "id",
-            "created_utc",
-            "value",
-            "u",
-            "U95",
-            "dof",
-            "unit",
-            "temperature_c",
-        ],
-        &rows,
-    ));
+    // The temperature column only when some calibration states one.
+    let with_t = h.points.iter().any(|p| p.temperature_c.is_some());
+    let mut header = vec!["id", "created_utc", "value", "u", "U95", "dof", "unit"];
+    let rows: Vec<Vec<String>> = if with_t {
+        header.push("temperature_c");
+        rows
+    } else {
+        rows.into_iter()
+            .map(|mut r| {
+                r.pop();
+                r
+            })
+            .collect()
+    };
+    s.push_str(&table(&header, &rows));
     s.push('\n');
     match &h.drift {
         Some(d) => {
