@@ -34,8 +34,14 @@ fn parse_degree(s: &str) -> Result<Degree, String> {
 #[derive(clap::Args, Debug)]
 pub struct FitArgs {
     /// Result documents (JSON) of one instrument and one procedure; each one's temperature is its instrument.temperature_c (--meta temperature_c=T) or the mean of its recording's temperature_c column.
-    #[arg(required = true, value_name = "RESULT.json")]
+    #[arg(value_name = "RESULT.json", required_unless_present = "db")]
     pub results: Vec<PathBuf>,
+    /// Instead of files: the records store's calibrations of --serial (not superseded), of --procedure.
+    #[arg(long, value_name = "PATH|URL", conflicts_with = "results", requires = "serial")]
+    pub db: Option<PathBuf>,
+    /// With --db: the procedure whose records are fitted (needed when the serial has records of more than one).
+    #[arg(long, requires = "db")]
+    pub procedure: Option<String>,
     /// Reference temperature T_ref of the polynomials, degC.
     #[arg(long, default_value_t = thermal::DEFAULT_T_REF_C, allow_hyphen_values = true)]
     pub t_ref_c: f64,
@@ -115,12 +121,68 @@ fn run_fit(a: &FitArgs) -> CliResult<()> {
         let (name, sha256, doc) = read_document(p)?;
         inputs.push(soak::SoakInput { name, sha256, doc });
     }
+    if let Some(db) = &a.db {
+        inputs = from_store(db, a.result.serial.as_deref().unwrap_or(""), a.procedure.as_deref())?;
+    }
     let o = soak::SoakOptions {
         t_ref_c: a.t_ref_c,
         degree: a.degree,
     };
     let doc = soak::fit_documents(&inputs, &o).map_err(core)?;
     a.result.emit(doc)
+}
+
+/// The calibrations of `serial` in the store `db` (not superseded; of
+/// `procedure` when given, which is needed when there are several), as
+/// inputs named `record N`.
+fn from_store(
+    db: &std::path::Path,
+    serial: &str,
+    procedure: Option<&str>,
+) -> CliResult<Vec<soak::SoakInput>> {
+    let name = crate::options::store_name(db);
+    let err = |e| crate::options::store_error(&name, e);
+    let store = incal_records::Store::open_existing(db).map_err(err)?;
+    store.check_chain().map_err(err)?;
+    let want = match procedure {
+        Some(p) => Some(crate::options::procedure_id("--procedure", p)?.as_str().to_string()),
+        None => None,
+    };
+    let records: Vec<_> = store
+        .list(Some(serial))
+        .map_err(err)?
+        .into_iter()
+        .filter(|r| r.superseded_by.is_none())
+        .filter(|r| want.as_ref().is_none_or(|p| &r.procedure == p))
+        .collect();
+    let mut procs: Vec<&str> = records.iter().map(|r| r.procedure.as_str()).collect();
+    procs.sort_unstable();
+    procs.dedup();
+    if procs.len() > 1 {
+        return Err(CliError::Input(format!(
+            "{name}: serial '{serial}' has records of {}: give --procedure",
+            procs.join(", ")
+        )));
+    }
+    if records.is_empty() {
+        return Err(CliError::Input(format!(
+            "{name}: no calibration of serial '{serial}'{} that is not superseded",
+            want.map(|p| format!(" by {p}")).unwrap_or_default()
+        )));
+    }
+    records
+        .iter()
+        .map(|r| {
+            let rec = store.show(r.id).map_err(err)?;
+            let doc = incal::document::ResultDocument::from_json(&rec.document)
+                .map_err(|e| CliError::Input(format!("{name}: record {}: {e}", r.id)))?;
+            Ok(soak::SoakInput {
+                name: format!("record {}", r.id),
+                sha256: rec.sha256,
+                doc,
+            })
+        })
+        .collect()
 }
 
 fn run_apply(a: &ApplyArgs) -> CliResult<()> {
