@@ -37,7 +37,12 @@ pub struct FitArgs {
     #[arg(value_name = "RESULT.json", required_unless_present = "db")]
     pub results: Vec<PathBuf>,
     /// Instead of files: the records store's calibrations of --serial (not superseded), of --procedure.
-    #[arg(long, value_name = "PATH|URL", conflicts_with = "results", requires = "serial")]
+    #[arg(
+        long,
+        value_name = "PATH|URL",
+        conflicts_with = "results",
+        requires = "serial"
+    )]
     pub db: Option<PathBuf>,
     /// With --db: the procedure whose records are fitted (needed when the serial has records of more than one).
     #[arg(long, requires = "db")]
@@ -122,7 +127,11 @@ fn run_fit(a: &FitArgs) -> CliResult<()> {
         inputs.push(soak::SoakInput { name, sha256, doc });
     }
     if let Some(db) = &a.db {
-        inputs = from_store(db, a.result.serial.as_deref().unwrap_or(""), a.procedure.as_deref())?;
+        inputs = from_store(
+            db,
+            a.result.serial.as_deref().unwrap_or(""),
+            a.procedure.as_deref(),
+        )?;
     }
     let o = soak::SoakOptions {
         t_ref_c: a.t_ref_c,
@@ -145,7 +154,11 @@ fn from_store(
     let store = incal_records::Store::open_existing(db).map_err(err)?;
     store.check_chain().map_err(err)?;
     let want = match procedure {
-        Some(p) => Some(crate::options::procedure_id("--procedure", p)?.as_str().to_string()),
+        Some(p) => Some(
+            crate::options::procedure_id("--procedure", p)?
+                .as_str()
+                .to_string(),
+        ),
         None => None,
     };
     let records: Vec<_> = store
