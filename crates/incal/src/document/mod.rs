@@ -493,6 +493,33 @@ pub(crate) fn position_stats(
     ]
 }
 
+/// A fitted linear model on a grid, for the report's model curve
+/// (`model_curves.TABLE`): at each abscissa `x_i` (in the table's unit)
+/// the design row `a_i` gives `y = a_iᵀ x̂` and
+/// `U95 = k95 sqrt(a_iᵀ C a_i)` of the fit's estimates `e`.
+pub(crate) fn model_curve(x: &[f64], design: &crate::estimation::Design, e: &Estimates) -> Value {
+    let k = e.coverage_factor(0.95);
+    let (mut xs, mut ys, mut us) = (Vec::new(), Vec::new(), Vec::new());
+    for (i, &xi) in x.iter().enumerate() {
+        let row = design.matrix().row(i).transpose();
+        let y = (row.transpose() * e.values())[(0, 0)];
+        let var = (row.transpose() * e.covariance() * &row)[(0, 0)];
+        if xi.is_finite() && y.is_finite() && var.is_finite() {
+            xs.push(xi);
+            ys.push(y);
+            us.push(k * var.max(0.0).sqrt());
+        }
+    }
+    serde_json::json!({"x": xs, "y": ys, "U95": us})
+}
+
+/// `n` points from `lo` to `hi`.
+pub(crate) fn grid(lo: f64, hi: f64, n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|i| lo + (hi - lo) * i as f64 / (n.max(2) - 1) as f64)
+        .collect()
+}
+
 /// A table whose columns are `lead` then [`POSITION_STATS`].
 pub(crate) fn position_table(id: &str, title: &str, lead: &[(&str, Option<Unit>)]) -> Table {
     let cols: Vec<(&str, Option<Unit>)> = lead.iter().cloned().chain(POSITION_STATS).collect();

@@ -56,24 +56,14 @@ impl TumbleResult {
             return Ok(None);
         }
         let n = (((hi - lo).to_degrees() / 3.0).ceil() as usize).clamp(60, 180) + 1;
-        let grid: Vec<f64> = (0..n)
-            .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
-            .collect();
+        let grid = crate::document::grid(lo, hi, n);
         let d = super::design(self.mount, &self.terms, &grid)?;
-        let e = &self.fit.estimates;
-        let k = e.coverage_factor(0.95);
-        let (mut xs, mut ys, mut us) = (Vec::new(), Vec::new(), Vec::new());
-        for (i, t) in grid.iter().enumerate() {
-            let row = d.matrix().row(i).transpose();
-            let y = (row.transpose() * e.values())[(0, 0)];
-            let var = (row.transpose() * e.covariance() * &row)[(0, 0)];
-            if y.is_finite() && var.is_finite() {
-                xs.push(t.to_degrees());
-                ys.push(y);
-                us.push(k * var.max(0.0).sqrt());
-            }
-        }
-        Ok(Some(json!({"x": xs, "y": ys, "U95": us})))
+        let deg: Vec<f64> = grid.iter().map(|t| t.to_degrees()).collect();
+        Ok(Some(crate::document::model_curve(
+            &deg,
+            &d,
+            &self.fit.estimates,
+        )))
     }
 
     /// The result document (coefficients K0, K1, K2, … in g units, K1 in

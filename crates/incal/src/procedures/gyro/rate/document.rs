@@ -88,6 +88,32 @@ impl RateResult {
             pos.push(row)?;
         }
         b.table(pos);
+        // The model's curve against the nominal rate (the input rate is
+        // the nominal one plus Earth's constant projection).
+        if self.positions.len() >= 2 {
+            let n = self.positions.len() as f64;
+            let offset = self
+                .positions
+                .iter()
+                .map(|p| p.input_deg_s - p.rate_deg_s)
+                .sum::<f64>()
+                / n;
+            let (lo, hi) = self
+                .positions
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                    (a.min(p.rate_deg_s), b.max(p.rate_deg_s))
+                });
+            if lo < hi {
+                let rates = crate::document::grid(lo, hi, 121);
+                let inputs: Vec<f64> = rates.iter().map(|r| r + offset).collect();
+                let d = super::design(&inputs, &self.terms, self.asymmetric)?;
+                b.extra(
+                    "model_curves",
+                    json!({ "positions": crate::document::model_curve(&rates, &d, &self.fit.estimates) }),
+                )?;
+            }
+        }
         let fs = self.full_scale_output;
         let mut line = Table::new(
             "nonlinearity",
