@@ -1592,6 +1592,60 @@ mod tests {
         );
     }
 
+    /// With the model on a grid, the fitted plot draws the model's curve
+    /// and its band, not straight lines between the fitted values.
+    #[test]
+    fn the_fitted_plot_draws_the_model_curve_when_given() {
+        let mut t = Table::new(
+            "positions",
+            "Positions",
+            &[
+                ("angle", Some(Unit::Deg)),
+                ("n", None),
+                ("mean", Some(Unit::Output)),
+                ("std", Some(Unit::Output)),
+                ("residual", Some(Unit::Output)),
+            ],
+        );
+        for k in 0..12 {
+            let a = 30.0 * k as f64;
+            t.push(vec![
+                Cell::num(a),
+                Cell::num(4.0),
+                Cell::num(10.0 * a.to_radians().sin()),
+                Cell::num(1e-6),
+                Cell::num(0.0),
+            ])
+            .unwrap();
+        }
+        let curve: Curve = (0..=110)
+            .map(|i| {
+                let a = 3.0 * i as f64;
+                (a, 10.0 * a.to_radians().sin(), 1e-6)
+            })
+            .collect();
+        let without = table_plots(&t);
+        let with = table_plots_with(&t, Some(&curve));
+        let fitted = |ps: &[Plot]| ps.iter().find(|p| p.kind == "fitted").cloned().unwrap();
+        let (a, b) = (fitted(&without), fitted(&with));
+        let longest = |p: &Plot| {
+            p.series
+                .iter()
+                .filter(|s| s.style == Style::Line)
+                .map(|s| s.points.len())
+                .max()
+                .unwrap_or(0)
+        };
+        assert_eq!(longest(&a), 12, "lines between the 12 fitted values");
+        assert_eq!(longest(&b), 111, "the curve");
+        assert_eq!(
+            b.series.iter().filter(|s| s.style == Style::Dashed).count(),
+            2
+        );
+        assert!(b.caption.contains("its curve"), "{}", b.caption);
+        assert!(b.legend.iter().any(|l| l.contains("fitted model")));
+    }
+
     #[test]
     fn ticks_of_a_narrow_span_read_differently() {
         let span = 0.004;
