@@ -449,15 +449,9 @@ def _export(kind: str, gyro: Any, accel: Any, extra: list) -> str:
     import tempfile
 
     with tempfile.TemporaryDirectory() as d:
-        files = []
-        for name, r in (("gyro", gyro), ("accel", accel)):
-            if isinstance(r, Result):
-                f = os.path.join(d, f"{name}.json")
-                r.to_json(f)
-                files.append(f)
-            else:
-                files.append(os.fspath(r))
-        out, _ = run(["export", kind, "--gyro", files[0], "--accel", files[1]] + extra)
+        (g,) = _as_files(d, [gyro], "gyro")
+        (a,) = _as_files(d, [accel], "accel")
+        out, _ = run(["export", kind, "--gyro", g, "--accel", a] + extra)
     return out.decode()
 
 

@@ -50,12 +50,7 @@ pub fn apply<R: Read, W: Write>(
     if targets.is_empty() {
         return Err(Error::Unsupported(format!(
             "{name}: no column is named like a channel of the model ({}); thermal apply corrects the columns the model was fitted on",
-            model
-                .entries
-                .iter()
-                .map(|(n, _, _)| n.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
+            model.names()
         )));
     }
     let io = |e: std::io::Error| Error::Unsupported(format!("writing the output: {e}"));

@@ -80,7 +80,7 @@ pub fn axes<'a>(
             .ok_or_else(|| {
                 Error::Unsupported(format!(
                     "--axes: the model has no channel {name} (it has {})",
-                    names(model)
+                    model.names()
                 ))
             })
     };
@@ -115,17 +115,8 @@ pub fn axes<'a>(
     }
     Err(Error::Unsupported(format!(
         "which channels are X, Y and Z? give --axes X,Y,Z (the model has {})",
-        names(model)
+        model.names()
     )))
-}
-
-fn names(model: &Model) -> String {
-    model
-        .entries
-        .iter()
-        .map(|(n, _, _)| n.as_str())
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 /// The three axes in SI units: sensor, per axis the name, the polynomial

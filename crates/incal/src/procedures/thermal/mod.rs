@@ -474,6 +474,15 @@ impl Model {
         Ok(Model { entries })
     }
 
+    /// The entries' names, comma separated (for messages).
+    pub fn names(&self) -> String {
+        self.entries
+            .iter()
+            .map(|(n, _, _)| n.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
     /// The entry called `name`.
     pub fn get(&self, name: &str) -> Option<(&ThermalEntry, &[f64])> {
         self.entries

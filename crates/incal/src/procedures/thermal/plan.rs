@@ -106,7 +106,12 @@ pub fn predict_ramp(p: &RampPlan) -> Result<(Vec<f64>, Option<f64>, usize)> {
     let mut rows =
         incal_io::Reader::new("plan", csv.as_slice(), &incal_io::ReadOptions::default())?;
     let input = super::ramp::read(&mut rows, &o)?;
-    let (t, n, branch) = super::ramp::block_design(&input)?;
+    let super::ramp::BlockDesign {
+        temp_c: t,
+        rows: n,
+        branch,
+        ..
+    } = super::ramp::block_design(&input, p.block_s)?;
     let u: Vec<f64> = n.iter().map(|&n| p.noise / (n as f64).sqrt()).collect();
     let mut extra = Vec::new();
     let both = super::ramp::both_branches(&t, &branch);

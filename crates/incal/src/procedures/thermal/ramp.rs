@@ -251,22 +251,44 @@ impl ProcedureShape for Ramp {
     }
 }
 
-/// The blocks as the fit sees them: mean temperature, rows, and branch
-/// (+1 heating, −1 cooling, 0 before the first movement).
-pub fn block_design(input: &RampInput) -> Result<(Vec<f64>, Vec<usize>, Vec<i8>)> {
+/// The blocks as the fit sees them, computed once for the reduction and
+/// the plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BlockDesign {
+    /// Mean time of each block, s.
+    pub time_s: Vec<f64>,
+    /// Mean sensor temperature of each block, °C.
+    pub temp_c: Vec<f64>,
+    /// `dT/dt`, central difference of the block means, °C/s.
+    pub rate_c_s: Vec<f64>,
+    /// +1 heating, −1 cooling, 0 before the first movement ([`branches`]).
+    pub branch: Vec<i8>,
+    /// Rows in each block.
+    pub rows: Vec<usize>,
+}
+
+/// The blocks' design (module docs); at least 4 blocks of `block_s`.
+pub fn block_design(input: &RampInput, block_s: f64) -> Result<BlockDesign> {
     let blocks = &input.blocks;
     if blocks.len() < 4 {
         return Err(Error::TooFew {
-            what: "blocks (a longer recording, or a shorter --block-s)".into(),
+            what: format!("blocks of {block_s} s (a longer recording, or a shorter --block-s)"),
             needed: 4,
             got: blocks.len(),
         });
     }
-    let t_s: Vec<f64> = blocks.iter().map(|b| b.time.mean).collect();
-    let temp: Vec<f64> = blocks.iter().map(|b| b.temp.mean).collect();
-    let branch = branches(&central_rate(&t_s, &temp));
-    let n = blocks.iter().map(|b| b.temp.n).collect();
-    Ok((temp, n, branch))
+    let time_s: Vec<f64> = blocks.iter().map(|b| b.time.mean).collect();
+    let temp_c: Vec<f64> = blocks.iter().map(|b| b.temp.mean).collect();
+    let rate_c_s = central_rate(&time_s, &temp_c);
+    let branch = branches(&rate_c_s);
+    let rows = blocks.iter().map(|b| b.temp.n).collect();
+    Ok(BlockDesign {
+        time_s,
+        temp_c,
+        rate_c_s,
+        branch,
+        rows,
+    })
 }
 
 /// True when a heating and a cooling branch each have 3 blocks or more
@@ -336,20 +358,12 @@ fn central_rate(t: &[f64], y: &[f64]) -> Vec<f64> {
 /// Reduce the blocks (module docs).
 pub fn reduce(input: &RampInput, o: &RampOptions) -> Result<ResultDocument> {
     let blocks = &input.blocks;
-    if blocks.len() < 4 {
-        return Err(Error::TooFew {
-            what: format!(
-                "blocks of {} s (a longer recording, or a shorter --block-s)",
-                o.block_s
-            ),
-            needed: 4,
-            got: blocks.len(),
-        });
-    }
-    let t_s: Vec<f64> = blocks.iter().map(|b| b.time.mean).collect();
-    let temp: Vec<f64> = blocks.iter().map(|b| b.temp.mean).collect();
-    let rate = central_rate(&t_s, &temp);
-    let branch = branches(&rate);
+    let BlockDesign {
+        temp_c: temp,
+        rate_c_s: rate,
+        branch,
+        ..
+    } = block_design(input, o.block_s)?;
     let heating = branch.iter().filter(|&&b| b == 1).count();
     let cooling = branch.iter().filter(|&&b| b == -1).count();
     let both = both_branches(&temp, &branch);
@@ -517,7 +531,7 @@ pub fn reduce(input: &RampInput, o: &RampOptions) -> Result<ResultDocument> {
         b.table(super::soak::compensated_table(name, &unit, &f)?);
     }
     if input.has_chamber {
-        match lag(blocks, &t_s, &temp) {
+        match lag(blocks, &rate) {
             Ok((tau, u_tau, dof)) => {
                 b.extra("lag", json!(ValueU::new(tau, u_tau, "s", dof)))?;
             }
@@ -551,12 +565,7 @@ fn regressor(f: &super::PolyFit, extra: &[(String, Vec<f64>)], j: usize, k: usiz
 
 /// The sensor's first-order lag τ behind the chamber (module docs):
 /// `(τ, u(τ), dof)`.
-fn lag(
-    blocks: &[Block],
-    t_s: &[f64],
-    temp: &[f64],
-) -> std::result::Result<(f64, f64, f64), String> {
-    let rate = central_rate(t_s, temp);
+fn lag(blocks: &[Block], rate: &[f64]) -> std::result::Result<(f64, f64, f64), String> {
     let x: Vec<f64> = blocks
         .iter()
         .map(|b| b.chamber.mean - b.temp.mean)
@@ -570,8 +579,12 @@ fn lag(
         DMatrix::from_column_slice(n, 1, &x),
     )
     .map_err(|e| e.to_string())?;
-    let f = fit(&design, &DVector::from_vec(rate), &FitOptions::default())
-        .map_err(|_| "the chamber and the sensor never differ: no lag to see".to_string())?;
+    let f = fit(
+        &design,
+        &DVector::from_column_slice(rate),
+        &FitOptions::default(),
+    )
+    .map_err(|_| "the chamber and the sensor never differ: no lag to see".to_string())?;
     let (k, uk) = f.estimates.get("inverse_lag").ok_or("no slope")?;
     if k.is_nan() || k <= 0.0 || k < 3.0 * uk {
         return Err(format!(
