@@ -440,10 +440,7 @@ pub fn reduce(input: &RampInput, o: &RampOptions) -> Result<ResultDocument> {
         );
         b.fit(FitSummary::of(name, &f.fit, unit.clone()));
         let p = f.degree + 1;
-        let dof = match f.fit.variance_source {
-            crate::estimation::VarianceSource::Residuals => f.fit.dof as f64,
-            crate::estimation::VarianceSource::Prior => f.fit.estimates.dof(),
-        };
+        let dof = f.fit.estimates.dof();
         let e = Estimates::new(
             (0..p).map(|k| format!("c{k}")).collect(),
             f.values.rows(0, p).into_owned(),

@@ -239,10 +239,7 @@ pub fn fit_documents(inputs: &[SoakInput], o: &SoakOptions) -> Result<ResultDocu
     let dof_of: BTreeMap<String, f64> = fits
         .iter()
         .flat_map(|(name, _, f)| {
-            let d = match f.fit.variance_source {
-                crate::estimation::VarianceSource::Residuals => f.fit.dof as f64,
-                crate::estimation::VarianceSource::Prior => f.fit.estimates.dof(),
-            };
+            let d = f.fit.estimates.dof();
             (0..=f.degree).map(move |k| (format!("{name}.c{k}"), d))
         })
         .collect();
