@@ -74,6 +74,9 @@ pub fn core(e: incal::Error) -> CliError {
             as_flag(&what, true)
         )),
         incal::Error::Unsupported(m) => CliError::Input(as_flag(&m, false)),
+        incal::Error::InvalidOption { key, message } => {
+            CliError::Input(format!("--{}: {message}", key.replace('_', "-")))
+        }
         incal::Error::InFile { file, source } => match core(*source) {
             CliError::Input(m) => CliError::Input(format!("{file}: {m}")),
             other => other,

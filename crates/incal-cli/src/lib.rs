@@ -34,7 +34,7 @@ struct Cli {
 }
 
 /// The whole command tree (every subcommand and option), as clap sees it.
-pub(crate) fn command() -> clap::Command {
+pub fn command() -> clap::Command {
     Cli::command()
 }
 
@@ -60,6 +60,8 @@ enum Command {
     /// Export a result in another tool's format: imucal's calibration JSON, Kalibr's imu.yaml, PX4 and ArduPilot parameters.
     #[command(subcommand)]
     Export(commands::export::Command),
+    /// List every procedure incal reduces (id, commands, rig, chapter), from the procedure registry; --json for programs.
+    Procedures(commands::procedures::Args),
     /// Print the JSON Schema of the result document (incal.result/1), or with --plan of the plan document (incal.plan/1).
     Schema(commands::schema::Args),
     /// Write one self-contained HTML report (printable certificate) of a result file, with plots.
@@ -145,6 +147,7 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Compare(a) => commands::compare::run(&a),
         Command::Export(c) => commands::export::run(&c),
         Command::Schema(a) => commands::schema::run(&a),
+        Command::Procedures(a) => commands::procedures::run(&a),
         Command::Report(a) => commands::report::run(&a),
         Command::Gfimu(GfimuCommand::Calibrate(a)) => commands::gfimu::run_calibrate(&a),
         Command::Gfimu(GfimuCommand::Solve(a)) => commands::gfimu::run_solve(&a),

@@ -87,7 +87,7 @@ pub fn procedure_id(what: &str, text: &str) -> crate::error::CliResult<incal::do
         crate::error::CliError::Input(format!(
             "{what}: '{}' is not a procedure (one of: {})",
             crate::output::clip(text),
-            Procedure::ALL
+            Procedure::all()
                 .iter()
                 .map(|p| p.as_str())
                 .collect::<Vec<_>>()

@@ -41,6 +41,11 @@ pub const TARGETS: &[(&str, &str)] = &[
     ("imu-ferraris", "IMU Ferraris session CSV"),
     ("imu-multipos", "IMU multi-position CSV"),
     ("imu-autocal", "IMU autocalibration CSV"),
+    ("thermal-ramp", "thermal chamber ramp CSV"),
+    (
+        "thermal-fit",
+        "result document JSON at one plateau (thermal fit, beside two others)",
+    ),
     (
         "imu-calibration",
         "IMU calibration JSON (imu apply --calibration)",
@@ -167,6 +172,8 @@ pub fn seed(target: &str) -> &'static [u8] {
         "imu-ferraris" => include_bytes!("../seeds/imu-ferraris"),
         "imu-multipos" => include_bytes!("../seeds/imu-multipos"),
         "imu-autocal" => include_bytes!("../seeds/imu-autocal"),
+        "thermal-ramp" => include_bytes!("../seeds/thermal-ramp"),
+        "thermal-fit" => include_bytes!("../seeds/thermal-fit"),
         "imu-calibration" => include_bytes!("../seeds/imu-calibration"),
         "result" => include_bytes!("../seeds/result"),
         "limits" => include_bytes!("../seeds/limits"),
@@ -326,6 +333,11 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
             },
         ),
         "imu-calibration" => apply_imu(data, seed("imu-ferraris")),
+        "thermal-ramp" => reduce::<incal::procedures::thermal::ramp::Ramp>(
+            data,
+            &incal::procedures::thermal::ramp::RampOptions::default(),
+        ),
+        "thermal-fit" => thermal_fit(data),
         "result" => match document(data) {
             Ok(d) => match incal::document::compare::compare_documents("a", &d, "b", &d) {
                 Ok(c) => Outcome::Accepted(c.to_json().to_string()),
@@ -360,6 +372,40 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
             }
         }
         other => panic!("unknown fuzz target {other}"),
+    }
+}
+
+/// `thermal fit`: the fuzzed result document beside the seed's result
+/// at two other plateaus (0 and 50 degC), as `thermal fit A B C` reads
+/// three files.
+fn thermal_fit(data: &[u8]) -> Outcome {
+    use incal::procedures::thermal::soak;
+    let doc = match document(data) {
+        Ok(d) => d,
+        Err(e) => return Outcome::Refused(e),
+    };
+    let mut inputs = vec![soak::SoakInput {
+        name: NAME.into(),
+        sha256: String::new(),
+        doc,
+    }];
+    for t in ["0", "50"] {
+        let Ok(mut other) = document(seed("thermal-fit")) else {
+            return Outcome::Refused("seed: not a result document".into());
+        };
+        other
+            .instrument
+            .meta
+            .insert("temperature_c".into(), t.into());
+        inputs.push(soak::SoakInput {
+            name: format!("plateau-{t}"),
+            sha256: String::new(),
+            doc: other,
+        });
+    }
+    match soak::fit_documents(&inputs, &soak::SoakOptions::default()) {
+        Ok(doc) => Outcome::Accepted(doc.to_json()),
+        Err(e) => Outcome::Refused(e.to_string()),
     }
 }
 

@@ -36,6 +36,7 @@ use serde::Deserialize;
 
 use incal::document::limits::DecisionRule;
 use incal::document::{Procedure, ResultDocument};
+use incal::procedures::registry;
 
 use crate::format::esc;
 
@@ -273,39 +274,15 @@ pub fn recorded_environment(doc: &incal::document::ResultDocument) -> Option<Str
 }
 
 /// The rig whose reference standards make a procedure traceable (`None`:
-/// the result rests on the instrument's own record, as for noise).
+/// no rig standard enters the result), from the procedure registry.
 pub fn rig_of(p: Procedure) -> Option<&'static str> {
-    match p {
-        Procedure::Tumble
-        | Procedure::GyroPositions
-        | Procedure::ImuMultipos
-        | Procedure::GfimuCalibrate => Some("dividing-head"),
-        Procedure::Centrifuge => Some("centrifuge"),
-        Procedure::MisalignGyro
-        | Procedure::MisalignAccel
-        | Procedure::GyroRate
-        | Procedure::ImuFerraris => Some("rate-table"),
-        Procedure::Noise | Procedure::ImuAutocal => None,
-        Procedure::Thermal => Some("thermal-chamber"),
-    }
+    registry::first_of(p).and_then(|e| e.rig)
 }
 
 /// The method of a procedure: the standards and the paper it follows, by
-/// bibliographic reference.
+/// title, authors, venue and year, from the procedure registry.
 pub fn method_of(p: Procedure) -> &'static str {
-    match p {
-        Procedure::Tumble => "Multi-point tumble test on a dividing head: GJB 1037A-2004, Test methods for single-axis pendulous servo linear accelerometers; IEEE Std 1293-2018; Wu W., Nian H., Liu B., Cui J., Jiang X., 12-point tumble test method in a small angle for pendulous accelerometer with narrow input range, Navigation Positioning and Timing, 2015, no. 4, pp. 77-82",
-        Procedure::Centrifuge => "Precision centrifuge test: IEEE Std 836-2009, IEEE Recommended Practice for Precision Centrifuge Testing of Linear Accelerometers; He Y., Yin X., Calibration for the cross-coupling coefficients of linear accelerometers base on precision centrifuge, Metrology & Measurement Technology, 2017, vol. 37, no. 3, pp. 51-55",
-        Procedure::MisalignGyro | Procedure::MisalignAccel => "Misalignment separation on a rate table: Li W., Ren S., Zhao H., Error separating technology for misalignment angle measurement of inertial component, Journal of Harbin Institute of Technology, 2012, vol. 44, no. 1, pp. 43-46",
-        Procedure::GfimuCalibrate => "Six-position static test of a gyro-free inertial unit of six accelerometers (model of IEEE Std 1293-2018 per accelerometer)",
-        Procedure::GyroRate => "Rate-transfer test on a rate table: IEEE Std 952-1997 §12.3; IEEE Std 1431-2004 §10.3",
-        Procedure::GyroPositions => "Multi-position test on a dividing head: IEEE Std 517-1974; IEEE Std 1431-2004 §10.3",
-        Procedure::Noise => "Noise analysis of a static record: IEEE Std 952-1997 Annex C; W. J. Riley, Handbook of Frequency Stability Analysis, NIST Special Publication 1065, 2008",
-        Procedure::ImuFerraris => "Six positions and three rotations: Ferraris F., Grimaldi U., Parvis M., Procedure for effortless in-field calibration of three-axis rate gyros and accelerometers, Sensors and Materials, 1995, vol. 7, no. 5, pp. 311-330",
-        Procedure::ImuMultipos => "Least squares over known static orientations of the triad (model of IEEE Std 1293-2018 per axis)",
-        Procedure::Thermal => "Coefficients as polynomials in temperature from soak plateaus or a chamber ramp: IEEE Std 1293-2018 and IEEE Std 952-1997 (temperature sensitivity of bias and scale factor); Niu X., Li Y., Zhang H., Wang Q., Ban Y., Fast thermal calibration of low-grade inertial sensors and inertial measurement units, Sensors, 2013, vol. 13, no. 9, pp. 12192-12217",
-        Procedure::ImuAutocal => "Calibration without a fixture: Tedaldi D., Pretto A., Menegatti E., A robust and easy to implement method for IMU calibration without external equipments, Proc. IEEE ICRA 2014, pp. 3042-3049",
-    }
+    registry::first_of(p).map_or("", |e| e.method)
 }
 
 /// The decision rule as stated on a certificate (ILAC-G8:09/2019).
@@ -589,7 +566,7 @@ due = "2027-03-31"
 
     #[test]
     fn every_procedure_has_a_method_and_a_rig_or_says_why_not() {
-        for p in Procedure::ALL {
+        for p in Procedure::all() {
             assert!(method_of(p).len() > 40, "{p}");
             assert!(!method_of(p).to_lowercase().contains("seed"), "{p}");
             if let Some(r) = rig_of(p) {

@@ -138,6 +138,17 @@ pub enum Error {
         /// What is wrong.
         source: Box<Error>,
     },
+    /// An option of a procedure is missing, out of its range or
+    /// inconsistent with another: `key` is the option's snake_case key (as
+    /// in the document's `options`), which each front end spells its own
+    /// way (`--rate-hz` on the command line, `rate_hz=` in Python).
+    #[error("{key}: {message}")]
+    InvalidOption {
+        /// The option's snake_case key.
+        key: String,
+        /// What is wrong with it, for people.
+        message: String,
+    },
     /// A requested term or option does not exist or does not apply.
     #[error("{0}")]
     Unsupported(String),

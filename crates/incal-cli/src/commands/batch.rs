@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-use incal::document::Procedure;
+use incal::procedures::registry;
 use serde::Serialize;
 use serde_json::value::RawValue;
 
@@ -33,7 +33,7 @@ use crate::output::write_text;
 /// Options of `incal batch`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The procedure, by its id: tumble, centrifuge, misalign-gyro, misalign-accel, gyro-rate, gyro-positions, imu-ferraris, imu-multipos, imu-autocal, gfimu-calibrate, noise ('_' for '-' is accepted).
+    #[arg(help = procedure_help())]
     pub procedure: String,
     /// Recordings: files, or directories (every regular file in them, by name; hidden files skipped).
     pub sources: Vec<PathBuf>,
@@ -103,10 +103,31 @@ struct Outcome {
     run: Embedded,
 }
 
+/// The help of the PROCEDURE argument: every id `incal batch` runs, from
+/// the procedure registry.
+fn procedure_help() -> String {
+    format!(
+        "The procedure, by its id: {} ('_' for '-' is accepted; a document id such as 'thermal' names its one procedure that reduces a recording).",
+        registry::batch_ids().join(", ")
+    )
+}
+
+/// The registry entry of a procedure id that `incal batch` runs (a
+/// recording in, a result document out), or the one-line refusal listing
+/// the ids it runs.
+pub fn entry(id: &str) -> CliResult<&'static registry::Entry> {
+    registry::batch(id).ok_or_else(|| {
+        CliError::Input(format!(
+            "batch: '{}' is not a procedure (one of: {})",
+            crate::output::clip(id),
+            registry::batch_ids().join(", ")
+        ))
+    })
+}
+
 /// The command words of a procedure id (`imu-ferraris` → `imu ferraris`).
 pub fn command_words(id: &str) -> CliResult<Vec<String>> {
-    let p: Procedure = crate::options::procedure_id("batch", id)?;
-    Ok(p.as_str().split('-').map(str::to_string).collect())
+    Ok(entry(id)?.command.iter().map(|w| w.to_string()).collect())
 }
 
 /// The recordings named by the sources and the list, in order.
@@ -166,7 +187,8 @@ fn stem(p: &Path) -> String {
 
 /// `incal batch`.
 pub fn run(a: &Args) -> CliResult<()> {
-    let words = command_words(&a.procedure)?;
+    let procedure = entry(&a.procedure)?;
+    let words = command_words(procedure.id)?;
     for o in &a.options {
         let flag = o.split('=').next().unwrap_or_default();
         if matches!(flag, "--input" | "--json" | "-o" | "--output")
@@ -294,7 +316,7 @@ pub fn run(a: &Args) -> CliResult<()> {
     let failed = failed_input + failed_other;
     let summary = if a.json {
         let summary = Summary {
-            procedure: words.join("-"),
+            procedure: procedure.id.to_string(),
             recordings: n,
             ok: n - failed,
             failed,

@@ -10,6 +10,7 @@ pub mod gyro;
 pub mod imu;
 pub mod misalign;
 pub mod noise;
+pub mod procedures;
 pub mod record;
 pub mod report;
 pub mod schema;

@@ -356,92 +356,25 @@ pub struct PlanArgs {
     /// Reference temperature T_ref, degC.
     #[arg(long, default_value_t = thermal::DEFAULT_T_REF_C, allow_hyphen_values = true)]
     pub t_ref_c: f64,
-    /// Print JSON.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub out: crate::output::PlanOut,
 }
 
 /// `incal plan thermal`.
 pub fn plan(a: &PlanArgs) -> CliResult<()> {
-    let (u, hysteresis, dof, what) = match (a.ramp_c_per_min, &a.plateaus_c, a.u) {
-        (Some(rate), _, _) => {
-            let noise = a.noise.ok_or_else(|| {
-                usage("--noise: the white noise of one sample is needed for a ramp plan")
-            })?;
-            let plan = plan::RampPlan {
-                profile: RampSim {
-                    channels: Vec::new(),
-                    unit: String::new(),
-                    t_ref_c: a.t_ref_c,
-                    waypoints_c: vec![a.t_low_c, a.t_high_c, a.t_low_c],
-                    ramp_c_per_min: rate,
-                    hold_s: a.hold_s,
-                    lag_s: a.lag_s,
-                    rate_hz: a.rate_hz,
-                    temperature_noise_c: 0.0,
-                    seed: 0,
-                },
-                noise,
-                block_s: a.block_s,
-                degree: a.degree,
-            };
-            let (u, h, dof) = plan::predict_ramp(&plan).map_err(core)?;
-            let what = format!(
-                "Thermal ramp plan: {} to {} degC at {} degC/min, holds {} s, lag {} s, {} Hz, noise {} per sample, blocks of {} s; degree {}, T_ref {} degC",
-                a.t_low_c, a.t_high_c, rate, a.hold_s, a.lag_s, a.rate_hz, crate::output::sig(noise, 2), a.block_s, a.degree, a.t_ref_c
-            );
-            (u, h, dof, what)
-        }
-        (None, Some(p), Some(up)) => {
-            let (u, dof) = plan::predict(p, up, a.degree, a.t_ref_c).map_err(core)?;
-            let what = format!(
-                "Thermal plateau plan: {} plateaus, degree {}, T_ref {} degC, u per plateau {}",
-                p.len(),
-                a.degree,
-                a.t_ref_c,
-                crate::output::sig(up, 2)
-            );
-            (u, None, dof, what)
-        }
-        _ => {
-            return Err(usage(
-                "plan thermal: give --plateaus-c and --u, or a ramp (--ramp-c-per-min, --noise)",
-            ))
-        }
+    let o = plan::ThermalPlanOptions {
+        plateaus_c: a.plateaus_c.clone(),
+        u: a.u,
+        ramp_c_per_min: a.ramp_c_per_min,
+        t_low_c: a.t_low_c,
+        t_high_c: a.t_high_c,
+        hold_s: a.hold_s,
+        lag_s: a.lag_s,
+        rate_hz: a.rate_hz,
+        noise: a.noise,
+        block_s: a.block_s,
+        degree: a.degree,
+        t_ref_c: a.t_ref_c,
     };
-    let unit = |k: usize| match k {
-        0 => "unit".to_string(),
-        1 => "unit/degC".to_string(),
-        k => format!("unit/degC^{k}"),
-    };
-    if a.json {
-        let mut terms: Vec<serde_json::Value> = u
-            .iter()
-            .enumerate()
-            .map(|(k, v)| serde_json::json!({"name": format!("c{k}"), "u": v, "unit": unit(k)}))
-            .collect();
-        if let Some(h) = hysteresis {
-            terms.push(serde_json::json!({"name": "hysteresis", "u": h, "unit": "unit"}));
-        }
-        let v = serde_json::json!({
-            "plan": what,
-            "degree": a.degree,
-            "t_ref_c": a.t_ref_c,
-            "residual_dof": dof,
-            "terms": terms,
-        });
-        return crate::io::write_text(None, &crate::output::json_text(&v));
-    }
-    let mut s = format!("{what}\nresidual dof {dof}\n\nterm        predicted u\n");
-    for (k, v) in u.iter().enumerate() {
-        s.push_str(&format!(
-            "c{k}          {} {}\n",
-            crate::output::sig(*v, 2),
-            unit(k)
-        ));
-    }
-    if let Some(h) = hysteresis {
-        s.push_str(&format!("hysteresis  {} unit\n", crate::output::sig(h, 2)));
-    }
-    crate::io::write_text(None, &s)
+    a.out.emit(&plan::plan_document(&o).map_err(core)?)
 }

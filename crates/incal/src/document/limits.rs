@@ -211,7 +211,7 @@ impl Limits {
                 }
                 (p, Entry::Section(coefs)) => {
                     if Procedure::from_id(p).is_none() {
-                        let all: Vec<&str> = Procedure::ALL.iter().map(|p| p.as_str()).collect();
+                        let all: Vec<&str> = Procedure::all().iter().map(|p| p.as_str()).collect();
                         return Err(format!(
                             "line {line}: [{}]: not a procedure ({})",
                             incal_io::clip(p),

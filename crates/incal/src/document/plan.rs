@@ -142,39 +142,20 @@ impl PlanDocument {
         } else {
             positions.saturating_sub(parameters) as f64
         };
-        if dof < 1.0 {
-            return self;
-        }
-        let k = crate::estimation::coverage_factor(dof, 0.95);
-        self.predicted_dof = Some(dof);
-        self.predicted_u95 = self
-            .predicted_u
-            .as_ref()
-            .map(|u| u.iter().map(|(n, &x)| (n.clone(), k * x)).collect());
-        self
+        self.set_dof(dof)
     }
 
     /// The run sheet of the plan, for the operator: the settings in the
     /// order they are run (`step` from 1, then the procedure's settings and
-    /// the samples to take), from the plan's own keys. `None` for a plan
-    /// that lists no settings.
+    /// the samples to take), from the plan's own keys by the procedure's
+    /// registry entry ([`crate::procedures::registry::Entry::run_sheet`]).
+    /// `None` for a plan that lists no settings.
     pub fn run_sheet(&self) -> Option<(Vec<String>, Vec<Vec<String>>)> {
-        let nums = |key: &str, from: &BTreeMap<String, Value>| -> Vec<f64> {
-            from.get(key)
-                .and_then(Value::as_array)
-                .map(|a| a.iter().filter_map(Value::as_f64).collect())
-                .unwrap_or_default()
-        };
-        let texts = |key: &str, from: &BTreeMap<String, Value>| -> Vec<String> {
-            from.get(key)
-                .and_then(Value::as_array)
-                .map(|a| {
-                    a.iter()
-                        .map(|x| x.as_str().map_or_else(|| x.to_string(), str::to_string))
-                        .collect()
-                })
-                .unwrap_or_default()
-        };
+        let sheet = crate::procedures::registry::of(self.procedure).find_map(|e| e.run_sheet)?;
+        let (columns, rows) = sheet(self);
+        if rows.is_empty() {
+            return None;
+        }
         let samples = self
             .plan
             .get("samples")
@@ -182,112 +163,6 @@ impl PlanDocument {
             .and_then(Value::as_u64)
             .unwrap_or(1)
             .to_string();
-        let num = |x: f64| {
-            let s = format!("{x}");
-            if s == "-0" {
-                "0".into()
-            } else {
-                s
-            }
-        };
-        let (columns, rows): (Vec<&str>, Vec<Vec<String>>) = match self.procedure {
-            Procedure::Tumble => (
-                vec!["angle_deg"],
-                nums("angles_deg", &self.plan)
-                    .into_iter()
-                    .map(|a| vec![num(a)])
-                    .collect(),
-            ),
-            Procedure::GyroRate => (
-                vec!["rate_deg_s"],
-                nums("rates_deg_s", &self.plan)
-                    .into_iter()
-                    .map(|r| vec![num(r)])
-                    .collect(),
-            ),
-            Procedure::GyroPositions => (
-                vec!["azimuth_deg", "angle_deg"],
-                nums("azimuths_deg", &self.plan)
-                    .into_iter()
-                    .flat_map(|az| {
-                        nums("angles_deg", &self.plan)
-                            .into_iter()
-                            .map(move |a| vec![num(az), num(a)])
-                    })
-                    .collect(),
-            ),
-            Procedure::GfimuCalibrate => (
-                vec!["g_x", "g_y", "g_z"],
-                self.plan
-                    .get("positions")
-                    .and_then(Value::as_array)
-                    .map(|ps| {
-                        ps.iter()
-                            .map(|p| {
-                                p.as_array()
-                                    .map(|v| v.iter().filter_map(Value::as_f64).map(num).collect())
-                                    .unwrap_or_default()
-                            })
-                            .collect()
-                    })
-                    .unwrap_or_default(),
-            ),
-            Procedure::Centrifuge => {
-                let radius = self.plan.get("radius_m").and_then(Value::as_f64);
-                let g = self
-                    .options
-                    .get("gravity_m_s2")
-                    .and_then(Value::as_f64)
-                    .unwrap_or(crate::units::STANDARD_GRAVITY_M_S2);
-                let levels = nums("levels_g", &self.plan);
-                let polarities: &[&str] =
-                    if self.plan.get("single_polarity") == Some(&Value::Bool(true)) {
-                        &["+"]
-                    } else {
-                        &["+", "-"]
-                    };
-                let mut rows = Vec::new();
-                for p in texts("positions", &self.plan) {
-                    for pol in polarities {
-                        for &l in &levels {
-                            // ω = √(a/R): the table speed for the nominal level.
-                            let rpm = radius.filter(|r| *r > 0.0).map_or(String::new(), |r| {
-                                let w = (l * g / r).sqrt();
-                                format!("{:.3}", w * 60.0 / (2.0 * std::f64::consts::PI))
-                            });
-                            rows.push(vec![p.clone(), pol.to_string(), num(l), rpm]);
-                        }
-                    }
-                }
-                (vec!["position", "polarity", "level_g", "speed_rpm"], rows)
-            }
-            Procedure::MisalignGyro => {
-                let rates = nums("rates_deg_s", &self.options);
-                let mut rows = Vec::new();
-                // Each configuration (α:β) at every rate, forward then
-                // reverse.
-                for c in texts("configs", &self.options) {
-                    let (a, b) = c.split_once(':').unwrap_or((c.as_str(), ""));
-                    for &r in &rates {
-                        for sr in [r, -r] {
-                            rows.push(vec![a.trim().to_string(), b.trim().to_string(), num(sr)]);
-                        }
-                    }
-                }
-                (vec!["alpha_deg", "beta_deg", "rate_deg_s"], rows)
-            }
-            Procedure::MisalignAccel => (
-                vec!["beta_deg"],
-                nums("betas_deg", &self.options)
-                    .into_iter()
-                    .map(|b| vec![num(b)])
-                    .collect(),
-            ),
-            _ => return None,
-        };
-        if rows.is_empty() {
-            return None;
-        }
         let mut header = vec!["step".to_string()];
         header.extend(columns.iter().map(|c| c.to_string()));
         header.push("samples".into());
@@ -301,6 +176,23 @@ impl PlanDocument {
             })
             .collect();
         Some((header, rows))
+    }
+
+    /// Set the degrees of freedom the reduction will have and every
+    /// term's `predicted_U95 = k95 u` (k95 the Student t quantile for
+    /// `dof`, JCGM 100 Annex G); nothing for `dof < 1`. Call it after the
+    /// last [`PlanDocument::predict`].
+    pub fn set_dof(&mut self, dof: f64) -> &mut Self {
+        if dof.is_nan() || dof < 1.0 {
+            return self;
+        }
+        let k = crate::estimation::coverage_factor(dof, 0.95);
+        self.predicted_dof = Some(dof);
+        self.predicted_u95 = self
+            .predicted_u
+            .as_ref()
+            .map(|u| u.iter().map(|(n, &x)| (n.clone(), k * x)).collect());
+        self
     }
 
     /// Add a note for the operator.
@@ -319,4 +211,35 @@ impl PlanDocument {
 pub fn plan_json_schema() -> Value {
     let s = schemars::schema_for!(PlanDocument);
     serde_json::to_value(s).unwrap_or(Value::Null)
+}
+
+/// The numbers of the array `key` of `from` (a plan's own keys or its
+/// options); empty when absent. For the procedures' run sheets.
+pub fn values(from: &BTreeMap<String, Value>, key: &str) -> Vec<f64> {
+    from.get(key)
+        .and_then(Value::as_array)
+        .map(|a| a.iter().filter_map(Value::as_f64).collect())
+        .unwrap_or_default()
+}
+
+/// The texts of the array `key` of `from` (a non-string item as its JSON).
+pub fn texts(from: &BTreeMap<String, Value>, key: &str) -> Vec<String> {
+    from.get(key)
+        .and_then(Value::as_array)
+        .map(|a| {
+            a.iter()
+                .map(|x| x.as_str().map_or_else(|| x.to_string(), str::to_string))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// A setting as a run sheet writes it: as Rust prints it, `-0` as `0`.
+pub fn sheet_number(x: f64) -> String {
+    let s = format!("{x}");
+    if s == "-0" {
+        "0".into()
+    } else {
+        s
+    }
 }

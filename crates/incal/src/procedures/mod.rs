@@ -17,6 +17,7 @@ pub mod gyro;
 pub mod imu;
 pub mod misalign;
 pub mod noise;
+pub mod registry;
 pub mod thermal;
 pub mod tumble;
 

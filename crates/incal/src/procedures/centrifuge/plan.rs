@@ -192,3 +192,36 @@ pub fn plan_document(o: &CentrifugePlanOptions) -> Result<PlanDocument> {
     }
     Ok(d)
 }
+
+/// The run sheet of a centrifuge plan: each position, polarity and level
+/// in turn, with the table speed `ω = √(a/R)` for the nominal level
+/// (`position`, `polarity`, `level_g`, `speed_rpm`).
+pub fn run_sheet(d: &crate::document::plan::PlanDocument) -> crate::procedures::registry::RunSheet {
+    use crate::document::plan::{sheet_number as num, texts, values};
+    use serde_json::Value;
+    let radius = d.plan.get("radius_m").and_then(Value::as_f64);
+    let g = d
+        .options
+        .get("gravity_m_s2")
+        .and_then(Value::as_f64)
+        .unwrap_or(crate::units::STANDARD_GRAVITY_M_S2);
+    let levels = values(&d.plan, "levels_g");
+    let polarities: &[&str] = if d.plan.get("single_polarity") == Some(&Value::Bool(true)) {
+        &["+"]
+    } else {
+        &["+", "-"]
+    };
+    let mut rows = Vec::new();
+    for p in texts(&d.plan, "positions") {
+        for pol in polarities {
+            for &l in &levels {
+                let rpm = radius.filter(|r| *r > 0.0).map_or(String::new(), |r| {
+                    let w = (l * g / r).sqrt();
+                    format!("{:.3}", w * 60.0 / (2.0 * std::f64::consts::PI))
+                });
+                rows.push(vec![p.clone(), pol.to_string(), num(l), rpm]);
+            }
+        }
+    }
+    (vec!["position", "polarity", "level_g", "speed_rpm"], rows)
+}

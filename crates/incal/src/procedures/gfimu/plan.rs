@@ -135,3 +135,25 @@ pub fn plan_document(o: &GfimuPlanOptions) -> Result<PlanDocument> {
     doc.set("warnings", json!(cal.warnings))?;
     Ok(doc)
 }
+
+/// The run sheet of a gyro-free unit plan: the direction of gravity in the
+/// unit's frame at each position (`g_x`, `g_y`, `g_z`).
+pub fn run_sheet(d: &crate::document::plan::PlanDocument) -> crate::procedures::registry::RunSheet {
+    use crate::document::plan::sheet_number as num;
+    use serde_json::Value;
+    let rows = d
+        .plan
+        .get("positions")
+        .and_then(Value::as_array)
+        .map(|ps| {
+            ps.iter()
+                .map(|p| {
+                    p.as_array()
+                        .map(|v| v.iter().filter_map(Value::as_f64).map(num).collect())
+                        .unwrap_or_default()
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    (vec!["g_x", "g_y", "g_z"], rows)
+}

@@ -297,3 +297,36 @@ impl MisalignPlan {
         Ok(d)
     }
 }
+
+/// The run sheet of a gyro misalignment plan: each configuration (α:β)
+/// at every rate, forward then reverse (`alpha_deg`, `beta_deg`,
+/// `rate_deg_s`).
+pub fn run_sheet_gyro(
+    d: &crate::document::plan::PlanDocument,
+) -> crate::procedures::registry::RunSheet {
+    use crate::document::plan::{sheet_number as num, texts, values};
+    let rates = values(&d.options, "rates_deg_s");
+    let mut rows = Vec::new();
+    for c in texts(&d.options, "configs") {
+        let (a, b) = c.split_once(':').unwrap_or((c.as_str(), ""));
+        for &r in &rates {
+            for sr in [r, -r] {
+                rows.push(vec![a.trim().to_string(), b.trim().to_string(), num(sr)]);
+            }
+        }
+    }
+    (vec!["alpha_deg", "beta_deg", "rate_deg_s"], rows)
+}
+
+/// The run sheet of an accelerometer misalignment plan: the face angles
+/// in order (`beta_deg`).
+pub fn run_sheet_accel(
+    d: &crate::document::plan::PlanDocument,
+) -> crate::procedures::registry::RunSheet {
+    use crate::document::plan::{sheet_number as num, values};
+    let rows = values(&d.options, "betas_deg");
+    (
+        vec!["beta_deg"],
+        rows.into_iter().map(|b| vec![num(b)]).collect(),
+    )
+}

@@ -146,3 +146,152 @@ pub fn predict_ramp(p: &RampPlan) -> Result<(Vec<f64>, Option<f64>, usize)> {
     });
     Ok((uc, uh, f.fit.dof))
 }
+
+/// The options of a thermal plan (`incal plan thermal`): a soak plan
+/// (`plateaus_c` with `u`) or a ramp plan (`ramp_c_per_min` with
+/// `noise`); temperatures in °C, times in s, rates in Hz.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ThermalPlanOptions {
+    /// Plateau temperatures, °C (a soak plan).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub plateaus_c: Option<Vec<f64>>,
+    /// Standard uncertainty of the coefficient at one plateau, its unit.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub u: Option<f64>,
+    /// The chamber's ramp rate, °C/min (a ramp plan).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ramp_c_per_min: Option<f64>,
+    /// Ramp plan: low temperature, °C.
+    pub t_low_c: f64,
+    /// Ramp plan: high temperature, °C.
+    pub t_high_c: f64,
+    /// Ramp plan: hold at each end, s.
+    pub hold_s: f64,
+    /// Ramp plan: the sensor's lag behind the chamber, s.
+    pub lag_s: f64,
+    /// Ramp plan: sample rate, Hz.
+    pub rate_hz: f64,
+    /// Ramp plan: white noise of one sample, the channel's unit.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub noise: Option<f64>,
+    /// Ramp plan: block length, s.
+    pub block_s: f64,
+    /// Degree of the polynomial (0 to 3).
+    pub degree: usize,
+    /// Reference temperature T_ref, °C.
+    pub t_ref_c: f64,
+}
+
+/// The unit of `c_k`: the channel's unit per °C^k (`unit`, `unit/degC`,
+/// `unit/degC^2`, …), the channel being any.
+fn coefficient_unit(k: usize) -> String {
+    match k {
+        0 => "unit".to_string(),
+        1 => "unit/degC".to_string(),
+        k => format!("unit/degC^{k}"),
+    }
+}
+
+/// The plan document (`incal.plan/1`) of a soak or a ramp plan: the
+/// predicted u of `c0…cd` (and of the hysteresis for a ramp that covers
+/// both branches), the residual degrees of freedom and U95. A plan that
+/// is neither (no plateaus with their u, no ramp with its noise) is
+/// refused saying what to give.
+pub fn plan_document(o: &ThermalPlanOptions) -> Result<crate::document::plan::PlanDocument> {
+    use serde_json::json;
+    let (u, hysteresis, dof, title, kind) = match (o.ramp_c_per_min, &o.plateaus_c, o.u) {
+        (Some(rate), _, _) => {
+            let noise = o.noise.ok_or_else(|| Error::InvalidOption {
+                key: "noise".into(),
+                message: "the white noise of one sample is needed for a ramp plan".into(),
+            })?;
+            let plan = RampPlan {
+                profile: super::sim::RampSim {
+                    channels: Vec::new(),
+                    unit: String::new(),
+                    t_ref_c: o.t_ref_c,
+                    waypoints_c: vec![o.t_low_c, o.t_high_c, o.t_low_c],
+                    ramp_c_per_min: rate,
+                    hold_s: o.hold_s,
+                    lag_s: o.lag_s,
+                    rate_hz: o.rate_hz,
+                    temperature_noise_c: 0.0,
+                    seed: 0,
+                },
+                noise,
+                block_s: o.block_s,
+                degree: o.degree,
+            };
+            let (u, h, dof) = predict_ramp(&plan)?;
+            let title = format!(
+                "Thermal ramp plan: {} to {} degC at {} degC/min, holds {} s, lag {} s, {} Hz, noise {noise:e} per sample, blocks of {} s; degree {}, T_ref {} degC",
+                o.t_low_c, o.t_high_c, rate, o.hold_s, o.lag_s, o.rate_hz, o.block_s, o.degree, o.t_ref_c
+            );
+            (u, h, dof, title, "thermal-ramp")
+        }
+        (None, Some(p), Some(up)) => {
+            let (u, dof) = predict(p, up, o.degree, o.t_ref_c)?;
+            let title = format!(
+                "Thermal plateau plan: {} plateaus, degree {}, T_ref {} degC, u per plateau {up:e}",
+                p.len(),
+                o.degree,
+                o.t_ref_c
+            );
+            (u, None, dof, title, "thermal-plateaus")
+        }
+        _ => {
+            return Err(Error::InvalidOption {
+                key: "plateaus_c".into(),
+                message: "give the plateaus with their u, or a ramp (its rate and noise)".into(),
+            })
+        }
+    };
+    let mut d =
+        crate::document::plan::PlanDocument::new(crate::document::Procedure::Thermal, title);
+    d.with_options(o)?;
+    d.set("plan", json!(kind))?;
+    if let Some(p) = &o.plateaus_c {
+        d.set("plateaus_c", json!(p))?;
+    }
+    d.set("degree", json!(o.degree))?;
+    d.set("t_ref_c", json!(o.t_ref_c))?;
+    d.set("residual_dof", json!(dof))?;
+    for (k, v) in u.iter().enumerate() {
+        d.predict(&format!("c{k}"), *v, &coefficient_unit(k))?;
+    }
+    if let Some(h) = hysteresis {
+        d.predict("hysteresis", h, "unit")?;
+    }
+    d.set_dof(dof as f64);
+    Ok(d)
+}
+
+/// The run sheet of a thermal plan: the plateau temperatures in order
+/// (`plateau_c`), or the ramp's set points (low, high, low) with the
+/// rate and holds of a ramp plan.
+pub fn run_sheet(d: &crate::document::plan::PlanDocument) -> crate::procedures::registry::RunSheet {
+    use crate::document::plan::{sheet_number as num, values};
+    let plateaus = values(&d.plan, "plateaus_c");
+    if !plateaus.is_empty() {
+        return (
+            vec!["plateau_c"],
+            plateaus.into_iter().map(|t| vec![num(t)]).collect(),
+        );
+    }
+    let opt = |k: &str| d.options.get(k).and_then(serde_json::Value::as_f64);
+    match (
+        opt("t_low_c"),
+        opt("t_high_c"),
+        opt("ramp_c_per_min"),
+        opt("hold_s"),
+    ) {
+        (Some(lo), Some(hi), Some(rate), Some(hold)) => (
+            vec!["set_point_c", "ramp_c_per_min", "hold_s"],
+            [lo, hi, lo]
+                .iter()
+                .map(|&t| vec![num(t), num(rate), num(hold)])
+                .collect(),
+        ),
+        _ => (vec![], vec![]),
+    }
+}

@@ -373,3 +373,13 @@ pub fn plan_document(
     }
     Ok(d)
 }
+
+/// The run sheet of a tumble plan: the head angles in order (`angle_deg`).
+pub fn run_sheet(d: &crate::document::plan::PlanDocument) -> crate::procedures::registry::RunSheet {
+    use crate::document::plan::{sheet_number as num, values};
+    let rows = values(&d.plan, "angles_deg");
+    (
+        vec!["angle_deg"],
+        rows.into_iter().map(|a| vec![num(a)]).collect(),
+    )
+}

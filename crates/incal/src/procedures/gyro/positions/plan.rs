@@ -193,3 +193,15 @@ pub fn plan_document(o: &PositionsPlanOptions) -> Result<PlanDocument> {
     set_warnings(&mut d, &p.warnings)?;
     Ok(d)
 }
+
+/// The run sheet of a multi-position plan: every head angle at each
+/// azimuth in turn (`azimuth_deg`, `angle_deg`).
+pub fn run_sheet(d: &crate::document::plan::PlanDocument) -> crate::procedures::registry::RunSheet {
+    use crate::document::plan::{sheet_number as num, values};
+    let angles = values(&d.plan, "angles_deg");
+    let rows = values(&d.plan, "azimuths_deg")
+        .into_iter()
+        .flat_map(|az| angles.iter().map(move |&a| vec![num(az), num(a)]))
+        .collect();
+    (vec!["azimuth_deg", "angle_deg"], rows)
+}

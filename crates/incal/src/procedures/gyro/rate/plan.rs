@@ -205,3 +205,14 @@ pub(crate) fn set_warnings(d: &mut PlanDocument, warnings: &[crate::Warning]) ->
     }
     Ok(())
 }
+
+/// The run sheet of a rate-transfer plan: the table rates in order
+/// (`rate_deg_s`).
+pub fn run_sheet(d: &crate::document::plan::PlanDocument) -> crate::procedures::registry::RunSheet {
+    use crate::document::plan::{sheet_number as num, values};
+    let rows = values(&d.plan, "rates_deg_s");
+    (
+        vec!["rate_deg_s"],
+        rows.into_iter().map(|r| vec![num(r)]).collect(),
+    )
+}

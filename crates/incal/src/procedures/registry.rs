@@ -1,0 +1,481 @@
+//! The procedure registry: every procedure of incal, once.
+//!
+//! One [`Entry`] per procedure holds what the front ends and the documents
+//! need to know about it: its id, the document id it writes, the command
+//! that reduces it, its plan and simulator commands, its title, the rig
+//! whose reference standards make it traceable, the method the certificate
+//! states, the references it cites (keys of `docs/src/references.md`), its
+//! chapter of the manual, its Python names, the fuzz targets that cover its
+//! input, and the run sheet of its plans. Every other list of procedures
+//! is derived from [`REGISTRY`] (the certificate's rig and method, the plan
+//! run sheet, `incal batch`, `incal procedures`, Python's function tables)
+//! or checked against it by a test that names what is missing where (the
+//! CLI's subcommands, the fuzz targets and seeds, Python's functions and
+//! stubs, the README's table and the manual's chapters).
+//!
+//! Adding a procedure: its folder `procedures/<name>/`, one entry here,
+//! its CLI file, its chapter (CONTRIBUTING walks through it).
+
+use crate::document::plan::PlanDocument;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// The procedure that produced a document.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum Procedure {
+    /// Dividing-head tumble test (Wu et al. 2015; GJB 1037A).
+    Tumble,
+    /// Precision centrifuge (He & Yin 2017; IEEE Std 836).
+    Centrifuge,
+    /// Gyro misalignment on a rate table (Li et al. 2012).
+    MisalignGyro,
+    /// Accelerometer misalignment on a vertical face (Li et al. 2012).
+    MisalignAccel,
+    /// Gyro-free unit: K0 and Ks of every accelerometer (the GFIMU note).
+    GfimuCalibrate,
+    /// Gyro rate-transfer test on a rate table (IEEE Std 952 / 1431).
+    GyroRate,
+    /// Gyro multi-position test on a dividing head (IEEE Std 517 / 1431).
+    GyroPositions,
+    /// Noise and stability: Allan family, IEEE Std 952 terms, bias stability.
+    Noise,
+    /// IMU triad, Ferraris six-position + three-rotation method (imucal).
+    ImuFerraris,
+    /// IMU triad, least squares over known orientations.
+    ImuMultipos,
+    /// IMU triad, autocalibration without a fixture (Tedaldi et al. 2014).
+    ImuAutocal,
+    /// Thermal model: coefficients as polynomials in temperature, from
+    /// soak plateaus or a chamber ramp (IEEE Std 1293 / 952; Niu et al.
+    /// 2013).
+    Thermal,
+}
+
+impl Procedure {
+    /// Every document id, in registry order (each once).
+    pub fn all() -> Vec<Procedure> {
+        let mut out: Vec<Procedure> = Vec::new();
+        for e in REGISTRY {
+            if !out.contains(&e.document) {
+                out.push(e.document);
+            }
+        }
+        out
+    }
+
+    /// The procedure with document id `id`, if any.
+    pub fn from_id(id: &str) -> Option<Procedure> {
+        REGISTRY
+            .iter()
+            .map(|e| e.document)
+            .find(|p| p.as_str() == id)
+    }
+
+    /// The procedure id as in the JSON (`tumble`, `misalign-gyro`, …).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Procedure::Tumble => "tumble",
+            Procedure::Centrifuge => "centrifuge",
+            Procedure::MisalignGyro => "misalign-gyro",
+            Procedure::MisalignAccel => "misalign-accel",
+            Procedure::GfimuCalibrate => "gfimu-calibrate",
+            Procedure::GyroRate => "gyro-rate",
+            Procedure::GyroPositions => "gyro-positions",
+            Procedure::Noise => "noise",
+            Procedure::ImuFerraris => "imu-ferraris",
+            Procedure::ImuMultipos => "imu-multipos",
+            Procedure::ImuAutocal => "imu-autocal",
+            Procedure::Thermal => "thermal",
+        }
+    }
+}
+
+impl std::fmt::Display for Procedure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// What a procedure reduces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum InputKind {
+    /// One recording (CSV or binary samples): `--input FILE`; `incal
+    /// batch` runs it over many recordings.
+    Recording,
+    /// Result documents of earlier reductions (`thermal fit`).
+    Results,
+}
+
+/// The settings of a plan in the order they are run, for the operator:
+/// the column names of the settings and one row per step (without the
+/// `step` and `samples` columns that [`PlanDocument::run_sheet`] adds).
+pub type RunSheet = (Vec<&'static str>, Vec<Vec<String>>);
+
+/// One procedure in the registry (module docs).
+#[derive(Debug, Clone, Copy)]
+pub struct Entry {
+    /// The registry id: kebab-case, unique; the document id unless one
+    /// document id is written by several commands (`thermal-ramp` and
+    /// `thermal-fit` both write `thermal`).
+    pub id: &'static str,
+    /// The procedure id the result documents carry.
+    pub document: Procedure,
+    /// The command words that reduce it (`["gyro", "rate"]`).
+    pub command: &'static [&'static str],
+    /// The command words of its plan (`["plan", "gyro-rate"]`), if any.
+    pub plan: Option<&'static [&'static str]>,
+    /// The command words of its simulator (`["simulate", "gyro-rate"]`).
+    pub simulate: Option<&'static [&'static str]>,
+    /// One line for people, as the certificate's heading and the README.
+    pub title: &'static str,
+    /// The rig whose reference standards make its results traceable (one
+    /// of the certificate's rigs); `None` when no rig standard enters the
+    /// result (the instrument's own record and time base).
+    pub rig: Option<&'static str>,
+    /// The method as the certificate states it: standards and papers by
+    /// title, authors, venue and year.
+    pub method: &'static str,
+    /// The references it cites: anchors of `docs/src/references.md`.
+    pub references: &'static [&'static str],
+    /// Its chapter of the manual (`docs/src/<chapter>`).
+    pub chapter: &'static str,
+    /// What it reduces.
+    pub input: InputKind,
+    /// The fuzz targets (`incal_fuzz::TARGETS`) that cover its input.
+    pub fuzz: &'static [&'static str],
+    /// The run sheet of its plan documents, if its plans list settings.
+    pub run_sheet: Option<fn(&PlanDocument) -> RunSheet>,
+}
+
+impl Entry {
+    /// The Python function of the reduction (`incal.gyro_rate`): the
+    /// command words joined by `_`, with `-` as `_`.
+    pub fn python(&self) -> String {
+        python_name(self.command)
+    }
+
+    /// The Python function of its plan (`incal.plan.gyro_rate`).
+    pub fn python_plan(&self) -> Option<String> {
+        self.plan.map(|w| python_name(&w[1..]))
+    }
+
+    /// The Python function of its simulator (`incal.simulate.misalign_gyro`).
+    pub fn python_simulate(&self) -> Option<String> {
+        self.simulate.map(|w| python_name(&w[1..]))
+    }
+
+    /// The command line words of the reduction, space-separated.
+    pub fn command_line(&self) -> String {
+        self.command.join(" ")
+    }
+}
+
+/// Command words as a Python name (`["misalign", "gyro"]` → `misalign_gyro`).
+fn python_name(words: &[&str]) -> String {
+    words.join("_").replace('-', "_")
+}
+
+/// The entry of registry id `id` (`_` accepted for `-`), if any.
+pub fn find(id: &str) -> Option<&'static Entry> {
+    let id = id.replace('_', "-");
+    REGISTRY.iter().find(|e| e.id == id)
+}
+
+/// The entries that write documents of `procedure`, in registry order.
+pub fn of(procedure: Procedure) -> impl Iterator<Item = &'static Entry> {
+    REGISTRY.iter().filter(move |e| e.document == procedure)
+}
+
+/// The first entry that writes documents of `procedure` (every document
+/// id has one: a test checks it).
+pub fn first_of(procedure: Procedure) -> Option<&'static Entry> {
+    of(procedure).next()
+}
+
+/// The entry that `incal batch ID` runs: by registry id, or by document id
+/// when exactly one entry reducing a recording writes it (`thermal` is
+/// `thermal-ramp`). Only procedures that reduce one recording.
+pub fn batch(id: &str) -> Option<&'static Entry> {
+    let key = id.replace('_', "-");
+    let by_id = find(&key).filter(|e| e.input == InputKind::Recording);
+    by_id.or_else(|| {
+        let p = Procedure::from_id(&key)?;
+        let mut it = of(p).filter(|e| e.input == InputKind::Recording);
+        let e = it.next()?;
+        it.next().is_none().then_some(e)
+    })
+}
+
+/// The ids of the procedures `incal batch` runs, in registry order.
+pub fn batch_ids() -> Vec<&'static str> {
+    REGISTRY
+        .iter()
+        .filter(|e| e.input == InputKind::Recording)
+        .map(|e| e.id)
+        .collect()
+}
+
+const DIVIDING_HEAD: Option<&str> = Some("dividing-head");
+const RATE_TABLE: Option<&str> = Some("rate-table");
+
+const LI2012: &str = "Misalignment separation on a rate table: Li W., Ren S., Zhao H., Error separating technology for misalignment angle measurement of inertial component, Journal of Harbin Institute of Technology, 2012, vol. 44, no. 1, pp. 43-46";
+const THERMAL_METHOD: &str = "Coefficients as polynomials in temperature from soak plateaus or a chamber ramp: IEEE Std 1293-2018 and IEEE Std 952-1997 (temperature sensitivity of bias and scale factor); Niu X., Li Y., Zhang H., Wang Q., Ban Y., Fast thermal calibration of low-grade inertial sensors and inertial measurement units, Sensors, 2013, vol. 13, no. 9, pp. 12192-12217";
+
+/// Every procedure, in the order of the CLI's help and the README.
+pub static REGISTRY: &[Entry] = &[
+    Entry {
+        id: "tumble",
+        document: Procedure::Tumble,
+        command: &["tumble"],
+        plan: Some(&["plan", "tumble"]),
+        simulate: Some(&["simulate", "tumble"]),
+        title: "Tumble test on a dividing head",
+        rig: DIVIDING_HEAD,
+        method: "Multi-point tumble test on a dividing head: GJB 1037A-2004, Test methods for single-axis pendulous servo linear accelerometers; IEEE Std 1293-2018; Wu W., Nian H., Liu B., Cui J., Jiang X., 12-point tumble test method in a small angle for pendulous accelerometer with narrow input range, Navigation Positioning and Timing, 2015, no. 4, pp. 77-82",
+        references: &["wu2015", "gjb1037a", "ieee1293"],
+        chapter: "tumble.md",
+        input: InputKind::Recording,
+        fuzz: &["tumble"],
+        run_sheet: Some(super::tumble::plan::run_sheet),
+    },
+    Entry {
+        id: "centrifuge",
+        document: Procedure::Centrifuge,
+        command: &["centrifuge"],
+        plan: Some(&["plan", "centrifuge"]),
+        simulate: Some(&["simulate", "centrifuge"]),
+        title: "Precision centrifuge: radius, K2/K3, cross-axis and cross-coupling",
+        rig: Some("centrifuge"),
+        method: "Precision centrifuge test: IEEE Std 836-2009, IEEE Recommended Practice for Precision Centrifuge Testing of Linear Accelerometers; He Y., Yin X., Calibration for the cross-coupling coefficients of linear accelerometers base on precision centrifuge, Metrology & Measurement Technology, 2017, vol. 37, no. 3, pp. 51-55",
+        references: &["he2017", "ieee836"],
+        chapter: "centrifuge.md",
+        input: InputKind::Recording,
+        fuzz: &["centrifuge"],
+        run_sheet: Some(super::centrifuge::plan::run_sheet),
+    },
+    Entry {
+        id: "misalign-gyro",
+        document: Procedure::MisalignGyro,
+        command: &["misalign", "gyro"],
+        plan: Some(&["plan", "misalign"]),
+        simulate: Some(&["simulate", "misalign", "gyro"]),
+        title: "Gyro misalignment on a rate table",
+        rig: RATE_TABLE,
+        method: LI2012,
+        references: &["li2012"],
+        chapter: "misalignment.md",
+        input: InputKind::Recording,
+        fuzz: &["misalign-gyro", "misalign-gyro-raw"],
+        run_sheet: Some(super::misalign::plan::run_sheet_gyro),
+    },
+    Entry {
+        id: "misalign-accel",
+        document: Procedure::MisalignAccel,
+        command: &["misalign", "accel"],
+        plan: Some(&["plan", "misalign"]),
+        simulate: Some(&["simulate", "misalign", "accel"]),
+        title: "Accelerometer misalignment on a vertical face",
+        rig: RATE_TABLE,
+        method: LI2012,
+        references: &["li2012"],
+        chapter: "misalignment.md",
+        input: InputKind::Recording,
+        fuzz: &["misalign-accel"],
+        run_sheet: Some(super::misalign::plan::run_sheet_accel),
+    },
+    Entry {
+        id: "gyro-rate",
+        document: Procedure::GyroRate,
+        command: &["gyro", "rate"],
+        plan: Some(&["plan", "gyro-rate"]),
+        simulate: Some(&["simulate", "gyro-rate"]),
+        title: "Gyro rate-transfer test on a rate table",
+        rig: RATE_TABLE,
+        method: "Rate-transfer test on a rate table: IEEE Std 952-1997 §12.3; IEEE Std 1431-2004 §10.3",
+        references: &["ieee952", "ieee1431"],
+        chapter: "gyro.md",
+        input: InputKind::Recording,
+        fuzz: &["gyro-rate"],
+        run_sheet: Some(super::gyro::rate::plan::run_sheet),
+    },
+    Entry {
+        id: "gyro-positions",
+        document: Procedure::GyroPositions,
+        command: &["gyro", "positions"],
+        plan: Some(&["plan", "gyro-positions"]),
+        simulate: Some(&["simulate", "gyro-positions"]),
+        title: "Gyro multi-position test on a dividing head",
+        rig: DIVIDING_HEAD,
+        method: "Multi-position test on a dividing head: IEEE Std 517-1974; IEEE Std 1431-2004 §10.3",
+        references: &["ieee517", "ieee1431"],
+        chapter: "gyro.md",
+        input: InputKind::Recording,
+        fuzz: &["gyro-positions"],
+        run_sheet: Some(super::gyro::positions::plan::run_sheet),
+    },
+    Entry {
+        id: "imu-ferraris",
+        document: Procedure::ImuFerraris,
+        command: &["imu", "ferraris"],
+        plan: None,
+        simulate: Some(&["simulate", "imu"]),
+        title: "IMU triad, Ferraris six positions and three rotations",
+        rig: RATE_TABLE,
+        method: "Six positions and three rotations: Ferraris F., Grimaldi U., Parvis M., Procedure for effortless in-field calibration of three-axis rate gyros and accelerometers, Sensors and Materials, 1995, vol. 7, no. 5, pp. 311-330",
+        references: &["ferraris1995", "imucal"],
+        chapter: "imu.md",
+        input: InputKind::Recording,
+        fuzz: &["imu-ferraris"],
+        run_sheet: None,
+    },
+    Entry {
+        id: "imu-multipos",
+        document: Procedure::ImuMultipos,
+        command: &["imu", "multipos"],
+        plan: None,
+        simulate: Some(&["simulate", "imu"]),
+        title: "IMU triad, least squares over known orientations",
+        rig: DIVIDING_HEAD,
+        method: "Least squares over known static orientations of the triad (model of IEEE Std 1293-2018 per axis)",
+        references: &["ieee1293"],
+        chapter: "imu.md",
+        input: InputKind::Recording,
+        fuzz: &["imu-multipos"],
+        run_sheet: None,
+    },
+    Entry {
+        id: "imu-autocal",
+        document: Procedure::ImuAutocal,
+        command: &["imu", "autocal"],
+        plan: None,
+        simulate: Some(&["simulate", "imu"]),
+        title: "IMU triad, autocalibration without a fixture",
+        rig: None,
+        method: "Calibration without a fixture: Tedaldi D., Pretto A., Menegatti E., A robust and easy to implement method for IMU calibration without external equipments, Proc. IEEE ICRA 2014, pp. 3042-3049",
+        references: &["tedaldi2014", "imu-tk"],
+        chapter: "imu.md",
+        input: InputKind::Recording,
+        fuzz: &["imu-autocal"],
+        run_sheet: None,
+    },
+    Entry {
+        id: "gfimu-calibrate",
+        document: Procedure::GfimuCalibrate,
+        command: &["gfimu", "calibrate"],
+        plan: Some(&["plan", "gfimu"]),
+        simulate: Some(&["simulate", "gfimu"]),
+        title: "Gyro-free unit: K0 and Ks of every accelerometer",
+        rig: DIVIDING_HEAD,
+        method: "Six-position static test of a gyro-free inertial unit of six accelerometers (model of IEEE Std 1293-2018 per accelerometer)",
+        references: &["gfimu-note", "ieee1293"],
+        chapter: "gfimu.md",
+        input: InputKind::Recording,
+        fuzz: &["gfimu-calibrate"],
+        run_sheet: Some(super::gfimu::plan::run_sheet),
+    },
+    Entry {
+        id: "noise",
+        document: Procedure::Noise,
+        command: &["noise"],
+        plan: None,
+        simulate: Some(&["simulate", "noise"]),
+        title: "Noise and stability: Allan family, IEEE 952 terms, bias stability",
+        rig: None,
+        method: "Noise analysis of a static record: IEEE Std 952-1997 Annex C; W. J. Riley, Handbook of Frequency Stability Analysis, NIST Special Publication 1065, 2008",
+        references: &["ieee952", "nist1065", "gjb2426a"],
+        chapter: "noise.md",
+        input: InputKind::Recording,
+        fuzz: &["noise"],
+        run_sheet: None,
+    },
+    Entry {
+        id: "thermal-ramp",
+        document: Procedure::Thermal,
+        command: &["thermal", "ramp"],
+        plan: Some(&["plan", "thermal"]),
+        simulate: Some(&["simulate", "thermal"]),
+        title: "Thermal model from a chamber ramp: bias polynomials, hysteresis, lag",
+        rig: Some("thermal-chamber"),
+        method: THERMAL_METHOD,
+        references: &["niu2013", "ieee1293", "ieee952"],
+        chapter: "thermal.md",
+        input: InputKind::Recording,
+        fuzz: &["thermal-ramp"],
+        run_sheet: Some(super::thermal::plan::run_sheet),
+    },
+    Entry {
+        id: "thermal-fit",
+        document: Procedure::Thermal,
+        command: &["thermal", "fit"],
+        plan: Some(&["plan", "thermal"]),
+        simulate: Some(&["simulate", "thermal"]),
+        title: "Thermal model from soak plateaus: coefficients as polynomials in temperature",
+        rig: Some("thermal-chamber"),
+        method: THERMAL_METHOD,
+        references: &["niu2013", "ieee1293", "ieee952"],
+        chapter: "thermal.md",
+        input: InputKind::Results,
+        fuzz: &["thermal-fit"],
+        run_sheet: Some(super::thermal::plan::run_sheet),
+    },
+];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ids_are_unique_kebab_case_and_every_document_id_has_an_entry() {
+        let mut seen = std::collections::BTreeSet::new();
+        for e in REGISTRY {
+            assert!(seen.insert(e.id), "procedure {}: listed twice", e.id);
+            assert!(
+                e.id.chars()
+                    .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-'),
+                "procedure {}: the id is not kebab-case",
+                e.id
+            );
+            assert!(
+                e.id == e.document.as_str() || e.id.starts_with(e.document.as_str()),
+                "procedure {}: the id does not begin with its document id {}",
+                e.id,
+                e.document
+            );
+            assert!(e.method.len() > 40, "procedure {}: no method", e.id);
+            assert!(!e.references.is_empty(), "procedure {}: no reference", e.id);
+            assert!(!e.fuzz.is_empty(), "procedure {}: no fuzz target", e.id);
+        }
+        for p in Procedure::all() {
+            assert!(first_of(p).is_some(), "document id {p}: no registry entry");
+        }
+    }
+
+    #[test]
+    fn document_ids_are_the_serde_names() {
+        for p in Procedure::all() {
+            assert_eq!(serde_json::to_value(p).unwrap(), p.as_str(), "{p:?}");
+        }
+        assert_eq!(Procedure::all().len(), 12);
+    }
+
+    #[test]
+    fn batch_finds_by_id_and_by_a_document_id_with_one_recording_entry() {
+        assert_eq!(batch("gyro_rate").map(|e| e.id), Some("gyro-rate"));
+        assert_eq!(batch("thermal").map(|e| e.id), Some("thermal-ramp"));
+        assert_eq!(batch("thermal-ramp").map(|e| e.id), Some("thermal-ramp"));
+        assert!(batch("thermal-fit").is_none());
+        assert!(batch("tumbel").is_none());
+        assert!(batch_ids().contains(&"thermal-ramp"));
+    }
+
+    #[test]
+    fn python_names_follow_the_commands() {
+        let e = find("misalign-gyro").unwrap();
+        assert_eq!(e.python(), "misalign_gyro");
+        assert_eq!(e.python_plan().as_deref(), Some("misalign"));
+        assert_eq!(e.python_simulate().as_deref(), Some("misalign_gyro"));
+        assert_eq!(find("gyro-rate").unwrap().python(), "gyro_rate");
+    }
+}
