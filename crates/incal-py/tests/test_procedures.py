@@ -321,3 +321,30 @@ def test_thermal_ramp_fit_apply_and_exports(tmp_path):
     assert "K1.c0" in soak.coefficients
     with pytest.raises(incal.InputError, match="K0.c3"):
         incal.thermal_fit(docs, degree=3)
+
+
+def test_every_registry_procedure_has_its_functions_and_stubs():
+    """The procedure registry (``incal procedures --json``) names, for each
+    procedure, its Python function, plan and simulator: each exists, is
+    exported, and has its stub; no procedure function is missing."""
+    pkg = pathlib.Path(incal.__file__).parent
+    stubs = {m: (pkg / f"{m}.pyi").read_text() for m in ["__init__", "plan", "simulate"]}
+    registry = json.loads(cli(["procedures", "--json"]))
+    assert registry == incal.REGISTRY
+    missing = []
+    for e in registry:
+        names = [("__init__", incal, e["python"]["function"])]
+        names += [("plan", incal.plan, e["python"]["plan"]), ("simulate", incal.simulate, e["python"]["simulate"])]
+        for stub, module, name in names:
+            if name is None:
+                continue
+            if not callable(getattr(module, name, None)):
+                missing.append(f"procedure {e['id']}: no incal.{'' if stub == '__init__' else stub + '.'}{name}")
+            elif name not in module.__all__:
+                missing.append(f"procedure {e['id']}: {name} not in the __all__ of {module.__name__}")
+            if f"def {name}(" not in stubs[stub]:
+                missing.append(f"procedure {e['id']}: no stub of {name} in {stub}.pyi")
+        if e["input"] == "recording" and e["id"] not in incal.batch.PROCEDURES:
+            missing.append(f"procedure {e['id']}: not in incal.batch.PROCEDURES")
+    assert not missing, "\n".join(missing)
+    assert incal.batch._function("thermal") == "thermal_ramp"

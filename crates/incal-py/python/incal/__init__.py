@@ -34,18 +34,6 @@ __all__ = [
     "IncalError",
     "InputError",
     "Result",
-    "tumble",
-    "centrifuge",
-    "misalign_gyro",
-    "misalign_accel",
-    "gyro_rate",
-    "gyro_positions",
-    "imu_ferraris",
-    "imu_multipos",
-    "imu_autocal",
-    "gfimu_calibrate",
-    "noise",
-    "thermal_ramp",
     "thermal_fit",
     "thermal_apply",
     "export_thermal",
@@ -59,6 +47,7 @@ __all__ = [
     "batch",
     "Records",
     "run",
+    "REGISTRY",
 ]
 
 
@@ -339,22 +328,26 @@ def _procedure(name: str, command: Sequence[str], doc: str):
     return reduce
 
 
-tumble = _procedure("tumble", ["tumble"], "Accelerometer tumble test on a dividing head.")
-centrifuge = _procedure("centrifuge", ["centrifuge"], "Accelerometer on a precision centrifuge.")
-misalign_gyro = _procedure("misalign_gyro", ["misalign", "gyro"], "Gyro misalignment on a rate table.")
-misalign_accel = _procedure("misalign_accel", ["misalign", "accel"], "Accelerometer misalignment on a vertical face.")
-gyro_rate = _procedure("gyro_rate", ["gyro", "rate"], "Gyro rate-transfer test.")
-gyro_positions = _procedure("gyro_positions", ["gyro", "positions"], "Gyro multi-position test.")
-imu_ferraris = _procedure("imu_ferraris", ["imu", "ferraris"], "IMU triad, Ferraris six positions and three rotations.")
-imu_multipos = _procedure("imu_multipos", ["imu", "multipos"], "IMU triad, least squares over known orientations.")
-imu_autocal = _procedure("imu_autocal", ["imu", "autocal"], "IMU triad, autocalibration without a fixture.")
-gfimu_calibrate = _procedure("gfimu_calibrate", ["gfimu", "calibrate"], "Gyro-free unit: K0 and Ks of every accelerometer.")
-noise = _procedure("noise", ["noise"], "Noise and stability: Allan family, IEEE 952 terms, bias stability.")
-thermal_ramp = _procedure(
-    "thermal_ramp",
-    ["thermal", "ramp"],
-    "Thermal ramp: bias polynomials in temperature, hysteresis and lag from a chamber ramp.",
-)
+def _registry() -> List[Dict[str, Any]]:
+    """The procedure registry of the library (``incal procedures --json``):
+    one dict per procedure, with its id, commands, title, rig, chapter and
+    Python names. Every table of procedures in this package is built from
+    it."""
+    out, _ = run(["procedures", "--json"])
+    return json.loads(out)
+
+
+#: The procedure registry (see :func:`_registry`).
+REGISTRY: List[Dict[str, Any]] = _registry()
+
+# One function per procedure that reduces a recording, named as the
+# registry says (``incal.gyro_rate`` runs ``incal gyro rate``).
+for _entry in REGISTRY:
+    if _entry["input"] == "recording":
+        _name = _entry["python"]["function"]
+        globals()[_name] = _procedure(_name, _entry["command"].split(), _entry["title"] + ".")
+        __all__.append(_name)
+del _entry, _name
 
 
 def _as_files(d: str, items: Sequence[Any], stem: str) -> List[str]:

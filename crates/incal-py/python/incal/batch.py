@@ -24,20 +24,29 @@ from typing import Any, Dict, Iterable, List, Optional, Union
 
 __all__ = ["reduce", "Batch", "FileError", "PROCEDURES"]
 
-#: Procedure ids (as in result documents) and their function names.
-PROCEDURES = {
-    "tumble": "tumble",
-    "centrifuge": "centrifuge",
-    "misalign-gyro": "misalign_gyro",
-    "misalign-accel": "misalign_accel",
-    "gyro-rate": "gyro_rate",
-    "gyro-positions": "gyro_positions",
-    "imu-ferraris": "imu_ferraris",
-    "imu-multipos": "imu_multipos",
-    "imu-autocal": "imu_autocal",
-    "gfimu-calibrate": "gfimu_calibrate",
-    "noise": "noise",
-}
+#: Procedure ids (the registry's, ``incal procedures``) that reduce one
+#: recording, and their function names; from the procedure registry.
+PROCEDURES: Dict[str, str] = {}
+#: A document id written by exactly one such procedure, and that
+#: procedure's id (``thermal`` is ``thermal-ramp``), as ``incal batch``
+#: takes it.
+_BY_DOCUMENT: Dict[str, str] = {}
+
+
+def _tables() -> None:
+    from . import REGISTRY
+
+    seen: Dict[str, List[str]] = {}
+    for e in REGISTRY:
+        if e["input"] == "recording":
+            PROCEDURES[e["id"]] = e["python"]["function"]
+            seen.setdefault(e["document"], []).append(e["id"])
+    for doc, ids in seen.items():
+        if len(ids) == 1 and doc not in PROCEDURES:
+            _BY_DOCUMENT[doc] = ids[0]
+
+
+_tables()
 
 
 class FileError:
@@ -87,6 +96,7 @@ class Batch(list):
 
 def _function(procedure: str) -> str:
     pid = procedure.replace("_", "-")
+    pid = _BY_DOCUMENT.get(pid, pid)
     if pid not in PROCEDURES:
         from . import InputError
 

@@ -8,19 +8,9 @@ from __future__ import annotations
 
 from typing import Any, List, Tuple
 
-from . import _options, _read_csv, run
+from . import REGISTRY, _options, _read_csv, run
 
-__all__ = [
-    "tumble",
-    "centrifuge",
-    "misalign_gyro",
-    "misalign_accel",
-    "gfimu",
-    "gyro_rate",
-    "gyro_positions",
-    "imu",
-    "thermal",
-]
+__all__: List[str] = []
 
 
 def _frame(csv: bytes):
@@ -55,15 +45,17 @@ def _simulator(words: List[str], name: str):
     return simulate
 
 
-tumble = _simulator(["tumble"], "tumble")
-centrifuge = _simulator(["centrifuge"], "centrifuge")
-misalign_gyro = _simulator(["misalign", "gyro"], "misalign_gyro")
-misalign_accel = _simulator(["misalign", "accel"], "misalign_accel")
-gfimu = _simulator(["gfimu"], "gfimu")
-gyro_rate = _simulator(["gyro-rate"], "gyro_rate")
-gyro_positions = _simulator(["gyro-positions"], "gyro_positions")
-imu = _simulator(["imu"], "imu")
-thermal = _simulator(["thermal"], "thermal")
+# One function per simulator command of the procedure registry
+# (``incal.REGISTRY``): ``incal simulate misalign gyro`` is
+# ``incal.simulate.misalign_gyro``.
+for _entry in REGISTRY:
+    _name = _entry["python"]["simulate"]
+    if _name and _name not in __all__:
+        globals()[_name] = _simulator(_entry["simulate"].split()[1:], _name)
+        __all__.append(_name)
+del _entry, _name
+
+thermal = globals()["thermal"]
 thermal.__doc__ = (
     "``incal simulate thermal``: (DataFrame with time_s, chamber_c, temperature_c and the "
     "channels, truth dict: t_ref_c, lag_s, unit and per channel c, hysteresis, noise)."
