@@ -6,8 +6,18 @@
 # 15 server binaries and, for the certificate PDF checks, chromium and
 # poppler-utils (installed here with apt-get when run as root); pip
 # fetches maturin, pytest, numpy, pandas, imucal and dask from PyPI.
+#
+#   scripts/test.sh          the fast tier: every behaviour and refusal,
+#                            Monte Carlo at the smallest telling count
+#   scripts/test.sh --full   both tiers: also the statistical one (hundreds
+#                            of seeds, kill -9 loops, long campaigns), the
+#                            size and documentation checks and cargo doc;
+#                            what .ci/run runs
 set -euo pipefail
 cd "$(dirname "$0")/.."
+if [ "${1:-}" = "--full" ]; then
+    export INCAL_TESTS=full
+fi
 
 # The records tests start throwaway PostgreSQL servers
 # (scripts/pg-test-server.sh): make sure the server binaries are here.
@@ -37,7 +47,7 @@ if command -v chromium >/dev/null && command -v pdftoppm >/dev/null; then
     export INCAL_REQUIRE_CHROMIUM=1
 fi
 
-echo "== Rust: cargo test --workspace --locked"
+echo "== Rust: cargo test --workspace --locked (tier: ${INCAL_TESTS:-fast})"
 cargo test --workspace --locked
 
 echo "== Python: the incal package in target/py-venv"
@@ -49,3 +59,13 @@ fi
 "$venv/bin/pip" install --quiet --disable-pip-version-check --force-reinstall --no-deps crates/incal-py
 echo "== Python: pytest crates/incal-py/tests"
 INCAL_BIN="$PWD/target/debug/incal" "$venv/bin/python" -m pytest -q crates/incal-py/tests
+
+if [ "${INCAL_TESTS:-}" = "full" ]; then
+    echo "== size: no source file over 1,000 lines, no function over 150"
+    python3 scripts/check-size.py
+    echo "== docs: every link and example of the README and the manual"
+    INCAL="$PWD/target/debug/incal" python3 scripts/check-docs.py
+    echo "== cargo doc --no-deps (warnings denied)"
+    RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --locked --quiet
+    echo "checks: 3 passed, 0 failed"
+fi

@@ -215,25 +215,7 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
     use incal::procedures::{centrifuge, gfimu, gyro, imu, misalign, noise, tumble};
     match target {
         "tumble" => reduce::<tumble::Tumble>(data, &tumble_options()),
-        "centrifuge" => reduce::<centrifuge::CentrifugeTest>(
-            data,
-            &centrifuge::CentrifugeRun {
-                from: None,
-                k0_g: Some(1.2e-4),
-                u_k0_g: None,
-                k1: Some(1.3),
-                u_k1: None,
-                radius_m: 0.71,
-                latitude_deg: 39.9,
-                gravity_m_s2: incal::units::STANDARD_GRAVITY_M_S2,
-                opposite_sense: false,
-                order: 3,
-                alignment_tolerance_deg: 0.0,
-                noise: Noise::Auto,
-                terms: None,
-                u_omega_ppm: 0.0,
-            },
-        ),
+        "centrifuge" => reduce::<centrifuge::CentrifugeTest>(data, &centrifuge_options()),
         "misalign-gyro" | "misalign-gyro-raw" => reduce::<misalign::MisalignGyro>(
             data,
             &misalign::GyroRun {
@@ -338,39 +320,8 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
             &incal::procedures::thermal::ramp::RampOptions::default(),
         ),
         "thermal-fit" => thermal_fit(data),
-        "result" => match document(data) {
-            Ok(d) => match incal::document::compare::compare_documents("a", &d, "b", &d) {
-                Ok(c) => Outcome::Accepted(c.to_json().to_string()),
-                Err(e) => Outcome::Refused(e.to_string()),
-            },
-            Err(e) => Outcome::Refused(e),
-        },
-        "limits" => {
-            let limits = match std::str::from_utf8(data) {
-                Ok(text) => incal::document::limits::Limits::parse(text),
-                Err(_) => Err("not UTF-8 text".into()),
-            };
-            match limits {
-                Ok(limits) => {
-                    let read = incal_io::ReadOptions::default();
-                    let doc = reduce_source::<tumble::Tumble, _>(
-                        "tumble.csv",
-                        seed("tumble"),
-                        &read,
-                        &tumble_options(),
-                        &Silent,
-                    );
-                    match doc {
-                        Ok(mut doc) => match incal::document::limits::apply(&mut doc, &limits) {
-                            Ok(()) => Outcome::Accepted(doc.to_json()),
-                            Err(e) => Outcome::Refused(format!("{NAME}: {e}")),
-                        },
-                        Err(e) => Outcome::Refused(format!("seed: {e}")),
-                    }
-                }
-                Err(e) => Outcome::Refused(format!("{NAME}: {e}")),
-            }
-        }
+        "result" => compare_result(data),
+        "limits" => limits(data),
         other => panic!("unknown fuzz target {other}"),
     }
 }
@@ -406,6 +357,69 @@ fn thermal_fit(data: &[u8]) -> Outcome {
     match soak::fit_documents(&inputs, &soak::SoakOptions::default()) {
         Ok(doc) => Outcome::Accepted(doc.to_json()),
         Err(e) => Outcome::Refused(e.to_string()),
+    }
+}
+
+/// The centrifuge options of the seed's run (`incal simulate centrifuge`).
+fn centrifuge_options() -> incal::procedures::centrifuge::CentrifugeRun {
+    use incal::procedures::centrifuge;
+    centrifuge::CentrifugeRun {
+        from: None,
+        k0_g: Some(1.2e-4),
+        u_k0_g: None,
+        k1: Some(1.3),
+        u_k1: None,
+        radius_m: 0.71,
+        latitude_deg: 39.9,
+        gravity_m_s2: incal::units::STANDARD_GRAVITY_M_S2,
+        opposite_sense: false,
+        order: 3,
+        alignment_tolerance_deg: 0.0,
+        noise: Noise::Auto,
+        terms: None,
+        u_omega_ppm: 0.0,
+    }
+}
+
+/// `compare`: the fuzzed document against itself.
+fn compare_result(data: &[u8]) -> Outcome {
+    match document(data) {
+        Ok(d) => match incal::document::compare::compare_documents("a", &d, "b", &d) {
+            Ok(c) => Outcome::Accepted(c.to_json().to_string()),
+            Err(e) => Outcome::Refused(e.to_string()),
+        },
+        Err(e) => Outcome::Refused(e),
+    }
+}
+
+/// `--limits`: the fuzzed limits applied to the tumble seed's result.
+fn limits(data: &[u8]) -> Outcome {
+    use incal::procedures::tumble;
+    {
+        let limits = match std::str::from_utf8(data) {
+            Ok(text) => incal::document::limits::Limits::parse(text),
+            Err(_) => Err("not UTF-8 text".into()),
+        };
+        match limits {
+            Ok(limits) => {
+                let read = incal_io::ReadOptions::default();
+                let doc = reduce_source::<tumble::Tumble, _>(
+                    "tumble.csv",
+                    seed("tumble"),
+                    &read,
+                    &tumble_options(),
+                    &Silent,
+                );
+                match doc {
+                    Ok(mut doc) => match incal::document::limits::apply(&mut doc, &limits) {
+                        Ok(()) => Outcome::Accepted(doc.to_json()),
+                        Err(e) => Outcome::Refused(format!("{NAME}: {e}")),
+                    },
+                    Err(e) => Outcome::Refused(format!("seed: {e}")),
+                }
+            }
+            Err(e) => Outcome::Refused(format!("{NAME}: {e}")),
+        }
     }
 }
 

@@ -317,6 +317,45 @@ fn row(id: &str, label: &str, value_html: &str) -> String {
     )
 }
 
+/// The traceability statement (ISO/IEC 17025 §7.8.4.1 c): the rig's
+/// reference standards from the laboratory profile, each overdue one
+/// flagged, or why no rig standard enters the result.
+fn traceability(s: &mut String, doc: &ResultDocument, c: &Certificate) {
+    s.push_str("<div id=\"traceability\">");
+    match rig_of(doc.procedure) {
+        None => s.push_str("<p><b>Traceability.</b> The results are derived from the instrument's own record and its time base; no reference standard of a rig enters them.</p>"),
+        Some(rig) => {
+            let used: Vec<&Standard> = c.profile.standard.iter().filter(|x| x.rig == rig).collect();
+            if used.is_empty() {
+                s.push_str(&format!(
+                    "<p><b>Traceability.</b> <span class=\"missing\">No reference standard of the {rig} is listed in the laboratory profile: traceability is not stated.</span></p>"
+                ));
+            } else {
+                s.push_str(&format!("<p><b>Traceability.</b> The reference standards of the {rig} used are calibrated with metrological traceability to the International System of Units (SI):</p>\n<table class=\"standards\"><thead><tr><th>standard</th><th>certificate</th><th>due</th></tr></thead><tbody>\n"));
+                for x in used {
+                    let overdue = c
+                        .calibration_date
+                        .as_deref()
+                        .is_some_and(|d| before(&x.due, d));
+                    s.push_str(&format!(
+                        "<tr><td>{}</td><td>{}</td><td>{}{}</td></tr>\n",
+                        esc(&x.id),
+                        esc(&x.certificate),
+                        esc(&x.due),
+                        if overdue {
+                            " <span class=\"missing\">overdue on the date of calibration</span>"
+                        } else {
+                            ""
+                        }
+                    ));
+                }
+                s.push_str("</tbody></table>");
+            }
+        }
+    }
+    s.push_str("</div>\n");
+}
+
 /// The first page: laboratory, identification, results, decision rule and
 /// conformity, traceability, statements and authorisation.
 pub(crate) fn front_html(
@@ -428,39 +467,7 @@ pub(crate) fn front_html(
     s.push_str("<p id=\"uncertainty-statement\">The expanded uncertainty U95 = k95·u is the standard uncertainty multiplied by the coverage factor k95 from the Student t distribution for the stated degrees of freedom, giving a coverage probability of about 95 %; it was evaluated according to JCGM 100:2008 (GUM).</p>\n");
 
     // Traceability (§7.8.4.1 c, via the reference standards).
-    s.push_str("<div id=\"traceability\">");
-    match rig_of(doc.procedure) {
-        None => s.push_str("<p><b>Traceability.</b> The results are derived from the instrument's own record and its time base; no reference standard of a rig enters them.</p>"),
-        Some(rig) => {
-            let used: Vec<&Standard> = c.profile.standard.iter().filter(|x| x.rig == rig).collect();
-            if used.is_empty() {
-                s.push_str(&format!(
-                    "<p><b>Traceability.</b> <span class=\"missing\">No reference standard of the {rig} is listed in the laboratory profile: traceability is not stated.</span></p>"
-                ));
-            } else {
-                s.push_str(&format!("<p><b>Traceability.</b> The reference standards of the {rig} used are calibrated with metrological traceability to the International System of Units (SI):</p>\n<table class=\"standards\"><thead><tr><th>standard</th><th>certificate</th><th>due</th></tr></thead><tbody>\n"));
-                for x in used {
-                    let overdue = c
-                        .calibration_date
-                        .as_deref()
-                        .is_some_and(|d| before(&x.due, d));
-                    s.push_str(&format!(
-                        "<tr><td>{}</td><td>{}</td><td>{}{}</td></tr>\n",
-                        esc(&x.id),
-                        esc(&x.certificate),
-                        esc(&x.due),
-                        if overdue {
-                            " <span class=\"missing\">overdue on the date of calibration</span>"
-                        } else {
-                            ""
-                        }
-                    ));
-                }
-                s.push_str("</tbody></table>");
-            }
-        }
-    }
-    s.push_str("</div>\n");
+    traceability(&mut s, doc, c);
     s.push_str("<p id=\"relate-only\">The results relate only to the item calibrated. This certificate shall not be reproduced except in full without the written approval of the laboratory.</p>\n");
 
     // Authorisation (§7.8.2.1 o).

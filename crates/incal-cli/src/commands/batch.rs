@@ -185,10 +185,11 @@ fn stem(p: &Path) -> String {
         .unwrap_or_default()
 }
 
-/// `incal batch`.
-pub fn run(a: &Args) -> CliResult<()> {
-    let procedure = entry(&a.procedure)?;
-    let words = command_words(procedure.id)?;
+/// The recordings of the batch, after the checks made once before any is
+/// reduced: options the batch sets itself, `--jobs`, the procedure's own
+/// options (a usage error is the batch's, not every recording's) and
+/// `--out-dir` names that would collide (the directory is created).
+fn checked_inputs(a: &Args, words: &[String]) -> CliResult<Vec<PathBuf>> {
     for o in &a.options {
         let flag = o.split('=').next().unwrap_or_default();
         if matches!(flag, "--input" | "--json" | "-o" | "--output")
@@ -224,6 +225,45 @@ pub fn run(a: &Args) -> CliResult<()> {
             CliError::Failure(anyhow::anyhow!("{}: cannot create: {e}", dir.display()))
         })?;
     }
+    Ok(inputs)
+}
+
+/// The summary for people: one line per recording, then the count.
+fn text_summary(items: &[Item], failed: usize) -> String {
+    let n = items.len();
+    let mut s = String::new();
+    for it in items {
+        if it.ok {
+            s.push_str(&format!("ok    {}", it.input));
+            if let Some(o) = &it.output {
+                s.push_str(&format!(" -> {o}"));
+            }
+            if let Some(r) = it.record {
+                s.push_str(&format!(" (record {r})"));
+            }
+            if let Some(m) = &it.stopped {
+                s.push_str(&format!(" STOP {m}"));
+            }
+        } else {
+            s.push_str(&format!(
+                "FAIL  {}",
+                it.error.as_deref().unwrap_or_default()
+            ));
+        }
+        s.push('\n');
+    }
+    s.push_str(&format!(
+        "{} of {n} recordings reduced, {failed} failed\n",
+        n - failed
+    ));
+    s
+}
+
+/// `incal batch`.
+pub fn run(a: &Args) -> CliResult<()> {
+    let procedure = entry(&a.procedure)?;
+    let words = command_words(procedure.id)?;
+    let inputs = checked_inputs(a, &words)?;
     let mut store = match &a.db {
         Some(db) => Some(incal_records::Store::open(db).map_err(|e| store_error(db, e))?),
         None => None,
@@ -326,32 +366,7 @@ pub fn run(a: &Args) -> CliResult<()> {
             .map_err(|e| CliError::Failure(anyhow::anyhow!("cannot print the summary: {e}")))?;
         format!("{text}\n")
     } else {
-        let mut s = String::new();
-        for it in &items {
-            if it.ok {
-                s.push_str(&format!("ok    {}", it.input));
-                if let Some(o) = &it.output {
-                    s.push_str(&format!(" -> {o}"));
-                }
-                if let Some(r) = it.record {
-                    s.push_str(&format!(" (record {r})"));
-                }
-                if let Some(m) = &it.stopped {
-                    s.push_str(&format!(" STOP {m}"));
-                }
-            } else {
-                s.push_str(&format!(
-                    "FAIL  {}",
-                    it.error.as_deref().unwrap_or_default()
-                ));
-            }
-            s.push('\n');
-        }
-        s.push_str(&format!(
-            "{} of {n} recordings reduced, {failed} failed\n",
-            n - failed
-        ));
-        s
+        text_summary(&items, failed)
     };
     write_text(a.output.as_deref(), &summary)?;
     match (failed_input, failed_other) {

@@ -7,6 +7,7 @@
 /// The centrifuge simulator (lives with its procedure).
 pub use crate::procedures::centrifuge::sim as centrifuge;
 pub mod demo;
+pub mod tier;
 /// The gyro simulators (live with their procedures).
 pub mod gyro {
     pub use crate::procedures::gyro::positions::sim::{

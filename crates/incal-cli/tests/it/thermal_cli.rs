@@ -2,7 +2,7 @@
 //! thermal` and `incal export px4|ardupilot MODEL.json` from outside: the
 //! interface the issue fixes, and bad input refused in one line.
 
-mod common;
+use crate::common;
 
 use common::*;
 

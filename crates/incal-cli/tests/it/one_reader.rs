@@ -2,7 +2,7 @@
 //! with a UTF-8 BOM, a `#` comment line, CRLF line ends and `;` delimiters
 //! gives every command the same coefficients as the plain file.
 
-mod common;
+use crate::common;
 use common::*;
 
 /// `(name, simulate args, reduce args)`; the reduce args get `--input`.

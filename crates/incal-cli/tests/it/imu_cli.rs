@@ -3,7 +3,7 @@
 //! own example to 1e-9, round trips, and bad input refused with exit 2 and
 //! one line.
 
-mod common;
+use crate::common;
 use common::*;
 
 const FIX: &str = concat!(

@@ -1,7 +1,7 @@
 //! Integration tests of `incal gfimu ...` and `incal simulate gfimu`,
 //! running the real binary on temporary files.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::PathBuf;

@@ -4,7 +4,7 @@
 //! both rates, a decreasing stamp is refused at its line, gaps are
 //! reported.
 
-mod common;
+use crate::common;
 use common::*;
 
 /// A copy of `text` whose `time_s` (first column) is floored to

@@ -2,7 +2,7 @@
 //! `incal simulate gyro-rate|gyro-positions`: the real binary on temp
 //! files. Contract JSON keys and units; bad input exits 2 with one line.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::PathBuf;

@@ -4,7 +4,7 @@
 //! concurrent writers behave as on SQLite; `export` from one and `import`
 //! into the other rebuild the same chain.
 
-mod common;
+use crate::common;
 
 use std::sync::{Arc, Barrier};
 

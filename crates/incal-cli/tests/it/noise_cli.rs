@@ -2,7 +2,7 @@
 //! contract (options, JSON keys, coefficient names and units), parallel =
 //! sequential bit for bit, CSV = binary, and bad input → exit 2, one line.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::PathBuf;

@@ -2,7 +2,7 @@
 //! real binary on temp files. Good input gives the contract JSON; bad input
 //! gives exit code 2 and one stderr line naming the file and the line.
 
-mod common;
+use crate::common;
 use common::*;
 
 const TABLE1_20: &str = "alpha_deg,beta_deg,rate,output

@@ -1,6 +1,6 @@
 //! The real `incal` binary on good and bad tumble input.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::process::Output;

@@ -4,7 +4,7 @@
 //! procedure. Snapshots (insta) pin every command's text and JSON output on
 //! fixed seeded inputs.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::{Path, PathBuf};

@@ -4,7 +4,7 @@
 //! over many simulated histories the stated u covers the true rate as
 //! often as it claims.
 
-mod common;
+use crate::common;
 
 use common::{temp_dir, tumble_doc, Rng};
 use incal::estimation::VarianceSource;

@@ -2,7 +2,7 @@
 //! store file, add records concurrently; nothing is lost, ids are 1..=N
 //! without gaps and the hash chain verifies.
 
-mod common;
+use crate::common;
 
 use std::sync::{Arc, Barrier};
 

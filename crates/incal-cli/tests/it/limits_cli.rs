@@ -3,7 +3,7 @@
 //! overall verdict, the document still validates against the schema, and a
 //! limit that does not fit the result is refused with one line.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::PathBuf;

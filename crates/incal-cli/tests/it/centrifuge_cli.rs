@@ -2,7 +2,7 @@
 //! binary: the JSON contract, bad input (exit 2, one line naming file and
 //! line), and reproducible simulation.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::PathBuf;

@@ -4,7 +4,7 @@
 //! bad input; a store file changed behind incal's back; concurrent writer
 //! processes; and `record add` killed at random moments.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::{Path, PathBuf};
@@ -809,7 +809,7 @@ fn the_certificate_names_its_record_and_the_chain_head() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("missing.db"));
 }
 
-#[path = "../../incal-records/tests/common/pg.rs"]
+#[path = "../../../incal-records/tests/it/common/pg.rs"]
 mod pg;
 
 /// `--db postgresql://…` keeps the same store on a PostgreSQL server

@@ -2,7 +2,7 @@
 //! history, migrations, and `verify` catching records changed behind
 //! incal's back (direct SQL on the file).
 
-mod common;
+use crate::common;
 
 use common::{temp_dir, tumble_doc};
 use incal_records::{Error, NewRecord, Store, GENESIS};

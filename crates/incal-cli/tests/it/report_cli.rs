@@ -5,7 +5,7 @@
 //! and that the instrument's identity is escaped. A file that is not an
 //! incal result is refused (exit 2).
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::process::Command;

@@ -2,7 +2,7 @@
 //! with one line naming the file (and line) or the option, or gives a
 //! correct result. One test per defect, named after it.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::PathBuf;

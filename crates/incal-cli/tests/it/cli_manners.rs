@@ -2,7 +2,7 @@
 //! usage or input), exactly one stderr line naming the option or file, no
 //! panics, `-` for standard input, a UTF-8 byte-order mark accepted.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::PathBuf;

@@ -1,0 +1,22 @@
+//! Every integration test of `incal-cli` in one binary (one link instead of
+//! one per file); each file is a module. The statistical tier runs with
+//! `INCAL_TESTS=full` (see `incal::sim::tier`).
+
+mod centrifuge_cli;
+mod cli_manners;
+mod common;
+mod gfimu_cli;
+mod gyro_cli;
+mod hardening;
+mod imu_cli;
+mod limits_cli;
+mod misalign_cli;
+mod noise_cli;
+mod one_reader;
+mod record_cli;
+mod recordings_cli;
+mod registry;
+mod report_cli;
+mod result_document;
+mod thermal_cli;
+mod tumble_cli;

@@ -1,0 +1,27 @@
+//! Every integration test of `incal` in one binary (one link instead of
+//! one per file); each file is a module. The statistical tier runs with
+//! `INCAL_TESTS=full` (see `incal::sim::tier`).
+
+mod centrifuge_covariance;
+mod centrifuge_mc;
+mod centrifuge_roundtrip;
+mod gfimu_note;
+mod gfimu_plan;
+mod gfimu_roundtrip;
+mod gfimu_solve_long;
+mod gyro_roundtrip;
+mod he2017;
+mod imu_ferraris_imucal;
+mod imu_roundtrip;
+mod imu_tedaldi_reference;
+mod imu_tk_recordings;
+mod li2012;
+mod misalign_roundtrip;
+mod noise_reference;
+mod noise_roundtrip;
+mod noise_stable32;
+mod properties;
+mod schema_file;
+mod thermal_roundtrip;
+mod tumble_roundtrip;
+mod wu2015;
