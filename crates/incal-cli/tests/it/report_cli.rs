@@ -529,7 +529,7 @@ fn browser() -> Option<&'static str> {
     found
 }
 
-/// Issue 30: a certificate for every procedure carries every item of
+/// A certificate for every procedure carries every item of
 /// ISO/IEC 17025 §7.8 the issue lists; printed by headless Chromium (when
 /// installed) every page carries the number and "page x of y", a tumble
 /// certificate fits in three A4 pages with the results on page 1, and

@@ -355,3 +355,139 @@ fn history_keeps_one_temperature_when_asked_and_says_when_it_mixes() {
         &["within 2 degC of -40"],
     );
 }
+
+/// `plan thermal --json` is an `incal.plan/1` document that validates
+/// against the checked-in plan schema, soak and ramp alike, and its run
+/// sheet lists the plateaus or the set points in order.
+#[test]
+fn thermal_plans_are_schema_valid_plan_documents_with_run_sheets() {
+    let dir = workdir("thermal_plan_doc");
+    let schema: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../schema/plan.schema.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    let validator = jsonschema::validator_for(&schema).unwrap();
+    let soak = [
+        "plan",
+        "thermal",
+        "--plateaus-c",
+        "-40,-10,25,60,85",
+        "--u",
+        "2e-6",
+        "--degree",
+        "2",
+        "--json",
+        "--run-sheet",
+        "soak.csv",
+    ];
+    let ramp = [
+        "plan",
+        "thermal",
+        "--ramp-c-per-min",
+        "1",
+        "--noise",
+        "0.02",
+        "--degree",
+        "2",
+        "--rate-hz",
+        "10",
+        "--json",
+        "--run-sheet",
+        "ramp.csv",
+    ];
+    for (args, kind, terms) in [
+        (&soak[..], "thermal-plateaus", 3),
+        (&ramp[..], "thermal-ramp", 4),
+    ] {
+        let v = json_of(&run_in(&dir, args));
+        assert!(
+            validator.is_valid(&v),
+            "{kind}: not a valid incal.plan/1: {v}"
+        );
+        assert_eq!(v["schema"], "incal.plan/1");
+        assert_eq!(v["procedure"], "thermal");
+        assert_eq!(v["plan"], kind);
+        let u = v["predicted_u"].as_object().unwrap();
+        assert_eq!(u.len(), terms, "{kind}: {u:?}");
+        assert_eq!(v["predicted_U95"].as_object().unwrap().len(), terms);
+        assert!(v["predicted_dof"].as_f64().unwrap() >= 1.0);
+    }
+    let soak_sheet = std::fs::read_to_string(dir.join("soak.csv")).unwrap();
+    assert_eq!(
+        soak_sheet,
+        "step,plateau_c,samples\n1,-40,1\n2,-10,1\n3,25,1\n4,60,1\n5,85,1\n"
+    );
+    let ramp_sheet = std::fs::read_to_string(dir.join("ramp.csv")).unwrap();
+    assert!(
+        ramp_sheet
+            .starts_with("step,set_point_c,ramp_c_per_min,hold_s,samples\n1,-20,1,1800,1\n2,60,"),
+        "{ramp_sheet}"
+    );
+    // A ramp plan needs its noise: the option is named.
+    refused(
+        &run(&["plan", "thermal", "--ramp-c-per-min", "1", "--degree", "2"]),
+        &["--noise"],
+    );
+}
+
+/// `incal batch` reduces chamber ramps, by the registry id or by the
+/// document id, each result equal to the one-file run.
+#[test]
+fn batch_reduces_thermal_ramps() {
+    let dir = workdir("thermal_batch");
+    std::fs::create_dir_all(dir.join("ramps")).unwrap();
+    for seed in ["1", "2"] {
+        let out = format!("ramps/r{seed}.csv");
+        ok(&run_in(
+            &dir,
+            &[
+                "simulate",
+                "thermal",
+                "--seed",
+                seed,
+                "--t-low-c",
+                "20",
+                "--t-high-c",
+                "40",
+                "--ramp-c-per-min",
+                "20",
+                "--hold-s",
+                "30",
+                "--lag-s",
+                "5",
+                "--rate-hz",
+                "1",
+                "-o",
+                &out,
+            ],
+        ));
+    }
+    for id in ["thermal-ramp", "thermal"] {
+        let v = json_of(&run_in(
+            &dir,
+            &["batch", id, "ramps", "--json", "--", "--rate-hz", "1"],
+        ));
+        assert_eq!(v["procedure"], "thermal-ramp", "{id}");
+        assert_eq!(v["ok"], 2, "{id}: {v}");
+        let one = json_of(&run_in(
+            &dir,
+            &[
+                "thermal",
+                "ramp",
+                "--input",
+                "ramps/r1.csv",
+                "--rate-hz",
+                "1",
+                "--json",
+            ],
+        ));
+        assert_eq!(v["results"][0]["result"], one, "{id}");
+    }
+    refused(
+        &run_in(&dir, &["batch", "thermal-fit", "ramps"]),
+        &["thermal-fit", "is not a procedure", "thermal-ramp"],
+    );
+}
