@@ -39,6 +39,31 @@ pub fn band(n: usize, lo: f64, hi: f64) -> (f64, f64) {
     ((p - s).min(lo).max(0.0), (p + s).max(hi).min(1.0))
 }
 
+/// Three binomial standard deviations of a rate `p` over `n` trials in
+/// the fast tier (0 in the statistical tier, where a bound is asserted as
+/// written).
+fn spread(n: usize, p: f64) -> f64 {
+    if full() || n == 0 {
+        0.0
+    } else {
+        3.0 * (p.clamp(0.0, 1.0) * (1.0 - p.clamp(0.0, 1.0)) / n as f64).sqrt()
+    }
+}
+
+/// The largest rate asserted for something that should happen at most at
+/// rate `p` (a false inclusion, a miss): `p` in the statistical tier, `p`
+/// plus three binomial spreads of `n` trials in the fast tier.
+pub fn at_most(n: usize, p: f64) -> f64 {
+    (p + spread(n, p)).min(1.0)
+}
+
+/// The smallest rate asserted for something that should happen at least
+/// at rate `p` (a coverage, a find): `p` in the statistical tier, `p` less
+/// three binomial spreads of `n` trials in the fast tier.
+pub fn at_least(n: usize, p: f64) -> f64 {
+    (p - spread(n, p)).max(0.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -18,8 +18,12 @@ use incal::estimation::coverage_factor;
 use incal::noise::{phase_from_rate, stability, terms, StabilityOptions};
 use incal::sim::monte_carlo;
 use incal::sim::noise::{rate_record, NoiseTruth};
+use incal::sim::tier::{at_least, at_most, band, trials};
 
-const SEEDS: usize = 150;
+/// Records per coverage check: 150 in the statistical tier.
+fn seeds() -> usize {
+    trials(40, 150)
+}
 
 /// (reported value, U95) of each of the five terms.
 type Found = [Option<(f64, f64)>; 5];
@@ -47,27 +51,32 @@ fn n_b_k_intervals_cover_the_truth() {
         k: 5e-3,
         r: 0.0,
     };
-    let res = monte_carlo(2026, SEEDS, |s| one(s, &truth, 1 << 17));
+    let n_seeds = seeds();
+    let res = monte_carlo(2026, n_seeds, |s| one(s, &truth, 1 << 17));
     let want = [truth.q, truth.n, truth.b, truth.k, truth.r];
     for j in [1usize, 2, 3] {
         let cover = res
             .iter()
             .filter(|r| r[j].is_some_and(|(v, u95)| (v - want[j]).abs() <= u95))
             .count();
-        let rate = cover as f64 / SEEDS as f64;
+        let rate = cover as f64 / n_seeds as f64;
         eprintln!(
-            "{}: 95 % interval covers the truth in {cover}/{SEEDS}",
+            "{}: 95 % interval covers the truth in {cover}/{n_seeds}",
             terms::TERMS[j]
         );
         // At least 90 %; N runs to 149/150 (conservative: the Birge
         // ratio of the misfit at long τ scales every term).
-        assert!(rate >= 0.90, "{}: coverage {rate}", terms::TERMS[j]);
+        assert!(
+            rate >= at_least(n_seeds, 0.90),
+            "{}: coverage {rate}",
+            terms::TERMS[j]
+        );
     }
     // Q and R are zero: never reported as confident numbers most of the time.
     for j in [0usize, 4] {
         let found = res.iter().filter(|r| r[j].is_some()).count();
         assert!(
-            found as f64 <= 0.1 * SEEDS as f64,
+            found as f64 <= at_most(n_seeds, 0.1) * n_seeds as f64,
             "{} reported {found} times",
             terms::TERMS[j]
         );
@@ -131,7 +140,10 @@ fn the_fit_spans_seven_decades_of_tau() {
 }
 
 /// Seeds per mix of the model-choice tests.
-const SELECTION_SEEDS: usize = 200;
+/// Records per mix: 200 in the statistical tier.
+fn selection_seeds() -> usize {
+    trials(50, 200)
+}
 /// 2^16 samples at τ0 = 1 s: octaves from 4 s to 16 384 s in the fit.
 const SAMPLES: usize = 1 << 16;
 /// Three terms each dominating a decade need two more octaves.
@@ -139,7 +151,8 @@ const LONG: usize = 1 << 18;
 
 /// Run a mix; `present` are the terms in the truth that must be found.
 fn mix(name: &str, seed: u64, truth: NoiseTruth, samples: usize, present: &[usize]) {
-    let res = monte_carlo(seed, SELECTION_SEEDS, |s| one(s, &truth, samples));
+    let n = selection_seeds();
+    let res = monte_carlo(seed, n, |s| one(s, &truth, samples));
     let want = [truth.q, truth.n, truth.b, truth.k, truth.r];
     let mut line = format!("{name}:");
     let mut failed = Vec::new();
@@ -147,11 +160,9 @@ fn mix(name: &str, seed: u64, truth: NoiseTruth, samples: usize, present: &[usiz
         let term = terms::TERMS[j];
         let found = res.iter().filter(|r| r[j].is_some()).count();
         if want[j] == 0.0 {
-            line += &format!(" {term} false {found}/{SELECTION_SEEDS};");
-            if found as f64 > 0.05 * SELECTION_SEEDS as f64 {
-                failed.push(format!(
-                    "{term} (absent) reported in {found}/{SELECTION_SEEDS}"
-                ));
+            line += &format!(" {term} false {found}/{n};");
+            if found as f64 > at_most(n, 0.05) * n as f64 {
+                failed.push(format!("{term} (absent) reported in {found}/{n}"));
             }
             continue;
         }
@@ -159,18 +170,15 @@ fn mix(name: &str, seed: u64, truth: NoiseTruth, samples: usize, present: &[usiz
             .iter()
             .filter(|r| r[j].is_some_and(|(v, u95)| (v - want[j]).abs() <= u95))
             .count();
-        line += &format!(" {term} found {found}/{SELECTION_SEEDS} covered {cover}/{found};");
-        if present.contains(&j) && (found as f64) < 0.95 * SELECTION_SEEDS as f64 {
-            failed.push(format!(
-                "{term} missed in {} of {SELECTION_SEEDS}",
-                SELECTION_SEEDS - found
-            ));
+        line += &format!(" {term} found {found}/{n} covered {cover}/{found};");
+        if present.contains(&j) && (found as f64) < at_least(n, 0.95) * n as f64 {
+            failed.push(format!("{term} missed in {} of {n}", n - found));
         }
         // Never below 90 %. The target's upper end, 99 %, is not held by
         // N and K in every mix (up to 200/200): one Birge ratio scales
         // every term while the misfit sits at the longest τ (see the
         // noise chapter of the docs).
-        if found >= SELECTION_SEEDS / 2 && (cover as f64 / found as f64) < 0.90 {
+        if found >= n / 2 && (cover as f64 / found as f64) < at_least(found, 0.90) {
             failed.push(format!("{term} coverage {cover}/{found}"));
         }
     }
@@ -633,7 +641,7 @@ fn theo1_bounds_cover_and_theobr_removes_the_theo1_bias() {
         parallel: false,
         ..Default::default()
     };
-    let runs = monte_carlo(41, 300, |seed| {
+    let runs = monte_carlo(41, trials(60, 300), |seed| {
         let y = rate_record(
             &NoiseTruth {
                 n: 1.0,
@@ -661,7 +669,8 @@ fn theo1_bounds_cover_and_theobr_removes_the_theo1_bias() {
     for (j, m) in ms.iter().enumerate() {
         let rate = runs.iter().filter(|r| r.0[j]).count() as f64 / runs.len() as f64;
         println!("theo1 coverage at m = {m}: {rate:.3}");
-        assert!((0.60..=0.77).contains(&rate), "m = {m}: {rate}");
+        let (lo, hi) = band(runs.len(), 0.60, 0.77);
+        assert!((lo..=hi).contains(&rate), "m = {m}: {rate}");
     }
     // The TheoBR factor is about 1 for white FM (Theo1 unbiased there) …
     let wfm = runs.iter().map(|r| r.1).sum::<f64>() / runs.len() as f64;
