@@ -47,6 +47,21 @@ impl CentrifugeResult {
                 opts.order
             ),
         );
+        self.estimates_and_fits(&mut b)?;
+        options(&mut b, opts);
+        self.contract_objects(&mut b)?;
+        b.table(self.radius_by_range_table()?);
+        b.table(self.alignment_table()?);
+        b.table(self.stations_table()?);
+        b.table(self.points_table()?);
+        self.budget_tables(&mut b)?;
+        self.decisions_and_warnings(&mut b);
+        Ok(b.finish())
+    }
+
+    /// The joint estimates (coefficients and radii) and the summary of
+    /// every station and radius-regression fit.
+    fn estimates_and_fits(&self, b: &mut DocumentBuilder) -> Result<()> {
         // One joint block: coefficients and radii share K1 (and K0, E0).
         // Each coefficient's dof is the Welch–Satterthwaite dof of its
         // budget; the radii take the joint's (the smallest of their inputs).
@@ -73,22 +88,13 @@ impl CentrifugeResult {
                 ));
             }
         }
-        b.option("k0", json!(opts.k0_g.value));
-        b.option("u_k0", json!(opts.k0_g.u));
-        b.option("k1", json!(opts.k1.value));
-        b.option("cov_k0_k1", json!(opts.cov_k0_k1));
-        b.option("u_k1", json!(opts.k1.u));
-        b.option("radius_m", json!(opts.radius0_m));
-        b.option("latitude_deg", json!(opts.latitude_rad.to_degrees()));
-        b.option("gravity_m_s2", json!(opts.g_local_m_s2));
-        b.option("opposite_sense", json!(opts.opposite_sense));
-        b.option("order", json!(opts.order));
-        b.option(
-            "alignment_tolerance_deg",
-            json!(opts.alignment_tolerance_rad.to_degrees()),
-        );
+        Ok(())
+    }
 
-        // He & Yin 2017 contract objects.
+    /// The He & Yin 2017 contract objects `radius` (static and regression
+    /// radii per polarity) and `alignment` (|ECM offset|), and the static
+    /// radii exactly as eq. 5–6 give them.
+    fn contract_objects(&self, b: &mut DocumentBuilder) -> Result<()> {
         let reg = |k: usize| self.regression[k].as_ref().map(|f| f.radius_m);
         b.extra(
             "radius",
@@ -105,7 +111,12 @@ impl CentrifugeResult {
             "alignment",
             json!({"ecm_offset_m": vu(Some(ValueU { value: self.ecm_offset_m.value.abs(), u: self.ecm_offset_m.u }))}),
         )?;
+        Ok(())
+    }
 
+    /// Table `radius-by-range`: the regression radius by range and model
+    /// order (He & Yin 2017 Table 2).
+    fn radius_by_range_table(&self) -> Result<Table> {
         let mut t = Table::new(
             "radius-by-range",
             "Regression radius by range and model order (He & Yin 2017, Table 2)",
@@ -134,8 +145,12 @@ impl CentrifugeResult {
                 e,
             ])?;
         }
-        b.table(t);
+        Ok(t)
+    }
 
+    /// Table `alignment`: ECM radius, alignment error Δφ and its Δc2
+    /// (eq. 8) per station and polarity.
+    fn alignment_table(&self) -> Result<Table> {
         let mut t = Table::new(
             "alignment",
             "ECM radius and alignment error per station and polarity",
@@ -158,8 +173,12 @@ impl CentrifugeResult {
                 ])?;
             }
         }
-        b.table(t);
+        Ok(t)
+    }
 
+    /// Table `stations`: each station fit of eq. 9 (c2, q, c3 with u, the
+    /// type-B Δc2 half-width, dof and lack-of-fit p-value).
+    fn stations_table(&self) -> Result<Table> {
         let mut t = Table::new(
             "stations",
             "Station fits (eq. 9)",
@@ -194,8 +213,12 @@ impl CentrifugeResult {
                 Cell::opt(s.fit.chi2_p_value),
             ])?;
         }
-        b.table(t);
+        Ok(t)
+    }
 
+    /// Table `points`: every point of the station fits (input, mean and
+    /// scatter of E/K1, residual).
+    fn points_table(&self) -> Result<Table> {
         let mut t = Table::new(
             "points",
             "Station points (eq. 9 fit): mean E/K1 against the centripetal input",
@@ -222,8 +245,13 @@ impl CentrifugeResult {
                 ])?;
             }
         }
-        b.table(t);
+        Ok(t)
+    }
 
+    /// One table `budget.<coefficient>` per coefficient (GUM lines and the
+    /// combined u) and the extra object `budgets` (combined u, the paper's
+    /// eq. 10 u, effective dof and unit of each).
+    fn budget_tables(&self, b: &mut DocumentBuilder) -> Result<()> {
         let mut budgets = Map::new();
         for bu in &self.budgets {
             let unit = unit_of(&bu.coefficient)?;
@@ -275,7 +303,12 @@ impl CentrifugeResult {
             b.table(t);
         }
         b.extra("budgets", Value::Object(budgets))?;
+        Ok(())
+    }
 
+    /// The decisions (variance source, coefficients not determined) and
+    /// the warnings (stations not fitted, then the reduction's).
+    fn decisions_and_warnings(&self, b: &mut DocumentBuilder) {
         b.decision(
             DecisionCode::VarianceSource,
             "each station and radius fit: variance from the pooled scatter of repeated samples, or from its residuals when they show lack of fit (chi-square, 5 %); see the Fits",
@@ -290,6 +323,24 @@ impl CentrifugeResult {
             )]);
         }
         b.warnings(self.warnings.iter().cloned());
-        Ok(b.finish())
     }
+}
+
+/// The options as used (`options` of the document; type docs of
+/// [`super::CentrifugeRun`]).
+fn options(b: &mut DocumentBuilder, opts: &CentrifugeOptions) {
+    b.option("k0", json!(opts.k0_g.value));
+    b.option("u_k0", json!(opts.k0_g.u));
+    b.option("k1", json!(opts.k1.value));
+    b.option("cov_k0_k1", json!(opts.cov_k0_k1));
+    b.option("u_k1", json!(opts.k1.u));
+    b.option("radius_m", json!(opts.radius0_m));
+    b.option("latitude_deg", json!(opts.latitude_rad.to_degrees()));
+    b.option("gravity_m_s2", json!(opts.g_local_m_s2));
+    b.option("opposite_sense", json!(opts.opposite_sense));
+    b.option("order", json!(opts.order));
+    b.option(
+        "alignment_tolerance_deg",
+        json!(opts.alignment_tolerance_rad.to_degrees()),
+    );
 }

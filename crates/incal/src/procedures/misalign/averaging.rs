@@ -98,8 +98,50 @@ pub fn average_record(r: &Record, policy: TurnPolicy) -> Result<RecordMean> {
             got: m,
         });
     }
-    // Unwrap the table angle: steps wrapped to (−180°, 180°].
-    let mut unwrapped = Vec::with_capacity(m);
+    let unwrapped = unwrap_angles(r)?;
+    let (missing, mut warnings) = check_time(r)?;
+    let span = unwrapped[m - 1] - unwrapped[0];
+    // Equal angle steps, counting the samples lost in gaps.
+    let step = span / (m - 1 + missing) as f64;
+    if step == 0.0 {
+        return Err(Error::InvalidValue {
+            what: format!("table angle in {} (it does not turn)", describe(r)),
+            value: format!("{}", r.samples[0].table_angle_rad.to_degrees()),
+        });
+    }
+    let turns_total = (m + missing) as f64 * step.abs() / std::f64::consts::TAU;
+    let dt = r.samples[m - 1].time_s - r.samples[0].time_s;
+    let measured = span.to_degrees() / dt;
+    let whole = (turns_total + WHOLE_TURN_TOL).floor();
+    let (n_used, turns_used) = samples_used(policy, &unwrapped, step, turns_total, whole, missing);
+    let partial = partial_turn_notes(r, turns_total, whole, n_used < m, measured);
+    if !partial.is_empty() {
+        warnings.insert(
+            0,
+            crate::Warning::new(crate::WarningCode::PartialTurns, partial.join("; ")),
+        );
+    }
+    let mean = r.samples[..n_used].iter().map(|s| s.output).sum::<f64>() / n_used as f64;
+    Ok(RecordMean {
+        observation: GyroObservation {
+            alpha_rad: r.config.alpha_rad,
+            beta_rad: r.config.beta_rad,
+            rate_deg_s: r.rate_deg_s,
+            output: mean,
+        },
+        n_total: m,
+        n_used,
+        turns_total,
+        turns_used,
+        measured_rate_deg_s: measured,
+        warnings,
+    })
+}
+
+/// The table angle of every sample (rad), unwrapped: each step from one
+/// sample to the next wrapped to (−180°, 180°]. Refuses a decreasing time.
+fn unwrap_angles(r: &Record) -> Result<Vec<f64>> {
+    let mut unwrapped = Vec::with_capacity(r.samples.len());
     let mut acc = r.samples[0].table_angle_rad;
     unwrapped.push(acc);
     for w in r.samples.windows(2) {
@@ -115,9 +157,16 @@ pub fn average_record(r: &Record, policy: TurnPolicy) -> Result<RecordMean> {
         acc += d;
         unwrapped.push(acc);
     }
-    // The time stamps under the policy of crate::timebase: repeats are
-    // accepted (only the first and last stamps are used), samples lost in
-    // gaps are counted on the grid.
+    Ok(unwrapped)
+}
+
+/// The time stamps under the policy of [`crate::timebase`]: repeats are
+/// accepted (only the first and last stamps are used), samples lost in
+/// gaps are counted on the grid. Returns the number of samples lost and
+/// the warnings (`time-repeats`, `time-gaps`); more than
+/// [`MAX_MISSING_FRACTION`] lost is refused.
+fn check_time(r: &Record) -> Result<(usize, Vec<crate::Warning>)> {
+    let m = r.samples.len();
     let stamps: Vec<f64> = r.samples.iter().map(|s| s.time_s).collect();
     let tb = crate::timebase::analyse(&stamps, None).map_err(|e| Error::InvalidValue {
         what: format!("time in {}", describe(r)),
@@ -170,20 +219,24 @@ pub fn average_record(r: &Record, policy: TurnPolicy) -> Result<RecordMean> {
             ),
         ));
     }
-    let span = unwrapped[m - 1] - unwrapped[0];
-    // Equal angle steps, counting the samples lost in gaps.
-    let step = span / (m - 1 + missing) as f64;
-    if step == 0.0 {
-        return Err(Error::InvalidValue {
-            what: format!("table angle in {} (it does not turn)", describe(r)),
-            value: format!("{}", r.samples[0].table_angle_rad.to_degrees()),
-        });
-    }
-    let turns_total = (m + missing) as f64 * step.abs() / std::f64::consts::TAU;
-    let dt = r.samples[m - 1].time_s - r.samples[0].time_s;
-    let measured = span.to_degrees() / dt;
-    let whole = (turns_total + WHOLE_TURN_TOL).floor();
-    let (n_used, turns_used) = match policy {
+    Ok((missing, warnings))
+}
+
+/// Samples averaged and the turns they cover under `policy`: the first
+/// `whole` turns (at least one) for [`TurnPolicy::Whole`], counted by
+/// angle step when samples were lost in gaps; else every sample.
+/// `step` is the signed angle step (rad), `turns_total` the turns of the
+/// record.
+fn samples_used(
+    policy: TurnPolicy,
+    unwrapped: &[f64],
+    step: f64,
+    turns_total: f64,
+    whole: f64,
+    missing: usize,
+) -> (usize, f64) {
+    let m = unwrapped.len();
+    match policy {
         TurnPolicy::Whole if whole >= 1.0 && missing == 0 => {
             let n = ((whole * std::f64::consts::TAU / step.abs()).round() as usize).clamp(2, m);
             (n, n as f64 * step.abs() / std::f64::consts::TAU)
@@ -200,11 +253,24 @@ pub fn average_record(r: &Record, policy: TurnPolicy) -> Result<RecordMean> {
             (n, whole.min(turns_total))
         }
         _ => (m, turns_total),
-    };
+    }
+}
+
+/// The notes of the `partial-turns` warning: a record that is not a whole
+/// number of turns (`truncated`: averaged over its first `whole` turns
+/// rather than as is), and a measured rate (°/s) off the nominal one by
+/// its sign or by more than 1 %.
+fn partial_turn_notes(
+    r: &Record,
+    turns_total: f64,
+    whole: f64,
+    truncated: bool,
+    measured: f64,
+) -> Vec<String> {
     let mut partial = Vec::new();
     let frac = (turns_total - turns_total.round()).abs();
     if frac > WHOLE_TURN_TOL || turns_total < 1.0 - WHOLE_TURN_TOL {
-        if n_used < m {
+        if truncated {
             partial.push(format!(
                 "{} covers {:.3} turns, not a whole number: averaged over its first {} whole turn(s)",
                 describe(r),
@@ -227,29 +293,7 @@ pub fn average_record(r: &Record, policy: TurnPolicy) -> Result<RecordMean> {
             describe(r)
         ));
     }
-    let mean = r.samples[..n_used].iter().map(|s| s.output).sum::<f64>() / n_used as f64;
-    Ok(RecordMean {
-        observation: GyroObservation {
-            alpha_rad: r.config.alpha_rad,
-            beta_rad: r.config.beta_rad,
-            rate_deg_s: r.rate_deg_s,
-            output: mean,
-        },
-        n_total: m,
-        n_used,
-        turns_total,
-        turns_used,
-        measured_rate_deg_s: measured,
-        warnings: {
-            if !partial.is_empty() {
-                warnings.insert(
-                    0,
-                    crate::Warning::new(crate::WarningCode::PartialTurns, partial.join("; ")),
-                );
-            }
-            warnings
-        },
-    })
+    partial
 }
 
 /// Reduce every record; each mean is one sample of its position.

@@ -496,6 +496,72 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
     }
     let terms = normalized_terms(&opts.terms);
     let pos = positions_of(obs)?;
+    check_distinct_rates(&pos, &terms)?;
+    crate::validity::require_varying(obs.iter().map(|o| o.output), "output")?;
+    let inputs: Vec<f64> = pos
+        .iter()
+        .map(|p| input_rate_deg_s(p.0, opts.latitude_rad, opts.ia))
+        .collect();
+    let stats: Vec<PositionStats> = pos.iter().map(|p| p.2).collect();
+    let (fit, weights, phys, asymmetric, asym_warning) =
+        fit_best(&inputs, &stats, &terms, opts.noise)?;
+    crate::validity::require_scale_factor(&phys, "K1")?;
+    let mut warnings = fit.quality_warnings(
+        "table-rate errors, a nonlinearity not modelled (add K2/K3), or drift between rates",
+    );
+    warnings.extend(asym_warning);
+
+    let (base, mut dof) = with_rate_error(&phys, &terms, opts.rate_uncertainty_ppm)?;
+    let coefficients = if asymmetric {
+        with_slopes(base, &terms, &mut dof)?
+    } else {
+        base
+    };
+    let line = Nonlinearity::of(&inputs, &stats, &weights)?;
+    let std_res = fit.standardized_residuals(Some(&weights));
+    let positions = pos
+        .iter()
+        .enumerate()
+        .map(|(i, (rate, run, st))| RatePosition {
+            rate_deg_s: *rate,
+            input_deg_s: inputs[i],
+            run: run.clone(),
+            stats: *st,
+            residual: fit.residuals[i],
+            standardized_residual: std_res[i],
+            line_deviation: line.residuals[i],
+        })
+        .collect();
+    let runs = runs_alone(
+        &pos,
+        &inputs,
+        &stats,
+        &terms,
+        asymmetric,
+        opts.noise,
+        &mut warnings,
+    );
+    let repeatability = repeatability(&runs);
+    Ok(RateResult {
+        coefficients,
+        dof,
+        asymmetric,
+        nonlinearity_ppm_fs: line.ppm_fs,
+        full_scale_output: line.full_scale_output,
+        fit,
+        positions,
+        runs,
+        repeatability,
+        terms,
+        warnings,
+    })
+}
+
+/// Refuse fewer distinct table rates than terms.
+fn check_distinct_rates(
+    pos: &[(f64, Option<String>, PositionStats)],
+    terms: &[RateTerm],
+) -> Result<()> {
     let distinct_rates = {
         let mut r: Vec<u64> = pos.iter().map(|p| p.0.to_bits()).collect();
         r.sort();
@@ -516,22 +582,21 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
             got: distinct_rates,
         });
     }
-    crate::validity::require_varying(obs.iter().map(|o| o.output), "output")?;
-    let inputs: Vec<f64> = pos
-        .iter()
-        .map(|p| input_rate_deg_s(p.0, opts.latitude_rad, opts.ia))
-        .collect();
-    let stats: Vec<PositionStats> = pos.iter().map(|p| p.2).collect();
-    let (fit, weights, phys, asymmetric, asym_warning) =
-        fit_best(&inputs, &stats, &terms, opts.noise)?;
-    crate::validity::require_scale_factor(&phys, "K1")?;
-    let mut warnings = fit.quality_warnings(
-        "table-rate errors, a nonlinearity not modelled (add K2/K3), or drift between rates",
-    );
-    warnings.extend(asym_warning);
+    Ok(())
+}
 
+/// Add the type-B rate-table error `ε` (relative, `rate_uncertainty_ppm`)
+/// to the physical estimates: the coefficients move by
+/// `J ε = (K1, −B, K2, 2 K3, 0) ε` (module docs), covariance
+/// `J Jᵀ u²(ε)` with infinite degrees of freedom. Returns the estimates
+/// and each coefficient's Welch–Satterthwaite dof.
+fn with_rate_error(
+    phys: &Estimates,
+    terms: &[RateTerm],
+    rate_uncertainty_ppm: f64,
+) -> Result<(Estimates, Vec<(String, f64)>)> {
     // Type-B rate-table error: (K1, −B, K2, 2 K3, 0) ε.
-    let eps = opts.rate_uncertainty_ppm * 1e-6;
+    let eps = rate_uncertainty_ppm * 1e-6;
     let j = DVector::from_iterator(
         phys.len(),
         (0..phys.len()).map(|k| {
@@ -551,7 +616,7 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
         phys.covariance() + &cov_b,
         phys.dof(),
     )?;
-    let mut dof: Vec<(String, f64)> = phys
+    let dof: Vec<(String, f64)> = phys
         .names()
         .iter()
         .enumerate()
@@ -565,73 +630,99 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
             )
         })
         .collect();
-    let coefficients = if asymmetric {
-        let ik = terms.iter().position(|t| *t == RateTerm::K1).unwrap_or(0);
-        let ia = base.len() - 1;
-        let n = base.len();
-        let e = base.augment(
-            vec!["K1_pos".into(), "K1_neg".into()],
-            move |x| {
-                let dk = x[ia] * 1e-6 * x[ik];
-                DVector::from_vec(vec![x[ik] + 0.5 * dk, x[ik] - 0.5 * dk])
-            },
-            move |x| {
-                // K1± = K1 (1 ± A·1e-6/2): ∂/∂K1 = 1 ± A·1e-6/2, ∂/∂A = ±K1·1e-6/2.
-                let mut m = DMatrix::zeros(2, n);
-                let h = 0.5e-6;
-                m[(0, ik)] = 1.0 + h * x[ia];
-                m[(1, ik)] = 1.0 - h * x[ia];
-                m[(0, ia)] = h * x[ik];
-                m[(1, ia)] = -h * x[ik];
-                m
-            },
-        )?;
-        let d_k1 = dof.iter().find(|d| d.0 == "K1").map_or(e.dof(), |d| d.1);
-        dof.push(("K1_pos".into(), d_k1));
-        dof.push(("K1_neg".into(), d_k1));
-        e
-    } else {
-        base
-    };
+    Ok((base, dof))
+}
 
-    // Straight line for the nonlinearity, with the same weights.
-    let line_terms = [RateTerm::B, RateTerm::K1];
-    let line = crate::estimation::fit(
-        &design(&inputs, &line_terms, false)?,
-        &DVector::from_iterator(stats.len(), stats.iter().map(|s| s.mean)),
-        &crate::estimation::FitOptions {
-            weights: Some(weights.clone()),
-            ..Default::default()
+/// Append the slopes `K1_pos = K1 (1 + A·10⁻⁶/2)` and
+/// `K1_neg = K1 (1 − A·10⁻⁶/2)` (A the `asymmetry` in ppm, the last
+/// coefficient of `base`) with their covariance; both take the dof of K1.
+fn with_slopes(
+    base: Estimates,
+    terms: &[RateTerm],
+    dof: &mut Vec<(String, f64)>,
+) -> Result<Estimates> {
+    let ik = terms.iter().position(|t| *t == RateTerm::K1).unwrap_or(0);
+    let ia = base.len() - 1;
+    let n = base.len();
+    let e = base.augment(
+        vec!["K1_pos".into(), "K1_neg".into()],
+        move |x| {
+            let dk = x[ia] * 1e-6 * x[ik];
+            DVector::from_vec(vec![x[ik] + 0.5 * dk, x[ik] - 0.5 * dk])
+        },
+        move |x| {
+            // K1± = K1 (1 ± A·1e-6/2): ∂/∂K1 = 1 ± A·1e-6/2, ∂/∂A = ±K1·1e-6/2.
+            let mut m = DMatrix::zeros(2, n);
+            let h = 0.5e-6;
+            m[(0, ik)] = 1.0 + h * x[ia];
+            m[(1, ik)] = 1.0 - h * x[ia];
+            m[(0, ia)] = h * x[ik];
+            m[(1, ia)] = -h * x[ik];
+            m
         },
     )?;
-    let max_in = inputs.iter().fold(0.0f64, |m, w| m.max(w.abs()));
-    let full_scale_output = line.estimates.values()[1].abs() * max_in;
-    let max_dev = line.residuals.iter().fold(0.0f64, |m, r| m.max(r.abs()));
-    let nonlinearity_ppm_fs = if full_scale_output > 0.0 {
-        max_dev / full_scale_output * 1e6
-    } else {
-        0.0
-    };
+    let d_k1 = dof.iter().find(|d| d.0 == "K1").map_or(e.dof(), |d| d.1);
+    dof.push(("K1_pos".into(), d_k1));
+    dof.push(("K1_neg".into(), d_k1));
+    Ok(e)
+}
 
-    let std_res = fit.standardized_residuals(Some(&weights));
-    let positions = pos
-        .iter()
-        .enumerate()
-        .map(|(i, (rate, run, st))| RatePosition {
-            rate_deg_s: *rate,
-            input_deg_s: inputs[i],
-            run: run.clone(),
-            stats: *st,
-            residual: fit.residuals[i],
-            standardized_residual: std_res[i],
-            line_deviation: line.residuals[i],
+/// The scale-factor nonlinearity (module docs): the means' deviations from
+/// their least-squares straight line `E = c0 + c1 ω_in`, fitted with the
+/// model's weights.
+struct Nonlinearity {
+    /// Deviation of each mean from the line (output units).
+    residuals: DVector<f64>,
+    /// Full-scale output `|c1| max|ω_in|` (output units).
+    full_scale_output: f64,
+    /// Largest deviation in ppm of the full-scale output (0 when it is 0).
+    ppm_fs: f64,
+}
+
+impl Nonlinearity {
+    /// Fit the straight line to the means at the input rates `inputs`
+    /// (deg/s) with `weights`.
+    fn of(inputs: &[f64], stats: &[PositionStats], weights: &DVector<f64>) -> Result<Nonlinearity> {
+        // Straight line for the nonlinearity, with the same weights.
+        let line_terms = [RateTerm::B, RateTerm::K1];
+        let line = crate::estimation::fit(
+            &design(inputs, &line_terms, false)?,
+            &DVector::from_iterator(stats.len(), stats.iter().map(|s| s.mean)),
+            &crate::estimation::FitOptions {
+                weights: Some(weights.clone()),
+                ..Default::default()
+            },
+        )?;
+        let max_in = inputs.iter().fold(0.0f64, |m, w| m.max(w.abs()));
+        let full_scale_output = line.estimates.values()[1].abs() * max_in;
+        let max_dev = line.residuals.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+        let ppm_fs = if full_scale_output > 0.0 {
+            max_dev / full_scale_output * 1e6
+        } else {
+            0.0
+        };
+        Ok(Nonlinearity {
+            residuals: line.residuals,
+            full_scale_output,
+            ppm_fs,
         })
-        .collect();
+    }
+}
 
-    // Runs: each alone, with the same model.
+/// Each run alone, with the same model (two or more run labels): its K1;
+/// a run that cannot be fitted alone earns a warning.
+fn runs_alone(
+    pos: &[(f64, Option<String>, PositionStats)],
+    inputs: &[f64],
+    stats: &[PositionStats],
+    terms: &[RateTerm],
+    asymmetric: bool,
+    noise: Noise,
+    warnings: &mut Vec<Warning>,
+) -> Vec<RunK1> {
     let mut runs = Vec::new();
     let mut labels: Vec<String> = Vec::new();
-    for p in &pos {
+    for p in pos {
         if let Some(r) = &p.1 {
             if !labels.contains(r) {
                 labels.push(r.clone());
@@ -645,7 +736,7 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
                 .collect();
             let inp: Vec<f64> = idx.iter().map(|&i| inputs[i]).collect();
             let st: Vec<PositionStats> = idx.iter().map(|&i| stats[i]).collect();
-            match fit_model(&inp, &st, &terms, asymmetric, opts.noise) {
+            match fit_model(&inp, &st, terms, asymmetric, noise) {
                 Ok((_, _, e)) => runs.push(RunK1 {
                     run: label.clone(),
                     rates: idx.len(),
@@ -659,24 +750,17 @@ pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResu
             }
         }
     }
-    let repeatability = (runs.len() >= 2).then(|| {
+    runs
+}
+
+/// Scale-factor repeatability: the standard deviation of the runs' K1 in
+/// ppm of their mean, with `runs − 1` degrees of freedom (two or more
+/// runs).
+fn repeatability(runs: &[RunK1]) -> Option<(f64, f64)> {
+    (runs.len() >= 2).then(|| {
         let n = runs.len() as f64;
         let mean = runs.iter().map(|r| r.k1).sum::<f64>() / n;
         let sd = (runs.iter().map(|r| (r.k1 - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
         (sd / mean.abs() * 1e6, n - 1.0)
-    });
-
-    Ok(RateResult {
-        coefficients,
-        dof,
-        asymmetric,
-        nonlinearity_ppm_fs,
-        full_scale_output,
-        fit,
-        positions,
-        runs,
-        repeatability,
-        terms,
-        warnings,
     })
 }
