@@ -28,7 +28,7 @@
 
 pub mod compare;
 pub mod limits;
-pub mod misalign;
+pub use crate::procedures::misalign::document as misalign;
 /// The noise result document (lives with its procedure).
 pub use crate::procedures::noise::document as noise;
 mod builder;

@@ -23,6 +23,7 @@
 
 pub mod accel;
 pub mod averaging;
+pub mod document;
 pub mod gyro;
 pub mod input;
 pub mod plan;

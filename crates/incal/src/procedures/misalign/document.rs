@@ -3,8 +3,8 @@
 
 use serde_json::{json, Map, Value};
 
-use super::variance_decision;
-use super::{
+use crate::document::variance_decision;
+use crate::document::{
     position_stats, position_table, Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure,
     ResultDocument, Table,
 };
