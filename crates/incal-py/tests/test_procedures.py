@@ -16,56 +16,30 @@ import incal
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 BIN = os.environ.get("INCAL_BIN", str(ROOT / "target" / "debug" / "incal"))
 
-# (function, CLI words, simulate words, options)
+def _kwargs(args):
+    """CLI options (``--mount pendulum``) as Python keywords (``mount="pendulum"``)."""
+    out, i = {}, 0
+    while i < len(args):
+        key = args[i][2:].replace("-", "_")
+        if i + 1 < len(args) and not args[i + 1].startswith("--"):
+            out[key], i = args[i + 1], i + 2
+        else:
+            out[key], i = True, i + 1
+    return out
+
+
+# (function, CLI words, simulate words, options): every procedure that
+# reduces a simulated recording, with its worked example from the
+# procedure registry (``incal procedures --json``).
 CASES = [
-    ("tumble", ["tumble"], ["tumble", "--samples", "3"], {"mount": "pendulum"}),
     (
-        "centrifuge",
-        ["centrifuge"],
-        ["centrifuge", "--levels-g", "0,1,4,9", "--samples", "3"],
-        {"k1": 1.3, "k0": 1.2e-4, "radius_m": 0.71, "latitude_deg": 39.9},
-    ),
-    ("misalign_gyro", ["misalign", "gyro"], ["misalign", "gyro"], {"scale_factor": -2.9222}),
-    ("misalign_accel", ["misalign", "accel"], ["misalign", "accel"], {"scale_factor": 1.299}),
-    ("gyro_rate", ["gyro", "rate"], ["gyro-rate", "--samples", "4"], {"latitude_deg": 45}),
-    (
-        "gyro_positions",
-        ["gyro", "positions"],
-        ["gyro-positions", "--samples", "4"],
-        {"latitude_deg": 45, "azimuth_deg": 90, "k1": 0.02, "axial": "sa"},
-    ),
-    (
-        "imu_ferraris",
-        ["imu", "ferraris"],
-        ["imu", "--sequence", "ferraris", "--static-s", "0.5", "--rotation-s", "1"],
-        {"rate_hz": 100},
-    ),
-    (
-        "imu_multipos",
-        ["imu", "multipos"],
-        ["imu", "--sequence", "positions", "--static-s", "0.3", "--rotations"],
-        {"rate_hz": 100},
-    ),
-    (
-        "imu_autocal",
-        ["imu", "autocal"],
-        ["imu", "--sequence", "random", "--orientations", "12", "--init-static-s", "3",
-         "--static-s", "2", "--move-s", "1.5"],
-        {"rate_hz": 100, "init_static_s": 3},
-    ),
-    ("gfimu_calibrate", ["gfimu", "calibrate"], ["gfimu", "--seed", "3"], {}),
-    (
-        "noise",
-        ["noise"],
-        ["noise", "--duration-s", "200", "--rate-hz", "100", "--seed", "3", "--format", "csv"],
-        {"rate_hz": 100},
-    ),
-    (
-        "thermal_ramp",
-        ["thermal", "ramp"],
-        ["thermal", "--seed", "3", "--rate-hz", "1", "--hold-s", "300", "--ramp-c-per-min", "4"],
-        {"rate_hz": 1, "quantity": "gyro"},
-    ),
+        e["python"]["function"],
+        e["command"].split(),
+        e["simulate"].split()[1:] + e["example"]["simulate"],
+        _kwargs(e["example"]["options"]),
+    )
+    for e in incal.REGISTRY
+    if e["example"]
 ]
 
 

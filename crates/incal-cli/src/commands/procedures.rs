@@ -40,6 +40,7 @@ fn entry_json(e: &Entry) -> Value {
         "chapter": e.chapter,
         "run_sheet": e.run_sheet.is_some(),
         "fuzz": e.fuzz,
+        "example": e.example.map(|x| json!({"simulate": x.simulate, "options": x.options})),
         "python": {
             "function": e.python(),
             "plan": e.python_plan(),

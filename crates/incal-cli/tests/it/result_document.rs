@@ -42,75 +42,33 @@ type Case = (
     Vec<&'static str>,
 );
 
-/// The five reducing commands on simulated input.
+/// The input file of a procedure's case: `<id>.csv`, except for three
+/// procedures whose snapshots were taken before the registry named them.
+fn file_of(id: &'static str) -> &'static str {
+    match id {
+        "misalign-gyro" => "gyro.csv",
+        "misalign-accel" => "accel.csv",
+        "gfimu-calibrate" => "gfimu.csv",
+        _ => Box::leak(format!("{id}.csv").into_boxed_str()),
+    }
+}
+
+/// Every procedure that reduces a simulated recording, with its worked
+/// example from the procedure registry.
 fn cases() -> Vec<Case> {
-    vec![
-        (
-            "tumble",
-            "tumble",
-            vec!["tumble", "--seed", "11", "--passes", "2"],
-            "tumble.csv",
-            vec!["tumble", "--mount", "pendulum", "--input", "tumble.csv"],
-        ),
-        (
-            "centrifuge",
-            "centrifuge",
-            vec!["centrifuge", "--seed", "12"],
-            "centrifuge.csv",
-            vec![
-                "centrifuge",
-                "--input",
-                "centrifuge.csv",
-                "--k0",
-                "1.2e-4",
-                "--u-k0",
-                "2e-6",
-                "--k1",
-                "1.3",
-                "--u-k1",
-                "1.3e-6",
-                "--radius-m",
-                "0.71",
-                "--latitude-deg",
-                "39.9",
-            ],
-        ),
-        (
-            "misalign-gyro",
-            "misalign-gyro",
-            vec!["misalign", "gyro", "--seed", "13"],
-            "gyro.csv",
-            vec![
-                "misalign",
-                "gyro",
-                "--input",
-                "gyro.csv",
-                "--scale-factor",
-                "-2.9222",
-            ],
-        ),
-        (
-            "misalign-accel",
-            "misalign-accel",
-            vec!["misalign", "accel", "--seed", "14"],
-            "accel.csv",
-            vec![
-                "misalign",
-                "accel",
-                "--input",
-                "accel.csv",
-                "--scale-factor",
-                "1.299",
-            ],
-        ),
-        (
-            "gfimu-calibrate",
-            "gfimu-calibrate",
-            vec!["gfimu", "--seed", "15"],
-            "gfimu.csv",
-            vec!["gfimu", "calibrate", "--input", "gfimu.csv"],
-        ),
-    ]
+    incal::procedures::registry::REGISTRY
+        .iter()
+        .filter_map(|e| {
+            let example = e.example?;
+            let file = file_of(e.id);
+            let mut sim: Vec<&'static str> = e.simulate?[1..].to_vec();
+            sim.extend_from_slice(example.simulate);
+            let mut reduce = e.command.to_vec();
+            reduce.extend_from_slice(&["--input", file]);
+            reduce.extend_from_slice(example.options);
+            Some((e.id, e.document.as_str(), sim, file, reduce))
+        })
+        .collect()
 }
 
 #[test]

@@ -147,6 +147,23 @@ pub struct Entry {
     pub fuzz: &'static [&'static str],
     /// The run sheet of its plan documents, if its plans list settings.
     pub run_sheet: Option<fn(&PlanDocument) -> RunSheet>,
+    /// A small worked case: the simulator's options and the reduction's
+    /// options (after `--input FILE`) that reduce what it writes. Every
+    /// front end's test runs it (the document's schema and snapshots,
+    /// Python equals the CLI); `None` for a procedure that reduces result
+    /// documents.
+    pub example: Option<Example>,
+}
+
+/// A worked case of a procedure ([`Entry::example`]): `incal
+/// <simulate…> <simulate options> -o FILE`, then `incal <command…>
+/// --input FILE <options>`.
+#[derive(Debug, Clone, Copy)]
+pub struct Example {
+    /// Options of the simulator (after its command words).
+    pub simulate: &'static [&'static str],
+    /// Options of the reduction (besides `--input`).
+    pub options: &'static [&'static str],
 }
 
 impl Entry {
@@ -239,6 +256,10 @@ pub static REGISTRY: &[Entry] = &[
         input: InputKind::Recording,
         fuzz: &["tumble"],
         run_sheet: Some(super::tumble::plan::run_sheet),
+        example: Some(Example {
+            simulate: &["--seed", "11", "--passes", "2"],
+            options: &["--mount", "pendulum"],
+        }),
     },
     Entry {
         id: "centrifuge",
@@ -254,6 +275,10 @@ pub static REGISTRY: &[Entry] = &[
         input: InputKind::Recording,
         fuzz: &["centrifuge"],
         run_sheet: Some(super::centrifuge::plan::run_sheet),
+        example: Some(Example {
+            simulate: &["--seed", "12"],
+            options: &["--k0", "1.2e-4", "--u-k0", "2e-6", "--k1", "1.3", "--u-k1", "1.3e-6", "--radius-m", "0.71", "--latitude-deg", "39.9"],
+        }),
     },
     Entry {
         id: "misalign-gyro",
@@ -269,6 +294,10 @@ pub static REGISTRY: &[Entry] = &[
         input: InputKind::Recording,
         fuzz: &["misalign-gyro", "misalign-gyro-raw"],
         run_sheet: Some(super::misalign::plan::run_sheet_gyro),
+        example: Some(Example {
+            simulate: &["--seed", "13"],
+            options: &["--scale-factor", "-2.9222"],
+        }),
     },
     Entry {
         id: "misalign-accel",
@@ -284,6 +313,10 @@ pub static REGISTRY: &[Entry] = &[
         input: InputKind::Recording,
         fuzz: &["misalign-accel"],
         run_sheet: Some(super::misalign::plan::run_sheet_accel),
+        example: Some(Example {
+            simulate: &["--seed", "14"],
+            options: &["--scale-factor", "1.299"],
+        }),
     },
     Entry {
         id: "gyro-rate",
@@ -299,6 +332,10 @@ pub static REGISTRY: &[Entry] = &[
         input: InputKind::Recording,
         fuzz: &["gyro-rate"],
         run_sheet: Some(super::gyro::rate::plan::run_sheet),
+        example: Some(Example {
+            simulate: &["--samples", "4", "--seed", "16"],
+            options: &["--latitude-deg", "45"],
+        }),
     },
     Entry {
         id: "gyro-positions",
@@ -314,6 +351,10 @@ pub static REGISTRY: &[Entry] = &[
         input: InputKind::Recording,
         fuzz: &["gyro-positions"],
         run_sheet: Some(super::gyro::positions::plan::run_sheet),
+        example: Some(Example {
+            simulate: &["--samples", "4", "--seed", "17"],
+            options: &["--latitude-deg", "45", "--azimuth-deg", "90", "--k1", "0.02", "--axial", "sa"],
+        }),
     },
     Entry {
         id: "imu-ferraris",
@@ -329,6 +370,10 @@ pub static REGISTRY: &[Entry] = &[
         input: InputKind::Recording,
         fuzz: &["imu-ferraris"],
         run_sheet: None,
+        example: Some(Example {
+            simulate: &["--sequence", "ferraris", "--static-s", "0.5", "--rotation-s", "1", "--seed", "18"],
+            options: &["--rate-hz", "100"],
+        }),
     },
     Entry {
         id: "imu-multipos",
@@ -344,6 +389,10 @@ pub static REGISTRY: &[Entry] = &[
         input: InputKind::Recording,
         fuzz: &["imu-multipos"],
         run_sheet: None,
+        example: Some(Example {
+            simulate: &["--sequence", "positions", "--static-s", "0.3", "--rotations", "--seed", "19"],
+            options: &["--rate-hz", "100"],
+        }),
     },
     Entry {
         id: "imu-autocal",
@@ -359,6 +408,10 @@ pub static REGISTRY: &[Entry] = &[
         input: InputKind::Recording,
         fuzz: &["imu-autocal"],
         run_sheet: None,
+        example: Some(Example {
+            simulate: &["--sequence", "random", "--orientations", "12", "--init-static-s", "3", "--static-s", "2", "--move-s", "1.5", "--seed", "20"],
+            options: &["--rate-hz", "100", "--init-static-s", "3"],
+        }),
     },
     Entry {
         id: "gfimu-calibrate",
@@ -374,6 +427,10 @@ pub static REGISTRY: &[Entry] = &[
         input: InputKind::Recording,
         fuzz: &["gfimu-calibrate"],
         run_sheet: Some(super::gfimu::plan::run_sheet),
+        example: Some(Example {
+            simulate: &["--seed", "15"],
+            options: &[],
+        }),
     },
     Entry {
         id: "noise",
@@ -389,6 +446,10 @@ pub static REGISTRY: &[Entry] = &[
         input: InputKind::Recording,
         fuzz: &["noise"],
         run_sheet: None,
+        example: Some(Example {
+            simulate: &["--duration-s", "600", "--rate-hz", "100", "--arw-deg-rth", "0.1", "--bias-instability-deg-h", "5", "--seed", "21", "--format", "csv"],
+            options: &["--rate-hz", "100"],
+        }),
     },
     Entry {
         id: "thermal-ramp",
@@ -404,6 +465,10 @@ pub static REGISTRY: &[Entry] = &[
         input: InputKind::Recording,
         fuzz: &["thermal-ramp"],
         run_sheet: Some(super::thermal::plan::run_sheet),
+        example: Some(Example {
+            simulate: &["--seed", "22", "--rate-hz", "1", "--hold-s", "300", "--ramp-c-per-min", "4"],
+            options: &["--rate-hz", "1", "--quantity", "gyro"],
+        }),
     },
     Entry {
         id: "thermal-fit",
@@ -419,6 +484,7 @@ pub static REGISTRY: &[Entry] = &[
         input: InputKind::Results,
         fuzz: &["thermal-fit"],
         run_sheet: Some(super::thermal::plan::run_sheet),
+        example: None,
     },
 ];
 
@@ -446,6 +512,12 @@ mod tests {
             assert!(e.method.len() > 40, "procedure {}: no method", e.id);
             assert!(!e.references.is_empty(), "procedure {}: no reference", e.id);
             assert!(!e.fuzz.is_empty(), "procedure {}: no fuzz target", e.id);
+            assert_eq!(
+                e.example.is_some(),
+                e.input == InputKind::Recording && e.simulate.is_some(),
+                "procedure {}: a procedure that reduces a simulated recording has a worked example",
+                e.id
+            );
         }
         for p in Procedure::all() {
             assert!(first_of(p).is_some(), "document id {p}: no registry entry");
