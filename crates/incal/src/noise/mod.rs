@@ -77,8 +77,11 @@ pub mod corr;
 pub mod dev;
 pub mod edf;
 pub mod id;
-pub mod more;
+pub mod other_stats;
 pub mod terms;
+
+/// The former path of [`other_stats`], kept for its callers.
+pub use other_stats as more;
 
 use serde::{Deserialize, Serialize};
 

@@ -12,7 +12,7 @@ use serde_json::{json, Value};
 use crate::document::{Cell, Coefficient, DocumentBuilder, Procedure, ResultDocument, Table};
 use crate::error::Result;
 use crate::noise::terms::{Term, TermFit};
-use crate::noise::{Deviation, Series, Stability, Statistic};
+use crate::noise::{DevSeries, Deviation, Series, Stability, Statistic};
 use crate::units::{Unit, STANDARD_GRAVITY_M_S2};
 use crate::warning::{Warning, WarningCode};
 
@@ -185,172 +185,207 @@ pub fn document(
     let mut chans = serde_json::Map::new();
     let mut warnings = Vec::new();
     for c in channels {
-        let st = &c.stability;
-        let f = c.to_input;
-        let mut o = serde_json::Map::new();
-        o.insert("samples".into(), json!(c.samples));
-        o.insert("unit".into(), json!(unit));
-        o.insert("tdev_unit".into(), json!(format!("{unit}*s")));
-        o.insert("taus_s".into(), json!(st.taus_s));
-        for &d in shown {
-            let s = st.series(d);
-            o.insert(
-                d.as_str().into(),
-                json!({
-                    "taus_s": st.taus_s,
-                    "value": arr(&s.value, f),
-                    "lo": arr(&s.lo, f),
-                    "hi": arr(&s.hi, f),
-                    "edf": arr(&s.edf, 1.0),
-                    "n": s.n,
-                }),
-            );
-        }
-        for (s, r) in &c.more {
-            if r.left_out > 0 {
-                warnings.push(Warning::new(
-                    WarningCode::StatisticTruncated,
-                    format!(
-                        "{}: {} computed up to tau = {} s only; its cost grows as N*m and the {} longer averaging times would take too long (average the record down for them)",
-                        c.name,
-                        s.as_str(),
-                        r.taus_s.last().map_or("-".into(), |t| crate::error::short_f64(*t)),
-                        r.left_out
-                    ),
-                ));
-            }
-            o.insert(
-                s.as_str().into(),
-                json!({
-                    "taus_s": r.taus_s,
-                    "value": arr(&r.dev.value, f),
-                    "lo": arr(&r.dev.lo, f),
-                    "hi": arr(&r.dev.hi, f),
-                    "edf": arr(&r.dev.edf, 1.0),
-                    "n": r.dev.n,
-                }),
-            );
-        }
-        o.insert("alpha".into(), json!(st.alpha));
-        o.insert("id_method".into(), json!(st.id_method));
-        let model: Vec<Option<f64>> = st
-            .taus_s
-            .iter()
-            .map(|&t| Some(c.fit.model(t)).filter(|v| *v > 0.0 && v.is_finite()))
-            .collect();
-        o.insert("fit_oadev".into(), arr(&model, f));
-        let mut lines = serde_json::Map::new();
-        for (j, t) in c.fit.terms.iter().enumerate() {
-            if let Some(t) = t {
-                let curve: Vec<Option<f64>> = st
-                    .taus_s
-                    .iter()
-                    .map(|&tau| Some(t.value * crate::noise::terms::regressor(j, tau).sqrt()))
-                    .collect();
-                lines.insert(crate::noise::terms::TERMS[j].into(), arr(&curve, f));
-            }
-        }
-        o.insert("fit_terms_oadev".into(), Value::Object(lines));
-        // The chosen model: its terms, the fit's χ² and the correlation of
-        // the fitted squares (B² and K² are strongly correlated on short
-        // records).
-        if let (Some(sq), Some((chi2, dof))) = (&c.fit.squares, c.fit.chi2) {
-            let names: Vec<&str> = sq.names().iter().map(|n| n.trim_end_matches('2')).collect();
-            let r = sq.correlation();
-            let rows: Vec<Vec<Option<f64>>> = (0..r.nrows())
-                .map(|i| {
-                    (0..r.ncols())
-                        .map(|j| Some(r[(i, j)]).filter(|v| v.is_finite()))
-                        .collect()
-                })
-                .collect();
-            o.insert(
-                "term_model".into(),
-                json!({
-                    "terms": names,
-                    "chi2": Some(chi2).filter(|v| v.is_finite()),
-                    "dof": dof,
-                    "penalty": crate::noise::terms::PENALTY,
-                    "correlation": rows,
-                }),
-            );
-        }
-        let mut slope = serde_json::Map::new();
-        for (j, v) in c.slope.iter().enumerate() {
-            let (name, u, k) = &units.terms[j];
-            slope.insert(
-                name.clone(),
-                json!({"value": v.map(|v| v * k), "unit": u.as_str()}),
-            );
-        }
-        o.insert("slope_readings".into(), Value::Object(slope));
-        if let Some(si) = si_terms(quantity, &c.fit) {
-            o.insert("si_terms".into(), si);
-        }
+        let o = channel_json(c, shown, quantity, &units, unit, &mut warnings);
         chans.insert(c.name.clone(), Value::Object(o));
-
-        for (j, t) in c.fit.terms.iter().enumerate() {
-            if let Some(t) = t {
-                let (name, u, k) = &units.terms[j];
-                let full = format!("{}.{name}", c.name);
-                b.coefficient(
-                    &full,
-                    Coefficient::new(&full, t.value * k, t.u * k, u.clone(), t.dof)?,
-                )?;
-            }
-        }
-        for (tau, t) in &c.bias_stability {
-            let full = format!("{}.bias_stability_{}", c.name, tau_label(*tau));
-            match t {
-                Some(t) => {
-                    let (u, k) = &units.stability;
-                    b.coefficient(&full, Coefficient::new(&full, t.value * k, t.u * k, u.clone(), t.dof)?)?;
-                }
-                None => warnings.push(Warning::new(
-                    WarningCode::ShortRecord,
-                    format!("{}: the record holds fewer than two windows of {tau} s: no bias stability at {tau} s", c.name),
-                )),
-            }
-        }
+        channel_coefficients(&mut b, c, &units, &mut warnings)?;
         for w in &c.fit.warnings {
             warnings.push(Warning::new(w.code, format!("{}: {}", c.name, w.message)));
         }
         if tables {
-            let u = Some(Unit::Other(unit.to_string()));
-            let mut t = Table::new(
-                &format!("stability.{}", c.name),
-                &format!("{}: Allan family at each averaging time", c.name),
-                &[
-                    ("tau", Some(Unit::Other("s".into()))),
-                    ("alpha", None),
-                    ("oadev", u.clone()),
-                    ("oadev_lo", u.clone()),
-                    ("oadev_hi", u.clone()),
-                    ("mdev", u.clone()),
-                    ("ohdev", u.clone()),
-                    ("totdev", u.clone()),
-                    ("n", None),
-                ],
-            );
-            for (k, tau) in st.taus_s.iter().enumerate() {
-                let g = |v: Option<f64>| Cell::opt(v.map(|v| v * f));
-                t.push(vec![
-                    Cell::num(*tau),
-                    Cell::opt(st.alpha[k].map(f64::from)),
-                    g(st.oadev.value[k]),
-                    g(st.oadev.lo[k]),
-                    g(st.oadev.hi[k]),
-                    g(st.mdev.value[k]),
-                    g(st.ohdev.value[k]),
-                    g(st.totdev.value[k]),
-                    Cell::num(st.oadev.n[k] as f64),
-                ])?;
-            }
-            b.table(t);
+            b.table(stability_table(c, unit)?);
         }
     }
     b.warnings(warnings);
     b.option("confidence", json!(confidence));
     b.extra("channels", Value::Object(chans))?;
     Ok(b.finish())
+}
+
+/// One channel's entry of `channels` (module docs): its deviations, the
+/// statistics beyond the default five (a `statistic-truncated` warning
+/// for each one cut short), the noise identification, the term fit and
+/// the slope-line readings.
+fn channel_json(
+    c: &ChannelResult,
+    shown: &[Deviation],
+    quantity: &Quantity,
+    units: &NoiseUnits,
+    unit: &str,
+    warnings: &mut Vec<Warning>,
+) -> serde_json::Map<String, Value> {
+    let st = &c.stability;
+    let f = c.to_input;
+    let mut o = serde_json::Map::new();
+    o.insert("samples".into(), json!(c.samples));
+    o.insert("unit".into(), json!(unit));
+    o.insert("tdev_unit".into(), json!(format!("{unit}*s")));
+    o.insert("taus_s".into(), json!(st.taus_s));
+    for &d in shown {
+        o.insert(d.as_str().into(), series_json(&st.taus_s, st.series(d), f));
+    }
+    for (s, r) in &c.more {
+        if r.left_out > 0 {
+            warnings.push(Warning::new(
+                WarningCode::StatisticTruncated,
+                format!(
+                    "{}: {} computed up to tau = {} s only; its cost grows as N*m and the {} longer averaging times would take too long (average the record down for them)",
+                    c.name,
+                    s.as_str(),
+                    r.taus_s.last().map_or("-".into(), |t| crate::error::short_f64(*t)),
+                    r.left_out
+                ),
+            ));
+        }
+        o.insert(s.as_str().into(), series_json(&r.taus_s, &r.dev, f));
+    }
+    o.insert("alpha".into(), json!(st.alpha));
+    o.insert("id_method".into(), json!(st.id_method));
+    insert_fit(&mut o, c);
+    let mut slope = serde_json::Map::new();
+    for (j, v) in c.slope.iter().enumerate() {
+        let (name, u, k) = &units.terms[j];
+        slope.insert(
+            name.clone(),
+            json!({"value": v.map(|v| v * k), "unit": u.as_str()}),
+        );
+    }
+    o.insert("slope_readings".into(), Value::Object(slope));
+    if let Some(si) = si_terms(quantity, &c.fit) {
+        o.insert("si_terms".into(), si);
+    }
+    o
+}
+
+/// One deviation as `{taus_s, value, lo, hi, edf, n}`, the values and
+/// bounds times `f` (into the input unit).
+fn series_json(taus_s: &[f64], s: &DevSeries, f: f64) -> Value {
+    json!({
+        "taus_s": taus_s,
+        "value": arr(&s.value, f),
+        "lo": arr(&s.lo, f),
+        "hi": arr(&s.hi, f),
+        "edf": arr(&s.edf, 1.0),
+        "n": s.n,
+    })
+}
+
+/// The IEEE term fit into a channel's entry: the model's OADEV curve
+/// (`fit_oadev`), each identified term's line (`fit_terms_oadev`) and the
+/// chosen model (`term_model`).
+fn insert_fit(o: &mut serde_json::Map<String, Value>, c: &ChannelResult) {
+    let (st, f) = (&c.stability, c.to_input);
+    let model: Vec<Option<f64>> = st
+        .taus_s
+        .iter()
+        .map(|&t| Some(c.fit.model(t)).filter(|v| *v > 0.0 && v.is_finite()))
+        .collect();
+    o.insert("fit_oadev".into(), arr(&model, f));
+    let mut lines = serde_json::Map::new();
+    for (j, t) in c.fit.terms.iter().enumerate() {
+        if let Some(t) = t {
+            let curve: Vec<Option<f64>> = st
+                .taus_s
+                .iter()
+                .map(|&tau| Some(t.value * crate::noise::terms::regressor(j, tau).sqrt()))
+                .collect();
+            lines.insert(crate::noise::terms::TERMS[j].into(), arr(&curve, f));
+        }
+    }
+    o.insert("fit_terms_oadev".into(), Value::Object(lines));
+    // The chosen model: its terms, the fit's χ² and the correlation of
+    // the fitted squares (B² and K² are strongly correlated on short
+    // records).
+    if let (Some(sq), Some((chi2, dof))) = (&c.fit.squares, c.fit.chi2) {
+        let names: Vec<&str> = sq.names().iter().map(|n| n.trim_end_matches('2')).collect();
+        let r = sq.correlation();
+        let rows: Vec<Vec<Option<f64>>> = (0..r.nrows())
+            .map(|i| {
+                (0..r.ncols())
+                    .map(|j| Some(r[(i, j)]).filter(|v| v.is_finite()))
+                    .collect()
+            })
+            .collect();
+        o.insert(
+            "term_model".into(),
+            json!({
+                "terms": names,
+                "chi2": Some(chi2).filter(|v| v.is_finite()),
+                "dof": dof,
+                "penalty": crate::noise::terms::PENALTY,
+                "correlation": rows,
+            }),
+        );
+    }
+}
+
+/// A channel's coefficients: its identified terms (`NAME.TERM`) and its
+/// bias stability at each requested τ (`NAME.bias_stability_τ`, a
+/// `short-record` warning where the record is too short for it).
+fn channel_coefficients(
+    b: &mut DocumentBuilder,
+    c: &ChannelResult,
+    units: &NoiseUnits,
+    warnings: &mut Vec<Warning>,
+) -> Result<()> {
+    for (j, t) in c.fit.terms.iter().enumerate() {
+        if let Some(t) = t {
+            let (name, u, k) = &units.terms[j];
+            let full = format!("{}.{name}", c.name);
+            b.coefficient(
+                &full,
+                Coefficient::new(&full, t.value * k, t.u * k, u.clone(), t.dof)?,
+            )?;
+        }
+    }
+    for (tau, t) in &c.bias_stability {
+        let full = format!("{}.bias_stability_{}", c.name, tau_label(*tau));
+        match t {
+            Some(t) => {
+                let (u, k) = &units.stability;
+                b.coefficient(&full, Coefficient::new(&full, t.value * k, t.u * k, u.clone(), t.dof)?)?;
+            }
+            None => warnings.push(Warning::new(
+                WarningCode::ShortRecord,
+                format!("{}: the record holds fewer than two windows of {tau} s: no bias stability at {tau} s", c.name),
+            )),
+        }
+    }
+    Ok(())
+}
+
+/// The readable τ table of a channel (`stability.NAME`): α, OADEV with
+/// its bounds, MDEV, OHDEV and TOTDEV in the input unit, and OADEV's number of terms.
+fn stability_table(c: &ChannelResult, unit: &str) -> Result<Table> {
+    let (st, f) = (&c.stability, c.to_input);
+    let u = Some(Unit::Other(unit.to_string()));
+    let mut t = Table::new(
+        &format!("stability.{}", c.name),
+        &format!("{}: Allan family at each averaging time", c.name),
+        &[
+            ("tau", Some(Unit::Other("s".into()))),
+            ("alpha", None),
+            ("oadev", u.clone()),
+            ("oadev_lo", u.clone()),
+            ("oadev_hi", u.clone()),
+            ("mdev", u.clone()),
+            ("ohdev", u.clone()),
+            ("totdev", u.clone()),
+            ("n", None),
+        ],
+    );
+    for (k, tau) in st.taus_s.iter().enumerate() {
+        let g = |v: Option<f64>| Cell::opt(v.map(|v| v * f));
+        t.push(vec![
+            Cell::num(*tau),
+            Cell::opt(st.alpha[k].map(f64::from)),
+            g(st.oadev.value[k]),
+            g(st.oadev.lo[k]),
+            g(st.oadev.hi[k]),
+            g(st.mdev.value[k]),
+            g(st.ohdev.value[k]),
+            g(st.totdev.value[k]),
+            Cell::num(st.oadev.n[k] as f64),
+        ])?;
+    }
+    Ok(t)
 }

@@ -393,40 +393,16 @@ pub fn reduce(input: &RampInput, o: &RampOptions) -> Result<ResultDocument> {
     let mut thermal = serde_json::Map::new();
     let mut selection = serde_json::Map::new();
     for (c, name) in input.names.iter().enumerate() {
-        let keep: Vec<usize> = (0..blocks.len())
-            .filter(|&i| blocks[i].channels[c].n >= 2)
-            .collect();
-        let y: Vec<f64> = keep.iter().map(|&i| blocks[i].channels[c].mean).collect();
-        // The within-block variance pooled over the blocks: a block's own
-        // s² from a few samples would make the weights, and so χ², noisy.
-        let (m2, pooled_dof) = keep.iter().fold((0.0, 0usize), |(m, d), &i| {
-            let a = &blocks[i].channels[c];
-            (m + a.m2, d + a.n - 1)
-        });
-        let var = m2 / pooled_dof.max(1) as f64;
-        if !(var > 0.0 && var.is_finite()) {
-            return Err(Error::Unsupported(format!(
-                "channel {name}: no scatter within the blocks to weight the block means (a constant or missing channel)"
-            )));
-        }
-        let u: Vec<f64> = keep
-            .iter()
-            .map(|&i| (var / blocks[i].channels[c].n as f64).sqrt())
-            .collect();
-        let tk: Vec<f64> = keep.iter().map(|&i| temp[i]).collect();
-        let ek: Vec<(String, Vec<f64>)> = extra
-            .iter()
-            .map(|(n, col)| (n.clone(), keep.iter().map(|&i| col[i]).collect()))
-            .collect();
+        let d = ChannelBlocks::of(blocks, c, name, &temp, &extra)?;
         let (f, trials) = fit_with_degree(
             name,
-            &tk,
-            &y,
-            &u,
-            &ek,
+            &d.t,
+            &d.y,
+            &d.u,
+            &d.extra,
             o.t_ref_c,
             o.degree,
-            pooled_dof as f64,
+            d.pooled_dof as f64,
         )?;
         b.decision(
             DecisionCode::ModelDegree,
@@ -439,92 +415,13 @@ pub fn reduce(input: &RampInput, o: &RampOptions) -> Result<ResultDocument> {
                 .map(|w| w.prefixed(name)),
         );
         b.fit(FitSummary::of(name, &f.fit, unit.clone()));
-        let p = f.degree + 1;
-        let dof = f.fit.estimates.dof();
-        let e = Estimates::new(
-            (0..p).map(|k| format!("c{k}")).collect(),
-            f.values.rows(0, p).into_owned(),
-            f.covariance.view((0, 0), (p, p)).into_owned(),
-            dof,
-        )?;
-        b.estimates(&e, &format!("{name}."), |n| {
-            let k: usize = n[1..].parse().map_err(|_| Error::Unsupported(n.into()))?;
-            Ok(power_unit(&unit, k))
-        })?;
-        let extra_u = |label: &str, unit_text: String| {
-            f.names.iter().position(|n| n == label).map(|j| {
-                ValueU::new(
-                    f.values[j],
-                    f.covariance[(j, j)].max(0.0).sqrt(),
-                    &unit_text,
-                    dof,
-                )
-            })
-        };
-        let entry = ThermalEntry {
-            degree: f.degree,
-            t_ref_c: o.t_ref_c,
-            t_min_c: f.t_range_c.0,
-            t_max_c: f.t_range_c.1,
-            unit: unit.as_str().to_string(),
-            hysteresis: extra_u("hysteresis", unit.as_str().to_string()),
-            rate_term: extra_u("rate_term", format!("{}/(degC/s)", unit.as_str())),
-        };
+        let entry = channel_entry(&mut b, name, &f, o, &unit)?;
         thermal.insert(
             name.clone(),
             serde_json::to_value(&entry).unwrap_or(Value::Null),
         );
         selection.insert(name.clone(), json!(trials));
-        let mut tab = Table::new(
-            &format!("ramp.{name}"),
-            &format!("{name}: block means against the sensor temperature (consecutive blocks of a branch merged)"),
-            &[
-                ("temperature_c", Some(Unit::Other("degC".into()))),
-                ("branch", None),
-                ("mean", Some(unit.clone())),
-                ("u", Some(unit.clone())),
-                ("polynomial", Some(unit.clone())),
-                ("residual", Some(unit.clone())),
-            ],
-        );
-        // At most about 60 rows: consecutive blocks of one branch merged
-        // (weighted means), so a report stays readable.
-        let group = keep.len().div_ceil(60).max(1);
-        let mut j = 0;
-        while j < keep.len() {
-            let br = branch[keep[j]];
-            let mut end = j;
-            while end < keep.len() && end - j < group && branch[keep[end]] == br {
-                end += 1;
-            }
-            let (mut sw, mut st, mut sy, mut sr) = (0.0, 0.0, 0.0, 0.0);
-            for q in j..end {
-                let w = 1.0 / (u[q] * u[q]);
-                let fitted: f64 = (0..f.values.len())
-                    .map(|k| f.values[k] * regressor(&f, &ek, q, k, tk[q]))
-                    .sum();
-                sw += w;
-                st += w * tk[q];
-                sy += w * y[q];
-                sr += w * (y[q] - fitted);
-            }
-            let t_mean = st / sw;
-            let (poly_only, _) = f.eval(t_mean);
-            tab.push(vec![
-                Cell::num(t_mean),
-                Cell::text(match br {
-                    1 => "heating",
-                    -1 => "cooling",
-                    _ => "start",
-                }),
-                Cell::num(sy / sw),
-                Cell::num(sw.sqrt().recip()),
-                Cell::num(poly_only),
-                Cell::num(sr / sw),
-            ])?;
-            j = end;
-        }
-        b.table(tab);
+        b.table(block_table(name, &unit, &d, &branch, &f)?);
         b.table(super::soak::compensated_table(name, &unit, &f)?);
     }
     if input.has_chamber {
@@ -549,6 +446,176 @@ pub fn reduce(input: &RampInput, o: &RampOptions) -> Result<ResultDocument> {
         json!({"heating_blocks": heating, "cooling_blocks": cooling, "blocks": blocks.len()}),
     )?;
     Ok(b.finish())
+}
+
+/// One channel's points of the fit: the blocks with at least two of its
+/// samples, their means with `u_i = s/√n_i` (module docs), temperatures
+/// and extra regressors.
+struct ChannelBlocks {
+    /// Indices of the blocks kept.
+    keep: Vec<usize>,
+    /// Block means.
+    y: Vec<f64>,
+    /// Their standard uncertainties.
+    u: Vec<f64>,
+    /// Their mean sensor temperatures, °C.
+    t: Vec<f64>,
+    /// The extra regressors at the blocks kept.
+    extra: Vec<(String, Vec<f64>)>,
+    /// Degrees of freedom of the pooled within-block variance.
+    pooled_dof: usize,
+}
+
+impl ChannelBlocks {
+    /// Channel `c` (named `name`) of the blocks, with the blocks'
+    /// temperatures `temp` and extra regressors `extra`; an error when
+    /// the blocks show no scatter to weight the means.
+    fn of(
+        blocks: &[Block],
+        c: usize,
+        name: &str,
+        temp: &[f64],
+        extra: &[(String, Vec<f64>)],
+    ) -> Result<Self> {
+        let keep: Vec<usize> = (0..blocks.len())
+            .filter(|&i| blocks[i].channels[c].n >= 2)
+            .collect();
+        let y: Vec<f64> = keep.iter().map(|&i| blocks[i].channels[c].mean).collect();
+        // The within-block variance pooled over the blocks: a block's own
+        // s² from a few samples would make the weights, and so χ², noisy.
+        let (m2, pooled_dof) = keep.iter().fold((0.0, 0usize), |(m, d), &i| {
+            let a = &blocks[i].channels[c];
+            (m + a.m2, d + a.n - 1)
+        });
+        let var = m2 / pooled_dof.max(1) as f64;
+        if !(var > 0.0 && var.is_finite()) {
+            return Err(Error::Unsupported(format!(
+                "channel {name}: no scatter within the blocks to weight the block means (a constant or missing channel)"
+            )));
+        }
+        let u: Vec<f64> = keep
+            .iter()
+            .map(|&i| (var / blocks[i].channels[c].n as f64).sqrt())
+            .collect();
+        let t: Vec<f64> = keep.iter().map(|&i| temp[i]).collect();
+        let extra: Vec<(String, Vec<f64>)> = extra
+            .iter()
+            .map(|(n, col)| (n.clone(), keep.iter().map(|&i| col[i]).collect()))
+            .collect();
+        Ok(ChannelBlocks {
+            keep,
+            y,
+            u,
+            t,
+            extra,
+            pooled_dof,
+        })
+    }
+}
+
+/// A channel's polynomial coefficients `NAME.ck` into the document, and
+/// its `thermal` entry (with the hysteresis and `dT/dt` terms when
+/// fitted).
+fn channel_entry(
+    b: &mut DocumentBuilder,
+    name: &str,
+    f: &super::PolyFit,
+    o: &RampOptions,
+    unit: &Unit,
+) -> Result<ThermalEntry> {
+    let p = f.degree + 1;
+    let dof = f.fit.estimates.dof();
+    let e = Estimates::new(
+        (0..p).map(|k| format!("c{k}")).collect(),
+        f.values.rows(0, p).into_owned(),
+        f.covariance.view((0, 0), (p, p)).into_owned(),
+        dof,
+    )?;
+    b.estimates(&e, &format!("{name}."), |n| {
+        let k: usize = n[1..].parse().map_err(|_| Error::Unsupported(n.into()))?;
+        Ok(power_unit(unit, k))
+    })?;
+    let extra_u = |label: &str, unit_text: String| {
+        f.names.iter().position(|n| n == label).map(|j| {
+            ValueU::new(
+                f.values[j],
+                f.covariance[(j, j)].max(0.0).sqrt(),
+                &unit_text,
+                dof,
+            )
+        })
+    };
+    Ok(ThermalEntry {
+        degree: f.degree,
+        t_ref_c: o.t_ref_c,
+        t_min_c: f.t_range_c.0,
+        t_max_c: f.t_range_c.1,
+        unit: unit.as_str().to_string(),
+        hysteresis: extra_u("hysteresis", unit.as_str().to_string()),
+        rate_term: extra_u("rate_term", format!("{}/(degC/s)", unit.as_str())),
+    })
+}
+
+/// The table `ramp.NAME`: the block means against the sensor temperature
+/// with the polynomial and the residual, at most about 60 rows
+/// (consecutive blocks of one branch merged as weighted means, so a
+/// report stays readable).
+fn block_table(
+    name: &str,
+    unit: &Unit,
+    d: &ChannelBlocks,
+    branch: &[i8],
+    f: &super::PolyFit,
+) -> Result<Table> {
+    let (keep, u, y, tk) = (&d.keep, &d.u, &d.y, &d.t);
+    let mut tab = Table::new(
+        &format!("ramp.{name}"),
+        &format!("{name}: block means against the sensor temperature (consecutive blocks of a branch merged)"),
+        &[
+            ("temperature_c", Some(Unit::Other("degC".into()))),
+            ("branch", None),
+            ("mean", Some(unit.clone())),
+            ("u", Some(unit.clone())),
+            ("polynomial", Some(unit.clone())),
+            ("residual", Some(unit.clone())),
+        ],
+    );
+    let group = keep.len().div_ceil(60).max(1);
+    let mut j = 0;
+    while j < keep.len() {
+        let br = branch[keep[j]];
+        let mut end = j;
+        while end < keep.len() && end - j < group && branch[keep[end]] == br {
+            end += 1;
+        }
+        let (mut sw, mut st, mut sy, mut sr) = (0.0, 0.0, 0.0, 0.0);
+        for q in j..end {
+            let w = 1.0 / (u[q] * u[q]);
+            let fitted: f64 = (0..f.values.len())
+                .map(|k| f.values[k] * regressor(f, &d.extra, q, k, tk[q]))
+                .sum();
+            sw += w;
+            st += w * tk[q];
+            sy += w * y[q];
+            sr += w * (y[q] - fitted);
+        }
+        let t_mean = st / sw;
+        let (poly_only, _) = f.eval(t_mean);
+        tab.push(vec![
+            Cell::num(t_mean),
+            Cell::text(match br {
+                1 => "heating",
+                -1 => "cooling",
+                _ => "start",
+            }),
+            Cell::num(sy / sw),
+            Cell::num(sw.sqrt().recip()),
+            Cell::num(poly_only),
+            Cell::num(sr / sw),
+        ])?;
+        j = end;
+    }
+    Ok(tab)
 }
 
 /// The value of regressor `k` of fit `f` at point `j`.

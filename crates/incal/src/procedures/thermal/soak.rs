@@ -89,6 +89,91 @@ pub fn temperature_of(doc: &ResultDocument) -> std::result::Result<f64, String> 
 
 /// Fit every coefficient of the inputs against temperature (module docs).
 pub fn fit_documents(inputs: &[SoakInput], o: &SoakOptions) -> Result<ResultDocument> {
+    let (first, temps) = check_inputs(inputs, o)?;
+    let procedure = first.doc.procedure;
+    let mut b = DocumentBuilder::new(
+        Procedure::Thermal,
+        format!("Thermal model of the {procedure} coefficients (soak)"),
+    );
+    let mut names = Vec::new();
+    let mut fits: Vec<(String, Unit, PolyFit)> = Vec::new();
+    let mut thermal = serde_json::Map::new();
+    let mut selection = serde_json::Map::new();
+    for (name, c0) in first.doc.coefficients.iter() {
+        let Some(Plateaus { y, u, dof }) = plateau_values(inputs, first, name, &c0.unit)? else {
+            b.decision(
+                DecisionCode::NotDetermined,
+                format!("{name}: not reported with a non-zero u by every input: no thermal model"),
+            );
+            continue;
+        };
+        let (f, trials) = fit_with_degree(name, &temps, &y, &u, &[], o.t_ref_c, o.degree, dof)?;
+        b.decision(
+            DecisionCode::ModelDegree,
+            degree_reason(name, &f, o.degree, &trials),
+        );
+        b.warnings(
+            f.fit
+                .quality_warnings("the plateaus scatter about the polynomial more than their u (a higher degree, or drift between plateaus)")
+                .into_iter()
+                .map(|w| w.prefixed(name)),
+        );
+        b.fit(FitSummary::of(name, &f.fit, c0.unit.clone()));
+        let entry = ThermalEntry {
+            degree: f.degree,
+            t_ref_c: o.t_ref_c,
+            t_min_c: f.t_range_c.0,
+            t_max_c: f.t_range_c.1,
+            unit: c0.unit.as_str().to_string(),
+            hysteresis: None,
+            rate_term: None,
+        };
+        thermal.insert(
+            name.to_string(),
+            serde_json::to_value(&entry).unwrap_or(Value::Null),
+        );
+        selection.insert(name.to_string(), json!(trials));
+        names.push((name.to_string(), y, u));
+        fits.push((name.to_string(), c0.unit.clone(), f));
+    }
+    if fits.is_empty() {
+        return Err(Error::Unsupported(format!(
+            "{}: no coefficient with a non-zero u in every input",
+            first.name
+        )));
+    }
+    joint_estimates(&mut b, inputs, &fits)?;
+    for ((name, unit, f), (_, y, u)) in fits.iter().zip(&names) {
+        b.table(plateau_table(name, unit, f, &temps, y, u)?);
+        b.table(compensated_table(name, unit, f)?);
+    }
+    b.extra("thermal", Value::Object(thermal))?;
+    b.extra("degree_selection", Value::Object(selection))?;
+    b.option("t_ref_c", json!(o.t_ref_c));
+    b.option("degree", json!(o.degree));
+    let mut doc = b.finish();
+    doc.instrument = first.doc.instrument.clone();
+    doc.instrument.meta.remove("temperature_c");
+    doc.instrument
+        .meta
+        .insert("procedure".into(), procedure.as_str().into());
+    doc.inputs = inputs
+        .iter()
+        .zip(&temps)
+        .map(|(i, t)| InputFile {
+            role: format!("result at {t} degC"),
+            path: i.name.clone(),
+            sha256: i.sha256.clone(),
+            rows: None,
+        })
+        .collect();
+    Ok(doc)
+}
+
+/// The options and inputs checked (a sane `T_ref`; at least one input,
+/// all of one procedure other than thermal and of one instrument), and
+/// the first input with every input's temperature ([`temperature_of`]).
+fn check_inputs<'a>(inputs: &'a [SoakInput], o: &SoakOptions) -> Result<(&'a SoakInput, Vec<f64>)> {
     if !o.t_ref_c.is_finite() || o.t_ref_c.abs() > 500.0 {
         return Err(Error::InvalidValue {
             what: "t_ref_c (degC)".into(),
@@ -129,81 +214,61 @@ pub fn fit_documents(inputs: &[SoakInput], o: &SoakOptions) -> Result<ResultDocu
             temperature_of(&i.doc).map_err(|m| Error::Unsupported(format!("{}: {m}", i.name)))?,
         );
     }
+    Ok((first, temps))
+}
 
-    let mut b = DocumentBuilder::new(
-        Procedure::Thermal,
-        format!("Thermal model of the {procedure} coefficients (soak)"),
-    );
-    let mut names = Vec::new();
-    let mut fits: Vec<(String, Unit, PolyFit)> = Vec::new();
-    let mut thermal = serde_json::Map::new();
-    let mut selection = serde_json::Map::new();
-    for (name, c0) in first.doc.coefficients.iter() {
-        let mut y = Vec::new();
-        let mut u = Vec::new();
-        let mut dof = f64::INFINITY;
-        let mut usable = true;
-        for i in inputs {
-            match i.doc.coefficients.get(name) {
-                Some(c) if c.unit == c0.unit && c.u > 0.0 && c.u.is_finite() => {
-                    y.push(c.value);
-                    u.push(c.u);
-                    dof = dof.min(c.dof_value());
-                }
-                Some(c) if c.unit != c0.unit => {
-                    return Err(Error::Unsupported(format!(
-                        "{}: coefficient {name} in {} but {} in {}",
-                        i.name, c.unit, c0.unit, first.name
-                    )));
-                }
-                _ => usable = false,
+/// Coefficient `name`'s value and u in every input, and the smallest of
+/// their dof; `None` when an input lacks it or gives it no non-zero
+/// finite u; an error when an input gives it in another unit than
+/// `unit` (the first input's).
+fn plateau_values(
+    inputs: &[SoakInput],
+    first: &SoakInput,
+    name: &str,
+    unit: &Unit,
+) -> Result<Option<Plateaus>> {
+    let mut y = Vec::new();
+    let mut u = Vec::new();
+    let mut dof = f64::INFINITY;
+    let mut usable = true;
+    for i in inputs {
+        match i.doc.coefficients.get(name) {
+            Some(c) if c.unit == *unit && c.u > 0.0 && c.u.is_finite() => {
+                y.push(c.value);
+                u.push(c.u);
+                dof = dof.min(c.dof_value());
             }
+            Some(c) if c.unit != *unit => {
+                return Err(Error::Unsupported(format!(
+                    "{}: coefficient {name} in {} but {} in {}",
+                    i.name, c.unit, unit, first.name
+                )));
+            }
+            _ => usable = false,
         }
-        if !usable {
-            b.decision(
-                DecisionCode::NotDetermined,
-                format!("{name}: not reported with a non-zero u by every input: no thermal model"),
-            );
-            continue;
-        }
-        let (f, trials) = fit_with_degree(name, &temps, &y, &u, &[], o.t_ref_c, o.degree, dof)?;
-        b.decision(
-            DecisionCode::ModelDegree,
-            degree_reason(name, &f, o.degree, &trials),
-        );
-        b.warnings(
-            f.fit
-                .quality_warnings("the plateaus scatter about the polynomial more than their u (a higher degree, or drift between plateaus)")
-                .into_iter()
-                .map(|w| w.prefixed(name)),
-        );
-        b.fit(FitSummary::of(name, &f.fit, c0.unit.clone()));
-        let entry = ThermalEntry {
-            degree: f.degree,
-            t_ref_c: o.t_ref_c,
-            t_min_c: f.t_range_c.0,
-            t_max_c: f.t_range_c.1,
-            unit: c0.unit.as_str().to_string(),
-            hysteresis: None,
-            rate_term: None,
-        };
-        thermal.insert(
-            name.to_string(),
-            serde_json::to_value(&entry).unwrap_or(Value::Null),
-        );
-        selection.insert(name.to_string(), json!(trials));
-        names.push((name.to_string(), y, u));
-        fits.push((name.to_string(), c0.unit.clone(), f));
     }
-    if fits.is_empty() {
-        return Err(Error::Unsupported(format!(
-            "{}: no coefficient with a non-zero u in every input",
-            first.name
-        )));
-    }
+    Ok(usable.then_some(Plateaus { y, u, dof }))
+}
 
-    // One joint block: the polynomials of coefficients of one run are
-    // correlated through the runs' own correlations (module docs).
+/// One coefficient at every plateau ([`plateau_values`]).
+struct Plateaus {
+    /// Its values.
+    y: Vec<f64>,
+    /// Their standard uncertainties.
+    u: Vec<f64>,
+    /// The smallest of their dof.
+    dof: f64,
+}
+
+/// The polynomials' coefficients `NAME.ck` into the document as one joint
+/// block: the polynomials of coefficients of one run are correlated
+/// through the runs' own correlations (module docs), each coefficient
+/// with its own fit's dof.
+fn joint_estimates(
+    b: &mut DocumentBuilder,
+    inputs: &[SoakInput],
+    fits: &[(String, Unit, PolyFit)],
+) -> Result<()> {
     let sizes: Vec<usize> = fits.iter().map(|(_, _, f)| f.degree + 1).collect();
     let total: usize = sizes.iter().sum();
     let mut cov = DMatrix::zeros(total, total);
@@ -211,7 +276,7 @@ pub fn fit_documents(inputs: &[SoakInput], o: &SoakOptions) -> Result<ResultDocu
     let mut coef_names = Vec::with_capacity(total);
     let mut at = Vec::with_capacity(fits.len());
     let mut pos = 0;
-    for (name, _, f) in &fits {
+    for (name, _, f) in fits {
         at.push(pos);
         for k in 0..=f.degree {
             values[pos + k] = f.values[k];
@@ -261,32 +326,7 @@ pub fn fit_documents(inputs: &[SoakInput], o: &SoakOptions) -> Result<ResultDocu
         },
         |n| dof_of.get(n).copied().unwrap_or(f64::INFINITY),
     )?;
-
-    for ((name, unit, f), (_, y, u)) in fits.iter().zip(&names) {
-        b.table(plateau_table(name, unit, f, &temps, y, u)?);
-        b.table(compensated_table(name, unit, f)?);
-    }
-    b.extra("thermal", Value::Object(thermal))?;
-    b.extra("degree_selection", Value::Object(selection))?;
-    b.option("t_ref_c", json!(o.t_ref_c));
-    b.option("degree", json!(o.degree));
-    let mut doc = b.finish();
-    doc.instrument = first.doc.instrument.clone();
-    doc.instrument.meta.remove("temperature_c");
-    doc.instrument
-        .meta
-        .insert("procedure".into(), procedure.as_str().into());
-    doc.inputs = inputs
-        .iter()
-        .zip(&temps)
-        .map(|(i, t)| InputFile {
-            role: format!("result at {t} degC"),
-            path: i.name.clone(),
-            sha256: i.sha256.clone(),
-            rows: None,
-        })
-        .collect();
-    Ok(doc)
+    Ok(())
 }
 
 /// Why a polynomial got its degree.
