@@ -7,6 +7,11 @@
 //! exception: a command group without its subcommand (`incal`, `incal plan`)
 //! prints its usage to stderr, still exit 2.
 
+// The doc comments of the options are their `--help` text, read by people
+// on a terminal: `[lab]`, `[a,b]` and `ax,ay,az[,gyr_x,…]` there are
+// literal text, not links, and must print as written.
+#![allow(rustdoc::broken_intra_doc_links)]
+
 mod commands;
 mod documents;
 pub mod embed;

@@ -108,7 +108,7 @@ impl Table {
     pub fn text(&self, row: usize, col: usize) -> &str {
         std::str::from_utf8(self.bytes(row, col)).unwrap_or("")
     }
-    /// A number from a cell (as [`Row::f64`]).
+    /// A number from a cell (as `Row::f64`).
     pub fn f64(&self, row: usize, col: usize) -> Result<f64> {
         self.row(row).f64(col)
     }

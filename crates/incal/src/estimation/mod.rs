@@ -4,7 +4,7 @@
 //! ([`Design::predict`]), propagation to derived coefficients
 //! ([`Estimates::map`]) and a small Gauss–Newton iteration built on the same
 //! linear solver for models that are linear only after linearisation
-//! ([`gauss_newton`]).
+//! ([`gauss_newton`](mod@gauss_newton)).
 
 pub mod estimates;
 pub mod gauss_newton;

@@ -544,7 +544,7 @@ const B1_TOL: f64 = 1e-9;
 /// blind to a line): `Σ (u_{i+m} − u_i)² = Q(L) − Q(m) + Q(M) − 2R(m)`
 /// with `Q` the prefix sums of `u²` and `R` the autocorrelation by FFT
 /// ([`super::corr::autocorr`]), a factor whose round-off estimate
-/// exceeds [`B1_TOL`] summed directly. Same numbers serial or parallel.
+/// exceeds `B1_TOL` summed directly. Same numbers serial or parallel.
 pub fn b1_overlapping_many(x: &[f64], ms: &[usize], parallel: bool) -> Vec<Option<f64>> {
     let l = x.len();
     let direct = |m: usize| -> Option<f64> {

@@ -91,7 +91,7 @@ fn second_diff_of_means(e: &[f64], m: usize) -> f64 {
 
 /// Modified total variance (SP 1065 eq. 27): for each of the N − 3m + 1
 /// subsequences of 3m phase points, the half-average line removed and the
-/// sequence extended by even reflection to 9m points ([`reflected`]);
+/// sequence extended by even reflection to 9m points (`reflected`);
 /// `Mod σ²_total(τ) = Σ_n [ (1/6m) Σ_j z_j² ] / (2 (mτ0)² (N − 3m + 1))`,
 /// z_j the second difference of m-point phase averages. n = N − 3m + 1.
 pub fn mtotvar(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> {
@@ -136,7 +136,7 @@ fn windows_sum(x: &[f64], l: usize, parallel: bool, f: impl Fn(&[f64]) -> f64 + 
 /// Hadamard total variance (SP 1065 eq. 29), on the frequency record
 /// `y_i = (x_{i+1} − x_i)/τ0` (N − 1 values): for each of the
 /// N − 1 − 3m + 1 subsequences of 3m frequency values, the half-average
-/// line removed and reflected to 9m ([`reflected`]);
+/// line removed and reflected to 9m (`reflected`);
 /// `Tot σ²_H(τ) = Σ_n [ (1/6m) Σ_j H_j² ] / (6 (N − 3m))`, H_j the second
 /// difference of m-point frequency averages. At m = 1 it is the Hadamard
 /// variance ([`hvar`]), as SP 1065 defines it. n the subsequences.

@@ -7,7 +7,7 @@ use super::overlapping::Kind;
 use crate::noise::ordered_map;
 
 /// Largest estimated round-off of the FFT sums, relative to the sum,
-/// that [`dense_sums`] accepts; past it the factor is summed directly.
+/// that `dense_sums` accepts; past it the factor is summed directly.
 pub const DENSE_TOL: f64 = 1e-9;
 
 /// The sums of [`many_sums`](super::overlapping::many_sums) from lagged

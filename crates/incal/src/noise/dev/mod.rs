@@ -12,9 +12,9 @@
 //! eq. (15) MDEV, §5.2.6 eq. (17) TDEV, §5.2.9 eq. (22) OHDEV, §5.2.11
 //! eq. (25) TOTDEV.
 //!
-//! The kernels by family: [`kernels`] (the comb sums), [`sweep`] (many
-//! factors in one pass), [`overlapping`] (OADEV, OHDEV), [`dense`] (dense
-//! grids by FFT), [`modified`] and [`prefix`] (MDEV, TDEV), [`total`]
+//! The kernels by family: `kernels` (the comb sums), `sweep` (many
+//! factors in one pass), `overlapping` (OADEV, OHDEV), `dense` (dense
+//! grids by FFT), `modified` and `prefix` (MDEV, TDEV), `total`
 //! (TOTDEV).
 
 mod dense;
@@ -45,7 +45,7 @@ use total::totvar_from;
 pub const BLOCK: usize = 1 << 14;
 
 /// Terms per block of the OADEV and OHDEV sums (a window of about fifty
-/// of them stays in the caches in [`comb_many`]; the unit tests use short
+/// of them stays in the caches in `comb_many`; the unit tests use short
 /// blocks so that short records cross every band).
 pub const COMB_BLOCK: usize = if cfg!(test) { 1 << 8 } else { 1 << 11 };
 
@@ -61,7 +61,7 @@ pub struct VarN {
 /// OADEV, OHDEV, TOTDEV and MDEV variances at every factor of `ms`, as
 /// [`oavar_many`], [`ohvar_many`], [`oavar_totvar_many`] and [`mvar_many`]
 /// give them, sharing the work: on a sparse grid one sweep
-/// ([`comb_many`]) gives OADEV's and OHDEV's sums (the same bits as apart)
+/// (`comb_many`) gives OADEV's and OHDEV's sums (the same bits as apart)
 /// and the MDEV sums of the factors too large for [`mvar_many`]'s prefix
 /// superblocks, whose slide steps are exactly OHDEV's terms (instead of
 /// [`mvar`]'s slides, four more streams over the record per factor);

@@ -20,7 +20,7 @@ use crate::noise::ordered_map;
 /// The inner sums slide (`W_{j+1} = W_j + d_{j+1}`,
 /// `d_j = x_{j+3m−1} − 3x_{j+2m−1} + 3x_{j+m−1} − x_{j−1}`) inside blocks
 /// of at least 8m terms, eight slides in vector lanes per block
-/// ([`mvar_block`]); every block starts from a direct sum, so round-off
+/// (`mvar_block`); every block starts from a direct sum, so round-off
 /// cannot build up along the record and the blocks are independent.
 pub fn mvar(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> {
     let nt = (x.len() + 1)
@@ -125,7 +125,7 @@ pub(super) fn lane_slides(r: usize, step: impl Fn(usize) -> f64) -> [[f64; LANES
 /// four loads per term, vectorized and block-major over the factors as
 /// [`oavar_many`](super::oavar_many) (the slides of [`mvar`] run a dependent
 /// add per term, one m at a time). `P` is built per superblock of R terms (`R`
-/// from [`MVAR_GROUPS`](super::prefix::MVAR_GROUPS), `3m ≤ R`) over `R + 3m`
+/// from `MVAR_GROUPS`, `3m ≤ R`) over `R + 3m`
 /// samples, of `x_k − x_r − b(k − r)` (the line through the superblock's ends
 /// removed: W is blind to a line in x), so it stays small and the buffer is at
 /// most 2R values per thread, never a second copy of the record.

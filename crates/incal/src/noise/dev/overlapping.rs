@@ -43,7 +43,7 @@ pub fn ohvar(x: &[f64], m: usize, tau0: f64, parallel: bool) -> Option<VarN> {
 /// [`oavar`] at every factor of `ms`: one block-major sweep (same bits as
 /// [`oavar`]), or, for a dense grid (`taus all`) where the direct sums
 /// would cost more than the transforms, the lagged products by FFT
-/// ([`dense_sums`]).
+/// (`dense_sums`).
 pub fn oavar_many(x: &[f64], ms: &[usize], tau0: f64, parallel: bool) -> Vec<Option<VarN>> {
     variances(&many_sums(x, ms, Kind::Allan, parallel), ms, tau0, 2.0)
 }

@@ -30,7 +30,7 @@
 //!    `po,0`) gives `K_pp`; OA radial (`io,90` or `po,90`) gives `K_oo`;
 //!    a cross station (`ip`, `io`, `po` at an angle off the axes, 45°
 //!    preferred) gives `K_ip`, `K_io`, `K_po` by eq. 2–3. Uncertainties by
-//!    GUM propagation ([`Estimates::map`]) with the budget printed line by
+//!    GUM propagation (`Estimates::map`) with the budget printed line by
 //!    line: the c2 of each station (type A), the alignment Δc2 of each
 //!    station (eq. 8, type B, uniform with half-width
 //!    `|dc2/dφ| (|Δφ_net| + tolerance)`, `Δφ_net` the ECM alignment error
@@ -40,7 +40,7 @@
 //!    radius quantities of steps 2–3 (`R±`, static `R±`, `R = (R+ + R−)/2`,
 //!    `r`, λ) are one map of one input vector (K0, K1, the raw means E0 and
 //!    E_a±, each regression fit's parameters, each station fit's c2, q, c3
-//!    and the type-B Δc2) through [`Estimates::map`], so the covariance is
+//!    and the type-B Δc2) through `Estimates::map`, so the covariance is
 //!    complete: K1, shared by every `E/K1`, enters R+ and R− fully
 //!    correlated and does not average down in `R`
 //!    (`CentrifugeResult::joint`). The coefficient budgets are the rows of

@@ -1,7 +1,7 @@
 //! Six-accelerometer gyro-free inertial unit (GFIMU note; docs/src/gfimu.md):
 //! multi-position calibration of every accelerometer's equivalent bias K0
-//! and equivalent sensitive-direction vector Ks ([`calibrate`]), and the
-//! compensated angular-motion solution ([`solve`]).
+//! and equivalent sensitive-direction vector Ks ([`calibrate`](mod@calibrate)), and the
+//! compensated angular-motion solution ([`solve`](mod@solve)).
 //!
 //! # Model (GFIMU note eq. 8, docs/src/gfimu.md)
 //! Accelerometer j reads

@@ -1,7 +1,7 @@
 //! Reading a noise record: the channels of a CSV record through the input
 //! layer ([`read`]), or of a mapped binary record in one checking pass
-//! ([`read_mapped`]); and the samples as the analysis reads them
-//! ([`Samples`]).
+//! (`read_mapped`); and the samples as the analysis reads them
+//! (`Samples`).
 //!
 //! A CSV record has a header; every column but `time_s` is a channel
 //! unless `--columns` (the input layer's [`incal_io::ColumnMap`]) selects

@@ -45,7 +45,7 @@
 //! same bits on one thread). A mapped record is read once: each window is
 //! checked and, when the channels' arrays fit in the file's size, built
 //! into the phase in the same pass, then its pages are released, while the
-//! record's SHA-256 runs on a thread of its own ([`input::read_mapped`]).
+//! record's SHA-256 runs on a thread of its own (`input::read_mapped`).
 
 pub mod document;
 pub mod export;
@@ -488,7 +488,7 @@ impl Procedure for Noise {
 
 /// Reduce a mapped binary record: validate the options, select the
 /// channels (`selection`: as [`incal_io::binary::MappedRecord::select`]),
-/// read the record once ([`input::read_mapped`]), analyse every channel
+/// read the record once (`input::read_mapped`), analyse every channel
 /// and record the input (its SHA-256 and rows) and the options. Errors
 /// name the file.
 pub fn reduce_mapped(
