@@ -270,8 +270,8 @@ fn command_paths(prefix: Vec<String>, out: &mut Vec<Vec<String>>) {
     }
 }
 
-/// Issue 30 item 7: product text names papers by their bibliographic
-/// reference. The internal "seed 00x" labels and the workspace-external
+/// Product text names papers by their bibliographic reference. The
+/// internal "seed 00x" labels and the workspace-external
 /// methods note must not reach any help page, the demo or the schemas.
 #[test]
 fn product_text_names_no_internal_document() {
@@ -299,7 +299,7 @@ fn product_text_names_no_internal_document() {
     }
 }
 
-/// Issue 30: every CSV incal writes is read by `pandas.read_csv(path)`
+/// Every CSV incal writes is read by `pandas.read_csv(path)`
 /// with default arguments: a header, then rows as wide as it, no comment
 /// lines before or after (truth and run notes go to a side file, the JSON
 /// or standard error).

@@ -53,7 +53,7 @@ fn ferraris_reproduces_imucal_with_its_keys() {
     }
     assert_eq!(v["coefficients"]["K_a.xx"]["unit"], "output/(m/s^2)");
     assert_eq!(v["coefficients"]["K_g.xx"]["unit"], "output/(deg/s)");
-    // Issue 30: the off-diagonal elements of K_a and K_g are zero by the
+    // The off-diagonal elements of K_a and K_g are zero by the
     // method's construction: not listed as coefficients with u = 0, said
     // in a decision, kept (as 0) in the matrices imucal reads.
     for name in ["K_a.xy", "K_a.zx", "K_g.yz", "K_g.xz"] {
@@ -394,7 +394,7 @@ fn multipos_labels_or_directions_and_apply() {
         n += 1.0;
     }
     assert!((mean_norm / n - 9.80665).abs() < 0.01, "{}", mean_norm / n);
-    // Issue 30: every other column (the label here, a temperature and a
+    // Every other column (the label here, a temperature and a
     // quoted note below) is carried through, as read.
     assert!(out.lines().nth(1).unwrap().contains(",x_p,"), "{out:.300}");
     let extra = tmp("mp_extra.csv");
@@ -552,7 +552,7 @@ fn export_imucal_copies_a_ferraris_calibration_verbatim() {
     assert_eq!(out["from_acc_unit"], "a.u.");
 }
 
-/// Issue 30: one default gravity, the standard 9.80665 m/s² (it was 9.81
+/// One default gravity, the standard 9.80665 m/s² (it was 9.81
 /// for the IMU commands and 9.80665 elsewhere).
 #[test]
 fn every_imu_command_defaults_to_standard_gravity() {

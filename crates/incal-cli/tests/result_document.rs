@@ -451,7 +451,7 @@ fn snapshots_of_plans_compare_and_demo() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Issue 30: `centrifuge --from t.json` kept K0 and K1 but dropped the
+/// `centrifuge --from t.json` once kept K0 and K1 but dropped the
 /// instrument's serial. The chained result's instrument is kept; `--serial`
 /// may repeat it and is refused when it names another instrument.
 #[test]
@@ -509,7 +509,7 @@ fn centrifuge_from_keeps_the_tumble_results_instrument() {
     assert!(stderr(&o).contains("--serial SN-6: the chained result is of serial SN-5"));
 }
 
-/// Issue 30: a plan states u, the dof its reduction will have and U95,
+/// A plan states u, the dof its reduction will have and U95,
 /// and the dof is the one the reduction of a simulated run of that very
 /// plan reports.
 #[test]
@@ -641,7 +641,7 @@ fn plans_predict_the_dof_and_u95_their_reduction_reports() {
     }
 }
 
-/// Issue 30: `--run-sheet` writes the settings in run order for the
+/// `--run-sheet` writes the settings in run order for the
 /// operator, a plain CSV (no comment lines) that pandas reads as it is.
 #[test]
 fn plans_write_a_run_sheet_for_the_operator() {
