@@ -152,7 +152,7 @@ where
 /// A writer that refuses a CSV cell spelling a non-finite number (`NaN`,
 /// `inf`, `-inf`) or a number beyond ±10¹⁵ (which incal's own reader
 /// refuses): a simulator must never write one, whatever its options
-/// (hardening issue). Cells are split at `,`, `;`, tab and line ends; a
+/// (a hardening guard). Cells are split at `,`, `;`, tab and line ends; a
 /// cell longer than 40 bytes is no such token.
 struct FiniteGuard<W: Write> {
     inner: W,

@@ -86,7 +86,7 @@ pub fn procedure_id(what: &str, text: &str) -> crate::error::CliResult<incal::do
     Procedure::from_id(&text.replace('_', "-")).ok_or_else(|| {
         crate::error::CliError::Input(format!(
             "{what}: '{}' is not a procedure (one of: {})",
-            crate::output::clip(text),
+            incal_io::clip(text),
             Procedure::all()
                 .iter()
                 .map(|p| p.as_str())
@@ -119,13 +119,13 @@ pub fn latitude_deg(s: &str) -> Result<f64, String> {
     let v: f64 = s
         .trim()
         .parse()
-        .map_err(|_| format!("'{}' is not a number", crate::output::clip(s)))?;
+        .map_err(|_| format!("'{}' is not a number", incal_io::clip(s)))?;
     if v.is_finite() && v.abs() <= 90.0 {
         Ok(v)
     } else {
         Err(format!(
             "latitude must be within -90..90 deg, got {}",
-            crate::output::clip(s)
+            incal_io::clip(s)
         ))
     }
 }

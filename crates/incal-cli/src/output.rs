@@ -6,7 +6,6 @@
 use std::path::PathBuf;
 
 use incal::document::{InputFile, ResultDocument};
-use sha2::{Digest, Sha256};
 
 use crate::error::{usage, CliResult};
 
@@ -55,7 +54,7 @@ pub fn apply_limits(doc: &mut ResultDocument, path: &std::path::Path) -> CliResu
     doc.inputs.push(input_file(
         "limits",
         shown,
-        sha256_hex(text.as_bytes()),
+        incal_io::sha256_hex(text.as_bytes()),
         None,
     ));
     Ok(())
@@ -111,16 +110,6 @@ impl ResultArgs {
     }
 }
 
-/// SHA-256 of `bytes`, lower-case hex.
-pub fn sha256_hex(bytes: &[u8]) -> String {
-    hex(&Sha256::digest(bytes))
-}
-
-/// Lower-case hexadecimal of a digest.
-pub fn hex(digest: &[u8]) -> String {
-    digest.iter().map(|b| format!("{b:02x}")).collect()
-}
-
 /// The record of one input file of a result.
 pub fn input_file(role: &str, path: &str, bytes_sha256: String, rows: Option<usize>) -> InputFile {
     InputFile {
@@ -141,18 +130,6 @@ pub fn json_text(v: &serde_json::Value) -> String {
         "{}\n",
         serde_json::to_string_pretty(v).unwrap_or_else(|_| v.to_string())
     )
-}
-
-/// A value echoed in a message, clipped to 40 characters (a 100k-character
-/// cell or a 301-digit number is shown by its start).
-pub fn clip(s: &str) -> String {
-    const MAX: usize = 40;
-    if s.chars().count() <= MAX {
-        s.to_string()
-    } else {
-        let head: String = s.chars().take(MAX).collect();
-        format!("{head}... ({} characters)", s.chars().count())
-    }
 }
 
 /// Options every plan command shares: output form and destination.

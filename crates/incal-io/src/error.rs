@@ -74,8 +74,12 @@ impl std::error::Error for InputError {}
 /// Result of the input layer.
 pub type Result<T> = std::result::Result<T, InputError>;
 
-/// Text echoed in a message: as given when short, else its first 40
-/// characters and its length (a message stays one readable line).
+/// Text echoed in a message (a cell, a header, an option's value, a key of
+/// a profile): as given when short, else its first 40 characters and its
+/// length, `first 40... (N characters)`; control characters (a line
+/// break, a tab, an escape) shown as `?`. So a message stays one readable
+/// line whatever the input holds. The one such function of incal: every
+/// crate and front end echoes values through it.
 pub fn clip(s: &str) -> String {
     const MAX: usize = 40;
     let n = s.chars().count();

@@ -10,6 +10,9 @@
 //! * [`Table`]: the whole table in memory, for procedures that segment rows.
 //! * [`ColumnMap`]: `--columns` selection and renaming (`NAME=HEADER`).
 //! * [`CsvWriter`]: the writer of simulators and converters.
+//! * [`clip`], [`sha256_hex`], [`csv_text`]: the one echo of a value in a
+//!   message, the one hex form of a digest and the one quoting of a CSV
+//!   cell, for every crate of incal.
 //!
 //! The accepted format is described in [`reader`].
 
@@ -17,6 +20,7 @@
 
 pub mod binary;
 pub mod columns;
+pub mod digest;
 pub mod error;
 pub mod reader;
 pub mod source;
@@ -24,9 +28,10 @@ pub mod table;
 pub mod writer;
 
 pub use columns::{ColumnEntry, ColumnMap};
+pub use digest::{hex, sha256_hex};
 pub use error::{clip, InputError, Result};
 pub use reader::{
-    hex, parse_delimiter, parse_f64, Condition, Header, ReadOptions, Reader, Row, Summary,
+    parse_delimiter, parse_f64, Condition, Header, ReadOptions, Reader, Row, Summary,
     CONDITION_COLUMNS, MAX_ABS_VALUE, MAX_LINE_BYTES,
 };
 pub use source::{
@@ -34,7 +39,7 @@ pub use source::{
     MAX_DOCUMENT_BYTES,
 };
 pub use table::{Table, TableRow};
-pub use writer::{Cell, CsvWriter};
+pub use writer::{csv_text, Cell, CsvWriter};
 
 #[cfg(test)]
 mod tests;

@@ -28,6 +28,8 @@ use std::io::Read;
 
 use sha2::Digest;
 
+pub use crate::digest::hex;
+
 use crate::error::{clip, InputError, Result};
 use crate::ColumnMap;
 
@@ -739,17 +741,6 @@ fn detect_delimiter(line: &[u8]) -> u8 {
     } else {
         b','
     }
-}
-
-/// Lower-case hexadecimal of a digest.
-pub fn hex(digest: &[u8]) -> String {
-    const HEX: &[u8; 16] = b"0123456789abcdef";
-    let mut s = String::with_capacity(digest.len() * 2);
-    for &b in digest {
-        s.push(HEX[(b >> 4) as usize] as char);
-        s.push(HEX[(b & 15) as usize] as char);
-    }
-    s
 }
 
 impl<'a> Row<'a> {

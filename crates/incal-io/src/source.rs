@@ -131,7 +131,6 @@ pub const MAX_DOCUMENT_BYTES: usize = 64 << 20;
 /// More than [`MAX_DOCUMENT_BYTES`] is refused (`NAME: larger than 64 MiB
 /// …`) without reading further.
 pub fn read_hashed(path: &Path) -> Result<(String, Vec<u8>, String)> {
-    use sha2::Digest;
     let o = open(path)?;
     if o.size > MAX_DOCUMENT_BYTES {
         return Err(too_large(&o.name));
@@ -144,7 +143,7 @@ pub fn read_hashed(path: &Path) -> Result<(String, Vec<u8>, String)> {
     if bytes.len() > MAX_DOCUMENT_BYTES {
         return Err(too_large(&o.name));
     }
-    let sha = crate::hex(&sha2::Sha256::digest(&bytes));
+    let sha = crate::sha256_hex(&bytes);
     if bytes.starts_with(b"\xEF\xBB\xBF") {
         bytes.drain(..3);
     }

@@ -230,6 +230,39 @@ fn the_writer_quotes_what_needs_it_and_refuses_non_finite() {
     assert_eq!(w.finish().unwrap(), b"x\n1\n");
 }
 
+#[test]
+fn csv_text_quotes_what_needs_it_and_nothing_else() {
+    assert_eq!(csv_text("plain label"), "plain label");
+    assert_eq!(csv_text("a,b"), "\"a,b\"");
+    assert_eq!(csv_text("a;b"), "\"a;b\"");
+    assert_eq!(csv_text("a\tb"), "\"a\tb\"");
+    assert_eq!(csv_text("say \"hi\""), "\"say \"\"hi\"\"\"");
+    assert_eq!(csv_text("two\nlines"), "\"two\nlines\"");
+    assert_eq!(csv_text("#x"), "\"#x\"");
+    assert_eq!(csv_text(" padded"), "\" padded\"");
+}
+
+#[test]
+fn clip_keeps_a_message_on_one_short_line() {
+    assert_eq!(clip("short"), "short");
+    assert_eq!(clip("a\nb\tc"), "a?b?c");
+    let long = "x".repeat(100);
+    assert_eq!(
+        clip(&long),
+        format!("{}... (100 characters)", "x".repeat(40))
+    );
+    assert_eq!(clip(&"é".repeat(40)), "é".repeat(40));
+}
+
+#[test]
+fn sha256_hex_is_sha256sum() {
+    assert_eq!(
+        sha256_hex(b"abc"),
+        "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+    );
+    assert_eq!(hex(&[0x00, 0x0f, 0xa0, 0xff]), "000fa0ff");
+}
+
 proptest! {
     /// Whatever a table holds, writing it and reading it back in chunks of
     /// any size gives the same cells, numbers bit for bit.

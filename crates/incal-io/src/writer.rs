@@ -1,5 +1,6 @@
 //! The one CSV writer: a header, rows of numbers and text, `#` notes.
 
+use std::borrow::Cow;
 use std::io::Write;
 
 /// A CSV writer: `,` delimiter, LF line ends, numbers in Rust's shortest
@@ -89,14 +90,22 @@ impl<W: Write> CsvWriter<W> {
 }
 
 fn write_text(out: &mut impl Write, t: &str) -> std::io::Result<()> {
+    out.write_all(csv_text(t).as_bytes())
+}
+
+/// Text as one CSV cell: as is, or in double quotes (inner quotes doubled)
+/// when it holds a delimiter (`,`, `;`, tab), a quote or a line break,
+/// starts with `#` or has leading or trailing white space, so that incal's
+/// reader (which detects `;` and tab, skips `#` lines and trims cells),
+/// RFC 4180 readers and pandas all read it back as written.
+pub fn csv_text(t: &str) -> Cow<'_, str> {
     let needs = t.starts_with('#')
         || t.bytes()
             .any(|c| matches!(c, b',' | b';' | b'\t' | b'"' | b'\n' | b'\r'))
         || t != t.trim();
-    if !needs {
-        return out.write_all(t.as_bytes());
+    if needs {
+        format!("\"{}\"", t.replace('"', "\"\"")).into()
+    } else {
+        t.into()
     }
-    out.write_all(b"\"")?;
-    out.write_all(t.replace('"', "\"\"").as_bytes())?;
-    out.write_all(b"\"")
 }

@@ -25,7 +25,7 @@
 //! different records share a canonical form. In Python:
 //! `b"".join(b"-\n" if f is None else b"%d:%s\n" % (len(f.encode()), f.encode()) for f in fields)`.
 
-use sha2::{Digest, Sha256};
+pub use incal_io::sha256_hex;
 
 /// The version tag that opens every canonical form.
 pub const FORM: &str = "incal.record/1";
@@ -112,14 +112,6 @@ impl ChainFields<'_> {
     pub fn record_hash(&self) -> String {
         sha256_hex(&self.canonical())
     }
-}
-
-/// SHA-256 of `bytes`, lower-case hex.
-pub fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
 }
 
 #[cfg(test)]

@@ -196,7 +196,7 @@ impl LabProfile {
                 return Err(format!(
                     "{}[[standard]] rig: '{}' is not a rig ({})",
                     at("rig"),
-                    clip(&s.rig),
+                    incal_io::clip(&s.rig),
                     RIGS.join(", ")
                 ));
             }
@@ -204,7 +204,7 @@ impl LabProfile {
                 return Err(format!(
                     "{}[[standard]] due: '{}' is not a date YYYY-MM-DD",
                     at("due"),
-                    clip(&s.due)
+                    incal_io::clip(&s.due)
                 ));
             }
             if s.id.trim().is_empty() || s.certificate.trim().is_empty() {
@@ -215,15 +215,6 @@ impl LabProfile {
             }
         }
         Ok(p)
-    }
-}
-
-/// `s` cut to 60 characters for an error message.
-fn clip(s: &str) -> String {
-    if s.chars().count() > 60 {
-        s.chars().take(60).collect::<String>() + "…"
-    } else {
-        s.to_string()
     }
 }
 

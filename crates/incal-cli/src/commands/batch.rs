@@ -119,7 +119,7 @@ pub fn entry(id: &str) -> CliResult<&'static registry::Entry> {
     registry::batch(id).ok_or_else(|| {
         CliError::Input(format!(
             "batch: '{}' is not a procedure (one of: {})",
-            crate::output::clip(id),
+            incal_io::clip(id),
             registry::batch_ids().join(", ")
         ))
     })

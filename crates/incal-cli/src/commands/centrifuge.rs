@@ -5,12 +5,12 @@
 use std::path::PathBuf;
 
 use incal::estimation::Noise;
-use incal::models::{AccelerometerModel, Term};
+use incal::models::Term;
 use incal::procedures::centrifuge::plan::{plan_document, CentrifugePlanOptions};
 use incal::procedures::centrifuge::sim::{simulate as simulate_centrifuge, RigPlan};
 use incal::procedures::centrifuge::{CentrifugeRun, CentrifugeTest, ChainedResult};
 use incal::procedures::Silent;
-use incal::units::{arcsec_to_rad, STANDARD_GRAVITY_M_S2};
+use incal::units::STANDARD_GRAVITY_M_S2;
 
 use crate::documents::read_document;
 use crate::error::{core, usage, CliResult};
@@ -157,28 +157,7 @@ pub struct TruthArgs {
     pub k_oq: f64,
 }
 
-impl TruthArgs {
-    /// The truth model (fails on a non-finite value or K1 = 0).
-    pub fn model(&self) -> CliResult<AccelerometerModel> {
-        let m = AccelerometerModel {
-            k0_g: self.k0_g,
-            k1_out_per_g: self.k1,
-            k2: self.k2,
-            k3: self.k3,
-            delta_o_rad: arcsec_to_rad(self.delta_o_arcsec),
-            delta_p_rad: arcsec_to_rad(self.delta_p_arcsec),
-            k_ip: self.k_ip,
-            k_io: self.k_io,
-            k_po: self.k_po,
-            k_pp: self.k_pp,
-            k_oo: self.k_oo,
-            k_oq: self.k_oq,
-        };
-        m.validate()
-            .map_err(|e| usage(format!("truth model: {e}")))?;
-        Ok(m)
-    }
-}
+super::truth_model!(TruthArgs);
 
 /// Options of `incal simulate centrifuge`.
 #[derive(clap::Args, Debug)]

@@ -388,7 +388,7 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
                 input::parse_position(p).ok_or_else(|| {
                     usage(format!(
                         "--positions: '{}' is not one of +x, -x, +y, -y, +z, -z",
-                        crate::output::clip(p)
+                        incal_io::clip(p)
                     ))
                 })
             })

@@ -376,16 +376,6 @@ pub struct ApplyArgs {
 /// the raw series read row by row through the input layer, every row
 /// written as soon as it is calibrated (numbers in shortest round-trip
 /// form).
-/// A CSV field: quoted (quotes doubled) when it holds a comma, a quote or
-/// a line break, as RFC 4180 and pandas read it.
-fn csv_cell(s: &str) -> std::borrow::Cow<'_, str> {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\"")).into()
-    } else {
-        s.into()
-    }
-}
-
 pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
     let (cal_name, _, doc) = crate::documents::read_document(&a.calibration)?;
     let cal = ImuCalibration::from_document(&doc).map_err(|e| in_file(&cal_name, e))?;
@@ -403,7 +393,7 @@ pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
     let mut line = cols
         .output_header()
         .iter()
-        .map(|h| csv_cell(h))
+        .map(|h| incal_io::csv_text(h))
         .collect::<Vec<_>>()
         .join(",");
     line.push('\n');
@@ -429,7 +419,7 @@ pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
         }
         for cell in &r.extra {
             line.push(',');
-            line.push_str(&csv_cell(cell));
+            line.push_str(&incal_io::csv_text(cell));
         }
         line.push('\n');
         w.write_all(line.as_bytes()).map_err(wfail)

@@ -123,15 +123,14 @@ fn certificate(
     text: &str,
     stored: Option<&incal_records::StoredRecord>,
 ) -> incal_report::certificate::Certificate {
-    use sha2::{Digest, Sha256};
     let prefix = profile.lab.certificate_prefix.clone().unwrap_or_default();
     let number_of = |id: i64| format!("{prefix}{id:06}");
     let number = match stored {
         Some(r) => number_of(r.id),
         None => {
-            let h = Sha256::digest(text.as_bytes());
-            let hex: String = h.iter().take(6).map(|b| format!("{b:02x}")).collect();
-            format!("{prefix}{}", hex.to_uppercase())
+            // The first 12 hex digits of the document's SHA-256.
+            let hash = incal_io::sha256_hex(text.as_bytes());
+            format!("{prefix}{}", hash[..12].to_uppercase())
         }
     };
     let (calibration_date, source) = match (&a.date, stored) {

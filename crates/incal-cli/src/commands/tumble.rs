@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::ValueEnum;
 use incal::estimation::Noise;
-use incal::models::{AccelerometerModel, Term};
+use incal::models::Term;
 use incal::procedures::tumble::plan::{plan_document, TumblePlan, TumblePlanOptions};
 use incal::procedures::tumble::{default_terms, Tumble, TumbleOptions};
 use incal::procedures::Silent;
@@ -197,28 +197,7 @@ pub struct TruthArgs {
     pub k_oq: f64,
 }
 
-impl TruthArgs {
-    /// The truth model (fails on a non-finite value or K1 = 0).
-    pub fn model(&self) -> CliResult<AccelerometerModel> {
-        let m = AccelerometerModel {
-            k0_g: self.k0_g,
-            k1_out_per_g: self.k1,
-            k2: self.k2,
-            k3: self.k3,
-            delta_o_rad: arcsec_to_rad(self.delta_o_arcsec),
-            delta_p_rad: arcsec_to_rad(self.delta_p_arcsec),
-            k_ip: self.k_ip,
-            k_io: self.k_io,
-            k_po: self.k_po,
-            k_pp: self.k_pp,
-            k_oo: self.k_oo,
-            k_oq: self.k_oq,
-        };
-        m.validate()
-            .map_err(|e| usage(format!("truth model: {e}")))?;
-        Ok(m)
-    }
-}
+super::truth_model!(TruthArgs);
 
 /// Options of `incal simulate tumble`.
 #[derive(clap::Args, Debug)]

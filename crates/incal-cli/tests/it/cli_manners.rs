@@ -270,8 +270,8 @@ fn command_paths(prefix: Vec<String>, out: &mut Vec<Vec<String>>) {
     }
 }
 
-/// Product text names papers by their bibliographic
-/// reference. The internal "seed 00x" labels and the workspace-external
+/// Product text names papers by their bibliographic reference. The
+/// internal "seed 00x" labels and the workspace-external
 /// methods note must not reach any help page, the demo or the schemas.
 #[test]
 fn product_text_names_no_internal_document() {

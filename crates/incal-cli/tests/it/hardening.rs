@@ -1,6 +1,8 @@
-//! Regression tests of issue 13's reproducers: each bad input now exits 2
-//! with one line naming the file (and line) or the option, or gives a
-//! correct result. One test per defect, named after it.
+//! Hardening regression tests: each malformed, degenerate or out-of-range
+//! input (a constant output, a non-finite truth, a huge cell, a latitude
+//! beyond 90°, an oversized document...) exits 2 with one line naming the
+//! file (and line) or the option, or gives a correct result. One test per
+//! defect, named after it.
 
 use crate::common;
 use common::*;
@@ -517,7 +519,7 @@ fn plan_gfimu_predicts_and_refuses() {
     );
 }
 
-/// Issue "hardening", item 6: the centrifuge static radius includes u(ω).
+/// The centrifuge static radius includes u(ω).
 #[test]
 fn centrifuge_static_radius_carries_the_rate_uncertainty() {
     let csv = tmp("cf_uomega.csv");

@@ -681,7 +681,7 @@ fn eight_writer_processes_at_once_lose_nothing() {
     ok(&["record", "verify", "--db", s(&db)]);
 }
 
-/// Records are never lost or stored twice (hardening issue): in-memory
+/// Records are never lost or stored twice: in-memory
 /// and URI stores are refused; an output that fails after the commit says
 /// the record is stored (exit 3) and the retry finds it instead of adding
 /// a duplicate; reading commands refuse an empty or foreign file and

@@ -345,7 +345,7 @@ fn uniform(state: &mut u64) -> f64 {
     (*state >> 11) as f64 / (1u64 << 53) as f64
 }
 
-/// Injected faults (issue "Real recordings"): each faulty session gives
+/// Injected faults in real-recording sessions: each faulty session gives
 /// every coefficient within its stated u of the clean run (or, where the
 /// fault took samples away, within 4 standard deviations of a subset's
 /// difference from the whole), or is refused naming the problem, or (for

@@ -486,8 +486,8 @@ fn browser() -> Option<&'static str> {
     found
 }
 
-/// A certificate for every procedure carries every item of
-/// ISO/IEC 17025 §7.8 the issue lists; printed by headless Chromium (when
+/// A certificate for every procedure carries every item of ISO/IEC 17025
+/// §7.8.2.1 (a to p); printed by headless Chromium (when
 /// installed) every page carries the number and "page x of y", a tumble
 /// certificate fits in three A4 pages with the results on page 1, and
 /// every page renders to PNG.
@@ -539,7 +539,7 @@ fn a_certificate_for_every_procedure_states_what_17025_asks() {
         let item = |id: &str| {
             text_of(&page, id).unwrap_or_else(|| panic!("{procedure}: no #{id} on the certificate"))
         };
-        // §7.8.2.1 a-p, in the issue's words.
+        // §7.8.2.1 a-p, item by item.
         assert_eq!(item("lab-name"), "Inertial Test Laboratory", "{procedure}");
         assert!(item("lab-address").contains("Tianjin"), "{procedure}");
         assert!(item("lab-accreditation").contains("CNAS"), "{procedure}");

@@ -409,7 +409,7 @@ fn snapshots_of_plans_compare_and_demo() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `centrifuge --from t.json` kept K0 and K1 but dropped the
+/// `centrifuge --from t.json` once kept K0 and K1 but dropped the
 /// instrument's serial. The chained result's instrument is kept; `--serial`
 /// may repeat it and is refused when it names another instrument.
 #[test]

@@ -1,6 +1,7 @@
 //! `incal thermal fit|ramp|apply`, `incal simulate thermal`, `incal plan
 //! thermal` and `incal export px4|ardupilot MODEL.json` from outside: the
-//! interface the issue fixes, and bad input refused in one line.
+//! command-line interface (options, outputs, exit codes), and bad input
+//! refused in one line.
 
 use crate::common;
 

@@ -142,8 +142,9 @@ impl Geometry {
     }
 
     /// Twelve accelerometers that solve the centripetal products directly
-    /// (no ω feedback, issue 13): two at each of ±L on x, y and z, each
-    /// sensing one of the two directions across its lever arm. Named
+    /// (no feedback of the integrated ω, unlike the six-accelerometer
+    /// layout): two at each of ±L on x, y and z, each sensing one of the
+    /// two directions across its lever arm. Named
     /// `{p|m}{axis}_{sensed axis}`: `px_y` sits at +L on x and senses y.
     ///
     /// With sensing across the lever arm, only the cross products

@@ -212,7 +212,7 @@ fn tedaldi_reproduces_imu_tk_on_a_quantised_recording() {
 }
 
 /// `--method incal` against imu_tk's estimator on the T265 recording.
-/// The issue asked for agreement within incal's own U95; measured
+/// Agreement within incal's own U95 was the aim; measured
 /// (2026-11-26) that cannot hold, and the reason is on imu_tk's side:
 /// - The recording's 6 faces lie along the accelerometer axes once its
 ///   bias is removed (largest |ĝ_x ĝ_y| and |ĝ_y ĝ_z| below 0.02): the

@@ -3,7 +3,7 @@
 //! runs), by least squares on the linearised models of docs/src/misalignment.md.
 //!
 //! Tolerance: the paper prints 0.1″; every value must round to the printed
-//! figure, |ours − printed| ≤ 0.05″ (stricter than the 0.1″).
+//! figure, |ours − printed| ≤ 0.05″ (half the printed resolution).
 
 use incal::estimation::Noise;
 use incal::procedures::misalign::accel::{self, AccelObservation, AccelOptions};

@@ -23,8 +23,9 @@
 pub mod positions;
 pub mod rate;
 
-use crate::estimation::{Noise, PositionStats};
-use crate::units::EARTH_RATE_RAD_S;
+use crate::document::{DocumentBuilder, FitSummary, Procedure};
+use crate::estimation::{Estimates, Fit, Noise, PositionStats};
+use crate::units::{Unit, EARTH_RATE_RAD_S};
 
 /// Earth rate in deg/h (15.0411 deg/h).
 pub fn earth_rate_deg_h() -> f64 {
@@ -86,6 +87,53 @@ pub(crate) fn dof_lookup(dof: &[(String, f64)], name: &str) -> f64 {
     dof.iter()
         .find(|d| d.0 == name)
         .map_or(f64::INFINITY, |d| d.1)
+}
+
+/// What both gyro result documents open with.
+pub(crate) struct DocumentHead<'a> {
+    /// The procedure of the document.
+    pub procedure: Procedure,
+    /// The title before the counts (`Gyro rate-transfer test`).
+    pub title: String,
+    /// What the fit's observations are, plural (`rates`, `positions`).
+    pub observations: &'a str,
+    /// The terms fitted, in model order.
+    pub terms: Vec<&'static str>,
+    /// The coefficients.
+    pub coefficients: &'a Estimates,
+    /// Effective degrees of freedom of each coefficient ([`dof_lookup`]).
+    pub dof: &'a [(String, f64)],
+    /// The unit of a coefficient by its name.
+    pub unit_of: fn(&str) -> crate::error::Result<Unit>,
+    /// The fit.
+    pub fit: &'a Fit,
+    /// The unit of the fit's residuals.
+    pub residual_unit: Unit,
+}
+
+impl DocumentHead<'_> {
+    /// The builder holding the title `TITLE (N OBSERVATIONS, terms A, B)`,
+    /// the coefficients with their own degrees of freedom, the fit summary
+    /// `main` and the option `terms`.
+    pub(crate) fn builder(self) -> crate::error::Result<DocumentBuilder> {
+        let fit = self.fit;
+        let mut b = DocumentBuilder::new(
+            self.procedure,
+            format!(
+                "{} ({} {}, terms {})",
+                self.title,
+                fit.diagnostics.n_obs,
+                self.observations,
+                self.terms.join(", ")
+            ),
+        );
+        b.estimates_dof(self.coefficients, "", self.unit_of, |n| {
+            dof_lookup(self.dof, n)
+        })?;
+        b.fit(FitSummary::of("main", fit, self.residual_unit));
+        b.option("terms", serde_json::json!(self.terms));
+        Ok(b)
+    }
 }
 
 /// Welch–Satterthwaite effective degrees of freedom (JCGM 100 eq. G.2b) of

@@ -3,12 +3,9 @@
 use serde_json::json;
 
 use super::{DriftTerm, PositionsResult, ScaleFactor};
-use crate::document::{
-    variance_decision, Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure, ResultDocument,
-    Table,
-};
+use crate::document::{variance_decision, Cell, DecisionCode, Procedure, ResultDocument, Table};
 use crate::error::Result;
-use crate::procedures::gyro::dof_lookup;
+use crate::procedures::gyro::DocumentHead;
 use crate::units::Unit;
 
 fn drift_unit(name: &str) -> Result<Unit> {
@@ -28,36 +25,25 @@ impl PositionsResult {
         axial: &str,
     ) -> Result<ResultDocument> {
         let f = &self.fit;
-        let mut b = DocumentBuilder::new(
-            Procedure::GyroPositions,
-            format!(
-                "Gyro multi-position test, {axial} axial ({} positions, terms {})",
-                f.diagnostics.n_obs,
-                self.terms
-                    .iter()
-                    .map(|t| t.name())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        );
-        b.estimates_dof(&self.coefficients, "", drift_unit, |n| {
-            dof_lookup(&self.dof, n)
-        })?;
         let fitted_k1 = matches!(scale_factor, ScaleFactor::Fit);
-        b.fit(FitSummary::of(
-            "main",
-            f,
-            if fitted_k1 {
-                Unit::Output
-            } else {
-                Unit::Other("deg/h".into())
-            },
-        ));
+        let res_unit = if fitted_k1 {
+            Unit::Output
+        } else {
+            Unit::Other("deg/h".into())
+        };
+        let mut b = DocumentHead {
+            procedure: Procedure::GyroPositions,
+            title: format!("Gyro multi-position test, {axial} axial"),
+            observations: "positions",
+            terms: self.terms.iter().map(|t| t.name()).collect(),
+            coefficients: &self.coefficients,
+            dof: &self.dof,
+            unit_of: drift_unit,
+            fit: f,
+            residual_unit: res_unit.clone(),
+        }
+        .builder()?;
         b.option("axial", json!(axial));
-        b.option(
-            "terms",
-            json!(self.terms.iter().map(|t| t.name()).collect::<Vec<_>>()),
-        );
         match scale_factor {
             ScaleFactor::Known { k1, u, dof } => {
                 b.extra(
@@ -83,11 +69,6 @@ impl PositionsResult {
             }
         }
         b.warnings(self.warnings.iter().cloned());
-        let res_unit = if fitted_k1 {
-            Unit::Output
-        } else {
-            Unit::Other("deg/h".into())
-        };
         let mut t = Table::new(
             "positions",
             "Positions",

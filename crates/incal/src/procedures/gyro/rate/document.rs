@@ -4,11 +4,11 @@ use serde_json::json;
 
 use super::{coefficient_unit, RateResult, RateTerm};
 use crate::document::{
-    position_stats, position_table, variance_decision, Cell, DecisionCode, DocumentBuilder,
-    FitSummary, Procedure, ResultDocument, Table,
+    position_stats, position_table, variance_decision, Cell, DecisionCode, Procedure,
+    ResultDocument, Table,
 };
 use crate::error::{Error, Result};
-use crate::procedures::gyro::dof_lookup;
+use crate::procedures::gyro::DocumentHead;
 use crate::units::Unit;
 
 fn rate_unit(name: &str) -> Result<Unit> {
@@ -24,26 +24,18 @@ impl RateResult {
     /// `nonlinearity_ppm_fs`; per-rate table; per-run K1.
     pub fn document(&self, known_noise: bool, rate_uncertainty_ppm: f64) -> Result<ResultDocument> {
         let f = &self.fit;
-        let mut b = DocumentBuilder::new(
-            Procedure::GyroRate,
-            format!(
-                "Gyro rate-transfer test ({} rates, terms {})",
-                f.diagnostics.n_obs,
-                self.terms
-                    .iter()
-                    .map(|t| t.name())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        );
-        b.estimates_dof(&self.coefficients, "", rate_unit, |n| {
-            dof_lookup(&self.dof, n)
-        })?;
-        b.fit(FitSummary::of("main", f, Unit::Output));
-        b.option(
-            "terms",
-            json!(self.terms.iter().map(|t| t.name()).collect::<Vec<_>>()),
-        );
+        let mut b = DocumentHead {
+            procedure: Procedure::GyroRate,
+            title: "Gyro rate-transfer test".into(),
+            observations: "rates",
+            terms: self.terms.iter().map(|t| t.name()).collect(),
+            coefficients: &self.coefficients,
+            dof: &self.dof,
+            unit_of: rate_unit,
+            fit: f,
+            residual_unit: Unit::Output,
+        }
+        .builder()?;
         b.option("rate_uncertainty_ppm", json!(rate_uncertainty_ppm));
         b.decision(
             DecisionCode::VarianceSource,

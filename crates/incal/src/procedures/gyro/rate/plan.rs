@@ -7,7 +7,7 @@
 use serde_json::json;
 
 use super::{
-    calibrate, check_latitude_deg, coefficient_unit, input_rate_deg_s, term_names, InputAxis,
+    calibrate, coefficient_unit, input_rate_deg_s, term_names, GyroRateOptions, InputAxis,
     RateObservation, RateOptions, RateResult, RateTerm, MAX_RATE_DEG_S,
 };
 use crate::document::plan::PlanDocument;
@@ -96,7 +96,8 @@ impl RatePlanOptions {
     /// Refuse options no prediction can use: a noise that is not a
     /// positive number, no samples or more than [`MAX_PLAN_SAMPLES`], a
     /// rate that is not finite or beyond 1e5 deg/s, a K1 that is not
-    /// finite, a latitude outside ±90°, a negative rate uncertainty.
+    /// finite; then what the reduction refuses ([`GyroRateOptions::validate`]:
+    /// a latitude outside ±90°, a rate uncertainty outside 0…1e5 ppm).
     pub fn validate(&self) -> Result<()> {
         check_plan_noise(self.noise, self.samples)?;
         if let Some(r) = self
@@ -115,26 +116,26 @@ impl RatePlanOptions {
                 value: self.k1.to_string(),
             });
         }
-        check_latitude_deg(self.latitude_deg)?;
-        let ppm = self.rate_uncertainty_ppm;
-        if !(ppm.is_finite() && ppm >= 0.0) {
-            return Err(Error::InvalidValue {
-                what: "rate_uncertainty_ppm (a non-negative number)".into(),
-                value: ppm.to_string(),
-            });
-        }
-        Ok(())
+        self.test_options().validate()
     }
 
-    /// The options of the reduction the plan runs.
-    pub fn reduction(&self) -> RateOptions {
-        RateOptions {
-            latitude_rad: self.latitude_deg.to_radians(),
+    /// The rate-transfer test the plan predicts: its latitude, input axis,
+    /// terms and rate uncertainty, with the plan's σ as the known noise of
+    /// one output sample.
+    pub fn test_options(&self) -> GyroRateOptions {
+        GyroRateOptions {
+            latitude_deg: self.latitude_deg,
             ia: self.ia,
             terms: self.terms.clone(),
-            noise: Noise::Auto,
+            noise: Noise::Known { sigma: self.noise },
             rate_uncertainty_ppm: self.rate_uncertainty_ppm,
         }
+    }
+
+    /// The options of the reduction the plan runs: those the test's
+    /// [`GyroRateOptions::reduction`] gives.
+    pub fn reduction(&self) -> RateOptions {
+        self.test_options().reduction()
     }
 }
 
