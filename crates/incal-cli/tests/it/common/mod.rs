@@ -47,18 +47,20 @@ pub fn run_with_stdin(args: &[&str], input: &[u8]) -> Output {
     child.wait_with_output().expect("waits for incal")
 }
 
-/// Stem of this test binary's name (`gyro_cli-1a2b…` → `gyro_cli`), so
+/// Stem of the calling test module's file (`gyro_cli.rs` → `gyro_cli`), so
 /// that scratch files of different test files never share a name.
+#[track_caller]
 fn test_name() -> String {
-    std::env::current_exe()
-        .ok()
-        .and_then(|p| p.file_stem().map(|s| s.to_string_lossy().to_string()))
-        .map(|s| s.split('-').next().unwrap_or("test").to_string())
-        .unwrap_or_else(|| "test".into())
+    // The calling test module's file (`report_cli`, `result_document`):
+    // every module of the one test binary has scratch names of its own.
+    Path::new(std::panic::Location::caller().file())
+        .file_stem()
+        .map_or_else(|| "test".into(), |s| s.to_string_lossy().to_string())
 }
 
 /// A scratch path ending in `name`, the same on every call with the same
 /// name within one test binary (a test may write it and read it back).
+#[track_caller]
 pub fn tmp(name: &str) -> PathBuf {
     Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
         "incal_{}_{}_{name}",
@@ -69,6 +71,7 @@ pub fn tmp(name: &str) -> PathBuf {
 
 /// A scratch path ending in `name`, new on every call (for helpers that
 /// tests call concurrently).
+#[track_caller]
 pub fn unique(name: &str) -> PathBuf {
     static N: AtomicUsize = AtomicUsize::new(0);
     let k = N.fetch_add(1, Ordering::SeqCst);
@@ -76,6 +79,7 @@ pub fn unique(name: &str) -> PathBuf {
 }
 
 /// A scratch directory of this test binary (created).
+#[track_caller]
 pub fn dir() -> PathBuf {
     let d = tmp("dir");
     std::fs::create_dir_all(&d).expect("creates the scratch directory");
@@ -83,6 +87,7 @@ pub fn dir() -> PathBuf {
 }
 
 /// A scratch directory of its own for `test` (created).
+#[track_caller]
 pub fn workdir(test: &str) -> PathBuf {
     let d = tmp(test);
     std::fs::create_dir_all(&d).expect("creates the scratch directory");
@@ -90,6 +95,7 @@ pub fn workdir(test: &str) -> PathBuf {
 }
 
 /// Write `text` to [`tmp`]`(name)` and return its path.
+#[track_caller]
 pub fn write(name: &str, text: &(impl AsRef<[u8]> + ?Sized)) -> PathBuf {
     let p = tmp(name);
     std::fs::write(&p, text).expect("writes a scratch file");
@@ -97,6 +103,7 @@ pub fn write(name: &str, text: &(impl AsRef<[u8]> + ?Sized)) -> PathBuf {
 }
 
 /// Write `text` to a new [`unique`] path ending in `name` and return it.
+#[track_caller]
 pub fn write_unique(name: &str, text: &(impl AsRef<[u8]> + ?Sized)) -> PathBuf {
     let p = unique(name);
     std::fs::write(&p, text).expect("writes a scratch file");

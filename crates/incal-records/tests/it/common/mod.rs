@@ -8,10 +8,17 @@ use std::path::PathBuf;
 use incal::document::{Coefficient, DocumentBuilder, InputFile, Procedure};
 use incal::units::Unit;
 
-/// A fresh, empty directory for one test.
+/// A fresh, empty directory for one test (named after the calling test
+/// module too: every module of the one test binary has its own).
+#[track_caller]
 pub fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("incal-records-{}-{name}", std::process::id()));
+    let module = std::path::Path::new(std::panic::Location::caller().file())
+        .file_stem()
+        .map_or_else(|| "test".into(), |s| s.to_string_lossy().to_string());
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
+        "incal-records-{}-{module}-{name}",
+        std::process::id()
+    ));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
