@@ -206,7 +206,7 @@ fn checked_inputs(a: &Args, words: &[String]) -> CliResult<Vec<PathBuf>> {
     let inputs = recordings(a)?;
     // The procedure's options are checked once: a usage error is the
     // batch's, not every recording's.
-    if let Some(message) = crate::usage_error(&argv(a, &words, &inputs[0])) {
+    if let Some(message) = crate::usage_error(&argv(a, words, &inputs[0])) {
         return Err(CliError::Input(message));
     }
     if let Some(dir) = &a.out_dir {
