@@ -47,7 +47,7 @@ __all__ = [
     "batch",
     "Records",
     "run",
-    "REGISTRY",
+
 ]
 
 
