@@ -2,9 +2,10 @@
 //! weighted linear least squares with covariance and rank/condition
 //! diagnostics ([`linear`]), test-design prediction
 //! ([`Design::predict`]), propagation to derived coefficients
-//! ([`Estimates::map`]) and a small Gauss–Newton iteration built on the same
-//! linear solver for models that are linear only after linearisation
-//! ([`gauss_newton`](mod@gauss_newton)).
+//! ([`Estimates::map`]) and the crate's one Gauss–Newton iteration, built
+//! on the same linear solver, for models that are linear only after
+//! linearisation ([`gauss_newton()`]; [`minimize`] with optional step
+//! halving, [`StepControl`]).
 
 pub mod estimates;
 pub mod gauss_newton;
@@ -12,7 +13,9 @@ pub mod linear;
 pub mod repeated;
 
 pub use estimates::{coverage_factor, numeric_jacobian, propagate, Estimates};
-pub use gauss_newton::{gauss_newton, GaussNewtonOptions, NonlinearModel};
+pub use gauss_newton::{
+    gauss_newton, minimize, GaussNewtonOptions, Minimum, NonlinearModel, StepControl, Stop,
+};
 pub use linear::{
     fit, Design, Diagnostics, Fit, FitOptions, Variance, VarianceSource, DEFAULT_COND_LIMIT,
     WARN_COND,

@@ -51,12 +51,17 @@
 //! [`SolveOptions::omega_u_limit_rad_s`]. A solution whose |ω| passes
 //! 10⁴ rad/s has diverged and is refused at that sample.
 
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{Matrix3, Vector3};
 
 use crate::error::{Error, Result};
 use crate::estimation::{Design, Diagnostics, DEFAULT_COND_LIMIT, WARN_COND};
 use crate::models::gfimu::{Geometry, MOTION_TERMS};
 use crate::warning::{Warning, WarningCode};
+
+mod prepare;
+mod uncertainty;
+
+use prepare::{check_inputs, geometry_diagnostics, sample_design, weighted_pinv};
 
 /// Calibrated coefficients of one accelerometer, geometry order.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -352,71 +357,9 @@ impl Solver {
         opts: &SolveOptions,
     ) -> Result<Self> {
         let n = geometry.len();
-        if cal.len() != n {
-            return Err(Error::Unsupported(format!(
-                "{} calibrated accelerometers for a geometry of {n}",
-                cal.len()
-            )));
-        }
-        let g = opts.gravity_m_s2;
-        if !(g.is_finite() && g > 0.0) {
-            return Err(Error::InvalidValue {
-                what: "gravity (m/s^2)".into(),
-                value: g.to_string(),
-            });
-        }
-        if let Some(v) = opts.omega0_rad_s.iter().find(|v| !v.is_finite()) {
-            return Err(Error::InvalidValue {
-                what: "initial angular rate".into(),
-                value: v.to_string(),
-            });
-        }
-        if !(opts.omega_u_limit_rad_s.is_finite() && opts.omega_u_limit_rad_s > 0.0) {
-            return Err(Error::InvalidValue {
-                what: "omega uncertainty limit (rad/s)".into(),
-                value: opts.omega_u_limit_rad_s.to_string(),
-            });
-        }
-        for (j, c) in cal.iter().enumerate() {
-            let finite = c.k0.is_finite()
-                && c.ks.iter().all(|v| v.is_finite())
-                && c.u_k0.is_finite()
-                && c.u_k0 >= 0.0
-                && c.u_ks.iter().all(|v| v.is_finite() && *v >= 0.0);
-            if !finite {
-                return Err(Error::InvalidValue {
-                    what: format!("calibration of accelerometer {}", j + 1),
-                    value: format!("K0 {} Ks {:?}", c.k0, c.ks.as_slice()),
-                });
-            }
-            if let Some(s) = c.noise_output {
-                if !(s.is_finite() && s > 0.0) {
-                    return Err(Error::InvalidValue {
-                        what: format!("noise of accelerometer {}", j + 1),
-                        value: s.to_string(),
-                    });
-                }
-            }
-        }
+        let g = check_inputs(n, cal, opts)?;
         let ks: Vec<Vector3<f64>> = cal.iter().map(|c| c.ks).collect();
-        let base = geometry.motion_design(&ks, g)?;
-        let diagnostics = base.diagnose(None, DEFAULT_COND_LIMIT);
-        if !diagnostics.aliases.is_empty() {
-            return Err(Error::Unseparable {
-                aliases: diagnostics.aliases,
-            });
-        }
-        let mut warnings = Vec::new();
-        if diagnostics.condition > WARN_COND {
-            warnings.push(Warning::new(
-                WarningCode::WeakConditioning,
-                format!(
-                    "weak calibrated geometry (condition number {:.2e}): {} is poorly determined",
-                    diagnostics.condition,
-                    diagnostics.weakest.combination()
-                ),
-            ));
-        }
+        let (diagnostics, warnings) = geometry_diagnostics(geometry, &ks, g)?;
         let mode = solve_mode(geometry, &ks, g)?;
         let direct_products: Vec<usize> = match &mode {
             SolveMode::Direct { products } => products
@@ -431,60 +374,8 @@ impl Solver {
             .map(|a| a.position_m)
             .collect();
         let p = 6 + direct_products.len();
-        let design = DMatrix::from_fn(n, p, |i, j| {
-            let s = &ks[i];
-            match j {
-                0..=2 => s[j],
-                3..=5 => r[i].cross(s)[j - 3] / g,
-                _ => product_regressor(s, &r[i], PRODUCTS[direct_products[j - 6]]) / g,
-            }
-        });
-        let sigmas: Option<Vec<f64>> = cal.iter().map(|c| c.noise_output).collect();
-        let w: DVector<f64> = match &sigmas {
-            Some(s) => DVector::from_iterator(n, s.iter().map(|s| 1.0 / (s * s))),
-            None => DVector::from_element(n, 1.0),
-        };
-        // (AᵀWA)⁻¹ by SVD of W^{1/2}A (never squares the condition number).
-        let sw = w.map(f64::sqrt);
-        let aw = DMatrix::from_fn(n, p, |i, j| design[(i, j)] * sw[i]);
-        let svd = crate::estimation::bounded_svd(aw, true, true).ok_or_else(|| {
-            Error::Unsupported(
-                "the calibration's Ks and noise_output give a motion design that is not finite"
-                    .into(),
-            )
-        })?;
-        let (Some(u), Some(vt)) = (svd.u.as_ref(), svd.v_t.as_ref()) else {
-            return Err(Error::Unsupported("SVD of the motion design failed".into()));
-        };
-        let smax = svd.singular_values.max();
-        if svd
-            .singular_values
-            .iter()
-            .any(|s| *s <= smax / DEFAULT_COND_LIMIT)
-        {
-            return Err(Error::IllConditioned {
-                terms: diagnostics.weakest.combination(),
-                condition: f64::INFINITY,
-                limit: DEFAULT_COND_LIMIT,
-            });
-        }
-        let sinv = DMatrix::from_diagonal(&svd.singular_values.map(|s| 1.0 / s));
-        let v = vt.transpose();
-        // P = V S⁻¹ Uᵀ W^{1/2}
-        let pinv_w = &v * &sinv * u.transpose();
-        let pinv = DMatrix::from_fn(p, n, |i, j| pinv_w[(i, j)] * sw[j]);
-        let noise = if sigmas.is_some() {
-            NoiseSource::Known
-        } else if n > p {
-            NoiseSource::Residuals
-        } else {
-            NoiseSource::None
-        };
-        let base_cov = match noise {
-            NoiseSource::Known => &v * &sinv * &sinv * v.transpose(),
-            NoiseSource::Residuals => &pinv * pinv.transpose(),
-            NoiseSource::None => DMatrix::zeros(p, p),
-        };
+        let design = sample_design(&ks, &r, g, &direct_products);
+        let (pinv, base_cov, noise) = weighted_pinv(&design, cal, &diagnostics)?;
         let mut noise_diag = [0.0; MAX_P];
         for (a, d) in noise_diag.iter_mut().enumerate().take(p) {
             *d = base_cov[(a, a)];
@@ -593,11 +484,11 @@ impl Solver {
         self.warnings.extend(w);
     }
 
-    /// Solve one sample (time not before the previous one; a repeated
-    /// stamp is a step of zero: ω does not move, [`crate::timebase`]).
-    pub fn step(&mut self, t: f64, e: &[f64]) -> Result<MotionSample> {
+    /// Count the sample and refuse one with another number of outputs
+    /// than accelerometers, or a time or output that is not finite.
+    /// Returns the sample's number (from 1).
+    fn check_sample(&mut self, t: f64, e: &[f64]) -> Result<u64> {
         let n = self.cal.len();
-        let p = self.p;
         self.count += 1;
         let k = self.count;
         if e.len() != n {
@@ -612,158 +503,60 @@ impl Solver {
                 value: v.to_string(),
             });
         }
-        let feedback = matches!(self.mode, SolveMode::Feedback { .. });
-        let (x, w, dt) = match self.prev {
-            None => {
-                let w = self.omega0;
-                (self.solve_at(e, &w), w, 0.0)
-            }
-            Some((tp, wp, wdp)) => {
-                if t < tp {
-                    return Err(Error::InvalidValue {
-                        what: format!("time of sample {k} (times must not decrease)"),
-                        value: t.to_string(),
-                    });
-                }
-                let dt = t - tp;
-                let mut w = wp + wdp * dt;
-                let mut x = self.solve_at(e, &w);
-                let passes = if feedback { 2 } else { 1 };
-                for _ in 0..passes {
-                    let wd = Vector3::new(x[3], x[4], x[5]);
-                    w = wp + (wdp + wd) * (0.5 * dt);
-                    if feedback {
-                        x = self.solve_at(e, &w);
-                    }
-                }
-                let wd = Vector3::new(x[3], x[4], x[5]);
-                w = wp + (wdp + wd) * (0.5 * dt);
-                (x, w, dt)
-            }
-        };
-        let f0 = Vector3::new(x[0], x[1], x[2]);
-        let wd = Vector3::new(x[3], x[4], x[5]);
-        if !(w.iter().all(|v| v.is_finite()) && w.amax() <= 1e4) {
-            // The mode's full reason is in the output's head (diagnostics);
-            // the refusal stays one readable line.
-            let why = match &self.mode {
-                SolveMode::Direct { .. } => "the integrated omega_dot error grew without bound",
-                SolveMode::Feedback { .. } => "the centripetal products come from the integrated omega, so its error feeds back; a layout that solves them directly (e.g. --layout twelve) avoids this",
-            };
-            return Err(Error::Unsupported(format!(
-                "the angular rate diverged at sample {k} (t = {t} s): |omega| beyond 1e4 rad/s ({why})"
-            )));
-        }
+        Ok(k)
+    }
 
-        // Uncertainty (module docs); only the diagonal is reported, so
-        // only the diagonal of the p × p covariance is formed.
-        let noise_scale = match self.noise {
-            NoiseSource::Known => 1.0,
-            NoiseSource::Residuals => {
-                // Residuals of the last solve, at the final ω.
-                self.reduce(e, &w);
-                let mut ss = 0.0;
-                for (j, yj) in self.y.iter().enumerate() {
-                    let row = &self.design[j * p..(j + 1) * p];
-                    let fit: f64 = row.iter().zip(&x[..p]).map(|(a, b)| a * b).sum();
-                    ss += (yj - fit) * (yj - fit);
-                }
-                ss / (n - p) as f64
-            }
-            NoiseSource::None => 0.0,
+    /// Solve sample `k` and integrate ω (module docs): the first at the
+    /// initial rate; then predict `ω⁻ = ω_{k−1} + ω̇_{k−1} Δt`, solve,
+    /// integrate by the trapezoid (feedback: solved once more at the
+    /// integrated ω). Returns the unknowns, ω and Δt.
+    fn advance(&mut self, t: f64, e: &[f64], k: u64) -> Result<([f64; MAX_P], Vector3<f64>, f64)> {
+        let feedback = matches!(self.mode, SolveMode::Feedback { .. });
+        let Some((tp, wp, wdp)) = self.prev else {
+            let w = self.omega0;
+            return Ok((self.solve_at(e, &w), w, 0.0));
         };
-        let mut diag = [0.0; MAX_P];
-        for (d, nd) in diag.iter_mut().zip(&self.noise_diag[..p]) {
-            *d = nd * noise_scale;
+        if t < tp {
+            return Err(Error::InvalidValue {
+                what: format!("time of sample {k} (times must not decrease)"),
+                value: t.to_string(),
+            });
         }
-        let cwd_noise = self.noise_wd * noise_scale;
-        // The centripetal gradient at this sample: Q = ω̇ rows of P G, and
-        // F = I − QΔt carries both ω error parts below.
-        let mut pg = [Vector3::zeros(); MAX_P];
-        if feedback {
-            for j in 0..n {
-                let s = &self.cal[j].ks;
-                let r = &self.r[j];
-                self.grad[j] = (s * w.dot(r) + r * s.dot(&w) - w * (2.0 * s.dot(r))) / self.g;
-            }
-            for (a, pga) in pg.iter_mut().enumerate().take(p) {
-                let row = &self.pinv[a * n..(a + 1) * n];
-                *pga = row
-                    .iter()
-                    .zip(&self.grad)
-                    .fold(Vector3::zeros(), |acc, (pj, gj)| acc + gj * *pj);
-            }
-            self.q_last =
-                Matrix3::from_rows(&[pg[3].transpose(), pg[4].transpose(), pg[5].transpose()]);
-        }
-        // Calibration: the sensitivity of x to every K0_j, Ks_j at the
-        // specific force f_j of each accelerometer, ∂x/∂K0_j = −P_:j,
-        // ∂x/∂Ks_ja = −P_:j f_ja. Every column for accelerometer j is a
-        // multiple of P_:j, so D U Dᵀ = Σ_j v_j P_:j P_:jᵀ with
-        // v_j = u²(K0_j) + Σ_a f_ja² u²(Ks_ja).
-        let mut sigma_cal = Matrix3::zeros();
-        if self.has_cal {
-            let fm = if feedback {
-                Matrix3::identity() - self.q_last * dt
-            } else {
-                Matrix3::identity()
-            };
-            for j in 0..n {
-                let r = &self.r[j];
-                let fj = f0 + (wd.cross(r) + w.cross(&w.cross(r))) / self.g;
-                let u2 = &self.u2_cal[4 * j..4 * j + 4];
-                let vj = u2[0] + (0..3).map(|a| fj[a] * fj[a] * u2[1 + a]).sum::<f64>();
-                for (a, d) in diag.iter_mut().enumerate().take(p) {
-                    let pa = self.pinv[a * n + j];
-                    *d += pa * vj * pa;
-                }
-                // J_k = F J_{k−1} + Δt ∂ω̇/∂cal (columns of accelerometer j).
-                let pw = Vector3::new(
-                    self.pinv[3 * n + j],
-                    self.pinv[4 * n + j],
-                    self.pinv[5 * n + j],
-                );
-                if feedback {
-                    for c in 0..4 {
-                        let col = 4 * j + c;
-                        if dt > 0.0 {
-                            let scale = if c == 0 { -1.0 } else { -fj[c - 1] };
-                            self.j_cal[col] = fm * self.j_cal[col] + pw * (scale * dt);
-                        }
-                        let v = self.j_cal[col];
-                        sigma_cal += v * v.transpose() * u2[c];
-                    }
-                } else {
-                    // F = I: the columns are P_ω̇,j times running integrals,
-                    // and only the diagonal of Σ is used.
-                    let s = &mut self.cal_integrals[j];
-                    if dt > 0.0 {
-                        s[0] -= dt;
-                        for a in 0..3 {
-                            s[1 + a] -= fj[a] * dt;
-                        }
-                    }
-                    let w2: f64 = (0..4).map(|c| s[c] * s[c] * u2[c]).sum();
-                    for i in 0..3 {
-                        sigma_cal[(i, i)] += pw[i] * pw[i] * w2;
-                    }
-                }
+        let dt = t - tp;
+        let mut w = wp + wdp * dt;
+        let mut x = self.solve_at(e, &w);
+        let passes = if feedback { 2 } else { 1 };
+        for _ in 0..passes {
+            let wd = Vector3::new(x[3], x[4], x[5]);
+            w = wp + (wdp + wd) * (0.5 * dt);
+            if feedback {
+                x = self.solve_at(e, &w);
             }
         }
-        // ω error from the sample noise: a random walk through F.
-        if dt > 0.0 {
-            let f = Matrix3::identity() - self.q_last * dt;
-            self.sigma_omega = f * self.sigma_omega * f.transpose() + cwd_noise * (dt * dt);
+        let wd = Vector3::new(x[3], x[4], x[5]);
+        w = wp + (wdp + wd) * (0.5 * dt);
+        Ok((x, w, dt))
+    }
+
+    /// Refuse a rate that is not finite or beyond 1e4 rad/s at sample `k`.
+    fn check_divergence(&self, w: &Vector3<f64>, k: u64, t: f64) -> Result<()> {
+        if w.iter().all(|v| v.is_finite()) && w.amax() <= 1e4 {
+            return Ok(());
         }
-        let sigma_total = self.sigma_omega + sigma_cal;
-        if feedback {
-            for (a, d) in diag.iter_mut().enumerate().take(p) {
-                *d += pg[a].dot(&(sigma_total * pg[a]));
-            }
-        }
-        let u_omega = Vector3::from_fn(|i, _| sigma_total[(i, i)].max(0.0).sqrt());
-        let report_u = self.noise != NoiseSource::None;
-        if report_u && self.warned_at.is_none() && u_omega.amax() > self.omega_u_limit {
+        // The mode's full reason is in the output's head (diagnostics);
+        // the refusal stays one readable line.
+        let why = match &self.mode {
+            SolveMode::Direct { .. } => "the integrated omega_dot error grew without bound",
+            SolveMode::Feedback { .. } => "the centripetal products come from the integrated omega, so its error feeds back; a layout that solves them directly (e.g. --layout twelve) avoids this",
+        };
+        Err(Error::Unsupported(format!(
+            "the angular rate diverged at sample {k} (t = {t} s): |omega| beyond 1e4 rad/s ({why})"
+        )))
+    }
+
+    /// Warn (once) when the predicted u(ω) first passes the limit.
+    fn warn_omega_u(&mut self, t: f64, k: u64, u_omega: &Vector3<f64>) {
+        if self.warned_at.is_none() && u_omega.amax() > self.omega_u_limit {
             self.warned_at = Some(t);
             self.warnings.push(Warning::new(
                 WarningCode::ModelRange,
@@ -773,6 +566,21 @@ impl Solver {
                     self.mode_reason()
                 ),
             ));
+        }
+    }
+
+    /// Solve one sample (time not before the previous one; a repeated
+    /// stamp is a step of zero: ω does not move, [`crate::timebase`]).
+    pub fn step(&mut self, t: f64, e: &[f64]) -> Result<MotionSample> {
+        let k = self.check_sample(t, e)?;
+        let (x, w, dt) = self.advance(t, e, k)?;
+        let f0 = Vector3::new(x[0], x[1], x[2]);
+        let wd = Vector3::new(x[3], x[4], x[5]);
+        self.check_divergence(&w, k, t)?;
+        let (diag, u_omega) = self.uncertainty(e, &x, &f0, &wd, &w, dt);
+        let report_u = self.noise != NoiseSource::None;
+        if report_u {
+            self.warn_omega_u(t, k, &u_omega);
         }
         let u = |k0: usize| Vector3::from_fn(|i, _| diag[k0 + i].max(0.0).sqrt());
         self.prev = Some((t, w, wd));

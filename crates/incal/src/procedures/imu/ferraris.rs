@@ -293,14 +293,10 @@ fn map(x: &[f64], counts: &[usize; 9], opts: &FerrarisOptions) -> Option<Ferrari
     })
 }
 
-/// Ferraris calibration from the nine sections' samples, each a 6-vector
-/// (accelerometer x, y, z, gyro x, y, z) in [`SECTIONS`] order.
-///
-/// Fails (naming the section) when a section has fewer than 2 samples,
-/// and when the positions do not determine a scale (a zero row of `U_d` or
-/// of the rotation integrals).
-pub fn ferraris(sections: &[Vec<[f64; 6]>; 9], opts: &FerrarisOptions) -> Result<FerrarisResult> {
-    opts.validate()?;
+/// The statistics of the nine sections after the channel check: static
+/// positions with their spikes left out of the mean, rotations as
+/// recorded (spikes reported only); the warnings of both.
+fn section_stats(sections: &[Vec<[f64; 6]>; 9]) -> Result<(Vec<SectionStats>, Vec<Warning>)> {
     let mut stats = Vec::with_capacity(9);
     let mut warnings = Vec::new();
     let mut channels = super::screen::ChannelCheck::default();
@@ -337,12 +333,12 @@ pub fn ferraris(sections: &[Vec<[f64; 6]>; 9], opts: &FerrarisOptions) -> Result
         &replaced,
         super::screen::NOT_CHANGED,
     ));
-    let counts: [usize; 9] = std::array::from_fn(|k| stats[k].n);
+    Ok((stats, warnings))
+}
 
-    // Input vector and its covariance.
-    let mut x = DVector::zeros(N_IN);
-    let mut c = DMatrix::zeros(N_IN, N_IN);
-    // Pooled static gyro covariance (within sections).
+/// The gyro covariance pooled within the six static sections (raw
+/// units², weights n − 1).
+fn pooled_static_gyro(stats: &[SectionStats]) -> [[f64; 3]; 3] {
     let mut pooled = [[0.0; 3]; 3];
     let mut pooled_dof = 0.0;
     for st in &stats[..6] {
@@ -359,6 +355,16 @@ pub fn ferraris(sections: &[Vec<[f64; 6]>; 9], opts: &FerrarisOptions) -> Result
             *v /= pooled_dof;
         }
     }
+    pooled
+}
+
+/// The map's input vector (module docs: section means, rotation
+/// accelerometer means and gyro integrals, angle) and its covariance.
+fn inputs(stats: &[SectionStats], opts: &FerrarisOptions) -> (DVector<f64>, DMatrix<f64>) {
+    let mut x = DVector::zeros(N_IN);
+    let mut c = DMatrix::zeros(N_IN, N_IN);
+    // Pooled static gyro covariance (within sections).
+    let pooled = pooled_static_gyro(stats);
     for (s, st) in stats.iter().enumerate() {
         let n = st.n as f64;
         let o = 6 * s;
@@ -384,12 +390,20 @@ pub fn ferraris(sections: &[Vec<[f64; 6]>; 9], opts: &FerrarisOptions) -> Result
     }
     x[N_IN - 1] = opts.rotation_deg;
     c[(N_IN - 1, N_IN - 1)] = opts.u_rotation_deg.powi(2);
+    (x, c)
+}
 
-    let matrices = map(x.as_slice(), &counts, opts).ok_or_else(|| Error::Unsupported(
+/// The matrices at the input `x`, refused (naming the cause) when the
+/// sections do not determine a scale or give a non-finite calibration.
+fn checked_map(
+    x: &DVector<f64>,
+    counts: &[usize; 9],
+    opts: &FerrarisOptions,
+) -> Result<FerrarisMatrices> {
+    let matrices = map(x.as_slice(), counts, opts).ok_or_else(|| Error::Unsupported(
         "the sections do not determine a scale: a row of the accelerometer differences or of the rotation integrals is zero (check the section labels)".into(),
     ))?;
-    let values = matrices.to_vec();
-    if values.iter().any(|v| !v.is_finite()) {
+    if matrices.to_vec().iter().any(|v| !v.is_finite()) {
         return Err(Error::Unsupported(
             "the sections give a non-finite calibration (check the section labels)".into(),
         ));
@@ -402,8 +416,21 @@ pub fn ferraris(sections: &[Vec<[f64; 6]>; 9], opts: &FerrarisOptions) -> Result
             )));
         }
     }
+    Ok(matrices)
+}
+
+/// The 51 elements with the covariance propagated from the inputs'
+/// (`x`, `c`) by the Jacobian of the map (JCGM 100 eq. 13); dof the
+/// smallest section's n − 1.
+fn propagated(
+    matrices: &FerrarisMatrices,
+    x: &DVector<f64>,
+    c: &DMatrix<f64>,
+    counts: &[usize; 9],
+    opts: &FerrarisOptions,
+) -> Result<Estimates> {
     let f = |z: &DVector<f64>| -> DVector<f64> {
-        match map(z.as_slice(), &counts, opts) {
+        match map(z.as_slice(), counts, opts) {
             Some(m) => DVector::from_vec(m.to_vec()),
             None => DVector::from_element(51, f64::NAN),
         }
@@ -411,8 +438,8 @@ pub fn ferraris(sections: &[Vec<[f64; 6]>; 9], opts: &FerrarisOptions) -> Result
     let steps: Vec<f64> = (0..N_IN)
         .map(|k| 1e-6 * x[k].abs().max(c[(k, k)].sqrt()).max(1e-9))
         .collect();
-    let j = numeric_jacobian(&f, &x, &steps);
-    let cov = propagate(&c, &j);
+    let j = numeric_jacobian(&f, x, &steps);
+    let cov = propagate(c, &j);
     if cov.iter().any(|v| !v.is_finite()) {
         return Err(Error::Unsupported(
             "the uncertainty of the Ferraris map is not finite (check the section labels)".into(),
@@ -422,8 +449,18 @@ pub fn ferraris(sections: &[Vec<[f64; 6]>; 9], opts: &FerrarisOptions) -> Result
         .iter()
         .map(|&n| (n - 1) as f64)
         .fold(f64::INFINITY, f64::min);
-    let estimates = Estimates::new(element_names(), DVector::from_vec(values), cov, dof)?;
+    Estimates::new(
+        element_names(),
+        DVector::from_vec(matrices.to_vec()),
+        cov,
+        dof,
+    )
+}
 
+/// Warnings of a negative diagonal of `R_a` (positions reading −g) or of
+/// `R_g` (rotations opposite to the stated angle).
+fn sign_warnings(matrices: &FerrarisMatrices, opts: &FerrarisOptions) -> Vec<Warning> {
+    let mut warnings = Vec::new();
     let neg = |m: &M3| {
         (0..3)
             .filter(|&i| m[(i, i)] < 0.0)
@@ -454,6 +491,23 @@ pub fn ferraris(sections: &[Vec<[f64; 6]>; 9], opts: &FerrarisOptions) -> Result
             ),
         ));
     }
+    warnings
+}
+
+/// Ferraris calibration from the nine sections' samples, each a 6-vector
+/// (accelerometer x, y, z, gyro x, y, z) in [`SECTIONS`] order.
+///
+/// Fails (naming the section) when a section has fewer than 2 samples,
+/// and when the positions do not determine a scale (a zero row of `U_d` or
+/// of the rotation integrals).
+pub fn ferraris(sections: &[Vec<[f64; 6]>; 9], opts: &FerrarisOptions) -> Result<FerrarisResult> {
+    opts.validate()?;
+    let (stats, mut warnings) = section_stats(sections)?;
+    let counts: [usize; 9] = std::array::from_fn(|k| stats[k].n);
+    let (x, c) = inputs(&stats, opts);
+    let matrices = checked_map(&x, &counts, opts)?;
+    let estimates = propagated(&matrices, &x, &c, &counts, opts)?;
+    warnings.extend(sign_warnings(&matrices, opts));
     Ok(FerrarisResult {
         matrices,
         estimates,

@@ -266,17 +266,9 @@ fn concat(parts: &[Estimates]) -> Result<Estimates> {
     Estimates::new(names, v, c, dof)
 }
 
-/// Least-squares calibration over known orientations.
-// Axis indices j, k address vectors, matrices and names alike.
-#[allow(clippy::needless_range_loop)]
-pub fn multipos(
-    statics: &[StaticPosition],
-    rotations: &[RotationSection],
-    opts: &MultiposOptions,
-) -> Result<MultiposResult> {
-    check_gravity(opts.gravity)?;
-    check_rate_hz(opts.rate_hz)?;
-    let g = opts.gravity;
+/// Refuse a position with fewer than 2 samples or an up direction that
+/// is not a unit vector, naming it.
+fn check_positions(statics: &[StaticPosition]) -> Result<()> {
     for p in statics {
         if p.stats.n < 2 {
             return Err(Error::TooFew {
@@ -295,100 +287,107 @@ pub fn multipos(
             });
         }
     }
-    let mut warnings = Vec::new();
-    // Accelerometer, one fit per axis.
-    let mut fits = Vec::new();
-    let mut parts = Vec::new();
-    for j in 0..3 {
-        let ks: Vec<usize> = match opts.matrix {
-            MatrixForm::Full => vec![0, 1, 2],
-            MatrixForm::Upper => (j..3).collect(),
-        };
-        let mut names = vec![format!("acc.b_{}", AXES[j])];
-        names.extend(ks.iter().map(|&k| format!("acc.A_{}{}", AXES[j], AXES[k])));
-        let rows: Vec<Vec<f64>> = statics
-            .iter()
-            .map(|p| {
-                let mut r = vec![1.0];
-                r.extend(ks.iter().map(|&k| g * p.up[k]));
-                r
-            })
-            .collect();
-        let y: Vec<f64> = statics.iter().map(|p| p.stats.mean[j]).collect();
-        let n: Vec<f64> = statics.iter().map(|p| p.stats.n as f64).collect();
-        let f = axis_fit(names, &rows, &y, &n, statics, j)?;
-        warnings.extend(
-            f.quality_warnings("the positions are not where the labels say, or the sensor moved"),
-        );
-        parts.push(f.estimates.clone());
-        fits.push((format!("acc.{}", AXES[j]), f));
-    }
-    // Gyro.
-    let omega_e = |p: &StaticPosition| -> V3 {
-        match (opts.latitude_deg, p.north) {
-            (Some(lat), Some(n)) => {
-                let phi = lat.to_radians();
-                (n * phi.cos() + p.up * phi.sin()) * EARTH_RATE_RAD_S.to_degrees()
-            }
-            _ => V3::zeros(),
-        }
+    Ok(())
+}
+
+/// The accelerometer fit of axis `j`: `ā_j = b_j + Σ_k A_jk g û_k` over
+/// the positions (`k ≥ j` only for `--matrix upper`).
+fn acc_axis(statics: &[StaticPosition], opts: &MultiposOptions, j: usize) -> Result<Fit> {
+    let g = opts.gravity;
+    let ks: Vec<usize> = match opts.matrix {
+        MatrixForm::Full => vec![0, 1, 2],
+        MatrixForm::Upper => (j..3).collect(),
     };
-    let earth = opts.latitude_deg.is_some() && statics.iter().all(|p| p.north.is_some());
-    let gyro_scale = opts.gyro && (!rotations.is_empty() || earth);
-    if opts.gyro {
-        for j in 0..3 {
-            let mut names = vec![format!("gyr.b_{}", AXES[j])];
-            names.extend((0..3).map(|k| format!("gyr.G_{}{}", AXES[j], AXES[k])));
-            if gyro_scale {
-                names.extend((0..3).map(|k| format!("gyr.A_{}{}", AXES[j], AXES[k])));
-            }
-            let mut rows = Vec::new();
-            let mut y = Vec::new();
-            let mut n = Vec::new();
-            for p in statics {
-                let mut r = vec![1.0];
-                r.extend((0..3).map(|k| g * p.up[k]));
-                if gyro_scale {
-                    let w = omega_e(p);
-                    r.extend((0..3).map(|k| w[k]));
-                } else {
-                    // The Earth rate is left in the bias when the scale is
-                    // not estimated (it is below MEMS resolution).
-                }
-                rows.push(r);
-                y.push(p.stats.mean[3 + j]);
-                n.push(p.stats.n as f64);
-            }
-            for r in rotations {
-                let t = r.stats.n as f64 / opts.rate_hz;
-                let mut up = V3::zeros();
-                up[r.axis] = 1.0;
-                let mut row = vec![1.0];
-                row.extend((0..3).map(|k| g * up[k]));
-                row.extend((0..3).map(|k| {
-                    if k == r.axis {
-                        opts.rotation_deg / t
-                    } else {
-                        0.0
-                    }
-                }));
-                rows.push(row);
-                y.push(r.stats.mean[3 + j]);
-                n.push(r.stats.n as f64);
-            }
-            let f = axis_fit(names, &rows, &y, &n, statics, 3 + j)?;
-            warnings.extend(f.quality_warnings(
-                "the positions are not where the labels say, the sensor moved, or a rotation was not of the stated angle",
-            ));
-            parts.push(f.estimates.clone());
-            fits.push((format!("gyr.{}", AXES[j]), f));
+    let mut names = vec![format!("acc.b_{}", AXES[j])];
+    names.extend(ks.iter().map(|&k| format!("acc.A_{}{}", AXES[j], AXES[k])));
+    let rows: Vec<Vec<f64>> = statics
+        .iter()
+        .map(|p| {
+            let mut r = vec![1.0];
+            r.extend(ks.iter().map(|&k| g * p.up[k]));
+            r
+        })
+        .collect();
+    let y: Vec<f64> = statics.iter().map(|p| p.stats.mean[j]).collect();
+    let n: Vec<f64> = statics.iter().map(|p| p.stats.n as f64).collect();
+    axis_fit(names, &rows, &y, &n, statics, j)
+}
+
+/// The Earth rate in a position (deg/s, IMU frame) when the latitude and
+/// the position's north are given, else zero.
+fn earth_rate(opts: &MultiposOptions, p: &StaticPosition) -> V3 {
+    match (opts.latitude_deg, p.north) {
+        (Some(lat), Some(n)) => {
+            let phi = lat.to_radians();
+            (n * phi.cos() + p.up * phi.sin()) * EARTH_RATE_RAD_S.to_degrees()
         }
+        _ => V3::zeros(),
     }
-    let base = concat(&parts)?;
-    // Derived scale factors and misalignments.
+}
+
+/// The gyro fit of axis `j` (module docs): bias and g-sensitivity over
+/// the positions and rotations, and the scale terms `A_jk` when
+/// `gyro_scale` (the Earth rate in the positions, `A/T` about the axis of
+/// each rotation).
+fn gyro_axis(
+    statics: &[StaticPosition],
+    rotations: &[RotationSection],
+    opts: &MultiposOptions,
+    gyro_scale: bool,
+    j: usize,
+) -> Result<Fit> {
+    let g = opts.gravity;
+    let mut names = vec![format!("gyr.b_{}", AXES[j])];
+    names.extend((0..3).map(|k| format!("gyr.G_{}{}", AXES[j], AXES[k])));
+    if gyro_scale {
+        names.extend((0..3).map(|k| format!("gyr.A_{}{}", AXES[j], AXES[k])));
+    }
+    let mut rows = Vec::new();
+    let mut y = Vec::new();
+    let mut n = Vec::new();
+    for p in statics {
+        let mut r = vec![1.0];
+        r.extend((0..3).map(|k| g * p.up[k]));
+        if gyro_scale {
+            let w = earth_rate(opts, p);
+            r.extend((0..3).map(|k| w[k]));
+        } else {
+            // The Earth rate is left in the bias when the scale is
+            // not estimated (it is below MEMS resolution).
+        }
+        rows.push(r);
+        y.push(p.stats.mean[3 + j]);
+        n.push(p.stats.n as f64);
+    }
+    for r in rotations {
+        let t = r.stats.n as f64 / opts.rate_hz;
+        let mut up = V3::zeros();
+        up[r.axis] = 1.0;
+        let mut row = vec![1.0];
+        row.extend((0..3).map(|k| g * up[k]));
+        row.extend((0..3).map(|k| {
+            if k == r.axis {
+                opts.rotation_deg / t
+            } else {
+                0.0
+            }
+        }));
+        rows.push(row);
+        y.push(r.stats.mean[3 + j]);
+        n.push(r.stats.n as f64);
+    }
+    axis_fit(names, &rows, &y, &n, statics, 3 + j)
+}
+
+/// The derived terms of `base`: for each triad fitted with a scale, the
+/// scale factors `S_j = A_jj` then the misalignments `M_jk = A_jk / A_jj`;
+/// their names and the indices `(A_jj, None)` or `(A_jj, Some(A_jk))`.
+// Axis indices j, k address vectors, matrices and names alike.
+#[allow(clippy::needless_range_loop)]
+fn derived_terms(base: &Estimates, gyro_scale: bool) -> (Vec<String>, Vec<(usize, Option<usize>)>) {
     let idx = |name: &str| base.index(name);
     let mut derived_names = Vec::new();
-    let mut derived: Vec<(usize, Option<usize>)> = Vec::new(); // (A_jj, Some(A_jk)) or (A_jj, None) = S
+    let mut derived: Vec<(usize, Option<usize>)> = Vec::new();
     for (t, on) in [("acc", true), ("gyr", gyro_scale)] {
         if !on {
             continue;
@@ -416,6 +415,14 @@ pub fn multipos(
             }
         }
     }
+    (derived_names, derived)
+}
+
+/// `base` augmented with the derived scale factors and misalignments
+/// ([`derived_terms`]), their covariance by the Jacobian of the ratios;
+/// refused when a scale term is zero or the result is not finite.
+fn with_derived(base: Estimates, gyro_scale: bool) -> Result<Estimates> {
+    let (derived_names, derived) = derived_terms(&base, gyro_scale);
     let gfun = |x: &DVector<f64>| {
         DVector::from_iterator(
             derived.len(),
@@ -443,6 +450,46 @@ pub fn multipos(
             "multi-position fit gave a non-finite result".into(),
         ));
     }
+    Ok(estimates)
+}
+
+/// Least-squares calibration over known orientations.
+// Axis indices j, k address vectors, matrices and names alike.
+#[allow(clippy::needless_range_loop)]
+pub fn multipos(
+    statics: &[StaticPosition],
+    rotations: &[RotationSection],
+    opts: &MultiposOptions,
+) -> Result<MultiposResult> {
+    check_gravity(opts.gravity)?;
+    check_rate_hz(opts.rate_hz)?;
+    check_positions(statics)?;
+    let mut warnings = Vec::new();
+    // Accelerometer, one fit per axis.
+    let mut fits = Vec::new();
+    let mut parts = Vec::new();
+    for j in 0..3 {
+        let f = acc_axis(statics, opts, j)?;
+        warnings.extend(
+            f.quality_warnings("the positions are not where the labels say, or the sensor moved"),
+        );
+        parts.push(f.estimates.clone());
+        fits.push((format!("acc.{}", AXES[j]), f));
+    }
+    // Gyro.
+    let earth = opts.latitude_deg.is_some() && statics.iter().all(|p| p.north.is_some());
+    let gyro_scale = opts.gyro && (!rotations.is_empty() || earth);
+    if opts.gyro {
+        for j in 0..3 {
+            let f = gyro_axis(statics, rotations, opts, gyro_scale, j)?;
+            warnings.extend(f.quality_warnings(
+                "the positions are not where the labels say, the sensor moved, or a rotation was not of the stated angle",
+            ));
+            parts.push(f.estimates.clone());
+            fits.push((format!("gyr.{}", AXES[j]), f));
+        }
+    }
+    let estimates = with_derived(concat(&parts)?, gyro_scale)?;
     Ok(MultiposResult {
         estimates,
         fits,
