@@ -9,15 +9,14 @@ use common::*;
 /// every procedure that reduces a simulated recording, with its worked
 /// example from the procedure registry.
 fn cases() -> Vec<(&'static str, Vec<&'static str>, Vec<&'static str>)> {
-    incal::procedures::registry::REGISTRY
-        .iter()
-        .filter_map(|e| {
-            let example = e.example?;
-            let mut sim = e.simulate?.to_vec();
-            sim.extend_from_slice(example.simulate);
-            let mut reduce = e.command.to_vec();
-            reduce.extend_from_slice(example.options);
-            Some((e.id, sim, reduce))
+    registry_cases()
+        .into_iter()
+        .map(|c| {
+            let mut sim = vec!["simulate"];
+            sim.extend_from_slice(&c.simulate);
+            let mut reduce = c.command.to_vec();
+            reduce.extend_from_slice(c.options);
+            (c.id, sim, reduce)
         })
         .collect()
 }

@@ -53,17 +53,11 @@ type Case = (
 /// Every procedure that reduces a simulated recording, with its worked
 /// example from the procedure registry.
 fn cases() -> Vec<Case> {
-    incal::procedures::registry::REGISTRY
-        .iter()
-        .filter_map(|e| {
-            let example = e.example?;
-            let file: &'static str = Box::leak(format!("{}.csv", e.id).into_boxed_str());
-            let mut sim = e.simulate?[1..].to_vec();
-            sim.extend_from_slice(example.simulate);
-            let mut reduce = e.command.to_vec();
-            reduce.extend_from_slice(&["--input", file]);
-            reduce.extend_from_slice(example.options);
-            Some((e.id, sim, file, reduce))
+    registry_cases()
+        .into_iter()
+        .map(|c| {
+            let file: &'static str = Box::leak(format!("{}.csv", c.id).into_boxed_str());
+            (c.id, c.simulate.clone(), file, c.reduce(file))
         })
         .collect()
 }

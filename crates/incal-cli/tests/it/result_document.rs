@@ -56,17 +56,11 @@ fn file_of(id: &'static str) -> &'static str {
 /// Every procedure that reduces a simulated recording, with its worked
 /// example from the procedure registry.
 fn cases() -> Vec<Case> {
-    incal::procedures::registry::REGISTRY
-        .iter()
-        .filter_map(|e| {
-            let example = e.example?;
-            let file = file_of(e.id);
-            let mut sim: Vec<&'static str> = e.simulate?[1..].to_vec();
-            sim.extend_from_slice(example.simulate);
-            let mut reduce = e.command.to_vec();
-            reduce.extend_from_slice(&["--input", file]);
-            reduce.extend_from_slice(example.options);
-            Some((e.id, e.document.as_str(), sim, file, reduce))
+    registry_cases()
+        .into_iter()
+        .map(|c| {
+            let file = file_of(c.id);
+            (c.id, c.document, c.simulate.clone(), file, c.reduce(file))
         })
         .collect()
 }

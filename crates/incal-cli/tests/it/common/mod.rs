@@ -171,3 +171,48 @@ pub fn keys(v: &Value) -> Vec<String> {
     k.sort();
     k
 }
+
+/// One procedure's worked example from the procedure registry.
+pub struct RegistryCase {
+    /// The registry id.
+    pub id: &'static str,
+    /// The document id its results carry.
+    pub document: &'static str,
+    /// `incal simulate` words after `simulate`, with the example's options.
+    pub simulate: Vec<&'static str>,
+    /// The reducing command's words.
+    pub command: &'static [&'static str],
+    /// The example's reduction options (besides `--input`).
+    pub options: &'static [&'static str],
+}
+
+impl RegistryCase {
+    /// The reducing command line on `file`: command, `--input FILE`, options.
+    pub fn reduce<'a>(&self, file: &'a str) -> Vec<&'a str> {
+        let mut v = self.command.to_vec();
+        v.extend_from_slice(&["--input", file]);
+        v.extend_from_slice(self.options);
+        v
+    }
+}
+
+/// Every procedure that reduces a simulated recording, with its worked
+/// example from the procedure registry: the case table of every test that
+/// runs all procedures.
+pub fn registry_cases() -> Vec<RegistryCase> {
+    incal::procedures::registry::REGISTRY
+        .iter()
+        .filter_map(|e| {
+            let example = e.example?;
+            let mut simulate = e.simulate?[1..].to_vec();
+            simulate.extend_from_slice(example.simulate);
+            Some(RegistryCase {
+                id: e.id,
+                document: e.document.as_str(),
+                simulate,
+                command: e.command,
+                options: example.options,
+            })
+        })
+        .collect()
+}
