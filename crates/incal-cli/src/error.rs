@@ -75,7 +75,7 @@ pub fn core(e: incal::Error) -> CliError {
         )),
         incal::Error::Unsupported(m) => CliError::Input(as_flag(&m, false)),
         incal::Error::InvalidOption { key, message } => {
-            CliError::Input(format!("--{}: {message}", key.replace('_', "-")))
+            CliError::Input(format!("{}: {message}", flag_of(&key)))
         }
         incal::Error::InFile { file, source } => match core(*source) {
             CliError::Input(m) => CliError::Input(format!("{file}: {m}")),
@@ -140,4 +140,36 @@ fn long_options() -> &'static std::collections::BTreeSet<String> {
         walk(&crate::command(), &mut out);
         out
     })
+}
+
+/// An option's key (`rate_hz`, or a path `runs[2].rate_deg_s`) as the
+/// command line spells it: the long flag of the argument whose id is the
+/// key (`--rate-hz`), from the argument definitions of every command; a
+/// key no argument carries is left as it is.
+pub fn flag_of(key: &str) -> String {
+    static FLAGS: std::sync::OnceLock<std::collections::BTreeMap<String, String>> =
+        std::sync::OnceLock::new();
+    let flags = FLAGS.get_or_init(|| {
+        fn walk(c: &clap::Command, out: &mut std::collections::BTreeMap<String, String>) {
+            for a in c.get_arguments() {
+                if let Some(long) = a.get_long() {
+                    out.entry(a.get_id().to_string())
+                        .or_insert_with(|| format!("--{long}"));
+                }
+            }
+            for s in c.get_subcommands() {
+                walk(s, out);
+            }
+        }
+        let mut out = std::collections::BTreeMap::new();
+        walk(&crate::command(), &mut out);
+        out
+    });
+    let last = key.rsplit('.').next().unwrap_or(key);
+    let last = last.split('[').next().unwrap_or(last);
+    match flags.get(last) {
+        Some(flag) if last == key => flag.clone(),
+        Some(flag) => format!("{flag} ({key})"),
+        None => key.to_string(),
+    }
 }

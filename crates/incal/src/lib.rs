@@ -32,6 +32,7 @@ pub use error::{Alias, Error, Result};
 pub use warning::{Warning, WarningCode};
 pub mod models;
 pub mod noise;
+pub mod options;
 pub mod procedures;
 pub mod rigs;
 pub mod sim;

@@ -5,9 +5,9 @@ use std::path::PathBuf;
 use clap::ValueEnum;
 use incal::estimation::Noise;
 use incal::models::Term;
-use incal::procedures::tumble::plan::{plan_document, TumblePlan, TumblePlanOptions};
+use incal::procedures::tumble::plan::{TumblePlan, TumblePlanChoice, TumblePlanOptions};
 use incal::procedures::tumble::{default_terms, Tumble, TumbleOptions};
-use incal::procedures::Silent;
+use incal::procedures::{Plan, Silent};
 use incal::rigs::Mount;
 use incal::sim::tumble::TumbleSim;
 use incal::units::arcsec_to_rad;
@@ -97,20 +97,20 @@ pub struct PlanChoice {
 }
 
 impl PlanChoice {
+    /// The plan choice as the core takes it.
+    pub fn choice(&self) -> TumblePlanChoice {
+        TumblePlanChoice {
+            range_g: self.range_g,
+            step_deg: self.step_deg,
+            points: self.points,
+            angles_deg: self.angles_deg.clone(),
+            step_resolution_deg: Some(self.step_resolution_deg),
+        }
+    }
+
     /// The chosen plan (GJB 12-point when nothing is chosen).
     pub fn plan(&self) -> CliResult<TumblePlan> {
-        let p = if let Some(r) = self.range_g {
-            TumblePlan::for_range(r, self.step_resolution_deg)
-        } else if let Some(a) = self.step_deg {
-            TumblePlan::small_angle(a)
-        } else if let Some(n) = self.points {
-            TumblePlan::n_point(n)
-        } else if let Some(angles) = &self.angles_deg {
-            TumblePlan::explicit(angles)
-        } else {
-            Ok(TumblePlan::gjb12())
-        };
-        p.map_err(core)
+        self.choice().plan().map_err(core)
     }
 }
 
@@ -145,6 +145,7 @@ pub struct PlanArgs {
 pub fn plan(a: &PlanArgs) -> CliResult<()> {
     let mount: Mount = a.mount.into();
     let options = TumblePlanOptions {
+        choice: a.plan.choice(),
         mount,
         terms: parse_terms(&a.terms, mount)?,
         k1: a.k1,
@@ -152,7 +153,7 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
         samples: a.samples,
         index_error_arcsec: a.index_error_arcsec,
     };
-    let doc = plan_document(&a.plan.plan()?, &options).map_err(core)?;
+    let doc = <Tumble as Plan>::plan(&options).map_err(core)?;
     a.out.emit(&doc)
 }
 

@@ -484,7 +484,9 @@ impl ResultDocument {
         let ia = self.correlation.names.iter().position(|n| n == a)?;
         let ib = self.correlation.names.iter().position(|n| n == b)?;
         let (ca, cb) = (self.coefficients.get(a)?, self.coefficients.get(b)?);
-        Some(self.correlation.matrix[ia][ib] * ca.u * cb.u)
+        // A document read from a file may hold a matrix of another size.
+        let r = *self.correlation.matrix.get(ia)?.get(ib)?;
+        Some(r * ca.u * cb.u)
     }
 
     /// Declare the instrument's output unit (`--output-unit V`): every

@@ -102,10 +102,13 @@ impl Noise {
         match self {
             Noise::Auto => Ok(()),
             Noise::Known { sigma } if sigma.is_finite() && sigma > 0.0 => Ok(()),
-            Noise::Known { sigma } => Err(Error::InvalidValue {
-                what: "noise (standard deviation of one output sample; a positive number)".into(),
-                value: sigma.to_string(),
-            }),
+            Noise::Known { sigma } => crate::options::invalid(
+                "noise",
+                format!(
+                    "the standard deviation of one output sample must be a positive number, got {}",
+                    crate::error::short_number(&sigma.to_string())
+                ),
+            ),
         }
     }
 }

@@ -308,3 +308,5 @@ mod tests {
         assert!((m.output(&a) - 10.0 * bracket).abs() < 1e-15);
     }
 }
+
+crate::named_enum!(Term, Term::ALL);

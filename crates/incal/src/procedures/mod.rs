@@ -84,6 +84,58 @@ pub trait Procedure {
     }
 }
 
+/// The test plan of a procedure: its options (engineering units, the keys
+/// of the plan document's `options`) into an `incal.plan/1` document.
+pub trait Plan {
+    /// The plan's options.
+    type Options: serde::Serialize + serde::de::DeserializeOwned + schemars::JsonSchema;
+
+    /// Predict the plan: settings, run sheet and expected uncertainties.
+    fn plan(options: &Self::Options) -> Result<crate::document::plan::PlanDocument>;
+}
+
+/// A rig simulator: its options (truth, rig, noise, seed; engineering
+/// units) into a recording the procedure reads, written to `out`.
+pub trait Simulate {
+    /// The simulator's options.
+    type Options: serde::Serialize + serde::de::DeserializeOwned + schemars::JsonSchema;
+
+    /// Draw the recording (same options and seed, same bytes) into `out`.
+    fn simulate(options: &Self::Options, out: &mut dyn std::io::Write) -> Result<()>;
+}
+
+/// [`reduce_source`] with the options as JSON (a Python keyword dict, a
+/// fuzz input): unknown, missing and mistyped keys are
+/// [`Error::InvalidOption`] naming the key.
+pub fn reduce_json<P: Procedure>(
+    name: &str,
+    src: &mut dyn Read,
+    read: &incal_io::ReadOptions,
+    options: &serde_json::Value,
+    progress: &dyn Progress,
+) -> Result<ResultDocument>
+where
+    P::Options: serde::de::DeserializeOwned,
+{
+    let options: P::Options = crate::options::from_json(options)?;
+    reduce_source::<P, _>(name, src, read, &options, progress)
+}
+
+/// [`Plan::plan`] with the options as JSON.
+pub fn plan_json<T: Plan>(
+    options: &serde_json::Value,
+) -> Result<crate::document::plan::PlanDocument> {
+    T::plan(&crate::options::from_json(options)?)
+}
+
+/// [`Simulate::simulate`] with the options as JSON.
+pub fn simulate_json<T: Simulate>(
+    options: &serde_json::Value,
+    out: &mut dyn std::io::Write,
+) -> Result<()> {
+    T::simulate(&crate::options::from_json(options)?, out)
+}
+
 /// Read one recording (`src`, named `name` in messages and in the
 /// document's inputs; `<stdin>` is recorded as `-`) and reduce it: validate
 /// the options, read through the input layer, reduce, record the input's

@@ -153,6 +153,66 @@ pub struct Entry {
     /// Python equals the CLI); `None` for a procedure that reduces result
     /// documents.
     pub example: Option<Example>,
+    /// The typed reduction: its options' JSON Schema and the reduction with
+    /// options as JSON ([`super::reduce_json`]); `None` for a procedure
+    /// that reduces result documents.
+    pub reduction: Option<Typed>,
+    /// The typed plan ([`super::Plan`]), if any.
+    pub planner: Option<Typed<PlanFn>>,
+    /// The typed simulator ([`super::Simulate`]), if any.
+    pub simulator: Option<Typed<SimulateFn>>,
+}
+
+/// A reduction with options as JSON ([`super::reduce_json`]).
+pub type ReduceFn = fn(
+    &str,
+    &mut dyn std::io::Read,
+    &incal_io::ReadOptions,
+    &serde_json::Value,
+    &dyn super::Progress,
+) -> crate::Result<crate::document::ResultDocument>;
+
+/// A plan with options as JSON ([`super::plan_json`]).
+pub type PlanFn = fn(&serde_json::Value) -> crate::Result<PlanDocument>;
+
+/// A simulator with options as JSON ([`super::simulate_json`]).
+pub type SimulateFn = fn(&serde_json::Value, &mut dyn std::io::Write) -> crate::Result<()>;
+
+/// One typed entry point of a procedure: the JSON Schema of its options
+/// (the keys every front end spells its own way) and the function.
+#[derive(Debug, Clone, Copy)]
+pub struct Typed<F = ReduceFn> {
+    /// The options' JSON Schema ([`crate::options::schema_of`]).
+    pub schema: fn() -> serde_json::Value,
+    /// The entry point.
+    pub run: F,
+}
+
+/// The typed reduction of procedure `P`.
+pub const fn reduction<P: super::Procedure>() -> Option<Typed>
+where
+    P::Options: serde::de::DeserializeOwned + schemars::JsonSchema,
+{
+    Some(Typed {
+        schema: crate::options::schema_of::<P::Options>,
+        run: super::reduce_json::<P>,
+    })
+}
+
+/// The typed plan `T`.
+pub const fn planner<T: super::Plan>() -> Option<Typed<PlanFn>> {
+    Some(Typed {
+        schema: crate::options::schema_of::<T::Options>,
+        run: super::plan_json::<T>,
+    })
+}
+
+/// The typed simulator `T`.
+pub const fn simulator<T: super::Simulate>() -> Option<Typed<SimulateFn>> {
+    Some(Typed {
+        schema: crate::options::schema_of::<T::Options>,
+        run: super::simulate_json::<T>,
+    })
 }
 
 /// A worked case of a procedure ([`Entry::example`]): `incal
@@ -260,6 +320,9 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--seed", "11", "--passes", "2"],
             options: &["--mount", "pendulum"],
         }),
+        reduction: reduction::<super::tumble::Tumble>(),
+        planner: planner::<super::tumble::Tumble>(),
+        simulator: None,
     },
     Entry {
         id: "centrifuge",
@@ -279,6 +342,9 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--seed", "12"],
             options: &["--k0", "1.2e-4", "--u-k0", "2e-6", "--k1", "1.3", "--u-k1", "1.3e-6", "--radius-m", "0.71", "--latitude-deg", "39.9"],
         }),
+        reduction: None,
+        planner: None,
+        simulator: None,
     },
     Entry {
         id: "misalign-gyro",
@@ -298,6 +364,9 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--seed", "13"],
             options: &["--scale-factor", "-2.9222"],
         }),
+        reduction: None,
+        planner: None,
+        simulator: None,
     },
     Entry {
         id: "misalign-accel",
@@ -317,6 +386,9 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--seed", "14"],
             options: &["--scale-factor", "1.299"],
         }),
+        reduction: None,
+        planner: None,
+        simulator: None,
     },
     Entry {
         id: "gyro-rate",
@@ -336,6 +408,9 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--samples", "4", "--seed", "16"],
             options: &["--latitude-deg", "45"],
         }),
+        reduction: None,
+        planner: None,
+        simulator: None,
     },
     Entry {
         id: "gyro-positions",
@@ -355,6 +430,9 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--samples", "4", "--seed", "17"],
             options: &["--latitude-deg", "45", "--azimuth-deg", "90", "--k1", "0.02", "--axial", "sa"],
         }),
+        reduction: None,
+        planner: None,
+        simulator: None,
     },
     Entry {
         id: "imu-ferraris",
@@ -374,6 +452,9 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--sequence", "ferraris", "--static-s", "0.5", "--rotation-s", "1", "--seed", "18"],
             options: &["--rate-hz", "100"],
         }),
+        reduction: None,
+        planner: None,
+        simulator: None,
     },
     Entry {
         id: "imu-multipos",
@@ -393,6 +474,9 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--sequence", "positions", "--static-s", "0.3", "--rotations", "--seed", "19"],
             options: &["--rate-hz", "100"],
         }),
+        reduction: None,
+        planner: None,
+        simulator: None,
     },
     Entry {
         id: "imu-autocal",
@@ -412,6 +496,9 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--sequence", "random", "--orientations", "12", "--init-static-s", "3", "--static-s", "2", "--move-s", "1.5", "--seed", "20"],
             options: &["--rate-hz", "100", "--init-static-s", "3"],
         }),
+        reduction: None,
+        planner: None,
+        simulator: None,
     },
     Entry {
         id: "gfimu-calibrate",
@@ -431,6 +518,9 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--seed", "15"],
             options: &[],
         }),
+        reduction: None,
+        planner: None,
+        simulator: None,
     },
     Entry {
         id: "noise",
@@ -450,6 +540,9 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--duration-s", "600", "--rate-hz", "100", "--arw-deg-rth", "0.1", "--bias-instability-deg-h", "5", "--seed", "21", "--format", "csv"],
             options: &["--rate-hz", "100"],
         }),
+        reduction: None,
+        planner: None,
+        simulator: None,
     },
     Entry {
         id: "thermal-ramp",
@@ -469,6 +562,9 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--seed", "22", "--rate-hz", "1", "--hold-s", "300", "--ramp-c-per-min", "4"],
             options: &["--rate-hz", "1", "--quantity", "gyro"],
         }),
+        reduction: None,
+        planner: None,
+        simulator: None,
     },
     Entry {
         id: "thermal-fit",
@@ -485,6 +581,9 @@ pub static REGISTRY: &[Entry] = &[
         fuzz: &["thermal-fit"],
         run_sheet: Some(super::thermal::plan::run_sheet),
         example: None,
+        reduction: None,
+        planner: None,
+        simulator: None,
     },
 ];
 

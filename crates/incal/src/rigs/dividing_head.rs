@@ -74,3 +74,5 @@ mod tests {
         assert!((Mount::Gate.specific_force(0.0).a_o - 1.0).abs() < 1e-15);
     }
 }
+
+crate::named_enum!(Mount, [Mount::Pendulum, Mount::Gate]);

@@ -87,15 +87,27 @@ pub fn default_terms(mount: Mount) -> Vec<Term> {
 
 /// Options of [`calibrate`]. In the document: `{"mount": "pendulum",
 /// "noise": null, "terms": ["K0", …]}` (`noise`: the known standard
-/// deviation of one output sample, output units, or null for "from the data").
-#[derive(Debug, Clone, PartialEq)]
+/// deviation of one output sample, output units, or null for "from the
+/// data"; `terms`: the mount's default terms when not given).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct TumbleOptions {
     /// Mount on the dividing head.
     pub mount: Mount,
-    /// Terms to fit (must contain K1).
+    /// Terms to fit (must contain K1); default: [`default_terms`] of the mount.
+    #[serde(default, deserialize_with = "terms_or_default")]
+    #[schemars(with = "Option<Vec<Term>>")]
     pub terms: Vec<Term>,
     /// Noise policy (see [`crate::estimation::repeated`]).
+    #[serde(default)]
     pub noise: Noise,
+}
+
+/// An absent or null `terms` is empty here and becomes the mount's
+/// default terms in [`TumbleOptions::terms`].
+pub(crate) fn terms_or_default<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<Vec<Term>, D::Error> {
+    Ok(<Option<Vec<Term>> as serde::Deserialize>::deserialize(d)?.unwrap_or_default())
 }
 
 impl TumbleOptions {
@@ -107,17 +119,15 @@ impl TumbleOptions {
             noise: Noise::Auto,
         }
     }
-}
 
-impl serde::Serialize for TumbleOptions {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut m = s.serialize_map(Some(3))?;
-        m.serialize_entry("mount", self.mount.name())?;
-        m.serialize_entry("noise", &self.noise.sigma())?;
-        let terms: Vec<&str> = self.terms.iter().map(|t| t.name()).collect();
-        m.serialize_entry("terms", &terms)?;
-        m.end()
+    /// The options as reduced and recorded: the terms as given, or the
+    /// mount's default terms when none were given.
+    pub fn settled(&self) -> TumbleOptions {
+        let mut o = self.clone();
+        if o.terms.is_empty() {
+            o.terms = default_terms(o.mount);
+        }
+        o
     }
 }
 
@@ -132,10 +142,8 @@ impl super::Procedure for Tumble {
 
     fn validate(o: &TumbleOptions) -> Result<()> {
         o.noise.validate()?;
-        if !o.terms.contains(&Term::K1) {
-            return Err(Error::Unsupported(
-                "the term set must contain K1 (scale factor)".into(),
-            ));
+        if !o.settled().terms.contains(&Term::K1) {
+            return crate::options::invalid("terms", "the term set must contain K1 (scale factor)");
         }
         Ok(())
     }
@@ -152,7 +160,14 @@ impl super::Procedure for Tumble {
         o: &TumbleOptions,
         _: &dyn super::Progress,
     ) -> Result<crate::document::ResultDocument> {
-        calibrate(obs, o)?.document(o.noise.sigma().is_some())
+        calibrate(obs, &o.settled())?.document(o.noise.sigma().is_some())
+    }
+
+    fn recorded(
+        _: &Vec<Observation>,
+        o: &TumbleOptions,
+    ) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
+        super::options_map(&o.settled())
     }
 }
 

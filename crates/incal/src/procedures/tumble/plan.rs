@@ -237,76 +237,153 @@ impl PlanKind {
     }
 }
 
+/// Which angles a tumble plan visits: the instrument's range, a
+/// small-angle step, N equal steps or explicit angles (at most one; the
+/// GJB 12-point plan when none is given). Not recorded in the plan
+/// document's `options`: the document records the angles themselves.
+#[derive(
+    Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
+pub struct TumblePlanChoice {
+    /// Instrument range (g): the small-angle plan with the largest step
+    /// whose inputs stay within it (GJB plan at 1 g and above).
+    #[serde(default, skip_serializing)]
+    pub range_g: Option<f64>,
+    /// Small-angle 12-point plan with this step (deg, at most 18).
+    #[serde(default, skip_serializing)]
+    pub step_deg: Option<f64>,
+    /// N equally spaced angles (GJB 12-point: 12).
+    #[serde(default, skip_serializing)]
+    pub points: Option<usize>,
+    /// Explicit angles (deg).
+    #[serde(default, skip_serializing)]
+    pub angles_deg: Option<Vec<f64>>,
+    /// Dividing-head step resolution used with `range_g` (deg; default 1).
+    #[serde(default, skip_serializing)]
+    pub step_resolution_deg: Option<f64>,
+}
+
+impl TumblePlanChoice {
+    /// The chosen plan (GJB 12-point when nothing is chosen); two choices
+    /// at once are refused naming the second.
+    pub fn plan(&self) -> Result<TumblePlan> {
+        let given: Vec<&str> = [
+            ("range_g", self.range_g.is_some()),
+            ("step_deg", self.step_deg.is_some()),
+            ("points", self.points.is_some()),
+            ("angles_deg", self.angles_deg.is_some()),
+        ]
+        .iter()
+        .filter(|(_, g)| *g)
+        .map(|(k, _)| *k)
+        .collect();
+        if given.len() > 1 {
+            return crate::options::invalid(
+                given[1],
+                format!(
+                    "cannot be given with {} (one plan choice at a time)",
+                    given[0]
+                ),
+            );
+        }
+        if let Some(r) = self.range_g {
+            TumblePlan::for_range(r, self.step_resolution_deg.unwrap_or(1.0))
+        } else if let Some(a) = self.step_deg {
+            TumblePlan::small_angle(a)
+        } else if let Some(n) = self.points {
+            TumblePlan::n_point(n)
+        } else if let Some(angles) = &self.angles_deg {
+            TumblePlan::explicit(angles)
+        } else {
+            Ok(TumblePlan::gjb12())
+        }
+    }
+}
+
 /// Options of a tumble plan's prediction. In the plan document's
 /// `options`: `mount`, `terms`, `k1` (output/g), `noise` (σ of one output
 /// sample, output units), `samples` (per position), `index_error_arcsec`
 /// (σ of the head's index error).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct TumblePlanOptions {
+    /// Which angles (not recorded: the document lists them).
+    #[serde(flatten)]
+    pub choice: TumblePlanChoice,
     /// Mount on the head.
     pub mount: Mount,
-    /// Terms to predict.
+    /// Terms to predict (default: the mount's default terms).
+    #[serde(default, deserialize_with = "super::terms_or_default")]
+    #[schemars(with = "Option<Vec<Term>>")]
     pub terms: Vec<Term>,
     /// Nominal scale factor K1 (output/g); with `noise`, needed for a prediction.
+    #[serde(default)]
     pub k1: Option<f64>,
     /// σ of one output sample (output units); with `k1`, needed for a prediction.
+    #[serde(default)]
     pub noise: Option<f64>,
     /// Samples averaged per position (≥ 1).
+    #[serde(default = "default_samples")]
     pub samples: usize,
-    /// σ of the head's index-angle error (arcsec, ≥ 0).
+    /// σ of the head's index-angle error (arcsec, 0…3600).
+    #[serde(default)]
     pub index_error_arcsec: f64,
 }
 
-impl serde::Serialize for TumblePlanOptions {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut m = s.serialize_map(Some(6))?;
-        m.serialize_entry("index_error_arcsec", &self.index_error_arcsec)?;
-        m.serialize_entry("k1", &self.k1)?;
-        m.serialize_entry("mount", self.mount.name())?;
-        m.serialize_entry("noise", &self.noise)?;
-        m.serialize_entry("samples", &self.samples)?;
-        let terms: Vec<&str> = self.terms.iter().map(|t| t.name()).collect();
-        m.serialize_entry("terms", &terms)?;
-        m.end()
-    }
+fn default_samples() -> usize {
+    1
 }
 
 impl TumblePlanOptions {
     /// Refuse options no prediction can use.
     pub fn validate(&self) -> Result<()> {
-        let bad = |what: &str, v: String| {
-            Err(Error::InvalidValue {
-                what: what.into(),
-                value: v,
-            })
-        };
+        use crate::options::{check_positive, check_range, invalid};
         if self.samples == 0 {
-            return bad("samples (at least 1 per position)", "0".into());
+            return invalid("samples", "at least 1 per position, got 0");
         }
-        if !(self.index_error_arcsec.is_finite()
-            && (0.0..=3600.0).contains(&self.index_error_arcsec))
-        {
-            return bad(
-                "index_error_arcsec (within 0..3600)",
-                self.index_error_arcsec.to_string(),
-            );
-        }
+        check_range(
+            "index_error_arcsec",
+            self.index_error_arcsec,
+            0.0,
+            3600.0,
+            "arcsec",
+        )?;
         match (self.k1, self.noise) {
             (Some(k1), Some(noise)) => {
                 if !(k1.is_finite() && k1 != 0.0 && k1.abs() <= 1e12) {
-                    return bad("k1 (a finite, non-zero scale factor)", k1.to_string());
+                    return invalid(
+                        "k1",
+                        format!("must be a finite, non-zero scale factor, got {k1}"),
+                    );
                 }
-                if !(noise.is_finite() && noise > 0.0) {
-                    return bad("noise (a positive number)", noise.to_string());
-                }
-                Ok(())
+                check_positive("noise", noise)
             }
             (None, None) => Ok(()),
-            _ => Err(Error::Unsupported(
-                "k1 and noise go together (both are needed for a prediction)".into(),
-            )),
+            (Some(_), None) => invalid(
+                "noise",
+                "k1 and noise go together (both are needed for a prediction)",
+            ),
+            (None, Some(_)) => invalid(
+                "k1",
+                "k1 and noise go together (both are needed for a prediction)",
+            ),
         }
+    }
+
+    /// The terms to predict: as given, or the mount's default terms.
+    pub fn terms(&self) -> Vec<Term> {
+        if self.terms.is_empty() {
+            super::default_terms(self.mount)
+        } else {
+            self.terms.clone()
+        }
+    }
+}
+
+impl crate::procedures::Plan for super::Tumble {
+    type Options = TumblePlanOptions;
+
+    fn plan(o: &TumblePlanOptions) -> Result<crate::document::plan::PlanDocument> {
+        plan_document(&o.choice.plan()?, o)
     }
 }
 
@@ -328,7 +405,11 @@ pub fn plan_document(
             o.mount.name()
         ),
     );
-    d.with_options(o)?;
+    let terms = o.terms();
+    d.with_options(&TumblePlanOptions {
+        terms: terms.clone(),
+        ..o.clone()
+    })?;
     d.set("plan", json!(plan.kind.name()))?;
     d.set(
         "step_deg",
@@ -341,7 +422,7 @@ pub fn plan_document(
         (Some(k1), Some(noise)) => {
             let p = predict(
                 o.mount,
-                &o.terms,
+                &terms,
                 &plan.angles_rad(),
                 k1,
                 noise / (o.samples as f64).sqrt(),
@@ -367,7 +448,7 @@ pub fn plan_document(
             // No prediction without them, but a plan that cannot separate a
             // term is refused all the same (its design does not depend on
             // the scale of K1 or of the noise).
-            predict(o.mount, &o.terms, &plan.angles_rad(), 1.0, 1.0, 0.0)?;
+            predict(o.mount, &terms, &plan.angles_rad(), 1.0, 1.0, 0.0)?;
             d.note("give k1 and noise for the predicted uncertainty of every coefficient");
         }
     }
