@@ -72,9 +72,20 @@ pub fn check_latitude_deg(latitude_deg: f64) -> Result<()> {
 }
 
 /// Options from a JSON value (a Python keyword dict, a fuzz input, a
-/// stored plan): unknown keys, missing keys and values of the wrong type are
-/// [`Error::InvalidOption`] naming the key path (`runs[2].rate_deg_s`).
-pub fn from_json<T: DeserializeOwned>(value: &serde_json::Value) -> Result<T> {
+/// stored plan): unknown keys (against the type's JSON Schema, so that a
+/// flattened group of options is checked too), missing keys and values of
+/// the wrong type are [`Error::InvalidOption`] naming the key path
+/// (`runs[2].rate_deg_s`).
+pub fn from_json<T: DeserializeOwned + JsonSchema>(value: &serde_json::Value) -> Result<T> {
+    if let serde_json::Value::Object(given) = value {
+        let known = known_keys(&schema_of::<T>());
+        if !known.is_empty() {
+            if let Some(k) = given.keys().find(|k| !known.contains(k.as_str())) {
+                let list: Vec<&str> = known.iter().map(String::as_str).collect();
+                return invalid(k, format!("unknown option (known: {})", list.join(", ")));
+            }
+        }
+    }
     serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
         let inner = e.into_inner().to_string();
@@ -97,6 +108,39 @@ pub fn from_json<T: DeserializeOwned>(value: &serde_json::Value) -> Result<T> {
             message: inner,
         }
     })
+}
+
+/// The top-level keys a schema allows: its `properties`, and those of the
+/// schemas it combines (`allOf`, `anyOf`, `oneOf`, `$ref` into `$defs`).
+fn known_keys(schema: &serde_json::Value) -> std::collections::BTreeSet<String> {
+    fn walk(
+        s: &serde_json::Value,
+        root: &serde_json::Value,
+        depth: usize,
+        out: &mut std::collections::BTreeSet<String>,
+    ) {
+        if depth > 8 {
+            return;
+        }
+        if let Some(p) = s.get("properties").and_then(|p| p.as_object()) {
+            out.extend(p.keys().cloned());
+        }
+        for k in ["allOf", "anyOf", "oneOf"] {
+            for sub in s.get(k).and_then(|v| v.as_array()).into_iter().flatten() {
+                walk(sub, root, depth + 1, out);
+            }
+        }
+        if let Some(r) = s.get("$ref").and_then(|r| r.as_str()) {
+            if let Some(name) = r.strip_prefix("#/$defs/") {
+                if let Some(d) = root.get("$defs").and_then(|d| d.get(name)) {
+                    walk(d, root, depth + 1, out);
+                }
+            }
+        }
+    }
+    let mut out = std::collections::BTreeSet::new();
+    walk(schema, schema, 0, &mut out);
+    out
 }
 
 /// The JSON Schema of an options type (draft 2020-12, as schemars writes).
@@ -201,6 +245,22 @@ mod tests {
             key_of(serde_json::json!({"rate_hz": 1.0, "noise": null, "rate_hx": 2})),
             "rate_hx"
         );
+        #[derive(Debug, serde::Deserialize, JsonSchema)]
+        struct Outer {
+            #[serde(flatten)]
+            #[allow(dead_code)]
+            inner: Demo,
+            #[allow(dead_code)]
+            samples: usize,
+        }
+        let flat = serde_json::json!({"rate_hz": 1.0, "noise": null, "samples": 2, "sample": 3});
+        match from_json::<Outer>(&flat) {
+            Err(Error::InvalidOption { key, message }) => {
+                assert_eq!(key, "sample");
+                assert!(message.contains("rate_hz"), "{message}");
+            }
+            other => panic!("a flattened unknown key passed: {other:?}"),
+        }
         let ok: Demo = from_json(&serde_json::json!({"rate_hz": 1.0, "noise": 0.5})).unwrap();
         assert_eq!(ok.noise, Noise::Known { sigma: 0.5 });
     }

@@ -115,7 +115,7 @@ pub fn reduce_json<P: Procedure>(
     progress: &dyn Progress,
 ) -> Result<ResultDocument>
 where
-    P::Options: serde::de::DeserializeOwned,
+    P::Options: serde::de::DeserializeOwned + schemars::JsonSchema,
 {
     let options: P::Options = crate::options::from_json(options)?;
     reduce_source::<P, _>(name, src, read, &options, progress)
