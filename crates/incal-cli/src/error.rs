@@ -75,7 +75,7 @@ pub fn core(e: incal::Error) -> CliError {
         )),
         incal::Error::Unsupported(m) => CliError::Input(as_flag(&m, false)),
         incal::Error::InvalidOption { key, message } => {
-            CliError::Input(format!("{}: {message}", flag_of(&key)))
+            CliError::Input(format!("{}: {}", flag_of(&key), spell_keys(&message)))
         }
         incal::Error::InFile { file, source } => match core(*source) {
             CliError::Input(m) => CliError::Input(format!("{file}: {m}")),
@@ -172,4 +172,22 @@ pub fn flag_of(key: &str) -> String {
         Some(flag) => format!("{flag} ({key})"),
         None => key.to_string(),
     }
+}
+
+/// A core message with the other options it names in backticks
+/// (`` `u_k1` ``) spelled as flags (`--u-k1`), by [`flag_of`].
+pub fn spell_keys(message: &str) -> String {
+    let mut out = String::with_capacity(message.len());
+    let mut parts = message.split('`');
+    out.push_str(parts.next().unwrap_or(""));
+    let mut inside = true;
+    for p in parts {
+        if inside {
+            out.push_str(&flag_of(p));
+        } else {
+            out.push_str(p);
+        }
+        inside = !inside;
+    }
+    out
 }

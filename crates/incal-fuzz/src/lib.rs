@@ -273,12 +273,8 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
             reduce::<gyro::positions::GyroPositions>(
                 data,
                 &gyro::positions::GyroPositionsOptions {
-                    latitude_deg: 45.0,
                     azimuth_deg: Some(90.0),
-                    axial,
-                    terms: gyro::positions::default_terms(axial),
-                    noise: Noise::Auto,
-                    k1: gyro::positions::K1Source::Given { k1: 0.02, u: None },
+                    ..gyro::positions::GyroPositionsOptions::new(45.0, axial, 0.02, None)
                 },
             )
         }

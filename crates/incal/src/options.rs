@@ -11,7 +11,9 @@
 //!
 //! A bad option is [`Error::InvalidOption`] naming the key: each front end
 //! spells the key its own way from its own table (the CLI from its argument
-//! definitions, Python from the keyword name).
+//! definitions, Python from the keyword name). A message that names another
+//! option puts its key in backticks (`` `u_k1` ``) for the front end to
+//! spell the same way.
 
 use schemars::JsonSchema;
 use serde::de::DeserializeOwned;

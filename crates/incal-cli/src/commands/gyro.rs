@@ -7,17 +7,15 @@ use std::path::PathBuf;
 
 use clap::{Subcommand, ValueEnum};
 use incal::estimation::Noise;
-use incal::procedures::gyro::positions::plan::{
-    plan_document as positions_plan, PositionsPlanOptions,
-};
+use incal::procedures::gyro::positions::plan::PositionsPlanOptions;
 use incal::procedures::gyro::positions::sim::{simulate_positions, DriftTruth, GyroPositionsSim};
 use incal::procedures::gyro::positions::{
     self as gp, Axial, DriftTerm, GyroPositions, GyroPositionsOptions, K1Source,
 };
-use incal::procedures::gyro::rate::plan::{plan_document as rate_plan, RatePlanOptions};
+use incal::procedures::gyro::rate::plan::RatePlanOptions;
 use incal::procedures::gyro::rate::sim::{k1_pos_neg, simulate_rate, GyroRateSim};
 use incal::procedures::gyro::rate::{self as gr, GyroRate, GyroRateOptions, InputAxis, RateTerm};
-use incal::procedures::Silent;
+use incal::procedures::{Plan, Silent};
 
 use crate::documents::read_document;
 use crate::error::{core, usage, CliError, CliResult};
@@ -96,7 +94,7 @@ pub struct RateArgs {
     #[arg(long)]
     pub input: PathBuf,
     /// Latitude of the rate table (deg, -90..90): the Earth rate's vertical component is an input.
-    #[arg(long, value_parser = crate::options::latitude_deg)]
+    #[arg(long)]
     pub latitude_deg: f64,
     /// Input axis along the table axis, up or down.
     #[arg(long, value_enum, default_value = "up")]
@@ -135,7 +133,7 @@ pub struct PositionsArgs {
     #[arg(long)]
     pub input: PathBuf,
     /// Latitude (deg, -90..90).
-    #[arg(long, value_parser = crate::options::latitude_deg)]
+    #[arg(long)]
     pub latitude_deg: f64,
     /// Azimuth of the head axis (deg from north towards east); needed unless the CSV has azimuth_deg.
     #[arg(long)]
@@ -150,8 +148,8 @@ pub struct PositionsArgs {
     #[arg(long)]
     pub u_k1: Option<f64>,
     /// A gyro rate result (JSON) whose K1 (with u and dof) is used.
-    #[arg(long, group = "k1_source")]
-    pub from: Option<PathBuf>,
+    #[arg(long = "from", group = "k1_source")]
+    pub k1_from: Option<PathBuf>,
     /// Fit K1 from the Earth-rate projection (needs several azimuths).
     #[arg(long, group = "k1_source")]
     pub fit_k1: bool,
@@ -167,43 +165,31 @@ pub struct PositionsArgs {
     pub result: ResultArgs,
 }
 
-/// K1 from `--k1`/`--u-k1`, `--from` (a gyro-rate result) or `--fit-k1`.
-fn k1_source(a: &PositionsArgs) -> CliResult<K1Source> {
-    if a.fit_k1 {
-        if a.u_k1.is_some() {
-            return Err(usage("--u-k1 goes with --k1"));
-        }
-        return Ok(K1Source::Fit);
-    }
-    if let Some(k1) = a.k1 {
-        return Ok(K1Source::Given { k1, u: a.u_k1 });
-    }
-    if let Some(p) = &a.from {
-        if a.u_k1.is_some() {
-            return Err(usage(
-                "--u-k1 goes with --k1 (the u of --from comes from the result)",
-            ));
-        }
-        let (name, sha, doc) = read_document(p)?;
-        let record = input_file("from", &p.display().to_string(), sha, None);
-        return K1Source::from_rate_result(&doc, record)
-            .map_err(|e| CliError::Input(format!("{name}: --from: {e}")));
-    }
-    Err(usage(
-        "give --k1 (with --u-k1), --from RATE.json or --fit-k1",
-    ))
-}
-
-/// `incal gyro positions`.
+/// `incal gyro positions`: K1 from `--k1`/`--u-k1`, `--fit-k1`, or
+/// `--from` (a gyro-rate result, read here); the core checks the choice.
 pub fn run_positions(a: &PositionsArgs) -> CliResult<()> {
     let axial: Axial = a.axial.into();
+    let k1_from = match &a.k1_from {
+        Some(p) => {
+            let (name, sha, doc) = read_document(p)?;
+            let record = input_file("from", &p.display().to_string(), sha, None);
+            Some(
+                K1Source::from_rate_result(&doc, record)
+                    .map_err(|e| CliError::Input(format!("{name}: --from: {e}")))?,
+            )
+        }
+        None => None,
+    };
     let options = GyroPositionsOptions {
         latitude_deg: a.latitude_deg,
         azimuth_deg: a.azimuth_deg,
         axial,
         terms: drift_terms(&a.terms, axial)?,
         noise: Noise::from_option(a.noise).map_err(core)?,
-        k1: k1_source(a)?,
+        k1: a.k1,
+        u_k1: a.u_k1,
+        fit_k1: a.fit_k1,
+        k1_from,
     };
     crate::run::reduce::<GyroPositions>(&a.input, &a.read, &options, &a.result, &Silent)
 }
@@ -224,7 +210,7 @@ pub struct PlanRateArgs {
     #[arg(long)]
     pub k1: f64,
     /// Latitude (deg).
-    #[arg(long, default_value_t = 0.0, value_parser = crate::options::latitude_deg)]
+    #[arg(long, default_value_t = 0.0)]
     pub latitude_deg: f64,
     /// Input axis up or down.
     #[arg(long, value_enum, default_value = "up")]
@@ -251,7 +237,8 @@ pub fn plan_rate(a: &PlanRateArgs) -> CliResult<()> {
         terms: rate_terms(&a.terms)?,
         rate_uncertainty_ppm: a.rate_uncertainty_ppm,
     };
-    a.out.emit(&rate_plan(&options).map_err(core)?)
+    a.out
+        .emit(&<GyroRate as Plan>::plan(&options).map_err(core)?)
 }
 
 /// Options of `incal plan gyro-positions`.
@@ -264,7 +251,7 @@ pub struct PlanPositionsArgs {
     #[arg(long, value_delimiter = ',', default_value = "0")]
     pub azimuths_deg: Vec<f64>,
     /// Latitude (deg).
-    #[arg(long, value_parser = crate::options::latitude_deg)]
+    #[arg(long)]
     pub latitude_deg: f64,
     /// Gyro axis along the head axis.
     #[arg(long, value_enum, default_value = "sa")]
@@ -306,7 +293,8 @@ pub fn plan_positions(a: &PlanPositionsArgs) -> CliResult<()> {
         noise: a.noise,
         samples: a.samples,
     };
-    a.out.emit(&positions_plan(&options).map_err(core)?)
+    a.out
+        .emit(&<GyroPositions as Plan>::plan(&options).map_err(core)?)
 }
 
 /// Options of `incal simulate gyro-rate`.
@@ -328,7 +316,7 @@ pub struct SimRateArgs {
     #[arg(long, default_value_t = 0.0)]
     pub k3: f64,
     /// Latitude (deg).
-    #[arg(long, default_value_t = 45.0, value_parser = crate::options::latitude_deg)]
+    #[arg(long, default_value_t = 45.0)]
     pub latitude_deg: f64,
     /// Input axis up or down.
     #[arg(long, value_enum, default_value = "up")]
@@ -419,7 +407,7 @@ pub struct SimPositionsArgs {
     #[arg(long, default_value_t = 0.0)]
     pub d_ss_deg_h_g2: f64,
     /// Latitude (deg).
-    #[arg(long, default_value_t = 45.0, value_parser = crate::options::latitude_deg)]
+    #[arg(long, default_value_t = 45.0)]
     pub latitude_deg: f64,
     /// Azimuths of the head axis (deg), comma separated; two or more add an azimuth_deg column.
     #[arg(long, value_delimiter = ',', default_value = "0")]

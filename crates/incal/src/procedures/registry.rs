@@ -408,8 +408,8 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--samples", "4", "--seed", "16"],
             options: &["--latitude-deg", "45"],
         }),
-        reduction: None,
-        planner: None,
+        reduction: reduction::<super::gyro::rate::GyroRate>(),
+        planner: planner::<super::gyro::rate::GyroRate>(),
         simulator: None,
     },
     Entry {
@@ -430,8 +430,8 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--samples", "4", "--seed", "17"],
             options: &["--latitude-deg", "45", "--azimuth-deg", "90", "--k1", "0.02", "--axial", "sa"],
         }),
-        reduction: None,
-        planner: None,
+        reduction: reduction::<super::gyro::positions::GyroPositions>(),
+        planner: planner::<super::gyro::positions::GyroPositions>(),
         simulator: None,
     },
     Entry {

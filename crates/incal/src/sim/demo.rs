@@ -448,8 +448,8 @@ fn centrifuge(seed: u64) -> Result<DemoSection> {
 }
 
 fn gyro(seed: u64) -> Result<DemoSection> {
-    use crate::procedures::gyro::positions::{self as gp, Axial, PositionsOptions, ScaleFactor};
-    use crate::procedures::gyro::rate::{self as gr, InputAxis, RateOptions, RateTerm};
+    use crate::procedures::gyro::positions::{self as gp, Axial, GyroPositionsOptions, K1Source};
+    use crate::procedures::gyro::rate::{self as gr, GyroRateOptions, InputAxis, RateTerm};
     use crate::sim::gyro::{
         simulate_positions, simulate_rate, DriftTruth, GyroPositionsSim, GyroRateSim,
     };
@@ -472,8 +472,8 @@ fn gyro(seed: u64) -> Result<DemoSection> {
         run_scatter_ppm: 0.0,
         seed: seed.wrapping_add(40),
     };
-    let ropts = RateOptions {
-        latitude_rad,
+    let ropts = GyroRateOptions {
+        latitude_deg: 45.75,
         ia: InputAxis::Up,
         terms: vec![RateTerm::K1, RateTerm::B, RateTerm::K2],
         noise: Noise::Auto,
@@ -507,17 +507,24 @@ fn gyro(seed: u64) -> Result<DemoSection> {
         seed: seed.wrapping_add(41),
     };
     let (k1_fit, u_k1) = rr.coefficients.get("K1").unwrap_or((k1, 0.0));
-    let sf = ScaleFactor::Known {
+    // K1 with its u and dof handed over from the rate test.
+    let from = K1Source::Result {
         k1: k1_fit,
         u: u_k1,
         dof: rr.coefficients.dof(),
+        input: crate::document::InputFile {
+            role: "from".into(),
+            path: "gyro rate (demo)".into(),
+            sha256: String::new(),
+            rows: None,
+        },
     };
-    let popts = PositionsOptions {
-        latitude_rad,
-        axial: Axial::Sa,
-        terms: gp::default_terms(Axial::Sa),
-        noise: Noise::Auto,
-        scale_factor: sf,
+    let sf = from.scale_factor();
+    let popts = GyroPositionsOptions {
+        k1: None,
+        u_k1: None,
+        k1_from: Some(from),
+        ..GyroPositionsOptions::new(45.75, Axial::Sa, k1_fit, None)
     };
     let pr = gp::calibrate(&simulate_positions(&pcfg), &popts)?;
     let pt: BTreeMap<String, f64> = ["B", "D_I", "D_O"]

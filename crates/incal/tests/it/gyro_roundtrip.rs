@@ -3,10 +3,8 @@
 //! and the refusals of terms a plan cannot separate.
 
 use incal::estimation::{coverage_factor, Noise};
-use incal::procedures::gyro::positions::{
-    self as gp, Axial, DriftTerm, PositionsOptions, ScaleFactor,
-};
-use incal::procedures::gyro::rate::{self as gr, InputAxis, RateOptions, RateTerm};
+use incal::procedures::gyro::positions::{self as gp, Axial, DriftTerm, GyroPositionsOptions};
+use incal::procedures::gyro::rate::{self as gr, GyroRateOptions, InputAxis, RateTerm};
 use incal::sim::gyro::{
     simulate_positions, simulate_rate, DriftTruth, GyroPositionsSim, GyroRateSim,
 };
@@ -38,9 +36,9 @@ fn rate_sim(seed: u64) -> GyroRateSim {
     }
 }
 
-fn rate_opts(terms: &[RateTerm], noise: Noise) -> RateOptions {
-    RateOptions {
-        latitude_rad: 45f64.to_radians(),
+fn rate_opts(terms: &[RateTerm], noise: Noise) -> GyroRateOptions {
+    GyroRateOptions {
+        latitude_deg: 45.0,
         ia: InputAxis::Up,
         terms: terms.to_vec(),
         noise,
@@ -183,7 +181,7 @@ fn rate_test_nonlinearity_reads_the_quadratic() {
     cfg.rates_deg_s = (-10..=10).map(|k| 20.0 * k as f64).collect();
     let obs = simulate_rate(&cfg);
     let mut o = rate_opts(&[RateTerm::B, RateTerm::K1], Noise::Known { sigma: 1e-6 });
-    o.latitude_rad = 0.0;
+    o.latitude_deg = 0.0;
     let r = gr::calibrate(&obs, &o).unwrap();
     // LS line of K2 ω² over a symmetric grid is flat at K2·mean(ω²); the
     // largest deviation is K1·K2·max|ω² − mean(ω²)| (at the ends here), over
@@ -247,16 +245,9 @@ fn positions_u95_covers_truth_at_latitudes_and_azimuths() {
             let k1 = 0.02 * (1.0 + normal(&mut r, u_k1_rel));
             let res = gp::calibrate(
                 &obs,
-                &PositionsOptions {
-                    latitude_rad: f64::to_radians(lat),
-                    axial,
+                &GyroPositionsOptions {
                     terms: terms.clone(),
-                    noise: Noise::Auto,
-                    scale_factor: ScaleFactor::Known {
-                        k1,
-                        u: 0.02 * u_k1_rel,
-                        dof: f64::INFINITY,
-                    },
+                    ..GyroPositionsOptions::new(lat, axial, k1, Some(0.02 * u_k1_rel))
                 },
             )
             .expect("positions reduce");
@@ -296,16 +287,9 @@ fn drift_value(n: &str) -> f64 {
 fn positions_plan_predicts_monte_carlo_scatter() {
     let axial = Axial::Sa;
     let terms = gp::default_terms(axial);
-    let opts = PositionsOptions {
-        latitude_rad: 45f64.to_radians(),
-        axial,
+    let opts = GyroPositionsOptions {
         terms: terms.clone(),
-        noise: Noise::Auto,
-        scale_factor: ScaleFactor::Known {
-            k1: 0.02,
-            u: 0.0,
-            dof: f64::INFINITY,
-        },
+        ..GyroPositionsOptions::new(45.0, axial, 0.02, Some(0.0))
     };
     let ang: Vec<f64> = angles().iter().map(|a| a.to_radians()).collect();
     let plan = gp::plan(&ang, &[90f64.to_radians()], 10, 2e-5, 0.02, &opts).unwrap();
@@ -334,12 +318,10 @@ fn positions_plan_predicts_monte_carlo_scatter() {
 #[test]
 fn positions_fit_k1_from_earth_rate_needs_two_azimuths() {
     let axial = Axial::Sa;
-    let opts = PositionsOptions {
-        latitude_rad: 45f64.to_radians(),
-        axial,
-        terms: gp::default_terms(axial),
-        noise: Noise::Auto,
-        scale_factor: ScaleFactor::Fit,
+    let opts = GyroPositionsOptions {
+        k1: None,
+        fit_k1: true,
+        ..GyroPositionsOptions::new(45.0, axial, 0.02, None)
     };
     // One azimuth: the Earth-rate projection is a combination of sin θ and
     // cos θ, so K1 aliases with D_I and D_O; the refusal names them.
@@ -370,9 +352,7 @@ fn positions_fit_k1_from_earth_rate_needs_two_azimuths() {
 fn positions_refuse_bias_against_second_order_terms() {
     let axial = Axial::Sa;
     let obs = simulate_positions(&pos_sim(45.0, &[0.0], axial, 4));
-    let opts = PositionsOptions {
-        latitude_rad: 45f64.to_radians(),
-        axial,
+    let opts = GyroPositionsOptions {
         terms: vec![
             DriftTerm::B,
             DriftTerm::DI,
@@ -380,12 +360,7 @@ fn positions_refuse_bias_against_second_order_terms() {
             DriftTerm::DII,
             DriftTerm::DOO,
         ],
-        noise: Noise::Auto,
-        scale_factor: ScaleFactor::Known {
-            k1: 0.02,
-            u: 0.0,
-            dof: f64::INFINITY,
-        },
+        ..GyroPositionsOptions::new(45.0, axial, 0.02, Some(0.0))
     };
     let e = gp::calibrate(&obs, &opts).unwrap_err().to_string();
     assert!(
@@ -396,7 +371,7 @@ fn positions_refuse_bias_against_second_order_terms() {
         "{e}"
     );
     // A term with no regressor in this mount is named too.
-    let opts = PositionsOptions {
+    let opts = GyroPositionsOptions {
         terms: vec![DriftTerm::B, DriftTerm::DS],
         ..opts
     };
@@ -417,7 +392,7 @@ fn rate_test_refuses_one_rate_and_bad_latitude() {
         .to_string();
     assert!(e.contains("distinct table rates"), "{e}");
     let mut o = rate_opts(&[RateTerm::B, RateTerm::K1], Noise::Auto);
-    o.latitude_rad = 200f64.to_radians();
+    o.latitude_deg = 200.0;
     let e = gr::calibrate(&simulate_rate(&rate_sim(1)), &o)
         .unwrap_err()
         .to_string();

@@ -37,18 +37,6 @@ pub fn earth_rate_deg_s() -> f64 {
     EARTH_RATE_RAD_S.to_degrees()
 }
 
-/// Check a latitude (rad): finite and within ±90°.
-pub fn check_latitude(latitude_rad: f64) -> crate::error::Result<()> {
-    if latitude_rad.is_finite() && latitude_rad.abs() <= std::f64::consts::FRAC_PI_2 + 1e-12 {
-        Ok(())
-    } else {
-        Err(crate::error::Error::InvalidValue {
-            what: "latitude (must be within -90..90 deg)".into(),
-            value: format!("{} deg", latitude_rad.to_degrees()),
-        })
-    }
-}
-
 /// Group values by a key, keeping the order of first appearance.
 pub(crate) fn group<K: PartialEq + Clone>(
     items: impl Iterator<Item = (K, f64)>,

@@ -81,7 +81,20 @@ impl Axial {
             Axial::Oa => "oa",
         }
     }
+    /// Parse `sa` or `oa` (case-insensitive).
+    pub fn parse(s: &str) -> Result<Axial> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "sa" => Ok(Axial::Sa),
+            "oa" => Ok(Axial::Oa),
+            other => Err(Error::Unsupported(format!(
+                "unknown axial axis '{other}' (use sa or oa)"
+            ))),
+        }
+    }
 }
+
+crate::named_enum!(Axial, [Axial::Sa, Axial::Oa]);
+crate::named_enum!(DriftTerm, ALL_TERMS);
 
 /// A term of the drift model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -215,21 +228,6 @@ pub enum ScaleFactor {
     Fit,
 }
 
-/// Options of the multi-position reduction.
-#[derive(Debug, Clone, PartialEq)]
-pub struct PositionsOptions {
-    /// Latitude φ (rad).
-    pub latitude_rad: f64,
-    /// Which gyro axis is along the head axis.
-    pub axial: Axial,
-    /// Drift terms.
-    pub terms: Vec<DriftTerm>,
-    /// Noise of one output sample (output units).
-    pub noise: Noise,
-    /// The scale factor.
-    pub scale_factor: ScaleFactor,
-}
-
 /// Largest head angle or azimuth (deg, in magnitude) a recording, a plan
 /// or a simulation may hold.
 pub const MAX_ANGLE_DEG: f64 = 1e4;
@@ -243,20 +241,16 @@ pub fn default_angles_deg() -> Vec<f64> {
 /// within ±[`MAX_ANGLE_DEG`].
 pub(crate) fn check_angles_deg(what: &str, v: &[f64]) -> Result<()> {
     if v.is_empty() {
-        return Err(Error::TooFew {
-            what: format!("{what} (angles)"),
-            needed: 1,
-            got: 0,
-        });
+        return crate::options::invalid(what, "need at least 1 angle, got 0");
     }
     match v
         .iter()
         .find(|x| !(x.is_finite() && x.abs() <= MAX_ANGLE_DEG))
     {
-        Some(x) => Err(Error::InvalidValue {
-            what: format!("{what} (an angle, |angle| <= 1e4 deg)"),
-            value: x.to_string(),
-        }),
+        Some(x) => crate::options::invalid(
+            what,
+            format!("an angle must be finite and within ±1e4 deg, got {x}"),
+        ),
         None => Ok(()),
     }
 }
@@ -399,72 +393,135 @@ impl K1Source {
     }
 }
 
-/// Options of the multi-position test as a front end gives them,
-/// validated once by [`GyroPositionsOptions::validate`];
-/// [`GyroPositionsOptions::reduction`] gives the [`PositionsOptions`] of
-/// the reduction. In the document's `options`: `{"axial": "sa",
-/// "azimuth_deg": 90.0, "latitude_deg": 45.0, "noise": null, "terms":
-/// ["B", "D_I", "D_O"]}` (angles as given; `azimuth_deg` null when the
-/// recording has an `azimuth_deg` column; `noise` the known σ of one output
-/// sample or null; `terms` as fitted, sorted). Where K1 came from is in the
-/// document's `scale_factor` and `inputs`.
-#[derive(Debug, Clone, PartialEq)]
+/// Options of the multi-position test, validated once by
+/// [`GyroPositionsOptions::validate`]. In the document's `options`:
+/// `{"axial": "sa", "azimuth_deg": 90.0, "latitude_deg": 45.0, "noise":
+/// null, "terms": ["B", "D_I", "D_O"]}` (angles as given; `azimuth_deg`
+/// null when the recording has an `azimuth_deg` column; `noise` the known
+/// σ of one output sample or null; `terms` as fitted, sorted). Where K1
+/// came from (`k1` and `u_k1`, `fit_k1`, or a gyro-rate result) is in the
+/// document's `scale_factor` and `inputs`, not in `options`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct GyroPositionsOptions {
     /// Latitude φ (deg, −90…90).
     pub latitude_deg: f64,
     /// Azimuth of the head axis (deg from north towards east) of every row
     /// of a recording without an `azimuth_deg` column.
+    #[serde(default)]
     pub azimuth_deg: Option<f64>,
     /// Which gyro axis is along the head axis.
     pub axial: Axial,
-    /// Drift terms.
+    /// Drift terms (default: [`default_terms`] of the axial axis).
+    #[serde(default, serialize_with = "serialize_terms")]
+    #[schemars(with = "Option<Vec<DriftTerm>>")]
     pub terms: Vec<DriftTerm>,
     /// Noise of one output sample (output units).
+    #[serde(default)]
     pub noise: Noise,
-    /// The scale factor K1 and where it comes from.
-    pub k1: K1Source,
+    /// Scale factor K1 (output/(deg/s)) from a rate test.
+    #[serde(default, skip_serializing)]
+    pub k1: Option<f64>,
+    /// Standard uncertainty of `k1` (output/(deg/s)); without it K1 is
+    /// taken as exact and the document warns.
+    #[serde(default, skip_serializing)]
+    pub u_k1: Option<f64>,
+    /// Fit K1 from the Earth-rate projection (needs several azimuths).
+    #[serde(default, skip_serializing)]
+    pub fit_k1: bool,
+    /// K1 of a gyro-rate result document, read by the front end
+    /// ([`K1Source::from_rate_result`]; the CLI's `--from`); not a value a
+    /// caller types.
+    #[serde(skip)]
+    pub k1_from: Option<K1Source>,
+}
+
+/// The terms as fitted (sorted, without repeats; the axial axis' default
+/// when none are given), as documents record them.
+fn serialize_terms<S: serde::Serializer>(
+    terms: &[DriftTerm],
+    s: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    serde::Serialize::serialize(&term_names(terms), s)
 }
 
 impl GyroPositionsOptions {
+    /// The options of an axial axis with its default terms, automatic
+    /// noise and K1 `k1` (output/(deg/s)) given with its u `u_k1`.
+    pub fn new(latitude_deg: f64, axial: Axial, k1: f64, u_k1: Option<f64>) -> Self {
+        Self {
+            latitude_deg,
+            azimuth_deg: None,
+            axial,
+            terms: default_terms(axial),
+            noise: Noise::Auto,
+            k1: Some(k1),
+            u_k1,
+            fit_k1: false,
+            k1_from: None,
+        }
+    }
+
     /// Refuse options no reduction can use: a latitude outside ±90°, an
     /// azimuth that is not an angle within 1e4 deg, a known noise that is
-    /// not a positive number, a K1 or u(K1) [`K1Source::validate`] refuses.
+    /// not a positive number, no source of K1 or two, a K1 or u(K1)
+    /// [`K1Source::validate`] refuses.
     pub fn validate(&self) -> Result<()> {
-        super::rate::check_latitude_deg(self.latitude_deg)?;
+        crate::options::check_latitude_deg(self.latitude_deg)?;
         if let Some(z) = self.azimuth_deg {
-            if !(z.is_finite() && z.abs() <= MAX_ANGLE_DEG) {
-                return Err(Error::InvalidValue {
-                    what: "azimuth_deg (an angle, |angle| <= 1e4 deg)".into(),
-                    value: z.to_string(),
-                });
-            }
+            crate::options::check_range("azimuth_deg", z, -MAX_ANGLE_DEG, MAX_ANGLE_DEG, "deg")?;
         }
         self.noise.validate()?;
-        self.k1.validate()
+        self.k1_source()?.validate()
     }
 
-    /// The options of [`calibrate`] (latitude in rad).
-    pub fn reduction(&self) -> PositionsOptions {
-        PositionsOptions {
-            latitude_rad: self.latitude_deg.to_radians(),
-            axial: self.axial,
-            terms: self.terms.clone(),
-            noise: self.noise,
-            scale_factor: self.k1.scale_factor(),
+    /// Where K1 comes from: `k1` (with `u_k1`), `fit_k1`, or a gyro-rate
+    /// result (`k1_from`); exactly one of them.
+    pub fn k1_source(&self) -> Result<K1Source> {
+        use crate::options::invalid;
+        let given = [self.k1.is_some(), self.fit_k1, self.k1_from.is_some()];
+        if given.iter().filter(|g| **g).count() > 1 {
+            return invalid(
+                if self.fit_k1 { "fit_k1" } else { "k1" },
+                "give one source of K1: `k1` (with `u_k1`), `k1_from` (a gyro-rate result) or `fit_k1`",
+            );
+        }
+        if self.u_k1.is_some() && self.k1.is_none() {
+            return invalid(
+                "u_k1",
+                "goes with `k1` (the u of a gyro-rate result comes from the result)",
+            );
+        }
+        match (&self.k1_from, self.k1) {
+            (Some(from), _) => Ok(from.clone()),
+            (None, Some(k1)) => Ok(K1Source::Given { k1, u: self.u_k1 }),
+            (None, None) if self.fit_k1 => Ok(K1Source::Fit),
+            (None, None) => invalid(
+                "k1",
+                "give `k1` (with `u_k1`), `k1_from` (a gyro-rate result) or `fit_k1`",
+            ),
         }
     }
-}
 
-impl serde::Serialize for GyroPositionsOptions {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut m = s.serialize_map(Some(5))?;
-        m.serialize_entry("axial", self.axial.name())?;
-        m.serialize_entry("azimuth_deg", &self.azimuth_deg)?;
-        m.serialize_entry("latitude_deg", &self.latitude_deg)?;
-        m.serialize_entry("noise", &self.noise.sigma())?;
-        m.serialize_entry("terms", &term_names(&self.terms))?;
-        m.end()
+    /// Latitude φ (rad): the one conversion of the option.
+    pub fn latitude_rad(&self) -> f64 {
+        self.latitude_deg.to_radians()
+    }
+
+    /// The drift terms: as given, or the axial axis' default terms.
+    pub fn terms(&self) -> Vec<DriftTerm> {
+        if self.terms.is_empty() {
+            default_terms(self.axial)
+        } else {
+            self.terms.clone()
+        }
+    }
+
+    /// The options as recorded: the terms filled in ([`Self::terms`]).
+    pub fn settled(&self) -> GyroPositionsOptions {
+        GyroPositionsOptions {
+            terms: self.terms(),
+            ..self.clone()
+        }
     }
 }
 
@@ -498,14 +555,21 @@ impl crate::procedures::Procedure for GyroPositions {
         o: &GyroPositionsOptions,
         _: &dyn crate::procedures::Progress,
     ) -> Result<crate::document::ResultDocument> {
-        let sf = o.k1.scale_factor();
-        let r = calibrate(obs, &o.reduction())?;
-        let mut doc = r.document(o.noise.sigma().is_some(), sf, o.axial.name())?;
-        doc.warnings.extend(o.k1.warnings());
-        if let K1Source::Result { input, .. } = &o.k1 {
+        let k1 = o.k1_source()?;
+        let r = calibrate(obs, o)?;
+        let mut doc = r.document(o.noise.sigma().is_some(), k1.scale_factor(), o.axial.name())?;
+        doc.warnings.extend(k1.warnings());
+        if let K1Source::Result { input, .. } = &k1 {
             doc.inputs.push(input.clone());
         }
         Ok(doc)
+    }
+
+    fn recorded(
+        _: &Vec<PositionObservation>,
+        o: &GyroPositionsOptions,
+    ) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
+        crate::procedures::options_map(&o.settled())
     }
 }
 
@@ -570,9 +634,14 @@ pub fn positions_of(obs: &[PositionObservation]) -> Result<Vec<(f64, f64, Positi
 }
 
 /// Reduce a multi-position test (module docs).
-pub fn calibrate(obs: &[PositionObservation], opts: &PositionsOptions) -> Result<PositionsResult> {
-    super::check_latitude(opts.latitude_rad)?;
-    let terms = normalized(&opts.terms);
+pub fn calibrate(
+    obs: &[PositionObservation],
+    opts: &GyroPositionsOptions,
+) -> Result<PositionsResult> {
+    opts.validate()?;
+    let latitude_rad = opts.latitude_rad();
+    let scale_factor = opts.k1_source()?.scale_factor();
+    let terms = normalized(&opts.terms());
     if terms.is_empty() {
         return Err(Error::TooFew {
             what: "drift terms".into(),
@@ -583,7 +652,7 @@ pub fn calibrate(obs: &[PositionObservation], opts: &PositionsOptions) -> Result
     let pos = positions_of(obs)?;
     let earth: Vec<f64> = pos
         .iter()
-        .map(|p| earth_rate_ia_deg_h(p.0, p.1, opts.latitude_rad))
+        .map(|p| earth_rate_ia_deg_h(p.0, p.1, latitude_rad))
         .collect();
     let rows: Vec<Vec<f64>> = pos
         .iter()
@@ -596,7 +665,7 @@ pub fn calibrate(obs: &[PositionObservation], opts: &PositionsOptions) -> Result
     let stats: Vec<PositionStats> = pos.iter().map(|p| p.2).collect();
     let n = pos.len();
 
-    let (fit, weights, coefficients, dof) = match opts.scale_factor {
+    let (fit, weights, coefficients, dof) = match scale_factor {
         ScaleFactor::Known { k1, u, dof } => {
             if !(k1.is_finite() && k1 != 0.0) {
                 return Err(Error::InvalidValue {

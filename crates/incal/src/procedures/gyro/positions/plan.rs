@@ -7,13 +7,12 @@
 use serde_json::json;
 
 use super::{
-    calibrate, check_angles_deg, earth_rate_ia_deg_h, term_names, Axial, DriftTerm,
-    PositionObservation, PositionsOptions, PositionsResult, ScaleFactor,
+    calibrate, check_angles_deg, earth_rate_ia_deg_h, Axial, DriftTerm, GyroPositionsOptions,
+    PositionObservation, PositionsResult,
 };
 use crate::document::plan::PlanDocument;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::estimation::Noise;
-use crate::procedures::gyro::rate::check_latitude_deg;
 use crate::procedures::gyro::rate::plan::{check_plan_noise, set_warnings};
 
 /// Predicted uncertainties for a plan: the reduction run on noise-free
@@ -25,13 +24,13 @@ pub fn plan(
     samples: usize,
     noise: f64,
     k1_nominal: f64,
-    opts: &PositionsOptions,
+    opts: &GyroPositionsOptions,
 ) -> Result<PositionsResult> {
     crate::validity::require_plan_inputs(samples, noise, k1_nominal, "nominal K1")?;
     let mut obs = Vec::new();
     for &z in azimuths_rad {
         for &a in angles_rad {
-            let e = k1_nominal * earth_rate_ia_deg_h(a, z, opts.latitude_rad) / 3600.0;
+            let e = k1_nominal * earth_rate_ia_deg_h(a, z, opts.latitude_rad()) / 3600.0;
             for _ in 0..samples {
                 obs.push(PositionObservation {
                     angle_rad: a,
@@ -41,7 +40,7 @@ pub fn plan(
             }
         }
     }
-    let o = PositionsOptions {
+    let o = GyroPositionsOptions {
         noise: Noise::Known { sigma: noise },
         ..opts.clone()
     };
@@ -52,9 +51,10 @@ pub fn plan(
 /// `angles_deg`, `axial`, `azimuths_deg`, `fit_k1`, `k1` (nominal,
 /// output/(deg/s)), `latitude_deg`, `noise` (σ of one output sample,
 /// output units), `samples` (per position), `terms` (sorted), `u_k1`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct PositionsPlanOptions {
-    /// Head angles (deg); every angle at each azimuth.
+    /// Head angles (deg); every angle at each azimuth (default 0, 30, …, 330).
+    #[serde(default = "super::default_angles_deg")]
     pub angles_deg: Vec<f64>,
     /// Azimuths of the head axis (deg from north towards east).
     pub azimuths_deg: Vec<f64>,
@@ -62,36 +62,23 @@ pub struct PositionsPlanOptions {
     pub latitude_deg: f64,
     /// Which gyro axis is along the head axis.
     pub axial: Axial,
-    /// Drift terms.
+    /// Drift terms (default: the axial axis' default terms).
+    #[serde(default, serialize_with = "super::serialize_terms")]
+    #[schemars(with = "Option<Vec<DriftTerm>>")]
     pub terms: Vec<DriftTerm>,
     /// Nominal scale factor K1 (output/(deg/s)).
     pub k1: f64,
     /// Standard uncertainty of K1 (output/(deg/s), ≥ 0; unused with `fit_k1`).
+    #[serde(default)]
     pub u_k1: f64,
     /// Predict with K1 fitted from the Earth-rate projection.
+    #[serde(default)]
     pub fit_k1: bool,
     /// σ of one output sample (output units, > 0).
     pub noise: f64,
     /// Samples averaged per position.
+    #[serde(default = "crate::procedures::gyro::rate::plan::one")]
     pub samples: usize,
-}
-
-impl serde::Serialize for PositionsPlanOptions {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut m = s.serialize_map(Some(10))?;
-        m.serialize_entry("angles_deg", &self.angles_deg)?;
-        m.serialize_entry("axial", self.axial.name())?;
-        m.serialize_entry("azimuths_deg", &self.azimuths_deg)?;
-        m.serialize_entry("fit_k1", &self.fit_k1)?;
-        m.serialize_entry("k1", &self.k1)?;
-        m.serialize_entry("latitude_deg", &self.latitude_deg)?;
-        m.serialize_entry("noise", &self.noise)?;
-        m.serialize_entry("samples", &self.samples)?;
-        m.serialize_entry("terms", &term_names(&self.terms))?;
-        m.serialize_entry("u_k1", &self.u_k1)?;
-        m.end()
-    }
 }
 
 impl PositionsPlanOptions {
@@ -100,41 +87,47 @@ impl PositionsPlanOptions {
     /// one beyond 1e4 deg, a K1 that is not finite, a u(K1) that is not a
     /// non-negative number, a latitude outside ±90°.
     pub fn validate(&self) -> Result<()> {
+        use crate::options::invalid;
         check_plan_noise(self.noise, self.samples)?;
         check_angles_deg("angles_deg", &self.angles_deg)?;
         check_angles_deg("azimuths_deg", &self.azimuths_deg)?;
         if !self.k1.is_finite() {
-            return Err(Error::InvalidValue {
-                what: "k1 (a finite scale factor)".into(),
-                value: self.k1.to_string(),
-            });
+            return invalid(
+                "k1",
+                format!("must be a finite scale factor, got {}", self.k1),
+            );
         }
         if !(self.u_k1.is_finite() && self.u_k1 >= 0.0) {
-            return Err(Error::InvalidValue {
-                what: "u_k1 (a non-negative number)".into(),
-                value: self.u_k1.to_string(),
-            });
+            return invalid(
+                "u_k1",
+                format!("must be a non-negative number, got {}", self.u_k1),
+            );
         }
-        check_latitude_deg(self.latitude_deg)
+        crate::options::check_latitude_deg(self.latitude_deg)
     }
 
-    /// The options of the reduction the plan runs.
-    pub fn reduction(&self) -> PositionsOptions {
-        PositionsOptions {
-            latitude_rad: self.latitude_deg.to_radians(),
+    /// The test the plan predicts: its latitude, axial axis and terms,
+    /// with K1 known (its u, infinite dof) or fitted.
+    pub fn test_options(&self) -> GyroPositionsOptions {
+        GyroPositionsOptions {
+            latitude_deg: self.latitude_deg,
+            azimuth_deg: None,
             axial: self.axial,
             terms: self.terms.clone(),
             noise: Noise::Auto,
-            scale_factor: if self.fit_k1 {
-                ScaleFactor::Fit
-            } else {
-                ScaleFactor::Known {
-                    k1: self.k1,
-                    u: self.u_k1,
-                    dof: f64::INFINITY,
-                }
-            },
+            k1: (!self.fit_k1).then_some(self.k1),
+            u_k1: (!self.fit_k1).then_some(self.u_k1),
+            fit_k1: self.fit_k1,
+            k1_from: None,
         }
+    }
+}
+
+impl crate::procedures::Plan for super::GyroPositions {
+    type Options = PositionsPlanOptions;
+
+    fn plan(o: &PositionsPlanOptions) -> Result<PlanDocument> {
+        plan_document(o)
     }
 }
 
@@ -152,7 +145,7 @@ pub fn plan_document(o: &PositionsPlanOptions) -> Result<PlanDocument> {
         o.samples,
         o.noise,
         o.k1,
-        &o.reduction(),
+        &o.test_options(),
     )?;
     let mut d = PlanDocument::new(
         crate::document::Procedure::GyroPositions,
@@ -165,7 +158,10 @@ pub fn plan_document(o: &PositionsPlanOptions) -> Result<PlanDocument> {
             o.k1
         ),
     );
-    d.with_options(o)?;
+    d.with_options(&PositionsPlanOptions {
+        terms: o.test_options().terms(),
+        ..o.clone()
+    })?;
     d.set("plan", json!("gyro-positions"))?;
     d.set("angles_deg", json!(o.angles_deg))?;
     d.set("azimuths_deg", json!(o.azimuths_deg))?;

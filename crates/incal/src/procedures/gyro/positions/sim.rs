@@ -119,7 +119,7 @@ impl GyroPositionsSim {
         if !(self.k1.is_finite() && self.k1 != 0.0 && self.k1.abs() <= MAX_SIM_K1) {
             return bad("k1 (non-zero, at most 1e9 in magnitude)".into(), self.k1);
         }
-        super::super::check_latitude(self.latitude_rad)?;
+        crate::options::check_latitude_deg(self.latitude_rad.to_degrees())?;
         super::check_angles_deg("angles_deg", &self.angles_deg)?;
         if self.azimuths_rad.is_empty() {
             return super::check_angles_deg("azimuths_deg", &[]);

@@ -89,7 +89,23 @@ impl InputAxis {
             InputAxis::Down => "down",
         }
     }
+    /// Parse `up` or `down` (case-insensitive).
+    pub fn parse(s: &str) -> Result<InputAxis> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "up" => Ok(InputAxis::Up),
+            "down" => Ok(InputAxis::Down),
+            other => Err(Error::Unsupported(format!(
+                "unknown input-axis direction '{other}' (use up or down)"
+            ))),
+        }
+    }
 }
+
+crate::named_enum!(InputAxis, [InputAxis::Up, InputAxis::Down]);
+crate::named_enum!(
+    RateTerm,
+    [RateTerm::B, RateTerm::K1, RateTerm::K2, RateTerm::K3]
+);
 
 /// A term of the rate model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -156,21 +172,6 @@ pub fn coefficient_unit(name: &str) -> &'static str {
     }
 }
 
-/// Options of the rate-transfer reduction.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RateOptions {
-    /// Latitude φ (rad).
-    pub latitude_rad: f64,
-    /// Input axis up or down.
-    pub ia: InputAxis,
-    /// Terms (K1 is added when missing).
-    pub terms: Vec<RateTerm>,
-    /// Noise of one output sample.
-    pub noise: Noise,
-    /// Relative standard uncertainty of the table rate (ppm, type B).
-    pub rate_uncertainty_ppm: f64,
-}
-
 /// Largest table rate a recording or a plan may hold (deg/s).
 pub const MAX_RATE_DEG_S: f64 = 1e5;
 
@@ -182,26 +183,41 @@ pub fn default_terms() -> Vec<RateTerm> {
     vec![RateTerm::B, RateTerm::K1]
 }
 
-/// Options of the rate-transfer test as a front end gives them, validated
-/// once by [`GyroRateOptions::validate`]; [`GyroRateOptions::reduction`]
-/// gives the [`RateOptions`] of the reduction. In the document's
-/// `options`: `{"ia": "up", "latitude_deg": 45.0, "noise": null,
+/// Options of the rate-transfer test, validated once by
+/// [`GyroRateOptions::validate`]. In the document's `options`:
+/// `{"ia": "up", "latitude_deg": 45.0, "noise": null,
 /// "rate_uncertainty_ppm": 0.0, "terms": ["B", "K1"]}` (`latitude_deg` as
 /// given; `noise` the known σ of one output sample or null for "from the
 /// data"; `terms` as fitted: sorted, K1 added).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct GyroRateOptions {
     /// Latitude φ of the rate table (deg, −90…90).
     pub latitude_deg: f64,
     /// Input axis up or down.
+    #[serde(default = "default_ia")]
     pub ia: InputAxis,
-    /// Terms (K1 is added when missing).
+    /// Terms (K1 is added when missing; default B and K1).
+    #[serde(default = "default_terms", serialize_with = "serialize_terms")]
     pub terms: Vec<RateTerm>,
     /// Noise of one output sample.
+    #[serde(default)]
     pub noise: Noise,
     /// Relative standard uncertainty of the table rate (ppm, type B,
     /// 0…[`MAX_RATE_UNCERTAINTY_PPM`]).
+    #[serde(default)]
     pub rate_uncertainty_ppm: f64,
+}
+
+fn default_ia() -> InputAxis {
+    InputAxis::Up
+}
+
+/// The terms as fitted (sorted, K1 added), as documents record them.
+fn serialize_terms<S: serde::Serializer>(
+    terms: &[RateTerm],
+    s: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    serde::Serialize::serialize(&term_names(terms), s)
 }
 
 impl GyroRateOptions {
@@ -209,58 +225,26 @@ impl GyroRateOptions {
     /// known noise that is not a positive number, a rate uncertainty
     /// outside 0…1e5 ppm.
     pub fn validate(&self) -> Result<()> {
-        check_latitude_deg(self.latitude_deg)?;
+        crate::options::check_latitude_deg(self.latitude_deg)?;
         self.noise.validate()?;
-        let ppm = self.rate_uncertainty_ppm;
-        if !(ppm.is_finite() && (0.0..=MAX_RATE_UNCERTAINTY_PPM).contains(&ppm)) {
-            return Err(Error::InvalidValue {
-                what: "rate_uncertainty_ppm (within 0..1e5 ppm)".into(),
-                value: ppm.to_string(),
-            });
-        }
-        Ok(())
+        crate::options::check_range(
+            "rate_uncertainty_ppm",
+            self.rate_uncertainty_ppm,
+            0.0,
+            MAX_RATE_UNCERTAINTY_PPM,
+            "ppm",
+        )
     }
 
-    /// The options of [`calibrate`] (latitude in rad).
-    pub fn reduction(&self) -> RateOptions {
-        RateOptions {
-            latitude_rad: self.latitude_deg.to_radians(),
-            ia: self.ia,
-            terms: self.terms.clone(),
-            noise: self.noise,
-            rate_uncertainty_ppm: self.rate_uncertainty_ppm,
-        }
-    }
-}
-
-impl serde::Serialize for GyroRateOptions {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut m = s.serialize_map(Some(5))?;
-        m.serialize_entry("ia", self.ia.name())?;
-        m.serialize_entry("latitude_deg", &self.latitude_deg)?;
-        m.serialize_entry("noise", &self.noise.sigma())?;
-        m.serialize_entry("rate_uncertainty_ppm", &self.rate_uncertainty_ppm)?;
-        m.serialize_entry("terms", &term_names(&self.terms))?;
-        m.end()
+    /// Latitude φ (rad): the one conversion of the option.
+    pub fn latitude_rad(&self) -> f64 {
+        self.latitude_deg.to_radians()
     }
 }
 
 /// The names of the terms as fitted (sorted, K1 added).
 pub(crate) fn term_names(terms: &[RateTerm]) -> Vec<&'static str> {
     normalized_terms(terms).iter().map(|t| t.name()).collect()
-}
-
-/// A latitude given in degrees: finite and within ±90°.
-pub(crate) fn check_latitude_deg(latitude_deg: f64) -> Result<()> {
-    if latitude_deg.is_finite() && latitude_deg.abs() <= 90.0 {
-        Ok(())
-    } else {
-        Err(Error::InvalidValue {
-            what: "latitude_deg (must be within -90..90 deg)".into(),
-            value: latitude_deg.to_string(),
-        })
-    }
 }
 
 /// The rate-transfer test as one [`crate::procedures::Procedure`].
@@ -288,7 +272,7 @@ impl crate::procedures::Procedure for GyroRate {
         o: &GyroRateOptions,
         _: &dyn crate::procedures::Progress,
     ) -> Result<crate::document::ResultDocument> {
-        calibrate(obs, &o.reduction())?.document(o.noise.sigma().is_some(), o.rate_uncertainty_ppm)
+        calibrate(obs, o)?.document(o.noise.sigma().is_some(), o.rate_uncertainty_ppm)
     }
 }
 
@@ -486,21 +470,15 @@ fn fit_best(
 }
 
 /// Reduce a rate-transfer test (module docs).
-pub fn calibrate(obs: &[RateObservation], opts: &RateOptions) -> Result<RateResult> {
-    super::check_latitude(opts.latitude_rad)?;
-    if !(opts.rate_uncertainty_ppm.is_finite() && opts.rate_uncertainty_ppm >= 0.0) {
-        return Err(Error::InvalidValue {
-            what: "rate uncertainty (ppm, must be >= 0)".into(),
-            value: opts.rate_uncertainty_ppm.to_string(),
-        });
-    }
+pub fn calibrate(obs: &[RateObservation], opts: &GyroRateOptions) -> Result<RateResult> {
+    opts.validate()?;
     let terms = normalized_terms(&opts.terms);
     let pos = positions_of(obs)?;
     check_distinct_rates(&pos, &terms)?;
     crate::validity::require_varying(obs.iter().map(|o| o.output), "output")?;
     let inputs: Vec<f64> = pos
         .iter()
-        .map(|p| input_rate_deg_s(p.0, opts.latitude_rad, opts.ia))
+        .map(|p| input_rate_deg_s(p.0, opts.latitude_rad(), opts.ia))
         .collect();
     let stats: Vec<PositionStats> = pos.iter().map(|p| p.2).collect();
     let (fit, weights, phys, asymmetric, asym_warning) =

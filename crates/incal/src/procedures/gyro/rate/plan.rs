@@ -7,11 +7,11 @@
 use serde_json::json;
 
 use super::{
-    calibrate, coefficient_unit, input_rate_deg_s, term_names, GyroRateOptions, InputAxis,
-    RateObservation, RateOptions, RateResult, RateTerm, MAX_RATE_DEG_S,
+    calibrate, coefficient_unit, input_rate_deg_s, GyroRateOptions, InputAxis, RateObservation,
+    RateResult, RateTerm, MAX_RATE_DEG_S,
 };
 use crate::document::plan::PlanDocument;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::estimation::Noise;
 
 /// Most samples a plan may average per rate.
@@ -27,14 +27,14 @@ pub fn plan(
     samples: usize,
     noise: f64,
     k1: f64,
-    opts: &RateOptions,
+    opts: &GyroRateOptions,
 ) -> Result<RateResult> {
     crate::validity::require_plan_inputs(samples, noise, k1, "nominal K1")?;
     // Noise-free means: each rate gets `samples` identical samples.
     let obs: Vec<RateObservation> = rates_deg_s
         .iter()
         .flat_map(|&r| {
-            let e = k1 * input_rate_deg_s(r, opts.latitude_rad, opts.ia);
+            let e = k1 * input_rate_deg_s(r, opts.latitude_rad(), opts.ia);
             std::iter::repeat_n(
                 RateObservation {
                     rate_deg_s: r,
@@ -45,7 +45,7 @@ pub fn plan(
             )
         })
         .collect();
-    let o = RateOptions {
+    let o = GyroRateOptions {
         noise: Noise::Known { sigma: noise },
         ..opts.clone()
     };
@@ -56,11 +56,12 @@ pub fn plan(
 /// `ia`, `k1` (nominal, output/(deg/s)), `latitude_deg`, `noise` (σ of one
 /// output sample, output units), `rate_uncertainty_ppm`, `rates_deg_s`,
 /// `samples` (per rate), `terms` (sorted, K1 added).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct RatePlanOptions {
     /// Table rates (deg/s), in test order.
     pub rates_deg_s: Vec<f64>,
     /// Samples averaged per rate (1…[`MAX_PLAN_SAMPLES`]).
+    #[serde(default = "one")]
     pub samples: usize,
     /// σ of one output sample (output units, > 0).
     pub noise: f64,
@@ -69,27 +70,21 @@ pub struct RatePlanOptions {
     /// Latitude of the rate table (deg, −90…90).
     pub latitude_deg: f64,
     /// Input axis up or down.
+    #[serde(default = "super::default_ia")]
     pub ia: InputAxis,
-    /// Terms (K1 is added when missing).
+    /// Terms (K1 is added when missing; default B and K1).
+    #[serde(
+        default = "super::default_terms",
+        serialize_with = "super::serialize_terms"
+    )]
     pub terms: Vec<RateTerm>,
     /// Relative standard uncertainty of the table rate (ppm, ≥ 0).
+    #[serde(default)]
     pub rate_uncertainty_ppm: f64,
 }
 
-impl serde::Serialize for RatePlanOptions {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut m = s.serialize_map(Some(8))?;
-        m.serialize_entry("ia", self.ia.name())?;
-        m.serialize_entry("k1", &self.k1)?;
-        m.serialize_entry("latitude_deg", &self.latitude_deg)?;
-        m.serialize_entry("noise", &self.noise)?;
-        m.serialize_entry("rate_uncertainty_ppm", &self.rate_uncertainty_ppm)?;
-        m.serialize_entry("rates_deg_s", &self.rates_deg_s)?;
-        m.serialize_entry("samples", &self.samples)?;
-        m.serialize_entry("terms", &term_names(&self.terms))?;
-        m.end()
-    }
+pub(crate) fn one() -> usize {
+    1
 }
 
 impl RatePlanOptions {
@@ -105,16 +100,16 @@ impl RatePlanOptions {
             .iter()
             .find(|r| !(r.is_finite() && r.abs() <= MAX_RATE_DEG_S))
         {
-            return Err(Error::InvalidValue {
-                what: "rates_deg_s (a table rate, |rate| <= 1e5 deg/s)".into(),
-                value: r.to_string(),
-            });
+            return crate::options::invalid(
+                "rates_deg_s",
+                format!("a table rate must be finite and within ±1e5 deg/s, got {r}"),
+            );
         }
         if !self.k1.is_finite() {
-            return Err(Error::InvalidValue {
-                what: "k1 (a finite scale factor)".into(),
-                value: self.k1.to_string(),
-            });
+            return crate::options::invalid(
+                "k1",
+                format!("must be a finite scale factor, got {}", self.k1),
+            );
         }
         self.test_options().validate()
     }
@@ -131,28 +126,25 @@ impl RatePlanOptions {
             rate_uncertainty_ppm: self.rate_uncertainty_ppm,
         }
     }
+}
 
-    /// The options of the reduction the plan runs: those the test's
-    /// [`GyroRateOptions::reduction`] gives.
-    pub fn reduction(&self) -> RateOptions {
-        self.test_options().reduction()
+impl crate::procedures::Plan for super::GyroRate {
+    type Options = RatePlanOptions;
+
+    fn plan(o: &RatePlanOptions) -> Result<PlanDocument> {
+        plan_document(o)
     }
 }
 
 /// The σ of one sample and the samples per position of a plan: a
 /// positive number, and 1…[`MAX_PLAN_SAMPLES`].
 pub(crate) fn check_plan_noise(noise: f64, samples: usize) -> Result<()> {
-    if !(noise.is_finite() && noise > 0.0) {
-        return Err(Error::InvalidValue {
-            what: "noise (a positive number)".into(),
-            value: noise.to_string(),
-        });
-    }
+    crate::options::check_positive("noise", noise)?;
     if !(1..=MAX_PLAN_SAMPLES).contains(&samples) {
-        return Err(Error::InvalidValue {
-            what: format!("samples (1..{MAX_PLAN_SAMPLES} per position)"),
-            value: samples.to_string(),
-        });
+        return crate::options::invalid(
+            "samples",
+            format!("must be within 1..{MAX_PLAN_SAMPLES} per position, got {samples}"),
+        );
     }
     Ok(())
 }
@@ -164,7 +156,7 @@ pub(crate) fn check_plan_noise(noise: f64, samples: usize) -> Result<()> {
 /// the asymmetry (ppm) when the rates separate it.
 pub fn plan_document(o: &RatePlanOptions) -> Result<PlanDocument> {
     o.validate()?;
-    let p = plan(&o.rates_deg_s, o.samples, o.noise, o.k1, &o.reduction())?;
+    let p = plan(&o.rates_deg_s, o.samples, o.noise, o.k1, &o.test_options())?;
     let mut d = PlanDocument::new(
         crate::document::Procedure::GyroRate,
         format!(

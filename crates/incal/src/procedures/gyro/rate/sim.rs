@@ -87,7 +87,7 @@ impl GyroRateSim {
                 return bad(&format!("{name} (at most 1 in magnitude)"), v);
             }
         }
-        super::super::check_latitude(self.latitude_rad)?;
+        crate::options::check_latitude_deg(self.latitude_rad.to_degrees())?;
         if self.samples == 0 {
             return bad("samples (at least 1 per rate)", 0.0);
         }
