@@ -46,6 +46,11 @@ fn entry_json(e: &Entry) -> Value {
             "plan": e.python_plan(),
             "simulate": e.python_simulate(),
         },
+        "options": {
+            "reduce": e.reduction.map(|t| (t.schema)()),
+            "plan": e.planner.map(|t| (t.schema)()),
+            "simulate": e.simulator.map(|t| (t.schema)()),
+        },
     })
 }
 

@@ -10,7 +10,11 @@ use incal::sim::gyro::{
 };
 use incal::sim::{monte_carlo, normal, rng};
 
-const TRIALS: usize = 1000;
+/// Trials of each Monte Carlo: 200 in the fast tier, 1000 in the
+/// statistical tier (`incal::sim::tier`).
+fn trials() -> usize {
+    incal::sim::tier::trials(200, 1000)
+}
 
 fn rates() -> Vec<f64> {
     vec![
@@ -56,7 +60,7 @@ fn rate_test_u95_covers_truth() {
     let terms = [RateTerm::B, RateTerm::K1, RateTerm::K2, RateTerm::K3];
     let truth = [("B", 5.0), ("K1", 0.02), ("K2", 2e-5), ("K3", -1e-7)];
     for ia in [InputAxis::Up, InputAxis::Down] {
-        let runs = monte_carlo(11, TRIALS, |s| {
+        let runs = monte_carlo(11, trials(), |s| {
             let mut cfg = rate_sim(s);
             cfg.ia = ia;
             let obs = simulate_rate(&cfg);
@@ -83,11 +87,13 @@ fn rate_test_u95_covers_truth() {
                 ia.name(),
                 100.0 * c
             );
+            let (lo, hi) = incal::sim::tier::band(trials(), 0.92, 0.98);
             assert!(
-                (0.92..=0.98).contains(&c),
-                "IA {}: U95 of {name} covers the truth in {:.1} % of {TRIALS} trials",
+                (lo..=hi).contains(&c),
+                "IA {}: U95 of {name} covers the truth in {:.1} % of {} trials",
                 ia.name(),
-                100.0 * c
+                100.0 * c,
+                trials()
             );
         }
     }
@@ -96,7 +102,7 @@ fn rate_test_u95_covers_truth() {
 #[test]
 fn rate_test_recovers_asymmetry() {
     // K1+ = K1 (1 + 150 ppm), K1− = K1 (1 − 150 ppm): asymmetry 300 ppm.
-    let runs = monte_carlo(12, TRIALS, |s| {
+    let runs = monte_carlo(12, trials(), |s| {
         let mut cfg = rate_sim(s);
         cfg.k1_pos = 0.02 * (1.0 + 150e-6);
         cfg.k1_neg = 0.02 * (1.0 - 150e-6);
@@ -117,16 +123,17 @@ fn rate_test_recovers_asymmetry() {
             u,
         )
     });
-    let cov = runs.iter().filter(|r| r.1).count() as f64 / TRIALS as f64;
-    let mean = runs.iter().map(|r| r.0).sum::<f64>() / TRIALS as f64;
+    let cov = runs.iter().filter(|r| r.1).count() as f64 / trials() as f64;
+    let mean = runs.iter().map(|r| r.0).sum::<f64>() / trials() as f64;
     let u = runs[0].2;
     eprintln!(
         "asymmetry 300 ppm: mean {mean:.1} ppm, u {u:.1} ppm, coverage {:.1} %",
         100.0 * cov
     );
-    assert!((0.92..=0.98).contains(&cov), "asymmetry coverage {cov}");
+    let (lo, hi) = incal::sim::tier::band(trials(), 0.92, 0.98);
+    assert!((lo..=hi).contains(&cov), "asymmetry coverage {cov}");
     assert!(
-        (mean - 300.0).abs() < 3.0 * u / (TRIALS as f64).sqrt() + 1.0,
+        (mean - 300.0).abs() < 3.0 * u / (trials() as f64).sqrt() + 1.0,
         "mean asymmetry {mean} ppm"
     );
     assert!(u < 30.0, "asymmetry u {u} ppm should resolve 300 ppm");
@@ -137,15 +144,15 @@ fn rate_plan_predicts_monte_carlo_scatter() {
     let terms = [RateTerm::B, RateTerm::K1, RateTerm::K2, RateTerm::K3];
     let noise = 2e-5;
     let plan = gr::plan(&rates(), 20, noise, 0.02, &rate_opts(&terms, Noise::Auto)).unwrap();
-    let runs = monte_carlo(13, TRIALS, |s| {
+    let runs = monte_carlo(13, trials(), |s| {
         let obs = simulate_rate(&rate_sim(s));
         let r = gr::calibrate(&obs, &rate_opts(&terms, Noise::Auto)).unwrap();
         ["B", "K1", "K2", "K3"].map(|n| r.coefficients.value(n).unwrap())
     });
     for (k, n) in ["B", "K1", "K2", "K3"].iter().enumerate() {
-        let m = runs.iter().map(|r| r[k]).sum::<f64>() / TRIALS as f64;
+        let m = runs.iter().map(|r| r[k]).sum::<f64>() / trials() as f64;
         let sd =
-            (runs.iter().map(|r| (r[k] - m).powi(2)).sum::<f64>() / (TRIALS as f64 - 1.0)).sqrt();
+            (runs.iter().map(|r| (r[k] - m).powi(2)).sum::<f64>() / (trials() as f64 - 1.0)).sqrt();
         let ratio = plan.coefficients.u(n).unwrap() / sd;
         eprintln!("rate plan {n}: plan u / MC sd = {ratio:.3}");
         assert!(
@@ -238,7 +245,7 @@ fn positions_u95_covers_truth_at_latitudes_and_azimuths() {
         (45.0, 200.0, Axial::Oa),
     ] {
         let terms = gp::default_terms(axial);
-        let runs = monte_carlo(21, TRIALS, |s| {
+        let runs = monte_carlo(21, trials(), |s| {
             let obs = simulate_positions(&pos_sim(lat, &[az], axial, s));
             // The K1 handed over from a rate test is off by its own u.
             let mut r = rng(s ^ 0xA5A5);
@@ -268,8 +275,9 @@ fn positions_u95_covers_truth_at_latitudes_and_azimuths() {
                 t.name(),
                 100.0 * c
             );
+            let (lo, hi) = incal::sim::tier::band(trials(), 0.92, 0.98);
             assert!(
-                (0.92..=0.98).contains(&c),
+                (lo..=hi).contains(&c),
                 "lat {lat} az {az} {}: U95 of {} covers in {:.1} %",
                 axial.name(),
                 t.name(),
@@ -293,7 +301,7 @@ fn positions_plan_predicts_monte_carlo_scatter() {
     };
     let ang: Vec<f64> = angles().iter().map(|a| a.to_radians()).collect();
     let plan = gp::plan(&ang, &[90f64.to_radians()], 10, 2e-5, 0.02, &opts).unwrap();
-    let runs = monte_carlo(22, TRIALS, |s| {
+    let runs = monte_carlo(22, trials(), |s| {
         let obs = simulate_positions(&pos_sim(45.0, &[90.0], axial, s));
         let r = gp::calibrate(&obs, &opts).unwrap();
         terms
@@ -302,9 +310,9 @@ fn positions_plan_predicts_monte_carlo_scatter() {
             .collect::<Vec<f64>>()
     });
     for (k, t) in terms.iter().enumerate() {
-        let m = runs.iter().map(|r| r[k]).sum::<f64>() / TRIALS as f64;
+        let m = runs.iter().map(|r| r[k]).sum::<f64>() / trials() as f64;
         let sd =
-            (runs.iter().map(|r| (r[k] - m).powi(2)).sum::<f64>() / (TRIALS as f64 - 1.0)).sqrt();
+            (runs.iter().map(|r| (r[k] - m).powi(2)).sum::<f64>() / (trials() as f64 - 1.0)).sqrt();
         let ratio = plan.coefficients.u(t.name()).unwrap() / sd;
         eprintln!("positions plan {}: plan u / MC sd = {ratio:.3}", t.name());
         assert!(

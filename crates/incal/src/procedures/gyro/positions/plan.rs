@@ -56,11 +56,13 @@ pub struct PositionsPlanOptions {
     /// Head angles (deg); every angle at each azimuth (default 0, 30, …, 330).
     #[serde(default = "super::default_angles_deg")]
     pub angles_deg: Vec<f64>,
-    /// Azimuths of the head axis (deg from north towards east).
+    /// Azimuths of the head axis (deg from north towards east; default 0).
+    #[serde(default = "north")]
     pub azimuths_deg: Vec<f64>,
     /// Latitude (deg, −90…90).
     pub latitude_deg: f64,
-    /// Which gyro axis is along the head axis.
+    /// Which gyro axis is along the head axis (default `sa`).
+    #[serde(default = "spin_axis")]
     pub axial: Axial,
     /// Drift terms (default: the axial axis' default terms).
     #[serde(default, serialize_with = "super::serialize_terms")]
@@ -79,6 +81,14 @@ pub struct PositionsPlanOptions {
     /// Samples averaged per position.
     #[serde(default = "crate::procedures::gyro::rate::plan::one")]
     pub samples: usize,
+}
+
+fn north() -> Vec<f64> {
+    vec![0.0]
+}
+
+fn spin_axis() -> Axial {
+    Axial::Sa
 }
 
 impl PositionsPlanOptions {

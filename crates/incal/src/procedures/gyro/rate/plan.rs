@@ -67,7 +67,8 @@ pub struct RatePlanOptions {
     pub noise: f64,
     /// Nominal scale factor K1 (output/(deg/s)).
     pub k1: f64,
-    /// Latitude of the rate table (deg, −90…90).
+    /// Latitude of the rate table (deg, −90…90; default 0).
+    #[serde(default)]
     pub latitude_deg: f64,
     /// Input axis up or down.
     #[serde(default = "super::default_ia")]
