@@ -20,3 +20,4 @@ mod report_cli;
 mod result_document;
 mod thermal_cli;
 mod tumble_cli;
+mod typed;
