@@ -152,6 +152,16 @@ pub enum Error {
     /// A requested term or option does not exist or does not apply.
     #[error("{0}")]
     Unsupported(String),
+    /// Writing an output (a simulated recording) failed: the I/O error's
+    /// message.
+    #[error("cannot write: {0}")]
+    Write(String),
+}
+
+impl From<std::io::Error> for Error {
+    fn from(e: std::io::Error) -> Error {
+        Error::Write(e.to_string())
+    }
 }
 
 /// Result alias of the core library.

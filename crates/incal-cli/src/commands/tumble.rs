@@ -5,12 +5,11 @@ use std::path::PathBuf;
 use clap::ValueEnum;
 use incal::estimation::Noise;
 use incal::models::Term;
-use incal::procedures::tumble::plan::{TumblePlan, TumblePlanChoice, TumblePlanOptions};
+use incal::procedures::tumble::plan::{TumblePlanChoice, TumblePlanOptions};
+use incal::procedures::tumble::sim::{TumbleSimOptions, TumbleTruth};
 use incal::procedures::tumble::{default_terms, Tumble, TumbleOptions};
-use incal::procedures::{Plan, Silent};
+use incal::procedures::{Plan, Silent, Simulate};
 use incal::rigs::Mount;
-use incal::sim::tumble::TumbleSim;
-use incal::units::arcsec_to_rad;
 
 use crate::error::{core, usage, CliResult};
 use crate::input::ReadArgs;
@@ -107,11 +106,6 @@ impl PlanChoice {
             step_resolution_deg: Some(self.step_resolution_deg),
         }
     }
-
-    /// The chosen plan (GJB 12-point when nothing is chosen).
-    pub fn plan(&self) -> CliResult<TumblePlan> {
-        self.choice().plan().map_err(core)
-    }
 }
 
 /// Options of `incal plan tumble`.
@@ -198,8 +192,6 @@ pub struct TruthArgs {
     pub k_oq: f64,
 }
 
-super::truth_model!(TruthArgs);
-
 /// Options of `incal simulate tumble`.
 #[derive(clap::Args, Debug)]
 pub struct SimArgs {
@@ -232,22 +224,33 @@ pub struct SimArgs {
 
 /// `incal simulate tumble`.
 pub fn simulate(a: &SimArgs) -> CliResult<()> {
-    let cfg = TumbleSim {
-        truth: a.truth.model()?,
+    let t = &a.truth;
+    let options = TumbleSimOptions {
         mount: a.mount.into(),
-        angles_deg: a.plan.plan()?.angles_deg,
+        plan: a.plan.choice(),
+        truth: TumbleTruth {
+            k0_g: t.k0_g,
+            k1: t.k1,
+            k2: t.k2,
+            k3: t.k3,
+            delta_o_arcsec: t.delta_o_arcsec,
+            delta_p_arcsec: t.delta_p_arcsec,
+            k_ip: t.k_ip,
+            k_io: t.k_io,
+            k_po: t.k_po,
+            k_pp: t.k_pp,
+            k_oo: t.k_oo,
+            k_oq: t.k_oq,
+        },
         samples: a.samples,
         noise: a.noise,
-        index_error_rad: arcsec_to_rad(a.index_error_arcsec),
+        index_error_arcsec: a.index_error_arcsec,
         passes: a.passes,
         seed: a.seed,
     };
-    cfg.validate().map_err(core)?;
-    // Streamed: rows are written as they are drawn, in constant memory.
+    // Refused before the output file is opened.
+    options.config().map_err(core)?;
     crate::io::write_stream(a.output.as_deref(), |out| {
-        incal::procedures::tumble::input::write_each(cfg.passes > 1, out, |row| {
-            incal::procedures::tumble::sim::for_each(&cfg, row)
-        })
-        .map(|_| ())
+        <Tumble as Simulate>::simulate(&options, out).map_err(std::io::Error::other)
     })
 }

@@ -137,3 +137,29 @@ fn every_typed_plan_and_simulator_publishes_an_object_schema() {
         }
     }
 }
+
+#[test]
+fn every_typed_simulator_writes_the_bytes_of_the_command_line() {
+    let mut checked = 0;
+    for e in REGISTRY {
+        let (Some(typed), Some(words), Some(example)) = (e.simulator, e.simulate, e.example) else {
+            continue;
+        };
+        let file = unique(&format!("{}-sim.csv", e.id));
+        let mut cli = words.to_vec();
+        cli.extend_from_slice(example.simulate);
+        cli.extend_from_slice(&["-o", p(&file)]);
+        ok(&run(&cli));
+        let options = options_json(words, example.simulate);
+        let mut bytes = Vec::new();
+        (typed.run)(&options, &mut bytes)
+            .unwrap_or_else(|err| panic!("{}: typed simulator with {options}: {err}", e.id));
+        assert!(
+            bytes == std::fs::read(&file).unwrap(),
+            "{}: the typed simulator wrote other bytes than the command line",
+            e.id
+        );
+        checked += 1;
+    }
+    assert!(checked >= 1, "no typed simulator");
+}

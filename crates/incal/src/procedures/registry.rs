@@ -322,7 +322,7 @@ pub static REGISTRY: &[Entry] = &[
         }),
         reduction: reduction::<super::tumble::Tumble>(),
         planner: planner::<super::tumble::Tumble>(),
-        simulator: None,
+        simulator: simulator::<super::tumble::Tumble>(),
     },
     Entry {
         id: "centrifuge",
