@@ -25,3 +25,16 @@ pub fn reduce<P: Procedure>(
         reduce_source::<P, _>(&src.name, src.reader, &read, options, progress).map_err(core)?;
     result.emit(doc)
 }
+
+/// `incal simulate …` of a procedure with a typed simulator: the options
+/// are refused before the output file is opened, then the recording is
+/// streamed to `output` (standard output when `None`).
+pub fn simulate<S: incal::procedures::Simulate>(
+    options: &S::Options,
+    output: Option<&std::path::Path>,
+) -> CliResult<()> {
+    S::validate(options).map_err(crate::error::core)?;
+    crate::io::write_stream(output, |out| {
+        S::simulate(options, out).map_err(std::io::Error::other)
+    })
+}

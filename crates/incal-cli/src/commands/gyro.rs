@@ -8,12 +8,12 @@ use std::path::PathBuf;
 use clap::{Subcommand, ValueEnum};
 use incal::estimation::Noise;
 use incal::procedures::gyro::positions::plan::PositionsPlanOptions;
-use incal::procedures::gyro::positions::sim::{simulate_positions, DriftTruth, GyroPositionsSim};
+use incal::procedures::gyro::positions::sim::GyroPositionsSimOptions;
 use incal::procedures::gyro::positions::{
     self as gp, Axial, DriftTerm, GyroPositions, GyroPositionsOptions, K1Source,
 };
 use incal::procedures::gyro::rate::plan::RatePlanOptions;
-use incal::procedures::gyro::rate::sim::{k1_pos_neg, simulate_rate, GyroRateSim};
+use incal::procedures::gyro::rate::sim::GyroRateSimOptions;
 use incal::procedures::gyro::rate::{self as gr, GyroRate, GyroRateOptions, InputAxis, RateTerm};
 use incal::procedures::{Plan, Silent};
 
@@ -350,14 +350,13 @@ pub struct SimRateArgs {
 
 /// `incal simulate gyro-rate`.
 pub fn simulate_rate_cmd(a: &SimRateArgs) -> CliResult<()> {
-    let (k1_pos, k1_neg) = k1_pos_neg(a.k1, a.asymmetry_ppm);
-    let cfg = GyroRateSim {
-        k1_pos,
-        k1_neg,
+    let options = GyroRateSimOptions {
+        k1: a.k1,
+        asymmetry_ppm: a.asymmetry_ppm,
         b_deg_h: a.b_deg_h,
         k2: a.k2,
         k3: a.k3,
-        latitude_rad: a.latitude_deg.to_radians(),
+        latitude_deg: a.latitude_deg,
         ia: a.ia.into(),
         rates_deg_s: a.rates_deg_s.clone(),
         samples: a.samples,
@@ -366,11 +365,7 @@ pub fn simulate_rate_cmd(a: &SimRateArgs) -> CliResult<()> {
         run_scatter_ppm: a.run_scatter_ppm,
         seed: a.seed,
     };
-    cfg.validate().map_err(core)?;
-    let obs = simulate_rate(&cfg);
-    crate::io::write_stream(a.output.as_deref(), |out| {
-        gr::input::write(&obs, out).map(|_| ())
-    })
+    crate::run::simulate::<GyroRate>(&options, a.output.as_deref())
 }
 
 /// Options of `incal simulate gyro-positions`.
@@ -434,32 +429,24 @@ pub struct SimPositionsArgs {
 
 /// `incal simulate gyro-positions`.
 pub fn simulate_positions_cmd(a: &SimPositionsArgs) -> CliResult<()> {
-    let cfg = GyroPositionsSim {
+    let options = GyroPositionsSimOptions {
         k1: a.k1,
-        drift: DriftTruth {
-            b: a.b_deg_h,
-            d_i: a.d_i_deg_h_g,
-            d_o: a.d_o_deg_h_g,
-            d_s: a.d_s_deg_h_g,
-            d_ii: a.d_ii_deg_h_g2,
-            d_io: a.d_io_deg_h_g2,
-            d_is: a.d_is_deg_h_g2,
-            d_oo: a.d_oo_deg_h_g2,
-            d_ss: a.d_ss_deg_h_g2,
-        },
-        latitude_rad: a.latitude_deg.to_radians(),
-        azimuths_rad: a.azimuths_deg.iter().map(|z| z.to_radians()).collect(),
+        b_deg_h: a.b_deg_h,
+        d_i_deg_h_g: a.d_i_deg_h_g,
+        d_o_deg_h_g: a.d_o_deg_h_g,
+        d_s_deg_h_g: a.d_s_deg_h_g,
+        d_ii_deg_h_g2: a.d_ii_deg_h_g2,
+        d_io_deg_h_g2: a.d_io_deg_h_g2,
+        d_is_deg_h_g2: a.d_is_deg_h_g2,
+        d_oo_deg_h_g2: a.d_oo_deg_h_g2,
+        d_ss_deg_h_g2: a.d_ss_deg_h_g2,
+        latitude_deg: a.latitude_deg,
+        azimuths_deg: a.azimuths_deg.clone(),
         axial: a.axial.into(),
         angles_deg: a.angles_deg.clone().unwrap_or_else(gp::default_angles_deg),
         samples: a.samples,
         noise: a.noise,
         seed: a.seed,
     };
-    cfg.validate().map_err(core)?;
-    let obs = simulate_positions(&cfg);
-    // Two or more azimuths add an azimuth_deg column.
-    let azimuth_column = a.azimuths_deg.len() > 1;
-    crate::io::write_stream(a.output.as_deref(), |out| {
-        gp::input::write(&obs, azimuth_column, out).map(|_| ())
-    })
+    crate::run::simulate::<GyroPositions>(&options, a.output.as_deref())
 }

@@ -8,7 +8,7 @@ use incal::models::Term;
 use incal::procedures::tumble::plan::{TumblePlanChoice, TumblePlanOptions};
 use incal::procedures::tumble::sim::{TumbleSimOptions, TumbleTruth};
 use incal::procedures::tumble::{default_terms, Tumble, TumbleOptions};
-use incal::procedures::{Plan, Silent, Simulate};
+use incal::procedures::{Plan, Silent};
 use incal::rigs::Mount;
 
 use crate::error::{core, usage, CliResult};
@@ -248,9 +248,5 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         passes: a.passes,
         seed: a.seed,
     };
-    // Refused before the output file is opened.
-    options.config().map_err(core)?;
-    crate::io::write_stream(a.output.as_deref(), |out| {
-        <Tumble as Simulate>::simulate(&options, out).map_err(std::io::Error::other)
-    })
+    crate::run::simulate::<Tumble>(&options, a.output.as_deref())
 }

@@ -100,6 +100,9 @@ pub trait Simulate {
     /// The simulator's options.
     type Options: serde::Serialize + serde::de::DeserializeOwned + schemars::JsonSchema;
 
+    /// Refuse options no simulation can use (before any output is opened).
+    fn validate(options: &Self::Options) -> Result<()>;
+
     /// Draw the recording (same options and seed, same bytes) into `out`.
     fn simulate(options: &Self::Options, out: &mut dyn std::io::Write) -> Result<()>;
 }

@@ -410,7 +410,7 @@ pub static REGISTRY: &[Entry] = &[
         }),
         reduction: reduction::<super::gyro::rate::GyroRate>(),
         planner: planner::<super::gyro::rate::GyroRate>(),
-        simulator: None,
+        simulator: simulator::<super::gyro::rate::GyroRate>(),
     },
     Entry {
         id: "gyro-positions",
@@ -432,7 +432,7 @@ pub static REGISTRY: &[Entry] = &[
         }),
         reduction: reduction::<super::gyro::positions::GyroPositions>(),
         planner: planner::<super::gyro::positions::GyroPositions>(),
-        simulator: None,
+        simulator: simulator::<super::gyro::positions::GyroPositions>(),
     },
     Entry {
         id: "imu-ferraris",

@@ -275,6 +275,10 @@ impl TumbleSimOptions {
 impl crate::procedures::Simulate for super::Tumble {
     type Options = TumbleSimOptions;
 
+    fn validate(o: &TumbleSimOptions) -> Result<()> {
+        o.config().map(|_| ())
+    }
+
     /// Streamed: rows are written as they are drawn, in constant memory.
     fn simulate(o: &TumbleSimOptions, out: &mut dyn std::io::Write) -> Result<()> {
         let cfg = o.config()?;

@@ -209,3 +209,114 @@ pub fn simulate_positions(cfg: &GyroPositionsSim) -> Vec<PositionObservation> {
     }
     out
 }
+
+/// Options of the multi-position simulator (`incal simulate
+/// gyro-positions`), in engineering units; a key not given takes the
+/// command line's default.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[serde(default)]
+pub struct GyroPositionsSimOptions {
+    /// Scale factor K1 (output/(deg/s)).
+    pub k1: f64,
+    /// Bias B (deg/h).
+    pub b_deg_h: f64,
+    /// D_I (deg/h/g).
+    pub d_i_deg_h_g: f64,
+    /// D_O (deg/h/g).
+    pub d_o_deg_h_g: f64,
+    /// D_S (deg/h/g).
+    pub d_s_deg_h_g: f64,
+    /// D_II (deg/h/g²).
+    pub d_ii_deg_h_g2: f64,
+    /// D_IO (deg/h/g²).
+    pub d_io_deg_h_g2: f64,
+    /// D_IS (deg/h/g²).
+    pub d_is_deg_h_g2: f64,
+    /// D_OO (deg/h/g²).
+    pub d_oo_deg_h_g2: f64,
+    /// D_SS (deg/h/g²).
+    pub d_ss_deg_h_g2: f64,
+    /// Latitude (deg).
+    pub latitude_deg: f64,
+    /// Azimuths of the head axis (deg); two or more add an `azimuth_deg` column.
+    pub azimuths_deg: Vec<f64>,
+    /// Gyro axis along the head axis.
+    pub axial: Axial,
+    /// Head angles (deg; default 0, 30, …, 330).
+    pub angles_deg: Vec<f64>,
+    /// Samples per position.
+    pub samples: usize,
+    /// Output noise of one sample (output units).
+    pub noise: f64,
+    /// Random seed (same seed, same file).
+    pub seed: u64,
+}
+
+impl Default for GyroPositionsSimOptions {
+    fn default() -> Self {
+        Self {
+            k1: 0.02,
+            b_deg_h: 3.0,
+            d_i_deg_h_g: 0.8,
+            d_o_deg_h_g: -0.5,
+            d_s_deg_h_g: 0.4,
+            d_ii_deg_h_g2: 0.0,
+            d_io_deg_h_g2: 0.0,
+            d_is_deg_h_g2: 0.0,
+            d_oo_deg_h_g2: 0.0,
+            d_ss_deg_h_g2: 0.0,
+            latitude_deg: 45.0,
+            azimuths_deg: vec![0.0],
+            axial: Axial::Sa,
+            angles_deg: super::default_angles_deg(),
+            samples: 10,
+            noise: 2e-5,
+            seed: 1,
+        }
+    }
+}
+
+impl GyroPositionsSimOptions {
+    /// The simulator's configuration (angles in rad: the one conversion),
+    /// refused as [`GyroPositionsSim::validate`] refuses.
+    pub fn config(&self) -> Result<GyroPositionsSim> {
+        crate::options::check_latitude_deg(self.latitude_deg)?;
+        let cfg = GyroPositionsSim {
+            k1: self.k1,
+            drift: DriftTruth {
+                b: self.b_deg_h,
+                d_i: self.d_i_deg_h_g,
+                d_o: self.d_o_deg_h_g,
+                d_s: self.d_s_deg_h_g,
+                d_ii: self.d_ii_deg_h_g2,
+                d_io: self.d_io_deg_h_g2,
+                d_is: self.d_is_deg_h_g2,
+                d_oo: self.d_oo_deg_h_g2,
+                d_ss: self.d_ss_deg_h_g2,
+            },
+            latitude_rad: self.latitude_deg.to_radians(),
+            azimuths_rad: self.azimuths_deg.iter().map(|z| z.to_radians()).collect(),
+            axial: self.axial,
+            angles_deg: self.angles_deg.clone(),
+            samples: self.samples,
+            noise: self.noise,
+            seed: self.seed,
+        };
+        cfg.validate()?;
+        Ok(cfg)
+    }
+}
+
+impl crate::procedures::Simulate for super::GyroPositions {
+    type Options = GyroPositionsSimOptions;
+
+    fn validate(o: &GyroPositionsSimOptions) -> Result<()> {
+        o.config().map(|_| ())
+    }
+
+    fn simulate(o: &GyroPositionsSimOptions, out: &mut dyn std::io::Write) -> Result<()> {
+        let obs = simulate_positions(&o.config()?);
+        super::input::write(&obs, o.azimuths_deg.len() > 1, out)?;
+        Ok(())
+    }
+}

@@ -177,3 +177,99 @@ pub fn simulate_rate(cfg: &GyroRateSim) -> Vec<RateObservation> {
     }
     out
 }
+
+/// Options of the rate-transfer simulator (`incal simulate gyro-rate`), in
+/// engineering units; a key not given takes the command line's default.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[serde(default)]
+pub struct GyroRateSimOptions {
+    /// Scale factor K1 (output/(deg/s)), the mean of K1⁺ and K1⁻.
+    pub k1: f64,
+    /// Scale-factor asymmetry (K1⁺ − K1⁻)/K1 (ppm).
+    pub asymmetry_ppm: f64,
+    /// Bias B (deg/h).
+    pub b_deg_h: f64,
+    /// K2 (1/(deg/s)).
+    pub k2: f64,
+    /// K3 (1/(deg/s)²).
+    pub k3: f64,
+    /// Latitude (deg).
+    pub latitude_deg: f64,
+    /// Input axis up or down.
+    pub ia: InputAxis,
+    /// Table rates (deg/s), in test order.
+    pub rates_deg_s: Vec<f64>,
+    /// Samples per rate.
+    pub samples: usize,
+    /// Output noise of one sample (output units).
+    pub noise: f64,
+    /// Runs (2 or more add a `run` column).
+    pub runs: usize,
+    /// Run-to-run scatter of K1 (ppm, standard deviation).
+    pub run_scatter_ppm: f64,
+    /// Random seed (same seed, same file).
+    pub seed: u64,
+}
+
+impl Default for GyroRateSimOptions {
+    fn default() -> Self {
+        Self {
+            k1: 0.02,
+            asymmetry_ppm: 0.0,
+            b_deg_h: 5.0,
+            k2: 0.0,
+            k3: 0.0,
+            latitude_deg: 45.0,
+            ia: InputAxis::Up,
+            rates_deg_s: vec![
+                -200.0, -100.0, -50.0, -10.0, -1.0, 1.0, 10.0, 50.0, 100.0, 200.0,
+            ],
+            samples: 20,
+            noise: 2e-5,
+            runs: 1,
+            run_scatter_ppm: 0.0,
+            seed: 1,
+        }
+    }
+}
+
+impl GyroRateSimOptions {
+    /// The simulator's configuration (K1⁺ and K1⁻ from K1 and the
+    /// asymmetry, latitude in rad: the one conversion), refused as
+    /// [`GyroRateSim::validate`] refuses.
+    pub fn config(&self) -> Result<GyroRateSim> {
+        crate::options::check_latitude_deg(self.latitude_deg)?;
+        let (k1_pos, k1_neg) = k1_pos_neg(self.k1, self.asymmetry_ppm);
+        let cfg = GyroRateSim {
+            k1_pos,
+            k1_neg,
+            b_deg_h: self.b_deg_h,
+            k2: self.k2,
+            k3: self.k3,
+            latitude_rad: self.latitude_deg.to_radians(),
+            ia: self.ia,
+            rates_deg_s: self.rates_deg_s.clone(),
+            samples: self.samples,
+            noise: self.noise,
+            runs: self.runs,
+            run_scatter_ppm: self.run_scatter_ppm,
+            seed: self.seed,
+        };
+        cfg.validate()?;
+        Ok(cfg)
+    }
+}
+
+impl crate::procedures::Simulate for super::GyroRate {
+    type Options = GyroRateSimOptions;
+
+    fn validate(o: &GyroRateSimOptions) -> Result<()> {
+        o.config().map(|_| ())
+    }
+
+    fn simulate(o: &GyroRateSimOptions, out: &mut dyn std::io::Write) -> Result<()> {
+        let obs = simulate_rate(&o.config()?);
+        super::input::write(&obs, out)?;
+        Ok(())
+    }
+}
