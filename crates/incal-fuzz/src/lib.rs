@@ -218,21 +218,11 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
         "centrifuge" => reduce::<centrifuge::CentrifugeTest>(data, &centrifuge_options()),
         "misalign-gyro" | "misalign-gyro-raw" => reduce::<misalign::MisalignGyro>(
             data,
-            &misalign::GyroRun {
-                fit: misalign::gyro::GyroOptions {
-                    scale_factor: -2.9222,
-                    per_config_bias: false,
-                    noise: Noise::Auto,
-                },
-                average: misalign::averaging::TurnPolicy::Whole,
-            },
+            &misalign::gyro::GyroOptions::new(-2.9222),
         ),
         "misalign-accel" => reduce::<misalign::MisalignAccel>(
             data,
-            &misalign::accel::AccelOptions {
-                scale_factor: 1.299,
-                noise: Noise::Auto,
-            },
+            &misalign::accel::AccelOptions::new(1.299),
         ),
         "gfimu-calibrate" => match builtin_array() {
             Ok(array) => reduce::<gfimu::GfimuCalibrate>(

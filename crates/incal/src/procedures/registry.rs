@@ -364,8 +364,8 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--seed", "13"],
             options: &["--scale-factor", "-2.9222"],
         }),
-        reduction: None,
-        planner: None,
+        reduction: reduction::<super::misalign::MisalignGyro>(),
+        planner: planner::<super::misalign::MisalignGyro>(),
         simulator: None,
     },
     Entry {
@@ -386,8 +386,8 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--seed", "14"],
             options: &["--scale-factor", "1.299"],
         }),
-        reduction: None,
-        planner: None,
+        reduction: reduction::<super::misalign::MisalignAccel>(),
+        planner: planner::<super::misalign::MisalignAccel>(),
         simulator: None,
     },
     Entry {

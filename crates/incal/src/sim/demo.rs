@@ -271,6 +271,8 @@ fn misalign(seed: u64) -> Result<DemoSection> {
         scale_factor: cfg.scale_factor,
         per_config_bias: true,
         noise: Noise::Auto,
+        scale_factor_unit: Default::default(),
+        average: Default::default(),
     };
     let r = gyro::calibrate(&simulate_gyro(&cfg)?, &gopts)?;
     // The same test, noiseless, with 2.5-turn records averaged as recorded.
@@ -284,6 +286,8 @@ fn misalign(seed: u64) -> Result<DemoSection> {
             scale_factor: cfg.scale_factor,
             per_config_bias: false,
             noise: Noise::Known { sigma: 1e-9 },
+            scale_factor_unit: Default::default(),
+            average: Default::default(),
         },
     )?;
     let worst = GYRO_ANGLES
@@ -313,6 +317,7 @@ fn misalign(seed: u64) -> Result<DemoSection> {
     let aopts = AccelOptions {
         scale_factor: acfg.scale_factor,
         noise: Noise::Auto,
+        scale_factor_unit: Default::default(),
     };
     let ra = accel::calibrate(&simulate_accel(&acfg), &aopts)?;
     Ok(DemoSection {
