@@ -351,14 +351,15 @@ fn thermal_fit(data: &[u8]) -> Outcome {
 }
 
 /// The centrifuge options of the seed's run (`incal simulate centrifuge`).
-fn centrifuge_options() -> incal::procedures::centrifuge::CentrifugeRun {
+fn centrifuge_options() -> incal::procedures::centrifuge::CentrifugeOptions {
     use incal::procedures::centrifuge;
-    centrifuge::CentrifugeRun {
+    centrifuge::CentrifugeOptions {
         from: None,
-        k0_g: Some(1.2e-4),
-        u_k0_g: None,
+        k0: Some(1.2e-4),
+        u_k0: None,
         k1: Some(1.3),
         u_k1: None,
+        cov_k0_k1: None,
         radius_m: 0.71,
         latitude_deg: 39.9,
         gravity_m_s2: incal::units::STANDARD_GRAVITY_M_S2,

@@ -342,9 +342,9 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--seed", "12"],
             options: &["--k0", "1.2e-4", "--u-k0", "2e-6", "--k1", "1.3", "--u-k1", "1.3e-6", "--radius-m", "0.71", "--latitude-deg", "39.9"],
         }),
-        reduction: None,
-        planner: None,
-        simulator: None,
+        reduction: reduction::<super::centrifuge::CentrifugeTest>(),
+        planner: planner::<super::centrifuge::CentrifugeTest>(),
+        simulator: simulator::<super::centrifuge::CentrifugeTest>(),
     },
     Entry {
         id: "misalign-gyro",

@@ -380,7 +380,6 @@ pub fn centrifuge_rig() -> crate::rigs::centrifuge::Centrifuge {
 }
 
 fn centrifuge(seed: u64) -> Result<DemoSection> {
-    use crate::procedures::centrifuge::radius::ValueU;
     use crate::procedures::centrifuge::{calibrate, CentrifugeOptions, CENTRIFUGE_TERMS};
     use crate::sim::centrifuge::{rates_for_levels, simulate, standard_positions, CentrifugeSim};
     let truth = centrifuge_truth();
@@ -399,21 +398,18 @@ fn centrifuge(seed: u64) -> Result<DemoSection> {
         seed,
     });
     let opts = CentrifugeOptions {
-        k0_g: ValueU {
-            value: truth.k0_g,
-            u: 2e-6,
-        },
-        k1: ValueU {
-            value: truth.k1_out_per_g,
-            u: 1.3e-6,
-        },
-        cov_k0_k1: 0.0,
-        radius0_m: 0.71,
-        latitude_rad: rig.latitude_rad,
-        g_local_m_s2: rig.g_local_m_s2,
+        from: None,
+        k0: Some(truth.k0_g),
+        u_k0: Some(2e-6),
+        k1: Some(truth.k1_out_per_g),
+        u_k1: Some(1.3e-6),
+        cov_k0_k1: Some(0.0),
+        radius_m: 0.71,
+        latitude_deg: 39.9,
+        gravity_m_s2: rig.g_local_m_s2,
         opposite_sense: false,
         order: 3,
-        alignment_tolerance_rad: 0.0,
+        alignment_tolerance_deg: 0.0,
         noise: Noise::Auto,
         terms: None,
         u_omega_ppm: 0.0,
