@@ -218,21 +218,11 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
         "centrifuge" => reduce::<centrifuge::CentrifugeTest>(data, &centrifuge_options()),
         "misalign-gyro" | "misalign-gyro-raw" => reduce::<misalign::MisalignGyro>(
             data,
-            &misalign::GyroRun {
-                fit: misalign::gyro::GyroOptions {
-                    scale_factor: -2.9222,
-                    per_config_bias: false,
-                    noise: Noise::Auto,
-                },
-                average: misalign::averaging::TurnPolicy::Whole,
-            },
+            &misalign::gyro::GyroOptions::new(-2.9222),
         ),
         "misalign-accel" => reduce::<misalign::MisalignAccel>(
             data,
-            &misalign::accel::AccelOptions {
-                scale_factor: 1.299,
-                noise: Noise::Auto,
-            },
+            &misalign::accel::AccelOptions::new(1.299),
         ),
         "gfimu-calibrate" => match builtin_array() {
             Ok(array) => reduce::<gfimu::GfimuCalibrate>(
@@ -357,14 +347,15 @@ fn thermal_fit(data: &[u8]) -> Outcome {
 }
 
 /// The centrifuge options of the seed's run (`incal simulate centrifuge`).
-fn centrifuge_options() -> incal::procedures::centrifuge::CentrifugeRun {
+fn centrifuge_options() -> incal::procedures::centrifuge::CentrifugeOptions {
     use incal::procedures::centrifuge;
-    centrifuge::CentrifugeRun {
+    centrifuge::CentrifugeOptions {
         from: None,
-        k0_g: Some(1.2e-4),
-        u_k0_g: None,
+        k0: Some(1.2e-4),
+        u_k0: None,
         k1: Some(1.3),
         u_k1: None,
+        cov_k0_k1: None,
         radius_m: 0.71,
         latitude_deg: 39.9,
         gravity_m_s2: incal::units::STANDARD_GRAVITY_M_S2,

@@ -6,10 +6,10 @@ use std::path::PathBuf;
 
 use incal::estimation::Noise;
 use incal::models::Term;
-use incal::procedures::centrifuge::plan::{plan_document, CentrifugePlanOptions};
-use incal::procedures::centrifuge::sim::{simulate as simulate_centrifuge, RigPlan};
-use incal::procedures::centrifuge::{CentrifugeRun, CentrifugeTest, ChainedResult};
-use incal::procedures::Silent;
+use incal::procedures::centrifuge::plan::CentrifugePlanOptions;
+use incal::procedures::centrifuge::sim::{CentrifugeSimOptions, CentrifugeTruth, RigPlan};
+use incal::procedures::centrifuge::{CentrifugeOptions, CentrifugeTest, ChainedResult};
+use incal::procedures::{Plan, Silent, Simulate};
 use incal::units::STANDARD_GRAVITY_M_S2;
 
 use crate::documents::read_document;
@@ -92,12 +92,13 @@ pub fn run(a: &Args) -> CliResult<()> {
         }
         None => None,
     };
-    let options = CentrifugeRun {
+    let options = CentrifugeOptions {
         from,
-        k0_g: a.k0,
-        u_k0_g: a.u_k0,
+        k0: a.k0,
+        u_k0: a.u_k0,
         k1: a.k1,
         u_k1: a.u_k1,
+        cov_k0_k1: None,
         radius_m: a.radius_m,
         latitude_deg: a.latitude_deg,
         gravity_m_s2: a.gravity_m_s2,
@@ -121,7 +122,7 @@ pub struct TruthArgs {
         default_value_t = 1.2e-4,
         allow_hyphen_values = true
     )]
-    pub k0_g: f64,
+    pub k0: f64,
     /// Scale factor K1 (output/g).
     #[arg(long, default_value_t = 1.3, allow_hyphen_values = true)]
     pub k1: f64,
@@ -157,7 +158,25 @@ pub struct TruthArgs {
     pub k_oq: f64,
 }
 
-super::truth_model!(TruthArgs);
+impl TruthArgs {
+    /// The truth as the core takes it.
+    pub fn truth(&self) -> CentrifugeTruth {
+        CentrifugeTruth {
+            k0: self.k0,
+            k1: self.k1,
+            k2: self.k2,
+            k3: self.k3,
+            delta_o_arcsec: self.delta_o_arcsec,
+            delta_p_arcsec: self.delta_p_arcsec,
+            k_ip: self.k_ip,
+            k_io: self.k_io,
+            k_po: self.k_po,
+            k_pp: self.k_pp,
+            k_oo: self.k_oo,
+            k_oq: self.k_oq,
+        }
+    }
+}
 
 /// Options of `incal simulate centrifuge`.
 #[derive(clap::Args, Debug)]
@@ -194,7 +213,7 @@ pub struct RigArgs {
     pub latitude_deg: f64,
     /// Local gravity (m/s^2).
     #[arg(long = "gravity-m-s2", visible_alias = "g-local", default_value_t = STANDARD_GRAVITY_M_S2)]
-    pub g_local: f64,
+    pub gravity_m_s2: f64,
     /// The table spins opposite to Earth's sense.
     #[arg(long)]
     pub opposite_sense: bool,
@@ -232,7 +251,7 @@ impl RigArgs {
             radius_m: self.radius_m,
             tilt_arcsec: self.tilt_arcsec,
             latitude_deg: self.latitude_deg,
-            gravity_m_s2: self.g_local,
+            gravity_m_s2: self.gravity_m_s2,
             opposite_sense: self.opposite_sense,
             positions: self.positions.clone(),
             single_polarity: self.single_polarity,
@@ -245,14 +264,23 @@ impl RigArgs {
 
 /// `incal simulate centrifuge`.
 pub fn simulate(a: &SimArgs) -> CliResult<()> {
-    let cfg = a
+    let options = CentrifugeSimOptions {
+        truth: a.truth.truth(),
+        rig: a.rig.rig(),
+        seed: a.seed,
+    };
+    // Refused before the output file is touched.
+    options
         .rig
-        .rig()
-        .simulation(a.truth.model()?, a.seed)
+        .simulation(options.truth.model().map_err(core)?, options.seed)
         .map_err(core)?;
-    let obs = simulate_centrifuge(&cfg);
     crate::io::write_stream(a.output.as_deref(), |out| {
-        incal::procedures::centrifuge::input::write(&obs, out).map(|_| ())
+        <CentrifugeTest as Simulate>::simulate(&options, out).map_err(|e| match e {
+            incal::Error::InvalidValue { value, .. } => {
+                std::io::Error::new(std::io::ErrorKind::InvalidData, value)
+            }
+            e => std::io::Error::other(e.to_string()),
+        })
     })
 }
 
@@ -288,7 +316,7 @@ pub struct PlanArgs {
 /// outputs with an exact scatter of `--noise`).
 pub fn plan(a: &PlanArgs) -> CliResult<()> {
     let options = CentrifugePlanOptions {
-        truth: a.truth.model()?,
+        truth: a.truth.truth(),
         rig: a.rig.rig(),
         u_k0: a.u_k0,
         u_k1: a.u_k1,
@@ -296,6 +324,6 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
         alignment_tolerance_deg: a.alignment_tolerance_deg,
         u_omega_ppm: a.u_omega_ppm,
     };
-    let doc = plan_document(&options).map_err(core)?;
+    let doc = <CentrifugeTest as Plan>::plan(&options).map_err(core)?;
     a.out.emit(&doc)
 }

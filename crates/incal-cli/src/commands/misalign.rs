@@ -14,12 +14,12 @@ use incal::procedures::misalign::plan::{MisalignPlan, PlanInstrument};
 use incal::procedures::misalign::sim::{
     simulate_accel, simulate_gyro, simulate_gyro_records, AccelSim, GyroSim,
 };
-use incal::procedures::misalign::{GyroRun, MisalignAccel, MisalignGyro};
-use incal::procedures::Silent;
+use incal::procedures::misalign::{MisalignAccel, MisalignGyro};
+use incal::procedures::{Plan, Silent};
 use incal::rigs::rate_table::{FaceMounting, GyroMounting};
 use incal::units::arcsec_to_rad;
 
-use crate::error::{core, usage, CliResult};
+use crate::error::{core, CliResult};
 use crate::input::ReadArgs;
 use crate::output::{PlanOut, ResultArgs};
 
@@ -76,7 +76,7 @@ pub struct GyroArgs {
     pub noise: Option<f64>,
     /// Raw records: average whole table revolutions only, or every sample (--turns is an old name of this option).
     #[arg(long = "average", alias = "turns", value_enum, default_value = "whole")]
-    pub turns: TurnsArg,
+    pub average: TurnsArg,
     #[command(flatten)]
     pub read: ReadArgs,
     #[command(flatten)]
@@ -105,20 +105,18 @@ pub struct AccelArgs {
 pub fn run(c: &Command) -> CliResult<()> {
     match c {
         Command::Gyro(a) => {
-            let options = GyroRun {
-                fit: GyroOptions {
-                    scale_factor: a.scale_factor,
-                    per_config_bias: a.per_config_bias,
-                    noise: Noise::from_option(a.noise).map_err(core)?,
-                },
-                average: a.turns.into(),
+            let options = GyroOptions {
+                per_config_bias: a.per_config_bias,
+                noise: Noise::from_option(a.noise).map_err(core)?,
+                average: a.average.into(),
+                ..GyroOptions::new(a.scale_factor)
             };
             crate::run::reduce::<MisalignGyro>(&a.input, &a.read, &options, &a.result, &Silent)
         }
         Command::Accel(a) => {
             let options = AccelOptions {
-                scale_factor: a.scale_factor,
                 noise: Noise::from_option(a.noise).map_err(core)?,
+                ..AccelOptions::new(a.scale_factor)
             };
             crate::run::reduce::<MisalignAccel>(&a.input, &a.read, &options, &a.result, &Silent)
         }
@@ -128,20 +126,7 @@ pub fn run(c: &Command) -> CliResult<()> {
 /// Parse `A:B` (deg) configuration pairs.
 fn parse_configs(list: &[String]) -> CliResult<Vec<GyroConfig>> {
     list.iter()
-        .map(|p| {
-            let bad = || {
-                usage(format!(
-                    "--configs: '{p}' is not ALPHA:BETA in degrees (e.g. 0:180)"
-                ))
-            };
-            let (a, b) = p.split_once(':').ok_or_else(bad)?;
-            let a: f64 = a.trim().parse().map_err(|_| bad())?;
-            let b: f64 = b.trim().parse().map_err(|_| bad())?;
-            if !(a.is_finite() && b.is_finite()) {
-                return Err(bad());
-            }
-            Ok(GyroConfig::deg(a, b))
-        })
+        .map(|p| GyroConfig::parse(p).map_err(core))
         .collect()
 }
 
@@ -181,7 +166,7 @@ pub struct PlanArgs {
     pub betas_deg: Vec<f64>,
     /// Samples (rows: record means or single readings) per position.
     #[arg(long = "samples", visible_alias = "readings", default_value_t = 1)]
-    pub readings: usize,
+    pub samples: usize,
     /// Scale factor kI (gyro: output per deg/s; accelerometer: output per g).
     #[arg(long, visible_alias = "k1", allow_hyphen_values = true)]
     pub scale_factor: f64,
@@ -194,23 +179,30 @@ pub struct PlanArgs {
 
 /// `incal plan misalign`.
 pub fn plan(a: &PlanArgs) -> CliResult<()> {
-    let plan = MisalignPlan {
+    let gyro = a.instrument == Instrument::Gyro;
+    let options = MisalignPlan {
         instrument: match a.instrument {
             Instrument::Gyro => PlanInstrument::Gyro,
             Instrument::Accel => PlanInstrument::Accel,
         },
-        configs: match a.instrument {
-            Instrument::Gyro => parse_configs(&a.configs)?,
-            Instrument::Accel => Vec::new(),
+        configs: if gyro {
+            Some(parse_configs(&a.configs)?)
+        } else {
+            None
         },
-        rates_deg_s: a.rates_deg_s.clone(),
-        per_config_bias: a.per_config_bias,
-        betas_deg: a.betas_deg.clone(),
-        samples: a.readings,
+        rates_deg_s: Some(a.rates_deg_s.clone()),
+        per_config_bias: Some(a.per_config_bias),
+        betas_deg: Some(a.betas_deg.clone()),
+        samples: a.samples,
         scale_factor: a.scale_factor,
         noise: a.noise,
     };
-    a.out.emit(&plan.document().map_err(core)?)
+    let doc = if gyro {
+        <MisalignGyro as Plan>::plan(&options)
+    } else {
+        <MisalignAccel as Plan>::plan(&options)
+    };
+    a.out.emit(&doc.map_err(core)?)
 }
 
 /// Options of `incal simulate misalign gyro`.

@@ -271,6 +271,8 @@ fn misalign(seed: u64) -> Result<DemoSection> {
         scale_factor: cfg.scale_factor,
         per_config_bias: true,
         noise: Noise::Auto,
+        scale_factor_unit: Default::default(),
+        average: Default::default(),
     };
     let r = gyro::calibrate(&simulate_gyro(&cfg)?, &gopts)?;
     // The same test, noiseless, with 2.5-turn records averaged as recorded.
@@ -284,6 +286,8 @@ fn misalign(seed: u64) -> Result<DemoSection> {
             scale_factor: cfg.scale_factor,
             per_config_bias: false,
             noise: Noise::Known { sigma: 1e-9 },
+            scale_factor_unit: Default::default(),
+            average: Default::default(),
         },
     )?;
     let worst = GYRO_ANGLES
@@ -313,6 +317,7 @@ fn misalign(seed: u64) -> Result<DemoSection> {
     let aopts = AccelOptions {
         scale_factor: acfg.scale_factor,
         noise: Noise::Auto,
+        scale_factor_unit: Default::default(),
     };
     let ra = accel::calibrate(&simulate_accel(&acfg), &aopts)?;
     Ok(DemoSection {
@@ -375,7 +380,6 @@ pub fn centrifuge_rig() -> crate::rigs::centrifuge::Centrifuge {
 }
 
 fn centrifuge(seed: u64) -> Result<DemoSection> {
-    use crate::procedures::centrifuge::radius::ValueU;
     use crate::procedures::centrifuge::{calibrate, CentrifugeOptions, CENTRIFUGE_TERMS};
     use crate::sim::centrifuge::{rates_for_levels, simulate, standard_positions, CentrifugeSim};
     let truth = centrifuge_truth();
@@ -394,21 +398,18 @@ fn centrifuge(seed: u64) -> Result<DemoSection> {
         seed,
     });
     let opts = CentrifugeOptions {
-        k0_g: ValueU {
-            value: truth.k0_g,
-            u: 2e-6,
-        },
-        k1: ValueU {
-            value: truth.k1_out_per_g,
-            u: 1.3e-6,
-        },
-        cov_k0_k1: 0.0,
-        radius0_m: 0.71,
-        latitude_rad: rig.latitude_rad,
-        g_local_m_s2: rig.g_local_m_s2,
+        from: None,
+        k0: Some(truth.k0_g),
+        u_k0: Some(2e-6),
+        k1: Some(truth.k1_out_per_g),
+        u_k1: Some(1.3e-6),
+        cov_k0_k1: Some(0.0),
+        radius_m: 0.71,
+        latitude_deg: 39.9,
+        gravity_m_s2: rig.g_local_m_s2,
         opposite_sense: false,
         order: 3,
-        alignment_tolerance_rad: 0.0,
+        alignment_tolerance_deg: 0.0,
         noise: Noise::Auto,
         terms: None,
         u_omega_ppm: 0.0,

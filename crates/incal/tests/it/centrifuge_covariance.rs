@@ -5,7 +5,6 @@
 //! = `2·(λ + K0)/K1·C` (GUM, JCGM 100 eq. 13).
 
 use incal::estimation::Noise;
-use incal::procedures::centrifuge::radius::ValueU;
 use incal::procedures::centrifuge::{calibrate, CentrifugeOptions};
 use incal::sim::centrifuge::{rates_for_levels, simulate, standard_positions, CentrifugeSim};
 use incal::sim::demo::{centrifuge_rig, centrifuge_truth};
@@ -28,21 +27,18 @@ fn k0_k1_covariance_enters_the_tilt_exactly() {
         calibrate(
             &obs,
             &CentrifugeOptions {
-                k0_g: ValueU {
-                    value: truth.k0_g,
-                    u: u0,
-                },
-                k1: ValueU {
-                    value: truth.k1_out_per_g,
-                    u: u1,
-                },
-                cov_k0_k1: cov,
-                radius0_m: 0.71,
-                latitude_rad: 39.9f64.to_radians(),
-                g_local_m_s2: STANDARD_GRAVITY_M_S2,
+                from: None,
+        k0: Some(truth.k0_g),
+        u_k0: Some(u0),
+                k1: Some(truth.k1_out_per_g),
+        u_k1: Some(u1),
+                cov_k0_k1: Some(cov),
+                radius_m: 0.71,
+                latitude_deg: 39.9,
+                gravity_m_s2: STANDARD_GRAVITY_M_S2,
                 opposite_sense: false,
                 order: 3,
-                alignment_tolerance_rad: 0.0,
+                alignment_tolerance_deg: 0.0,
                 noise: Noise::Auto,
                 terms: None,
                 u_omega_ppm: 0.0,

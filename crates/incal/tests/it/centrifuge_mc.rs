@@ -78,18 +78,18 @@ fn sim(seed: u64) -> CentrifugeSim {
 
 fn options(k1: f64) -> CentrifugeOptions {
     CentrifugeOptions {
-        k0_g: ValueU {
-            value: truth().k0_g,
-            u: 0.0,
-        },
-        k1: ValueU { value: k1, u: U_K1 },
-        cov_k0_k1: 0.0,
-        radius0_m: R0,
-        latitude_rad: 39.9f64.to_radians(),
-        g_local_m_s2: G,
+        from: None,
+        k0: Some(truth().k0_g),
+        u_k0: Some(0.0),
+        k1: Some(k1),
+        u_k1: Some(U_K1 ),
+        cov_k0_k1: Some(0.0),
+        radius_m: R0,
+        latitude_deg: 39.9,
+        gravity_m_s2: G,
         opposite_sense: false,
         order: 3,
-        alignment_tolerance_rad: 0.0,
+        alignment_tolerance_deg: 0.0,
         noise: Noise::Auto,
         terms: Some(vec![Term::K2]),
         u_omega_ppm: 0.0,

@@ -61,21 +61,18 @@ fn sim(seed: u64, positions: Vec<Position>) -> CentrifugeSim {
 fn options(order: usize) -> CentrifugeOptions {
     let t = truth();
     CentrifugeOptions {
-        k0_g: ValueU {
-            value: t.k0_g,
-            u: 0.0,
-        },
-        k1: ValueU {
-            value: t.k1_out_per_g,
-            u: 0.0,
-        },
-        cov_k0_k1: 0.0,
-        radius0_m: R0,
-        latitude_rad: 39.9f64.to_radians(),
-        g_local_m_s2: G,
+        from: None,
+        k0: Some(t.k0_g),
+        u_k0: Some(0.0),
+        k1: Some(t.k1_out_per_g),
+        u_k1: Some(0.0),
+        cov_k0_k1: Some(0.0),
+        radius_m: R0,
+        latitude_deg: 39.9,
+        gravity_m_s2: G,
         opposite_sense: false,
         order,
-        alignment_tolerance_rad: 0.0,
+        alignment_tolerance_deg: 0.0,
         noise: Noise::Auto,
         terms: None,
         u_omega_ppm: 0.0,
@@ -290,7 +287,7 @@ fn earth_rate_and_sense_are_applied() {
 fn budget_lines_add_up_to_the_reported_u() {
     let obs = simulate(&sim(8, standard_positions()));
     let mut o = options(3);
-    o.alignment_tolerance_rad = 1f64.to_radians();
+    o.alignment_tolerance_deg = 1.0;
     let r = calibrate(&obs, &o).unwrap();
     for b in &r.budgets {
         let u = r.coefficients.u(&b.coefficient).unwrap();
@@ -347,8 +344,8 @@ fn joint_estimates_share_k1_and_match_the_fields() {
     let obs = simulate(&sim(8, standard_positions()));
     let mut o = options(3);
     let rel = 1e-5;
-    o.k1.u = rel * o.k1.value;
-    o.k0_g.u = 2e-6;
+    o.u_k1 = o.k1.map(|k1| rel * k1);
+    o.u_k0 = Some(2e-6);
     let r = calibrate(&obs, &o).unwrap();
     let j = &r.joint;
     let mut expect: Vec<String> = r.coefficients.names().to_vec();
@@ -419,8 +416,8 @@ fn joint_static_radius_is_correct_static_radius() {
     for (k, pol) in [(0usize, 1.0), (1, -1.0)] {
         let raw = r.static_radius_uncorrected[k].unwrap();
         let w = r.static_rate_rad_s[k].unwrap();
-        let a_g = raw.value * centripetal_rate_squared(w, o.latitude_rad, o.opposite_sense)
-            / o.g_local_m_s2;
+        let a_g = raw.value * centripetal_rate_squared(w, o.latitude_rad(), o.opposite_sense)
+            / o.gravity_m_s2;
         let fit = &r.regression[k].as_ref().unwrap().fit.estimates;
         let c = correct_static_radius(raw, a_g, pol, fit).unwrap();
         let st = r.static_radius[k].unwrap();

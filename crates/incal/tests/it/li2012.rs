@@ -93,6 +93,8 @@ fn table1_gyro_all_rates() {
                 scale_factor: KI_GYRO,
                 per_config_bias: false,
                 noise: Noise::Auto,
+                scale_factor_unit: Default::default(),
+                average: Default::default(),
             },
         )
         .unwrap();
@@ -130,6 +132,8 @@ fn table1_least_squares_equals_closed_forms() {
                 scale_factor: KI_GYRO,
                 per_config_bias: false,
                 noise: Noise::Auto,
+                scale_factor_unit: Default::default(),
+                average: Default::default(),
             },
         )
         .unwrap();
@@ -153,6 +157,8 @@ fn table1_all_rates_per_config_bias() {
             scale_factor: KI_GYRO,
             per_config_bias: true,
             noise: Noise::Auto,
+            scale_factor_unit: Default::default(),
+            average: Default::default(),
         },
     )
     .unwrap();
@@ -205,6 +211,7 @@ fn table2_accel_all_runs() {
             &AccelOptions {
                 scale_factor: 1.299,
                 noise: Noise::Auto,
+                scale_factor_unit: Default::default(),
             },
         )
         .unwrap();
@@ -254,6 +261,8 @@ fn unseparable_gyro_plans_are_refused_by_name() {
             scale_factor: KI_GYRO,
             per_config_bias: false,
             noise: Noise::Auto,
+            scale_factor_unit: Default::default(),
+            average: Default::default(),
         },
     )
     .unwrap_err();
@@ -291,6 +300,7 @@ fn unseparable_accel_plans_are_refused() {
     let opts = AccelOptions {
         scale_factor: 1.299,
         noise: Noise::Known { sigma: 1e-6 },
+        scale_factor_unit: Default::default(),
     };
     let e = accel::calibrate(&obs(&[0.0, 180.0, 360.0, 0.0]), &opts).unwrap_err();
     assert!(matches!(e, Error::TooFew { got: 2, .. }), "{e:?}");

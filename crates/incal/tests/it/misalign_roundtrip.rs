@@ -74,6 +74,8 @@ fn gyro_coverage(seed: u64, bias_shift: f64, per_config_bias: bool) -> Vec<(Stri
                 scale_factor: -2.9222,
                 per_config_bias,
                 noise: Noise::Auto,
+                scale_factor_unit: Default::default(),
+                average: Default::default(),
             },
         )
         .unwrap();
@@ -134,6 +136,8 @@ fn partial_turn_averaging_error_is_shown_and_removed() {
         scale_factor: -2.9222,
         per_config_bias: false,
         noise: Noise::Auto,
+        scale_factor_unit: Default::default(),
+        average: Default::default(),
     };
     let worst = |policy| {
         let means = average_records(&records, policy).unwrap();
@@ -198,6 +202,7 @@ fn accel_coverage() {
             &AccelOptions {
                 scale_factor: 1.299,
                 noise: Noise::Auto,
+                scale_factor_unit: Default::default(),
             },
         )
         .unwrap();

@@ -102,18 +102,22 @@ pub struct CentrifugeResult {
     pub warnings: Vec<Warning>,
 }
 
-/// Calibrate from centrifuge observations (module docs).
+/// Calibrate from centrifuge observations (module docs); K0 and K1 as
+/// [`CentrifugeOptions::resolve`] settles them (its warnings are the
+/// procedure's, [`super::CentrifugeTest`]).
 pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<CentrifugeResult> {
+    let resolved = opts.resolve()?.options;
+    let opts = &resolved;
     check_options(opts)?;
     check_observations(obs)?;
-    let k1 = opts.k1.value;
+    let k1 = opts.k1_u().value;
     let noise = noise_in_g(opts.noise, k1);
     let ctx = radius_context(opts);
     let nominal = Centrifuge {
-        r_plus_m: opts.radius0_m,
-        r_minus_m: opts.radius0_m,
-        latitude_rad: opts.latitude_rad,
-        g_local_m_s2: opts.g_local_m_s2,
+        r_plus_m: opts.radius_m,
+        r_minus_m: opts.radius_m,
+        latitude_rad: opts.latitude_rad(),
+        g_local_m_s2: opts.gravity_m_s2,
         opposite_sense: opts.opposite_sense,
         tilt_rad: 0.0,
     };
@@ -136,7 +140,7 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
     };
 
     // --- ECM offset (values; u from the joint propagation below) ------------
-    let (r_plus, r_minus) = ecm_radii(&radius.regression, opts.radius0_m, &mut warnings);
+    let (r_plus, r_minus) = ecm_radii(&radius.regression, opts.radius_m, &mut warnings);
     let (centre, offset) = budget::ecm_offset(r_plus, r_minus);
     let rig = Centrifuge {
         r_plus_m: r_plus,
@@ -163,7 +167,7 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
     check_coefficients(&coefficients, &unsupported, opts)?;
     station_warnings(&stations, &mut warnings);
     let (centre_radius_m, ecm_offset_m) =
-        take_joint_radii(&joint, &mut radius, (centre, offset), opts.k1.value)?;
+        take_joint_radii(&joint, &mut radius, (centre, offset), opts.k1_u().value)?;
     Ok(CentrifugeResult {
         ia_station: ia.map(|g| station_label(g.0 .0, (g.0 .1 as f64 / 1e6).to_radians())),
         tilt_rad: radius.tilt,
@@ -205,10 +209,10 @@ fn check_observations(obs: &[Observation]) -> Result<()> {
 /// What the radius formulas of [`radius`](super::radius) need from the options.
 fn radius_context(opts: &CentrifugeOptions) -> RadiusContext {
     RadiusContext {
-        k0_g: opts.k0_g,
-        k1: opts.k1,
-        latitude_rad: opts.latitude_rad,
-        g_local_m_s2: opts.g_local_m_s2,
+        k0_g: opts.k0_u(),
+        k1: opts.k1_u(),
+        latitude_rad: opts.latitude_rad(),
+        g_local_m_s2: opts.gravity_m_s2,
         opposite_sense: opts.opposite_sense,
         u_omega_rel: opts.u_omega_ppm * 1e-6,
         known_sigma: match opts.noise {

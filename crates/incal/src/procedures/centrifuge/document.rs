@@ -327,20 +327,20 @@ impl CentrifugeResult {
 }
 
 /// The options as used (`options` of the document; type docs of
-/// [`super::CentrifugeRun`]).
+/// [`super::CentrifugeOptions`]).
 fn options(b: &mut DocumentBuilder, opts: &CentrifugeOptions) {
-    b.option("k0", json!(opts.k0_g.value));
-    b.option("u_k0", json!(opts.k0_g.u));
-    b.option("k1", json!(opts.k1.value));
-    b.option("cov_k0_k1", json!(opts.cov_k0_k1));
-    b.option("u_k1", json!(opts.k1.u));
-    b.option("radius_m", json!(opts.radius0_m));
-    b.option("latitude_deg", json!(opts.latitude_rad.to_degrees()));
-    b.option("gravity_m_s2", json!(opts.g_local_m_s2));
+    b.option("k0", json!(opts.k0_u().value));
+    b.option("u_k0", json!(opts.k0_u().u));
+    b.option("k1", json!(opts.k1_u().value));
+    b.option("cov_k0_k1", json!(opts.cov_k0_k1()));
+    b.option("u_k1", json!(opts.k1_u().u));
+    b.option("radius_m", json!(opts.radius_m));
+    b.option("latitude_deg", json!(opts.latitude_deg));
+    b.option("gravity_m_s2", json!(opts.gravity_m_s2));
     b.option("opposite_sense", json!(opts.opposite_sense));
     b.option("order", json!(opts.order));
     b.option(
         "alignment_tolerance_deg",
-        json!(opts.alignment_tolerance_rad.to_degrees()),
+        json!(opts.alignment_tolerance_deg),
     );
 }

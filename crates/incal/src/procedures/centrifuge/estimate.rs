@@ -134,8 +134,8 @@ pub(super) fn estimate(
     let k1_idx = inp.push_block(
         None,
         UncertaintyType::B,
-        vec![("K1".into(), opts.k1.value)],
-        DMatrix::from_element(1, 1, opts.k1.u.powi(2)),
+        vec![("K1".into(), opts.k1_u().value)],
+        DMatrix::from_element(1, 1, opts.k1_u().u.powi(2)),
         f64::INFINITY,
     );
     // Radius inputs: K0 and E0 (tilt, static radii), then per polarity E_a
@@ -151,7 +151,7 @@ pub(super) fn estimate(
         &mut inp,
         &combos,
         &at.dc2,
-        opts.alignment_tolerance_rad,
+        opts.alignment_tolerance_rad(),
     );
 
     // Requested subset, report order.
@@ -164,7 +164,7 @@ pub(super) fn estimate(
     let coefficient_map = CoefficientMap {
         rows: order.iter().map(|t| combos[t].0.clone()).collect(),
         k1: k1_idx,
-        k1_used: opts.k1.value,
+        k1_used: opts.k1_u().value,
         n_in: inp.names.len(),
     };
     let joint = propagate(

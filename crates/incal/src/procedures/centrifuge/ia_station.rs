@@ -166,7 +166,7 @@ pub(super) fn measure_radius(
             .map(|p| {
                 Ok(SpeedPoint {
                     omega_rad_s: p.omega,
-                    stats: e_over_k1(&p.samples, opts.k1.value)?,
+                    stats: e_over_k1(&p.samples, opts.k1_u().value)?,
                 })
             })
             .collect::<Result<_>>()?;
@@ -174,7 +174,7 @@ pub(super) fn measure_radius(
             &speed_points,
             f64::from(pol),
             opts.order,
-            opts.radius0_m,
+            opts.radius_m,
             lambda,
             ctx,
             noise,
@@ -248,13 +248,13 @@ fn range_table(
     noise: Noise,
 ) -> Vec<RadiusRangeRow> {
     let rate = |p: &SpeedPoint| {
-        opts.radius0_m
+        opts.radius_m
             * crate::rigs::centrifuge::centripetal_rate_squared(
                 p.omega_rad_s,
-                opts.latitude_rad,
+                opts.latitude_rad(),
                 opts.opposite_sense,
             )
-            / opts.g_local_m_s2
+            / opts.gravity_m_s2
     };
     let max = points.iter().map(rate).fold(0.0, f64::max);
     let mut out = Vec::new();
@@ -275,7 +275,7 @@ fn range_table(
                 &sub,
                 f64::from(pol),
                 order,
-                opts.radius0_m,
+                opts.radius_m,
                 lambda,
                 ctx,
                 noise,

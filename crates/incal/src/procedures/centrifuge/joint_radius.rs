@@ -135,13 +135,13 @@ pub(super) fn push_radius_inputs(
         let k0 = inp.push_block(
             None,
             UncertaintyType::B,
-            vec![("K0".into(), opts.k0_g.value)],
-            DMatrix::from_element(1, 1, opts.k0_g.u.powi(2)),
+            vec![("K0".into(), opts.k0_u().value)],
+            DMatrix::from_element(1, 1, opts.k0_u().u.powi(2)),
             f64::INFINITY,
         );
         // K0 and K1 from one tumble fit are correlated.
-        if opts.cov_k0_k1 != 0.0 {
-            inp.cross.push((k0, k1_idx, opts.cov_k0_k1));
+        if opts.cov_k0_k1() != 0.0 {
+            inp.cross.push((k0, k1_idx, opts.cov_k0_k1()));
         }
         let e = inp.push_block(
             None,
@@ -180,12 +180,12 @@ pub(super) fn push_radius_inputs(
     }
     Ok(RadiusMap {
         k1: k1_idx,
-        k1_used: opts.k1.value,
+        k1_used: opts.k1_u().value,
         k0_e0,
-        g_local_m_s2: opts.g_local_m_s2,
+        g_local_m_s2: opts.gravity_m_s2,
         regression: reg_at,
         static_point: static_at,
-        latitude_rad: opts.latitude_rad,
+        latitude_rad: opts.latitude_rad(),
         opposite_sense: opts.opposite_sense,
     })
 }

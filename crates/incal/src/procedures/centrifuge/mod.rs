@@ -52,8 +52,8 @@
 //! 3–4) are what the `tolerance` covers.
 //!
 //! # Modules
-//! `options` ([`CentrifugeOptions`], [`CentrifugeRun`] and the `--from`
-//! chain to a tumble result), `stations` (points, stations, the eq. 9
+//! `options` ([`CentrifugeOptions`] and the `--from` chain to a tumble
+//! result), `stations` (points, stations, the eq. 9
 //! fit), `ia_station` (step 2), `estimate` and `joint_radius` (steps 5–6),
 //! `calibrate` ([`calibrate`]: the steps composed), [`radius`] (eq. 4–7),
 //! [`budget`] (eq. 2–3, 8, 10), [`document`], [`plan`], [`sim`],
@@ -74,7 +74,7 @@ mod stations;
 
 pub use calibrate::{calibrate, CentrifugeResult};
 pub use ia_station::{correct_static_radius, RadiusRangeRow};
-pub use options::{CentrifugeOptions, CentrifugeRun, ChainedResult, Resolved};
+pub use options::{CentrifugeOptions, ChainedResult, Resolved};
 pub use stations::{Alignment, Station, StationPoint};
 
 use crate::document::ResultDocument;
@@ -111,27 +111,35 @@ pub const CENTRIFUGE_TERMS: [Term; 8] = [
 #[derive(Debug, Clone, Copy, Default)]
 pub struct CentrifugeTest;
 
-impl super::Procedure for CentrifugeTest {
-    const ID: crate::document::Procedure = crate::document::Procedure::Centrifuge;
-    type Options = CentrifugeRun;
-    type Input = Vec<Observation>;
-
-    fn validate(o: &CentrifugeRun) -> Result<()> {
+impl CentrifugeTest {
+    /// Every check of the options, each naming its option (the noise and
+    /// the rate's u first, then K0 and K1 as resolved and the rest).
+    pub fn validate_options(o: &CentrifugeOptions) -> Result<()> {
         o.noise.validate()?;
         check_u_omega_ppm(o.u_omega_ppm)?;
         check_options(&o.resolve()?.options)
     }
+}
+
+impl super::Procedure for CentrifugeTest {
+    const ID: crate::document::Procedure = crate::document::Procedure::Centrifuge;
+    type Options = CentrifugeOptions;
+    type Input = Vec<Observation>;
+
+    fn validate(o: &CentrifugeOptions) -> Result<()> {
+        Self::validate_options(o)
+    }
 
     fn read<R: std::io::Read>(
         rows: &mut incal_io::Reader<R>,
-        _: &CentrifugeRun,
+        _: &CentrifugeOptions,
     ) -> Result<Vec<Observation>> {
         input::read(rows)
     }
 
     fn reduce(
         obs: &Vec<Observation>,
-        o: &CentrifugeRun,
+        o: &CentrifugeOptions,
         _: &dyn super::Progress,
     ) -> Result<ResultDocument> {
         let Resolved { options, warnings } = o.resolve()?;
@@ -142,5 +150,13 @@ impl super::Procedure for CentrifugeTest {
         }
         doc.warnings.splice(0..0, warnings);
         Ok(doc)
+    }
+
+    /// The options as used: K0, K1, their u and covariance as resolved.
+    fn recorded(
+        _: &Vec<Observation>,
+        o: &CentrifugeOptions,
+    ) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
+        super::options_map(&o.resolve()?.options)
     }
 }

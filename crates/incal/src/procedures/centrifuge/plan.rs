@@ -8,82 +8,93 @@
 //! quantities, one joint propagation) is the predicted standard
 //! uncertainty of that plan, and shrinks as `1/sqrt(samples)`.
 
-use serde::Serialize;
 use serde_json::json;
 
-use super::radius::ValueU;
-use super::sim::RigPlan;
+use super::sim::{CentrifugeTruth, RigPlan};
 use super::CentrifugeOptions;
 use crate::document::plan::PlanDocument;
 use crate::document::Procedure;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::estimation::Noise;
-use crate::models::{AccelerometerModel, Term};
+use crate::models::Term;
+use crate::options::invalid;
 
-/// Options of a centrifuge plan's prediction. In the plan document's
-/// `options`: the rig and plan of [`RigPlan`], the expected `k0` (g) and
-/// `k1` (output/g), `u_k0`, `u_k1` (standard uncertainties of K0 and K1
-/// from the 1 g calibration), `order` (2 or 3), `alignment_tolerance_deg`
-/// (fixture angle bound) and `u_omega_ppm` (relative u of the table rate).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// Options of a centrifuge plan's prediction: the instrument expected
+/// (its K0 and K1 matter most), the rig and plan of [`RigPlan`], `u_k0`,
+/// `u_k1` (standard uncertainties of K0 and K1 from the 1 g calibration),
+/// `order` (2 or 3), `alignment_tolerance_deg` (fixture angle bound) and
+/// `u_omega_ppm` (relative u of the table rate); every key has the
+/// command line's default. In the plan document's `options`: all of them
+/// but the expected instrument's terms other than `k0` and `k1`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct CentrifugePlanOptions {
     /// The instrument expected (its K0 and K1 matter most).
-    #[serde(skip)]
-    pub truth: AccelerometerModel,
+    #[serde(flatten)]
+    pub truth: CentrifugeTruth,
     /// The rig and the plan.
     #[serde(flatten)]
     pub rig: RigPlan,
     /// Standard uncertainty of K0 from the 1 g calibration (g, ≥ 0).
+    #[serde(default)]
     pub u_k0: f64,
     /// Standard uncertainty of K1 from the 1 g calibration (output/g, ≥ 0).
+    #[serde(default)]
     pub u_k1: f64,
     /// Model order of the radius regression and the station fits (2 or 3).
+    #[serde(default = "default_order")]
     pub order: usize,
-    /// Bound of the fixture angle error (deg, ≥ 0), for the type-B Δc2.
+    /// Bound of the fixture angle error (deg, 0…10), for the type-B Δc2.
+    #[serde(default)]
     pub alignment_tolerance_deg: f64,
     /// Relative standard uncertainty of the table rate (ppm, 0…1e5).
+    #[serde(default)]
     pub u_omega_ppm: f64,
 }
+
+fn default_order() -> usize {
+    3
+}
+
+/// The expected instrument's terms a plan document does not record (the
+/// prediction barely depends on them).
+const UNRECORDED_TRUTH: [&str; 10] = [
+    "k2",
+    "k3",
+    "delta_o_arcsec",
+    "delta_p_arcsec",
+    "k_ip",
+    "k_io",
+    "k_po",
+    "k_pp",
+    "k_oo",
+    "k_oq",
+];
 
 impl CentrifugePlanOptions {
     /// Refuse options no prediction can use: fewer than 2 samples per
     /// point or no noise (the plan needs a scatter), a negative u or
     /// tolerance, `u_k1` not below |K1|, `u_k0` not below 1 g, a tolerance
     /// above 10°, `u_omega_ppm` outside 0…1e5, a model order other than 2
-    /// or 3, and the rig checks of [`RigPlan::validate`].
+    /// or 3, and the rig checks of [`RigPlan::validate`]; each names its
+    /// option.
     pub fn validate(&self) -> Result<()> {
         if self.rig.samples < 2 {
-            return Err(Error::TooFew {
-                what: "samples per point (the plan needs a scatter)".into(),
-                needed: 2,
-                got: self.rig.samples,
-            });
+            return invalid(
+                "samples",
+                format!(
+                    "at least 2 per point (the plan needs a scatter), got {}",
+                    self.rig.samples
+                ),
+            );
         }
-        if !(self.rig.noise.is_finite() && self.rig.noise > 0.0) {
-            return Err(Error::InvalidValue {
-                what: "noise (a positive number)".into(),
-                value: self.rig.noise.to_string(),
-            });
-        }
-        for (name, v) in [
-            ("u_k0", self.u_k0),
-            ("u_k1", self.u_k1),
-            ("alignment_tolerance_deg", self.alignment_tolerance_deg),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::InvalidValue {
-                    what: format!("{name} (a non-negative number)"),
-                    value: v.to_string(),
-                });
-            }
-        }
+        crate::options::check_positive("noise", self.rig.noise)?;
         // Bounds on what a 1 g calibration and a fixture can give: a u as
         // large as K1 (or above 1 g for K0) means the quantity is not
         // known, and past 10 deg the small-angle fixture model fails.
-        let k1 = self.truth.k1_out_per_g.abs();
+        let k1 = self.truth.k1.abs();
         for (name, v, limit, what) in [
-            ("u_k1", self.u_k1, k1, "smaller than |K1|"),
             ("u_k0", self.u_k0, 1.0, "below 1 g"),
+            ("u_k1", self.u_k1, k1, "smaller than |K1|"),
             (
                 "alignment_tolerance_deg",
                 self.alignment_tolerance_deg,
@@ -91,21 +102,29 @@ impl CentrifugePlanOptions {
                 "at most 10 deg",
             ),
         ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return invalid(name, format!("must be a non-negative number, got {v}"));
+            }
             let ok = if name == "alignment_tolerance_deg" {
                 v <= limit
             } else {
                 v < limit
             };
             if !ok {
-                return Err(Error::InvalidValue {
-                    what: format!("{name} ({what})"),
-                    value: v.to_string(),
-                });
+                return invalid(name, format!("must be {what}, got {v}"));
             }
         }
         super::check_u_omega_ppm(self.u_omega_ppm)?;
         super::check_order(self.order)?;
         self.rig.validate()
+    }
+}
+
+impl crate::procedures::Plan for super::CentrifugeTest {
+    type Options = CentrifugePlanOptions;
+
+    fn plan(o: &CentrifugePlanOptions) -> Result<PlanDocument> {
+        plan_document(o)
     }
 }
 
@@ -123,25 +142,23 @@ fn unit_of(name: &str) -> String {
 /// samples, and the predicted u of every coefficient and radius quantity
 /// (with the reduction's warnings about the plan).
 pub fn plan_document(o: &CentrifugePlanOptions) -> Result<PlanDocument> {
+    let truth = o.truth.model()?;
     o.validate()?;
-    let cfg = o.rig.simulation(o.truth, 0)?;
+    let cfg = o.rig.simulation(truth, 0)?;
     let t = &cfg.truth;
     let opts = CentrifugeOptions {
-        k0_g: ValueU {
-            value: t.k0_g,
-            u: o.u_k0,
-        },
-        k1: ValueU {
-            value: t.k1_out_per_g,
-            u: o.u_k1,
-        },
-        cov_k0_k1: 0.0,
-        radius0_m: o.rig.radius_m,
-        latitude_rad: o.rig.latitude_deg.to_radians(),
-        g_local_m_s2: o.rig.gravity_m_s2,
+        from: None,
+        k0: Some(t.k0_g),
+        u_k0: Some(o.u_k0),
+        k1: Some(t.k1_out_per_g),
+        u_k1: Some(o.u_k1),
+        cov_k0_k1: Some(0.0),
+        radius_m: o.rig.radius_m,
+        latitude_deg: o.rig.latitude_deg,
+        gravity_m_s2: o.rig.gravity_m_s2,
         opposite_sense: o.rig.opposite_sense,
         order: o.order,
-        alignment_tolerance_rad: o.alignment_tolerance_deg.to_radians(),
+        alignment_tolerance_deg: o.alignment_tolerance_deg,
         noise: Noise::Known { sigma: o.rig.noise },
         terms: None,
         u_omega_ppm: o.u_omega_ppm,
@@ -159,8 +176,9 @@ pub fn plan_document(o: &CentrifugePlanOptions) -> Result<PlanDocument> {
         ),
     );
     d.with_options(o)?;
-    d.options.insert("k0".into(), json!(t.k0_g));
-    d.options.insert("k1".into(), json!(t.k1_out_per_g));
+    for k in UNRECORDED_TRUTH {
+        d.options.remove(k);
+    }
     for (key, value) in [
         ("plan", json!("centrifuge")),
         ("positions", json!(o.rig.positions)),

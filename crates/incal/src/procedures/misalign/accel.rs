@@ -40,13 +40,30 @@ pub struct AccelObservation {
     pub output: f64,
 }
 
-/// Options of [`calibrate`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Options of [`calibrate`] and of [`super::MisalignAccel`]. In the
+/// document: `{"noise": null, "scale_factor": 1.299, "scale_factor_unit":
+/// "output/g"}`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct AccelOptions {
     /// Known scale factor kI (output per g); finite, non-zero.
     pub scale_factor: f64,
-    /// Noise policy of one sample.
+    /// The unit of `scale_factor` (recorded; always `output/g`).
+    #[serde(default)]
+    pub scale_factor_unit: super::AccelScaleFactorUnit,
+    /// Noise policy of one sample: σ (output units), or null for "from the data".
+    #[serde(default)]
     pub noise: Noise,
+}
+
+impl AccelOptions {
+    /// The scale factor kI (output per g), noise from the data.
+    pub fn new(scale_factor: f64) -> Self {
+        Self {
+            scale_factor,
+            scale_factor_unit: Default::default(),
+            noise: Noise::Auto,
+        }
+    }
 }
 
 /// Fit summary at one β.

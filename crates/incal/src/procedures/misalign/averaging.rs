@@ -39,8 +39,19 @@ pub struct Record {
     pub samples: Vec<RawSample>,
 }
 
-/// Which samples of a record are averaged.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// Which samples of a record are averaged (`whole` or `all` at the edges).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
 pub enum TurnPolicy {
     /// The samples of the first whole turns (default; Earth rate cancels).
     #[default]

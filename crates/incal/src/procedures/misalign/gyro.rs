@@ -65,8 +65,10 @@ pub struct GyroObservation {
     pub output: f64,
 }
 
-/// A (α, β) configuration.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// A (α, β) configuration; at the edges (a plan's `configs`) the text
+/// `ALPHA:BETA` in degrees (`90:180`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[serde(try_from = "String", into = "String")]
 pub struct GyroConfig {
     /// Gyro angle α on the fixture (rad).
     pub alpha_rad: f64,
@@ -98,6 +100,27 @@ impl GyroConfig {
         .collect()
     }
 
+    /// From `ALPHA:BETA` in degrees (`0:180`); anything else is
+    /// [`Error::InvalidOption`] for `configs`.
+    pub fn parse(text: &str) -> Result<Self> {
+        let bad = || {
+            crate::options::invalid(
+                "configs",
+                format!(
+                    "'{}' is not ALPHA:BETA in degrees (e.g. 0:180)",
+                    incal_io::clip(text)
+                ),
+            )
+        };
+        let Some((a, b)) = text.split_once(':') else {
+            return bad();
+        };
+        match (a.trim().parse::<f64>(), b.trim().parse::<f64>()) {
+            (Ok(a), Ok(b)) if a.is_finite() && b.is_finite() => Ok(GyroConfig::deg(a, b)),
+            _ => bad(),
+        }
+    }
+
     /// Name of this configuration's bias term, `bias(alpha=A,beta=B)` (deg).
     pub fn bias_name(&self) -> String {
         format!(
@@ -108,21 +131,60 @@ impl GyroConfig {
     }
 }
 
+impl TryFrom<String> for GyroConfig {
+    type Error = Error;
+
+    fn try_from(text: String) -> Result<Self> {
+        GyroConfig::parse(&text)
+    }
+}
+
+impl From<GyroConfig> for String {
+    /// `ALPHA:BETA` in degrees, as a plan document records it.
+    fn from(c: GyroConfig) -> String {
+        format!("{}:{}", c.alpha_rad.to_degrees(), c.beta_rad.to_degrees())
+    }
+}
+
 fn fmt_deg(rad: f64) -> String {
     let d = key_angle(angle_key(rad)).to_degrees();
     let r = (d * 1e6).round() / 1e6;
     format!("{r}")
 }
 
-/// Options of [`calibrate`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Options of [`calibrate`] and of [`super::MisalignGyro`]. In the
+/// document: `{"average": "whole", "noise": null, "per_config_bias": false,
+/// "scale_factor": -2.9222, "scale_factor_unit": "output/(deg/s)"}`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct GyroOptions {
     /// Known scale factor kI (output per °/s); must be finite and non-zero.
     pub scale_factor: f64,
+    /// The unit of `scale_factor` (recorded; always `output/(deg/s)`).
+    #[serde(default)]
+    pub scale_factor_unit: super::GyroScaleFactorUnit,
     /// One bias per (α, β) configuration instead of a common one.
+    #[serde(default)]
     pub per_config_bias: bool,
-    /// Noise policy of one sample.
+    /// Noise policy of one sample: σ (output units), or null for "from the data".
+    #[serde(default)]
     pub noise: Noise,
+    /// Which samples of a raw record are averaged (unused for record means).
+    #[serde(default)]
+    pub average: super::averaging::TurnPolicy,
+}
+
+impl GyroOptions {
+    /// The scale factor kI (output per °/s), a common bias, noise from the
+    /// data, whole turns averaged.
+    pub fn new(scale_factor: f64) -> Self {
+        Self {
+            scale_factor,
+            scale_factor_unit: Default::default(),
+            per_config_bias: false,
+            noise: Noise::Auto,
+            average: Default::default(),
+        }
+    }
 }
 
 /// Fit summary at one (α, β, ω) position.

@@ -143,89 +143,91 @@ fn check_scale_factor(k: f64) -> Result<()> {
     if k.is_finite() && k != 0.0 {
         Ok(())
     } else {
-        crate::Error::invalid("scale_factor (a finite non-zero number)", k)
+        crate::options::invalid(
+            "scale_factor",
+            format!(
+                "must be a finite, non-zero number, got {}",
+                crate::error::short_number(&k.to_string())
+            ),
+        )
     }
+}
+
+/// The unit of a gyro's scale factor as the document records it
+/// (`scale_factor_unit`): output per °/s, the only one.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
+pub enum GyroScaleFactorUnit {
+    /// `output/(deg/s)`.
+    #[default]
+    #[serde(rename = "output/(deg/s)")]
+    OutputPerDegS,
+}
+
+/// The unit of an accelerometer's scale factor as the document records
+/// it (`scale_factor_unit`): output per g, the only one.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
+pub enum AccelScaleFactorUnit {
+    /// `output/g`.
+    #[default]
+    #[serde(rename = "output/g")]
+    OutputPerG,
 }
 
 /// `incal misalign gyro`: a gyro on a rate table ([`gyro`]), from record
-/// means or raw records ([`input`]).
+/// means or raw records ([`input`]); options [`gyro::GyroOptions`].
 #[derive(Debug, Clone, Copy, Default)]
 pub struct MisalignGyro;
 
-/// Options of [`MisalignGyro`]: the fit and how raw records are averaged.
-/// In the document: `{"average": "whole", "noise": null,
-/// "per_config_bias": false, "scale_factor": -2.9222,
-/// "scale_factor_unit": "output/(deg/s)"}`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GyroRun {
-    /// Scale factor, bias layout and noise policy.
-    pub fit: gyro::GyroOptions,
-    /// Which samples of a raw record are averaged (unused for record means).
-    pub average: averaging::TurnPolicy,
-}
-
-impl serde::Serialize for GyroRun {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut m = s.serialize_map(Some(5))?;
-        m.serialize_entry(
-            "average",
-            match self.average {
-                averaging::TurnPolicy::Whole => "whole",
-                averaging::TurnPolicy::All => "all",
-            },
-        )?;
-        m.serialize_entry("noise", &self.fit.noise.sigma())?;
-        m.serialize_entry("per_config_bias", &self.fit.per_config_bias)?;
-        m.serialize_entry("scale_factor", &self.fit.scale_factor)?;
-        m.serialize_entry(
-            "scale_factor_unit",
-            crate::units::Unit::OutputPerDegS.as_str(),
-        )?;
-        m.end()
-    }
-}
-
 impl super::Procedure for MisalignGyro {
     const ID: crate::document::Procedure = crate::document::Procedure::MisalignGyro;
-    type Options = GyroRun;
+    type Options = gyro::GyroOptions;
     type Input = input::GyroInput;
 
-    fn validate(o: &GyroRun) -> Result<()> {
-        check_scale_factor(o.fit.scale_factor)?;
-        o.fit.noise.validate()
+    fn validate(o: &gyro::GyroOptions) -> Result<()> {
+        check_scale_factor(o.scale_factor)?;
+        o.noise.validate()
     }
 
     fn read<R: std::io::Read>(
         rows: &mut incal_io::Reader<R>,
-        o: &GyroRun,
+        o: &gyro::GyroOptions,
     ) -> Result<input::GyroInput> {
         input::read_gyro(rows, o.average)
     }
 
     fn reduce(
         i: &input::GyroInput,
-        o: &GyroRun,
+        o: &gyro::GyroOptions,
         _: &dyn super::Progress,
     ) -> Result<crate::document::ResultDocument> {
-        gyro::calibrate(&i.observations, &o.fit)?.document(&o.fit, &i.records)
+        gyro::calibrate(&i.observations, o)?.document(o, &i.records)
     }
 }
 
-/// `incal misalign accel`: an accelerometer on a vertical face ([`accel`]).
+/// `incal misalign accel`: an accelerometer on a vertical face ([`accel`]);
+/// options [`accel::AccelOptions`].
 #[derive(Debug, Clone, Copy, Default)]
 pub struct MisalignAccel;
-
-impl serde::Serialize for accel::AccelOptions {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut m = s.serialize_map(Some(3))?;
-        m.serialize_entry("noise", &self.noise.sigma())?;
-        m.serialize_entry("scale_factor", &self.scale_factor)?;
-        m.serialize_entry("scale_factor_unit", crate::units::Unit::OutputPerG.as_str())?;
-        m.end()
-    }
-}
 
 impl super::Procedure for MisalignAccel {
     const ID: crate::document::Procedure = crate::document::Procedure::MisalignAccel;
@@ -295,5 +297,101 @@ mod tests {
         let (gv, psi) = (g.value(GAMMA).unwrap(), a.values()[0]);
         assert!((-gv * psi.sin() - -7.9e-4).abs() < 1e-15);
         assert!((gv * psi.cos() - 2.7e-4).abs() < 1e-15);
+    }
+
+    fn key_of<T: serde::de::DeserializeOwned + schemars::JsonSchema + std::fmt::Debug>(
+        v: serde_json::Value,
+    ) -> String {
+        match crate::options::from_json::<T>(&v) {
+            Err(crate::Error::InvalidOption { key, .. }) => key,
+            other => panic!("expected InvalidOption, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn options_round_trip_the_documents_and_name_a_bad_key() {
+        use super::super::Procedure;
+        use serde_json::json;
+        let g = json!({"average": "whole", "noise": null, "per_config_bias": false,
+            "scale_factor": -2.9222, "scale_factor_unit": "output/(deg/s)"});
+        let o: gyro::GyroOptions = crate::options::from_json(&g).unwrap();
+        assert_eq!(serde_json::to_value(o).unwrap(), g);
+        assert_eq!(
+            crate::options::from_json::<gyro::GyroOptions>(&json!({"scale_factor": -2.9222}))
+                .unwrap(),
+            o
+        );
+        assert_eq!(
+            json!(crate::units::Unit::OutputPerDegS.as_str()),
+            g["scale_factor_unit"]
+        );
+        let a = json!({"noise": 0.001, "scale_factor": 1.299, "scale_factor_unit": "output/g"});
+        let o: accel::AccelOptions = crate::options::from_json(&a).unwrap();
+        assert_eq!(serde_json::to_value(o).unwrap(), a);
+        assert_eq!(json!(crate::units::Unit::OutputPerG.as_str()), a["scale_factor_unit"]);
+        assert_eq!(
+            key_of::<gyro::GyroOptions>(json!({"scale_factor": 1.0, "averge": "all"})),
+            "averge"
+        );
+        assert_eq!(
+            key_of::<gyro::GyroOptions>(json!({"scale_factor": 1.0, "average": "half"})),
+            "average"
+        );
+        assert_eq!(
+            key_of::<accel::AccelOptions>(json!({"scale_factor": 1.0, "scale_factor_unit": "V/g"})),
+            "scale_factor_unit"
+        );
+        for bad in [0.0, f64::INFINITY] {
+            match MisalignAccel::validate(&accel::AccelOptions::new(bad)) {
+                Err(crate::Error::InvalidOption { key, .. }) => assert_eq!(key, "scale_factor"),
+                other => panic!("{other:?}"),
+            }
+        }
+        let mut n = gyro::GyroOptions::new(1.0);
+        n.noise = crate::estimation::Noise::Known { sigma: -1.0 };
+        assert!(matches!(
+            MisalignGyro::validate(&n),
+            Err(crate::Error::InvalidOption { key, .. }) if key == "noise"
+        ));
+    }
+
+    #[test]
+    fn plan_options_round_trip_the_plan_documents() {
+        use serde_json::json;
+        let gyro_plan = json!({"instrument": "gyro",
+            "configs": ["0:0", "0:180", "180:180", "90:180", "0:90"],
+            "rates_deg_s": [20.0, 30.0, 40.0], "per_config_bias": false,
+            "samples": 1, "scale_factor": 1.0, "noise": 0.01});
+        let o: plan::MisalignPlan = crate::options::from_json(&json!({
+            "scale_factor": 1.0, "noise": 0.01})).unwrap();
+        let settled = serde_json::to_value(o.settled()).unwrap();
+        assert_eq!(settled, gyro_plan);
+        let back: plan::MisalignPlan = crate::options::from_json(&settled).unwrap();
+        assert_eq!(back, o.settled());
+        let doc = o.document().unwrap();
+        assert_eq!(json!(doc.options), gyro_plan);
+        let accel_plan = json!({"instrument": "accel", "betas_deg": [0.0, 90.0, 180.0, 270.0],
+            "samples": 3, "scale_factor": 1.3, "noise": 0.01});
+        let o: plan::MisalignPlan = crate::options::from_json(&json!({"instrument": "accel",
+            "samples": 3, "scale_factor": 1.3, "noise": 0.01, "rates_deg_s": [5.0]})).unwrap();
+        assert_eq!(json!(o.document().unwrap().options), accel_plan);
+        assert_eq!(
+            key_of::<plan::MisalignPlan>(json!({"scale_factor": 1.0, "noise": 0.1, "configs": ["0:0", "90"]})),
+            "configs[1]"
+        );
+        let refused = |v: serde_json::Value| -> String {
+            let p: plan::MisalignPlan = crate::options::from_json(&v).unwrap();
+            match p.document() {
+                Err(crate::Error::InvalidOption { key, .. }) => key,
+                other => panic!("{other:?}"),
+            }
+        };
+        assert_eq!(refused(json!({"scale_factor": 1.0, "noise": 0.0})), "noise");
+        assert_eq!(refused(json!({"scale_factor": 0.0, "noise": 0.1})), "scale_factor");
+        assert_eq!(refused(json!({"scale_factor": 1.0, "noise": 0.1, "samples": 0})), "samples");
+        assert_eq!(
+            refused(json!({"scale_factor": 1.0, "noise": 0.1, "rates_deg_s": [-1.0]})),
+            "rates_deg_s"
+        );
     }
 }

@@ -27,23 +27,16 @@ pub struct Prediction {
 }
 
 fn check_noise(noise: f64) -> Result<()> {
-    if noise.is_finite() && noise > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::InvalidValue {
-            what: "noise of one reading (output units)".into(),
-            value: noise.to_string(),
-        })
-    }
+    crate::options::check_positive("noise", noise)
 }
 
 fn check_readings(readings: usize) -> Result<()> {
     if (1..=MAX_PLAN_SAMPLES).contains(&readings) {
         Ok(())
     } else {
-        Error::invalid(
-            format!("samples (1 to {MAX_PLAN_SAMPLES} per position)"),
-            readings,
+        crate::options::invalid(
+            "samples",
+            format!("must be 1 to {MAX_PLAN_SAMPLES} per position, got {readings}"),
         )
     }
 }
@@ -151,10 +144,22 @@ pub fn predict_accel(
     predict_design(&d, readings, noise, &ACCEL_ANGLES)
 }
 
-/// Which instrument a misalignment plan is for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Which instrument a misalignment plan is for (`gyro` or `accel`).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
 pub enum PlanInstrument {
     /// Gyro on a rate table ([`predict_gyro`]).
+    #[default]
     Gyro,
     /// Accelerometer on a vertical face ([`predict_accel`]).
     Accel,
@@ -173,20 +178,30 @@ impl PlanInstrument {
 /// Options of a misalignment plan. In the document's `options`: the
 /// instrument, `samples`, `scale_factor`, `noise`, and the instrument's
 /// own keys (`configs` as `ALPHA:BETA` in deg, `rates_deg_s`,
-/// `per_config_bias`; or `betas_deg`).
-#[derive(Debug, Clone, PartialEq)]
+/// `per_config_bias`; or `betas_deg`): [`MisalignPlan::settled`] keeps
+/// only those of the instrument, with their defaults when not given.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct MisalignPlan {
-    /// Gyro or accelerometer.
+    /// Gyro or accelerometer (default: gyro).
+    #[serde(default)]
     pub instrument: PlanInstrument,
-    /// Gyro: configurations, in test order.
-    pub configs: Vec<GyroConfig>,
-    /// Gyro: table rate magnitudes (deg/s), each run forward and reverse.
-    pub rates_deg_s: Vec<f64>,
-    /// Gyro: one bias per configuration.
-    pub per_config_bias: bool,
-    /// Accelerometer: angles β (deg).
-    pub betas_deg: Vec<f64>,
-    /// Samples (record means or single readings) per position, ≥ 1.
+    /// Gyro: configurations `ALPHA:BETA` (deg), in test order (default:
+    /// the paper's five, [`GyroConfig::paper`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub configs: Option<Vec<GyroConfig>>,
+    /// Gyro: table rate magnitudes (deg/s), each run forward and reverse
+    /// (default: 20, 30, 40).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rates_deg_s: Option<Vec<f64>>,
+    /// Gyro: one bias per configuration (default: false).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub per_config_bias: Option<bool>,
+    /// Accelerometer: angles β (deg) (default: 0, 90, 180, 270).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub betas_deg: Option<Vec<f64>>,
+    /// Samples (record means or single readings) per position, ≥ 1
+    /// (default: 1).
+    #[serde(default = "one")]
     pub samples: usize,
     /// Scale factor kI (gyro: output per deg/s; accelerometer: output per g).
     pub scale_factor: f64,
@@ -194,57 +209,86 @@ pub struct MisalignPlan {
     pub noise: f64,
 }
 
-impl serde::Serialize for MisalignPlan {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut m = s.serialize_map(None)?;
-        m.serialize_entry("instrument", self.instrument.name())?;
-        match self.instrument {
-            PlanInstrument::Gyro => {
-                let configs: Vec<String> = self
-                    .configs
-                    .iter()
-                    .map(|c| format!("{}:{}", c.alpha_rad.to_degrees(), c.beta_rad.to_degrees()))
-                    .collect();
-                m.serialize_entry("configs", &configs)?;
-                m.serialize_entry("rates_deg_s", &self.rates_deg_s)?;
-                m.serialize_entry("per_config_bias", &self.per_config_bias)?;
-            }
-            PlanInstrument::Accel => m.serialize_entry("betas_deg", &self.betas_deg)?,
-        }
-        m.serialize_entry("samples", &self.samples)?;
-        m.serialize_entry("scale_factor", &self.scale_factor)?;
-        m.serialize_entry("noise", &self.noise)?;
-        m.end()
-    }
+fn one() -> usize {
+    1
 }
 
+/// Default table rate magnitudes of a gyro plan (deg/s).
+pub const DEFAULT_RATES_DEG_S: [f64; 3] = [20.0, 30.0, 40.0];
+/// Default face angles of an accelerometer plan (deg).
+pub const DEFAULT_BETAS_DEG: [f64; 4] = [0.0, 90.0, 180.0, 270.0];
+
 impl MisalignPlan {
+    /// The plan as predicted and recorded: the instrument's own keys, with
+    /// their defaults when not given; the other instrument's keys dropped.
+    pub fn settled(&self) -> MisalignPlan {
+        let mut o = self.clone();
+        match o.instrument {
+            PlanInstrument::Gyro => {
+                o.configs.get_or_insert_with(GyroConfig::paper);
+                o.rates_deg_s
+                    .get_or_insert_with(|| DEFAULT_RATES_DEG_S.to_vec());
+                o.per_config_bias.get_or_insert(false);
+                o.betas_deg = None;
+            }
+            PlanInstrument::Accel => {
+                o.betas_deg.get_or_insert_with(|| DEFAULT_BETAS_DEG.to_vec());
+                o.configs = None;
+                o.rates_deg_s = None;
+                o.per_config_bias = None;
+            }
+        }
+        o
+    }
+
     /// Refuse options that make no plan: no sample, a scale factor that
-    /// is zero or not finite, an angle that is not finite (the design
-    /// refuses what cannot separate an angle, naming it).
+    /// is zero or not finite, a noise that is not positive, no rate or
+    /// angle, an angle that is not finite (the design refuses what cannot
+    /// separate an angle, naming it).
     pub fn validate(&self) -> Result<()> {
+        use crate::options::invalid;
         check_readings(self.samples)?;
         if !(self.scale_factor.is_finite() && self.scale_factor != 0.0) {
-            return Error::invalid("scale_factor (a finite non-zero number)", self.scale_factor);
+            return invalid(
+                "scale_factor",
+                format!(
+                    "must be a finite, non-zero number, got {}",
+                    crate::error::short_number(&self.scale_factor.to_string())
+                ),
+            );
         }
-        match self.instrument {
+        check_noise(self.noise)?;
+        let o = self.settled();
+        match o.instrument {
             PlanInstrument::Gyro => {
-                if self.rates_deg_s.is_empty() {
-                    return Error::invalid("rates_deg_s (at least one rate)", "none");
+                let rates = o.rates_deg_s.unwrap_or_default();
+                if rates.is_empty() {
+                    return invalid("rates_deg_s", "give at least one rate");
                 }
-                for c in &self.configs {
-                    if !(c.alpha_rad.is_finite() && c.beta_rad.is_finite()) {
-                        return Error::invalid("configs (finite angles)", "not finite");
-                    }
+                if let Some(r) = rates.iter().find(|r| !(r.is_finite() && **r > 0.0)) {
+                    return invalid(
+                        "rates_deg_s",
+                        format!("a rate magnitude must be a positive number (deg/s), got {r}"),
+                    );
+                }
+                let configs = o.configs.unwrap_or_default();
+                if configs.is_empty() {
+                    return invalid("configs", "give at least one configuration");
+                }
+                if configs
+                    .iter()
+                    .any(|c| !(c.alpha_rad.is_finite() && c.beta_rad.is_finite()))
+                {
+                    return invalid("configs", "the angles must be finite");
                 }
             }
             PlanInstrument::Accel => {
-                if self.betas_deg.is_empty() {
-                    return Error::invalid("betas_deg (at least one angle)", "none");
+                let betas = o.betas_deg.unwrap_or_default();
+                if betas.is_empty() {
+                    return invalid("betas_deg", "give at least one angle");
                 }
-                if let Some(b) = self.betas_deg.iter().find(|b| !b.is_finite()) {
-                    return Error::invalid("betas_deg (finite angles)", b);
+                if let Some(b) = betas.iter().find(|b| !b.is_finite()) {
+                    return invalid("betas_deg", format!("the angles must be finite, got {b}"));
                 }
             }
         }
@@ -256,25 +300,31 @@ impl MisalignPlan {
     pub fn document(&self) -> Result<crate::document::plan::PlanDocument> {
         use serde_json::json;
         self.validate()?;
-        let (procedure, what, p) = match self.instrument {
+        let o = self.settled();
+        let (procedure, what, p) = match o.instrument {
             PlanInstrument::Gyro => (
                 crate::document::Procedure::MisalignGyro,
                 "gyro on a rate table",
                 predict_gyro(
-                    &self.configs,
-                    &self.rates_deg_s,
-                    self.samples,
-                    self.scale_factor,
-                    self.noise,
-                    self.per_config_bias,
+                    o.configs.as_deref().unwrap_or_default(),
+                    o.rates_deg_s.as_deref().unwrap_or_default(),
+                    o.samples,
+                    o.scale_factor,
+                    o.noise,
+                    o.per_config_bias.unwrap_or(false),
                 )?,
             ),
             PlanInstrument::Accel => {
-                let b: Vec<f64> = self.betas_deg.iter().map(|x| x.to_radians()).collect();
+                let b: Vec<f64> = o
+                    .betas_deg
+                    .iter()
+                    .flatten()
+                    .map(|x| x.to_radians())
+                    .collect();
                 (
                     crate::document::Procedure::MisalignAccel,
                     "accelerometer on a vertical face",
-                    predict_accel(&b, self.samples, self.scale_factor, self.noise)?,
+                    predict_accel(&b, o.samples, o.scale_factor, o.noise)?,
                 )
             }
         };
@@ -285,8 +335,8 @@ impl MisalignPlan {
                 p.n_obs, p.n_params
             ),
         );
-        d.with_options(self)?;
-        d.set("instrument", json!(self.instrument.name()))?;
+        d.with_options(&o)?;
+        d.set("instrument", json!(o.instrument.name()))?;
         d.set("observations", json!(p.n_obs))?;
         d.set("parameters", json!(p.n_params))?;
         for (j, n) in p.angles.names().iter().enumerate() {
@@ -329,4 +379,24 @@ pub fn run_sheet_accel(
         vec!["beta_deg"],
         rows.into_iter().map(|b| vec![num(b)]).collect(),
     )
+}
+
+impl crate::procedures::Plan for super::MisalignGyro {
+    type Options = MisalignPlan;
+
+    /// The plan of either instrument (`instrument` chooses; the plan
+    /// command is shared by both misalignment procedures).
+    fn plan(o: &MisalignPlan) -> Result<crate::document::plan::PlanDocument> {
+        o.document()
+    }
+}
+
+impl crate::procedures::Plan for super::MisalignAccel {
+    type Options = MisalignPlan;
+
+    /// The plan of either instrument (`instrument` chooses; the plan
+    /// command is shared by both misalignment procedures).
+    fn plan(o: &MisalignPlan) -> Result<crate::document::plan::PlanDocument> {
+        o.document()
+    }
 }
