@@ -35,6 +35,11 @@ pub fn simulate<S: incal::procedures::Simulate>(
 ) -> CliResult<()> {
     S::validate(options).map_err(crate::error::core)?;
     crate::io::write_stream(output, |out| {
-        S::simulate(options, out).map_err(std::io::Error::other)
+        S::simulate(options, out).map_err(|e| match e {
+            incal::Error::Write(m) => std::io::Error::other(m),
+            // A value the simulation cannot represent: bad input, not a
+            // disk failure (the writer removes the half-written file).
+            other => std::io::Error::new(std::io::ErrorKind::InvalidData, other.to_string()),
+        })
     })
 }

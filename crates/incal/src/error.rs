@@ -159,8 +159,19 @@ pub enum Error {
 }
 
 impl From<std::io::Error> for Error {
+    /// A writer that refuses a value (a non-finite number: `InvalidData`)
+    /// is an option outside what the simulator can represent; any other
+    /// I/O error is a failure to write.
     fn from(e: std::io::Error) -> Error {
-        Error::Write(e.to_string())
+        if e.kind() == std::io::ErrorKind::InvalidData {
+            Error::InvalidValue {
+                what: "simulated value (an option is outside what the simulator can represent)"
+                    .into(),
+                value: e.to_string(),
+            }
+        } else {
+            Error::Write(e.to_string())
+        }
     }
 }
 

@@ -9,7 +9,7 @@ use incal::models::Term;
 use incal::procedures::centrifuge::plan::CentrifugePlanOptions;
 use incal::procedures::centrifuge::sim::{CentrifugeSimOptions, CentrifugeTruth, RigPlan};
 use incal::procedures::centrifuge::{CentrifugeOptions, CentrifugeTest, ChainedResult};
-use incal::procedures::{Plan, Silent, Simulate};
+use incal::procedures::{Plan, Silent};
 use incal::units::STANDARD_GRAVITY_M_S2;
 
 use crate::documents::read_document;
@@ -269,19 +269,7 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         rig: a.rig.rig(),
         seed: a.seed,
     };
-    // Refused before the output file is touched.
-    options
-        .rig
-        .simulation(options.truth.model().map_err(core)?, options.seed)
-        .map_err(core)?;
-    crate::io::write_stream(a.output.as_deref(), |out| {
-        <CentrifugeTest as Simulate>::simulate(&options, out).map_err(|e| match e {
-            incal::Error::InvalidValue { value, .. } => {
-                std::io::Error::new(std::io::ErrorKind::InvalidData, value)
-            }
-            e => std::io::Error::other(e.to_string()),
-        })
-    })
+    crate::run::simulate::<CentrifugeTest>(&options, a.output.as_deref())
 }
 
 /// Options of `incal plan centrifuge`.

@@ -371,20 +371,16 @@ impl Default for CentrifugeSimOptions {
 impl crate::procedures::Simulate for super::CentrifugeTest {
     type Options = CentrifugeSimOptions;
 
+    fn validate(o: &CentrifugeSimOptions) -> Result<()> {
+        o.rig.simulation(o.truth.model()?, o.seed).map(|_| ())
+    }
+
     /// The recording of `incal simulate centrifuge` (the input CSV of the
-    /// reduction, [`super::input::write`]).
+    /// reduction, [`super::input::write`]); a value the writer refuses (not
+    /// finite) is an option beyond what the simulator can represent.
     fn simulate(o: &CentrifugeSimOptions, out: &mut dyn std::io::Write) -> Result<()> {
         let cfg = o.rig.simulation(o.truth.model()?, o.seed)?;
-        super::input::write(&simulate(&cfg), out).map_err(|e| match e.kind() {
-            // The writer refuses a value it cannot write (not finite):
-            // options beyond what the simulator can represent.
-            std::io::ErrorKind::InvalidData => Error::InvalidValue {
-                what: "simulated value (an option is outside what the simulator can represent)"
-                    .into(),
-                value: e.to_string(),
-            },
-            _ => Error::Unsupported(format!("writing the simulation: {e}")),
-        })?;
+        super::input::write(&simulate(&cfg), out)?;
         Ok(())
     }
 }
