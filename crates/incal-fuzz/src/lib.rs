@@ -216,14 +216,12 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
     match target {
         "tumble" => reduce::<tumble::Tumble>(data, &tumble_options()),
         "centrifuge" => reduce::<centrifuge::CentrifugeTest>(data, &centrifuge_options()),
-        "misalign-gyro" | "misalign-gyro-raw" => reduce::<misalign::MisalignGyro>(
-            data,
-            &misalign::gyro::GyroOptions::new(-2.9222),
-        ),
-        "misalign-accel" => reduce::<misalign::MisalignAccel>(
-            data,
-            &misalign::accel::AccelOptions::new(1.299),
-        ),
+        "misalign-gyro" | "misalign-gyro-raw" => {
+            reduce::<misalign::MisalignGyro>(data, &misalign::gyro::GyroOptions::new(-2.9222))
+        }
+        "misalign-accel" => {
+            reduce::<misalign::MisalignAccel>(data, &misalign::accel::AccelOptions::new(1.299))
+        }
         "gfimu-calibrate" => match builtin_array() {
             Ok(array) => reduce::<gfimu::GfimuCalibrate>(
                 data,

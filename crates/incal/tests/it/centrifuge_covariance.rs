@@ -28,10 +28,10 @@ fn k0_k1_covariance_enters_the_tilt_exactly() {
             &obs,
             &CentrifugeOptions {
                 from: None,
-        k0: Some(truth.k0_g),
-        u_k0: Some(u0),
+                k0: Some(truth.k0_g),
+                u_k0: Some(u0),
                 k1: Some(truth.k1_out_per_g),
-        u_k1: Some(u1),
+                u_k1: Some(u1),
                 cov_k0_k1: Some(cov),
                 radius_m: 0.71,
                 latitude_deg: 39.9,

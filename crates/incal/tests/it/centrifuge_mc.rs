@@ -82,7 +82,7 @@ fn options(k1: f64) -> CentrifugeOptions {
         k0: Some(truth().k0_g),
         u_k0: Some(0.0),
         k1: Some(k1),
-        u_k1: Some(U_K1 ),
+        u_k1: Some(U_K1),
         cov_k0_k1: Some(0.0),
         radius_m: R0,
         latitude_deg: 39.9,

@@ -226,7 +226,9 @@ impl CentrifugeOptions {
                 if u.is_some() {
                     return invalid(
                         ukey,
-                        format!("goes with {key} (the u of a chained result comes from that result)"),
+                        format!(
+                            "goes with {key} (the u of a chained result comes from that result)"
+                        ),
                     );
                 }
                 let c = f.document.coefficients.get(name).ok_or_else(|| {
@@ -262,18 +264,13 @@ impl CentrifugeOptions {
         // The covariance holds only when both come from the same result.
         let cov_k0_k1 = match (&self.from, self.k0, self.k1, self.cov_k0_k1) {
             (_, Some(_), Some(_), Some(c)) => c,
-            (_, _, _, Some(_)) => {
-                return invalid(
-                    "cov_k0_k1",
-                    "goes with k0 and k1 (the covariance of a chained result comes from that result)",
-                )
-            }
-            (Some(f), None, None, None) => {
-                f.document.covariance("K0", "K1").ok_or_else(|| {
-                    Error::Unsupported("$.correlation: no entry for K0 and K1".into())
-                        .in_file(&f.name)
-                })?
-            }
+            (_, _, _, Some(_)) => return invalid(
+                "cov_k0_k1",
+                "goes with k0 and k1 (the covariance of a chained result comes from that result)",
+            ),
+            (Some(f), None, None, None) => f.document.covariance("K0", "K1").ok_or_else(|| {
+                Error::Unsupported("$.correlation: no entry for K0 and K1".into()).in_file(&f.name)
+            })?,
             _ => 0.0,
         };
         Ok(Resolved {
@@ -307,7 +304,10 @@ pub(super) fn check_options(o: &CentrifugeOptions) -> Result<()> {
     let (k0, k1, cov) = (o.k0_u(), o.k1_u(), o.cov_k0_k1());
     let num = |v: f64| crate::error::short_number(&v.to_string());
     if !k0.value.is_finite() {
-        return invalid("k0", format!("must be a finite number, got {}", num(k0.value)));
+        return invalid(
+            "k0",
+            format!("must be a finite number, got {}", num(k0.value)),
+        );
     }
     if !(k1.value.is_finite() && k1.value != 0.0) {
         return invalid(
@@ -317,7 +317,10 @@ pub(super) fn check_options(o: &CentrifugeOptions) -> Result<()> {
     }
     for (key, u) in [("u_k0", k0.u), ("u_k1", k1.u)] {
         if !(u.is_finite() && u >= 0.0) {
-            return invalid(key, format!("must be a non-negative number, got {}", num(u)));
+            return invalid(
+                key,
+                format!("must be a non-negative number, got {}", num(u)),
+            );
         }
     }
     if !cov.is_finite() || cov.abs() > k0.u * k1.u * (1.0 + 1e-9) {
@@ -351,7 +354,10 @@ pub(super) fn check_order(order: usize) -> Result<()> {
     if (2..=3).contains(&order) {
         Ok(())
     } else {
-        invalid("order", format!("the model order must be 2 or 3, got {order}"))
+        invalid(
+            "order",
+            format!("the model order must be 2 or 3, got {order}"),
+        )
     }
 }
 
@@ -401,7 +407,9 @@ mod tests {
         let from = |v: serde_json::Value| crate::options::from_json::<CentrifugeOptions>(&v);
         assert_eq!(key_of(from(json!({"radius_m": 0.71}))), "latitude_deg");
         assert_eq!(
-            key_of(from(json!({"radius_m": 0.71, "latitude_deg": 1.0, "radius": 1.0}))),
+            key_of(from(
+                json!({"radius_m": 0.71, "latitude_deg": 1.0, "radius": 1.0})
+            )),
             "radius"
         );
         let bad = |f: &dyn Fn(&mut CentrifugeOptions)| {
@@ -416,7 +424,10 @@ mod tests {
         assert_eq!(bad(&|o| o.u_omega_ppm = -1.0), "u_omega_ppm");
         assert_eq!(bad(&|o| o.cov_k0_k1 = Some(1.0)), "cov_k0_k1");
         assert_eq!(bad(&|o| o.k0 = None), "k0");
-        assert_eq!(bad(&|o| o.alignment_tolerance_deg = -1.0), "alignment_tolerance_deg");
+        assert_eq!(
+            bad(&|o| o.alignment_tolerance_deg = -1.0),
+            "alignment_tolerance_deg"
+        );
     }
 
     #[test]
@@ -427,12 +438,18 @@ mod tests {
         assert_eq!(sim, Default::default());
         assert_eq!(sim.seed, 1);
         let v = serde_json::to_value(&sim).unwrap();
-        assert_eq!(crate::options::from_json::<super::super::sim::CentrifugeSimOptions>(&v).unwrap(), sim);
+        assert_eq!(
+            crate::options::from_json::<super::super::sim::CentrifugeSimOptions>(&v).unwrap(),
+            sim
+        );
         let mut a = Vec::new();
         super::super::CentrifugeTest::simulate(&sim, &mut a).unwrap();
         let mut b = Vec::new();
-        crate::procedures::simulate_json::<super::super::CentrifugeTest>(&json!({"seed": 1}), &mut b)
-            .unwrap();
+        crate::procedures::simulate_json::<super::super::CentrifugeTest>(
+            &json!({"seed": 1}),
+            &mut b,
+        )
+        .unwrap();
         assert_eq!(a, b);
         assert!(a.starts_with(b"plane,phi_deg,polarity,omega_rad_s,output\n"));
         let plan: super::super::plan::CentrifugePlanOptions =
@@ -450,7 +467,10 @@ mod tests {
         };
         assert_eq!(refused(json!({"samples": 1})), "samples");
         assert_eq!(refused(json!({"u_k1": 2.0})), "u_k1");
-        assert_eq!(refused(json!({"positions": ["ip:0", "ip:360"]})), "positions");
+        assert_eq!(
+            refused(json!({"positions": ["ip:0", "ip:360"]})),
+            "positions"
+        );
         assert_eq!(refused(json!({"r_plus_m": 1e300})), "r_plus_m");
         assert_eq!(refused(json!({"k1": 0.0})), "k1");
     }

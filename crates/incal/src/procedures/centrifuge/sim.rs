@@ -9,8 +9,8 @@
 //! position, the IA tilt and the Earth-rate term.
 
 use crate::error::{Error, Result};
-use crate::options::invalid;
 use crate::models::AccelerometerModel;
+use crate::options::invalid;
 use crate::procedures::centrifuge::Observation;
 use crate::rigs::centrifuge::{Centrifuge, Plane, Position};
 use crate::sim::{normal, rng};
@@ -196,7 +196,9 @@ impl Default for RigPlan {
 /// The simulated instrument of a centrifuge test or plan, in engineering
 /// units (g units; K1 in output/g; misalignments in arcsec), each with the
 /// command line's default (the He & Yin 2017 instrument of the demo).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 pub struct CentrifugeTruth {
     /// Bias K0 (g).
     #[serde(default = "t_k0")]
@@ -312,7 +314,10 @@ impl CentrifugeTruth {
             ("k_oq", self.k_oq),
         ] {
             if !v.is_finite() {
-                return invalid(key, format!("truth model: must be a finite number, got {v}"));
+                return invalid(
+                    key,
+                    format!("truth model: must be a finite number, got {v}"),
+                );
             }
         }
         if self.k1 == 0.0 {

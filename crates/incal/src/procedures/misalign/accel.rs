@@ -43,7 +43,9 @@ pub struct AccelObservation {
 /// Options of [`calibrate`] and of [`super::MisalignAccel`]. In the
 /// document: `{"noise": null, "scale_factor": 1.299, "scale_factor_unit":
 /// "output/g"}`.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 pub struct AccelOptions {
     /// Known scale factor kI (output per g); finite, non-zero.
     pub scale_factor: f64,

@@ -67,7 +67,9 @@ pub struct GyroObservation {
 
 /// A (α, β) configuration; at the edges (a plan's `configs`) the text
 /// `ALPHA:BETA` in degrees (`90:180`).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 #[serde(try_from = "String", into = "String")]
 pub struct GyroConfig {
     /// Gyro angle α on the fixture (rad).
@@ -155,7 +157,9 @@ fn fmt_deg(rad: f64) -> String {
 /// Options of [`calibrate`] and of [`super::MisalignGyro`]. In the
 /// document: `{"average": "whole", "noise": null, "per_config_bias": false,
 /// "scale_factor": -2.9222, "scale_factor_unit": "output/(deg/s)"}`.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 pub struct GyroOptions {
     /// Known scale factor kI (output per °/s); must be finite and non-zero.
     pub scale_factor: f64,

@@ -328,7 +328,10 @@ mod tests {
         let a = json!({"noise": 0.001, "scale_factor": 1.299, "scale_factor_unit": "output/g"});
         let o: accel::AccelOptions = crate::options::from_json(&a).unwrap();
         assert_eq!(serde_json::to_value(o).unwrap(), a);
-        assert_eq!(json!(crate::units::Unit::OutputPerG.as_str()), a["scale_factor_unit"]);
+        assert_eq!(
+            json!(crate::units::Unit::OutputPerG.as_str()),
+            a["scale_factor_unit"]
+        );
         assert_eq!(
             key_of::<gyro::GyroOptions>(json!({"scale_factor": 1.0, "averge": "all"})),
             "averge"
@@ -363,7 +366,8 @@ mod tests {
             "rates_deg_s": [20.0, 30.0, 40.0], "per_config_bias": false,
             "samples": 1, "scale_factor": 1.0, "noise": 0.01});
         let o: plan::MisalignPlan = crate::options::from_json(&json!({
-            "scale_factor": 1.0, "noise": 0.01})).unwrap();
+            "scale_factor": 1.0, "noise": 0.01}))
+        .unwrap();
         let settled = serde_json::to_value(o.settled()).unwrap();
         assert_eq!(settled, gyro_plan);
         let back: plan::MisalignPlan = crate::options::from_json(&settled).unwrap();
@@ -373,10 +377,13 @@ mod tests {
         let accel_plan = json!({"instrument": "accel", "betas_deg": [0.0, 90.0, 180.0, 270.0],
             "samples": 3, "scale_factor": 1.3, "noise": 0.01});
         let o: plan::MisalignPlan = crate::options::from_json(&json!({"instrument": "accel",
-            "samples": 3, "scale_factor": 1.3, "noise": 0.01, "rates_deg_s": [5.0]})).unwrap();
+            "samples": 3, "scale_factor": 1.3, "noise": 0.01, "rates_deg_s": [5.0]}))
+        .unwrap();
         assert_eq!(json!(o.document().unwrap().options), accel_plan);
         assert_eq!(
-            key_of::<plan::MisalignPlan>(json!({"scale_factor": 1.0, "noise": 0.1, "configs": ["0:0", "90"]})),
+            key_of::<plan::MisalignPlan>(
+                json!({"scale_factor": 1.0, "noise": 0.1, "configs": ["0:0", "90"]})
+            ),
             "configs[1]"
         );
         let refused = |v: serde_json::Value| -> String {
@@ -387,8 +394,14 @@ mod tests {
             }
         };
         assert_eq!(refused(json!({"scale_factor": 1.0, "noise": 0.0})), "noise");
-        assert_eq!(refused(json!({"scale_factor": 0.0, "noise": 0.1})), "scale_factor");
-        assert_eq!(refused(json!({"scale_factor": 1.0, "noise": 0.1, "samples": 0})), "samples");
+        assert_eq!(
+            refused(json!({"scale_factor": 0.0, "noise": 0.1})),
+            "scale_factor"
+        );
+        assert_eq!(
+            refused(json!({"scale_factor": 1.0, "noise": 0.1, "samples": 0})),
+            "samples"
+        );
         assert_eq!(
             refused(json!({"scale_factor": 1.0, "noise": 0.1, "rates_deg_s": [-1.0]})),
             "rates_deg_s"

@@ -232,7 +232,8 @@ impl MisalignPlan {
                 o.betas_deg = None;
             }
             PlanInstrument::Accel => {
-                o.betas_deg.get_or_insert_with(|| DEFAULT_BETAS_DEG.to_vec());
+                o.betas_deg
+                    .get_or_insert_with(|| DEFAULT_BETAS_DEG.to_vec());
                 o.configs = None;
                 o.rates_deg_s = None;
                 o.per_config_bias = None;
