@@ -562,8 +562,8 @@ pub static REGISTRY: &[Entry] = &[
             simulate: &["--seed", "22", "--rate-hz", "1", "--hold-s", "300", "--ramp-c-per-min", "4"],
             options: &["--rate-hz", "1", "--quantity", "gyro"],
         }),
-        reduction: None,
-        planner: None,
+        reduction: reduction::<super::thermal::ramp::Ramp>(),
+        planner: planner::<super::thermal::Thermal>(),
         simulator: None,
     },
     Entry {
@@ -582,7 +582,7 @@ pub static REGISTRY: &[Entry] = &[
         run_sheet: Some(super::thermal::plan::run_sheet),
         example: None,
         reduction: None,
-        planner: None,
+        planner: planner::<super::thermal::Thermal>(),
         simulator: None,
     },
 ];

@@ -53,6 +53,7 @@ pub mod input;
 pub mod sim;
 
 use rayon::prelude::*;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::document::ResultDocument;
@@ -66,7 +67,7 @@ use document::{ChannelResult, Quantity};
 use input::{Channels, Samples};
 
 /// What the channels measure, and so the units of the noise terms.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum QuantityKind {
     /// Gyro: rate in deg/s, rad/s or deg/h.
@@ -74,6 +75,7 @@ pub enum QuantityKind {
     /// Accelerometer: specific force in g, mg or m/s².
     Accel,
     /// Anything else: terms in the input unit.
+    #[default]
     Generic,
 }
 
