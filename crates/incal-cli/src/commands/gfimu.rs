@@ -429,5 +429,6 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
         noise: a.noise,
         k1: a.k1,
     };
-    a.out.emit(&<GfimuCalibrate as Plan>::plan(&options).map_err(core)?)
+    a.out
+        .emit(&<GfimuCalibrate as Plan>::plan(&options).map_err(core)?)
 }

@@ -34,7 +34,15 @@ use crate::models::gfimu::{ArrayAccelerometer, Geometry};
 
 /// Built-in gyro-free layouts (`paper`, `twelve` at the edges).
 #[derive(
-    Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
 )]
 #[serde(rename_all = "lowercase")]
 pub enum Layout {
@@ -147,10 +155,9 @@ impl ArrayChoice {
                 let path = f.path.as_deref().unwrap_or(&f.name);
                 ArrayGeometry::from_toml(&f.name, path, f.toml.as_bytes(), sha)
             }
-            None => ArrayGeometry::builtin(
-                self.layout,
-                self.lever_arm_m.unwrap_or(DEFAULT_LEVER_ARM_M),
-            ),
+            None => {
+                ArrayGeometry::builtin(self.layout, self.lever_arm_m.unwrap_or(DEFAULT_LEVER_ARM_M))
+            }
         }
     }
 
@@ -159,10 +166,7 @@ impl ArrayChoice {
     pub fn label(&self) -> String {
         match &self.geometry {
             Some(f) => f.name.clone(),
-            None => builtin_label(
-                self.layout,
-                self.lever_arm_m.unwrap_or(DEFAULT_LEVER_ARM_M),
-            ),
+            None => builtin_label(self.layout, self.lever_arm_m.unwrap_or(DEFAULT_LEVER_ARM_M)),
         }
     }
 }

@@ -136,18 +136,34 @@ mod tests {
             from_json(&json!({"layout": "twelve", "lever_arm_m": 0.2, "noise": 1e-3})).unwrap();
         assert_eq!(o.noise, Noise::Known { sigma: 1e-3 });
         assert_eq!(o.array.label(), o.array.load().unwrap().label);
-        assert_eq!(o.array.label(), "twelve-accelerometer layout, lever arm 0.2 m");
-        let bad = |v| key_of(from_json::<GfimuCalibrateOptions>(&v).and_then(|o| GfimuCalibrate::validate(&o)));
+        assert_eq!(
+            o.array.label(),
+            "twelve-accelerometer layout, lever arm 0.2 m"
+        );
+        let bad = |v| {
+            key_of(
+                from_json::<GfimuCalibrateOptions>(&v).and_then(|o| GfimuCalibrate::validate(&o)),
+            )
+        };
         assert_eq!(bad(json!({"lever_arm_m": 0.0})), "lever_arm_m");
         assert_eq!(bad(json!({"layout": "paper", "lever": 1.0})), "lever");
 
         let p: plan::GfimuPlanOptions = from_json(&json!({"noise": 1e-4})).unwrap();
-        assert_eq!(from_json::<plan::GfimuPlanOptions>(&serde_json::to_value(&p).unwrap()).unwrap(), p);
+        assert_eq!(
+            from_json::<plan::GfimuPlanOptions>(&serde_json::to_value(&p).unwrap()).unwrap(),
+            p
+        );
         let d = GfimuCalibrate::plan(&p).unwrap();
         assert_eq!(d.options["geometry"], "paper layout, lever arm 0.1 m");
         assert_eq!(d.options["positions"].as_array().map(Vec::len), Some(6));
-        assert_eq!((d.options["samples"].clone(), d.options["k1"].clone()), (json!(1), json!(1.0)));
-        let bad = plan::GfimuPlanOptions { samples: 0, ..p.clone() };
+        assert_eq!(
+            (d.options["samples"].clone(), d.options["k1"].clone()),
+            (json!(1), json!(1.0))
+        );
+        let bad = plan::GfimuPlanOptions {
+            samples: 0,
+            ..p.clone()
+        };
         assert_eq!(key_of(GfimuCalibrate::plan(&bad)), "samples");
         let bad = plan::GfimuPlanOptions { noise: -1.0, ..p };
         assert_eq!(key_of(GfimuCalibrate::plan(&bad)), "noise");

@@ -68,10 +68,7 @@ impl GfimuPlanOptions {
         if self.samples == 0 || self.samples > MAX_PLAN_SAMPLES {
             return invalid(
                 "samples",
-                format!(
-                    "must be within 1..{MAX_PLAN_SAMPLES}, got {}",
-                    self.samples
-                ),
+                format!("must be within 1..{MAX_PLAN_SAMPLES}, got {}", self.samples),
             );
         }
         if !(self.k1.is_finite() && self.k1 != 0.0 && self.k1.abs() <= MAX_PLAN_K1) {

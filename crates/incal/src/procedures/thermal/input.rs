@@ -140,4 +140,3 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &RampOptions) -> Result<
         has_chamber: chamber.is_some(),
     })
 }
-

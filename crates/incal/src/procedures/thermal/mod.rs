@@ -657,7 +657,10 @@ mod tests {
         assert_eq!(from_json::<plan::ThermalPlanOptions>(&shown).unwrap(), o);
         let d = Thermal::plan(&o).unwrap();
         assert_eq!(serde_json::to_value(&d.options).unwrap(), shown);
-        let bad = plan::ThermalPlanOptions { degree: 4, ..o.clone() };
+        let bad = plan::ThermalPlanOptions {
+            degree: 4,
+            ..o.clone()
+        };
         assert_eq!(key_of(Thermal::plan(&bad)), "degree");
         let bad = plan::ThermalPlanOptions { u: Some(0.0), ..o };
         assert_eq!(key_of(Thermal::plan(&bad)), "u");

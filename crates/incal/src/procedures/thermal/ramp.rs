@@ -117,11 +117,17 @@ impl ProcedureShape for Ramp {
         use crate::options::{check_positive, invalid};
         check_positive("rate_hz", o.rate_hz)?;
         if o.rate_hz > 1e7 {
-            return invalid("rate_hz", format!("must be at most 1e7 Hz, got {}", o.rate_hz));
+            return invalid(
+                "rate_hz",
+                format!("must be at most 1e7 Hz, got {}", o.rate_hz),
+            );
         }
         check_positive("block_s", o.block_s)?;
         if o.block_s > 86400.0 {
-            return invalid("block_s", format!("must be at most 86400 s, got {}", o.block_s));
+            return invalid(
+                "block_s",
+                format!("must be at most 86400 s, got {}", o.block_s),
+            );
         }
         check_t_ref_c(o.t_ref_c)
     }

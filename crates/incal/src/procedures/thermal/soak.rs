@@ -19,10 +19,12 @@
 
 use serde_json::{json, Value};
 
-use super::document::{joint_estimates, plateau_table};
 pub use super::document::{compensated_table, degree_reason};
+use super::document::{joint_estimates, plateau_table};
 use super::{fit_with_degree, Degree, PolyFit, ThermalEntry, DEFAULT_T_REF_C};
-use crate::document::{DecisionCode, DocumentBuilder, FitSummary, InputFile, Procedure, ResultDocument};
+use crate::document::{
+    DecisionCode, DocumentBuilder, FitSummary, InputFile, Procedure, ResultDocument,
+};
 use crate::error::{Error, Result};
 use crate::units::Unit;
 
@@ -251,4 +253,3 @@ struct Plateaus {
     /// The smallest of their dof.
     dof: f64,
 }
-
