@@ -222,22 +222,27 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
         "misalign-accel" => {
             reduce::<misalign::MisalignAccel>(data, &misalign::accel::AccelOptions::new(1.299))
         }
-        "gfimu-calibrate" => match builtin_array() {
-            Ok(array) => reduce::<gfimu::GfimuCalibrate>(
-                data,
-                &gfimu::GfimuCalibrateOptions {
-                    array,
-                    noise: Noise::Auto,
-                },
-            ),
-            Err(e) => Outcome::Refused(e),
-        },
+        "gfimu-calibrate" => reduce::<gfimu::GfimuCalibrate>(
+            data,
+            &gfimu::GfimuCalibrateOptions {
+                array: gfimu::input::ArrayChoice::default(),
+                noise: Noise::Auto,
+            },
+        ),
         "gfimu-geometry" => {
             match gfimu::input::ArrayGeometry::from_toml(NAME, NAME, data, String::new()) {
-                Ok(array) => reduce::<gfimu::GfimuCalibrate>(
+                Ok(_) => reduce::<gfimu::GfimuCalibrate>(
                     seed("gfimu-calibrate"),
                     &gfimu::GfimuCalibrateOptions {
-                        array,
+                        array: gfimu::input::ArrayChoice {
+                            geometry: Some(gfimu::input::GeometryFile {
+                                name: NAME.into(),
+                                path: None,
+                                sha256: Some(String::new()),
+                                toml: String::from_utf8_lossy(data).into_owned(),
+                            }),
+                            ..Default::default()
+                        },
                         noise: Noise::Auto,
                     },
                 ),

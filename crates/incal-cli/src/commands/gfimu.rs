@@ -7,13 +7,15 @@ use std::path::PathBuf;
 
 use clap::ValueEnum;
 use incal::estimation::Noise;
-use incal::procedures::gfimu::input::{self, ArrayGeometry, DEFAULT_LEVER_ARM_M};
-use incal::procedures::gfimu::plan::{plan_document, GfimuPlanOptions};
+use incal::procedures::gfimu::input::{
+    self, ArrayChoice, ArrayGeometry, GeometryFile, DEFAULT_LEVER_ARM_M,
+};
+use incal::procedures::gfimu::plan::GfimuPlanOptions;
 use incal::procedures::gfimu::sim::{self, six_positions, F0Frame, GfimuSim, MotionProfile};
 use incal::procedures::gfimu::solve::Solver;
 use incal::procedures::gfimu::stream::{solve_stream, MotionSeries, SolutionFormat, StreamError};
 use incal::procedures::gfimu::{GfimuCalibrate, GfimuCalibrateOptions, SolveOptions};
-use incal::procedures::Silent;
+use incal::procedures::{Plan, Procedure, Silent};
 use incal::units::STANDARD_GRAVITY_M_S2;
 use nalgebra::Vector3;
 
@@ -54,6 +56,30 @@ impl From<Layout> for input::Layout {
 }
 
 impl GeometryArgs {
+    /// The array as the core's options name it: the geometry file (opened
+    /// and hashed here, its text read by the core) or the built-in layout.
+    pub fn choice(&self) -> CliResult<ArrayChoice> {
+        let geometry = match &self.geometry {
+            Some(p) => {
+                let (name, bytes, sha) = crate::io::read_hashed(p)?;
+                let toml = String::from_utf8(bytes)
+                    .map_err(|_| usage(format!("{name}: not valid UTF-8")))?;
+                Some(GeometryFile {
+                    path: Some(p.display().to_string()),
+                    name,
+                    sha256: Some(sha),
+                    toml,
+                })
+            }
+            None => None,
+        };
+        Ok(ArrayChoice {
+            geometry,
+            layout: self.layout.into(),
+            lever_arm_m: self.lever_arm_m,
+        })
+    }
+
     /// The array: the geometry file (opened here, read by the core) or
     /// the built-in layout; one that cannot solve the motion is refused.
     pub fn load(&self) -> CliResult<ArrayGeometry> {
@@ -253,9 +279,11 @@ fn vec3(opt: &str, v: &[f64]) -> CliResult<Vector3<f64>> {
 pub fn run_calibrate(a: &CalibrateArgs) -> CliResult<()> {
     let noise = Noise::from_option(a.noise).map_err(core)?;
     let options = GfimuCalibrateOptions {
-        array: a.geometry.load()?,
+        array: a.geometry.choice()?,
         noise,
     };
+    // The array is checked before the recording is opened.
+    GfimuCalibrate::validate(&options).map_err(core)?;
     crate::run::reduce::<GfimuCalibrate>(&a.input, &a.read, &options, &a.result, &Silent)
 }
 
@@ -380,7 +408,7 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
 /// `incal plan gfimu`: predicted u of every K0 and Ks, and the geometry's
 /// conditioning for the motion solution.
 pub fn plan(a: &PlanArgs) -> CliResult<()> {
-    let positions = match &a.positions {
+    let positions: Vec<Vector3<f64>> = match &a.positions {
         None => six_positions(),
         Some(list) => list
             .iter()
@@ -395,11 +423,12 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
             .collect::<CliResult<_>>()?,
     };
     let options = GfimuPlanOptions {
-        array: a.geometry.load()?,
-        positions,
+        array: a.geometry.choice()?,
+        positions: positions.iter().map(|f| [f.x, f.y, f.z]).collect(),
         samples: a.samples,
         noise: a.noise,
         k1: a.k1,
     };
-    a.out.emit(&plan_document(&options).map_err(core)?)
+    a.out
+        .emit(&<GfimuCalibrate as Plan>::plan(&options).map_err(core)?)
 }

@@ -5,9 +5,9 @@
 use std::path::PathBuf;
 
 use incal::procedures::thermal::{
-    self, apply, plan, ramp::Ramp, ramp::RampOptions, sim::RampSim, soak, Degree,
+    self, apply, plan, ramp::Ramp, ramp::RampOptions, sim::RampSim, soak, Degree, Thermal,
 };
-use incal::procedures::Silent;
+use incal::procedures::{Plan, Silent};
 
 use crate::commands::noise::QuantityArg;
 use crate::documents::read_document;
@@ -376,5 +376,5 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
         degree: a.degree,
         t_ref_c: a.t_ref_c,
     };
-    a.out.emit(&plan::plan_document(&o).map_err(core)?)
+    a.out.emit(&<Thermal as Plan>::plan(&o).map_err(core)?)
 }

@@ -249,7 +249,7 @@ fn bad_input_is_one_line_and_exit_2() {
             "--unit",
             "furlong/s",
         ]),
-        "invalid --unit",
+        "--unit: 'furlong/s'",
     );
     bad(
         &run(&[

@@ -32,13 +32,25 @@ use crate::document::InputFile;
 use crate::error::{Error, Result};
 use crate::models::gfimu::{ArrayAccelerometer, Geometry};
 
-/// Built-in gyro-free layouts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Built-in gyro-free layouts (`paper`, `twelve` at the edges).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
 pub enum Layout {
     /// The six accelerometers of Fig. 1 of the technical note *Error
     /// coefficient calibration algorithm; error compensation algorithm*
     /// (authors and year not known): a, b at ±L on x
     /// sensing z; c, d at ±L on y sensing x; e, f at ±L on z sensing y.
+    #[default]
     Paper,
     /// Twelve accelerometers, two across each of the six lever arms: the
     /// centripetal products are solved directly.
@@ -75,6 +87,90 @@ pub struct ArrayGeometry {
     pub file: Option<InputFile>,
 }
 
+/// The label of a built-in layout with lever arm `l` (m), as documents
+/// record it (`paper layout, lever arm 0.1 m`).
+fn builtin_label(layout: Layout, l: f64) -> String {
+    let what = match layout {
+        Layout::Paper => "paper",
+        Layout::Twelve => "twelve-accelerometer",
+    };
+    format!("{what} layout, lever arm {l} m")
+}
+
+/// A geometry file as the front end read it (the core opens no file):
+/// its name as the user gave it (messages, and the document's
+/// `geometry`), its path as the document's inputs record it (default: the
+/// name), the SHA-256 of its bytes (default: of `toml`) and its text
+/// (TOML, module docs).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+pub struct GeometryFile {
+    /// The file's name as given.
+    pub name: String,
+    /// Its path as recorded among a result's inputs (default: `name`).
+    #[serde(default)]
+    pub path: Option<String>,
+    /// SHA-256 of its bytes, hex (default: of `toml`).
+    #[serde(default)]
+    pub sha256: Option<String>,
+    /// Its text: `[[accelerometer]]` tables.
+    pub toml: String,
+}
+
+/// Which array the options name: a geometry file, or a built-in layout
+/// with its lever arm (default: the paper layout, 0.1 m). Not recorded as
+/// given: a document records the array's label as `geometry`
+/// ([`ArrayChoice::label`]).
+#[derive(
+    Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
+pub struct ArrayChoice {
+    /// The geometry file (instead of a built-in layout).
+    #[serde(default, skip_serializing)]
+    pub geometry: Option<GeometryFile>,
+    /// Built-in layout.
+    #[serde(default, skip_serializing)]
+    pub layout: Layout,
+    /// Lever arm L of the built-in layout (m; default [`DEFAULT_LEVER_ARM_M`]).
+    #[serde(default, skip_serializing)]
+    pub lever_arm_m: Option<f64>,
+}
+
+impl ArrayChoice {
+    /// The array: the geometry file read ([`ArrayGeometry::from_toml`]) or
+    /// the built-in layout ([`ArrayGeometry::builtin`]); a lever arm with
+    /// a geometry file is refused naming `lever_arm_m`.
+    pub fn load(&self) -> Result<ArrayGeometry> {
+        match &self.geometry {
+            Some(f) => {
+                if self.lever_arm_m.is_some() {
+                    return crate::options::invalid(
+                        "lever_arm_m",
+                        "goes with a built-in layout, not with a geometry file",
+                    );
+                }
+                let sha = f
+                    .sha256
+                    .clone()
+                    .unwrap_or_else(|| incal_io::sha256_hex(f.toml.as_bytes()));
+                let path = f.path.as_deref().unwrap_or(&f.name);
+                ArrayGeometry::from_toml(&f.name, path, f.toml.as_bytes(), sha)
+            }
+            None => {
+                ArrayGeometry::builtin(self.layout, self.lever_arm_m.unwrap_or(DEFAULT_LEVER_ARM_M))
+            }
+        }
+    }
+
+    /// The array's label as documents record it (`geometry`): the file's
+    /// name, or the built-in layout's label.
+    pub fn label(&self) -> String {
+        match &self.geometry {
+            Some(f) => f.name.clone(),
+            None => builtin_label(self.layout, self.lever_arm_m.unwrap_or(DEFAULT_LEVER_ARM_M)),
+        }
+    }
+}
+
 /// A number echoed in a message: as typed when short, else in scientific
 /// notation (a huge value is not printed with hundreds of digits).
 pub(crate) fn shown(x: f64) -> String {
@@ -92,17 +188,20 @@ impl ArrayGeometry {
     pub fn builtin(layout: Layout, lever_arm_m: f64) -> Result<Self> {
         let l = lever_arm_m;
         if !(l.is_finite() && l > 0.0 && l <= MAX_LEVER_ARM_M) {
-            return Err(Error::Unsupported(format!(
-                "lever_arm_m must be positive and at most {MAX_LEVER_ARM_M} m, got {}",
-                shown(l)
-            )));
+            return crate::options::invalid(
+                "lever_arm_m",
+                format!(
+                    "must be positive and at most {MAX_LEVER_ARM_M} m, got {}",
+                    shown(l)
+                ),
+            );
         }
-        let (g, what) = match layout {
-            Layout::Paper => (Geometry::paper(l), "paper"),
-            Layout::Twelve => (Geometry::twelve(l), "twelve-accelerometer"),
+        let g = match layout {
+            Layout::Paper => Geometry::paper(l),
+            Layout::Twelve => Geometry::twelve(l),
         };
-        let g = g.map_err(|e| Error::Unsupported(format!("lever_arm_m: {e}")))?;
-        Self::solvable(g, format!("{what} layout, lever arm {l} m"), None)
+        let g = g.or_else(|e| crate::options::invalid("lever_arm_m", e.to_string()))?;
+        Self::solvable(g, builtin_label(layout, l), None)
     }
 
     /// The geometry file `name` (as the user named it; `path` as recorded
@@ -535,7 +634,7 @@ mod tests {
             csv.replace(',', ";").replace('\n', "\r\n")
         );
         let o = GfimuCalibrateOptions {
-            array: array.clone(),
+            array: ArrayChoice::default(),
             noise: crate::estimation::Noise::Auto,
         };
         let a = reduce_source::<GfimuCalibrate, _>(

@@ -46,23 +46,18 @@ use crate::error::Result;
 use crate::estimation::Noise;
 
 /// Options of the calibration ([`GfimuCalibrate`]): the array and the
-/// noise policy. Serialised as `{"geometry": label, "noise": σ | null}`.
-#[derive(Debug, Clone, PartialEq)]
+/// noise policy. Recorded as `{"geometry": label, "noise": σ | null}`
+/// ([`input::ArrayChoice::label`]).
+#[derive(
+    Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 pub struct GfimuCalibrateOptions {
     /// The array whose accelerometers are calibrated.
-    pub array: input::ArrayGeometry,
+    #[serde(flatten)]
+    pub array: input::ArrayChoice,
     /// Noise policy of the position means ([`Noise`]).
+    #[serde(default)]
     pub noise: Noise,
-}
-
-impl serde::Serialize for GfimuCalibrateOptions {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut m = s.serialize_map(Some(2))?;
-        m.serialize_entry("geometry", &self.array.label)?;
-        m.serialize_entry("noise", &self.noise.sigma())?;
-        m.end()
-    }
 }
 
 /// The multi-position static calibration of a gyro-free unit as one
@@ -79,14 +74,15 @@ impl super::Procedure for GfimuCalibrate {
     type Input = Vec<StaticSample>;
 
     fn validate(o: &GfimuCalibrateOptions) -> Result<()> {
-        o.noise.validate()
+        o.noise.validate()?;
+        o.array.load().map(|_| ())
     }
 
     fn read<R: std::io::Read>(
         rows: &mut incal_io::Reader<R>,
         o: &GfimuCalibrateOptions,
     ) -> Result<Vec<StaticSample>> {
-        input::read_static(rows, &o.array.geometry)
+        input::read_static(rows, &o.array.load()?.geometry)
     }
 
     fn reduce(
@@ -94,13 +90,82 @@ impl super::Procedure for GfimuCalibrate {
         o: &GfimuCalibrateOptions,
         _: &dyn super::Progress,
     ) -> Result<crate::document::ResultDocument> {
+        let array = o.array.load()?;
         let cal = calibrate(
-            &o.array.geometry,
+            &array.geometry,
             samples,
             &CalibrateOptions { noise: o.noise },
         )?;
-        let mut doc = cal.document(&o.array.label, o.noise.sigma().is_some())?;
-        doc.inputs.extend(o.array.file.clone());
+        let mut doc = cal.document(&array.label, o.noise.sigma().is_some())?;
+        doc.inputs.extend(array.file);
         Ok(doc)
+    }
+
+    fn recorded(
+        _: &Vec<StaticSample>,
+        o: &GfimuCalibrateOptions,
+    ) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
+        let mut m = super::options_map(o)?;
+        m.insert("geometry".into(), o.array.label().into());
+        Ok(m)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::options::from_json;
+    use crate::procedures::{Plan, Procedure};
+    use serde_json::json;
+
+    fn key_of(r: Result<impl std::fmt::Debug>) -> String {
+        match r {
+            Err(crate::Error::InvalidOption { key, .. }) => key,
+            other => panic!("expected InvalidOption, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn options_round_trip_and_name_a_bad_key() {
+        let o: GfimuCalibrateOptions = from_json(&json!({})).unwrap();
+        assert_eq!(o, GfimuCalibrateOptions::default());
+        let shown = serde_json::to_value(&o).unwrap();
+        assert_eq!(shown, json!({"noise": null}));
+        assert_eq!(from_json::<GfimuCalibrateOptions>(&shown).unwrap(), o);
+        let o: GfimuCalibrateOptions =
+            from_json(&json!({"layout": "twelve", "lever_arm_m": 0.2, "noise": 1e-3})).unwrap();
+        assert_eq!(o.noise, Noise::Known { sigma: 1e-3 });
+        assert_eq!(o.array.label(), o.array.load().unwrap().label);
+        assert_eq!(
+            o.array.label(),
+            "twelve-accelerometer layout, lever arm 0.2 m"
+        );
+        let bad = |v| {
+            key_of(
+                from_json::<GfimuCalibrateOptions>(&v).and_then(|o| GfimuCalibrate::validate(&o)),
+            )
+        };
+        assert_eq!(bad(json!({"lever_arm_m": 0.0})), "lever_arm_m");
+        assert_eq!(bad(json!({"layout": "paper", "lever": 1.0})), "lever");
+
+        let p: plan::GfimuPlanOptions = from_json(&json!({"noise": 1e-4})).unwrap();
+        assert_eq!(
+            from_json::<plan::GfimuPlanOptions>(&serde_json::to_value(&p).unwrap()).unwrap(),
+            p
+        );
+        let d = GfimuCalibrate::plan(&p).unwrap();
+        assert_eq!(d.options["geometry"], "paper layout, lever arm 0.1 m");
+        assert_eq!(d.options["positions"].as_array().map(Vec::len), Some(6));
+        assert_eq!(
+            (d.options["samples"].clone(), d.options["k1"].clone()),
+            (json!(1), json!(1.0))
+        );
+        let bad = plan::GfimuPlanOptions {
+            samples: 0,
+            ..p.clone()
+        };
+        assert_eq!(key_of(GfimuCalibrate::plan(&bad)), "samples");
+        let bad = plan::GfimuPlanOptions { noise: -1.0, ..p };
+        assert_eq!(key_of(GfimuCalibrate::plan(&bad)), "noise");
     }
 }

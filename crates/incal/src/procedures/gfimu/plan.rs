@@ -9,7 +9,7 @@
 use nalgebra::Vector3;
 use serde_json::json;
 
-use super::input::{shown, ArrayGeometry};
+use super::input::{shown, ArrayChoice};
 use crate::document::plan::PlanDocument;
 use crate::error::{Error, Result};
 use crate::units::STANDARD_GRAVITY_M_S2;
@@ -20,61 +20,90 @@ pub const MAX_PLAN_SAMPLES: usize = 100_000_000;
 /// Largest magnitude of the nominal scale factor (output/g).
 pub const MAX_PLAN_K1: f64 = 1e9;
 
-/// Options of a gyro-free unit calibration plan.
-#[derive(Debug, Clone, PartialEq)]
+/// Options of a gyro-free unit calibration plan. In the plan document's
+/// `options`: `geometry` (the array's label), `positions` (g), `samples`,
+/// `noise`, `k1`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct GfimuPlanOptions {
-    /// The array.
-    pub array: ArrayGeometry,
-    /// Static positions: the specific force (g, unit frame) of each.
-    pub positions: Vec<Vector3<f64>>,
+    /// The array (recorded as its label).
+    #[serde(flatten)]
+    pub array: ArrayChoice,
+    /// Static positions: the specific force (g, unit frame) of each
+    /// (default: the six-position test, ±1 g along each axis).
+    #[serde(default = "default_positions")]
+    pub positions: Vec<[f64; 3]>,
     /// Samples per position (1 ..= [`MAX_PLAN_SAMPLES`]).
+    #[serde(default = "default_samples")]
     pub samples: usize,
     /// Standard deviation of one output sample (output, > 0).
     pub noise: f64,
     /// Nominal scale factor of every accelerometer (output/g; non-zero,
     /// at most [`MAX_PLAN_K1`] in magnitude).
+    #[serde(default = "default_k1")]
     pub k1: f64,
 }
 
-impl serde::Serialize for GfimuPlanOptions {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut m = s.serialize_map(Some(5))?;
-        m.serialize_entry("geometry", &self.array.label)?;
-        let positions: Vec<[f64; 3]> = self.positions.iter().map(|f| [f.x, f.y, f.z]).collect();
-        m.serialize_entry("positions", &positions)?;
-        m.serialize_entry("samples", &self.samples)?;
-        m.serialize_entry("noise", &self.noise)?;
-        m.serialize_entry("k1", &self.k1)?;
-        m.end()
-    }
+fn default_positions() -> Vec<[f64; 3]> {
+    super::sim::six_positions()
+        .iter()
+        .map(|f| [f.x, f.y, f.z])
+        .collect()
+}
+
+fn default_samples() -> usize {
+    1
+}
+
+fn default_k1() -> f64 {
+    1.0
 }
 
 impl GfimuPlanOptions {
     /// Refuse a noise that is not positive, a sample count outside
-    /// 1 ..= [`MAX_PLAN_SAMPLES`] and a zero, non-finite or huge `k1`,
-    /// naming the option.
+    /// 1 ..= [`MAX_PLAN_SAMPLES`], a zero, non-finite or huge `k1` and a
+    /// position that is not a finite specific force, naming the option.
     pub fn validate(&self) -> Result<()> {
-        let bad = |msg: String| Err(Error::Unsupported(msg));
-        if !(self.noise.is_finite() && self.noise > 0.0) {
-            return bad(format!(
-                "noise must be a positive number, got {}",
-                shown(self.noise)
-            ));
-        }
+        use crate::options::{check_positive, invalid};
+        check_positive("noise", self.noise)?;
         if self.samples == 0 || self.samples > MAX_PLAN_SAMPLES {
-            return bad(format!(
-                "samples must be within 1..{MAX_PLAN_SAMPLES}, got {}",
-                self.samples
-            ));
+            return invalid(
+                "samples",
+                format!("must be within 1..{MAX_PLAN_SAMPLES}, got {}", self.samples),
+            );
         }
         if !(self.k1.is_finite() && self.k1 != 0.0 && self.k1.abs() <= MAX_PLAN_K1) {
-            return bad(format!(
-                "k1 must be non-zero and at most 1e9 in magnitude, got {}",
-                shown(self.k1)
-            ));
+            return invalid(
+                "k1",
+                format!(
+                    "must be non-zero and at most 1e9 in magnitude, got {}",
+                    shown(self.k1)
+                ),
+            );
+        }
+        if let Some(p) = self
+            .positions
+            .iter()
+            .find(|p| !p.iter().all(|x| x.is_finite() && x.abs() <= 1e3))
+        {
+            return invalid(
+                "positions",
+                format!("a specific force (g) of finite components, got {p:?}"),
+            );
         }
         Ok(())
+    }
+
+    /// The positions as vectors (g, unit frame).
+    pub fn position_vectors(&self) -> Vec<Vector3<f64>> {
+        self.positions.iter().map(|p| Vector3::from(*p)).collect()
+    }
+}
+
+impl crate::procedures::Plan for super::GfimuCalibrate {
+    type Options = GfimuPlanOptions;
+
+    fn plan(o: &GfimuPlanOptions) -> Result<PlanDocument> {
+        plan_document(o)
     }
 }
 
@@ -85,9 +114,11 @@ impl GfimuPlanOptions {
 /// number, solve mode of the array) and `warnings` of the calibration.
 pub fn plan_document(o: &GfimuPlanOptions) -> Result<PlanDocument> {
     o.validate()?;
-    let g = &o.array.geometry;
-    let label = &o.array.label;
-    let cal = super::calibrate::plan(g, &o.positions, o.samples, o.noise, o.k1)
+    let array = o.array.load()?;
+    let g = &array.geometry;
+    let label = &array.label;
+    let positions = o.position_vectors();
+    let cal = super::calibrate::plan(g, &positions, o.samples, o.noise, o.k1)
         .map_err(|e| Error::Unsupported(format!("{label}: {e}")))?;
     let d = g.check()?;
     let directions: Vec<Vector3<f64>> = g.accelerometers().iter().map(|a| a.direction).collect();
@@ -103,6 +134,7 @@ pub fn plan_document(o: &GfimuPlanOptions) -> Result<PlanDocument> {
         ),
     );
     doc.with_options(o)?;
+    doc.options.insert("geometry".into(), json!(label));
     for acc in &cal.accelerometers {
         for (k, term) in super::LINEAR_TERMS.iter().enumerate() {
             let unit = if k == 0 { "output" } else { "output/g" };
@@ -113,14 +145,7 @@ pub fn plan_document(o: &GfimuPlanOptions) -> Result<PlanDocument> {
     doc.expect_dof(o.positions.len(), o.samples, super::LINEAR_TERMS.len());
     doc.set("plan", json!("gfimu"))?;
     doc.set("geometry", json!(label))?;
-    doc.set(
-        "positions",
-        json!(o
-            .positions
-            .iter()
-            .map(|f| [f.x, f.y, f.z])
-            .collect::<Vec<_>>()),
-    )?;
+    doc.set("positions", json!(o.positions))?;
     doc.set("samples", json!(o.samples))?;
     doc.set("noise", json!(o.noise))?;
     doc.set("k1", json!(o.k1))?;

@@ -53,6 +53,7 @@ pub mod input;
 pub mod sim;
 
 use rayon::prelude::*;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::document::ResultDocument;
@@ -66,7 +67,7 @@ use document::{ChannelResult, Quantity};
 use input::{Channels, Samples};
 
 /// What the channels measure, and so the units of the noise terms.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum QuantityKind {
     /// Gyro: rate in deg/s, rad/s or deg/h.
@@ -74,6 +75,7 @@ pub enum QuantityKind {
     /// Accelerometer: specific force in g, mg or m/s².
     Accel,
     /// Anything else: terms in the input unit.
+    #[default]
     Generic,
 }
 
@@ -89,20 +91,22 @@ impl QuantityKind {
 }
 
 /// What the samples are.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum DataKind {
     /// Rate ("frequency") samples in the unit.
+    #[default]
     Rate,
     /// Angle or velocity-increment sums ("phase") in the unit times s.
     Angle,
 }
 
 /// How the record is stored.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Format {
     /// CSV with a header (through [`incal_io::Reader`]).
+    #[default]
     Csv,
     /// Raw little-endian 32-bit floats, channels interleaved.
     F32le,
@@ -110,47 +114,86 @@ pub enum Format {
     F64le,
 }
 
-/// Options of a noise analysis. Serialised (the document's `options`) as
-/// `rate_hz`, `quantity`, `unit` (the unit in use, the default filled in),
-/// `data`, `taus`, `stability_tau_s` and `confidence`; the storage
-/// (`format`, `channels`) and `parallel` change no number and are not
-/// recorded.
-#[derive(Debug, Clone, PartialEq)]
+/// Options of a noise analysis. Serialised (the document's `options`,
+/// [`NoiseOptions::settled`]) as `rate_hz`, `quantity`, `unit` (the unit
+/// in use, the default filled in), `data`, `taus`, `deviations` (when not
+/// the default), `stability_tau_s`, `confidence`, and `sort_time` and
+/// `three_cornered_hat` when set; the storage (`format`, `channels`) and
+/// `parallel` change no number and are not recorded.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct NoiseOptions {
     /// Sample rate F (Hz); τ0 = 1/F. `None`: the rate of the record's
     /// `time_s` stamps (a record without stamps then is refused).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rate_hz: Option<f64>,
     /// What the channels measure.
+    #[serde(default)]
     pub quantity: QuantityKind,
     /// Unit of the samples: deg/s, rad/s, deg/h (gyro); g, mg, m/s2
     /// (accel); any text (generic). `None`: [`QuantityKind::default_unit`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub unit: Option<String>,
     /// Rate samples or their running sums.
+    #[serde(default)]
     pub data: DataKind,
     /// Averaging times: `octave`, `decade`, `all` or N points per decade.
+    #[serde(default = "default_taus")]
     pub taus: String,
     /// The statistics reported, comma separated ([`DEFAULT_DEVIATIONS`];
     /// `all` adds every [`Statistic`], MTIE and TIE rms only for angle
     /// data). OADEV and the noise identification are computed whatever
     /// the list (the term fit reads them).
+    #[serde(
+        default = "default_deviations",
+        skip_serializing_if = "is_default_deviations"
+    )]
     pub deviations: String,
     /// Confidence of the deviation bounds, 0 < P < 1 (Stable32: 0.683).
+    #[serde(default = "default_confidence")]
     pub confidence: f64,
     /// Averaging times (s) of bias stability.
+    #[serde(default = "default_stability_tau_s")]
     pub stability_tau_s: Vec<f64>,
-    /// How the record is stored.
+    /// How the record is stored (not recorded).
+    #[serde(default, skip_serializing)]
     pub format: Format,
-    /// Interleaved channels of a binary record (binary formats only).
+    /// Interleaved channels of a binary record (binary formats only; not
+    /// recorded).
+    #[serde(default, skip_serializing)]
     pub channels: Option<usize>,
-    /// Channels and sums on rayon's threads (the same bits either way).
+    /// Channels and sums on rayon's threads (the same bits either way;
+    /// not recorded).
+    #[serde(default = "default_parallel", skip_serializing)]
     pub parallel: bool,
     /// Put CSV rows that are out of time order in order by `time_s`
     /// instead of refusing them (warning `time-sorted`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub sort_time: bool,
     /// Three instruments recorded together (exactly three channels): each
     /// one's OADEV by the three-cornered hat
     /// ([`crate::noise::three_cornered_hat`]), in `three_cornered_hat`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub three_cornered_hat: bool,
+}
+
+fn default_taus() -> String {
+    "octave".into()
+}
+
+fn default_deviations() -> String {
+    DEFAULT_DEVIATIONS.into()
+}
+
+fn default_confidence() -> f64 {
+    0.683
+}
+
+fn default_stability_tau_s() -> Vec<f64> {
+    vec![10.0, 100.0]
+}
+
+fn default_parallel() -> bool {
+    true
 }
 
 impl Default for NoiseOptions {
@@ -160,10 +203,10 @@ impl Default for NoiseOptions {
             quantity: QuantityKind::Generic,
             unit: None,
             data: DataKind::Rate,
-            taus: "octave".into(),
-            deviations: DEFAULT_DEVIATIONS.into(),
-            confidence: 0.683,
-            stability_tau_s: vec![10.0, 100.0],
+            taus: default_taus(),
+            deviations: default_deviations(),
+            confidence: default_confidence(),
+            stability_tau_s: default_stability_tau_s(),
             format: Format::Csv,
             channels: None,
             parallel: true,
@@ -173,46 +216,11 @@ impl Default for NoiseOptions {
     }
 }
 
-impl Serialize for NoiseOptions {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        #[derive(Serialize)]
-        struct Shown<'a> {
-            #[serde(skip_serializing_if = "Option::is_none")]
-            rate_hz: Option<f64>,
-            quantity: QuantityKind,
-            unit: &'a str,
-            data: DataKind,
-            taus: &'a str,
-            #[serde(skip_serializing_if = "is_default_deviations")]
-            deviations: &'a str,
-            stability_tau_s: &'a [f64],
-            confidence: f64,
-            #[serde(skip_serializing_if = "std::ops::Not::not")]
-            sort_time: bool,
-            #[serde(skip_serializing_if = "std::ops::Not::not")]
-            three_cornered_hat: bool,
-        }
-        Shown {
-            rate_hz: self.rate_hz,
-            quantity: self.quantity,
-            unit: self.unit_text(),
-            data: self.data,
-            taus: &self.taus,
-            deviations: &self.deviations,
-            stability_tau_s: &self.stability_tau_s,
-            confidence: self.confidence,
-            sort_time: self.sort_time,
-            three_cornered_hat: self.three_cornered_hat,
-        }
-        .serialize(s)
-    }
-}
-
 /// The statistics reported by default.
 pub const DEFAULT_DEVIATIONS: &str = "oadev,mdev,ohdev,tdev,totdev";
 
-fn is_default_deviations(s: &&str) -> bool {
-    *s == DEFAULT_DEVIATIONS
+fn is_default_deviations(s: &str) -> bool {
+    s == DEFAULT_DEVIATIONS
 }
 
 /// The statistics of a `deviations` list: the default five shown, and the
@@ -227,14 +235,26 @@ pub struct Selection {
     pub totdev_named: bool,
 }
 
-fn invalid(what: &str, value: impl ToString) -> Error {
-    Error::InvalidValue {
-        what: what.into(),
-        value: value.to_string(),
+/// [`Error::InvalidOption`] for `key`.
+fn invalid(key: &str, message: impl Into<String>) -> Error {
+    Error::InvalidOption {
+        key: key.into(),
+        message: message.into(),
     }
 }
 
 impl NoiseOptions {
+    /// The options as recorded in the document: the unit in use (the
+    /// quantity's default filled in) and the sample rate used (`rate_hz`,
+    /// from the stamps when none was given).
+    pub fn settled(&self, rate_hz: Option<f64>) -> NoiseOptions {
+        NoiseOptions {
+            rate_hz: rate_hz.or(self.rate_hz),
+            unit: Some(self.unit_text().to_string()),
+            ..self.clone()
+        }
+    }
+
     /// The unit of the samples (the default of the quantity when none is given).
     pub fn unit_text(&self) -> &str {
         self.unit.as_deref().unwrap_or(self.quantity.default_unit())
@@ -245,7 +265,7 @@ impl NoiseOptions {
     /// accelerometers, the unit itself otherwise).
     pub fn units(&self) -> Result<(Quantity, String, f64)> {
         let u = self.unit_text();
-        let bad = |ok: &str| invalid(&format!("unit (a {ok})"), u);
+        let bad = |ok: &str| invalid("unit", format!("'{}' is not a {ok}", incal_io::clip(u)));
         Ok(match self.quantity {
             QuantityKind::Gyro => {
                 let f = match u {
@@ -289,8 +309,8 @@ impl NoiseOptions {
                 more.push(s);
             } else {
                 return Err(invalid(
-                    "deviations (a list of oadev, mdev, ohdev, tdev, totdev, adev, hdev, mtotdev, htotdev, theo1, theoh, mtie, tierms, or all)",
-                    name,
+                    "deviations",
+                    format!("'{}' is not one of oadev, mdev, ohdev, tdev, totdev, adev, hdev, mtotdev, htotdev, theo1, theoh, mtie, tierms, or all", incal_io::clip(name)),
                 ));
             }
         }
@@ -314,8 +334,11 @@ impl NoiseOptions {
     pub fn grid(&self) -> Result<TauGrid> {
         TauGrid::parse(&self.taus).ok_or_else(|| {
             invalid(
-                "taus (octave, decade, all or a number of points per decade, 1-1000)",
-                &self.taus,
+                "taus",
+                format!(
+                    "'{}' is not octave, decade, all or a number of points per decade (1-1000)",
+                    incal_io::clip(&self.taus)
+                ),
             )
         })
     }
@@ -354,13 +377,16 @@ impl Procedure for Noise {
     /// quantity's, and `channels` given with (and only with) a binary
     /// format, at least 1.
     fn validate(o: &NoiseOptions) -> Result<()> {
-        if let Some(r) = o.rate_hz.filter(|r| !(r.is_finite() && *r > 0.0)) {
-            return Err(invalid("rate_hz (a positive number, Hz)", r));
+        if let Some(r) = o.rate_hz {
+            crate::options::check_positive("rate_hz", r)?;
         }
         if !(o.confidence > 0.0 && o.confidence < 1.0) {
             return Err(invalid(
-                "confidence (between 0 and 1, e.g. 0.683)",
-                o.confidence,
+                "confidence",
+                format!(
+                    "must be between 0 and 1 (e.g. 0.683), got {}",
+                    crate::error::short_f64(o.confidence)
+                ),
             ));
         }
         o.grid()?;
@@ -370,17 +396,25 @@ impl Procedure for Noise {
             .iter()
             .find(|t| !(t.is_finite() && **t > 0.0))
         {
-            return Err(invalid("stability_tau_s (a positive time, s)", t));
+            return Err(invalid(
+                "stability_tau_s",
+                format!(
+                    "every time must be a positive number of seconds, got {}",
+                    crate::error::short_f64(*t)
+                ),
+            ));
         }
         o.units()?;
         match (o.format, o.channels) {
-            (Format::Csv, Some(_)) => Err(Error::Unsupported(
-                "channels goes with format f32le or f64le (a CSV record names its columns)".into(),
+            (Format::Csv, Some(_)) => Err(invalid(
+                "channels",
+                "goes with format f32le or f64le (a CSV record names its columns)",
             )),
-            (Format::F32le | Format::F64le, None) => Err(Error::Unsupported(
-                "format f32le/f64le needs channels (the number of interleaved channels)".into(),
+            (Format::F32le | Format::F64le, None) => Err(invalid(
+                "channels",
+                "format f32le/f64le needs the number of interleaved channels",
             )),
-            (_, Some(0)) => Err(invalid("channels (at least 1)", 0)),
+            (_, Some(0)) => Err(invalid("channels", "at least 1, got 0")),
             _ => Ok(()),
         }
     }
@@ -403,10 +437,7 @@ impl Procedure for Noise {
         input: &Channels,
         o: &NoiseOptions,
     ) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
-        options_map(&NoiseOptions {
-            rate_hz: Some(input.rate_hz),
-            ..o.clone()
-        })
+        options_map(&o.settled(Some(input.rate_hz)))
     }
 
     fn reduce(
@@ -547,7 +578,7 @@ pub fn reduce_mapped(
         sha256: read.hash.finish(name)?,
         rows: Some(rec.rows() as u64),
     });
-    doc.options = options_map(o)?;
+    doc.options = options_map(&o.settled(None))?;
     Ok(doc)
 }
 
@@ -902,3 +933,6 @@ fn unit_suspect(
     }
     None
 }
+
+#[cfg(test)]
+mod options_tests;

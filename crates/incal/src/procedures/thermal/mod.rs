@@ -37,7 +37,9 @@
 //! tests for the measured rates).
 
 pub mod apply;
+pub mod document;
 pub mod export;
+pub mod input;
 pub mod plan;
 pub mod ramp;
 pub mod sim;
@@ -50,6 +52,13 @@ use crate::error::{Error, Result};
 use crate::estimation::linear::{fit, Design, Fit, FitOptions, Variance, LACK_OF_FIT_ALPHA};
 use crate::units::Unit;
 
+/// The thermal calibration's test plan (soak plateaus or a chamber ramp,
+/// [`plan`]) as one [`crate::procedures::Plan`]; the reductions are
+/// [`ramp::Ramp`] (a recording) and [`soak::fit_documents`] (result
+/// documents).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Thermal;
+
 /// Highest polynomial degree incal fits (the flight stacks' cubic).
 pub const MAX_DEGREE: usize = 3;
 
@@ -61,14 +70,49 @@ pub const DEFAULT_T_REF_C: f64 = 25.0;
 pub const SAME_PLATEAU_C: f64 = 0.05;
 
 /// The degree of the temperature polynomials: chosen by the degree rule
-/// (module docs) or fixed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// (module docs) or fixed. At the edges `"auto"` or a whole number 0…3
+/// (`"2"` is read as 2).
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(into = "DegreeText", try_from = "DegreeText")]
 pub enum Degree {
     /// The degree rule picks it, per coefficient.
     #[default]
     Auto,
     /// This degree for every coefficient (0..=3).
     Fixed(usize),
+}
+
+/// [`Degree`] as written: a whole number, or a word (`auto`, or a number
+/// in a string).
+#[derive(Debug, Clone, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(untagged)]
+enum DegreeText {
+    /// A fixed degree, 0 to 3.
+    Number(usize),
+    /// `auto` (or a degree in a string).
+    Word(String),
+}
+
+impl From<Degree> for DegreeText {
+    fn from(d: Degree) -> Self {
+        match d {
+            Degree::Auto => DegreeText::Word("auto".into()),
+            Degree::Fixed(d) => DegreeText::Number(d),
+        }
+    }
+}
+
+impl TryFrom<DegreeText> for Degree {
+    type Error = String;
+
+    fn try_from(t: DegreeText) -> std::result::Result<Self, String> {
+        match t {
+            DegreeText::Number(d) => Degree::parse(&d.to_string()),
+            DegreeText::Word(w) => Degree::parse(&w),
+        }
+    }
 }
 
 impl Degree {
@@ -93,27 +137,6 @@ impl std::fmt::Display for Degree {
             Degree::Auto => f.write_str("auto"),
             Degree::Fixed(d) => write!(f, "{d}"),
         }
-    }
-}
-
-impl Serialize for Degree {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        match self {
-            Degree::Auto => s.serialize_str("auto"),
-            Degree::Fixed(d) => s.serialize_u64(*d as u64),
-        }
-    }
-}
-
-impl<'de> Deserialize<'de> for Degree {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        let v = serde_json::Value::deserialize(d)?;
-        let text = match &v {
-            serde_json::Value::String(s) => s.clone(),
-            serde_json::Value::Number(n) => n.to_string(),
-            _ => return Err(serde::de::Error::custom("degree: auto or 0..3")),
-        };
-        Degree::parse(&text).map_err(serde::de::Error::custom)
     }
 }
 
@@ -565,5 +588,81 @@ mod tests {
             let r = cov[(j, j)] / f.covariance[(j, j)];
             assert!((r - 1.0).abs() < 1e-6, "{r}");
         }
+    }
+
+    fn key_of<T: std::fmt::Debug>(r: Result<T>) -> String {
+        match r {
+            Err(Error::InvalidOption { key, .. }) => key,
+            other => panic!("expected InvalidOption, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn ramp_options_round_trip_and_name_a_bad_key() {
+        use crate::options::from_json;
+        use crate::procedures::Procedure;
+        let o: ramp::RampOptions = from_json(&serde_json::json!({"rate_hz": 2.0})).unwrap();
+        assert_eq!(o.block_s, 10.0);
+        assert_eq!(o.t_ref_c, DEFAULT_T_REF_C);
+        let given = serde_json::json!({
+            "rate_hz": 1.0, "quantity": "gyro", "t_ref_c": 20.0,
+            "degree": 2, "block_s": 30.0, "rate_term": true
+        });
+        let o: ramp::RampOptions = from_json(&given).unwrap();
+        assert_eq!(o.degree, Degree::Fixed(2));
+        let shown = serde_json::to_value(&o).unwrap();
+        assert_eq!(shown, given);
+        assert_eq!(from_json::<ramp::RampOptions>(&shown).unwrap(), o);
+        let auto = serde_json::to_value(ramp::RampOptions::default()).unwrap();
+        assert_eq!(auto["degree"], "auto");
+        assert_eq!(
+            from_json::<ramp::RampOptions>(&serde_json::json!({"rate_hz": 1.0, "degree": "3"}))
+                .unwrap()
+                .degree,
+            Degree::Fixed(3)
+        );
+        assert_eq!(
+            key_of(from_json::<ramp::RampOptions>(
+                &serde_json::json!({"rate_hz": 1.0, "degree": 4})
+            )),
+            "degree"
+        );
+        assert_eq!(
+            key_of(from_json::<ramp::RampOptions>(
+                &serde_json::json!({"rate_hz": 1.0, "block": 4})
+            )),
+            "block"
+        );
+        let bad = ramp::RampOptions {
+            block_s: 0.0,
+            ..Default::default()
+        };
+        assert_eq!(key_of(ramp::Ramp::validate(&bad)), "block_s");
+        let bad = ramp::RampOptions {
+            t_ref_c: 600.0,
+            ..Default::default()
+        };
+        assert_eq!(key_of(ramp::Ramp::validate(&bad)), "t_ref_c");
+    }
+
+    #[test]
+    fn plan_options_round_trip_and_name_a_bad_key() {
+        use crate::options::from_json;
+        use crate::procedures::Plan;
+        let given = serde_json::json!({"plateaus_c": [-20.0, 25.0, 70.0], "u": 1e-3, "degree": 1});
+        let o: plan::ThermalPlanOptions = from_json(&given).unwrap();
+        assert_eq!((o.rate_hz, o.hold_s, o.t_ref_c), (10.0, 1800.0, 25.0));
+        let shown = serde_json::to_value(&o).unwrap();
+        assert!(shown.get("noise").is_none(), "{shown}");
+        assert_eq!(from_json::<plan::ThermalPlanOptions>(&shown).unwrap(), o);
+        let d = Thermal::plan(&o).unwrap();
+        assert_eq!(serde_json::to_value(&d.options).unwrap(), shown);
+        let bad = plan::ThermalPlanOptions {
+            degree: 4,
+            ..o.clone()
+        };
+        assert_eq!(key_of(Thermal::plan(&bad)), "degree");
+        let bad = plan::ThermalPlanOptions { u: Some(0.0), ..o };
+        assert_eq!(key_of(Thermal::plan(&bad)), "u");
     }
 }

@@ -149,37 +149,100 @@ pub fn predict_ramp(p: &RampPlan) -> Result<(Vec<f64>, Option<f64>, usize)> {
 
 /// The options of a thermal plan (`incal plan thermal`): a soak plan
 /// (`plateaus_c` with `u`) or a ramp plan (`ramp_c_per_min` with
-/// `noise`); temperatures in °C, times in s, rates in Hz.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+/// `noise`); temperatures in °C, times in s, rates in Hz. Every key is
+/// in the plan document's `options` (those not given left out).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct ThermalPlanOptions {
     /// Plateau temperatures, °C (a soak plan).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub plateaus_c: Option<Vec<f64>>,
     /// Standard uncertainty of the coefficient at one plateau, its unit.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub u: Option<f64>,
     /// The chamber's ramp rate, °C/min (a ramp plan).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ramp_c_per_min: Option<f64>,
     /// Ramp plan: low temperature, °C.
+    #[serde(default = "default_t_low_c")]
     pub t_low_c: f64,
     /// Ramp plan: high temperature, °C.
+    #[serde(default = "default_t_high_c")]
     pub t_high_c: f64,
     /// Ramp plan: hold at each end, s.
+    #[serde(default = "default_hold_s")]
     pub hold_s: f64,
     /// Ramp plan: the sensor's lag behind the chamber, s.
+    #[serde(default = "default_lag_s")]
     pub lag_s: f64,
     /// Ramp plan: sample rate, Hz.
+    #[serde(default = "default_rate_hz")]
     pub rate_hz: f64,
     /// Ramp plan: white noise of one sample, the channel's unit.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noise: Option<f64>,
     /// Ramp plan: block length, s.
+    #[serde(default = "default_block_s")]
     pub block_s: f64,
     /// Degree of the polynomial (0 to 3).
     pub degree: usize,
     /// Reference temperature T_ref, °C.
+    #[serde(default = "super::ramp::default_t_ref_c")]
     pub t_ref_c: f64,
+}
+
+fn default_t_low_c() -> f64 {
+    -20.0
+}
+
+fn default_t_high_c() -> f64 {
+    60.0
+}
+
+fn default_hold_s() -> f64 {
+    1800.0
+}
+
+fn default_lag_s() -> f64 {
+    120.0
+}
+
+fn default_rate_hz() -> f64 {
+    10.0
+}
+
+fn default_block_s() -> f64 {
+    10.0
+}
+
+impl ThermalPlanOptions {
+    /// Refuse options no plan can use, naming the key: a degree above
+    /// [`MAX_DEGREE`], a `u` or `noise` that is not positive, a `T_ref`
+    /// beyond ±500 °C. The ramp's profile is checked by the simulator
+    /// and the reduction it predicts.
+    pub fn validate(&self) -> Result<()> {
+        use crate::options::{check_positive, invalid};
+        if self.degree > MAX_DEGREE {
+            return invalid(
+                "degree",
+                format!("must be within 0..{MAX_DEGREE}, got {}", self.degree),
+            );
+        }
+        if let Some(u) = self.u {
+            check_positive("u", u)?;
+        }
+        if let Some(noise) = self.noise {
+            check_positive("noise", noise)?;
+        }
+        super::ramp::check_t_ref_c(self.t_ref_c)
+    }
+}
+
+impl crate::procedures::Plan for super::Thermal {
+    type Options = ThermalPlanOptions;
+
+    fn plan(o: &ThermalPlanOptions) -> Result<crate::document::plan::PlanDocument> {
+        plan_document(o)
+    }
 }
 
 /// The unit of `c_k`: the channel's unit per °C^k (`unit`, `unit/degC`,
@@ -199,6 +262,7 @@ fn coefficient_unit(k: usize) -> String {
 /// refused saying what to give.
 pub fn plan_document(o: &ThermalPlanOptions) -> Result<crate::document::plan::PlanDocument> {
     use serde_json::json;
+    o.validate()?;
     let (u, hysteresis, dof, title, kind) = match (o.ramp_c_per_min, &o.plateaus_c, o.u) {
         (Some(rate), _, _) => {
             let noise = o.noise.ok_or_else(|| Error::InvalidOption {

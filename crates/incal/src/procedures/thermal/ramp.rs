@@ -40,38 +40,49 @@
 use std::io::Read;
 
 use nalgebra::{DMatrix, DVector};
-use serde::Serialize;
 use serde_json::{json, Value};
 
-use super::{fit_with_degree, power_unit, Degree, ThermalEntry, ValueU, DEFAULT_T_REF_C};
-use crate::document::{
-    Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure, ResultDocument, Table,
-};
+use super::document::{block_table, channel_entry};
+pub use super::input::{read, Block, RampInput, NOT_CHANNELS};
+use super::{fit_with_degree, Degree, ValueU, DEFAULT_T_REF_C};
+use crate::document::{DecisionCode, DocumentBuilder, FitSummary, Procedure, ResultDocument};
 use crate::error::{Error, Result};
 use crate::estimation::linear::{fit, Design, FitOptions};
-use crate::estimation::Estimates;
 use crate::procedures::noise::QuantityKind;
 use crate::procedures::{Procedure as ProcedureShape, Progress};
 use crate::units::Unit;
 
-/// Columns that are never channels.
-pub const NOT_CHANNELS: [&str; 4] = ["time_s", "temperature_c", "chamber_c", "humidity_pct"];
-
-/// Options of a ramp reduction.
-#[derive(Debug, Clone, Serialize)]
+/// Options of a ramp reduction. In the document: `rate_hz`, `quantity`,
+/// `t_ref_c`, `degree` (`"auto"` or 0…3), `block_s`, `rate_term`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct RampOptions {
     /// Sample rate, Hz (the time base when there is no `time_s`).
     pub rate_hz: f64,
     /// What the channels measure: their unit (deg/s, g, or 1).
+    #[serde(default)]
     pub quantity: QuantityKind,
     /// Reference temperature `T_ref`, °C.
+    #[serde(default = "default_t_ref_c")]
     pub t_ref_c: f64,
     /// Degree of every polynomial, or the degree rule.
+    #[serde(default)]
     pub degree: Degree,
     /// Block length, s.
+    #[serde(default = "default_block_s")]
     pub block_s: f64,
     /// Fit a `dT/dt` term too.
+    #[serde(default)]
     pub rate_term: bool,
+}
+
+/// [`DEFAULT_T_REF_C`].
+pub(crate) fn default_t_ref_c() -> f64 {
+    DEFAULT_T_REF_C
+}
+
+/// Blocks of 10 s.
+fn default_block_s() -> f64 {
+    10.0
 }
 
 impl Default for RampOptions {
@@ -81,134 +92,16 @@ impl Default for RampOptions {
             quantity: QuantityKind::Generic,
             t_ref_c: DEFAULT_T_REF_C,
             degree: Degree::Auto,
-            block_s: 10.0,
+            block_s: default_block_s(),
             rate_term: false,
         }
     }
 }
 
-/// Welford accumulator of one channel in one block.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-struct Acc {
-    n: usize,
-    mean: f64,
-    m2: f64,
-}
-
-impl Acc {
-    fn push(&mut self, x: f64) {
-        self.n += 1;
-        let d = x - self.mean;
-        self.mean += d / self.n as f64;
-        self.m2 += d * (x - self.mean);
-    }
-}
-
-/// One block of rows.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Block {
-    time: Acc,
-    temp: Acc,
-    chamber: Acc,
-    channels: Vec<Acc>,
-}
-
-/// A ramp recording as blocks.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RampInput {
-    /// Channel names.
-    pub names: Vec<String>,
-    /// The blocks, in time order.
-    pub blocks: Vec<Block>,
-    /// True when the recording has `chamber_c`.
-    pub has_chamber: bool,
-}
-
-/// Rows per block.
-fn block_rows(o: &RampOptions) -> usize {
-    ((o.block_s * o.rate_hz).round() as usize).max(2)
-}
-
-/// Read a ramp recording (module docs).
-pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &RampOptions) -> Result<RampInput> {
-    let h = rows.header();
-    let temp = h.column("temperature_c")?;
-    let chamber = h.opt_column("chamber_c");
-    let time = h.opt_column("time_s");
-    let pick: Vec<usize> = if h.selected().is_empty() {
-        (0..h.width())
-            .filter(|&k| !NOT_CHANNELS.contains(&h.names()[k].as_str()))
-            .collect()
-    } else {
-        h.selected()
-            .iter()
-            .copied()
-            .filter(|&k| !NOT_CHANNELS.contains(&h.names()[k].as_str()))
-            .collect()
-    };
-    if pick.is_empty() {
-        return Err(h
-            .error("no channel column besides time_s, temperature_c and chamber_c")
-            .into());
-    }
-    let names: Vec<String> = pick.iter().map(|&k| h.names()[k].clone()).collect();
-    let per = block_rows(o);
-    let mut blocks = Vec::new();
-    let empty = Block {
-        time: Acc::default(),
-        temp: Acc::default(),
-        chamber: Acc::default(),
-        channels: vec![Acc::default(); pick.len()],
-    };
-    let mut cur = empty.clone();
-    let mut index = 0usize;
-    let mut in_block = 0usize;
-    let mut last_t = f64::NEG_INFINITY;
-    while let Some(row) = rows.next_row()? {
-        let t = match time {
-            Some(c) => {
-                let t = row.f64(c)?;
-                if t <= last_t {
-                    return Err(row
-                        .cell_error(c, format!("time_s {t} does not increase (after {last_t})"))
-                        .into());
-                }
-                last_t = t;
-                t
-            }
-            None => index as f64 / o.rate_hz,
-        };
-        index += 1;
-        let tc = row.f64(temp)?;
-        if !(-273.15..=1000.0).contains(&tc) {
-            return Err(row
-                .cell_error(temp, format!("{tc} is not a temperature in degC"))
-                .into());
-        }
-        cur.time.push(t);
-        cur.temp.push(tc);
-        if let Some(c) = chamber {
-            cur.chamber.push(row.f64(c)?);
-        }
-        for (a, &k) in cur.channels.iter_mut().zip(&pick) {
-            if let Some(v) = row.f64_or_missing(k)? {
-                a.push(v);
-            }
-        }
-        in_block += 1;
-        if in_block == per {
-            blocks.push(std::mem::replace(&mut cur, empty.clone()));
-            in_block = 0;
-        }
-    }
-    if in_block * 2 >= per {
-        blocks.push(cur);
-    }
-    Ok(RampInput {
-        names,
-        blocks,
-        has_chamber: chamber.is_some(),
-    })
+/// `T_ref` finite and within ±500 °C, or [`Error::InvalidOption`] naming
+/// `t_ref_c`.
+pub(crate) fn check_t_ref_c(t_ref_c: f64) -> Result<()> {
+    crate::options::check_range("t_ref_c", t_ref_c, -500.0, 500.0, "degC")
 }
 
 /// The ramp reduction as a [`crate::procedures::Procedure`].
@@ -221,25 +114,22 @@ impl ProcedureShape for Ramp {
     type Input = RampInput;
 
     fn validate(o: &RampOptions) -> Result<()> {
-        if !(o.rate_hz.is_finite() && o.rate_hz > 0.0 && o.rate_hz <= 1e7) {
-            return Err(Error::InvalidValue {
-                what: "rate_hz (Hz, above 0)".into(),
-                value: o.rate_hz.to_string(),
-            });
+        use crate::options::{check_positive, invalid};
+        check_positive("rate_hz", o.rate_hz)?;
+        if o.rate_hz > 1e7 {
+            return invalid(
+                "rate_hz",
+                format!("must be at most 1e7 Hz, got {}", o.rate_hz),
+            );
         }
-        if !(o.block_s.is_finite() && o.block_s > 0.0 && o.block_s <= 86400.0) {
-            return Err(Error::InvalidValue {
-                what: "block_s (s, above 0)".into(),
-                value: o.block_s.to_string(),
-            });
+        check_positive("block_s", o.block_s)?;
+        if o.block_s > 86400.0 {
+            return invalid(
+                "block_s",
+                format!("must be at most 86400 s, got {}", o.block_s),
+            );
         }
-        if !(o.t_ref_c.is_finite() && o.t_ref_c.abs() <= 500.0) {
-            return Err(Error::InvalidValue {
-                what: "t_ref_c (degC)".into(),
-                value: o.t_ref_c.to_string(),
-            });
-        }
-        Ok(())
+        check_t_ref_c(o.t_ref_c)
     }
 
     fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &RampOptions) -> Result<RampInput> {
@@ -406,7 +296,7 @@ pub fn reduce(input: &RampInput, o: &RampOptions) -> Result<ResultDocument> {
         )?;
         b.decision(
             DecisionCode::ModelDegree,
-            super::soak::degree_reason(name, &f, o.degree, &trials),
+            super::document::degree_reason(name, &f, o.degree, &trials),
         );
         b.warnings(
             f.fit
@@ -422,7 +312,7 @@ pub fn reduce(input: &RampInput, o: &RampOptions) -> Result<ResultDocument> {
         );
         selection.insert(name.clone(), json!(trials));
         b.table(block_table(name, &unit, &d, &branch, &f)?);
-        b.table(super::soak::compensated_table(name, &unit, &f)?);
+        b.table(super::document::compensated_table(name, &unit, &f)?);
     }
     if input.has_chamber {
         match lag(blocks, &rate) {
@@ -451,19 +341,19 @@ pub fn reduce(input: &RampInput, o: &RampOptions) -> Result<ResultDocument> {
 /// One channel's points of the fit: the blocks with at least two of its
 /// samples, their means with `u_i = s/√n_i` (module docs), temperatures
 /// and extra regressors.
-struct ChannelBlocks {
+pub(crate) struct ChannelBlocks {
     /// Indices of the blocks kept.
-    keep: Vec<usize>,
+    pub(crate) keep: Vec<usize>,
     /// Block means.
-    y: Vec<f64>,
+    pub(crate) y: Vec<f64>,
     /// Their standard uncertainties.
-    u: Vec<f64>,
+    pub(crate) u: Vec<f64>,
     /// Their mean sensor temperatures, °C.
-    t: Vec<f64>,
+    pub(crate) t: Vec<f64>,
     /// The extra regressors at the blocks kept.
-    extra: Vec<(String, Vec<f64>)>,
+    pub(crate) extra: Vec<(String, Vec<f64>)>,
     /// Degrees of freedom of the pooled within-block variance.
-    pooled_dof: usize,
+    pub(crate) pooled_dof: usize,
 }
 
 impl ChannelBlocks {
@@ -510,120 +400,6 @@ impl ChannelBlocks {
             extra,
             pooled_dof,
         })
-    }
-}
-
-/// A channel's polynomial coefficients `NAME.ck` into the document, and
-/// its `thermal` entry (with the hysteresis and `dT/dt` terms when
-/// fitted).
-fn channel_entry(
-    b: &mut DocumentBuilder,
-    name: &str,
-    f: &super::PolyFit,
-    o: &RampOptions,
-    unit: &Unit,
-) -> Result<ThermalEntry> {
-    let p = f.degree + 1;
-    let dof = f.fit.estimates.dof();
-    let e = Estimates::new(
-        (0..p).map(|k| format!("c{k}")).collect(),
-        f.values.rows(0, p).into_owned(),
-        f.covariance.view((0, 0), (p, p)).into_owned(),
-        dof,
-    )?;
-    b.estimates(&e, &format!("{name}."), |n| {
-        let k: usize = n[1..].parse().map_err(|_| Error::Unsupported(n.into()))?;
-        Ok(power_unit(unit, k))
-    })?;
-    let extra_u = |label: &str, unit_text: String| {
-        f.names.iter().position(|n| n == label).map(|j| {
-            ValueU::new(
-                f.values[j],
-                f.covariance[(j, j)].max(0.0).sqrt(),
-                &unit_text,
-                dof,
-            )
-        })
-    };
-    Ok(ThermalEntry {
-        degree: f.degree,
-        t_ref_c: o.t_ref_c,
-        t_min_c: f.t_range_c.0,
-        t_max_c: f.t_range_c.1,
-        unit: unit.as_str().to_string(),
-        hysteresis: extra_u("hysteresis", unit.as_str().to_string()),
-        rate_term: extra_u("rate_term", format!("{}/(degC/s)", unit.as_str())),
-    })
-}
-
-/// The table `ramp.NAME`: the block means against the sensor temperature
-/// with the polynomial and the residual, at most about 60 rows
-/// (consecutive blocks of one branch merged as weighted means, so a
-/// report stays readable).
-fn block_table(
-    name: &str,
-    unit: &Unit,
-    d: &ChannelBlocks,
-    branch: &[i8],
-    f: &super::PolyFit,
-) -> Result<Table> {
-    let (keep, u, y, tk) = (&d.keep, &d.u, &d.y, &d.t);
-    let mut tab = Table::new(
-        &format!("ramp.{name}"),
-        &format!("{name}: block means against the sensor temperature (consecutive blocks of a branch merged)"),
-        &[
-            ("temperature_c", Some(Unit::Other("degC".into()))),
-            ("branch", None),
-            ("mean", Some(unit.clone())),
-            ("u", Some(unit.clone())),
-            ("polynomial", Some(unit.clone())),
-            ("residual", Some(unit.clone())),
-        ],
-    );
-    let group = keep.len().div_ceil(60).max(1);
-    let mut j = 0;
-    while j < keep.len() {
-        let br = branch[keep[j]];
-        let mut end = j;
-        while end < keep.len() && end - j < group && branch[keep[end]] == br {
-            end += 1;
-        }
-        let (mut sw, mut st, mut sy, mut sr) = (0.0, 0.0, 0.0, 0.0);
-        for q in j..end {
-            let w = 1.0 / (u[q] * u[q]);
-            let fitted: f64 = (0..f.values.len())
-                .map(|k| f.values[k] * regressor(f, &d.extra, q, k, tk[q]))
-                .sum();
-            sw += w;
-            st += w * tk[q];
-            sy += w * y[q];
-            sr += w * (y[q] - fitted);
-        }
-        let t_mean = st / sw;
-        let (poly_only, _) = f.eval(t_mean);
-        tab.push(vec![
-            Cell::num(t_mean),
-            Cell::text(match br {
-                1 => "heating",
-                -1 => "cooling",
-                _ => "start",
-            }),
-            Cell::num(sy / sw),
-            Cell::num(sw.sqrt().recip()),
-            Cell::num(poly_only),
-            Cell::num(sr / sw),
-        ])?;
-        j = end;
-    }
-    Ok(tab)
-}
-
-/// The value of regressor `k` of fit `f` at point `j`.
-fn regressor(f: &super::PolyFit, extra: &[(String, Vec<f64>)], j: usize, k: usize, t: f64) -> f64 {
-    if k <= f.degree {
-        (t - f.t_ref_c).powi(k as i32)
-    } else {
-        extra[k - f.degree - 1].1[j]
     }
 }
 

@@ -17,26 +17,25 @@
 //! (JCGM 100 §5.2, the linear propagation of the joint input covariance).
 //! The compensated value at any T has `u² = gᵀ C g`, `g_k = (T − T_ref)^k`.
 
-use std::collections::BTreeMap;
-
-use nalgebra::{DMatrix, DVector};
-use serde::Serialize;
 use serde_json::{json, Value};
 
-use super::{fit_with_degree, power_unit, Degree, PolyFit, ThermalEntry, DEFAULT_T_REF_C};
+pub use super::document::{compensated_table, degree_reason};
+use super::document::{joint_estimates, plateau_table};
+use super::{fit_with_degree, Degree, PolyFit, ThermalEntry, DEFAULT_T_REF_C};
 use crate::document::{
-    Cell, DecisionCode, DocumentBuilder, FitSummary, InputFile, Procedure, ResultDocument, Table,
+    DecisionCode, DocumentBuilder, FitSummary, InputFile, Procedure, ResultDocument,
 };
 use crate::error::{Error, Result};
-use crate::estimation::Estimates;
 use crate::units::Unit;
 
-/// Options of a soak fit.
-#[derive(Debug, Clone, Serialize)]
+/// Options of a soak fit. In the document: `t_ref_c`, `degree`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct SoakOptions {
     /// Reference temperature `T_ref`, °C.
+    #[serde(default = "super::ramp::default_t_ref_c")]
     pub t_ref_c: f64,
     /// Degree of every polynomial, or the degree rule.
+    #[serde(default)]
     pub degree: Degree,
 }
 
@@ -174,12 +173,7 @@ pub fn fit_documents(inputs: &[SoakInput], o: &SoakOptions) -> Result<ResultDocu
 /// all of one procedure other than thermal and of one instrument), and
 /// the first input with every input's temperature ([`temperature_of`]).
 fn check_inputs<'a>(inputs: &'a [SoakInput], o: &SoakOptions) -> Result<(&'a SoakInput, Vec<f64>)> {
-    if !o.t_ref_c.is_finite() || o.t_ref_c.abs() > 500.0 {
-        return Err(Error::InvalidValue {
-            what: "t_ref_c (degC)".into(),
-            value: o.t_ref_c.to_string(),
-        });
-    }
+    super::ramp::check_t_ref_c(o.t_ref_c)?;
     let Some(first) = inputs.first() else {
         return Err(Error::TooFew {
             what: "result documents".into(),
@@ -258,162 +252,4 @@ struct Plateaus {
     u: Vec<f64>,
     /// The smallest of their dof.
     dof: f64,
-}
-
-/// The polynomials' coefficients `NAME.ck` into the document as one joint
-/// block: the polynomials of coefficients of one run are correlated
-/// through the runs' own correlations (module docs), each coefficient
-/// with its own fit's dof.
-fn joint_estimates(
-    b: &mut DocumentBuilder,
-    inputs: &[SoakInput],
-    fits: &[(String, Unit, PolyFit)],
-) -> Result<()> {
-    let sizes: Vec<usize> = fits.iter().map(|(_, _, f)| f.degree + 1).collect();
-    let total: usize = sizes.iter().sum();
-    let mut cov = DMatrix::zeros(total, total);
-    let mut values = DVector::zeros(total);
-    let mut coef_names = Vec::with_capacity(total);
-    let mut at = Vec::with_capacity(fits.len());
-    let mut pos = 0;
-    for (name, _, f) in fits {
-        at.push(pos);
-        for k in 0..=f.degree {
-            values[pos + k] = f.values[k];
-            coef_names.push(format!("{name}.c{k}"));
-        }
-        pos += f.degree + 1;
-    }
-    for (ia, (na, _, fa)) in fits.iter().enumerate() {
-        for (ib, (nb, _, fb)) in fits.iter().enumerate() {
-            let (pa, pb) = (fa.degree + 1, fb.degree + 1);
-            let block = if ia == ib {
-                fa.covariance.view((0, 0), (pa, pa)).into_owned()
-            } else {
-                let s = DVector::from_fn(inputs.len(), |i, _| {
-                    inputs[i].doc.covariance(na, nb).unwrap_or(0.0)
-                });
-                let ga = fa.gain.rows(0, pa);
-                let gb = fb.gain.rows(0, pb);
-                (ga * DMatrix::from_diagonal(&s) * gb.transpose())
-                    * (fa.variance_factor * fb.variance_factor).sqrt()
-            };
-            cov.view_mut((at[ia], at[ib]), (pa, pb)).copy_from(&block);
-        }
-    }
-    let dof_of: BTreeMap<String, f64> = fits
-        .iter()
-        .flat_map(|(name, _, f)| {
-            let d = f.fit.estimates.dof();
-            (0..=f.degree).map(move |k| (format!("{name}.c{k}"), d))
-        })
-        .collect();
-    let unit_of: BTreeMap<String, Unit> = fits
-        .iter()
-        .flat_map(|(name, unit, f)| {
-            (0..=f.degree).map(move |k| (format!("{name}.c{k}"), power_unit(unit, k)))
-        })
-        .collect();
-    let e = Estimates::new(coef_names, values, cov, f64::INFINITY)?;
-    b.estimates_dof(
-        &e,
-        "",
-        |n| {
-            unit_of
-                .get(n)
-                .cloned()
-                .ok_or_else(|| Error::Unsupported(format!("no unit for {n}")))
-        },
-        |n| dof_of.get(n).copied().unwrap_or(f64::INFINITY),
-    )?;
-    Ok(())
-}
-
-/// Why a polynomial got its degree.
-pub fn degree_reason(
-    name: &str,
-    f: &PolyFit,
-    asked: Degree,
-    trials: &[super::DegreeTrial],
-) -> String {
-    let tried: Vec<String> = trials
-        .iter()
-        .map(|t| match t.p_value {
-            Some(p) => format!(
-                "degree {}: chi2 {:.3} on {} dof, p {:.3}",
-                t.degree, t.chi2, t.dof, p
-            ),
-            None => format!("degree {}: no residual dof", t.degree),
-        })
-        .collect();
-    let how = match asked {
-        Degree::Fixed(d) => format!("degree {d} as asked"),
-        Degree::Auto => format!(
-            "degree {} by the degree rule (smallest degree whose lack-of-fit p >= 0.05, at most min(3, plateaus - 2))",
-            f.degree
-        ),
-    };
-    format!("{name}: {how}; {}", tried.join("; "))
-}
-
-fn plateau_table(
-    name: &str,
-    unit: &Unit,
-    f: &PolyFit,
-    t: &[f64],
-    y: &[f64],
-    u: &[f64],
-) -> Result<Table> {
-    let mut tab = Table::new(
-        &format!("plateaus.{name}"),
-        &format!("{name} at each plateau: value, polynomial and residual"),
-        &[
-            ("temperature_c", Some(Unit::Other("degC".into()))),
-            ("value", Some(unit.clone())),
-            ("u", Some(unit.clone())),
-            ("polynomial", Some(unit.clone())),
-            ("residual", Some(unit.clone())),
-            ("normalized_residual", Some(Unit::One)),
-        ],
-    );
-    for i in 0..t.len() {
-        let (p, _) = f.eval(t[i]);
-        tab.push(vec![
-            Cell::num(t[i]),
-            Cell::num(y[i]),
-            Cell::num(u[i]),
-            Cell::num(p),
-            Cell::num(y[i] - p),
-            Cell::num((y[i] - p) / u[i]),
-        ])?;
-    }
-    Ok(tab)
-}
-
-/// The compensated value over the valid range: `y(T)` with u and U95 at
-/// eleven temperatures from `t_min` to `t_max`.
-pub fn compensated_table(name: &str, unit: &Unit, f: &PolyFit) -> Result<Table> {
-    let mut tab = Table::new(
-        &format!("model.{name}"),
-        &format!("{name} from the polynomial over the valid range, with its uncertainty"),
-        &[
-            ("temperature_c", Some(Unit::Other("degC".into()))),
-            ("polynomial", Some(unit.clone())),
-            ("u", Some(unit.clone())),
-            ("U95", Some(unit.clone())),
-        ],
-    );
-    let (lo, hi) = f.t_range_c;
-    let k = crate::estimation::coverage_factor(f.fit.estimates.dof(), 0.95);
-    for i in 0..=10 {
-        let t = lo + (hi - lo) * i as f64 / 10.0;
-        let (v, u) = f.eval(t);
-        tab.push(vec![
-            Cell::num(t),
-            Cell::num(v),
-            Cell::num(u),
-            Cell::num(k * u),
-        ])?;
-    }
-    Ok(tab)
 }

@@ -1,0 +1,142 @@
+//! Reading a thermal ramp recording: its columns (`temperature_c`,
+//! optional `chamber_c` and `time_s`, the channels) averaged in blocks as
+//! the rows are read ([`super::ramp`] module docs).
+
+use std::io::Read;
+
+use super::ramp::RampOptions;
+use crate::error::Result;
+
+/// Columns that are never channels.
+pub const NOT_CHANNELS: [&str; 4] = ["time_s", "temperature_c", "chamber_c", "humidity_pct"];
+
+/// Welford accumulator of one channel in one block.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct Acc {
+    /// Samples.
+    pub(crate) n: usize,
+    /// Their mean.
+    pub(crate) mean: f64,
+    /// Sum of squared deviations from the mean.
+    pub(crate) m2: f64,
+}
+
+impl Acc {
+    fn push(&mut self, x: f64) {
+        self.n += 1;
+        let d = x - self.mean;
+        self.mean += d / self.n as f64;
+        self.m2 += d * (x - self.mean);
+    }
+}
+
+/// One block of rows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Block {
+    /// `time_s` (or the row index over the rate), s.
+    pub(crate) time: Acc,
+    /// The sensor's `temperature_c`, °C.
+    pub(crate) temp: Acc,
+    /// The chamber's `chamber_c`, °C.
+    pub(crate) chamber: Acc,
+    /// Each channel.
+    pub(crate) channels: Vec<Acc>,
+}
+
+/// A ramp recording as blocks.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RampInput {
+    /// Channel names.
+    pub names: Vec<String>,
+    /// The blocks, in time order.
+    pub blocks: Vec<Block>,
+    /// True when the recording has `chamber_c`.
+    pub has_chamber: bool,
+}
+
+/// Rows per block.
+fn block_rows(o: &RampOptions) -> usize {
+    ((o.block_s * o.rate_hz).round() as usize).max(2)
+}
+
+/// Read a ramp recording (module docs).
+pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &RampOptions) -> Result<RampInput> {
+    let h = rows.header();
+    let temp = h.column("temperature_c")?;
+    let chamber = h.opt_column("chamber_c");
+    let time = h.opt_column("time_s");
+    let pick: Vec<usize> = if h.selected().is_empty() {
+        (0..h.width())
+            .filter(|&k| !NOT_CHANNELS.contains(&h.names()[k].as_str()))
+            .collect()
+    } else {
+        h.selected()
+            .iter()
+            .copied()
+            .filter(|&k| !NOT_CHANNELS.contains(&h.names()[k].as_str()))
+            .collect()
+    };
+    if pick.is_empty() {
+        return Err(h
+            .error("no channel column besides time_s, temperature_c and chamber_c")
+            .into());
+    }
+    let names: Vec<String> = pick.iter().map(|&k| h.names()[k].clone()).collect();
+    let per = block_rows(o);
+    let mut blocks = Vec::new();
+    let empty = Block {
+        time: Acc::default(),
+        temp: Acc::default(),
+        chamber: Acc::default(),
+        channels: vec![Acc::default(); pick.len()],
+    };
+    let mut cur = empty.clone();
+    let mut index = 0usize;
+    let mut in_block = 0usize;
+    let mut last_t = f64::NEG_INFINITY;
+    while let Some(row) = rows.next_row()? {
+        let t = match time {
+            Some(c) => {
+                let t = row.f64(c)?;
+                if t <= last_t {
+                    return Err(row
+                        .cell_error(c, format!("time_s {t} does not increase (after {last_t})"))
+                        .into());
+                }
+                last_t = t;
+                t
+            }
+            None => index as f64 / o.rate_hz,
+        };
+        index += 1;
+        let tc = row.f64(temp)?;
+        if !(-273.15..=1000.0).contains(&tc) {
+            return Err(row
+                .cell_error(temp, format!("{tc} is not a temperature in degC"))
+                .into());
+        }
+        cur.time.push(t);
+        cur.temp.push(tc);
+        if let Some(c) = chamber {
+            cur.chamber.push(row.f64(c)?);
+        }
+        for (a, &k) in cur.channels.iter_mut().zip(&pick) {
+            if let Some(v) = row.f64_or_missing(k)? {
+                a.push(v);
+            }
+        }
+        in_block += 1;
+        if in_block == per {
+            blocks.push(std::mem::replace(&mut cur, empty.clone()));
+            in_block = 0;
+        }
+    }
+    if in_block * 2 >= per {
+        blocks.push(cur);
+    }
+    Ok(RampInput {
+        names,
+        blocks,
+        has_chamber: chamber.is_some(),
+    })
+}
