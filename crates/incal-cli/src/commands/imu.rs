@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::Subcommand;
 use incal::procedures::imu::apply::ImuCalibration;
 use incal::procedures::imu::autocal::{Autocal, AutocalSessionOptions, Initial, Method};
-use incal::procedures::imu::ferraris::{Ferraris, FerrarisOptions};
+use incal::procedures::imu::ferraris::{Convention, Ferraris, FerrarisOptions};
 use incal::procedures::imu::input;
 use incal::procedures::imu::multipos::{MatrixForm, Multipos, MultiposSessionOptions};
 use incal::procedures::imu::sim::{simulate as sim, ImuSim, ImuTruth, Layout, Sequence};
@@ -39,9 +39,12 @@ pub struct FerrarisArgs {
     /// Sample rate (Hz): integrates the rotations.
     #[arg(long)]
     pub rate_hz: f64,
-    /// Gravity (m/s^2); negative when the positive axis is the one reading -g (imucal's convention).
+    /// Gravity magnitude (m/s^2, > 0); its sign is --convention's.
     #[arg(long, default_value_t = incal::units::STANDARD_GRAVITY_M_S2, allow_hyphen_values = true)]
     pub gravity_m_s2: f64,
+    /// Sign convention of the positions: standard (x_p reads +g) or imucal (the positive axis is the one reading -g: imucal's grav = -9.81).
+    #[arg(long, value_enum, default_value = "standard")]
+    pub convention: ConventionArg,
     /// Angle of each rotation section (deg); negative is clockwise seen from the axis tip (imucal's default -360).
     #[arg(long, default_value_t = -360.0, allow_hyphen_values = true)]
     pub rotation_deg: f64,
@@ -54,11 +57,24 @@ pub struct FerrarisArgs {
     pub result: ResultArgs,
 }
 
+/// Sign convention of `incal imu ferraris`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ConventionArg {
+    /// x_p: the positive x axis points up and the x accelerometer reads +g.
+    Standard,
+    /// The positive axis is the one along which the accelerometer reads -g (imucal with grav = -9.81).
+    Imucal,
+}
+
 /// `incal imu ferraris`.
 pub fn run_ferraris(a: &FerrarisArgs) -> CliResult<()> {
     let options = FerrarisOptions {
         rate_hz: a.rate_hz,
-        gravity: a.gravity_m_s2,
+        gravity_m_s2: a.gravity_m_s2,
+        convention: match a.convention {
+            ConventionArg::Standard => Convention::Standard,
+            ConventionArg::Imucal => Convention::Imucal,
+        },
         rotation_deg: a.rotation_deg,
         u_rotation_deg: a.u_rotation_deg,
     };
@@ -145,6 +161,7 @@ pub fn run_autocal(a: &AutocalArgs) -> CliResult<()> {
             gyro_scale: triple("--init-gyro-scale", &a.init_gyro_scale)?,
         },
         sort_time: a.sort_time,
+        ..AutocalSessionOptions::new(a.rate_hz, Method::Incal)
     };
     crate::run::reduce::<Autocal>(&a.input, &a.read, &options, &a.result, &Silent)
 }
@@ -327,7 +344,7 @@ pub struct MultiposArgs {
     #[arg(long, value_enum, default_value = "full")]
     pub matrix: MatrixArg,
     /// Latitude (deg): the Earth rate becomes a known gyro input (needs nx,ny,nz).
-    #[arg(long, value_parser = crate::options::latitude_deg)]
+    #[arg(long, allow_hyphen_values = true)]
     pub latitude_deg: Option<f64>,
     /// Angle of each rotation section (deg; -360 is clockwise seen from the axis tip).
     #[arg(long, default_value_t = -360.0, allow_hyphen_values = true)]

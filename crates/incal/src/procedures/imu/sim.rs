@@ -502,7 +502,7 @@ pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
     if !(cfg.static_s.is_finite() && cfg.static_s > 0.0) {
         return Err(bad("static duration (s, > 0)", cfg.static_s));
     }
-    super::check_gravity(cfg.gravity)?;
+    super::check_gravity_magnitude(cfg.gravity)?;
     let mut r = rng(cfg.seed);
     let g = cfg.gravity;
     let n_static = (cfg.static_s * cfg.rate_hz).round().max(1.0) as usize;
