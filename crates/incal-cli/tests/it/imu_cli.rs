@@ -200,11 +200,12 @@ fn ferraris_convention_imucal_is_recorded_and_flips_r_a() {
     for (a, b) in s.iter().zip(&i) {
         assert!((a + b).abs() <= 1e-12 * a.abs().max(1.0), "{a} vs {b}");
     }
-    let warned = imucal["warnings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .any(|w| w["message"].as_str().unwrap().contains("--convention standard"));
+    let warned = imucal["warnings"].as_array().unwrap().iter().any(|w| {
+        w["message"]
+            .as_str()
+            .unwrap()
+            .contains("--convention standard")
+    });
     assert!(warned, "{}", imucal["warnings"]);
 }
 

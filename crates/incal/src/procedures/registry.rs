@@ -454,7 +454,7 @@ pub static REGISTRY: &[Entry] = &[
         }),
         reduction: reduction::<super::imu::ferraris::Ferraris>(),
         planner: None,
-        simulator: None,
+        simulator: simulator::<super::imu::sim::ImuSimulator>(),
     },
     Entry {
         id: "imu-multipos",
@@ -476,7 +476,7 @@ pub static REGISTRY: &[Entry] = &[
         }),
         reduction: reduction::<super::imu::multipos::Multipos>(),
         planner: None,
-        simulator: None,
+        simulator: simulator::<super::imu::sim::ImuSimulator>(),
     },
     Entry {
         id: "imu-autocal",
@@ -498,7 +498,7 @@ pub static REGISTRY: &[Entry] = &[
         }),
         reduction: reduction::<super::imu::autocal::Autocal>(),
         planner: None,
-        simulator: None,
+        simulator: simulator::<super::imu::sim::ImuSimulator>(),
     },
     Entry {
         id: "gfimu-calibrate",

@@ -39,8 +39,8 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::{
-    check_gravity_magnitude, check_rate_hz, check_rotation_deg, component_name, element_name, SectionStats,
-    M3, V3,
+    check_gravity_magnitude, check_rate_hz, check_rotation_deg, component_name, element_name,
+    SectionStats, M3, V3,
 };
 use crate::error::{Error, Result};
 use crate::estimation::{numeric_jacobian, propagate, Estimates};
@@ -57,7 +57,15 @@ pub const QUANTITIES: [&str; 7] = ["K_a", "R_a", "b_a", "K_g", "R_g", "K_ga", "b
 /// Sign convention of the static positions (`convention`; recorded in the
 /// document only when not [`Convention::Standard`]).
 #[derive(
-    Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
 )]
 #[serde(rename_all = "lowercase")]
 pub enum Convention {
@@ -665,7 +673,10 @@ mod tests {
         assert_eq!(imucal.signed_gravity(), -9.80665);
         let bad = |v| key_of(from_json::<FerrarisOptions>(&v).unwrap_err()).0;
         assert_eq!(bad(json!({"rate_hz": 100, "gravity": 9.81})), "gravity");
-        assert_eq!(bad(json!({"rate_hz": 100, "convention": "up"})), "convention");
+        assert_eq!(
+            bad(json!({"rate_hz": 100, "convention": "up"})),
+            "convention"
+        );
         let invalid = |o: FerrarisOptions| key_of(o.validate().unwrap_err());
         let (key, message) = invalid(FerrarisOptions {
             gravity_m_s2: -9.81,

@@ -10,7 +10,8 @@
 //!   covariance.
 //! * [`detect`]: the moving-variance static detector.
 //! * [`input`]: the sessions' columns, segmentation and checks, and the
-//!   CSV of simulated sessions; [`sim`]: the session simulator;
+//!   CSV of simulated sessions; [`sim`]: the session simulator and
+//!   [`sim_options`] its typed options;
 //!   [`document`]: the result documents; [`apply`]: a calibration applied
 //!   to a raw series, row by row.
 //!
@@ -33,6 +34,7 @@ pub mod input;
 pub mod multipos;
 pub mod screen;
 pub mod sim;
+pub mod sim_options;
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -121,7 +123,7 @@ impl SectionStats {
 /// refused: imucal's opposite sign convention is an option of its own
 /// (`convention`, [`ferraris::Convention::Imucal`]).
 pub fn check_gravity_magnitude(g: f64) -> Result<()> {
-    if g.is_finite() && g < 0.0 && g >= -100.0 {
+    if (-100.0..0.0).contains(&g) {
         return crate::options::invalid(
             "gravity_m_s2",
             format!(
@@ -146,7 +148,10 @@ pub fn check_rate_hz(rate_hz: f64) -> Result<()> {
 pub fn check_rotation_deg(a: f64) -> Result<()> {
     crate::options::check_range("rotation_deg", a, -36000.0, 36000.0, "deg")?;
     if a == 0.0 {
-        return crate::options::invalid("rotation_deg", "must be non-zero (the angle of each rotation section)");
+        return crate::options::invalid(
+            "rotation_deg",
+            "must be non-zero (the angle of each rotation section)",
+        );
     }
     Ok(())
 }

@@ -160,10 +160,7 @@ impl Initial {
                     };
                     return crate::options::invalid(
                         key,
-                        format!(
-                            "{need}, got {}",
-                            crate::error::short_number(&x.to_string())
-                        ),
+                        format!("{need}, got {}", crate::error::short_number(&x.to_string())),
                     );
                 }
             }
@@ -311,13 +308,7 @@ impl AutocalSessionOptions {
                 format!("must be odd and within 11..1000001 samples, got {w}"),
             );
         }
-        crate::options::check_range(
-            "min_samples",
-            self.min_samples as f64,
-            3.0,
-            1e9,
-            "samples",
-        )?;
+        crate::options::check_range("min_samples", self.min_samples as f64, 3.0, 1e9, "samples")?;
         self.init.validate()
     }
 
