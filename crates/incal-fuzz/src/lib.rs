@@ -301,6 +301,8 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
                 settle_s: 0.1,
                 init: Default::default(),
                 sort_time: false,
+                window_samples: 101,
+                min_samples: 100,
             },
         ),
         "imu-calibration" => apply_imu(data, seed("imu-ferraris")),
@@ -416,7 +418,8 @@ fn limits(data: &[u8]) -> Outcome {
 fn ferraris_options() -> incal::procedures::imu::ferraris::FerrarisOptions {
     incal::procedures::imu::ferraris::FerrarisOptions {
         rate_hz: 100.0,
-        gravity: 9.81,
+        gravity_m_s2: 9.81,
+        convention: Default::default(),
         rotation_deg: -360.0,
         u_rotation_deg: 0.0,
     }

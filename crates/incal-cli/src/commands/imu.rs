@@ -7,10 +7,10 @@ use std::path::PathBuf;
 use clap::Subcommand;
 use incal::procedures::imu::apply::ImuCalibration;
 use incal::procedures::imu::autocal::{Autocal, AutocalSessionOptions, Initial, Method};
-use incal::procedures::imu::ferraris::{Ferraris, FerrarisOptions};
+use incal::procedures::imu::ferraris::{Convention, Ferraris, FerrarisOptions};
 use incal::procedures::imu::input;
 use incal::procedures::imu::multipos::{MatrixForm, Multipos, MultiposSessionOptions};
-use incal::procedures::imu::sim::{simulate as sim, ImuSim, ImuTruth, Layout, Sequence};
+use incal::procedures::imu::sim::{ImuSimOptions, SequenceKind};
 use incal::procedures::Silent;
 
 use crate::error::{core, in_file, CliError, CliResult};
@@ -39,9 +39,12 @@ pub struct FerrarisArgs {
     /// Sample rate (Hz): integrates the rotations.
     #[arg(long)]
     pub rate_hz: f64,
-    /// Gravity (m/s^2); negative when the positive axis is the one reading -g (imucal's convention).
+    /// Gravity magnitude (m/s^2, > 0); its sign is --convention's.
     #[arg(long, default_value_t = incal::units::STANDARD_GRAVITY_M_S2, allow_hyphen_values = true)]
     pub gravity_m_s2: f64,
+    /// Sign convention of the positions: standard (x_p reads +g) or imucal (the positive axis is the one reading -g: imucal's grav = -9.81).
+    #[arg(long, value_enum, default_value = "standard")]
+    pub convention: ConventionArg,
     /// Angle of each rotation section (deg); negative is clockwise seen from the axis tip (imucal's default -360).
     #[arg(long, default_value_t = -360.0, allow_hyphen_values = true)]
     pub rotation_deg: f64,
@@ -54,11 +57,24 @@ pub struct FerrarisArgs {
     pub result: ResultArgs,
 }
 
+/// Sign convention of `incal imu ferraris`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ConventionArg {
+    /// x_p: the positive x axis points up and the x accelerometer reads +g.
+    Standard,
+    /// The positive axis is the one along which the accelerometer reads -g (imucal with grav = -9.81).
+    Imucal,
+}
+
 /// `incal imu ferraris`.
 pub fn run_ferraris(a: &FerrarisArgs) -> CliResult<()> {
     let options = FerrarisOptions {
         rate_hz: a.rate_hz,
-        gravity: a.gravity_m_s2,
+        gravity_m_s2: a.gravity_m_s2,
+        convention: match a.convention {
+            ConventionArg::Standard => Convention::Standard,
+            ConventionArg::Imucal => Convention::Imucal,
+        },
         rotation_deg: a.rotation_deg,
         u_rotation_deg: a.u_rotation_deg,
     };
@@ -145,6 +161,7 @@ pub fn run_autocal(a: &AutocalArgs) -> CliResult<()> {
             gyro_scale: triple("--init-gyro-scale", &a.init_gyro_scale)?,
         },
         sort_time: a.sort_time,
+        ..AutocalSessionOptions::new(a.rate_hz, Method::Incal)
     };
     crate::run::reduce::<Autocal>(&a.input, &a.read, &options, &a.result, &Silent)
 }
@@ -222,7 +239,7 @@ pub struct SimArgs {
     #[arg(long, default_value_t = 2.0)]
     pub noise_gyr: f64,
     /// Latitude (deg): adds the Earth rate (positions also get the north direction nx,ny,nz).
-    #[arg(long, value_parser = crate::options::latitude_deg)]
+    #[arg(long, allow_hyphen_values = true)]
     pub latitude_deg: Option<f64>,
     /// Sensor: 0 is a typical MEMS IMU in counts; any other number draws scales, biases, misalignments and g-sensitivity around it with that seed.
     #[arg(long, default_value_t = 0)]
@@ -241,62 +258,42 @@ pub struct SimArgs {
     pub truth_out: Option<PathBuf>,
 }
 
-/// `incal simulate imu`.
+/// `incal simulate imu`: the core's simulator (`ImuSimulator`) with the
+/// options as given; the truth as JSON when asked.
 pub fn simulate(a: &SimArgs) -> CliResult<()> {
-    let (sequence, layout) = match a.sequence {
-        SequenceArg::Ferraris => (
-            Sequence::Ferraris {
-                rotation_deg: a.rotation_deg,
-                rotation_s: a.rotation_s,
-            },
-            Layout::Ferraris,
-        ),
-        SequenceArg::Random => (
-            Sequence::Random {
-                positions: a.orientations,
-                init_s: a.init_static_s,
-                move_s: a.move_s,
-            },
-            Layout::Random,
-        ),
-        SequenceArg::Faces => (
-            Sequence::Faces {
-                positions: a.orientations,
-                init_s: a.init_static_s,
-                move_s: a.move_s,
-            },
-            Layout::Random,
-        ),
-        SequenceArg::Positions => (
-            Sequence::positions(
-                &a.positions,
-                a.rotations.then_some((a.rotation_deg, a.rotation_s)),
-            )
-            .map_err(core)?,
-            Layout::Positions {
-                labels: a.positions.clone(),
-                north: a.latitude_deg.is_some(),
-            },
-        ),
-    };
-    let cfg = ImuSim {
-        truth: ImuTruth::of_seed(a.truth_seed, !a.no_g_sensitivity),
-        sequence,
+    let o = ImuSimOptions {
+        sequence: match a.sequence {
+            SequenceArg::Ferraris => SequenceKind::Ferraris,
+            SequenceArg::Random => SequenceKind::Random,
+            SequenceArg::Faces => SequenceKind::Faces,
+            SequenceArg::Positions => SequenceKind::Positions,
+        },
         rate_hz: a.rate_hz,
         static_s: a.static_s,
-        gravity: a.gravity_m_s2,
+        orientations: a.orientations,
+        init_static_s: a.init_static_s,
+        move_s: a.move_s,
+        positions: a.positions.clone(),
+        rotations: a.rotations,
+        rotation_deg: a.rotation_deg,
+        rotation_s: a.rotation_s,
+        gravity_m_s2: a.gravity_m_s2,
         noise_acc: a.noise_acc,
         noise_gyr: a.noise_gyr,
         latitude_deg: a.latitude_deg,
+        truth_seed: a.truth_seed,
+        no_g_sensitivity: a.no_g_sensitivity,
         seed: a.seed,
     };
-    cfg.validate().map_err(core)?;
-    let samples = sim(&cfg).map_err(core)?;
+    // Drawn before anything is written (a refusal leaves no file); then
+    // written as `<ImuSimulator as Simulate>::simulate` writes it, the
+    // writer's refusals keeping their kind.
+    let (samples, layout) = o.draw().map_err(core)?;
     crate::io::write_stream(a.output.as_deref(), |out| {
         input::write(&samples, &layout, out).map(|_| ())
     })?;
     if let Some(p) = &a.truth_out {
-        let truth = cfg.truth.to_json().map_err(core)?;
+        let truth = o.truth().to_json().map_err(core)?;
         crate::output::write_text(Some(p), &format!("{}\n", crate::output::json_text(&truth)))?;
     }
     Ok(())
@@ -327,7 +324,7 @@ pub struct MultiposArgs {
     #[arg(long, value_enum, default_value = "full")]
     pub matrix: MatrixArg,
     /// Latitude (deg): the Earth rate becomes a known gyro input (needs nx,ny,nz).
-    #[arg(long, value_parser = crate::options::latitude_deg)]
+    #[arg(long, allow_hyphen_values = true)]
     pub latitude_deg: Option<f64>,
     /// Angle of each rotation section (deg; -360 is clockwise seen from the axis tip).
     #[arg(long, default_value_t = -360.0, allow_hyphen_values = true)]

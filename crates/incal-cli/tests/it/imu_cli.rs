@@ -151,6 +151,62 @@ fn ferraris_refuses_bad_sections() {
         ]),
         &["--gravity-m-s2"],
     );
+    // imucal's negative-g convention is an option of its own, not a sign.
+    refused(
+        &run(&[
+            "imu",
+            "ferraris",
+            "--input",
+            &session,
+            "--rate-hz",
+            "100",
+            "--gravity-m-s2",
+            "-9.81",
+        ]),
+        &["--gravity-m-s2", "-9.81", "--convention imucal"],
+    );
+}
+
+/// `--convention imucal` runs the map with -g: on a session whose `_p`
+/// positions read +g, R_a comes out negated, the warning names the other
+/// convention, and the document records the convention (the default one
+/// is not recorded).
+#[test]
+fn ferraris_convention_imucal_is_recorded_and_flips_r_a() {
+    let session = format!("{FIX}annotated_session.csv");
+    let args = |conv: &'static str| {
+        let mut a = vec![
+            "imu",
+            "ferraris",
+            "--input",
+            session.as_str(),
+            "--rate-hz",
+            "204.8",
+            "--gravity-m-s2",
+            "9.81",
+            "--json",
+        ];
+        if !conv.is_empty() {
+            a.extend(["--convention", conv]);
+        }
+        a
+    };
+    let standard = json_of(&run(&args("")));
+    let imucal = json_of(&run(&args("imucal")));
+    assert!(standard["options"].get("convention").is_none());
+    assert_eq!(imucal["options"]["convention"], "imucal");
+    assert_eq!(imucal["options"]["gravity_m_s2"], 9.81);
+    let (s, i) = (flat(&standard["R_a"]), flat(&imucal["R_a"]));
+    for (a, b) in s.iter().zip(&i) {
+        assert!((a + b).abs() <= 1e-12 * a.abs().max(1.0), "{a} vs {b}");
+    }
+    let warned = imucal["warnings"].as_array().unwrap().iter().any(|w| {
+        w["message"]
+            .as_str()
+            .unwrap()
+            .contains("--convention standard")
+    });
+    assert!(warned, "{}", imucal["warnings"]);
 }
 
 #[test]

@@ -105,6 +105,8 @@ fn t265_options(method: Method) -> AutocalSessionOptions {
         settle_s: 0.1,
         init: Default::default(),
         sort_time: false,
+        window_samples: 101,
+        min_samples: 100,
     }
 }
 
@@ -128,6 +130,8 @@ fn xsens_options(method: Method, imu_tk_init: bool) -> AutocalSessionOptions {
             Initial::default()
         },
         sort_time: false,
+        window_samples: 101,
+        min_samples: 100,
     }
 }
 

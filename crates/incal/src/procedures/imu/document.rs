@@ -64,8 +64,13 @@ impl FerrarisResult {
         let mut b = DocumentBuilder::new(
             Procedure::ImuFerraris,
             format!(
-                "IMU Ferraris calibration (6 positions + 3 rotations of {} deg, g = {} m/s^2)",
-                o.rotation_deg, o.gravity
+                "IMU Ferraris calibration (6 positions + 3 rotations of {} deg, g = {} m/s^2{})",
+                o.rotation_deg,
+                o.gravity_m_s2,
+                match o.convention {
+                    super::ferraris::Convention::Standard => "",
+                    super::ferraris::Convention::Imucal => ", imucal's sign convention",
+                }
             ),
         );
         // K_a and K_g are diagonal by the method's construction (Ferraris
@@ -90,10 +95,9 @@ impl FerrarisResult {
                 "K_a and K_g are diagonal by construction (Ferraris et al. 1995; the misalignments are in R_a, R_g): their off-diagonal elements are 0, not estimated, and not listed as coefficients",
             );
         }
-        b.option("rate_hz", json!(o.rate_hz));
-        b.option("gravity_m_s2", json!(o.gravity));
-        b.option("rotation_deg", json!(o.rotation_deg));
-        b.option("u_rotation_deg", json!(o.u_rotation_deg));
+        for (k, v) in crate::procedures::options_map(o)? {
+            b.option(&k, v);
+        }
         let m = &self.matrices;
         for q in QUANTITIES {
             let v = match m.matrix(q) {

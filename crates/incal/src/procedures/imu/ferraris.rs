@@ -5,12 +5,13 @@
 //! # Model (imucal's definitions)
 //! Accelerometer: `a_raw = K_a R_a f + b_a`; gyro:
 //! `ω_raw = K_g R_g ω + K_ga f + b_g`, with `f` the specific force in the
-//! unit of `--gravity-m-s2` (m/s²) and `ω` in deg/s. `K` are diagonal scale
-//! matrices, `R` have unit-norm rows (the sensitive-axis directions).
+//! unit of `gravity_m_s2` (m/s²; its sign by `convention`) and `ω` in
+//! deg/s. `K` are diagonal scale matrices, `R` have unit-norm rows (the
+//! sensitive-axis directions).
 //!
 //! # Sections
-//! Static: `x_p` (x up: the x accelerometer reads +g), `x_a` (x down), and
-//! likewise `y_p, y_a, z_p, z_a`. Rotations: `x_rot`, `y_rot`, `z_rot`, one
+//! Static: `x_p` (x up: the x accelerometer reads +g; with convention
+//! `imucal` it reads −g), `x_a` (x down), and likewise `y_p, y_a, z_p, z_a`. Rotations: `x_rot`, `y_rot`, `z_rot`, one
 //! rotation of the known angle A (`--rotation-deg`, default −360: clockwise
 //! seen from the tip, as imucal) about the axis in its `_p` position.
 //!
@@ -38,8 +39,8 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::{
-    check_gravity, check_rate_hz, check_rotation_deg, component_name, element_name, SectionStats,
-    M3, V3,
+    check_gravity_magnitude, check_rate_hz, check_rotation_deg, component_name, element_name,
+    SectionStats, M3, V3,
 };
 use crate::error::{Error, Result};
 use crate::estimation::{numeric_jacobian, propagate, Estimates};
@@ -53,19 +54,75 @@ pub const SECTIONS: [&str; 9] = [
 /// The seven calibration quantities, in imucal's order.
 pub const QUANTITIES: [&str; 7] = ["K_a", "R_a", "b_a", "K_g", "R_g", "K_ga", "b_g"];
 
+/// Sign convention of the static positions (`convention`; recorded in the
+/// document only when not [`Convention::Standard`]).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Convention {
+    /// `x_p`: the positive x axis points up and the x accelerometer reads
+    /// +g (imucal's default, `grav > 0`).
+    #[default]
+    Standard,
+    /// The positive axis is the one along which the accelerometer reads −g
+    /// (imucal's `grav = -9.81`, as its documentation advises for such
+    /// sensors): the map runs with −g.
+    Imucal,
+}
+
+impl Convention {
+    /// `standard` or `imucal`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Convention::Standard => "standard",
+            Convention::Imucal => "imucal",
+        }
+    }
+
+    fn is_standard(&self) -> bool {
+        *self == Convention::Standard
+    }
+}
+
+fn standard_gravity() -> f64 {
+    crate::units::STANDARD_GRAVITY_M_S2
+}
+
+fn imucal_rotation_deg() -> f64 {
+    -360.0
+}
+
 /// Options of [`ferraris`] and of the [`Ferraris`] procedure. In the
-/// document: `{"rate_hz", "gravity_m_s2", "rotation_deg", "u_rotation_deg"}`.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+/// document: `{"rate_hz", "gravity_m_s2", "rotation_deg", "u_rotation_deg"}`,
+/// and `convention` when it is not `standard`. Defaults (JSON callers, as
+/// the CLI): g 9.80665 m/s², A −360 deg, u(A) 0, convention `standard`.
+#[derive(
+    Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 pub struct FerrarisOptions {
     /// Sample rate F_s (Hz).
     pub rate_hz: f64,
-    /// Gravity g (m/s²; default the standard 9.80665, imucal uses 9.81; negative flips the sign
-    /// convention of the positions).
-    #[serde(rename = "gravity_m_s2")]
-    pub gravity: f64,
+    /// Gravity magnitude g (m/s², > 0; default the standard 9.80665,
+    /// imucal uses 9.81). The sign convention is [`FerrarisOptions::convention`].
+    #[serde(default = "standard_gravity")]
+    pub gravity_m_s2: f64,
+    /// Sign convention of the positions ([`Convention`]).
+    #[serde(default, skip_serializing_if = "Convention::is_standard")]
+    pub convention: Convention,
     /// Rotation angle A of each rotation section (deg; imucal default −360).
+    #[serde(default = "imucal_rotation_deg")]
     pub rotation_deg: f64,
     /// Standard uncertainty of the rotation angle (deg).
+    #[serde(default)]
     pub u_rotation_deg: f64,
 }
 
@@ -74,27 +131,32 @@ impl FerrarisOptions {
     pub fn imucal(rate_hz: f64) -> Self {
         Self {
             rate_hz,
-            gravity: 9.81,
+            gravity_m_s2: 9.81,
+            convention: Convention::Standard,
             rotation_deg: -360.0,
             u_rotation_deg: 0.0,
         }
     }
 
-    /// Refuse options the method cannot use, naming the option: a sample
-    /// rate outside (0, 1e6] Hz, a gravity that is zero or beyond ±100, a
-    /// rotation angle that is zero or beyond ±36 000 deg, a rotation-angle
+    /// The g the map runs with (imucal's `grav`): `gravity_m_s2`, negated
+    /// for [`Convention::Imucal`].
+    pub fn signed_gravity(&self) -> f64 {
+        match self.convention {
+            Convention::Standard => self.gravity_m_s2,
+            Convention::Imucal => -self.gravity_m_s2,
+        }
+    }
+
+    /// Refuse options the method cannot use ([`crate::Error::InvalidOption`]
+    /// naming the key): a sample rate outside (0, 1e6] Hz, a gravity outside
+    /// (0, 100] (a negative one points to `convention`), a rotation
+    /// angle that is zero or beyond ±36 000 deg, a rotation-angle
     /// uncertainty outside [0, 360] deg.
     pub fn validate(&self) -> Result<()> {
         check_rate_hz(self.rate_hz)?;
-        check_gravity(self.gravity)?;
+        check_gravity_magnitude(self.gravity_m_s2)?;
         check_rotation_deg(self.rotation_deg)?;
-        if !(self.u_rotation_deg.is_finite() && (0.0..=360.0).contains(&self.u_rotation_deg)) {
-            return Err(Error::InvalidValue {
-                what: "u_rotation_deg (must be within 0..360 deg)".into(),
-                value: self.u_rotation_deg.to_string(),
-            });
-        }
-        Ok(())
+        crate::options::check_range("u_rotation_deg", self.u_rotation_deg, 0.0, 360.0, "deg")
     }
 }
 
@@ -243,7 +305,7 @@ const N_IN: usize = 55;
 /// The map from the input vector (section means, rotation integrals,
 /// angle) to the matrices. `counts`: samples of each section.
 fn map(x: &[f64], counts: &[usize; 9], opts: &FerrarisOptions) -> Option<FerrarisMatrices> {
-    let g = opts.gravity;
+    let g = opts.signed_gravity();
     let acc = |s: usize| V3::new(x[6 * s], x[6 * s + 1], x[6 * s + 2]);
     let gyr = |s: usize| V3::new(x[6 * s + 3], x[6 * s + 4], x[6 * s + 5]);
     // Columns: x, y, z positions; sections 0,2,4 are _p and 1,3,5 _a.
@@ -472,10 +534,13 @@ fn sign_warnings(matrices: &FerrarisMatrices, opts: &FerrarisOptions) -> Vec<War
         warnings.push(Warning::new(
             WarningCode::SignConvention,
             format!(
-                "R_a has a negative diagonal on {}: the positions read -g where --gravity-m-s2 {} says +g (swapped _p/_a labels, or use --gravity-m-s2 {})",
+                "R_a has a negative diagonal on {}: the positions read -g where convention {} says +g (swapped _p/_a labels, or use --convention {})",
                 na.join(", "),
-                opts.gravity,
-                -opts.gravity
+                opts.convention.name(),
+                match opts.convention {
+                    Convention::Standard => Convention::Imucal.name(),
+                    Convention::Imucal => Convention::Standard.name(),
+                }
             ),
         ));
     }
@@ -520,11 +585,11 @@ pub fn ferraris(sections: &[Vec<[f64; 6]>; 9], opts: &FerrarisOptions) -> Result
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde_json::json;
 
-    /// Ideal sensor (imucal's own unit test): every matrix is the identity.
-    #[test]
-    fn ideal_sensor_gives_identity() {
-        let g = 9.81;
+    /// Nine sections of an ideal sensor whose `_p` positions read `plus`
+    /// (+g, or −g for imucal's negative-g convention).
+    fn ideal_sections(plus: f64) -> [Vec<[f64; 6]>; 9] {
         let mut secs: [Vec<[f64; 6]>; 9] = Default::default();
         for (k, s) in secs.iter_mut().enumerate() {
             for i in 0..100 {
@@ -534,16 +599,22 @@ mod tests {
                 let mut v = [e, -e, 0.5 * e, e, 0.3 * e, -e];
                 if k < 6 {
                     let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
-                    v[k / 2] += sign * g;
+                    v[k / 2] += sign * plus;
                 } else {
                     let a = k - 6;
-                    v[a] += g;
+                    v[a] += plus;
                     v[3 + a] += -360.0;
                 }
                 s.push(v);
             }
         }
-        let r = ferraris(&secs, &FerrarisOptions::imucal(100.0)).unwrap();
+        secs
+    }
+
+    /// Ideal sensor (imucal's own unit test): every matrix is the identity.
+    #[test]
+    fn ideal_sensor_gives_identity() {
+        let r = ferraris(&ideal_sections(9.81), &FerrarisOptions::imucal(100.0)).unwrap();
         let m = &r.matrices;
         assert!((m.k_a - M3::identity()).abs().max() < 1e-3);
         assert!((m.r_a - M3::identity()).abs().max() < 1e-3);
@@ -552,5 +623,83 @@ mod tests {
         assert!(m.k_ga.abs().max() < 1e-3);
         assert!(r.warnings.is_empty(), "{:?}", r.warnings);
         assert!(r.estimates.u("K_a.xx").unwrap() > 0.0);
+    }
+
+    /// Positions that read −g: identity under convention `imucal` (imucal's
+    /// `grav = -9.81`), a sign warning naming the convention otherwise.
+    #[test]
+    fn imucal_convention_is_the_negative_g_map() {
+        let secs = ideal_sections(-9.81);
+        let imucal = FerrarisOptions {
+            convention: Convention::Imucal,
+            ..FerrarisOptions::imucal(100.0)
+        };
+        let r = ferraris(&secs, &imucal).unwrap();
+        assert!((r.matrices.r_a - M3::identity()).abs().max() < 1e-3);
+        assert!((r.matrices.r_g - M3::identity()).abs().max() < 1e-3);
+        assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+        let r = ferraris(&secs, &FerrarisOptions::imucal(100.0)).unwrap();
+        assert!(
+            r.warnings
+                .iter()
+                .any(|w| w.message.contains("--convention imucal")),
+            "{:?}",
+            r.warnings
+        );
+    }
+
+    fn key_of(e: Error) -> (String, String) {
+        match e {
+            Error::InvalidOption { key, message } => (key, message),
+            other => panic!("expected InvalidOption, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn options_round_trip_and_a_bad_one_names_its_key() {
+        use crate::options::from_json;
+        // The document's options, as recorded.
+        let doc = json!({"gravity_m_s2": 9.80665, "rate_hz": 100.0, "rotation_deg": -360.0, "u_rotation_deg": 0.0});
+        let o: FerrarisOptions = from_json(&doc).unwrap();
+        assert_eq!(serde_json::to_value(o).unwrap(), doc);
+        assert_eq!(o, from_json(&json!({"rate_hz": 100})).unwrap());
+        let imucal = FerrarisOptions {
+            convention: Convention::Imucal,
+            ..o
+        };
+        let v = serde_json::to_value(imucal).unwrap();
+        assert_eq!(v["convention"], "imucal");
+        assert_eq!(from_json::<FerrarisOptions>(&v).unwrap(), imucal);
+        assert_eq!(imucal.signed_gravity(), -9.80665);
+        let bad = |v| key_of(from_json::<FerrarisOptions>(&v).unwrap_err()).0;
+        assert_eq!(bad(json!({"rate_hz": 100, "gravity": 9.81})), "gravity");
+        assert_eq!(
+            bad(json!({"rate_hz": 100, "convention": "up"})),
+            "convention"
+        );
+        let invalid = |o: FerrarisOptions| key_of(o.validate().unwrap_err());
+        let (key, message) = invalid(FerrarisOptions {
+            gravity_m_s2: -9.81,
+            ..o
+        });
+        assert_eq!(key, "gravity_m_s2");
+        assert!(message.contains("--convention imucal"), "{message}");
+        assert_eq!(invalid(FerrarisOptions { rate_hz: 0.0, ..o }).0, "rate_hz");
+        assert_eq!(
+            invalid(FerrarisOptions {
+                rotation_deg: 0.0,
+                ..o
+            })
+            .0,
+            "rotation_deg"
+        );
+        assert_eq!(
+            invalid(FerrarisOptions {
+                u_rotation_deg: -1.0,
+                ..o
+            })
+            .0,
+            "u_rotation_deg"
+        );
     }
 }

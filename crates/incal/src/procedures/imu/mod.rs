@@ -10,7 +10,8 @@
 //!   covariance.
 //! * [`detect`]: the moving-variance static detector.
 //! * [`input`]: the sessions' columns, segmentation and checks, and the
-//!   CSV of simulated sessions; [`sim`]: the session simulator;
+//!   CSV of simulated sessions; [`sim`]: the session simulator and
+//!   [`sim_options`] its typed options;
 //!   [`document`]: the result documents; [`apply`]: a calibration applied
 //!   to a raw series, row by row.
 //!
@@ -33,6 +34,7 @@ pub mod input;
 pub mod multipos;
 pub mod screen;
 pub mod sim;
+pub mod sim_options;
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -116,54 +118,42 @@ impl SectionStats {
     }
 }
 
-/// Check a gravity value: finite, non-zero, |g| ≤ 100 (m/s² or any unit a
-/// lab uses for 1 g). A negative value flips imucal's sign convention.
-pub fn check_gravity(g: f64) -> Result<()> {
-    if g.is_finite() && g != 0.0 && g.abs() <= 100.0 {
-        Ok(())
-    } else {
-        Err(Error::InvalidValue {
-            what: "gravity_m_s2 (must be finite, non-zero and |g| <= 100)".into(),
-            value: g.to_string(),
-        })
-    }
-}
-
-/// Check a gravity magnitude: finite, positive, at most 100.
+/// Check a gravity magnitude (option `gravity_m_s2`): finite, positive,
+/// at most 100 (m/s² or any unit a lab uses for 1 g). A negative value is
+/// refused: imucal's opposite sign convention is an option of its own
+/// (`convention`, [`ferraris::Convention::Imucal`]).
 pub fn check_gravity_magnitude(g: f64) -> Result<()> {
-    if g.is_finite() && g > 0.0 && g <= 100.0 {
-        Ok(())
-    } else {
-        Err(Error::InvalidValue {
-            what: "gravity_m_s2 (must be > 0 and <= 100)".into(),
-            value: g.to_string(),
-        })
+    if (-100.0..0.0).contains(&g) {
+        return crate::options::invalid(
+            "gravity_m_s2",
+            format!(
+                "must be a positive magnitude, got {}; for imucal's convention (the positive axis reads -g) give {} with --convention imucal",
+                crate::error::short_number(&g.to_string()),
+                crate::error::short_number(&(-g).to_string())
+            ),
+        );
     }
+    crate::options::check_positive("gravity_m_s2", g)?;
+    crate::options::check_range("gravity_m_s2", g, 0.0, 100.0, "m/s^2")
 }
 
-/// Check a sample rate (Hz): finite, positive, at most 1 MHz.
+/// Check a sample rate (option `rate_hz`): finite, positive, at most 1 MHz.
 pub fn check_rate_hz(rate_hz: f64) -> Result<()> {
-    if rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= 1e6 {
-        Ok(())
-    } else {
-        Err(Error::InvalidValue {
-            what: "rate_hz (sample rate, must be > 0 and <= 1e6 Hz)".into(),
-            value: rate_hz.to_string(),
-        })
-    }
+    crate::options::check_positive("rate_hz", rate_hz)?;
+    crate::options::check_range("rate_hz", rate_hz, 0.0, 1e6, "Hz")
 }
 
-/// Check the angle of the rotation sections (deg): finite, non-zero, at
-/// most 100 turns.
+/// Check the angle of the rotation sections (option `rotation_deg`):
+/// finite, non-zero, at most 100 turns.
 pub fn check_rotation_deg(a: f64) -> Result<()> {
-    if a.is_finite() && a != 0.0 && a.abs() <= 36000.0 {
-        Ok(())
-    } else {
-        Err(Error::InvalidValue {
-            what: "rotation_deg (must be non-zero with |A| <= 36000 deg)".into(),
-            value: a.to_string(),
-        })
+    crate::options::check_range("rotation_deg", a, -36000.0, 36000.0, "deg")?;
+    if a == 0.0 {
+        return crate::options::invalid(
+            "rotation_deg",
+            "must be non-zero (the angle of each rotation section)",
+        );
     }
+    Ok(())
 }
 
 /// Rows of a 3×3 matrix as nested vectors (the JSON "list of rows").

@@ -26,17 +26,28 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::{check_gravity, check_rate_hz, SectionStats, AXES, V3};
+use super::{check_gravity_magnitude, check_rate_hz, SectionStats, AXES, V3};
 use crate::error::{Error, Result};
 use crate::estimation::{fit, numeric_jacobian, Design, Estimates, Fit, FitOptions, Variance};
 use crate::units::EARTH_RATE_RAD_S;
 use crate::warning::Warning;
 
 /// Accelerometer matrix convention (`full` or `upper` in documents).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum MatrixForm {
     /// Nine elements.
+    #[default]
     Full,
     /// Upper-triangular (six elements).
     Upper,
@@ -95,38 +106,50 @@ pub struct MultiposOptions {
 
 /// Options of the [`Multipos`] procedure (a session read from a file; the
 /// session tells whether there is a gyro). In the document:
-/// `{"gravity_m_s2", "matrix", "rate_hz", "latitude_deg", "rotation_deg"}`.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+/// `{"gravity_m_s2", "matrix", "rate_hz", "latitude_deg", "rotation_deg"}`
+/// (`latitude_deg` null when not given). Defaults (JSON callers, as the
+/// CLI): g 9.80665 m/s², matrix `full`, no latitude, A −360 deg.
+#[derive(
+    Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 pub struct MultiposSessionOptions {
-    /// Gravity (m/s², > 0).
+    /// Gravity magnitude (m/s², > 0).
+    #[serde(default = "standard_gravity")]
     pub gravity_m_s2: f64,
     /// Accelerometer matrix convention.
+    #[serde(default)]
     pub matrix: MatrixForm,
     /// Sample rate (Hz): times the rotations.
     pub rate_hz: f64,
-    /// Latitude (deg) for the Earth rate (the session then needs the north
-    /// direction, `nx, ny, nz`).
+    /// Latitude φ (deg) for the Earth rate (the session then needs the
+    /// north direction, `nx, ny, nz`).
+    #[serde(default)]
     pub latitude_deg: Option<f64>,
     /// Rotation angle of each rotation section (deg; −360 is clockwise
     /// seen from the axis tip).
+    #[serde(default = "imucal_rotation_deg")]
     pub rotation_deg: f64,
 }
 
+fn standard_gravity() -> f64 {
+    crate::units::STANDARD_GRAVITY_M_S2
+}
+
+fn imucal_rotation_deg() -> f64 {
+    -360.0
+}
+
 impl MultiposSessionOptions {
-    /// Refuse options the method cannot use, naming the option: a gravity
-    /// outside (0, 100], a sample rate outside (0, 1e6] Hz, a latitude
-    /// beyond ±90 deg, a rotation angle that is zero or beyond ±36 000 deg.
+    /// Refuse options the method cannot use ([`crate::Error::InvalidOption`]
+    /// naming the key): a gravity outside (0, 100], a sample rate outside
+    /// (0, 1e6] Hz, a latitude beyond ±90 deg, a rotation angle that is
+    /// zero or beyond ±36 000 deg.
     pub fn validate(&self) -> Result<()> {
         super::check_rate_hz(self.rate_hz)?;
         super::check_gravity_magnitude(self.gravity_m_s2)?;
         super::check_rotation_deg(self.rotation_deg)?;
         if let Some(lat) = self.latitude_deg {
-            if !(lat.is_finite() && lat.abs() <= 90.0) {
-                return Err(Error::InvalidValue {
-                    what: "latitude_deg (must be within -90..90)".into(),
-                    value: lat.to_string(),
-                });
-            }
+            crate::options::check_latitude_deg(lat)?;
         }
         Ok(())
     }
@@ -461,7 +484,7 @@ pub fn multipos(
     rotations: &[RotationSection],
     opts: &MultiposOptions,
 ) -> Result<MultiposResult> {
-    check_gravity(opts.gravity)?;
+    check_gravity_magnitude(opts.gravity)?;
     check_rate_hz(opts.rate_hz)?;
     check_positions(statics)?;
     let mut warnings = Vec::new();
@@ -499,4 +522,56 @@ pub fn multipos(
         warnings,
         options: *opts,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    fn key_of(e: Error) -> String {
+        match e {
+            Error::InvalidOption { key, .. } => key,
+            other => panic!("expected InvalidOption, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn options_round_trip_and_a_bad_one_names_its_key() {
+        use crate::options::from_json;
+        // The document's options, as recorded (no latitude: null).
+        let doc = json!({"gravity_m_s2": 9.80665, "latitude_deg": null, "matrix": "full", "rate_hz": 100.0, "rotation_deg": -360.0});
+        let o: MultiposSessionOptions = from_json(&doc).unwrap();
+        assert_eq!(serde_json::to_value(o).unwrap(), doc);
+        assert_eq!(o, from_json(&json!({"rate_hz": 100})).unwrap());
+        let upper = json!({"rate_hz": 50, "matrix": "upper", "latitude_deg": -33.9});
+        let u: MultiposSessionOptions = from_json(&upper).unwrap();
+        assert_eq!((u.matrix, u.latitude_deg), (MatrixForm::Upper, Some(-33.9)));
+        let bad = |v| key_of(from_json::<MultiposSessionOptions>(&v).unwrap_err());
+        assert_eq!(bad(json!({"rate_hz": 100, "matrix": "lower"})), "matrix");
+        assert_eq!(bad(json!({"rate_hz": 100, "latitude": 45})), "latitude");
+        assert_eq!(bad(json!({"matrix": "full"})), "rate_hz");
+        let invalid = |o: MultiposSessionOptions| key_of(o.validate().unwrap_err());
+        assert_eq!(
+            invalid(MultiposSessionOptions {
+                latitude_deg: Some(91.0),
+                ..o
+            }),
+            "latitude_deg"
+        );
+        assert_eq!(
+            invalid(MultiposSessionOptions {
+                gravity_m_s2: -9.81,
+                ..o
+            }),
+            "gravity_m_s2"
+        );
+        assert_eq!(
+            invalid(MultiposSessionOptions {
+                rotation_deg: 0.0,
+                ..o
+            }),
+            "rotation_deg"
+        );
+    }
 }

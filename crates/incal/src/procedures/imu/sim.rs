@@ -25,6 +25,8 @@ use crate::error::{Error, Result};
 use crate::sim::{normal, rng};
 use crate::units::EARTH_RATE_RAD_S;
 
+pub use super::sim_options::{ImuSimOptions, ImuSimulator, SequenceKind, DEFAULT_POSITIONS};
+
 /// The sensor truth (see the module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ImuTruth {
@@ -377,13 +379,14 @@ impl ImuSim {
             if x.is_finite() && lo_ok && x <= hi {
                 Ok(())
             } else {
-                Err(Error::InvalidValue {
-                    what: format!(
-                        "{what} (must be {} 0 and <= {hi})",
-                        if lo_open { ">" } else { ">=" }
+                crate::options::invalid(
+                    what,
+                    format!(
+                        "must be {} 0 and <= {hi}, got {}",
+                        if lo_open { ">" } else { ">=" },
+                        crate::error::short_number(&x.to_string())
                     ),
-                    value: x.to_string(),
-                })
+                )
             }
         };
         range("rate_hz", self.rate_hz, true, 1e5)?;
@@ -392,19 +395,17 @@ impl ImuSim {
         range("noise_acc", self.noise_acc, false, 1e6)?;
         range("noise_gyr", self.noise_gyr, false, 1e6)?;
         if let Some(lat) = self.latitude_deg {
-            if !(lat.is_finite() && lat.abs() <= 90.0) {
-                return Err(Error::InvalidValue {
-                    what: "latitude_deg (must be within -90..90)".into(),
-                    value: lat.to_string(),
-                });
-            }
+            crate::options::check_latitude_deg(lat)?;
         }
         let rotation = |deg: f64, dur: f64| -> Result<()> {
             if !(deg.is_finite() && deg != 0.0 && deg.abs() <= 3600.0) {
-                return Err(Error::InvalidValue {
-                    what: "rotation_deg (must be non-zero with |A| <= 3600)".into(),
-                    value: deg.to_string(),
-                });
+                return crate::options::invalid(
+                    "rotation_deg",
+                    format!(
+                        "must be non-zero with |A| <= 3600 deg, got {}",
+                        crate::error::short_number(&deg.to_string())
+                    ),
+                );
             }
             range("rotation_s", dur, true, 1e4)
         };
@@ -433,10 +434,10 @@ impl ImuSim {
                 range("init_static_s", *init_s, true, 1e5)?;
                 range("move_s", *move_s, true, 1e4)?;
                 if !(1..=10_000).contains(positions) {
-                    return Err(Error::InvalidValue {
-                        what: "orientations (must be within 1..10000)".into(),
-                        value: positions.to_string(),
-                    });
+                    return crate::options::invalid(
+                        "orientations",
+                        format!("must be within 1..10000, got {positions}"),
+                    );
                 }
                 crate::sim::check_rows(&[(
                     "(init_static_s + orientations x (static_s + move_s)) x rate_hz",
@@ -445,10 +446,10 @@ impl ImuSim {
             }
             Sequence::Positions { up, rotations } => {
                 if up.is_empty() || up.len() > 1000 {
-                    return Err(Error::InvalidValue {
-                        what: "positions (1 to 1000 labels)".into(),
-                        value: up.len().to_string(),
-                    });
+                    return crate::options::invalid(
+                        "positions",
+                        format!("must be 1 to 1000 labels, got {}", up.len()),
+                    );
                 }
                 let mut rot_s = 0.0;
                 if let Some((deg, dur)) = rotations {
@@ -502,7 +503,7 @@ pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
     if !(cfg.static_s.is_finite() && cfg.static_s > 0.0) {
         return Err(bad("static duration (s, > 0)", cfg.static_s));
     }
-    super::check_gravity(cfg.gravity)?;
+    super::check_gravity_magnitude(cfg.gravity)?;
     let mut r = rng(cfg.seed);
     let g = cfg.gravity;
     let n_static = (cfg.static_s * cfg.rate_hz).round().max(1.0) as usize;

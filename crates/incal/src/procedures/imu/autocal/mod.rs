@@ -71,10 +71,21 @@ use crate::estimation::{
 use crate::warning::Warning;
 
 /// Which autocalibration (`incal` or `tedaldi` in documents).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
     /// incal's weighted form with full covariance (default).
+    #[default]
     Incal,
     /// imu_tk's exact steps, for comparison.
     Tedaldi,
@@ -97,13 +108,37 @@ impl Method {
 /// angles over the raw integrals). In the document as `init_acc_bias`,
 /// `init_acc_scale`, `init_gyro_scale` (raw units; scales in calibrated
 /// unit per raw unit) when given.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
 pub struct Initial {
     /// Accelerometer bias (raw units), e.g. 32768 for 16-bit offset counts.
+    #[serde(
+        rename = "init_acc_bias",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
     pub acc_bias: Option<[f64; 3]>,
     /// Accelerometer scale (m/s² per raw unit).
+    #[serde(
+        rename = "init_acc_scale",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
     pub acc_scale: Option<[f64; 3]>,
     /// Gyro scale (rad/s per raw unit), e.g. 1/6258 for an Xsens in counts.
+    #[serde(
+        rename = "init_gyro_scale",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
     pub gyro_scale: Option<[f64; 3]>,
 }
 
@@ -123,7 +158,10 @@ impl Initial {
                     } else {
                         "must be finite and within 1e12"
                     };
-                    return Error::invalid(format!("{key} ({need})"), x);
+                    return crate::options::invalid(
+                        key,
+                        format!("{need}, got {}", crate::error::short_number(&x.to_string())),
+                    );
                 }
             }
         }
@@ -173,91 +211,128 @@ impl AutocalOptions {
 /// Options of the [`Autocal`] procedure (a record read from a file). In
 /// the document: `{"rate_hz", "method", "gravity_m_s2", "init_static_s",
 /// "settle_s", "window_samples", "min_samples"}` (`settle_s` as used: 0 for
-/// method `tedaldi`).
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// method `tedaldi`), `sort_time` when true and the initial values
+/// (`init_acc_bias`, `init_acc_scale`, `init_gyro_scale`) when given.
+/// Defaults (JSON callers, as the CLI): method `incal`, g 9.80665 m/s², a
+/// still start of 50 s, `settle_s` 0.1 s, imu_tk's window of 101 samples
+/// and intervals of at least 100 samples.
+#[derive(
+    Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 pub struct AutocalSessionOptions {
     /// Sample rate (Hz); the record's `time_s`, when present, gives the
     /// time steps instead.
     pub rate_hz: f64,
     /// Method.
+    #[serde(default)]
     pub method: Method,
     /// Gravity magnitude (m/s², > 0): the calibrated accelerometer output
     /// is in this unit.
+    #[serde(default = "standard_gravity")]
     pub gravity_m_s2: f64,
     /// Duration of the still start (s).
+    #[serde(default = "default_init_static_s")]
     pub init_static_s: f64,
     /// Time trimmed from both ends of every still interval (s; method
     /// `incal` only).
+    #[serde(default = "default_settle_s")]
     pub settle_s: f64,
+    /// Moving-variance window of the static detector (samples, odd,
+    /// ≥ 11; imu_tk: 101).
+    #[serde(default = "default_window_samples")]
+    pub window_samples: usize,
+    /// Samples a still interval needs (imu_tk: 100).
+    #[serde(default = "default_min_samples")]
+    pub min_samples: usize,
     /// Initial values of the fits (absent: from the data).
+    #[serde(flatten)]
     pub init: Initial,
     /// Put rows that are out of time order in order instead of refusing
     /// them (warning `time-sorted`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub sort_time: bool,
 }
 
+fn standard_gravity() -> f64 {
+    crate::units::STANDARD_GRAVITY_M_S2
+}
+
+fn default_init_static_s() -> f64 {
+    50.0
+}
+
+fn default_settle_s() -> f64 {
+    0.1
+}
+
+fn default_window_samples() -> usize {
+    101
+}
+
+fn default_min_samples() -> usize {
+    100
+}
+
 impl AutocalSessionOptions {
-    /// Refuse options the method cannot use, naming the option: a sample
-    /// rate outside (0, 1e6] Hz, a gravity outside (0, 100], a still start
-    /// outside (0, 1e6] s, a settling time outside [0, 1000] s.
+    /// The defaults (type docs) at a sample rate, with a method.
+    pub fn new(rate_hz: f64, method: Method) -> Self {
+        Self {
+            rate_hz,
+            method,
+            gravity_m_s2: standard_gravity(),
+            init_static_s: default_init_static_s(),
+            settle_s: default_settle_s(),
+            window_samples: default_window_samples(),
+            min_samples: default_min_samples(),
+            init: Initial::default(),
+            sort_time: false,
+        }
+    }
+
+    /// Refuse options the method cannot use ([`crate::Error::InvalidOption`]
+    /// naming the key): a sample rate outside (0, 1e6] Hz, a gravity
+    /// outside (0, 100], a still start outside (0, 1e6] s, a settling time
+    /// outside [0, 1000] s, a window that is even or outside 11..=1e6
+    /// samples, intervals of fewer than 3 or more than 1e9 samples, a
+    /// non-finite initial value or a zero initial scale.
     pub fn validate(&self) -> Result<()> {
         super::check_rate_hz(self.rate_hz)?;
         super::check_gravity_magnitude(self.gravity_m_s2)?;
-        if !(self.init_static_s.is_finite()
-            && self.init_static_s > 0.0
-            && self.init_static_s <= 1e6)
-        {
-            return Err(Error::InvalidValue {
-                what: "init_static_s (must be > 0 and <= 1e6 s)".into(),
-                value: self.init_static_s.to_string(),
-            });
+        crate::options::check_positive("init_static_s", self.init_static_s)?;
+        crate::options::check_range("init_static_s", self.init_static_s, 0.0, 1e6, "s")?;
+        crate::options::check_range("settle_s", self.settle_s, 0.0, 1e3, "s")?;
+        let w = self.window_samples;
+        if !(11..=1_000_001).contains(&w) || w % 2 == 0 {
+            return crate::options::invalid(
+                "window_samples",
+                format!("must be odd and within 11..1000001 samples, got {w}"),
+            );
         }
-        if !(self.settle_s.is_finite() && (0.0..=1e3).contains(&self.settle_s)) {
-            return Err(Error::InvalidValue {
-                what: "settle_s (must be within 0..1000 s)".into(),
-                value: self.settle_s.to_string(),
-            });
-        }
+        crate::options::check_range("min_samples", self.min_samples as f64, 3.0, 1e9, "samples")?;
         self.init.validate()
     }
 
-    /// The options of [`autocal`]: the method's settings
-    /// ([`AutocalOptions::new`]) with the settling time for method `incal`.
-    pub fn model(&self) -> AutocalOptions {
-        let mut o = AutocalOptions::new(self.method, self.gravity_m_s2, self.init_static_s);
-        if self.method == Method::Incal {
-            o.settle_s = self.settle_s;
+    /// The options as reduced and recorded: `settle_s` as used (0 for
+    /// method `tedaldi`, which trims nothing).
+    pub fn settled(&self) -> AutocalSessionOptions {
+        let mut o = *self;
+        if o.method == Method::Tedaldi {
+            o.settle_s = 0.0;
         }
-        o.init = self.init;
         o
     }
-}
 
-impl serde::Serialize for AutocalSessionOptions {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let o = self.model();
-        let mut m = s.serialize_map(None)?;
-        m.serialize_entry("method", &o.method)?;
-        m.serialize_entry("gravity_m_s2", &o.gravity)?;
-        m.serialize_entry("init_static_s", &o.init_static_s)?;
-        m.serialize_entry("window_samples", &o.window)?;
-        m.serialize_entry("min_samples", &o.min_samples)?;
-        m.serialize_entry("settle_s", &o.settle_s)?;
-        m.serialize_entry("rate_hz", &self.rate_hz)?;
-        if self.sort_time {
-            m.serialize_entry("sort_time", &true)?;
-        }
-        for (key, v) in [
-            ("init_acc_bias", o.init.acc_bias),
-            ("init_acc_scale", o.init.acc_scale),
-            ("init_gyro_scale", o.init.gyro_scale),
-        ] {
-            if let Some(v) = v {
-                m.serialize_entry(key, &v)?;
-            }
-        }
-        m.end()
+    /// The options of [`autocal`]: the method's settings
+    /// ([`AutocalOptions::new`]) with the window, the interval length and,
+    /// for method `incal`, the settling time given.
+    pub fn model(&self) -> AutocalOptions {
+        let o = self.settled();
+        let mut m = AutocalOptions::new(o.method, o.gravity_m_s2, o.init_static_s);
+        m.window = o.window_samples;
+        m.min_samples = o.min_samples;
+        m.settle_s = o.settle_s;
+        m.init = o.init;
+        m
     }
 }
 
@@ -274,6 +349,13 @@ impl crate::procedures::Procedure for Autocal {
 
     fn validate(o: &AutocalSessionOptions) -> Result<()> {
         o.validate()
+    }
+
+    fn recorded(
+        _: &Self::Input,
+        o: &AutocalSessionOptions,
+    ) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
+        crate::procedures::options_map(&o.settled())
     }
 
     fn read<R: std::io::Read>(
@@ -427,4 +509,83 @@ pub fn autocal(
         None => None,
     };
     assemble::assemble(s, best, trials, x_acc, acc_fit, gyro)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    fn key_of(e: Error) -> String {
+        match e {
+            Error::InvalidOption { key, .. } => key,
+            other => panic!("expected InvalidOption, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn options_round_trip_and_a_bad_one_names_its_key() {
+        use crate::options::from_json;
+        // The document's options, as recorded.
+        let doc = json!({"gravity_m_s2": 9.80665, "init_static_s": 3.0, "method": "incal", "min_samples": 100, "rate_hz": 100.0, "settle_s": 0.1, "window_samples": 101});
+        let o: AutocalSessionOptions = from_json(&doc).unwrap();
+        assert_eq!(serde_json::to_value(o).unwrap(), doc);
+        assert_eq!(
+            o,
+            from_json(&json!({"rate_hz": 100, "init_static_s": 3})).unwrap()
+        );
+        // tedaldi trims nothing: recorded with settle_s 0; given values
+        // and the flag recorded only when set.
+        let t = AutocalSessionOptions {
+            method: Method::Tedaldi,
+            sort_time: true,
+            init: Initial {
+                acc_bias: Some([32768.0; 3]),
+                ..Initial::default()
+            },
+            ..o
+        };
+        let v = serde_json::to_value(t.settled()).unwrap();
+        assert_eq!(v["settle_s"], 0.0);
+        assert_eq!(v["sort_time"], true);
+        assert_eq!(v["init_acc_bias"], json!([32768.0, 32768.0, 32768.0]));
+        assert!(v.get("init_gyro_scale").is_none(), "{v}");
+        assert_eq!(from_json::<AutocalSessionOptions>(&v).unwrap(), t.settled());
+        assert_eq!(t.model(), t.settled().model());
+        let bad = |v| key_of(from_json::<AutocalSessionOptions>(&v).unwrap_err());
+        assert_eq!(bad(json!({"rate_hz": 100, "window": 51})), "window");
+        assert_eq!(bad(json!({"rate_hz": 100, "method": "imu_tk"})), "method");
+        let invalid = |o: AutocalSessionOptions| key_of(o.validate().unwrap_err());
+        assert_eq!(
+            invalid(AutocalSessionOptions {
+                window_samples: 100,
+                ..o
+            }),
+            "window_samples"
+        );
+        assert_eq!(
+            invalid(AutocalSessionOptions {
+                gravity_m_s2: -9.81,
+                ..o
+            }),
+            "gravity_m_s2"
+        );
+        assert_eq!(
+            invalid(AutocalSessionOptions {
+                settle_s: -1.0,
+                ..o
+            }),
+            "settle_s"
+        );
+        assert_eq!(
+            invalid(AutocalSessionOptions {
+                init: Initial {
+                    gyro_scale: Some([0.0, 1.0, 1.0]),
+                    ..Initial::default()
+                },
+                ..o
+            }),
+            "init_gyro_scale"
+        );
+    }
 }

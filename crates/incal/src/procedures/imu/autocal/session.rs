@@ -9,7 +9,7 @@ use std::borrow::Cow;
 use nalgebra::DVector;
 
 use super::super::detect::{self, Interval};
-use super::super::{check_gravity, screen};
+use super::super::{check_gravity_magnitude, screen};
 use super::{AutocalOptions, Method};
 use crate::error::{Error, Result};
 use crate::warning::Warning;
@@ -51,7 +51,7 @@ fn check_record(
     gyr: Option<&[[f64; 3]]>,
     opts: &AutocalOptions,
 ) -> Result<Interval> {
-    check_gravity(opts.gravity)?;
+    check_gravity_magnitude(opts.gravity)?;
     if !(opts.init_static_s.is_finite() && opts.init_static_s > 0.0) {
         return Err(Error::InvalidValue {
             what: "initial still duration (s, > 0)".into(),
