@@ -8,7 +8,6 @@ use clap::Subcommand;
 use incal::procedures::imu::apply::ImuCalibration;
 use incal::procedures::imu::autocal::{Autocal, AutocalSessionOptions, Initial, Method};
 use incal::procedures::imu::ferraris::{Convention, Ferraris, FerrarisOptions};
-use incal::procedures::imu::input;
 use incal::procedures::imu::multipos::{MatrixForm, Multipos, MultiposSessionOptions};
 use incal::procedures::imu::sim::{ImuSimOptions, SequenceKind};
 use incal::procedures::Silent;
@@ -285,13 +284,7 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         no_g_sensitivity: a.no_g_sensitivity,
         seed: a.seed,
     };
-    // Drawn before anything is written (a refusal leaves no file); then
-    // written as `<ImuSimulator as Simulate>::simulate` writes it, the
-    // writer's refusals keeping their kind.
-    let (samples, layout) = o.draw().map_err(core)?;
-    crate::io::write_stream(a.output.as_deref(), |out| {
-        input::write(&samples, &layout, out).map(|_| ())
-    })?;
+    crate::run::simulate::<incal::procedures::imu::sim::ImuSimulator>(&o, a.output.as_deref())?;
     if let Some(p) = &a.truth_out {
         let truth = o.truth().to_json().map_err(core)?;
         crate::output::write_text(Some(p), &format!("{}\n", crate::output::json_text(&truth)))?;

@@ -5,7 +5,7 @@
 //! [`super::input::write`].
 
 use super::sim::{simulate, ImuSim, ImuTruth, Layout, Sequence};
-use crate::error::{Error, Result};
+use crate::error::Result;
 
 /// The session sequence of [`ImuSimOptions`] (`sequence`).
 #[derive(
@@ -228,11 +228,14 @@ pub struct ImuSimulator;
 impl crate::procedures::Simulate for ImuSimulator {
     type Options = ImuSimOptions;
 
+    fn validate(o: &ImuSimOptions) -> Result<()> {
+        o.validate()
+    }
+
     fn simulate(o: &ImuSimOptions, out: &mut dyn std::io::Write) -> Result<()> {
         let (samples, layout) = o.draw()?;
-        super::input::write(&samples, &layout, out)
-            .map(|_| ())
-            .map_err(|e| Error::Unsupported(format!("cannot write the session: {e}")))
+        super::input::write(&samples, &layout, out)?;
+        Ok(())
     }
 }
 
