@@ -262,7 +262,7 @@ mod tests {
         crate::procedures::simulate_json::<ImuSimulator>(&v, &mut b).unwrap();
         assert_eq!(a, b);
         assert!(a.starts_with(b"time_s,position,fx,fy,fz,nx,ny,nz,acc_x"));
-        let key = |e: Error| match e {
+        let key = |e: crate::Error| match e {
             Error::InvalidOption { key, .. } => key,
             other => panic!("expected InvalidOption, got {other:?}"),
         };
