@@ -263,7 +263,7 @@ mod tests {
         assert_eq!(a, b);
         assert!(a.starts_with(b"time_s,position,fx,fy,fz,nx,ny,nz,acc_x"));
         let key = |e: crate::Error| match e {
-            Error::InvalidOption { key, .. } => key,
+            crate::Error::InvalidOption { key, .. } => key,
             other => panic!("expected InvalidOption, got {other:?}"),
         };
         let bad = |v| key(crate::options::from_json::<ImuSimOptions>(&v).unwrap_err());
