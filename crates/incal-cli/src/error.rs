@@ -58,22 +58,12 @@ pub fn in_file(file: &str, e: impl fmt::Display) -> CliError {
     CliError::Input(format!("{file}: {e}"))
 }
 
-/// A core-library error about the options (no file involved): exit 2.
-/// The core names an option by its snake_case key (`invalid samples (at
-/// least 1): 0`); on the command line it is spelled as the flag the user
-/// typed (`invalid --samples (at least 1): 0`).
+/// A core-library error (exit 2). An option is named by its snake_case
+/// key ([`incal::Error::InvalidOption`]), spelled here as the flag the user
+/// typed, from the argument table ([`flag_of`]): `--samples: at least 1
+/// per position, got 0`; nothing else in a message is rewritten.
 pub fn core(e: incal::Error) -> CliError {
     match e {
-        incal::Error::InvalidValue { what, value } => CliError::Input(format!(
-            "invalid {}: {}",
-            as_flag(&what, true),
-            incal::error::short_number(&value)
-        )),
-        incal::Error::TooFew { what, needed, got } => CliError::Input(format!(
-            "{}: need at least {needed}, got {got}",
-            as_flag(&what, true)
-        )),
-        incal::Error::Unsupported(m) => CliError::Input(as_flag(&m, false)),
         incal::Error::InvalidOption { key, message } => {
             CliError::Input(format!("{}: {}", flag_of(&key), spell_keys(&message)))
         }
@@ -81,65 +71,9 @@ pub fn core(e: incal::Error) -> CliError {
             CliError::Input(m) => CliError::Input(format!("{file}: {m}")),
             other => other,
         },
-        other => CliError::Input(other.to_string()),
+        // Option keys a message names in backticks, spelled as flags.
+        other => CliError::Input(spell_keys(&other.to_string())),
     }
-}
-
-/// `what` with its option keys spelled as flags: the leading snake_case
-/// key (with `lead`), and any snake_case word with an underscore in it
-/// (`half of rate_hz`), each when it is an option of some command
-/// (`truth (…)` is no flag and stays as it is).
-fn as_flag(what: &str, lead: bool) -> String {
-    let is_key = |c: char| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_';
-    let mut out = String::with_capacity(what.len() + 8);
-    let mut rest = what;
-    let mut first = true;
-    while !rest.is_empty() {
-        let end = rest.find(|c: char| !is_key(c)).unwrap_or(rest.len());
-        let (word, tail) = rest.split_at(end);
-        let flag = word.replace('_', "-");
-        // A key stands alone: after a space or '(' (never inside a path).
-        let boundary = out.is_empty() || out.ends_with([' ', '(']);
-        if !word.is_empty()
-            && boundary
-            && ((lead && first) || word.contains('_'))
-            && long_options().contains(&flag)
-        {
-            out.push_str("--");
-            out.push_str(&flag);
-        } else {
-            out.push_str(word);
-        }
-        first = false;
-        let skip = tail.find(is_key).unwrap_or(tail.len());
-        out.push_str(&tail[..skip]);
-        rest = &tail[skip..];
-    }
-    out
-}
-
-/// Every long option name of every command (and their aliases).
-fn long_options() -> &'static std::collections::BTreeSet<String> {
-    static NAMES: std::sync::OnceLock<std::collections::BTreeSet<String>> =
-        std::sync::OnceLock::new();
-    NAMES.get_or_init(|| {
-        fn walk(c: &clap::Command, out: &mut std::collections::BTreeSet<String>) {
-            for a in c.get_arguments() {
-                out.extend(
-                    a.get_long_and_visible_aliases()
-                        .into_iter()
-                        .flatten()
-                        .map(String::from),
-                );
-            }
-            for s in c.get_subcommands() {
-                walk(s, out);
-            }
-        }
-        let mut out = std::collections::BTreeSet::new();
-        walk(&crate::command(), &mut out);
-        out
-    })
 }
 
 /// An option's key (`rate_hz`, or a path `runs[2].rate_deg_s`) as the

@@ -179,13 +179,40 @@ impl From<std::io::Error> for Error {
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
-    /// `Err(InvalidValue)` for `what` (a snake_case option key first, then
-    /// what it must be, e.g. `"samples (at least 1)"`) and its value.
+    /// `Err(...)` of [`Error::invalid_value`].
     pub fn invalid<T>(what: impl Into<String>, value: impl std::fmt::Display) -> Result<T> {
-        Err(Error::InvalidValue {
-            what: what.into(),
-            value: value.to_string(),
-        })
+        Err(Error::invalid_value(what, value))
+    }
+
+    /// A value out of its domain. When `what` is an option key alone or
+    /// followed by what it must be in parentheses (`"samples (at least
+    /// 1)"`), it is [`Error::InvalidOption`] on that key (`samples: at least
+    /// 1, got 0`); any other `what` (`"sample rate (Hz)"`, a quantity of the
+    /// data) is [`Error::InvalidValue`].
+    pub fn invalid_value(what: impl Into<String>, value: impl std::fmt::Display) -> Error {
+        let what = what.into();
+        let value = short_number(&value.to_string());
+        let (head, reason) = match what.split_once(" (") {
+            Some((h, r)) if r.ends_with(')') => (h, Some(&r[..r.len() - 1])),
+            Some(_) => (what.as_str(), None),
+            None => (what.as_str(), None),
+        };
+        let is_key = !head.is_empty()
+            && head
+                .chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+            && head.chars().next().is_some_and(|c| c.is_ascii_lowercase());
+        if is_key && (reason.is_some() || head == what) {
+            Error::InvalidOption {
+                key: head.to_string(),
+                message: match reason {
+                    Some(r) => format!("{r}, got {value}"),
+                    None => format!("invalid value {value}"),
+                },
+            }
+        } else {
+            Error::InvalidValue { what, value }
+        }
     }
 
     /// This error as found in the data of `file` (an input-layer error

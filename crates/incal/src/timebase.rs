@@ -114,7 +114,7 @@ impl std::fmt::Display for TimeError {
             ),
             TimeError::RateContradiction { given_hz, stamps_hz } => write!(
                 f,
-                "rate_hz {} Hz contradicts the time_s stamps ({}, gaps excluded): give the rate of the recording",
+                "`rate_hz` {} Hz contradicts the time_s stamps ({}, gaps excluded): give the rate of the recording",
                 short(*given_hz),
                 hz(*stamps_hz)
             ),

@@ -163,3 +163,21 @@ fn every_typed_simulator_writes_the_bytes_of_the_command_line() {
     }
     assert!(checked >= 1, "no typed simulator");
 }
+
+#[test]
+fn every_procedure_has_its_typed_reduction_and_plan() {
+    use incal::procedures::registry::InputKind;
+    let mut gaps = Vec::new();
+    for e in REGISTRY {
+        if e.input == InputKind::Recording && e.reduction.is_none() {
+            gaps.push(format!("procedure {}: no typed reduction", e.id));
+        }
+        if e.plan.is_some() && e.planner.is_none() {
+            gaps.push(format!(
+                "procedure {}: a plan command but no typed plan",
+                e.id
+            ));
+        }
+    }
+    assert!(gaps.is_empty(), "{}", gaps.join("\n"));
+}

@@ -48,8 +48,9 @@ pub trait Procedure {
     /// The procedure's id in result documents.
     const ID: crate::document::Procedure;
     /// The options of the reduction, validated by [`Procedure::validate`]
-    /// and serialised (snake_case keys) into the document's `options`.
-    type Options: serde::Serialize;
+    /// and serialised (snake_case keys) into the document's `options`;
+    /// read from JSON and published as a JSON Schema (`crate::options`).
+    type Options: serde::Serialize + serde::de::DeserializeOwned + schemars::JsonSchema;
     /// Observations as the input layer reads them from a recording.
     type Input;
 
@@ -116,10 +117,7 @@ pub fn reduce_json<P: Procedure>(
     read: &incal_io::ReadOptions,
     options: &serde_json::Value,
     progress: &dyn Progress,
-) -> Result<ResultDocument>
-where
-    P::Options: serde::de::DeserializeOwned + schemars::JsonSchema,
-{
+) -> Result<ResultDocument> {
     let options: P::Options = crate::options::from_json(options)?;
     reduce_source::<P, _>(name, src, read, &options, progress)
 }

@@ -189,10 +189,7 @@ pub struct Typed<F = ReduceFn> {
 }
 
 /// The typed reduction of procedure `P`.
-pub const fn reduction<P: super::Procedure>() -> Option<Typed>
-where
-    P::Options: serde::de::DeserializeOwned + schemars::JsonSchema,
-{
+pub const fn reduction<P: super::Procedure>() -> Option<Typed> {
     Some(Typed {
         schema: crate::options::schema_of::<P::Options>,
         run: super::reduce_json::<P>,

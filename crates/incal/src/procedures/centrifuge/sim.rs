@@ -81,10 +81,7 @@ impl CentrifugeSim {
 }
 
 fn bad<T>(what: &str, value: String) -> Result<T> {
-    Err(Error::InvalidValue {
-        what: what.into(),
-        value,
-    })
+    Error::invalid(what, value)
 }
 
 /// The rig and the test plan of a simulated or planned centrifuge test as

@@ -188,12 +188,7 @@ impl MotionProfile {
 
     /// Refuse a profile the simulator cannot represent, naming the field.
     pub fn check(&self) -> Result<()> {
-        let bad = |what: &str, v: f64| {
-            Err(Error::InvalidValue {
-                what: what.into(),
-                value: v.to_string(),
-            })
-        };
+        let bad = |what: &str, v: f64| Error::invalid(what, v);
         for (what, v) in [
             ("sample rate (Hz)", self.rate_hz),
             ("duration (s)", self.duration_s),
@@ -467,7 +462,8 @@ impl GfimuSim {
                     && m.spin_up_s >= 0.0)
                 {
                     return bad(
-                        "angular_accel_rad_s2 and spin_up_s must be finite (spin-up >= 0)".into(),
+                        "`angular_accel_rad_s2` and `spin_up_s` must be finite (spin-up >= 0)"
+                            .into(),
                     );
                 }
                 if !(m.oscillation_hz.is_finite()
@@ -475,7 +471,7 @@ impl GfimuSim {
                     && m.oscillation_hz < m.rate_hz / 2.0)
                 {
                     return bad(format!(
-                        "oscillation_hz must be at least 0 and below half of rate_hz ({} Hz), got {}",
+                        "`oscillation_hz` must be at least 0 and below half of `rate_hz` ({} Hz), got {}",
                         shown(m.rate_hz / 2.0),
                         shown(m.oscillation_hz)
                     ));
@@ -484,13 +480,13 @@ impl GfimuSim {
                     || (m.oscillation_amplitude_rad_s != 0.0 && m.oscillation_hz == 0.0)
                 {
                     return bad(
-                        "oscillation_amplitude_rad_s must be finite, with oscillation_hz > 0 when it is not 0"
+                        "`oscillation_amplitude_rad_s` must be finite, with `oscillation_hz` > 0 when it is not 0"
                             .into(),
                     );
                 }
                 if m.f0_frame == F0Frame::Table && !m.omega0_along_axis() {
                     return bad(
-                        "f0_frame table: omega0_rad_s must lie along axis (the unit turns about that one axis)"
+                        "f0_frame table: `omega0_rad_s` must lie along axis (the unit turns about that one axis)"
                             .into(),
                     );
                 }

@@ -113,20 +113,20 @@ impl SolveOptions {
     pub fn validate(&self) -> Result<()> {
         if let Some(v) = self.omega0_rad_s.iter().find(|v| !v.is_finite()) {
             return Err(Error::Unsupported(format!(
-                "omega0_rad_s must be three finite numbers, got {v}"
+                "`omega0_rad_s` must be three finite numbers, got {v}"
             )));
         }
         let g = self.gravity_m_s2;
         if !(g.is_finite() && g > 0.0 && g <= MAX_GRAVITY_M_S2) {
             return Err(Error::Unsupported(format!(
-                "gravity_m_s2 must be a positive number (at most {MAX_GRAVITY_M_S2}), got {}",
+                "`gravity_m_s2` must be a positive number (at most {MAX_GRAVITY_M_S2}), got {}",
                 super::input::shown(g)
             )));
         }
         let l = self.omega_u_limit_rad_s;
         if !(l.is_finite() && l > 0.0) {
             return Err(Error::Unsupported(format!(
-                "omega_u_limit_rad_s must be a positive number, got {}",
+                "`omega_u_limit_rad_s` must be a positive number, got {}",
                 super::input::shown(l)
             )));
         }

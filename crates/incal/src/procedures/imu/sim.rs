@@ -417,7 +417,7 @@ impl ImuSim {
             } => {
                 rotation(*rotation_deg, *rotation_s)?;
                 crate::sim::check_rows(&[(
-                    "(6 x static_s + 3 x rotation_s) x rate_hz",
+                    "(6 x `static_s` + 3 x `rotation_s`) x `rate_hz`",
                     (6.0 * stat + 3.0 * rotation_s) * rate,
                 )])
             }
@@ -440,7 +440,7 @@ impl ImuSim {
                     );
                 }
                 crate::sim::check_rows(&[(
-                    "(init_static_s + orientations x (static_s + move_s)) x rate_hz",
+                    "(`init_static_s` + orientations x (`static_s` + `move_s`)) x `rate_hz`",
                     (init_s + *positions as f64 * (stat + move_s)) * rate,
                 )])
             }
@@ -457,7 +457,7 @@ impl ImuSim {
                     rot_s = 3.0 * dur;
                 }
                 crate::sim::check_rows(&[(
-                    "(positions x static_s + 3 x rotation_s) x rate_hz",
+                    "(positions x `static_s` + 3 x `rotation_s`) x `rate_hz`",
                     (up.len() as f64 * stat + rot_s) * rate,
                 )])
             }
@@ -493,10 +493,7 @@ fn attitude_up(up: &V3) -> M3 {
 
 /// Simulate a session. Fails on non-finite or out-of-range options.
 pub fn simulate(cfg: &ImuSim) -> Result<Vec<ImuSample>> {
-    let bad = |what: &str, v: f64| Error::InvalidValue {
-        what: what.into(),
-        value: v.to_string(),
-    };
+    let bad = |what: &str, v: f64| Error::invalid_value(what, v);
     if !(cfg.rate_hz.is_finite() && cfg.rate_hz > 0.0 && cfg.rate_hz <= 1e5) {
         return Err(bad("sample rate (0 < Hz <= 1e5)", cfg.rate_hz));
     }

@@ -81,7 +81,7 @@ pub fn read<R: Read>(
     let time = h.opt_column("time_s").filter(|c| !pick.contains(c));
     if time.is_none() && rate_hz.is_none() {
         return Err(h
-            .error("no time_s column and no rate_hz: give the sample rate (--rate-hz)")
+            .error("no time_s column and no rate_hz: give the sample rate (`rate_hz`)")
             .into());
     }
     let mut stamps = time.map(|_| Vec::new());

@@ -537,7 +537,7 @@ pub fn reduce_mapped(
     }
     let rate_hz = o.rate_hz.ok_or_else(|| {
         Error::Unsupported(format!(
-            "{name}: a binary record has no time_s: give the sample rate (rate_hz)"
+            "{name}: a binary record has no time_s: give the sample rate (`rate_hz`)"
         ))
     })?;
     let (quantity, unit, factor) = o.units()?;

@@ -206,12 +206,7 @@ impl NoiseSim {
     /// fewer than 4 or more than [`MAX_NOISE_SAMPLES`] samples, and a
     /// channel count outside 1 to 64.
     pub fn validate(&self) -> Result<()> {
-        let bad = |what: String, v: f64| {
-            Err(Error::InvalidValue {
-                what,
-                value: v.to_string(),
-            })
-        };
+        let bad = |what: String, v: f64| Error::invalid(what, v);
         // One option, one meaning: a term of the other quantity is refused.
         let (mine, other, what) =
             match self.quantity {
@@ -224,7 +219,7 @@ impl NoiseSim {
             };
         if let Some((n, _)) = other.iter().find(|(_, v)| *v != 0.0) {
             return Err(Error::Unsupported(format!(
-                "{n} is not a term of quantity {what}"
+                "`{n}` is not a term of quantity {what}"
             )));
         }
         for (n, v) in mine.iter().take(4) {
@@ -241,7 +236,7 @@ impl NoiseSim {
         let n = self.duration_s * self.rate_hz;
         if !(n.is_finite() && (4.0..=MAX_NOISE_SAMPLES).contains(&n)) {
             return Err(Error::Unsupported(
-                "duration_s times rate_hz must give between 4 and 1e9 samples".into(),
+                "`duration_s` times `rate_hz` must give between 4 and 1e9 samples".into(),
             ));
         }
         if self.channels == 0 || self.channels > 64 {

@@ -162,7 +162,7 @@ pub fn block_design(input: &RampInput, block_s: f64) -> Result<BlockDesign> {
     let blocks = &input.blocks;
     if blocks.len() < 4 {
         return Err(Error::TooFew {
-            what: format!("blocks of {block_s} s (a longer recording, or a shorter --block-s)"),
+            what: format!("blocks of {block_s} s (a longer recording, or a shorter `block_s`)"),
             needed: 4,
             got: blocks.len(),
         });

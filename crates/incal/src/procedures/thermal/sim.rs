@@ -155,7 +155,10 @@ impl RampSim {
                 return bad("channel noise (above 0)", c.noise);
             }
         }
-        crate::sim::check_rows(&[("duration_s", self.duration_s()), ("rate_hz", self.rate_hz)])
+        crate::sim::check_rows(&[
+            ("`duration_s`", self.duration_s()),
+            ("`rate_hz`", self.rate_hz),
+        ])
     }
 
     /// The chamber temperature at time `t` (s).

@@ -26,7 +26,7 @@ pub fn read<R: Read>(
     let azimuth_deg = match (cz, azimuth_deg) {
         (None, None) => {
             return Err(h
-                .error("no azimuth: give the azimuth_deg option or an azimuth_deg column")
+                .error("no azimuth: give the `azimuth_deg` option or an azimuth_deg column")
                 .into())
         }
         (_, z) => z.unwrap_or(0.0),

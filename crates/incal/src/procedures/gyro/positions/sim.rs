@@ -101,12 +101,7 @@ impl GyroPositionsSim {
     /// no samples, more than [`crate::sim::MAX_SIM_ROWS`] rows, a noise
     /// outside 0…1e9.
     pub fn validate(&self) -> Result<()> {
-        let bad = |what: String, v: f64| {
-            Err(Error::InvalidValue {
-                what,
-                value: v.to_string(),
-            })
-        };
+        let bad = |what: String, v: f64| Error::invalid(what, v);
         for t in ALL_TERMS {
             let v = self.drift.get(t.name());
             if !(v.is_finite() && v.abs() <= MAX_SIM_DRIFT) {

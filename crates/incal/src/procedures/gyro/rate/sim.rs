@@ -65,12 +65,7 @@ impl GyroRateSim {
     /// outside 0…1e9, a run scatter outside 0…1e5 ppm, or a truth whose
     /// output is not finite.
     pub fn validate(&self) -> Result<()> {
-        let bad = |what: &str, v: f64| {
-            Err(Error::InvalidValue {
-                what: what.into(),
-                value: v.to_string(),
-            })
-        };
+        let bad = |what: &str, v: f64| Error::invalid(what, v);
         let k1 = 0.5 * (self.k1_pos + self.k1_neg);
         if !(k1.is_finite() && k1 != 0.0 && k1.abs() <= MAX_SIM_K1) {
             return bad("k1 (non-zero, at most 1e9 in magnitude)", k1);
