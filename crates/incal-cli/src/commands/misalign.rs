@@ -9,15 +9,10 @@ use incal::estimation::Noise;
 use incal::procedures::misalign::accel::AccelOptions;
 use incal::procedures::misalign::averaging::TurnPolicy;
 use incal::procedures::misalign::gyro::{GyroConfig, GyroOptions};
-use incal::procedures::misalign::input;
 use incal::procedures::misalign::plan::{MisalignPlan, PlanInstrument};
-use incal::procedures::misalign::sim::{
-    simulate_accel, simulate_gyro, simulate_gyro_records, AccelSim, GyroSim,
-};
+use incal::procedures::misalign::sim_options::{AccelSimOptions, GyroSimOptions};
 use incal::procedures::misalign::{MisalignAccel, MisalignGyro};
 use incal::procedures::{Plan, Silent};
-use incal::rigs::rate_table::{FaceMounting, GyroMounting};
-use incal::units::arcsec_to_rad;
 
 use crate::error::{core, CliResult};
 use crate::input::ReadArgs;
@@ -254,7 +249,7 @@ pub struct SimGyroArgs {
     #[arg(long, default_value_t = 1e-3)]
     pub noise: f64,
     /// Latitude (deg), for the Earth rate.
-    #[arg(long, default_value_t = 45.75, allow_hyphen_values = true, value_parser = crate::options::latitude_deg)]
+    #[arg(long, default_value_t = 45.75, allow_hyphen_values = true)]
     pub latitude_deg: f64,
     /// Write raw records (time_s, table_angle_deg per sample) instead of record means.
     #[arg(long)]
@@ -267,56 +262,46 @@ pub struct SimGyroArgs {
     pub output: Option<PathBuf>,
 }
 
-fn gyro_sim_of(a: &SimGyroArgs) -> CliResult<GyroSim> {
-    let cfg = GyroSim {
-        mounting: GyroMounting {
-            dtheta_x0: arcsec_to_rad(a.dtheta_x0_arcsec),
-            dtheta_y0: arcsec_to_rad(a.dtheta_y0_arcsec),
-            dtheta_y1: arcsec_to_rad(a.dtheta_y1_arcsec),
-            dtheta_z1: arcsec_to_rad(a.dtheta_z1_arcsec),
-            dtheta_y2: arcsec_to_rad(a.dtheta_y2_arcsec),
-            dtheta_z2: arcsec_to_rad(a.dtheta_z2_arcsec),
-        },
-        scale_factor: a.scale_factor,
-        bias: a.bias,
-        bias_shift: a.bias_shift,
-        configs: parse_configs(&a.configs)?,
-        rates_deg_s: a.rates_deg_s.clone(),
-        records: a.records,
-        turns: a.turns,
-        samples_per_turn: a.samples_per_turn,
-        noise: a.noise,
-        latitude_rad: a.latitude_deg.to_radians(),
-        seed: a.seed,
-    };
-    cfg.validate().map_err(core)?;
-    Ok(cfg)
-}
-
-/// `incal simulate misalign gyro|accel`.
+/// `incal simulate misalign gyro|accel`: the arguments into the core's
+/// simulator options, run by [`crate::run::simulate`].
 pub fn simulate(c: &SimCommand) -> CliResult<()> {
     match c {
         SimCommand::Gyro(a) => {
-            let cfg = gyro_sim_of(a)?;
-            if a.time_series {
-                let records = simulate_gyro_records(&cfg);
-                crate::io::write_stream(a.output.as_deref(), |out| {
-                    input::write_gyro_records(&records, out).map(|_| ())
-                })
-            } else {
-                let obs = simulate_gyro(&cfg).map_err(core)?;
-                crate::io::write_stream(a.output.as_deref(), |out| {
-                    input::write_gyro_means(&obs, out).map(|_| ())
-                })
-            }
+            let options = GyroSimOptions {
+                scale_factor: a.scale_factor,
+                bias: a.bias,
+                bias_shift: a.bias_shift,
+                dtheta_x0_arcsec: a.dtheta_x0_arcsec,
+                dtheta_y0_arcsec: a.dtheta_y0_arcsec,
+                dtheta_y1_arcsec: a.dtheta_y1_arcsec,
+                dtheta_z1_arcsec: a.dtheta_z1_arcsec,
+                dtheta_y2_arcsec: a.dtheta_y2_arcsec,
+                dtheta_z2_arcsec: a.dtheta_z2_arcsec,
+                configs: parse_configs(&a.configs)?,
+                rates_deg_s: a.rates_deg_s.clone(),
+                records: a.records,
+                turns: a.turns,
+                samples_per_turn: a.samples_per_turn,
+                noise: a.noise,
+                latitude_deg: a.latitude_deg,
+                time_series: a.time_series,
+                seed: a.seed,
+            };
+            crate::run::simulate::<MisalignGyro>(&options, a.output.as_deref())
         }
         SimCommand::Accel(a) => {
-            let cfg = accel_sim_of(a);
-            cfg.validate().map_err(core)?;
-            let obs = simulate_accel(&cfg);
-            crate::io::write_stream(a.output.as_deref(), |out| {
-                input::write_accel(&obs, out).map(|_| ())
-            })
+            let options = AccelSimOptions {
+                scale_factor: a.scale_factor,
+                bias: a.bias,
+                dtheta_y0_arcsec: a.dtheta_y0_arcsec,
+                dtheta_y2_arcsec: a.dtheta_y2_arcsec,
+                dtheta_z2_arcsec: a.dtheta_z2_arcsec,
+                betas_deg: a.betas_deg.clone(),
+                samples: a.samples,
+                noise: a.noise,
+                seed: a.seed,
+            };
+            crate::run::simulate::<MisalignAccel>(&options, a.output.as_deref())
         }
     }
 }
@@ -359,21 +344,4 @@ pub struct SimAccelArgs {
     /// Write the CSV here instead of standard output.
     #[arg(long, short = 'o', value_name = "FILE")]
     pub output: Option<PathBuf>,
-}
-
-fn accel_sim_of(a: &SimAccelArgs) -> AccelSim {
-    AccelSim {
-        mounting: FaceMounting {
-            dtheta_y0: arcsec_to_rad(a.dtheta_y0_arcsec),
-            dtheta_y1: 0.0,
-            dtheta_y2: arcsec_to_rad(a.dtheta_y2_arcsec),
-            dtheta_z2: arcsec_to_rad(a.dtheta_z2_arcsec),
-        },
-        scale_factor: a.scale_factor,
-        bias: a.bias,
-        betas_rad: a.betas_deg.iter().map(|b| b.to_radians()).collect(),
-        samples: a.samples,
-        noise: a.noise,
-        seed: a.seed,
-    }
 }

@@ -363,7 +363,7 @@ pub static REGISTRY: &[Entry] = &[
         }),
         reduction: reduction::<super::misalign::MisalignGyro>(),
         planner: planner::<super::misalign::MisalignGyro>(),
-        simulator: None,
+        simulator: simulator::<super::misalign::MisalignGyro>(),
     },
     Entry {
         id: "misalign-accel",
@@ -385,7 +385,7 @@ pub static REGISTRY: &[Entry] = &[
         }),
         reduction: reduction::<super::misalign::MisalignAccel>(),
         planner: planner::<super::misalign::MisalignAccel>(),
-        simulator: None,
+        simulator: simulator::<super::misalign::MisalignAccel>(),
     },
     Entry {
         id: "gyro-rate",

@@ -425,7 +425,7 @@ fn a_rate_the_stamps_contradict_is_refused_and_none_needs_stamps() {
         .collect::<Vec<_>>()
         .join("\n");
     let e = noise_doc(&no_stamps, None).unwrap_err().to_string();
-    assert!(e.contains("rec.csv") && e.contains("--rate-hz"), "{e}");
+    assert!(e.contains("rec.csv") && e.contains("`rate_hz`"), "{e}");
 }
 
 // ---- The statistics beyond the default five, and the three-cornered hat ----

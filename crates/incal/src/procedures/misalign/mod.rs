@@ -28,6 +28,7 @@ pub mod gyro;
 pub mod input;
 pub mod plan;
 pub mod sim;
+pub mod sim_options;
 
 use nalgebra::{DMatrix, DVector};
 
