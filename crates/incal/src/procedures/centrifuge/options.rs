@@ -74,7 +74,7 @@ impl ChainedResult {
 /// it, else `cov_k0_k1` (with explicit `k0` and `k1`; default 0).
 /// [`CentrifugeOptions::resolve`] settles them.
 ///
-/// In the document's `options` (as used, [`super::Procedure::recorded`]):
+/// In the document's `options` (as used, [`crate::procedures::Procedure::recorded`]):
 /// `k0`, `u_k0`, `k1`, `u_k1`, `cov_k0_k1`, `radius_m`, `latitude_deg`,
 /// `gravity_m_s2`, `opposite_sense`, `order`, `alignment_tolerance_deg`,
 /// `noise` (σ of one output sample, output units, or null for "from the
