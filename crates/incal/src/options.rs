@@ -216,6 +216,16 @@ macro_rules! named_enum {
     };
 }
 
+/// The key an option error names, for tests: panics, showing what came
+/// instead, when `r` is not [`Error::InvalidOption`].
+#[cfg(test)]
+pub(crate) fn refused_key<T: std::fmt::Debug>(r: Result<T>) -> String {
+    match r {
+        Err(Error::InvalidOption { key, .. }) => key,
+        other => panic!("expected InvalidOption, got {other:?}"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -230,10 +240,7 @@ mod tests {
     }
 
     fn key_of(v: serde_json::Value) -> String {
-        match from_json::<Demo>(&v) {
-            Err(Error::InvalidOption { key, .. }) => key,
-            other => panic!("expected InvalidOption, got {other:?}"),
-        }
+        refused_key(from_json::<Demo>(&v))
     }
 
     #[test]

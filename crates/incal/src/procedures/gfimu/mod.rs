@@ -119,10 +119,7 @@ mod tests {
     use serde_json::json;
 
     fn key_of(r: Result<impl std::fmt::Debug>) -> String {
-        match r {
-            Err(crate::Error::InvalidOption { key, .. }) => key,
-            other => panic!("expected InvalidOption, got {other:?}"),
-        }
+        crate::options::refused_key(r)
     }
 
     #[test]

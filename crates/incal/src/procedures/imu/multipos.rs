@@ -530,10 +530,7 @@ mod tests {
     use serde_json::json;
 
     fn key_of(e: Error) -> String {
-        match e {
-            Error::InvalidOption { key, .. } => key,
-            other => panic!("expected InvalidOption, got {other:?}"),
-        }
+        crate::options::refused_key::<()>(Err(e))
     }
 
     #[test]

@@ -262,10 +262,7 @@ mod tests {
         crate::procedures::simulate_json::<ImuSimulator>(&v, &mut b).unwrap();
         assert_eq!(a, b);
         assert!(a.starts_with(b"time_s,position,fx,fy,fz,nx,ny,nz,acc_x"));
-        let key = |e: crate::Error| match e {
-            crate::Error::InvalidOption { key, .. } => key,
-            other => panic!("expected InvalidOption, got {other:?}"),
-        };
+        let key = |e: crate::Error| crate::options::refused_key::<()>(Err(e));
         let bad = |v| key(crate::options::from_json::<ImuSimOptions>(&v).unwrap_err());
         assert_eq!(bad(serde_json::json!({"sequence": "cube"})), "sequence");
         assert_eq!(bad(serde_json::json!({"rate": 10})), "rate");

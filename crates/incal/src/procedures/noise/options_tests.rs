@@ -4,10 +4,7 @@ use super::*;
 use crate::options::from_json;
 
 fn key_of(r: Result<impl std::fmt::Debug>) -> String {
-    match r {
-        Err(Error::InvalidOption { key, .. }) => key,
-        other => panic!("expected InvalidOption, got {other:?}"),
-    }
+    crate::options::refused_key(r)
 }
 
 #[test]
