@@ -11,40 +11,33 @@
 //!
 //! The targets run under `cargo fuzz` (`fuzz/` at the repository root) and
 //! as a property-based pass in the normal test suite (`tests/fuzz_props.rs`).
-//! Each target's valid seed (`seeds/`, written by the simulators:
-//! `make-seeds.sh`) is compiled in.
+//! The targets are derived from the procedure registry: every target a
+//! registry entry names ([`incal::procedures::registry::Entry::fuzz`]) is
+//! reduced by the entry's typed reduction with its example options
+//! ([`incal::procedures::Procedure::example`]); [`EXTRA`] adds the inputs
+//! that are not one procedure's recording (geometry, calibration and
+//! result documents, limits). Each target's valid seed is the file of its
+//! name in `seeds/` (written by the simulators: `make-seeds.sh`).
 
-use incal::document::ResultDocument;
+use std::collections::BTreeMap;
+use std::sync::OnceLock;
+
+use incal::document::{Procedure as Id, ResultDocument};
 use incal::estimation::Noise;
-use incal::procedures::{reduce_source, Procedure, Silent};
+use incal::procedures::registry::{InputKind, REGISTRY};
+use incal::procedures::{reduce_source, Silent};
 
 /// Longest refusal message allowed (characters): one readable line.
 pub const MAX_MESSAGE: usize = 400;
 
-/// Every target: `(name, what the fuzzed bytes are)`.
-pub const TARGETS: &[(&str, &str)] = &[
-    ("tumble", "tumble CSV"),
-    ("centrifuge", "centrifuge CSV"),
-    ("misalign-gyro", "misalignment gyro CSV (record means)"),
-    ("misalign-gyro-raw", "misalignment gyro CSV (raw records)"),
-    ("misalign-accel", "misalignment accelerometer CSV"),
-    ("gfimu-calibrate", "gyro-free unit static CSV"),
+/// The targets that are not one procedure's recording: `(name, what the
+/// fuzzed bytes are)`.
+pub const EXTRA: &[(&str, &str)] = &[
     ("gfimu-geometry", "gyro-free unit geometry TOML"),
     ("gfimu-solve", "gyro-free unit motion CSV"),
     (
         "gfimu-calibration",
         "gyro-free unit calibration JSON (gfimu solve --calibration)",
-    ),
-    ("gyro-rate", "gyro rate-transfer CSV"),
-    ("gyro-positions", "gyro multi-position CSV"),
-    ("noise", "noise CSV"),
-    ("imu-ferraris", "IMU Ferraris session CSV"),
-    ("imu-multipos", "IMU multi-position CSV"),
-    ("imu-autocal", "IMU autocalibration CSV"),
-    ("thermal-ramp", "thermal chamber ramp CSV"),
-    (
-        "thermal-fit",
-        "result document JSON at one plateau (thermal fit, beside two others)",
     ),
     (
         "imu-calibration",
@@ -54,17 +47,34 @@ pub const TARGETS: &[(&str, &str)] = &[
     ("limits", "limits TOML (--limits)"),
 ];
 
+/// Every target: `(name, what the fuzzed bytes are)`: those of the
+/// registry's entries, in registry order, then [`EXTRA`].
+pub fn targets() -> Vec<(&'static str, String)> {
+    let mut out: Vec<(&'static str, String)> = Vec::new();
+    for e in REGISTRY {
+        for t in e.fuzz {
+            let what = match e.input {
+                InputKind::Recording => format!("{} recording ({})", e.command_line(), t),
+                InputKind::Results => format!("result document JSON ({})", e.command_line()),
+            };
+            out.push((t, what));
+        }
+    }
+    out.extend(EXTRA.iter().map(|(t, w)| (*t, (*w).to_string())));
+    out
+}
+
+/// The target names of [`targets`].
+pub fn target_names() -> Vec<&'static str> {
+    targets().into_iter().map(|(t, _)| t).collect()
+}
+
 /// Executions of every target in the test suite (`tests/fuzz_props.rs`,
 /// [`campaign`]): a fixed number per target, so CI does the same work on
-/// every run; fewer for the targets that reduce a whole session per valid
-/// input (a few seconds each in the test profile).
+/// every run; fewer for the targets whose seed is large (a whole session
+/// per valid input): 1.6e7 bytes over the seed's size, from 100 to 2000.
 pub fn ci_executions(target: &str) -> u64 {
-    match target {
-        "imu-autocal" => 100,
-        "gfimu-solve" | "noise" | "imu-ferraris" | "imu-multipos" | "imu-calibration"
-        | "gfimu-calibration" => 600,
-        _ => 2000,
-    }
+    (16_000_000 / seed(target).len().max(1)).clamp(100, 2000) as u64
 }
 
 /// The bytes that break readers, spliced in by [`mutate`].
@@ -154,31 +164,21 @@ pub fn campaign(target: &str, executions: u64, seed_value: u64) -> Result<Campai
     })
 }
 
-/// A valid input of `target` (empty for an unknown target).
+/// A valid input of `target`: the file `seeds/<target>` (empty for an
+/// unknown target). The seeds are read once, on first use.
 pub fn seed(target: &str) -> &'static [u8] {
-    match target {
-        "tumble" => include_bytes!("../seeds/tumble"),
-        "centrifuge" => include_bytes!("../seeds/centrifuge"),
-        "misalign-gyro" => include_bytes!("../seeds/misalign-gyro"),
-        "misalign-gyro-raw" => include_bytes!("../seeds/misalign-gyro-raw"),
-        "misalign-accel" => include_bytes!("../seeds/misalign-accel"),
-        "gfimu-calibrate" => include_bytes!("../seeds/gfimu-calibrate"),
-        "gfimu-geometry" => include_bytes!("../seeds/gfimu-geometry"),
-        "gfimu-solve" => include_bytes!("../seeds/gfimu-solve"),
-        "gfimu-calibration" => include_bytes!("../seeds/gfimu-calibration"),
-        "gyro-rate" => include_bytes!("../seeds/gyro-rate"),
-        "gyro-positions" => include_bytes!("../seeds/gyro-positions"),
-        "noise" => include_bytes!("../seeds/noise"),
-        "imu-ferraris" => include_bytes!("../seeds/imu-ferraris"),
-        "imu-multipos" => include_bytes!("../seeds/imu-multipos"),
-        "imu-autocal" => include_bytes!("../seeds/imu-autocal"),
-        "thermal-ramp" => include_bytes!("../seeds/thermal-ramp"),
-        "thermal-fit" => include_bytes!("../seeds/thermal-fit"),
-        "imu-calibration" => include_bytes!("../seeds/imu-calibration"),
-        "result" => include_bytes!("../seeds/result"),
-        "limits" => include_bytes!("../seeds/limits"),
-        _ => b"",
-    }
+    static SEEDS: OnceLock<BTreeMap<String, &'static [u8]>> = OnceLock::new();
+    let seeds = SEEDS.get_or_init(|| {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("seeds");
+        let mut m = BTreeMap::new();
+        for e in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+            if let (Some(name), Ok(bytes)) = (e.file_name().to_str(), std::fs::read(e.path())) {
+                m.insert(name.to_string(), &*Box::leak(bytes.into_boxed_slice()));
+            }
+        }
+        m
+    });
+    seeds.get(target).copied().unwrap_or(b"")
 }
 
 /// What a target made of its bytes.
@@ -193,12 +193,21 @@ pub enum Outcome {
 /// The name the fuzzed bytes go by in messages.
 const NAME: &str = "input";
 
-fn reduce<P: Procedure>(data: &[u8], options: &P::Options) -> Outcome {
+/// Reduce `data` with the typed reduction of the registry entry whose
+/// fuzz targets include `target`, with the entry's example options;
+/// `None` when no entry with a typed reduction names it.
+fn reduce(target: &str, data: &[u8]) -> Option<Outcome> {
+    let e = REGISTRY.iter().find(|e| e.fuzz.contains(&target))?;
+    let typed = e.reduction?;
+    let options = (typed.example?)();
     let read = incal_io::ReadOptions::default();
-    match reduce_source::<P, _>(NAME, data, &read, options, &Silent) {
-        Ok(doc) => Outcome::Accepted(doc.to_json()),
-        Err(e) => Outcome::Refused(e.to_string()),
-    }
+    let mut src = data;
+    Some(
+        match (typed.run)(NAME, &mut src, &read, &options, &Silent) {
+            Ok(doc) => Outcome::Accepted(doc.to_json()),
+            Err(e) => Outcome::Refused(e.to_string()),
+        },
+    )
 }
 
 fn document(data: &[u8]) -> Result<ResultDocument, String> {
@@ -206,34 +215,17 @@ fn document(data: &[u8]) -> Result<ResultDocument, String> {
     ResultDocument::from_json(text).map_err(|e| format!("{NAME}: {e}"))
 }
 
-fn tumble_options() -> incal::procedures::tumble::TumbleOptions {
-    incal::procedures::tumble::TumbleOptions::new(incal::rigs::Mount::Pendulum)
-}
-
 /// Run `target` on `data` (module docs). Panics only for an unknown target.
 pub fn run(target: &str, data: &[u8]) -> Outcome {
-    use incal::procedures::{centrifuge, gfimu, gyro, imu, misalign, noise, tumble};
+    use incal::procedures::gfimu;
+    if let Some(outcome) = reduce(target, data) {
+        return outcome;
+    }
     match target {
-        "tumble" => reduce::<tumble::Tumble>(data, &tumble_options()),
-        "centrifuge" => reduce::<centrifuge::CentrifugeTest>(data, &centrifuge_options()),
-        "misalign-gyro" | "misalign-gyro-raw" => {
-            reduce::<misalign::MisalignGyro>(data, &misalign::gyro::GyroOptions::new(-2.9222))
-        }
-        "misalign-accel" => {
-            reduce::<misalign::MisalignAccel>(data, &misalign::accel::AccelOptions::new(1.299))
-        }
-        "gfimu-calibrate" => reduce::<gfimu::GfimuCalibrate>(
-            data,
-            &gfimu::GfimuCalibrateOptions {
-                array: gfimu::input::ArrayChoice::default(),
-                noise: Noise::Auto,
-            },
-        ),
         "gfimu-geometry" => {
             match gfimu::input::ArrayGeometry::from_toml(NAME, NAME, data, String::new()) {
-                Ok(_) => reduce::<gfimu::GfimuCalibrate>(
-                    seed("gfimu-calibrate"),
-                    &gfimu::GfimuCalibrateOptions {
+                Ok(_) => {
+                    let options = gfimu::GfimuCalibrateOptions {
                         array: gfimu::input::ArrayChoice {
                             geometry: Some(gfimu::input::GeometryFile {
                                 name: NAME.into(),
@@ -244,83 +236,38 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
                             ..Default::default()
                         },
                         noise: Noise::Auto,
-                    },
-                ),
+                    };
+                    let read = incal_io::ReadOptions::default();
+                    let seed = seed(Id::GfimuCalibrate.as_str());
+                    match reduce_source::<gfimu::GfimuCalibrate, _>(
+                        NAME, seed, &read, &options, &Silent,
+                    ) {
+                        Ok(doc) => Outcome::Accepted(doc.to_json()),
+                        Err(e) => Outcome::Refused(e.to_string()),
+                    }
+                }
                 Err(e) => Outcome::Refused(e.to_string()),
             }
         }
         "gfimu-solve" => solve(seed("gfimu-calibration"), data),
         "gfimu-calibration" => solve(data, seed("gfimu-solve")),
-        "gyro-rate" => reduce::<gyro::rate::GyroRate>(
-            data,
-            &gyro::rate::GyroRateOptions {
-                latitude_deg: 45.0,
-                ia: gyro::rate::InputAxis::Up,
-                terms: gyro::rate::default_terms(),
-                noise: Noise::Auto,
-                rate_uncertainty_ppm: 0.0,
-            },
-        ),
-        "gyro-positions" => {
-            let axial = gyro::positions::Axial::Sa;
-            reduce::<gyro::positions::GyroPositions>(
-                data,
-                &gyro::positions::GyroPositionsOptions {
-                    azimuth_deg: Some(90.0),
-                    ..gyro::positions::GyroPositionsOptions::new(45.0, axial, 0.02, None)
-                },
-            )
-        }
-        "noise" => reduce::<noise::Noise>(
-            data,
-            &noise::NoiseOptions {
-                rate_hz: Some(100.0),
-                // Sequential: a fuzzer's process stays on one thread.
-                parallel: false,
-                ..noise::NoiseOptions::default()
-            },
-        ),
-        "imu-ferraris" => reduce::<imu::ferraris::Ferraris>(data, &ferraris_options()),
-        "imu-multipos" => reduce::<imu::multipos::Multipos>(
-            data,
-            &imu::multipos::MultiposSessionOptions {
-                gravity_m_s2: 9.81,
-                matrix: imu::multipos::MatrixForm::Full,
-                rate_hz: 100.0,
-                latitude_deg: None,
-                rotation_deg: -360.0,
-            },
-        ),
-        "imu-autocal" => reduce::<imu::autocal::Autocal>(
-            data,
-            &imu::autocal::AutocalSessionOptions {
-                rate_hz: 100.0,
-                method: imu::autocal::Method::Incal,
-                gravity_m_s2: 9.81,
-                init_static_s: 3.0,
-                settle_s: 0.1,
-                init: Default::default(),
-                sort_time: false,
-                window_samples: 101,
-                min_samples: 100,
-            },
-        ),
-        "imu-calibration" => apply_imu(data, seed("imu-ferraris")),
-        "thermal-ramp" => reduce::<incal::procedures::thermal::ramp::Ramp>(
-            data,
-            &incal::procedures::thermal::ramp::RampOptions::default(),
-        ),
-        "thermal-fit" => thermal_fit(data),
+        "imu-calibration" => apply_imu(data, seed(Id::ImuFerraris.as_str())),
         "result" => compare_result(data),
         "limits" => limits(data),
+        t if REGISTRY
+            .iter()
+            .any(|e| e.input == InputKind::Results && e.fuzz.contains(&t)) =>
+        {
+            thermal_fit(data, t)
+        }
         other => panic!("unknown fuzz target {other}"),
     }
 }
 
-/// `thermal fit`: the fuzzed result document beside the seed's result
-/// at two other plateaus (0 and 50 degC), as `thermal fit A B C` reads
-/// three files.
-fn thermal_fit(data: &[u8]) -> Outcome {
+/// `thermal fit` (target `target`): the fuzzed result document beside the
+/// seed's result at two other plateaus (0 and 50 degC), as `thermal fit A
+/// B C` reads three files.
+fn thermal_fit(data: &[u8], target: &str) -> Outcome {
     use incal::procedures::thermal::soak;
     let doc = match document(data) {
         Ok(d) => d,
@@ -332,7 +279,7 @@ fn thermal_fit(data: &[u8]) -> Outcome {
         doc,
     }];
     for t in ["0", "50"] {
-        let Ok(mut other) = document(seed("thermal-fit")) else {
+        let Ok(mut other) = document(seed(target)) else {
             return Outcome::Refused("seed: not a result document".into());
         };
         other
@@ -351,28 +298,6 @@ fn thermal_fit(data: &[u8]) -> Outcome {
     }
 }
 
-/// The centrifuge options of the seed's run (`incal simulate centrifuge`).
-fn centrifuge_options() -> incal::procedures::centrifuge::CentrifugeOptions {
-    use incal::procedures::centrifuge;
-    centrifuge::CentrifugeOptions {
-        from: None,
-        k0: Some(1.2e-4),
-        u_k0: None,
-        k1: Some(1.3),
-        u_k1: None,
-        cov_k0_k1: None,
-        radius_m: 0.71,
-        latitude_deg: 39.9,
-        gravity_m_s2: incal::units::STANDARD_GRAVITY_M_S2,
-        opposite_sense: false,
-        order: 3,
-        alignment_tolerance_deg: 0.0,
-        noise: Noise::Auto,
-        terms: None,
-        u_omega_ppm: 0.0,
-    }
-}
-
 /// `compare`: the fuzzed document against itself.
 fn compare_result(data: &[u8]) -> Outcome {
     match document(data) {
@@ -386,42 +311,26 @@ fn compare_result(data: &[u8]) -> Outcome {
 
 /// `--limits`: the fuzzed limits applied to the tumble seed's result.
 fn limits(data: &[u8]) -> Outcome {
-    use incal::procedures::tumble;
-    {
-        let limits = match std::str::from_utf8(data) {
-            Ok(text) => incal::document::limits::Limits::parse(text),
-            Err(_) => Err("not UTF-8 text".into()),
-        };
-        match limits {
-            Ok(limits) => {
-                let read = incal_io::ReadOptions::default();
-                let doc = reduce_source::<tumble::Tumble, _>(
-                    "tumble.csv",
-                    seed("tumble"),
-                    &read,
-                    &tumble_options(),
-                    &Silent,
-                );
-                match doc {
-                    Ok(mut doc) => match incal::document::limits::apply(&mut doc, &limits) {
-                        Ok(()) => Outcome::Accepted(doc.to_json()),
-                        Err(e) => Outcome::Refused(format!("{NAME}: {e}")),
-                    },
-                    Err(e) => Outcome::Refused(format!("seed: {e}")),
-                }
-            }
+    let limits = match std::str::from_utf8(data) {
+        Ok(text) => incal::document::limits::Limits::parse(text),
+        Err(_) => Err("not UTF-8 text".into()),
+    };
+    let limits = match limits {
+        Ok(l) => l,
+        Err(e) => return Outcome::Refused(format!("{NAME}: {e}")),
+    };
+    let tumble = Id::Tumble.as_str();
+    let doc = match reduce(tumble, seed(tumble)) {
+        Some(Outcome::Accepted(json)) => document(json.as_bytes()),
+        Some(Outcome::Refused(e)) => Err(e),
+        None => Err(format!("no typed reduction of {tumble}")),
+    };
+    match doc {
+        Ok(mut doc) => match incal::document::limits::apply(&mut doc, &limits) {
+            Ok(()) => Outcome::Accepted(doc.to_json()),
             Err(e) => Outcome::Refused(format!("{NAME}: {e}")),
-        }
-    }
-}
-
-fn ferraris_options() -> incal::procedures::imu::ferraris::FerrarisOptions {
-    incal::procedures::imu::ferraris::FerrarisOptions {
-        rate_hz: 100.0,
-        gravity_m_s2: 9.81,
-        convention: Default::default(),
-        rotation_deg: -360.0,
-        u_rotation_deg: 0.0,
+        },
+        Err(e) => Outcome::Refused(format!("seed: {e}")),
     }
 }
 

@@ -58,6 +58,21 @@ pub trait Procedure {
     /// of the procedure lives here, not in a front end.
     fn validate(options: &Self::Options) -> Result<()>;
 
+    /// The options of a small worked case: those that reduce what the
+    /// procedure's simulator writes with its defaults (the rig and truth
+    /// of `incal simulate`). The fuzz targets reduce their seeds with them
+    /// and the registry publishes them ([`registry::Typed::example`]), so a
+    /// front end can start from a valid set.
+    fn example() -> Self::Options;
+
+    /// [`Procedure::example`] as JSON a caller gives
+    /// ([`reduce_json`] reads it back into the same options): the
+    /// serialised options, unless the document's form of the options
+    /// leaves out keys a caller gives (then the procedure adds them).
+    fn example_json() -> serde_json::Value {
+        serde_json::to_value(Self::example()).unwrap_or_default()
+    }
+
     /// Columns, segmentation and checks: the rows of one recording into
     /// observations. Pure: the rows come from any source.
     fn read<R: Read>(

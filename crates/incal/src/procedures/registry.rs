@@ -186,6 +186,10 @@ pub struct Typed<F = ReduceFn> {
     pub schema: fn() -> serde_json::Value,
     /// The entry point.
     pub run: F,
+    /// Options of a small worked case as JSON, valid against `schema`
+    /// ([`super::Procedure::example`]); `None` where the entry point has
+    /// no example of its own.
+    pub example: Option<fn() -> serde_json::Value>,
 }
 
 /// The typed reduction of procedure `P`.
@@ -193,6 +197,7 @@ pub const fn reduction<P: super::Procedure>() -> Option<Typed> {
     Some(Typed {
         schema: crate::options::schema_of::<P::Options>,
         run: super::reduce_json::<P>,
+        example: Some(P::example_json),
     })
 }
 
@@ -201,6 +206,7 @@ pub const fn planner<T: super::Plan>() -> Option<Typed<PlanFn>> {
     Some(Typed {
         schema: crate::options::schema_of::<T::Options>,
         run: super::plan_json::<T>,
+        example: None,
     })
 }
 
@@ -209,6 +215,7 @@ pub const fn simulator<T: super::Simulate>() -> Option<Typed<SimulateFn>> {
     Some(Typed {
         schema: crate::options::schema_of::<T::Options>,
         run: super::simulate_json::<T>,
+        example: None,
     })
 }
 

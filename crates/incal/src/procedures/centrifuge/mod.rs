@@ -126,6 +126,26 @@ impl super::Procedure for CentrifugeTest {
     type Options = CentrifugeOptions;
     type Input = Vec<Observation>;
 
+    fn example() -> CentrifugeOptions {
+        CentrifugeOptions {
+            from: None,
+            k0: Some(1.2e-4),
+            u_k0: None,
+            k1: Some(1.3),
+            u_k1: None,
+            cov_k0_k1: None,
+            radius_m: 0.71,
+            latitude_deg: 39.9,
+            gravity_m_s2: crate::units::STANDARD_GRAVITY_M_S2,
+            opposite_sense: false,
+            order: 3,
+            alignment_tolerance_deg: 0.0,
+            noise: crate::estimation::Noise::Auto,
+            terms: None,
+            u_omega_ppm: 0.0,
+        }
+    }
+
     fn validate(o: &CentrifugeOptions) -> Result<()> {
         Self::validate_options(o)
     }

@@ -73,6 +73,13 @@ impl super::Procedure for GfimuCalibrate {
     type Options = GfimuCalibrateOptions;
     type Input = Vec<StaticSample>;
 
+    fn example() -> GfimuCalibrateOptions {
+        GfimuCalibrateOptions {
+            array: input::ArrayChoice::default(),
+            noise: crate::estimation::Noise::Auto,
+        }
+    }
+
     fn validate(o: &GfimuCalibrateOptions) -> Result<()> {
         o.noise.validate()?;
         o.array.load().map(|_| ())

@@ -174,6 +174,16 @@ impl crate::procedures::Procedure for Ferraris {
         Option<crate::timebase::TimeBase>,
     );
 
+    fn example() -> FerrarisOptions {
+        FerrarisOptions {
+            rate_hz: 100.0,
+            gravity_m_s2: 9.81,
+            convention: Default::default(),
+            rotation_deg: -360.0,
+            u_rotation_deg: 0.0,
+        }
+    }
+
     fn validate(o: &FerrarisOptions) -> Result<()> {
         o.validate()
     }

@@ -179,6 +179,16 @@ impl crate::procedures::Procedure for Multipos {
     type Options = MultiposSessionOptions;
     type Input = super::input::MultiposInput;
 
+    fn example() -> MultiposSessionOptions {
+        MultiposSessionOptions {
+            gravity_m_s2: 9.81,
+            matrix: MatrixForm::Full,
+            rate_hz: 100.0,
+            latitude_deg: None,
+            rotation_deg: -360.0,
+        }
+    }
+
     fn validate(o: &MultiposSessionOptions) -> Result<()> {
         o.validate()
     }

@@ -204,6 +204,10 @@ impl super::Procedure for MisalignGyro {
     type Options = gyro::GyroOptions;
     type Input = input::GyroInput;
 
+    fn example() -> gyro::GyroOptions {
+        gyro::GyroOptions::new(-2.9222)
+    }
+
     fn validate(o: &gyro::GyroOptions) -> Result<()> {
         check_scale_factor(o.scale_factor)?;
         o.noise.validate()
@@ -234,6 +238,10 @@ impl super::Procedure for MisalignAccel {
     const ID: crate::document::Procedure = crate::document::Procedure::MisalignAccel;
     type Options = accel::AccelOptions;
     type Input = Vec<accel::AccelObservation>;
+
+    fn example() -> accel::AccelOptions {
+        accel::AccelOptions::new(1.299)
+    }
 
     fn validate(o: &accel::AccelOptions) -> Result<()> {
         check_scale_factor(o.scale_factor)?;

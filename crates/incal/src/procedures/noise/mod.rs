@@ -372,6 +372,16 @@ impl Procedure for Noise {
     type Options = NoiseOptions;
     type Input = Channels;
 
+    fn example() -> NoiseOptions {
+        NoiseOptions {
+            rate_hz: Some(100.0),
+            // Sequential: the same numbers, and a fuzzer's process stays
+            // on one thread.
+            parallel: false,
+            ..NoiseOptions::default()
+        }
+    }
+
     /// The sample rate positive, the confidence in (0, 1), the τ grid
     /// known, every bias-stability τ positive, the unit one of the
     /// quantity's, and `channels` given with (and only with) a binary

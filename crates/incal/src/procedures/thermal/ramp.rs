@@ -113,6 +113,10 @@ impl ProcedureShape for Ramp {
     type Options = RampOptions;
     type Input = RampInput;
 
+    fn example() -> RampOptions {
+        RampOptions::default()
+    }
+
     fn validate(o: &RampOptions) -> Result<()> {
         use crate::options::{check_positive, invalid};
         check_positive("rate_hz", o.rate_hz)?;

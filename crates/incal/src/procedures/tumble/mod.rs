@@ -140,6 +140,10 @@ impl super::Procedure for Tumble {
     type Options = TumbleOptions;
     type Input = Vec<Observation>;
 
+    fn example() -> TumbleOptions {
+        TumbleOptions::new(crate::rigs::Mount::Pendulum)
+    }
+
     fn validate(o: &TumbleOptions) -> Result<()> {
         o.noise.validate()?;
         if !o.settled().terms.contains(&Term::K1) {

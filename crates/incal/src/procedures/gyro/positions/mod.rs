@@ -539,6 +539,24 @@ impl crate::procedures::Procedure for GyroPositions {
     type Options = GyroPositionsOptions;
     type Input = Vec<PositionObservation>;
 
+    fn example() -> GyroPositionsOptions {
+        GyroPositionsOptions {
+            azimuth_deg: Some(90.0),
+            ..GyroPositionsOptions::new(45.0, Axial::Sa, 0.02, None)
+        }
+    }
+
+    /// The example with its K1, which the document's `options` leave out
+    /// (it is in the document's `scale_factor`).
+    fn example_json() -> serde_json::Value {
+        let o = Self::example();
+        let mut v = serde_json::to_value(&o).unwrap_or_default();
+        if let Some(m) = v.as_object_mut() {
+            m.insert("k1".into(), o.k1.into());
+        }
+        v
+    }
+
     fn validate(o: &GyroPositionsOptions) -> Result<()> {
         o.validate()
     }

@@ -256,6 +256,16 @@ impl crate::procedures::Procedure for GyroRate {
     type Options = GyroRateOptions;
     type Input = Vec<RateObservation>;
 
+    fn example() -> GyroRateOptions {
+        GyroRateOptions {
+            latitude_deg: 45.0,
+            ia: InputAxis::Up,
+            terms: default_terms(),
+            noise: crate::estimation::Noise::Auto,
+            rate_uncertainty_ppm: 0.0,
+        }
+    }
+
     fn validate(o: &GyroRateOptions) -> Result<()> {
         o.validate()
     }

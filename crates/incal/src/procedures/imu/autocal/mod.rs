@@ -347,6 +347,20 @@ impl crate::procedures::Procedure for Autocal {
     type Options = AutocalSessionOptions;
     type Input = super::input::AutocalInput;
 
+    fn example() -> AutocalSessionOptions {
+        AutocalSessionOptions {
+            rate_hz: 100.0,
+            method: Method::Incal,
+            gravity_m_s2: 9.81,
+            init_static_s: 3.0,
+            settle_s: 0.1,
+            init: Default::default(),
+            sort_time: false,
+            window_samples: 101,
+            min_samples: 100,
+        }
+    }
+
     fn validate(o: &AutocalSessionOptions) -> Result<()> {
         o.validate()
     }

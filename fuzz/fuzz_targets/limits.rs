@@ -1,9 +1,0 @@
-#![no_main]
-//! Fuzz target `limits`: see `incal_fuzz`.
-use libfuzzer_sys::fuzz_target;
-
-fuzz_target!(|data: &[u8]| {
-    if let Err(e) = incal_fuzz::check("limits", data) {
-        panic!("limits: {e}");
-    }
-});
