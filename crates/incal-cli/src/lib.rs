@@ -47,19 +47,15 @@ pub fn command() -> clap::Command {
 enum Command {
     /// Simulate virtual instruments on every rig, calibrate, and print estimate, truth and uncertainty.
     Demo(commands::demo::Args),
-    /// Calibrate an accelerometer from a dividing-head tumble test (Wu et al. 2015; GJB 1037A).
-    Tumble(commands::tumble::Args),
-    /// Calibrate an accelerometer on a precision centrifuge: radius, K2/K3, cross-axis and cross-coupling terms (He & Yin 2017; IEEE Std 836).
-    Centrifuge(commands::centrifuge::Args),
+    /// The procedures (each family's file in `commands/`, listed once in `commands/mod.rs`).
+    #[command(flatten)]
+    Procedure(commands::Reductions),
     /// Design a test plan and predict the uncertainty of every coefficient before the test.
     #[command(subcommand)]
-    Plan(PlanCommand),
+    Plan(commands::Plans),
     /// Simulate a rig from a known truth and write the input CSV of the matching procedure.
     #[command(subcommand)]
-    Simulate(SimulateCommand),
-    /// Misalignment separation: gyro on a rate table, accelerometer on a vertical face (Li et al. 2012).
-    #[command(subcommand)]
-    Misalign(commands::misalign::Command),
+    Simulate(commands::Simulations),
     /// Compare the coefficients of two result files: difference, per mille and En.
     Compare(commands::compare::Args),
     /// Export a result in another tool's format: imucal's calibration JSON, Kalibr's imu.yaml, PX4 and ArduPilot parameters.
@@ -71,117 +67,27 @@ enum Command {
     Schema(commands::schema::Args),
     /// Write one self-contained HTML report (printable certificate) of a result file, with plots.
     Report(commands::report::Args),
-    /// Gyro-free inertial unit of six (or more) accelerometers: calibrate K0 and Ks, solve motion (the GFIMU note).
-    #[command(subcommand)]
-    Gfimu(GfimuCommand),
-    /// Gyro tests: rate-transfer test on a rate table, multi-position test on a dividing head (IEEE Std 952 / 1431 / 517).
-    #[command(subcommand)]
-    Gyro(commands::gyro::Command),
     /// Calibration records: store results per instrument (append-only, hash-chained), list, show, supersede, history and drift, verify.
     #[command(subcommand)]
     Record(commands::record::Command),
     /// Reduce many recordings with one procedure on the local machine's cores: results in order, per-file errors collected, records written by one writer.
     Batch(commands::batch::Args),
-    /// Noise and stability of long static records: OADEV, MDEV, OHDEV, TDEV, TOTDEV with confidence bounds, IEEE 952 noise terms, bias stability.
-    Noise(commands::noise::Args),
-    /// IMU triad calibration: Ferraris (imucal), least squares over known orientations, autocalibration (Tedaldi / imu_tk), apply.
-    #[command(subcommand)]
-    Imu(commands::imu::Command),
-    /// Thermal calibration: coefficients as polynomials in temperature from soak plateaus (fit) or a chamber ramp (ramp), and compensation (apply).
-    #[command(subcommand)]
-    Thermal(commands::thermal::Command),
-}
-
-#[derive(Subcommand, Debug)]
-enum GfimuCommand {
-    /// Calibrate every accelerometer's K0 and Ks from static positions (six-position test or any >= 6 orientations).
-    Calibrate(commands::gfimu::CalibrateArgs),
-    /// Solve a time series of outputs for f0, angular acceleration and angular rate.
-    Solve(commands::gfimu::SolveArgs),
-}
-
-#[derive(Subcommand, Debug)]
-enum PlanCommand {
-    /// Tumble plan: GJB 12-point, small-angle 12-point for a range, or N-point.
-    Tumble(commands::tumble::PlanArgs),
-    /// Misalignment plan: predicted u of each angle for a configuration set.
-    Misalign(commands::misalign::PlanArgs),
-    /// Centrifuge plan: predicted u of the radius quantities and of every coefficient for a station/speed plan.
-    Centrifuge(commands::centrifuge::PlanArgs),
-    /// Gyro-free unit calibration plan: predicted u of every accelerometer's K0 and Ks, and the geometry's conditioning.
-    Gfimu(commands::gfimu::PlanArgs),
-    /// Gyro rate-transfer plan: predicted u of K1, B, K2, K3 and the asymmetry for a set of table rates.
-    GyroRate(commands::gyro::PlanRateArgs),
-    /// Gyro multi-position plan: predicted u of every drift term for head angles and azimuths.
-    GyroPositions(commands::gyro::PlanPositionsArgs),
-    /// Thermal plateau plan: predicted u of every polynomial coefficient for a set of plateau temperatures.
-    Thermal(commands::thermal::PlanArgs),
-}
-
-#[derive(Subcommand, Debug)]
-enum SimulateCommand {
-    /// Dividing-head tumble test.
-    Tumble(commands::tumble::SimArgs),
-    /// Gyro-free unit: six-position static test or rate-table motion.
-    Gfimu(commands::gfimu::SimArgs),
-    /// Misalignment test: gyro on a rate table or accelerometer on a vertical face.
-    #[command(subcommand)]
-    Misalign(commands::misalign::SimCommand),
-    /// Precision centrifuge test (IA, PA, OA radial and 45-degree cross positions).
-    Centrifuge(commands::centrifuge::SimArgs),
-    /// Gyro rate-transfer test on a rate table; writes the input CSV of `incal gyro rate`.
-    GyroRate(commands::gyro::SimRateArgs),
-    /// Gyro multi-position test on a dividing head; writes the input CSV of `incal gyro positions`.
-    GyroPositions(commands::gyro::SimPositionsArgs),
-    /// Rate-noise record (gyro) with IEEE 952 terms: quantization, white, flicker, random walk, ramp.
-    Noise(commands::noise::SimArgs),
-    /// IMU session (three accelerometers, three gyros): Ferraris sequence, random orientations or static positions.
-    Imu(commands::imu::SimArgs),
-    /// Thermal chamber ramp (hold, heat, hold, cool, hold) with a lagging sensor whose biases follow known polynomials with hysteresis; writes the input CSV of `incal thermal ramp`.
-    Thermal(commands::thermal::SimArgs),
 }
 
 fn run(cli: Cli) -> CliResult<()> {
+    use commands::Run;
     match cli.command {
         Command::Demo(a) => commands::demo::run(&a),
-        Command::Tumble(a) => commands::tumble::run(&a),
-        Command::Centrifuge(a) => commands::centrifuge::run(&a),
-        Command::Plan(PlanCommand::Tumble(a)) => commands::tumble::plan(&a),
-        Command::Simulate(SimulateCommand::Tumble(a)) => commands::tumble::simulate(&a),
-        Command::Simulate(SimulateCommand::Centrifuge(a)) => commands::centrifuge::simulate(&a),
+        Command::Procedure(c) => c.run(),
+        Command::Plan(c) => c.run(),
+        Command::Simulate(c) => c.run(),
         Command::Compare(a) => commands::compare::run(&a),
         Command::Export(c) => commands::export::run(&c),
         Command::Schema(a) => commands::schema::run(&a),
         Command::Procedures(a) => commands::procedures::run(&a),
         Command::Report(a) => commands::report::run(&a),
-        Command::Gfimu(GfimuCommand::Calibrate(a)) => commands::gfimu::run_calibrate(&a),
-        Command::Gfimu(GfimuCommand::Solve(a)) => commands::gfimu::run_solve(&a),
-        Command::Simulate(SimulateCommand::Gfimu(a)) => commands::gfimu::simulate(&a),
-        Command::Misalign(c) => commands::misalign::run(&c),
-        Command::Plan(PlanCommand::Misalign(a)) => commands::misalign::plan(&a),
-        Command::Simulate(SimulateCommand::Misalign(c)) => commands::misalign::simulate(&c),
         Command::Record(c) => commands::record::run(&c),
-        Command::Gyro(commands::gyro::Command::Rate(a)) => commands::gyro::run_rate(&a),
-        Command::Gyro(commands::gyro::Command::Positions(a)) => commands::gyro::run_positions(&a),
-        Command::Plan(PlanCommand::GyroRate(a)) => commands::gyro::plan_rate(&a),
-        Command::Plan(PlanCommand::Gfimu(a)) => commands::gfimu::plan(&a),
-        Command::Plan(PlanCommand::Centrifuge(a)) => commands::centrifuge::plan(&a),
-        Command::Plan(PlanCommand::GyroPositions(a)) => commands::gyro::plan_positions(&a),
-        Command::Simulate(SimulateCommand::GyroRate(a)) => commands::gyro::simulate_rate_cmd(&a),
-        Command::Simulate(SimulateCommand::GyroPositions(a)) => {
-            commands::gyro::simulate_positions_cmd(&a)
-        }
-        Command::Noise(a) => commands::noise::run(&a),
         Command::Batch(a) => commands::batch::run(&a),
-        Command::Imu(commands::imu::Command::Ferraris(a)) => commands::imu::run_ferraris(&a),
-        Command::Imu(commands::imu::Command::Autocal(a)) => commands::imu::run_autocal(&a),
-        Command::Imu(commands::imu::Command::Multipos(a)) => commands::imu::run_multipos(&a),
-        Command::Imu(commands::imu::Command::Apply(a)) => commands::imu::run_apply(&a),
-        Command::Simulate(SimulateCommand::Imu(a)) => commands::imu::simulate(&a),
-        Command::Simulate(SimulateCommand::Noise(a)) => commands::noise::simulate(&a),
-        Command::Simulate(SimulateCommand::Thermal(a)) => commands::thermal::simulate(&a),
-        Command::Plan(PlanCommand::Thermal(a)) => commands::thermal::plan(&a),
-        Command::Thermal(c) => commands::thermal::run(&c),
     }
 }
 

@@ -315,3 +315,50 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
     let doc = <CentrifugeTest as Plan>::plan(&options).map_err(core)?;
     a.out.emit(&doc)
 }
+
+// The commands of this file in the command tree (`crate::commands`).
+
+/// This file's commands at the top level (`incal …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Reductions {
+    /// Calibrate an accelerometer on a precision centrifuge: radius, K2/K3, cross-axis and cross-coupling terms (He & Yin 2017; IEEE Std 836).
+    Centrifuge(Args),
+}
+
+impl crate::commands::Run for Reductions {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Centrifuge(a) => run(a),
+        }
+    }
+}
+
+/// This file's plans (`incal plan …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Plans {
+    /// Centrifuge plan: predicted u of the radius quantities and of every coefficient for a station/speed plan.
+    Centrifuge(PlanArgs),
+}
+
+impl crate::commands::Run for Plans {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Centrifuge(a) => plan(a),
+        }
+    }
+}
+
+/// This file's simulators (`incal simulate …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Simulations {
+    /// Precision centrifuge test (IA, PA, OA radial and 45-degree cross positions).
+    Centrifuge(SimArgs),
+}
+
+impl crate::commands::Run for Simulations {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Centrifuge(a) => simulate(a),
+        }
+    }
+}

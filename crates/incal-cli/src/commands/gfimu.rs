@@ -432,3 +432,61 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
     a.out
         .emit(&<GfimuCalibrate as Plan>::plan(&options).map_err(core)?)
 }
+
+/// `incal gfimu …`.
+#[derive(clap::Subcommand, Debug)]
+pub enum Command {
+    /// Calibrate every accelerometer's K0 and Ks from static positions (six-position test or any >= 6 orientations).
+    Calibrate(CalibrateArgs),
+    /// Solve a time series of outputs for f0, angular acceleration and angular rate.
+    Solve(SolveArgs),
+}
+
+// The commands of this file in the command tree (`crate::commands`).
+
+/// This file's commands at the top level (`incal …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Reductions {
+    /// Gyro-free inertial unit of six (or more) accelerometers: calibrate K0 and Ks, solve motion (the GFIMU note).
+    #[command(subcommand)]
+    Gfimu(Command),
+}
+
+impl crate::commands::Run for Reductions {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Gfimu(Command::Calibrate(a)) => run_calibrate(a),
+            Self::Gfimu(Command::Solve(a)) => run_solve(a),
+        }
+    }
+}
+
+/// This file's plans (`incal plan …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Plans {
+    /// Gyro-free unit calibration plan: predicted u of every accelerometer's K0 and Ks, and the geometry's conditioning.
+    Gfimu(PlanArgs),
+}
+
+impl crate::commands::Run for Plans {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Gfimu(a) => plan(a),
+        }
+    }
+}
+
+/// This file's simulators (`incal simulate …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Simulations {
+    /// Gyro-free unit: six-position static test or rate-table motion.
+    Gfimu(SimArgs),
+}
+
+impl crate::commands::Run for Simulations {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Gfimu(a) => simulate(a),
+        }
+    }
+}

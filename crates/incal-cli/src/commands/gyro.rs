@@ -450,3 +450,58 @@ pub fn simulate_positions_cmd(a: &SimPositionsArgs) -> CliResult<()> {
     };
     crate::run::simulate::<GyroPositions>(&options, a.output.as_deref())
 }
+
+// The commands of this file in the command tree (`crate::commands`).
+
+/// This file's commands at the top level (`incal …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Reductions {
+    /// Gyro tests: rate-transfer test on a rate table, multi-position test on a dividing head (IEEE Std 952 / 1431 / 517).
+    #[command(subcommand)]
+    Gyro(Command),
+}
+
+impl crate::commands::Run for Reductions {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Gyro(Command::Rate(a)) => run_rate(a),
+            Self::Gyro(Command::Positions(a)) => run_positions(a),
+        }
+    }
+}
+
+/// This file's plans (`incal plan …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Plans {
+    /// Gyro rate-transfer plan: predicted u of K1, B, K2, K3 and the asymmetry for a set of table rates.
+    GyroRate(PlanRateArgs),
+    /// Gyro multi-position plan: predicted u of every drift term for head angles and azimuths.
+    GyroPositions(PlanPositionsArgs),
+}
+
+impl crate::commands::Run for Plans {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::GyroRate(a) => plan_rate(a),
+            Self::GyroPositions(a) => plan_positions(a),
+        }
+    }
+}
+
+/// This file's simulators (`incal simulate …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Simulations {
+    /// Gyro rate-transfer test on a rate table; writes the input CSV of `incal gyro rate`.
+    GyroRate(SimRateArgs),
+    /// Gyro multi-position test on a dividing head; writes the input CSV of `incal gyro positions`.
+    GyroPositions(SimPositionsArgs),
+}
+
+impl crate::commands::Run for Simulations {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::GyroRate(a) => simulate_rate_cmd(a),
+            Self::GyroPositions(a) => simulate_positions_cmd(a),
+        }
+    }
+}

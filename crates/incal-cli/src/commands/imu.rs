@@ -461,3 +461,50 @@ pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
     }
     Ok(())
 }
+
+// The commands of this file in the command tree (`crate::commands`).
+
+/// This file's commands at the top level (`incal …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Reductions {
+    /// IMU triad calibration: Ferraris (imucal), least squares over known orientations, autocalibration (Tedaldi / imu_tk), apply.
+    #[command(subcommand)]
+    Imu(Command),
+}
+
+impl crate::commands::Run for Reductions {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Imu(Command::Ferraris(a)) => run_ferraris(a),
+            Self::Imu(Command::Autocal(a)) => run_autocal(a),
+            Self::Imu(Command::Multipos(a)) => run_multipos(a),
+            Self::Imu(Command::Apply(a)) => run_apply(a),
+        }
+    }
+}
+
+/// This file's plans (`incal plan …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Plans {
+}
+
+impl crate::commands::Run for Plans {
+    fn run(&self) -> CliResult<()> {
+        match *self {}
+    }
+}
+
+/// This file's simulators (`incal simulate …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Simulations {
+    /// IMU session (three accelerometers, three gyros): Ferraris sequence, random orientations or static positions.
+    Imu(SimArgs),
+}
+
+impl crate::commands::Run for Simulations {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Imu(a) => simulate(a),
+        }
+    }
+}

@@ -345,3 +345,52 @@ pub struct SimAccelArgs {
     #[arg(long, short = 'o', value_name = "FILE")]
     pub output: Option<PathBuf>,
 }
+
+// The commands of this file in the command tree (`crate::commands`).
+
+/// This file's commands at the top level (`incal …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Reductions {
+    /// Misalignment separation: gyro on a rate table, accelerometer on a vertical face (Li et al. 2012).
+    #[command(subcommand)]
+    Misalign(Command),
+}
+
+impl crate::commands::Run for Reductions {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Misalign(c) => run(c),
+        }
+    }
+}
+
+/// This file's plans (`incal plan …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Plans {
+    /// Misalignment plan: predicted u of each angle for a configuration set.
+    Misalign(PlanArgs),
+}
+
+impl crate::commands::Run for Plans {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Misalign(a) => plan(a),
+        }
+    }
+}
+
+/// This file's simulators (`incal simulate …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Simulations {
+    /// Misalignment test: gyro on a rate table or accelerometer on a vertical face.
+    #[command(subcommand)]
+    Misalign(SimCommand),
+}
+
+impl crate::commands::Run for Simulations {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Misalign(c) => simulate(c),
+        }
+    }
+}

@@ -310,3 +310,46 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         crate::io::write_binary_stream(Some(&a.output), write)
     }
 }
+
+// The commands of this file in the command tree (`crate::commands`).
+
+/// This file's commands at the top level (`incal …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Reductions {
+    /// Noise and stability of long static records: OADEV, MDEV, OHDEV, TDEV, TOTDEV with confidence bounds, IEEE 952 noise terms, bias stability.
+    Noise(Args),
+}
+
+impl crate::commands::Run for Reductions {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Noise(a) => run(a),
+        }
+    }
+}
+
+/// This file's plans (`incal plan …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Plans {
+}
+
+impl crate::commands::Run for Plans {
+    fn run(&self) -> CliResult<()> {
+        match *self {}
+    }
+}
+
+/// This file's simulators (`incal simulate …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Simulations {
+    /// Rate-noise record (gyro) with IEEE 952 terms: quantization, white, flicker, random walk, ramp.
+    Noise(SimArgs),
+}
+
+impl crate::commands::Run for Simulations {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Noise(a) => simulate(a),
+        }
+    }
+}

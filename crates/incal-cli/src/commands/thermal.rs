@@ -378,3 +378,51 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
     };
     a.out.emit(&<Thermal as Plan>::plan(&o).map_err(core)?)
 }
+
+// The commands of this file in the command tree (`crate::commands`).
+
+/// This file's commands at the top level (`incal …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Reductions {
+    /// Thermal calibration: coefficients as polynomials in temperature from soak plateaus (fit) or a chamber ramp (ramp), and compensation (apply).
+    #[command(subcommand)]
+    Thermal(Command),
+}
+
+impl crate::commands::Run for Reductions {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Thermal(c) => run(c),
+        }
+    }
+}
+
+/// This file's plans (`incal plan …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Plans {
+    /// Thermal plateau plan: predicted u of every polynomial coefficient for a set of plateau temperatures.
+    Thermal(PlanArgs),
+}
+
+impl crate::commands::Run for Plans {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Thermal(a) => plan(a),
+        }
+    }
+}
+
+/// This file's simulators (`incal simulate …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Simulations {
+    /// Thermal chamber ramp (hold, heat, hold, cool, hold) with a lagging sensor whose biases follow known polynomials with hysteresis; writes the input CSV of `incal thermal ramp`.
+    Thermal(SimArgs),
+}
+
+impl crate::commands::Run for Simulations {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Thermal(a) => simulate(a),
+        }
+    }
+}

@@ -250,3 +250,50 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
     };
     crate::run::simulate::<Tumble>(&options, a.output.as_deref())
 }
+
+// The commands of this file in the command tree (`crate::commands`).
+
+/// This file's commands at the top level (`incal …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Reductions {
+    /// Calibrate an accelerometer from a dividing-head tumble test (Wu et al. 2015; GJB 1037A).
+    Tumble(Args),
+}
+
+impl crate::commands::Run for Reductions {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Tumble(a) => run(a),
+        }
+    }
+}
+
+/// This file's plans (`incal plan …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Plans {
+    /// Tumble plan: GJB 12-point, small-angle 12-point for a range, or N-point.
+    Tumble(PlanArgs),
+}
+
+impl crate::commands::Run for Plans {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Tumble(a) => plan(a),
+        }
+    }
+}
+
+/// This file's simulators (`incal simulate …`).
+#[derive(clap::Subcommand, Debug)]
+pub enum Simulations {
+    /// Dividing-head tumble test.
+    Tumble(SimArgs),
+}
+
+impl crate::commands::Run for Simulations {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Tumble(a) => simulate(a),
+        }
+    }
+}
