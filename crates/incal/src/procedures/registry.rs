@@ -629,10 +629,13 @@ mod tests {
 
     #[test]
     fn document_ids_are_the_serde_names() {
-        for p in Procedure::all() {
+        let all = Procedure::all();
+        for p in &all {
             assert_eq!(serde_json::to_value(p).unwrap(), p.as_str(), "{p:?}");
+            assert_eq!(Procedure::from_id(p.as_str()), Some(*p));
         }
-        assert_eq!(Procedure::all().len(), 12);
+        let ids: std::collections::BTreeSet<&str> = all.iter().map(|p| p.as_str()).collect();
+        assert_eq!(ids.len(), all.len(), "a document id twice");
     }
 
     #[test]
