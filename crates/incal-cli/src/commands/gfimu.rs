@@ -11,7 +11,7 @@ use incal::procedures::gfimu::input::{
     self, ArrayChoice, ArrayGeometry, GeometryFile, DEFAULT_LEVER_ARM_M,
 };
 use incal::procedures::gfimu::plan::GfimuPlanOptions;
-use incal::procedures::gfimu::sim::{self, six_positions, F0Frame, GfimuSim, MotionProfile};
+use incal::procedures::gfimu::sim::six_positions;
 use incal::procedures::gfimu::solve::Solver;
 use incal::procedures::gfimu::stream::{solve_stream, MotionSeries, SolutionFormat, StreamError};
 use incal::procedures::gfimu::{GfimuCalibrate, GfimuCalibrateOptions, SolveOptions};
@@ -371,38 +371,40 @@ impl Drop for Spill {
 
 /// `incal simulate gfimu`.
 pub fn simulate(a: &SimArgs) -> CliResult<()> {
-    let kind = match a.kind {
-        SimKind::Static => sim::SimKind::Static { samples: a.samples },
-        SimKind::Motion => sim::SimKind::Motion(MotionProfile {
-            axis: vec3("--axis", &a.axis)?,
-            angular_accel_rad_s2: a.angular_accel_rad_s2,
-            spin_up_s: a.spin_up_s,
-            omega0_rad_s: vec3("--omega0-rad-s", &a.omega0_rad_s)?,
-            f0_g: vec3("--f0-g", &a.f0_g)?,
-            f0_frame: match a.f0_frame {
-                F0FrameArg::Unit => F0Frame::Unit,
-                F0FrameArg::Table => F0Frame::Table,
-            },
-            oscillation_amplitude_rad_s: a.oscillation_amplitude_rad_s,
-            oscillation_hz: a.oscillation_hz,
-            duration_s: a.duration_s,
-            rate_hz: a.rate_hz,
-            gravity_m_s2: a.gravity_m_s2,
-        }),
-    };
-    let cfg = GfimuSim {
-        array: a.geometry.load()?,
-        k1_out_per_g: a.k1,
+    use incal::procedures::gfimu::sim_options::{F0FrameOption, GfimuSimKind, GfimuSimOptions};
+    let three = |opt: &str, v: &[f64]| vec3(opt, v).map(|v| [v.x, v.y, v.z]);
+    let options = GfimuSimOptions {
+        kind: match a.kind {
+            SimKind::Static => GfimuSimKind::Static,
+            SimKind::Motion => GfimuSimKind::Motion,
+        },
+        array: a.geometry.choice()?,
+        k1: a.k1,
         noise: a.noise,
-        kind,
+        samples: a.samples,
+        duration_s: a.duration_s,
+        rate_hz: a.rate_hz,
+        spin_up_s: a.spin_up_s,
+        angular_accel_rad_s2: a.angular_accel_rad_s2,
+        axis: three("--axis", &a.axis)?,
+        omega0_rad_s: three("--omega0-rad-s", &a.omega0_rad_s)?,
+        f0_g: three("--f0-g", &a.f0_g)?,
+        f0_frame: match a.f0_frame {
+            F0FrameArg::Unit => F0FrameOption::Unit,
+            F0FrameArg::Table => F0FrameOption::Table,
+        },
+        oscillation_amplitude_rad_s: a.oscillation_amplitude_rad_s,
+        oscillation_hz: a.oscillation_hz,
+        gravity_m_s2: a.gravity_m_s2,
         seed: a.seed,
     };
-    cfg.validate().map_err(core)?;
     if let Some(p) = &a.truth_out {
+        let cfg = options.config().map_err(core)?;
+        cfg.validate().map_err(core)?;
         let truth = serde_json::json!({ "notes": cfg.notes() });
         crate::io::write_text(Some(p), &crate::output::json_text(&truth))?;
     }
-    crate::io::write_stream(a.output.as_deref(), |out| cfg.write(out).map(|_| ()))
+    crate::run::simulate::<GfimuCalibrate>(&options, a.output.as_deref())
 }
 
 /// `incal plan gfimu`: predicted u of every K0 and Ks, and the geometry's

@@ -277,6 +277,7 @@ pub struct SimArgs {
 
 /// `incal simulate noise`: rate samples in deg/s (gyro) or g (accel).
 pub fn simulate(a: &SimArgs) -> CliResult<()> {
+    use incal::procedures::{noise::Noise, Simulate};
     let sim = NoiseSim {
         quantity: a.quantity.into(),
         arw_deg_rth: a.arw_deg_rth,
@@ -293,22 +294,22 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         duration_s: a.duration_s,
         channels: a.channels,
         seed: a.seed,
+        format: a.format.into(),
     };
-    sim.validate().map_err(core)?;
-    if a.format != FormatArg::Csv && incal_io::is_dash(&a.output) {
+    if a.format == FormatArg::Csv {
+        return crate::run::simulate::<Noise>(&sim, Some(&a.output));
+    }
+    Noise::validate(&sim).map_err(core)?;
+    if incal_io::is_dash(&a.output) {
         return Err(usage(
             "--format f32le/f64le writes a file, not standard output",
         ));
     }
     // The output is opened before the (possibly long) simulation, so a
     // path that cannot be written fails at once.
-    let write =
-        |out: &mut dyn std::io::Write| sim.write(&sim.simulate(), a.format.into(), out).map(|_| ());
-    if a.format == FormatArg::Csv {
-        crate::io::write_stream(Some(&a.output), write)
-    } else {
-        crate::io::write_binary_stream(Some(&a.output), write)
-    }
+    crate::io::write_binary_stream(Some(&a.output), |out| {
+        Noise::simulate(&sim, out).map_err(|e| std::io::Error::other(e.to_string()))
+    })
 }
 
 // The commands of this file in the command tree (`crate::commands`).

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use incal::procedures::thermal::{
-    self, apply, plan, ramp::Ramp, ramp::RampOptions, sim::RampSim, soak, Degree, Thermal,
+    self, apply, plan, ramp::Ramp, ramp::RampOptions, soak, Degree, Thermal,
 };
 use incal::procedures::{Plan, Silent};
 
@@ -274,42 +274,30 @@ pub struct SimArgs {
 
 /// `incal simulate thermal`.
 pub fn simulate(a: &SimArgs) -> CliResult<()> {
-    let gyro = match a.quantity {
-        QuantityArg::Gyro => true,
-        QuantityArg::Accel => false,
-        QuantityArg::Generic => return Err(usage("--quantity: gyro or accel")),
-    };
-    let names: Vec<String> = if gyro {
-        ["gx", "gy", "gz"]
-    } else {
-        ["ax", "ay", "az"]
-    }
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    let cfg = RampSim {
-        channels: thermal::sim::default_channels(&names, gyro),
-        unit: if gyro { "deg/s" } else { "g" }.into(),
-        t_ref_c: a.t_ref_c,
-        waypoints_c: match &a.plateaus_c {
-            Some(p) => p.clone(),
-            None => vec![a.t_low_c, a.t_high_c, a.t_low_c],
+    use incal::procedures::thermal::sim::{SimQuantity, ThermalSimOptions};
+    let options = ThermalSimOptions {
+        quantity: match a.quantity {
+            QuantityArg::Gyro => SimQuantity::Gyro,
+            QuantityArg::Accel => SimQuantity::Accel,
+            QuantityArg::Generic => return Err(usage("--quantity: gyro or accel")),
         },
+        t_low_c: a.t_low_c,
+        t_high_c: a.t_high_c,
+        plateaus_c: a.plateaus_c.clone(),
         ramp_c_per_min: a.ramp_c_per_min,
         hold_s: a.hold_s,
         lag_s: a.lag_s,
         rate_hz: a.rate_hz,
         temperature_noise_c: a.temperature_noise_c,
+        t_ref_c: a.t_ref_c,
         seed: a.seed,
     };
-    cfg.validate().map_err(core)?;
     if let Some(p) = &a.truth_out {
+        let cfg = options.config();
+        cfg.validate().map_err(core)?;
         crate::io::write_text(Some(p), &crate::output::json_text(&cfg.truth_json()))?;
     }
-    crate::io::write_stream(a.output.as_deref(), |out| {
-        cfg.write(out)
-            .map_err(|e| std::io::Error::other(e.to_string()))
-    })
+    crate::run::simulate::<Ramp>(&options, a.output.as_deref())
 }
 
 /// `incal plan thermal`.

@@ -423,7 +423,7 @@ fn accelerometer_records_round_trip() {
             "--output",
             q.to_str().unwrap(),
         ]),
-        "--arw-deg-rth is not a term of quantity accel",
+        "--arw-deg-rth: not a term of quantity accel",
     );
     bad(
         &run(&[
@@ -440,7 +440,7 @@ fn accelerometer_records_round_trip() {
             "--output",
             q.to_str().unwrap(),
         ]),
-        "--vrw-ug-rthz is not a term of quantity gyro",
+        "--vrw-ug-rthz: not a term of quantity gyro",
     );
 }
 

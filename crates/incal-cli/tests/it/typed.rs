@@ -165,7 +165,7 @@ fn every_typed_simulator_writes_the_bytes_of_the_command_line() {
 }
 
 #[test]
-fn every_procedure_has_its_typed_reduction_and_plan() {
+fn every_procedure_has_its_typed_reduction_plan_and_simulator() {
     use incal::procedures::registry::InputKind;
     let mut gaps = Vec::new();
     for e in REGISTRY {
@@ -175,6 +175,12 @@ fn every_procedure_has_its_typed_reduction_and_plan() {
         if e.plan.is_some() && e.planner.is_none() {
             gaps.push(format!(
                 "procedure {}: a plan command but no typed plan",
+                e.id
+            ));
+        }
+        if e.simulate.is_some() && e.simulator.is_none() {
+            gaps.push(format!(
+                "procedure {}: a simulate command but no typed simulator",
                 e.id
             ));
         }

@@ -524,7 +524,7 @@ pub static REGISTRY: &[Entry] = &[
         }),
         reduction: reduction::<super::gfimu::GfimuCalibrate>(),
         planner: planner::<super::gfimu::GfimuCalibrate>(),
-        simulator: None,
+        simulator: simulator::<super::gfimu::GfimuCalibrate>(),
     },
     Entry {
         id: "noise",
@@ -546,7 +546,7 @@ pub static REGISTRY: &[Entry] = &[
         }),
         reduction: reduction::<super::noise::Noise>(),
         planner: None,
-        simulator: None,
+        simulator: simulator::<super::noise::Noise>(),
     },
     Entry {
         id: "thermal-ramp",
@@ -568,7 +568,7 @@ pub static REGISTRY: &[Entry] = &[
         }),
         reduction: reduction::<super::thermal::ramp::Ramp>(),
         planner: planner::<super::thermal::Thermal>(),
-        simulator: None,
+        simulator: simulator::<super::thermal::ramp::Ramp>(),
     },
     Entry {
         id: "thermal-fit",
@@ -587,7 +587,7 @@ pub static REGISTRY: &[Entry] = &[
         example: None,
         reduction: None,
         planner: planner::<super::thermal::Thermal>(),
-        simulator: None,
+        simulator: simulator::<super::thermal::ramp::Ramp>(),
     },
 ];
 

@@ -33,6 +33,7 @@ pub mod document;
 pub mod input;
 pub mod plan;
 pub mod sim;
+pub mod sim_options;
 pub mod solve;
 pub mod stream;
 

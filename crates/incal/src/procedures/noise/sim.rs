@@ -144,39 +144,78 @@ pub const MAX_NOISE_SAMPLES: f64 = 1e9;
 
 /// A simulated noise record: the terms in engineering units of one
 /// quantity (the other quantity's terms must be 0), the sample rate, the
-/// length, the channels (independent, seeded from `seed`) and the format.
-#[derive(Debug, Clone, PartialEq)]
+/// length, the channels (independent, seeded from `seed`) and the format:
+/// the options of `incal simulate noise` ([`crate::procedures::Simulate`]),
+/// every term 0 unless given.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct NoiseSim {
-    /// Gyro (deg/s samples) or accel (g samples).
+    /// Gyro (deg/s samples) or accel (g samples); default gyro.
+    #[serde(default = "gyro")]
     pub quantity: QuantityKind,
     /// Gyro: angle random walk N, deg/√h.
+    #[serde(default)]
     pub arw_deg_rth: f64,
     /// Gyro: bias instability B, deg/h.
+    #[serde(default)]
     pub bias_instability_deg_h: f64,
     /// Gyro: rate random walk K, deg/h/√h.
+    #[serde(default)]
     pub rrw_deg_h_rth: f64,
     /// Gyro: angle quantization Q, arcsec.
+    #[serde(default)]
     pub quantization_arcsec: f64,
     /// Gyro: rate ramp R, deg/h².
+    #[serde(default)]
     pub rate_ramp_deg_h2: f64,
     /// Accelerometer: velocity random walk N, µg/√Hz.
+    #[serde(default)]
     pub vrw_ug_rthz: f64,
     /// Accelerometer: bias instability B, µg.
+    #[serde(default)]
     pub bias_instability_ug: f64,
     /// Accelerometer: acceleration random walk K, µg/√s.
+    #[serde(default)]
     pub accel_rw_ug_rts: f64,
     /// Accelerometer: velocity quantization Q, m/s.
+    #[serde(default)]
     pub quantization_m_s: f64,
     /// Accelerometer: acceleration ramp R, µg/s.
+    #[serde(default)]
     pub accel_ramp_ug_s: f64,
     /// Sample rate, Hz.
     pub rate_hz: f64,
     /// Record length, s.
     pub duration_s: f64,
     /// Channels, 1 to 64.
+    #[serde(default = "one")]
     pub channels: usize,
     /// Random seed (channel c draws from `trial_seed(seed, c)`).
     pub seed: u64,
+    /// How the record is written: CSV (`time_s,ch1,…`) or raw
+    /// interleaved little-endian floats.
+    #[serde(default)]
+    pub format: Format,
+}
+
+fn gyro() -> QuantityKind {
+    QuantityKind::Gyro
+}
+
+fn one() -> usize {
+    1
+}
+
+impl crate::procedures::Simulate for super::Noise {
+    type Options = NoiseSim;
+
+    fn validate(o: &NoiseSim) -> Result<()> {
+        o.validate()
+    }
+
+    fn simulate(o: &NoiseSim, out: &mut dyn std::io::Write) -> Result<()> {
+        o.write(&o.simulate(), o.format, out)?;
+        Ok(())
+    }
 }
 
 impl NoiseSim {
@@ -208,19 +247,18 @@ impl NoiseSim {
     pub fn validate(&self) -> Result<()> {
         let bad = |what: String, v: f64| Error::invalid(what, v);
         // One option, one meaning: a term of the other quantity is refused.
-        let (mine, other, what) =
-            match self.quantity {
-                QuantityKind::Gyro => (self.gyro_terms(), self.accel_terms(), "gyro"),
-                QuantityKind::Accel => (self.accel_terms(), self.gyro_terms(), "accel"),
-                QuantityKind::Generic => return Err(Error::Unsupported(
-                    "quantity: gyro or accel (a generic quantity has no term units to simulate)"
-                        .into(),
-                )),
-            };
+        let (mine, other, what) = match self.quantity {
+            QuantityKind::Gyro => (self.gyro_terms(), self.accel_terms(), "gyro"),
+            QuantityKind::Accel => (self.accel_terms(), self.gyro_terms(), "accel"),
+            QuantityKind::Generic => {
+                return crate::options::invalid(
+                    "quantity",
+                    "gyro or accel (a generic quantity has no term units to simulate)",
+                )
+            }
+        };
         if let Some((n, _)) = other.iter().find(|(_, v)| *v != 0.0) {
-            return Err(Error::Unsupported(format!(
-                "`{n}` is not a term of quantity {what}"
-            )));
+            return crate::options::invalid(n, format!("not a term of quantity {what}"));
         }
         for (n, v) in mine.iter().take(4) {
             if !(v.is_finite() && *v >= 0.0) {
@@ -235,9 +273,10 @@ impl NoiseSim {
         }
         let n = self.duration_s * self.rate_hz;
         if !(n.is_finite() && (4.0..=MAX_NOISE_SAMPLES).contains(&n)) {
-            return Err(Error::Unsupported(
-                "`duration_s` times `rate_hz` must give between 4 and 1e9 samples".into(),
-            ));
+            return crate::options::invalid(
+                "duration_s",
+                format!("times `rate_hz` must give between 4 and 1e9 samples, got {n}"),
+            );
         }
         if self.channels == 0 || self.channels > 64 {
             return bad("channels (1 to 64)".into(), self.channels as f64);

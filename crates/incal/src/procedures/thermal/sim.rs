@@ -21,6 +21,7 @@
 
 use std::io::Write;
 
+use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::poly;
@@ -179,7 +180,7 @@ impl RampSim {
     /// Write the recording (`time_s,chamber_c,temperature_c,<channels>`).
     pub fn write<W: Write>(&self, out: W) -> Result<()> {
         self.validate()?;
-        let io = |e: std::io::Error| Error::Unsupported(format!("writing the simulation: {e}"));
+        let io = Error::from;
         let mut header = vec!["time_s", "chamber_c", "temperature_c"];
         header.extend(self.channels.iter().map(|c| c.name.as_str()));
         let mut w = incal_io::writer::CsvWriter::new(out, &header).map_err(io)?;
@@ -278,4 +279,123 @@ pub fn default_channels(names: &[String], gyro: bool) -> Vec<ChannelTruth> {
             }
         })
         .collect()
+}
+
+/// What a simulated chamber ramp measures.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize, JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum SimQuantity {
+    /// Gyro: channels gx, gy, gz in deg/s.
+    #[default]
+    Gyro,
+    /// Accelerometer: channels ax, ay, az in g.
+    Accel,
+}
+
+/// The options of `incal simulate thermal`, typed once for every front
+/// end (the command line's defaults): the chamber profile (hold, heat,
+/// hold, cool, hold between `t_low_c` and `t_high_c`, or a soak sequence
+/// `plateaus_c`), the sensor's lag, the sample rate and the seed; the
+/// truth is [`default_channels`] of the quantity.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, JsonSchema)]
+pub struct ThermalSimOptions {
+    /// What the channels measure.
+    #[serde(default)]
+    pub quantity: SimQuantity,
+    /// Low temperature of the ramp profile, °C.
+    #[serde(default = "d_t_low")]
+    pub t_low_c: f64,
+    /// High temperature of the ramp profile, °C.
+    #[serde(default = "d_t_high")]
+    pub t_high_c: f64,
+    /// A soak sequence instead of the ramp: the chamber's plateaus in
+    /// order, °C (then `t_low_c` and `t_high_c` are not used).
+    #[serde(default)]
+    pub plateaus_c: Option<Vec<f64>>,
+    /// Ramp rate of the chamber, °C/min.
+    #[serde(default = "d_ramp")]
+    pub ramp_c_per_min: f64,
+    /// Hold at the start, at each turn and at the end, s.
+    #[serde(default = "d_hold")]
+    pub hold_s: f64,
+    /// The sensor's first-order lag behind the chamber, s.
+    #[serde(default = "d_lag")]
+    pub lag_s: f64,
+    /// Sample rate, Hz.
+    #[serde(default = "d_rate")]
+    pub rate_hz: f64,
+    /// Noise of the temperature reading, °C.
+    #[serde(default)]
+    pub temperature_noise_c: f64,
+    /// Reference temperature of the truth polynomials, °C.
+    #[serde(default = "d_t_ref")]
+    pub t_ref_c: f64,
+    /// Random seed.
+    pub seed: u64,
+}
+
+fn d_t_low() -> f64 {
+    -20.0
+}
+fn d_t_high() -> f64 {
+    60.0
+}
+fn d_ramp() -> f64 {
+    1.0
+}
+fn d_hold() -> f64 {
+    1800.0
+}
+fn d_lag() -> f64 {
+    120.0
+}
+fn d_rate() -> f64 {
+    10.0
+}
+fn d_t_ref() -> f64 {
+    super::DEFAULT_T_REF_C
+}
+
+impl ThermalSimOptions {
+    /// The simulator's configuration ([`RampSim`]).
+    pub fn config(&self) -> RampSim {
+        let gyro = self.quantity == SimQuantity::Gyro;
+        let names: Vec<String> = if gyro {
+            ["gx", "gy", "gz"]
+        } else {
+            ["ax", "ay", "az"]
+        }
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        RampSim {
+            channels: default_channels(&names, gyro),
+            unit: if gyro { "deg/s" } else { "g" }.into(),
+            t_ref_c: self.t_ref_c,
+            waypoints_c: match &self.plateaus_c {
+                Some(p) => p.clone(),
+                None => vec![self.t_low_c, self.t_high_c, self.t_low_c],
+            },
+            ramp_c_per_min: self.ramp_c_per_min,
+            hold_s: self.hold_s,
+            lag_s: self.lag_s,
+            rate_hz: self.rate_hz,
+            temperature_noise_c: self.temperature_noise_c,
+            seed: self.seed,
+        }
+    }
+}
+
+impl crate::procedures::Simulate for super::ramp::Ramp {
+    type Options = ThermalSimOptions;
+
+    fn validate(o: &ThermalSimOptions) -> Result<()> {
+        o.config().validate()
+    }
+
+    fn simulate(o: &ThermalSimOptions, out: &mut dyn Write) -> Result<()> {
+        o.config().write(out)
+    }
 }
