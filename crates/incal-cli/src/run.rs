@@ -43,3 +43,42 @@ pub fn simulate<S: incal::procedures::Simulate>(
         })
     })
 }
+
+/// The one runner of a streaming tool ([`incal::procedures::stream`]):
+/// the input opened (`-` is standard input) and read with `read`, the
+/// output opened before the first row (`None` or `-` is standard output),
+/// the tool run. A bad row is bad input (exit 2, naming the file and
+/// line; the rows before stay written); an output that cannot be written
+/// is a failure (exit 1). Returns what the tool did: the command shows its
+/// notes and warnings ([`show_streamed`]) as it needs.
+pub fn stream<S: incal::procedures::stream::Stream>(
+    model: S::Model,
+    input: &std::path::Path,
+    read: &incal_io::ReadOptions,
+    output: Option<&std::path::Path>,
+) -> CliResult<incal::procedures::stream::Streamed> {
+    let src = incal_io::open(input)?;
+    let mut out = crate::io::open_output(output)?;
+    let out_name = crate::io::output_name(output);
+    let done = S::stream(model, &src.name, src.reader, read, &mut out).and_then(|s| {
+        std::io::Write::flush(&mut out)?;
+        Ok(s)
+    });
+    done.map_err(|e| match e {
+        incal::Error::Write(m) => {
+            crate::error::CliError::Failure(anyhow::anyhow!("{out_name}: cannot write: {m}"))
+        }
+        other => crate::error::core(other),
+    })
+}
+
+/// A streaming tool's notes (`note: …`) and warnings (`warning [code]:
+/// …`) on standard error, one line each.
+pub fn show_streamed(s: &incal::procedures::stream::Streamed) {
+    for n in &s.notes {
+        crate::embed::stderr_line(&format!("note: {n}"));
+    }
+    for w in &s.warnings {
+        crate::embed::stderr_line(&format!("warning [{}]: {}", w.code, w.message));
+    }
+}

@@ -13,7 +13,7 @@ use incal::procedures::gfimu::input::{
 use incal::procedures::gfimu::plan::GfimuPlanOptions;
 use incal::procedures::gfimu::sim::six_positions;
 use incal::procedures::gfimu::solve::Solver;
-use incal::procedures::gfimu::stream::{solve_stream, MotionSeries, SolutionFormat, StreamError};
+use incal::procedures::gfimu::stream::{SolutionFormat, Solve, SolveModel};
 use incal::procedures::gfimu::{GfimuCalibrate, GfimuCalibrateOptions, SolveOptions};
 use incal::procedures::{Plan, Procedure, Silent};
 use incal::units::STANDARD_GRAVITY_M_S2;
@@ -302,8 +302,6 @@ pub fn run_solve(a: &SolveArgs) -> CliResult<()> {
     let (cal_name, bytes) = crate::io::read_bytes(&a.calibration)?;
     let cal = input::read_calibration(&cal_name, &bytes, g).map_err(core)?;
     let solver = Solver::for_calibration(&cal_name, g, &cal, &opts).map_err(core)?;
-    let src = incal_io::open(&a.input)?;
-    let series = MotionSeries::open(&src.name, src.reader, &a.read.options()?, g).map_err(core)?;
     let format = if a.json {
         SolutionFormat::Json
     } else if a.jsonl {
@@ -311,29 +309,33 @@ pub fn run_solve(a: &SolveArgs) -> CliResult<()> {
     } else {
         SolutionFormat::Csv
     };
-    let mut out = crate::io::open_output(a.output.as_deref())?;
-    let mut spill = match format {
+    // The spill file lives (and is removed) here; the solver writes
+    // through a second handle to it.
+    let spill = match format {
         SolutionFormat::Json => Some(Spill::new()?),
         _ => None,
     };
-    let scratch = spill
-        .as_mut()
-        .map(|s| &mut s.file as &mut dyn incal::procedures::gfimu::stream::Scratch);
-    match solve_stream(series, solver, format, &mut out, scratch) {
-        Ok(s) => {
-            // The CSV is rows only (pandas reads it as it is): its mode and
-            // warnings go to standard error, as imu apply's do.
-            if format == SolutionFormat::Csv {
-                crate::embed::stderr_line(&format!("note: solution mode {}", s.mode));
-                for w in &s.warnings {
-                    crate::embed::stderr_line(&format!("warning [{}]: {}", w.code, w.message));
-                }
-            }
-            Ok(())
-        }
-        Err(StreamError::Input(e)) => Err(core(e)),
-        Err(e @ StreamError::Write(_)) => Err(CliError::Failure(anyhow::anyhow!("{e}"))),
+    let scratch = match &spill {
+        Some(s) => Some(Box::new(s.file.try_clone().map_err(|e| {
+            CliError::Failure(anyhow::anyhow!("{}: cannot write: {e}", s.path.display()))
+        })?) as Box<dyn incal::procedures::gfimu::stream::Scratch + Send>),
+        None => None,
+    };
+    let model = SolveModel {
+        solver,
+        geometry: g.clone(),
+        format,
+        scratch,
+    };
+    let done = crate::run::stream::<Solve>(model, &a.input, &a.read.options()?, a.output.as_deref())?;
+    // The CSV is rows only (pandas reads it as it is): its mode and
+    // warnings go to standard error, as imu apply's do; a JSON output
+    // holds them.
+    if format == SolutionFormat::Csv {
+        crate::run::show_streamed(&done);
     }
+    drop(spill);
+    Ok(())
 }
 
 /// A temporary file holding the JSON document's `"uncertainty"` array

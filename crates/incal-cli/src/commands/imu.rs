@@ -1,7 +1,6 @@
 //! `incal imu ferraris|multipos|autocal|apply` and `incal simulate imu`:
 //! IMU triad calibration (three accelerometers, three gyros).
 
-use std::io::Write;
 use std::path::PathBuf;
 
 use clap::Subcommand;
@@ -12,7 +11,7 @@ use incal::procedures::imu::multipos::{MatrixForm, Multipos, MultiposSessionOpti
 use incal::procedures::imu::sim::{ImuSimOptions, SequenceKind};
 use incal::procedures::Silent;
 
-use crate::error::{core, in_file, CliError, CliResult};
+use crate::error::{core, in_file, CliResult};
 use crate::input::ReadArgs;
 use crate::output::ResultArgs;
 
@@ -367,98 +366,19 @@ pub struct ApplyArgs {
 /// written as soon as it is calibrated (numbers in shortest round-trip
 /// form).
 pub fn run_apply(a: &ApplyArgs) -> CliResult<()> {
+    use incal::procedures::imu::apply::{Apply, ApplyModel};
     let (cal_name, _, doc) = crate::documents::read_document(&a.calibration)?;
-    let cal = ImuCalibration::from_document(&doc).map_err(|e| in_file(&cal_name, e))?;
-    let src = incal_io::open(&a.input)?;
+    let calibration = ImuCalibration::from_document(&doc).map_err(|e| in_file(&cal_name, e))?;
     let read = incal_io::ReadOptions {
         hash: false,
         ..a.read.options()?
     };
-    let mut rows = incal_io::Reader::new(&src.name, src.reader, &read)?;
-    let cols = cal.columns(rows.header()).map_err(core)?;
-    let mut w = crate::io::open_output(a.output.as_deref())?;
-    let out_name = crate::io::output_name(a.output.as_deref());
-    let wfail =
-        |e: std::io::Error| CliError::Failure(anyhow::anyhow!("{out_name}: cannot write: {e}"));
-    let mut line = cols
-        .output_header()
-        .iter()
-        .map(|h| incal_io::csv_text(h))
-        .collect::<Vec<_>>()
-        .join(",");
-    line.push('\n');
-    w.write_all(line.as_bytes()).map_err(wfail)?;
-    let mut fmt = ryu::Buffer::new();
-    let mut put = |r: &incal::procedures::imu::apply::CalibratedRow| -> CliResult<()> {
-        line.clear();
-        if let Some(t) = r.time {
-            line.push_str(fmt.format(t));
-            line.push(',');
-        }
-        for (k, x) in r.acc.iter().enumerate() {
-            if k > 0 {
-                line.push(',');
-            }
-            line.push_str(fmt.format(*x));
-        }
-        if let Some(g) = r.gyr {
-            for x in g.iter() {
-                line.push(',');
-                line.push_str(fmt.format(*x));
-            }
-        }
-        for cell in &r.extra {
-            line.push(',');
-            line.push_str(&incal_io::csv_text(cell));
-        }
-        line.push('\n');
-        w.write_all(line.as_bytes()).map_err(wfail)
+    let model = ApplyModel {
+        calibration,
+        sort_time: a.sort_time,
     };
-    // The time-stamp policy of a streaming reduction: stamps copied as
-    // read, a decreasing one refused at its line (or, with --sort-time,
-    // the rows held and put in order), repeats and gaps reported.
-    let mut stamps = incal::timebase::StampStream::new(f64::INFINITY);
-    let stamp_error = |(l, e): (usize, incal::timebase::TimeError)| {
-        CliError::from(incal_io::InputError::cell(
-            &src.name,
-            l,
-            "time_s",
-            e.to_string(),
-        ))
-    };
-    let mut held = Vec::new();
-    while let Some(row) = rows.next_row()? {
-        let r = cal.row(&cols, &row).map_err(core)?;
-        if a.sort_time {
-            held.push(r);
-            continue;
-        }
-        if let Some(t) = r.time {
-            stamps.push(t, row.line()).map_err(stamp_error)?;
-        }
-        put(&r)?;
-    }
-    rows.finish()?;
-    let mut warnings = Vec::new();
-    if cols.time.is_some() && a.sort_time {
-        let mut times: Vec<f64> = held.iter().map(|r| r.time.unwrap_or(0.0)).collect();
-        if let Some((order, moved)) = incal::timebase::time_order(&mut times) {
-            incal::timebase::permute(&mut held, &order);
-            warnings.push(incal::timebase::sorted_warning(moved, held.len()));
-        }
-        for (k, t) in times.iter().enumerate() {
-            stamps.push(*t, k + 1).map_err(stamp_error)?;
-        }
-    }
-    for r in &held {
-        put(r)?;
-    }
-    stamps.finish().map_err(stamp_error)?;
-    warnings.extend(stamps.warnings());
-    w.flush().map_err(wfail)?;
-    for x in warnings {
-        crate::embed::stderr_line(&format!("warning [{}]: {}", x.code, x.message));
-    }
+    let done = crate::run::stream::<Apply>(model, &a.input, &read, a.output.as_deref())?;
+    crate::run::show_streamed(&done);
     Ok(())
 }
 

@@ -201,30 +201,9 @@ fn from_store(
 fn run_apply(a: &ApplyArgs) -> CliResult<()> {
     let (name, _, doc) = read_document(&a.model)?;
     let model = thermal::Model::of(&doc).map_err(|e| in_file(&name, e))?;
-    let src = incal_io::open(&a.input)?;
-    let src_name = src.name.clone();
-    let mut summary = None;
-    crate::io::write_stream(a.output.as_deref(), |out| {
-        match apply::apply(&model, &src_name, src.reader, out) {
-            Ok(s) => {
-                summary = Some(s);
-                Ok(())
-            }
-            Err(e) => Err(std::io::Error::other(e.to_string())),
-        }
-    })
-    .map_err(|e| match e {
-        CliError::Failure(f) => CliError::Input(f.to_string()),
-        other => other,
-    })?;
-    if let Some(s) = summary {
-        if s.clamped > 0 {
-            eprintln!(
-                "warning[model-range]: {} of {} rows lie outside the model's valid temperature range: their temperature was clamped to it",
-                s.clamped, s.rows
-            );
-        }
-    }
+    let read = incal_io::ReadOptions::default();
+    let done = crate::run::stream::<apply::Compensate>(model, &a.input, &read, a.output.as_deref())?;
+    crate::run::show_streamed(&done);
     Ok(())
 }
 

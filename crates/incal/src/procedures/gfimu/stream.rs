@@ -586,6 +586,60 @@ pub struct Solved {
     pub warnings: Vec<crate::Warning>,
 }
 
+/// `gfimu solve` as a [`crate::procedures::stream::Stream`]: a motion
+/// series solved sample by sample ([`solve_stream`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Solve;
+
+/// The model of [`Solve`]: the solver (calibration, geometry, options),
+/// the geometry whose columns the series has, the output's form, and the
+/// scratch that holds a JSON document's `uncertainty` array meanwhile
+/// (memory when `None`).
+pub struct SolveModel {
+    /// The solver ([`Solver::for_calibration`]).
+    pub solver: Solver,
+    /// The array's geometry (the series' columns).
+    pub geometry: Geometry,
+    /// CSV, one JSON document or JSON lines.
+    pub format: SolutionFormat,
+    /// Where the `uncertainty` array waits (module docs).
+    pub scratch: Option<Box<dyn Scratch + Send>>,
+}
+
+impl crate::procedures::stream::Stream for Solve {
+    type Model = SolveModel;
+
+    /// The solution mode is the one note; the warnings are the run's (a
+    /// JSON output holds them too).
+    fn stream(
+        model: SolveModel,
+        name: &str,
+        input: Box<dyn Read + Send>,
+        read: &incal_io::ReadOptions,
+        mut out: &mut dyn Write,
+    ) -> Result<crate::procedures::stream::Streamed> {
+        let SolveModel {
+            solver,
+            geometry,
+            format,
+            mut scratch,
+        } = model;
+        let series = MotionSeries::open(name, input, read, &geometry)?;
+        let scratch = scratch.as_mut().map(|s| &mut **s as &mut dyn Scratch);
+        match solve_stream(series, solver, format, &mut out, scratch) {
+            Ok(s) => Ok(crate::procedures::stream::Streamed {
+                rows: s.summary.rows as u64,
+                notes: vec![format!("solution mode {}", s.mode)],
+                warnings: s.warnings,
+            }),
+            Err(StreamError::Input(e)) => Err(e),
+            Err(StreamError::Write(e)) => {
+                Err(Error::Write(format!("cannot write the solution: {e}")))
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

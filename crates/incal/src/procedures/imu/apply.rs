@@ -399,3 +399,118 @@ mod tests {
         assert_eq!(e.to_string(), "K_a R_a is singular");
     }
 }
+
+/// `imu apply` as a [`crate::procedures::stream::Stream`]: a calibration
+/// applied to a raw series row by row.
+#[derive(Debug, Clone, Copy)]
+pub struct Apply;
+
+/// The model of [`Apply`]: the calibration and the time-stamp policy.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ApplyModel {
+    /// The calibration ([`ImuCalibration::from_document`]).
+    pub calibration: ImuCalibration,
+    /// Hold the rows and write them in time order (`time_s` sorted, the
+    /// rows moved reported) instead of refusing a decreasing stamp.
+    pub sort_time: bool,
+}
+
+/// One calibrated row as CSV text: numbers in their shortest round-trip
+/// form, other cells quoted as needed.
+fn put_row(r: &CalibratedRow, line: &mut String, fmt: &mut ryu::Buffer) {
+    line.clear();
+    if let Some(t) = r.time {
+        line.push_str(fmt.format(t));
+        line.push(',');
+    }
+    for (k, x) in r.acc.iter().enumerate() {
+        if k > 0 {
+            line.push(',');
+        }
+        line.push_str(fmt.format(*x));
+    }
+    if let Some(g) = r.gyr {
+        for x in g.iter() {
+            line.push(',');
+            line.push_str(fmt.format(*x));
+        }
+    }
+    for cell in &r.extra {
+        line.push(',');
+        line.push_str(&incal_io::csv_text(cell));
+    }
+    line.push('\n');
+}
+
+impl crate::procedures::stream::Stream for Apply {
+    type Model = ApplyModel;
+
+    /// The time-stamp policy of a streaming reduction: stamps copied as
+    /// read, a decreasing one refused at its line (or, with `sort_time`,
+    /// the rows held and put in order), repeats and gaps reported.
+    fn stream(
+        model: ApplyModel,
+        name: &str,
+        input: Box<dyn std::io::Read + Send>,
+        read: &incal_io::ReadOptions,
+        out: &mut dyn std::io::Write,
+    ) -> Result<crate::procedures::stream::Streamed> {
+        use crate::timebase::{permute, sorted_warning, time_order, StampStream};
+        let cal = &model.calibration;
+        let mut rows = incal_io::Reader::new(name, input, read)?;
+        let cols = cal.columns(rows.header())?;
+        let mut line = cols
+            .output_header()
+            .iter()
+            .map(|h| incal_io::csv_text(h))
+            .collect::<Vec<_>>()
+            .join(",");
+        line.push('\n');
+        out.write_all(line.as_bytes())?;
+        let mut fmt = ryu::Buffer::new();
+        let mut stamps = StampStream::new(f64::INFINITY);
+        let stamp_error = |(l, e): (usize, crate::timebase::TimeError)| {
+            Error::from(incal_io::InputError::cell(name, l, "time_s", e.to_string()))
+        };
+        let mut held = Vec::new();
+        let mut written = 0u64;
+        while let Some(row) = rows.next_row()? {
+            let r = cal.row(&cols, &row)?;
+            if model.sort_time {
+                held.push(r);
+                continue;
+            }
+            if let Some(t) = r.time {
+                stamps.push(t, row.line()).map_err(stamp_error)?;
+            }
+            put_row(&r, &mut line, &mut fmt);
+            out.write_all(line.as_bytes())?;
+            written += 1;
+        }
+        rows.finish()?;
+        let mut warnings = Vec::new();
+        if cols.time.is_some() && model.sort_time {
+            let mut times: Vec<f64> = held.iter().map(|r| r.time.unwrap_or(0.0)).collect();
+            if let Some((order, moved)) = time_order(&mut times) {
+                permute(&mut held, &order);
+                warnings.push(sorted_warning(moved, held.len()));
+            }
+            for (k, t) in times.iter().enumerate() {
+                stamps.push(*t, k + 1).map_err(stamp_error)?;
+            }
+        }
+        for r in &held {
+            put_row(r, &mut line, &mut fmt);
+            out.write_all(line.as_bytes())?;
+            written += 1;
+        }
+        stamps.finish().map_err(stamp_error)?;
+        warnings.extend(stamps.warnings());
+        out.flush()?;
+        Ok(crate::procedures::stream::Streamed {
+            rows: written,
+            notes: Vec::new(),
+            warnings,
+        })
+    }
+}

@@ -37,7 +37,18 @@ pub fn apply<R: Read, W: Write>(
     input: R,
     out: W,
 ) -> Result<ApplySummary> {
-    let mut rows = incal_io::Reader::new(name, input, &incal_io::ReadOptions::default())?;
+    apply_with(model, name, input, &incal_io::ReadOptions::default(), out)
+}
+
+/// [`apply`] with the input layer's options `read`.
+pub fn apply_with<R: Read, W: Write>(
+    model: &Model,
+    name: &str,
+    input: R,
+    read: &incal_io::ReadOptions,
+    out: W,
+) -> Result<ApplySummary> {
+    let mut rows = incal_io::Reader::new(name, input, read)?;
     let h = rows.header().clone();
     let temp = h.column("temperature_c").map_err(Error::from)?;
     let mut targets = Vec::new();
@@ -53,7 +64,7 @@ pub fn apply<R: Read, W: Write>(
             model.names()
         )));
     }
-    let io = |e: std::io::Error| Error::Unsupported(format!("writing the output: {e}"));
+    let io = Error::from;
     let header: Vec<&str> = h.names().iter().map(String::as_str).collect();
     let mut w = incal_io::CsvWriter::new(out, &header).map_err(io)?;
     let mut n = 0usize;
@@ -89,4 +100,41 @@ pub fn apply<R: Read, W: Write>(
             .map(|(k, ..)| h.names()[*k].clone())
             .collect(),
     })
+}
+
+/// `thermal apply` as a [`crate::procedures::stream::Stream`]: a thermal
+/// model ([`Model::of`] a thermal result) applied to raw data with its
+/// `temperature_c` column.
+#[derive(Debug, Clone, Copy)]
+pub struct Compensate;
+
+impl crate::procedures::stream::Stream for Compensate {
+    type Model = Model;
+
+    /// [`apply`]; rows whose temperature was clamped to the model's valid
+    /// range are a `model-range` warning.
+    fn stream(
+        model: Model,
+        name: &str,
+        input: Box<dyn Read + Send>,
+        read: &incal_io::ReadOptions,
+        out: &mut dyn Write,
+    ) -> Result<crate::procedures::stream::Streamed> {
+        let s = apply_with(&model, name, input, read, out)?;
+        let mut warnings = Vec::new();
+        if s.clamped > 0 {
+            warnings.push(crate::Warning::new(
+                crate::warning::WarningCode::ModelRange,
+                format!(
+                    "{} of {} rows lie outside the model's valid temperature range: their temperature was clamped to it",
+                    s.clamped, s.rows
+                ),
+            ));
+        }
+        Ok(crate::procedures::stream::Streamed {
+            rows: s.rows as u64,
+            notes: Vec::new(),
+            warnings,
+        })
+    }
 }
