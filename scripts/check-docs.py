@@ -11,7 +11,7 @@ Default files: README.md, CONTRIBUTING.md and docs/src/*.md.
 2. Examples: every ```sh block is run, line by line, with `incal` replaced by
    $INCAL, in one temporary directory per Markdown file (so a chapter's
    blocks build on each other). Lines that start with `cargo`, `cd`,
-   `scripts/`, `mdbook`, `INCAL_UPDATE_SCHEMA` or contain a `[`-bracketed
+   `scripts/`, `mdbook`, `INCAL_UPDATE_SCHEMA`, `INCAL_FUZZ_TARGET` or contain a `[`-bracketed
    synopsis are skipped. A ```text block right after a ```sh block must
    appear in what that block printed: every line, except `...` lines and
    blank lines, must be a line of the output (trailing spaces ignored).
@@ -29,7 +29,7 @@ import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 INCAL = os.environ.get("INCAL", os.path.join(ROOT, "target", "release", "incal"))
-SKIP = ("cargo", "cd ", "scripts/", "mdbook", "INCAL_UPDATE_SCHEMA", "INCAL=", "#")
+SKIP = ("cargo", "cd ", "scripts/", "mdbook", "INCAL_UPDATE_SCHEMA", "INCAL_FUZZ_TARGET", "INCAL=", "#")
 
 problems = []
 

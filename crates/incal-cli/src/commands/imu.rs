@@ -13,7 +13,7 @@ use incal::procedures::Silent;
 
 use crate::error::{core, in_file, CliResult};
 use crate::input::ReadArgs;
-use crate::output::ResultArgs;
+use crate::output::{PlanOut, ResultArgs};
 
 /// `incal imu …`.
 #[derive(Subcommand, Debug)]
@@ -196,6 +196,20 @@ pub struct SimArgs {
     /// ferraris, random, faces or positions.
     #[arg(long, value_enum, default_value = "ferraris")]
     pub sequence: SequenceArg,
+    #[command(flatten)]
+    pub session: SessionArgs,
+    /// Write the CSV here instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Write the truth (imucal's, imu_tk's and the sensor model's parameters) as JSON here.
+    #[arg(long, value_name = "FILE")]
+    pub truth_out: Option<PathBuf>,
+}
+
+/// The session of `incal simulate imu` and of the IMU plans: rig, timing,
+/// sensor and noise.
+#[derive(clap::Args, Debug)]
+pub struct SessionArgs {
     /// Sample rate (Hz).
     #[arg(long, default_value_t = 100.0)]
     pub rate_hz: f64,
@@ -248,41 +262,109 @@ pub struct SimArgs {
     /// Random seed of the noise and the orientations.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Write the CSV here instead of standard output.
-    #[arg(long, short = 'o', value_name = "FILE")]
-    pub output: Option<PathBuf>,
-    /// Write the truth (imucal's, imu_tk's and the sensor model's parameters) as JSON here.
-    #[arg(long, value_name = "FILE")]
-    pub truth_out: Option<PathBuf>,
+}
+
+impl SessionArgs {
+    /// The simulator's options for `sequence`.
+    fn options(&self, sequence: SequenceKind) -> ImuSimOptions {
+        ImuSimOptions {
+            sequence,
+            rate_hz: self.rate_hz,
+            static_s: self.static_s,
+            orientations: self.orientations,
+            init_static_s: self.init_static_s,
+            move_s: self.move_s,
+            positions: self.positions.clone(),
+            rotations: self.rotations,
+            rotation_deg: self.rotation_deg,
+            rotation_s: self.rotation_s,
+            gravity_m_s2: self.gravity_m_s2,
+            noise_acc: self.noise_acc,
+            noise_gyr: self.noise_gyr,
+            latitude_deg: self.latitude_deg,
+            truth_seed: self.truth_seed,
+            no_g_sensitivity: self.no_g_sensitivity,
+            seed: self.seed,
+        }
+    }
+}
+
+/// Options of `incal plan imu-ferraris`, `imu-multipos` and `imu-autocal`:
+/// the planned session (its sequence is the procedure's) and the seeds.
+#[derive(clap::Args, Debug)]
+pub struct PlanArgs {
+    #[command(flatten)]
+    pub session: SessionArgs,
+    /// Sessions simulated and reduced (seeds --seed, --seed + 1, …): the predicted u is the root mean square of their u.
+    #[arg(long, default_value_t = 5)]
+    pub seeds: usize,
+    #[command(flatten)]
+    pub out: PlanOut,
+}
+
+/// A plan by simulation of procedure `P` ([`incal::procedures::sim_plan`]).
+fn plan_by_simulation<P: incal::procedures::Procedure>(
+    a: &PlanArgs,
+    sequence: SequenceKind,
+    reduce: P::Options,
+) -> CliResult<()> {
+    use incal::procedures::sim_plan::{BySimulation, SimPlanOptions};
+    use incal::procedures::Plan;
+    let o = SimPlanOptions {
+        session: a.session.options(sequence),
+        reduce,
+        seeds: a.seeds,
+    };
+    a.out
+        .emit(&BySimulation::<P, incal::procedures::imu::sim::ImuSimulator>::plan(&o).map_err(core)?)
+}
+
+/// `incal plan imu-ferraris`.
+pub fn plan_ferraris(a: &PlanArgs) -> CliResult<()> {
+    use incal::procedures::{imu::ferraris::Ferraris, Procedure};
+    let reduce = incal::procedures::imu::ferraris::FerrarisOptions {
+        rate_hz: a.session.rate_hz,
+        gravity_m_s2: a.session.gravity_m_s2,
+        rotation_deg: a.session.rotation_deg,
+        ..Ferraris::example()
+    };
+    plan_by_simulation::<Ferraris>(a, SequenceKind::Ferraris, reduce)
+}
+
+/// `incal plan imu-multipos`.
+pub fn plan_multipos(a: &PlanArgs) -> CliResult<()> {
+    use incal::procedures::{imu::multipos::Multipos, Procedure};
+    let reduce = incal::procedures::imu::multipos::MultiposSessionOptions {
+        rate_hz: a.session.rate_hz,
+        gravity_m_s2: a.session.gravity_m_s2,
+        latitude_deg: a.session.latitude_deg,
+        rotation_deg: a.session.rotation_deg,
+        ..Multipos::example()
+    };
+    plan_by_simulation::<Multipos>(a, SequenceKind::Positions, reduce)
+}
+
+/// `incal plan imu-autocal`.
+pub fn plan_autocal(a: &PlanArgs) -> CliResult<()> {
+    use incal::procedures::{imu::autocal::Autocal, Procedure};
+    let reduce = incal::procedures::imu::autocal::AutocalSessionOptions {
+        rate_hz: a.session.rate_hz,
+        gravity_m_s2: a.session.gravity_m_s2,
+        init_static_s: a.session.init_static_s,
+        ..Autocal::example()
+    };
+    plan_by_simulation::<Autocal>(a, SequenceKind::Random, reduce)
 }
 
 /// `incal simulate imu`: the core's simulator (`ImuSimulator`) with the
 /// options as given; the truth as JSON when asked.
 pub fn simulate(a: &SimArgs) -> CliResult<()> {
-    let o = ImuSimOptions {
-        sequence: match a.sequence {
-            SequenceArg::Ferraris => SequenceKind::Ferraris,
-            SequenceArg::Random => SequenceKind::Random,
-            SequenceArg::Faces => SequenceKind::Faces,
-            SequenceArg::Positions => SequenceKind::Positions,
-        },
-        rate_hz: a.rate_hz,
-        static_s: a.static_s,
-        orientations: a.orientations,
-        init_static_s: a.init_static_s,
-        move_s: a.move_s,
-        positions: a.positions.clone(),
-        rotations: a.rotations,
-        rotation_deg: a.rotation_deg,
-        rotation_s: a.rotation_s,
-        gravity_m_s2: a.gravity_m_s2,
-        noise_acc: a.noise_acc,
-        noise_gyr: a.noise_gyr,
-        latitude_deg: a.latitude_deg,
-        truth_seed: a.truth_seed,
-        no_g_sensitivity: a.no_g_sensitivity,
-        seed: a.seed,
-    };
+    let o = a.session.options(match a.sequence {
+        SequenceArg::Ferraris => SequenceKind::Ferraris,
+        SequenceArg::Random => SequenceKind::Random,
+        SequenceArg::Faces => SequenceKind::Faces,
+        SequenceArg::Positions => SequenceKind::Positions,
+    });
     crate::run::simulate::<incal::procedures::imu::sim::ImuSimulator>(&o, a.output.as_deref())?;
     if let Some(p) = &a.truth_out {
         let truth = o.truth().to_json().map_err(core)?;
@@ -405,12 +487,23 @@ impl crate::commands::Run for Reductions {
 
 /// This file's plans (`incal plan …`).
 #[derive(clap::Subcommand, Debug)]
+#[allow(clippy::enum_variant_names)] // the command names: imu-ferraris, …
 pub enum Plans {
+    /// IMU Ferraris session plan: the session simulated and reduced with the given noise (a few seeds), the u the reduction will report for every element.
+    ImuFerraris(PlanArgs),
+    /// IMU multi-position session plan: the positions (and rotations) simulated and reduced with the given noise, the u of every element.
+    ImuMultipos(PlanArgs),
+    /// IMU autocalibration session plan: the random orientations simulated and reduced with the given noise, the u of every element.
+    ImuAutocal(PlanArgs),
 }
 
 impl crate::commands::Run for Plans {
     fn run(&self) -> CliResult<()> {
-        match *self {}
+        match self {
+            Self::ImuFerraris(a) => plan_ferraris(a),
+            Self::ImuMultipos(a) => plan_multipos(a),
+            Self::ImuAutocal(a) => plan_autocal(a),
+        }
     }
 }
 

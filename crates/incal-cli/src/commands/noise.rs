@@ -222,6 +222,21 @@ pub fn run(a: &Args) -> CliResult<()> {
 /// `incal simulate noise`.
 #[derive(clap::Args, Debug)]
 pub struct SimArgs {
+    #[command(flatten)]
+    pub session: SessionArgs,
+    /// Output format: csv (time_s,ch1,...) or raw interleaved f32le / f64le.
+    #[arg(long, value_enum, default_value = "csv")]
+    pub format: FormatArg,
+    /// Output file (- = standard output, csv only).
+    #[arg(long, short = 'o')]
+    pub output: PathBuf,
+}
+
+/// The record of `incal simulate noise` and of `incal plan noise`: the
+/// noise terms of one quantity, the rate, the length, the channels and the
+/// seed.
+#[derive(clap::Args, Debug)]
+pub struct SessionArgs {
     /// What to simulate: gyro (rate in deg/s, the --arw-deg-rth ... options) or accel (in g, the --vrw-ug-rthz ... options).
     #[arg(long, value_enum, default_value = "gyro")]
     pub quantity: QuantityArg,
@@ -267,35 +282,70 @@ pub struct SimArgs {
     /// Random seed.
     #[arg(long)]
     pub seed: u64,
-    /// Output format: csv (time_s,ch1,...) or raw interleaved f32le / f64le.
-    #[arg(long, value_enum, default_value = "csv")]
-    pub format: FormatArg,
-    /// Output file (- = standard output, csv only).
-    #[arg(long, short = 'o')]
-    pub output: PathBuf,
+}
+
+impl SessionArgs {
+    /// The simulator's options, written as `format`.
+    fn options(&self, format: Format) -> NoiseSim {
+        NoiseSim {
+            quantity: self.quantity.into(),
+            arw_deg_rth: self.arw_deg_rth,
+            bias_instability_deg_h: self.bias_instability_deg_h,
+            rrw_deg_h_rth: self.rrw_deg_h_rth,
+            quantization_arcsec: self.quantization_arcsec,
+            rate_ramp_deg_h2: self.rate_ramp_deg_h2,
+            vrw_ug_rthz: self.vrw_ug_rthz,
+            bias_instability_ug: self.bias_instability_ug,
+            accel_rw_ug_rts: self.accel_rw_ug_rts,
+            quantization_m_s: self.quantization_m_s,
+            accel_ramp_ug_s: self.accel_ramp_ug_s,
+            rate_hz: self.rate_hz,
+            duration_s: self.duration_s,
+            channels: self.channels,
+            seed: self.seed,
+            format,
+        }
+    }
+}
+
+/// Options of `incal plan noise`.
+#[derive(clap::Args, Debug)]
+pub struct PlanArgs {
+    #[command(flatten)]
+    pub session: SessionArgs,
+    /// Records simulated and analysed (seeds --seed, --seed + 1, …): the predicted u is the root mean square of their u.
+    #[arg(long, default_value_t = 5)]
+    pub seeds: usize,
+    #[command(flatten)]
+    pub out: crate::output::PlanOut,
+}
+
+/// `incal plan noise`: the record simulated with the planned terms and
+/// length and analysed as `incal noise` would (a few seeds): the u of every
+/// noise term it will identify.
+pub fn plan(a: &PlanArgs) -> CliResult<()> {
+    use incal::procedures::noise::Noise;
+    use incal::procedures::sim_plan::{BySimulation, SimPlanOptions};
+    use incal::procedures::{Plan, Procedure};
+    let session = a.session.options(Format::Csv);
+    let reduce = incal::procedures::noise::NoiseOptions {
+        rate_hz: Some(session.rate_hz),
+        quantity: session.quantity,
+        ..Noise::example()
+    };
+    let o = SimPlanOptions {
+        session,
+        reduce,
+        seeds: a.seeds,
+    };
+    a.out
+        .emit(&BySimulation::<Noise, Noise>::plan(&o).map_err(core)?)
 }
 
 /// `incal simulate noise`: rate samples in deg/s (gyro) or g (accel).
 pub fn simulate(a: &SimArgs) -> CliResult<()> {
     use incal::procedures::{noise::Noise, Simulate};
-    let sim = NoiseSim {
-        quantity: a.quantity.into(),
-        arw_deg_rth: a.arw_deg_rth,
-        bias_instability_deg_h: a.bias_instability_deg_h,
-        rrw_deg_h_rth: a.rrw_deg_h_rth,
-        quantization_arcsec: a.quantization_arcsec,
-        rate_ramp_deg_h2: a.rate_ramp_deg_h2,
-        vrw_ug_rthz: a.vrw_ug_rthz,
-        bias_instability_ug: a.bias_instability_ug,
-        accel_rw_ug_rts: a.accel_rw_ug_rts,
-        quantization_m_s: a.quantization_m_s,
-        accel_ramp_ug_s: a.accel_ramp_ug_s,
-        rate_hz: a.rate_hz,
-        duration_s: a.duration_s,
-        channels: a.channels,
-        seed: a.seed,
-        format: a.format.into(),
-    };
+    let sim = a.session.options(a.format.into());
     if a.format == FormatArg::Csv {
         return crate::run::simulate::<Noise>(&sim, Some(&a.output));
     }
@@ -332,11 +382,15 @@ impl crate::commands::Run for Reductions {
 /// This file's plans (`incal plan …`).
 #[derive(clap::Subcommand, Debug)]
 pub enum Plans {
+    /// Noise plan: the record simulated with the planned terms and length and analysed (a few seeds): the u of every noise term and bias stability it will report.
+    Noise(PlanArgs),
 }
 
 impl crate::commands::Run for Plans {
     fn run(&self) -> CliResult<()> {
-        match *self {}
+        match self {
+            Self::Noise(a) => plan(a),
+        }
     }
 }
 

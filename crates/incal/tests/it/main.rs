@@ -22,6 +22,7 @@ mod noise_roundtrip;
 mod noise_stable32;
 mod properties;
 mod schema_file;
+mod sim_plan;
 mod thermal_roundtrip;
 mod tumble_roundtrip;
 mod wu2015;
