@@ -325,7 +325,8 @@ pub struct PlanArgs {
 /// noise term it will identify.
 pub fn plan(a: &PlanArgs) -> CliResult<()> {
     use incal::procedures::noise::Noise;
-    use incal::procedures::sim_plan::{BySimulation, SimPlanOptions};
+    use incal::procedures::noise::plan::NoisePlan;
+    use incal::procedures::sim_plan::SimPlanOptions;
     use incal::procedures::{Plan, Procedure};
     let session = a.session.options(Format::Csv);
     let reduce = incal::procedures::noise::NoiseOptions {
@@ -339,7 +340,7 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
         seeds: a.seeds,
     };
     a.out
-        .emit(&BySimulation::<Noise, Noise>::plan(&o).map_err(core)?)
+        .emit(&NoisePlan::plan(&o).map_err(core)?)
 }
 
 /// `incal simulate noise`: rate samples in deg/s (gyro) or g (accel).

@@ -457,7 +457,7 @@ pub static REGISTRY: &[Entry] = &[
             options: &["--rate-hz", "100"],
         }),
         reduction: reduction::<super::imu::ferraris::Ferraris>(),
-        planner: planner::<super::sim_plan::BySimulation<super::imu::ferraris::Ferraris, super::imu::sim::ImuSimulator>>(),
+        planner: planner::<super::imu::plan::FerrarisPlan>(),
         simulator: simulator::<super::imu::sim::ImuSimulator>(),
     },
     Entry {
@@ -479,7 +479,7 @@ pub static REGISTRY: &[Entry] = &[
             options: &["--rate-hz", "100"],
         }),
         reduction: reduction::<super::imu::multipos::Multipos>(),
-        planner: planner::<super::sim_plan::BySimulation<super::imu::multipos::Multipos, super::imu::sim::ImuSimulator>>(),
+        planner: planner::<super::imu::plan::MultiposPlan>(),
         simulator: simulator::<super::imu::sim::ImuSimulator>(),
     },
     Entry {
@@ -501,7 +501,7 @@ pub static REGISTRY: &[Entry] = &[
             options: &["--rate-hz", "100", "--init-static-s", "3"],
         }),
         reduction: reduction::<super::imu::autocal::Autocal>(),
-        planner: planner::<super::sim_plan::BySimulation<super::imu::autocal::Autocal, super::imu::sim::ImuSimulator>>(),
+        planner: planner::<super::imu::plan::AutocalPlan>(),
         simulator: simulator::<super::imu::sim::ImuSimulator>(),
     },
     Entry {
@@ -545,7 +545,7 @@ pub static REGISTRY: &[Entry] = &[
             options: &["--rate-hz", "100"],
         }),
         reduction: reduction::<super::noise::Noise>(),
-        planner: planner::<super::sim_plan::BySimulation<super::noise::Noise, super::noise::Noise>>(),
+        planner: planner::<super::noise::plan::NoisePlan>(),
         simulator: simulator::<super::noise::Noise>(),
     },
     Entry {

@@ -32,6 +32,7 @@ pub mod document;
 pub mod ferraris;
 pub mod input;
 pub mod multipos;
+pub mod plan;
 pub mod screen;
 pub mod sim;
 pub mod sim_options;

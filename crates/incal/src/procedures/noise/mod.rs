@@ -50,6 +50,7 @@
 pub mod document;
 pub mod export;
 pub mod input;
+pub mod plan;
 pub mod sim;
 
 use rayon::prelude::*;
