@@ -163,11 +163,11 @@ def test_imu_calibrations_load_in_imucal_and_calibrate_as_incal_does(recordings,
 
 def test_the_package_ships_its_type_stubs():
     pkg = pathlib.Path(incal.__file__).parent
-    for stub in ["__init__.pyi", "plan.pyi", "simulate.pyi", "batch.pyi", "records.pyi", "py.typed"]:
+    for stub in ["__init__.pyi", "plan.pyi", "simulate.pyi", "batch.pyi", "records.pyi", "warnings.pyi", "py.typed"]:
         assert (pkg / stub).exists(), stub
     text = (pkg / "__init__.pyi").read_text()
     for name in incal.__all__:
-        if name not in ("plan", "simulate", "batch", "Records"):
+        if name not in ("plan", "simulate", "batch", "Records", "IncalWarning"):
             assert f"def {name}(" in text or f"class {name}" in text, name
     assert "from .records import Records as Records" in text
     for module, stub in [(incal.batch, "batch.pyi"), (incal.records, "records.pyi")]:
@@ -322,3 +322,35 @@ def test_every_registry_procedure_has_its_functions_and_stubs():
             missing.append(f"procedure {e['id']}: not in incal.batch.PROCEDURES")
     assert not missing, "\n".join(missing)
     assert incal.batch._function("thermal") == "thermal_ramp"
+
+
+def test_document_warnings_are_python_warnings_of_their_category(tmp_path):
+    import warnings
+
+    e = next(e for e in incal.REGISTRY if e["id"] == "gyro-positions")
+    path = tmp_path / "positions.csv"
+    cli(["simulate"] + e["simulate"].split()[1:] + e["example"]["simulate"] + ["-o", path])
+    options = _kwargs(e["example"]["options"])
+    with pytest.warns(incal.IncalWarning) as caught:
+        result = incal.gyro_positions(str(path), **options)
+    codes = sorted(w["code"] for w in result.document["warnings"])
+    assert "missing-uncertainty" in codes
+    raised = sorted(w.category.code for w in caught if issubclass(w.category, incal.IncalWarning))
+    assert raised == codes
+    assert all(w.filename == __file__ for w in caught), "warnings point at the caller's line"
+    with warnings.catch_warnings():
+        warnings.filterwarnings("error", category=incal.warnings.MissingUncertainty)
+        with pytest.raises(incal.warnings.MissingUncertainty, match=r"\[missing-uncertainty\]"):
+            incal.gyro_positions(str(path), **options)
+
+
+def test_every_warning_code_is_a_category_with_its_stub():
+    schema = json.loads(cli(["schema"]))
+    codes = [v["const"] for v in schema["$defs"]["WarningCode"]["oneOf"]]
+    stub = (pathlib.Path(incal.__file__).parent / "warnings.pyi").read_text()
+    for code in codes:
+        cls = incal.warnings.category(code)
+        assert cls is not incal.IncalWarning and cls.code == code and issubclass(cls, UserWarning)
+        assert cls.__doc__, code
+        assert f"class {cls.__name__}(IncalWarning): ..." in stub, f"warnings.pyi: add 'class {cls.__name__}(IncalWarning): ...'"
+    assert incal.warnings.category("no-such-code") is incal.IncalWarning

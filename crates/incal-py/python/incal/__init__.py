@@ -17,7 +17,9 @@ keyword arguments named as the CLI options with ``_`` for ``-``
 (``gravity_m_s2=9.80665``); ``True`` gives a flag, a list or tuple a
 comma-separated value. Errors raise :class:`InputError` (bad data or
 options, the CLI's exit 2) or :class:`IncalError`, with the CLI's one-line
-message.
+message. The warnings of a result are raised as Python warnings, each code
+its own category (:mod:`incal.warnings`: ``incal.warnings.LackOfFit``, …,
+subclasses of :class:`IncalWarning`).
 """
 
 from __future__ import annotations
@@ -27,12 +29,14 @@ import os
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 from ._incal import _run, _run_array, _version
+from .warnings import IncalWarning, warn_all as _warn_all
 
 __version__ = _version()
 
 __all__ = [
     "IncalError",
     "InputError",
+    "IncalWarning",
     "Result",
     "thermal_fit",
     "thermal_apply",
@@ -305,6 +309,14 @@ def _noise_array(options: Dict[str, Any]):
     return ["--input", "-", "--format", fmt, "--channels", str(len(names)), "--columns", columns], data
 
 
+def _result(out: bytes, err: List[str]) -> Result:
+    """The result document a command wrote, its warnings raised as Python
+    warnings of their category (:mod:`incal.warnings`)."""
+    r = Result(json.loads(out), err, out.decode())
+    _warn_all(r.document.get("warnings", []))
+    return r
+
+
 def _reduce(command: Sequence[str], data: Any, options: Dict[str, Any]) -> Result:
     options = dict(options)
     if list(command) == ["noise"] and data is None:
@@ -312,10 +324,10 @@ def _reduce(command: Sequence[str], data: Any, options: Dict[str, Any]) -> Resul
         if fast is not None:
             words, array = fast
             out, err = run(list(command) + words + ["--json"] + _options(options), array=array)
-            return Result(json.loads(out), err, out.decode())
+            return _result(out, err)
     words, stdin = _data(data, options)
     out, err = run(list(command) + words + ["--json"] + _options(options), stdin)
-    return Result(json.loads(out), err, out.decode())
+    return _result(out, err)
 
 
 def _procedure(name: str, command: Sequence[str], doc: str):
@@ -372,7 +384,7 @@ def thermal_fit(results: Sequence[Any], **options: Any) -> Result:
     with tempfile.TemporaryDirectory() as d:
         files = _as_files(d, results, "plateau")
         out, err = run(["thermal", "fit"] + files + ["--json"] + _options(options))
-    return Result(json.loads(out), err, out.decode())
+    return _result(out, err)
 
 
 def thermal_apply(model: Any, data: Any = None, **columns: Any):
@@ -384,7 +396,8 @@ def thermal_apply(model: Any, data: Any = None, **columns: Any):
     words, stdin = _data(data, columns)
     with tempfile.TemporaryDirectory() as d:
         (path,) = _as_files(d, [model], "model")
-        out, _ = run(["thermal", "apply", path] + words, stdin)
+        out, err = run(["thermal", "apply", path] + words, stdin)
+    _warn_all(err)
     return _read_csv(out)
 
 
@@ -432,9 +445,10 @@ def apply(calibration: Any, data: Any = None, **columns: Any):
     if isinstance(calibration, Result):
         if stdin is not None:
             raise InputError("apply: with in-memory data, give the calibration as a path")
-        out, _ = run(["imu", "apply", "--calibration", "-"] + words, calibration.to_json().encode())
+        out, err = run(["imu", "apply", "--calibration", "-"] + words, calibration.to_json().encode())
     else:
-        out, _ = run(["imu", "apply", "--calibration", os.fspath(calibration)] + words, stdin)
+        out, err = run(["imu", "apply", "--calibration", os.fspath(calibration)] + words, stdin)
+    _warn_all(err)
     return _read_csv(out)
 
 
@@ -475,5 +489,5 @@ def export_px4(
     return _write(_export("px4", gyro, accel, ["--ekf-rate-hz", repr(float(ekf_rate_hz))]), path)
 
 
-from . import batch, plan, simulate  # noqa: E402  (they use run and _options)
+from . import batch, plan, simulate, warnings  # noqa: E402  (they use run and _options)
 from .records import Records  # noqa: E402

@@ -6,6 +6,8 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 from . import batch as batch
 from . import plan as plan
 from . import simulate as simulate
+from . import warnings as warnings
+from .warnings import IncalWarning as IncalWarning
 from .records import Records as Records
 
 __version__: str
