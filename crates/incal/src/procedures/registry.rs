@@ -6,12 +6,14 @@
 //! whose reference standards make it traceable, the method the certificate
 //! states, the references it cites (keys of `docs/src/references.md`), its
 //! chapter of the manual, its Python names, the fuzz targets that cover its
-//! input, and the run sheet of its plans. Every other list of procedures
-//! is derived from [`REGISTRY`] (the certificate's rig and method, the plan
-//! run sheet, `incal batch`, `incal procedures`, Python's function tables)
-//! or checked against it by a test that names what is missing where (the
-//! CLI's subcommands, the fuzz targets and seeds, Python's functions and
-//! stubs, the README's table and the manual's chapters).
+//! input, the run sheet of its plans, and its typed entry points (the
+//! reduction, plan and simulator with options as JSON and their schemas).
+//! Every other list of procedures is derived from [`REGISTRY`] (the
+//! certificate's rig and method, the plan run sheet, `incal batch`, `incal
+//! procedures`, Python's function tables, the fuzz targets) or checked
+//! against it by a test that names what is missing where (the CLI's
+//! subcommands, the fuzz seeds, Python's stubs, the README's table and the
+//! manual's chapters).
 //!
 //! Adding a procedure: its folder `procedures/<name>/`, one entry here,
 //! its CLI file, its chapter (CONTRIBUTING walks through it).
@@ -143,7 +145,8 @@ pub struct Entry {
     pub chapter: &'static str,
     /// What it reduces.
     pub input: InputKind,
-    /// The fuzz targets (`incal_fuzz::TARGETS`) that cover its input.
+    /// The fuzz targets that cover its input (`incal_fuzz::targets`: each
+    /// reduced by the typed reduction with [`super::Procedure::example`]).
     pub fuzz: &'static [&'static str],
     /// The run sheet of its plan documents, if its plans list settings.
     pub run_sheet: Option<fn(&PlanDocument) -> RunSheet>,
