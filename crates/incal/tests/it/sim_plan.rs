@@ -66,7 +66,7 @@ fn bad_plan_options_are_refused_naming_the_key() {
 /// mean of (scatter / u)² is 1 for an honest u; a u half its size gives 4.
 #[test]
 fn the_predicted_u_matches_the_scatter_of_the_estimates() {
-    let n = incal::sim::tier::trials(20, 100);
+    let n = incal::sim::tier::trials(20, 50);
     let options = json!({
         "session": {"sequence": "positions", "static_s": 0.5, "rotations": true, "seed": 9},
         "reduce": {"rate_hz": 100.0, "gravity_m_s2": 9.80665, "matrix": "full",
