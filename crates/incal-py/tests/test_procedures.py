@@ -206,6 +206,23 @@ def test_noise_reads_numpy_arrays_in_place(tmp_path):
         incal.noise(gx=x, gy=np.zeros(3), rate_hz=100)
 
 
+def test_noise_takes_an_array_positionally_as_allantools_does(tmp_path):
+    """``incal.noise(y, rate_hz=...)``: a 1-D array is channel ``ch1``, a
+    2-D array one channel per column, read in place as by keyword."""
+    rng = np.random.default_rng(8)
+    x = rng.normal(0.0, 0.01, 50_000)
+    y = rng.normal(0.0, 0.02, 50_000)
+    one = incal.noise(x, rate_hz=100)
+    assert one.coefficients == incal.noise(ch1=x, rate_hz=100).coefficients
+    assert one.document["inputs"][0]["path"] == "<memory>"
+    two = incal.noise(np.column_stack([x, y]), rate_hz=100)
+    assert two.coefficients == incal.noise(ch1=x, ch2=y, rate_hz=100).coefficients
+    with pytest.raises(incal.InputError, match="3 dimensions"):
+        incal.noise(np.zeros((2, 2, 2)), rate_hz=100)
+    with pytest.raises(incal.InputError, match="given twice"):
+        incal.noise(x, ch1=y, rate_hz=100)
+
+
 def test_kalibr_yaml_reads_back_in_pyyaml(tmp_path):
     """Kalibr reads imu.yaml with PyYAML: every value comes back as a float
     equal to the largest axis's term converted to SI continuous time."""

@@ -317,8 +317,35 @@ def _result(out: bytes, err: List[str]) -> Result:
     return r
 
 
+def _noise_positional(data: Any, options: Dict[str, Any]) -> Any:
+    """``incal.noise(y, rate_hz=…)`` as allantools is called: a 1-D numpy
+    array is one channel (``ch1``), a 2-D array one channel per column
+    (``ch1``, ``ch2``, …), given to the in-place path as arrays by keyword.
+    Returns the data left for the other paths (``None`` when taken)."""
+    if data is None or isinstance(data, (str, os.PathLike)) or hasattr(data, "columns"):
+        return data
+    if not _is_array(data):
+        return data
+    import numpy as np
+
+    a = np.asarray(data)
+    if a.ndim == 1:
+        columns = {"ch1": a}
+    elif a.ndim == 2:
+        columns = {f"ch{k + 1}": a[:, k] for k in range(a.shape[1])}
+    else:
+        raise InputError(f"noise: an array of {a.ndim} dimensions; give one channel (1-D) or one per column (2-D)")
+    clash = [k for k in columns if k in options]
+    if clash:
+        raise InputError(f"noise: channel '{clash[0]}' given twice (positionally and by keyword)")
+    options.update(columns)
+    return None
+
+
 def _reduce(command: Sequence[str], data: Any, options: Dict[str, Any]) -> Result:
     options = dict(options)
+    if list(command) == ["noise"]:
+        data = _noise_positional(data, options)
     if list(command) == ["noise"] and data is None:
         fast = _noise_array(options)
         if fast is not None:
