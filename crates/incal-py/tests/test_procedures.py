@@ -90,8 +90,21 @@ def test_errors_are_exceptions_with_the_cli_message(tmp_path):
         incal.tumble(str(bad), mount="pendulum")
     assert str(e.value) == f"{bad}:3: column 'output': 'abc' is not a number"
     assert isinstance(e.value, ValueError) and e.value.code == 2
-    with pytest.raises(incal.InputError, match="possible values: pendulum, gate"):
+    assert (e.value.file, e.value.line, e.value.column, e.value.option) == (str(bad), 3, "output", None)
+    with pytest.raises(incal.InputError) as e:
+        incal.tumble(str(bad), mount="pendulum", noise=-1)
+    assert e.value.option == "noise" and e.value.file is None
+    missing = tmp_path / "missing.csv"
+    missing.write_text("angle_deg,outpt\n0,1\n")
+    with pytest.raises(incal.InputError) as e:
+        incal.tumble(str(missing), mount="pendulum")
+    assert (e.value.file, e.value.line, e.value.column) == (str(missing), None, "output")
+    with pytest.raises(incal.InputError) as e:
+        incal.tumble(str(bad), mount="pendulum", no_such_option_hz=1)
+    assert e.value.option == "no_such_option_hz"
+    with pytest.raises(incal.InputError, match="possible values: pendulum, gate") as e:
         incal.tumble(str(bad), mount="sideways")
+    assert e.value.option == "mount"
     with pytest.raises(incal.InputError, match="no data"):
         incal.tumble(mount="pendulum")
 

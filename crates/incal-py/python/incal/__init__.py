@@ -80,10 +80,39 @@ class IncalError(Exception):
 
 class InputError(IncalError, ValueError):
     """Bad data or options (the CLI's exit 2): the message names the file,
-    line and column, or the option."""
+    line and column, or the option. The attributes say the same for a
+    program (``None`` where the message names none): ``file`` (the path as
+    given), ``line`` (1-based, the header is line 1), ``column`` (the
+    column's name), ``option`` (the keyword, ``rate_hz``)."""
 
     def __init__(self, message: str):
         super().__init__(message, 2)
+        self.file: Optional[str] = None
+        self.line: Optional[int] = None
+        self.column: Optional[str] = None
+        self.option: Optional[str] = None
+        self._parse(message)
+
+    def _parse(self, message: str) -> None:
+        """Read the attributes from the one-line message's documented
+        forms: ``FILE:LINE: column 'NAME': …``, ``FILE: missing column
+        'NAME' …``, ``FILE: cannot read …``, ``--option: …``, ``invalid
+        value … for '--option …'``, ``unknown option '--option'``."""
+        import re
+
+        m = re.match(r"--([a-z0-9][a-z0-9-]*)(?:: | )", message)
+        if m is None:
+            m = re.search(r"'--([a-z0-9][a-z0-9-]*)[ ']", message)
+        if m is not None:
+            self.option = m.group(1).replace("-", "_")
+            return
+        m = re.match(r"(.+?):(\d+): (?:column '([^']*)': )?", message)
+        if m is not None:
+            self.file, self.line, self.column = m.group(1), int(m.group(2)), m.group(3)
+            return
+        m = re.match(r"(.+?): (?:missing column '([^']*)'|cannot read|not valid|no column)", message)
+        if m is not None:
+            self.file, self.column = m.group(1), m.group(2)
 
 
 def _word(value: Any) -> str:

@@ -23,6 +23,10 @@ class IncalError(Exception):
     def result(self) -> Optional["Result"]: ...
 
 class InputError(IncalError, ValueError):
+    file: Optional[str]
+    line: Optional[int]
+    column: Optional[str]
+    option: Optional[str]
     def __init__(self, message: str) -> None: ...
 
 class Result:
