@@ -384,3 +384,16 @@ def test_every_warning_code_is_a_category_with_its_stub():
         assert cls.__doc__, code
         assert f"class {cls.__name__}(IncalWarning): ..." in stub, f"warnings.pyi: add 'class {cls.__name__}(IncalWarning): ...'"
     assert incal.warnings.category("no-such-code") is incal.IncalWarning
+
+
+def test_coefficients_read_as_attributes_and_tables_as_dataframes(recordings):
+    r = incal.tumble(str(recordings["tumble"]), mount="pendulum")
+    k1 = r.coefficients["K1"]
+    assert (k1.value, k1.u, k1.U95, k1.dof, k1.unit, k1.k95) == (
+        k1["value"], k1["u"], k1["U95"], k1.get("dof"), k1["unit"], k1["k95"])
+    assert k1 == r.document["coefficients"]["K1"]
+    positions = r.table("positions")
+    t = next(t for t in r.document["tables"] if t["id"] == "positions")
+    assert len(positions) == len(t["rows"]) and "angle [deg]" in positions.columns
+    with pytest.raises(KeyError, match="tables: positions"):
+        r.table("no-such-table")

@@ -37,6 +37,7 @@ __all__ = [
     "IncalError",
     "InputError",
     "IncalWarning",
+    "Coefficient",
     "Result",
     "thermal_fit",
     "thermal_apply",
@@ -212,6 +213,42 @@ def _data(data: Any, options: Dict[str, Any]) -> Tuple[List[str], Optional[bytes
     raise InputError(f"data must be a path, a pandas DataFrame or arrays by keyword, not {type(data).__name__}")
 
 
+class Coefficient(dict):
+    """One coefficient of a result: a dict of the document's fields
+    (``value``, ``u``, ``unit``, ``dof``, ``k95``, ``U95``; JSON units) that
+    also reads them as attributes: ``r.coefficients["K1"].u``."""
+
+    @property
+    def value(self) -> float:
+        """The estimate."""
+        return self["value"]
+
+    @property
+    def u(self) -> float:
+        """Its standard uncertainty (same unit)."""
+        return self["u"]
+
+    @property
+    def U95(self) -> float:
+        """Its expanded uncertainty for 95 % coverage, ``k95 · u``."""
+        return self["U95"]
+
+    @property
+    def k95(self) -> float:
+        """The coverage factor (Student t with ``dof``)."""
+        return self["k95"]
+
+    @property
+    def dof(self) -> Optional[float]:
+        """Effective degrees of freedom of ``u`` (``None``: infinite)."""
+        return self.get("dof")
+
+    @property
+    def unit(self) -> str:
+        """The unit of ``value``, ``u`` and ``U95``."""
+        return self["unit"]
+
+
 class Result:
     """A result document (``incal.result/1``) and its views."""
 
@@ -231,9 +268,25 @@ class Result:
         self._text = text
 
     @property
-    def coefficients(self) -> Dict[str, Dict[str, Any]]:
-        """Name → ``{"value", "u", "unit", "dof", "k95", "U95"}`` (JSON units)."""
-        return {k: dict(v) for k, v in self.document.get("coefficients", {}).items()}
+    def coefficients(self) -> Dict[str, Coefficient]:
+        """Name → :class:`Coefficient` (``{"value", "u", "unit", "dof",
+        "k95", "U95"}`` in JSON units, also as attributes: ``.value``,
+        ``.u``, ``.U95``, ``.dof``, ``.unit``)."""
+        return {k: Coefficient(v) for k, v in self.document.get("coefficients", {}).items()}
+
+    def table(self, id: str):
+        """The document's table ``id`` (``positions``, ``terms``, …) as a
+        pandas DataFrame: one column per table column, named ``name`` or
+        ``name [unit]``; an unknown id raises :class:`KeyError` naming the
+        ids there are."""
+        import pandas as pd
+
+        tables = self.document.get("tables", [])
+        for t in tables:
+            if t.get("id") == id:
+                names = [c["name"] if not c.get("unit") else f"{c['name']} [{c['unit']}]" for c in t["columns"]]
+                return pd.DataFrame(t["rows"], columns=names)
+        raise KeyError(f"no table '{id}' (tables: {', '.join(t.get('id', '?') for t in tables)})")
 
     @property
     def procedure(self) -> str:
