@@ -99,8 +99,12 @@ def test_errors_are_exceptions_with_the_cli_message(tmp_path):
     with pytest.raises(incal.InputError) as e:
         incal.tumble(str(missing), mount="pendulum")
     assert (e.value.file, e.value.line, e.value.column) == (str(missing), None, "output")
-    with pytest.raises(incal.InputError) as e:
+    # A misspelt keyword is a TypeError at the call, as for any function;
+    # the command line's unknown option names it too.
+    with pytest.raises(TypeError, match="no_such_option_hz"):
         incal.tumble(str(bad), mount="pendulum", no_such_option_hz=1)
+    with pytest.raises(incal.InputError) as e:
+        incal.run(["tumble", "--input", str(bad), "--no-such-option-hz", "1"])
     assert e.value.option == "no_such_option_hz"
     with pytest.raises(incal.InputError, match="possible values: pendulum, gate") as e:
         incal.tumble(str(bad), mount="sideways")
@@ -397,3 +401,23 @@ def test_coefficients_read_as_attributes_and_tables_as_dataframes(recordings):
     assert len(positions) == len(t["rows"]) and "angle [deg]" in positions.columns
     with pytest.raises(KeyError, match="tables: positions"):
         r.table("no-such-table")
+
+
+def test_signatures_list_every_option_with_its_default_and_refuse_a_misspelt_one(recordings):
+    import inspect
+
+    sig = inspect.signature(incal.gyro_rate)
+    params = sig.parameters
+    assert list(params)[0] == "data"
+    assert params["latitude_deg"].default is inspect.Parameter.empty  # required
+    assert params["ia"].default == "up"
+    assert params["rate_uncertainty_ppm"].default == 0
+    assert params["serial"].default is None and "json" not in params and "input" not in params
+    assert "deg" in incal.gyro_rate.__doc__ and "latitude_deg (required)" in incal.gyro_rate.__doc__
+    for e in incal.REGISTRY:
+        if e["input"] == "recording":
+            f = getattr(incal, e["python"]["function"])
+            names = {incal._keyword(a["name"]) for a in e["arguments"]["reduce"]} - {"input", "json", "output"}
+            assert set(inspect.signature(f).parameters) == {"data"} | names, e["id"]
+    with pytest.raises(TypeError, match="unexpected keyword argument 'mont'"):
+        incal.tumble(str(recordings["tumble"]), mont="pendulum")

@@ -51,7 +51,52 @@ fn entry_json(e: &Entry) -> Value {
             "plan": e.planner.map(|t| (t.schema)()),
             "simulate": e.simulator.map(|t| (t.schema)()),
         },
+        "arguments": {
+            "reduce": arguments(e.command),
+            "plan": e.plan.map(arguments),
+            "simulate": e.simulate.map(arguments),
+        },
     })
+}
+
+/// The options of the command `words` as its argument table defines them
+/// (every `--flag` but `--help`): `name` (the argument id, the key of the
+/// core's options and of Python's keywords), `flag`, `aliases`, `help`,
+/// `default` (as text), `values` (the allowed ones), `flag_only` (takes no
+/// value), `multiple` (comma-separated), `required`.
+fn arguments(words: &[&str]) -> Value {
+    let mut cmd = crate::command();
+    for w in words {
+        match cmd.find_subcommand(w) {
+            Some(c) => cmd = c.clone(),
+            None => return Value::Null,
+        }
+    }
+    let args: Vec<Value> = cmd
+        .get_arguments()
+        .filter(|a| a.get_long().is_some() && !matches!(a.get_id().as_str(), "help" | "version"))
+        .map(|a| {
+            let text = |v: &std::ffi::OsStr| v.to_string_lossy().into_owned();
+            let values: Vec<String> = a
+                .get_possible_values()
+                .iter()
+                .filter(|v| !v.is_hide_set())
+                .map(|v| v.get_name().to_string())
+                .collect();
+            json!({
+                "name": a.get_id().as_str(),
+                "flag": format!("--{}", a.get_long().unwrap_or_default()),
+                "aliases": a.get_all_aliases().unwrap_or_default(),
+                "help": a.get_help().map(|h| h.to_string()),
+                "default": a.get_default_values().iter().map(|v| text(v)).collect::<Vec<_>>(),
+                "values": if a.get_action().takes_values() { values } else { Vec::new() },
+                "flag_only": !a.get_action().takes_values(),
+                "multiple": a.get_value_delimiter().is_some(),
+                "required": a.is_required_set(),
+            })
+        })
+        .collect();
+    Value::Array(args)
 }
 
 /// The registry as a table for people.

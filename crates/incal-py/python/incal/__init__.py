@@ -439,13 +439,101 @@ def _reduce(command: Sequence[str], data: Any, options: Dict[str, Any]) -> Resul
     return _result(out, err)
 
 
-def _procedure(name: str, command: Sequence[str], doc: str):
+#: Options of a command that are not keywords of its function: the data
+#: (``data``) and the output (the function returns the document).
+_NOT_KEYWORDS = ("input", "json", "output")
+
+
+def _default(arg: Dict[str, Any]) -> Any:
+    """An option's default as a Python value (``None``: none; a flag:
+    ``False``)."""
+    if arg["flag_only"]:
+        return False
+    texts = arg["default"]
+    if not texts:
+        return None
+
+    def value(t: str) -> Any:
+        for kind in (int, float):
+            try:
+                return kind(t)
+            except ValueError:
+                pass
+        return t
+
+    if arg["multiple"]:
+        return [value(x) for t in texts for x in t.split(",")]
+    return value(texts[0])
+
+
+def _keyword(name: str) -> str:
+    """An option's Python keyword: its name, with ``_`` after a Python
+    keyword or the data parameter's name (``from`` → ``from_``, noise's
+    ``data`` kind → ``data_``)."""
+    import keyword
+
+    return name + "_" if keyword.iskeyword(name) or name == "data" else name
+
+
+def _signature(args: List[Dict[str, Any]]):
+    """``(data=None, *, option=default, …)``: every option of the command
+    as a keyword-only parameter with its default (required ones without)."""
+    import inspect
+
+    params = [inspect.Parameter("data", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=None)]
+    for a in args:
+        if a["name"] in _NOT_KEYWORDS:
+            continue
+        default = inspect.Parameter.empty if a["required"] else _default(a)
+        params.append(inspect.Parameter(_keyword(a["name"]), inspect.Parameter.KEYWORD_ONLY, default=default))
+    return inspect.Signature(params)
+
+
+def _options_doc(args: List[Dict[str, Any]]) -> str:
+    lines = []
+    for a in args:
+        if a["name"] in _NOT_KEYWORDS:
+            continue
+        extra = []
+        if a["required"]:
+            extra.append("required")
+        elif not a["flag_only"] and a["default"]:
+            extra.append("default " + ",".join(a["default"]))
+        if a["values"]:
+            extra.append("one of " + ", ".join(a["values"]))
+        tail = f" ({'; '.join(extra)})" if extra else ""
+        lines.append(f"    {_keyword(a['name'])}{tail}: {a['help'] or ''}")
+    return "\n".join(lines)
+
+
+def _procedure(name: str, command: Sequence[str], doc: str, args: Optional[List[Dict[str, Any]]] = None):
+    args = args or []
+    names = {_keyword(a["name"]) for a in args}
+    # The keyword of an option is its name; its flag's spelling and aliases
+    # (``g_local``) are accepted too.
+    flags = {_keyword(a["name"]): a["flag"] for a in args}
+    for a in args:
+        for spelling in [a["flag"][2:]] + list(a["aliases"] or []):
+            flags.setdefault(spelling.replace("-", "_"), "--" + spelling)
+    known = set(flags) - set(_NOT_KEYWORDS)
+
     def reduce(data: Any = None, **options: Any) -> Result:
-        return _reduce(command, data, options)
+        if args:
+            for key, value in options.items():
+                if key not in known and not _is_array(value):
+                    raise TypeError(f"{name}() got an unexpected keyword argument '{key}'")
+        renamed = {}
+        for key, value in options.items():
+            flag = flags.get(key)
+            renamed[flag[2:].replace("-", "_") if flag and key in names else key] = value
+        return _reduce(command, data, renamed)
 
     reduce.__name__ = name
     reduce.__qualname__ = name
-    reduce.__doc__ = doc + f"\n\nRuns ``incal {' '.join(command)}``: options as its ``--help`` lists them."
+    reduce.__doc__ = doc + f"\n\nRuns ``incal {' '.join(command)}``."
+    if args:
+        reduce.__signature__ = _signature(args)  # type: ignore[attr-defined]
+        reduce.__doc__ += " Options (keywords; numpy arrays by keyword are data columns):\n\n" + _options_doc(args)
     return reduce
 
 
@@ -466,7 +554,9 @@ REGISTRY: List[Dict[str, Any]] = _registry()
 for _entry in REGISTRY:
     if _entry["input"] == "recording":
         _name = _entry["python"]["function"]
-        globals()[_name] = _procedure(_name, _entry["command"].split(), _entry["title"] + ".")
+        globals()[_name] = _procedure(
+            _name, _entry["command"].split(), _entry["title"] + ".", (_entry.get("arguments") or {}).get("reduce")
+        )
         __all__.append(_name)
 del _entry, _name
 
