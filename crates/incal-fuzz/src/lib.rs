@@ -197,17 +197,21 @@ const NAME: &str = "input";
 /// fuzz targets include `target`, with the entry's example options;
 /// `None` when no entry with a typed reduction names it.
 fn reduce(target: &str, data: &[u8]) -> Option<Outcome> {
+    reduce_document(target, data).map(|r| match r {
+        Ok(doc) => Outcome::Accepted(doc.to_json()),
+        Err(e) => Outcome::Refused(e),
+    })
+}
+
+/// [`reduce`]'s document itself (or its refusal), for the targets that
+/// build on a reduced seed (`limits`).
+fn reduce_document(target: &str, data: &[u8]) -> Option<Result<ResultDocument, String>> {
     let e = REGISTRY.iter().find(|e| e.fuzz.contains(&target))?;
     let typed = e.reduction?;
     let options = (typed.example?)();
     let read = incal_io::ReadOptions::default();
     let mut src = data;
-    Some(
-        match (typed.run)(NAME, &mut src, &read, &options, &Silent) {
-            Ok(doc) => Outcome::Accepted(doc.to_json()),
-            Err(e) => Outcome::Refused(e.to_string()),
-        },
-    )
+    Some((typed.run)(NAME, &mut src, &read, &options, &Silent).map_err(|e| e.to_string()))
 }
 
 fn document(data: &[u8]) -> Result<ResultDocument, String> {
@@ -320,11 +324,8 @@ fn limits(data: &[u8]) -> Outcome {
         Err(e) => return Outcome::Refused(format!("{NAME}: {e}")),
     };
     let tumble = Id::Tumble.as_str();
-    let doc = match reduce(tumble, seed(tumble)) {
-        Some(Outcome::Accepted(json)) => document(json.as_bytes()),
-        Some(Outcome::Refused(e)) => Err(e),
-        None => Err(format!("no typed reduction of {tumble}")),
-    };
+    let doc = reduce_document(tumble, seed(tumble))
+        .unwrap_or_else(|| Err(format!("no typed reduction of {tumble}")));
     match doc {
         Ok(mut doc) => match incal::document::limits::apply(&mut doc, &limits) {
             Ok(()) => Outcome::Accepted(doc.to_json()),
