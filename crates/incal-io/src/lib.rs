@@ -22,6 +22,7 @@ pub mod binary;
 pub mod columns;
 pub mod digest;
 pub mod error;
+pub mod frames;
 pub mod reader;
 pub mod source;
 pub mod table;

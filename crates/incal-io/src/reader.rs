@@ -23,8 +23,11 @@
 //! cells as ranges of the read buffer (no allocation per row) and parses
 //! numbers with `fast-float2` (correctly rounded, as `str::parse`).
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::io::Read;
+
+mod frames;
 
 use sha2::Digest;
 
@@ -55,6 +58,9 @@ pub struct ReadOptions {
     pub max_line_bytes: usize,
     /// Hash the bytes read (SHA-256, for the result's inputs).
     pub hash: bool,
+    /// The source is columns in memory in their canonical byte form
+    /// ([`crate::frames`]), not CSV text.
+    pub frames: bool,
 }
 
 impl Default for ReadOptions {
@@ -64,6 +70,7 @@ impl Default for ReadOptions {
             columns: ColumnMap::default(),
             max_line_bytes: MAX_LINE_BYTES,
             hash: true,
+            frames: false,
         }
     }
 }
@@ -101,6 +108,9 @@ pub struct Header {
     line: usize,
     delimiter: u8,
     selected: Vec<usize>,
+    /// Per column: its cells are 8-byte binary64 numbers (columns in
+    /// memory, [`crate::frames`]); empty for CSV text.
+    numeric: Vec<bool>,
 }
 
 impl Header {
@@ -164,6 +174,11 @@ impl Header {
     /// none was given).
     pub fn selected(&self) -> &[usize] {
         &self.selected
+    }
+    /// True when column `col` holds binary numbers, not text
+    /// ([`crate::frames`]).
+    pub fn is_numeric(&self, col: usize) -> bool {
+        self.numeric.get(col).copied().unwrap_or(false)
     }
     /// A problem on the header row.
     pub fn error(&self, message: impl Into<String>) -> InputError {
@@ -236,6 +251,7 @@ pub struct Reader<R> {
     row_line: usize,
     rows: usize,
     conditions: Vec<(usize, Condition)>,
+    frames: bool,
 }
 
 /// One data row; cells are trimmed text of the file.
@@ -271,6 +287,7 @@ impl<R: Read> Reader<R> {
                 line: 0,
                 delimiter: b',',
                 selected: Vec::new(),
+                numeric: Vec::new(),
             },
             fields: Vec::new(),
             scratch: Vec::new(),
@@ -278,8 +295,13 @@ impl<R: Read> Reader<R> {
             row_line: 0,
             rows: 0,
             conditions: Vec::new(),
+            frames: opts.frames,
         };
-        r.read_header(opts)?;
+        if opts.frames {
+            r.read_frame_header(opts)?;
+        } else {
+            r.read_header(opts)?;
+        }
         r.conditions = CONDITION_COLUMNS
             .iter()
             .filter_map(|n| {
@@ -315,10 +337,14 @@ impl<R: Read> Reader<R> {
     /// is an error naming the line.
     pub fn next_row(&mut self) -> Result<Option<Row<'_>>> {
         loop {
-            if !self.next_record()? {
+            if self.frames {
+                if !self.next_frame()? {
+                    return Ok(None);
+                }
+            } else if !self.next_record()? {
                 return Ok(None);
             }
-            if self.fields.iter().all(|&(a, b)| a == b) {
+            if !self.frames && self.fields.iter().all(|&(a, b)| a == b) {
                 continue;
             }
             if self.fields.len() != self.header.width() {
@@ -339,7 +365,8 @@ impl<R: Read> Reader<R> {
                     Cells::Buffer => &self.buf,
                     Cells::Scratch => &self.scratch,
                 };
-                if let Some(v) = parse_f64(&data[a as usize..b as usize]).filter(|v| v.is_finite())
+                if let Some(v) = cell_value(&self.header, *k, &data[a as usize..b as usize])
+                    .filter(|v| v.is_finite())
                 {
                     c.count += 1;
                     c.mean += (v - c.mean) / c.count as f64;
@@ -664,6 +691,12 @@ impl<R: Read> Reader<R> {
         for &(x, y) in &self.fields {
             names.push(String::from_utf8_lossy(&data[x as usize..y as usize]).into_owned());
         }
+        self.set_names(names, line, opts)
+    }
+
+    /// The header's names (refused empty or repeated), renamed and
+    /// selected by `--columns`.
+    fn set_names(&mut self, mut names: Vec<String>, line: usize, opts: &ReadOptions) -> Result<()> {
         let file = self.file.clone();
         let at = |m: String| InputError::at(&file, line, m);
         for (k, h) in names.iter().enumerate() {
@@ -761,15 +794,19 @@ impl<'a> Row<'a> {
         let (a, b) = self.fields[col];
         &self.data[a as usize..b as usize]
     }
-    /// Text of a cell (trimmed; every line was checked to be UTF-8).
-    pub fn text(&self, col: usize) -> &'a str {
-        std::str::from_utf8(self.bytes(col)).unwrap_or("")
+    /// Text of a cell (trimmed; every line was checked to be UTF-8); a
+    /// number column in memory reads as [`crate::frames::number_text`].
+    pub fn text(&self, col: usize) -> Cow<'a, str> {
+        cell_text(self.header, col, self.bytes(col))
     }
     /// A label cell (a pass, a run, a position name), trimmed; refused
     /// naming the cell when it holds `#` (a note written after the label
     /// would make a new label) or a control character (NUL, ESC, …).
-    pub fn label(&self, col: usize) -> Result<&'a str> {
-        let t = self.text(col).trim();
+    pub fn label(&self, col: usize) -> Result<Cow<'a, str>> {
+        let t = match self.text(col) {
+            Cow::Borrowed(t) => Cow::Borrowed(t.trim()),
+            Cow::Owned(t) => Cow::Owned(t),
+        };
         if t.contains('#') {
             return Err(self.cell_error(
                 col,
@@ -784,19 +821,18 @@ impl<'a> Row<'a> {
     /// A finite number within ±[`MAX_ABS_VALUE`] from a cell, or an error
     /// naming the file, line and column.
     pub fn f64(&self, col: usize) -> Result<f64> {
-        number(
-            self.header,
-            self.line,
-            &self.header.names[col],
-            self.bytes(col),
-        )
+        cell_number(self.header, self.line, col, self.bytes(col))
     }
     /// As [`Row::f64`], but an empty cell or `NaN` (any case) is a missing
     /// sample (`None`) for a reduction that handles gaps; infinities and
     /// text are still refused.
     pub fn f64_or_missing(&self, col: usize) -> Result<Option<f64>> {
         let b = self.bytes(col);
-        if b.is_empty() || b.eq_ignore_ascii_case(b"nan") {
+        if self.header.is_numeric(col) {
+            if frames::decode(b).is_nan() {
+                return Ok(None);
+            }
+        } else if b.is_empty() || b.eq_ignore_ascii_case(b"nan") {
             return Ok(None);
         }
         self.f64(col).map(Some)
@@ -825,7 +861,28 @@ pub fn parse_f64(bytes: &[u8]) -> Option<f64> {
 
 /// A number from the cell at (`line`, column `col`) of a table with this header.
 pub(crate) fn cell_number(header: &Header, line: usize, col: usize, bytes: &[u8]) -> Result<f64> {
+    if header.is_numeric(col) {
+        return frames::number(header, line, col, bytes);
+    }
     number(header, line, &header.names[col], bytes)
+}
+
+/// The value of a cell when it is a number (binary or text), else `None`.
+pub(crate) fn cell_value(header: &Header, col: usize, bytes: &[u8]) -> Option<f64> {
+    if header.is_numeric(col) {
+        Some(frames::decode(bytes))
+    } else {
+        parse_f64(bytes)
+    }
+}
+
+/// The text of a cell of a table with this header.
+pub(crate) fn cell_text<'a>(header: &Header, col: usize, bytes: &'a [u8]) -> Cow<'a, str> {
+    if header.is_numeric(col) {
+        Cow::Owned(crate::frames::number_text(frames::decode(bytes)))
+    } else {
+        Cow::Borrowed(std::str::from_utf8(bytes).unwrap_or(""))
+    }
 }
 
 fn number(header: &Header, line: usize, column: &str, bytes: &[u8]) -> Result<f64> {

@@ -104,9 +104,10 @@ impl Table {
         let start = if k == 0 { 0 } else { self.ends[k - 1] as usize };
         &self.text[start..self.ends[k] as usize]
     }
-    /// Text of a cell.
-    pub fn text(&self, row: usize, col: usize) -> &str {
-        std::str::from_utf8(self.bytes(row, col)).unwrap_or("")
+    /// Text of a cell (a number column in memory reads as
+    /// [`crate::frames::number_text`]).
+    pub fn text(&self, row: usize, col: usize) -> std::borrow::Cow<'_, str> {
+        crate::reader::cell_text(&self.header, col, self.bytes(row, col))
     }
     /// A number from a cell (as `Row::f64`).
     pub fn f64(&self, row: usize, col: usize) -> Result<f64> {
@@ -139,7 +140,7 @@ impl<'a> TableRow<'a> {
         self.table.line(self.row)
     }
     /// Text of a cell.
-    pub fn text(&self, col: usize) -> &'a str {
+    pub fn text(&self, col: usize) -> std::borrow::Cow<'a, str> {
         self.table.text(self.row, col)
     }
     /// A number from a cell, or an error naming file, line and column.

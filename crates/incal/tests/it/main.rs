@@ -5,6 +5,7 @@
 mod centrifuge_covariance;
 mod centrifuge_mc;
 mod centrifuge_roundtrip;
+mod columns_in_memory;
 mod gfimu_note;
 mod gfimu_plan;
 mod gfimu_roundtrip;

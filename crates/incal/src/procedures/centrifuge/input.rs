@@ -24,7 +24,7 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>) -> Result<Vec<Observation>>
     let mut obs = Vec::new();
     while let Some(row) = rows.next_row()? {
         let plane =
-            Plane::parse(row.text(cp)).map_err(|e| row.error(format!("column 'plane': {e}")))?;
+            Plane::parse(&row.text(cp)).map_err(|e| row.error(format!("column 'plane': {e}")))?;
         let phi = row.f64(cf)?;
         let pol = row.f64(cs)?;
         let polarity: i8 = if pol == 1.0 {

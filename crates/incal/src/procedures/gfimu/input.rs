@@ -369,12 +369,12 @@ pub fn read_static<R: Read>(
     let mut out = Vec::new();
     while let Some(row) = rows.next_row()? {
         let f = match (pos_col, force_cols) {
-            (Some(c), _) => parse_position(row.text(c)).ok_or_else(|| {
+            (Some(c), _) => parse_position(&row.text(c)).ok_or_else(|| {
                 row.cell_error(
                     c,
                     format!(
                         "'{}' is not one of +x, -x, +y, -y, +z, -z",
-                        clip(row.text(c))
+                        clip(&row.text(c))
                     ),
                 )
             })?,

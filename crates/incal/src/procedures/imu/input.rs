@@ -284,7 +284,8 @@ pub fn read_ferraris<R: Read>(
     while let Some(row) = rows.next_row()? {
         let s = session.read(&row)?;
         index += 1;
-        let label = row.text(cp).trim();
+        let text = row.text(cp);
+        let label = text.trim();
         if label.is_empty() {
             continue;
         }

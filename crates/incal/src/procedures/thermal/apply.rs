@@ -83,7 +83,7 @@ pub fn apply_with<R: Read, W: Write>(
         for (k, f) in fixed.iter().enumerate() {
             match f {
                 Some(v) => w.cell(incal_io::Cell::Num(*v)).map_err(io)?,
-                None => w.cell(incal_io::Cell::Text(row.text(k))).map_err(io)?,
+                None => w.cell(incal_io::Cell::Text(&row.text(k))).map_err(io)?,
             }
         }
         w.end_row().map_err(io)?;
