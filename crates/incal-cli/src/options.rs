@@ -32,42 +32,27 @@ pub enum FailOn {
 }
 
 /// Exit 3 (after the output) when `doc`'s overall verdict is one that
-/// `fail_on` stops on, naming the coefficients behind it.
+/// `fail_on` stops on, naming the coefficients behind it
+/// ([`incal::document::finish::FailOn::stop`]).
 pub fn check_fail_on(
     doc: &incal::document::ResultDocument,
     fail_on: Option<FailOn>,
 ) -> crate::error::CliResult<()> {
-    use incal::document::limits::Verdict;
-    let (Some(f), Some(v)) = (fail_on, doc.verdict) else {
+    use incal::document::finish::FailOn as Core;
+    let Some(f) = fail_on else {
         return Ok(());
     };
-    let from = match f {
-        FailOn::Fail => Verdict::NotDetermined,
-        FailOn::Conditional => Verdict::ConditionalPass,
+    let core = match f {
+        FailOn::Fail => Core::Fail,
+        FailOn::Conditional => Core::Conditional,
     };
-    if v < from {
-        return Ok(());
+    match core.stop(doc) {
+        Some(m) => Err(crate::error::CliError::Stop(format!(
+            "{m}: stopped by --fail-on {}",
+            core.as_str()
+        ))),
+        None => Ok(()),
     }
-    let names: Vec<String> = doc
-        .verdicts
-        .iter()
-        .flatten()
-        .filter(|(_, c)| c.verdict >= from)
-        .map(|(n, c)| format!("{n} {}", c.verdict))
-        .collect();
-    let shown = names.iter().take(6).cloned().collect::<Vec<_>>().join(", ");
-    let more = if names.len() > 6 {
-        format!(" and {} more", names.len() - 6)
-    } else {
-        String::new()
-    };
-    let word = match f {
-        FailOn::Fail => "fail",
-        FailOn::Conditional => "conditional",
-    };
-    Err(crate::error::CliError::Stop(format!(
-        "verdict {v} ({shown}{more}): stopped by --fail-on {word}"
-    )))
 }
 
 /// A records store as named in messages: its path, or its PostgreSQL URL

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use incal::document::{InputFile, ResultDocument};
 
-use crate::error::{usage, CliResult};
+use crate::error::CliResult;
 
 /// Options every reducing command shares: output form and destination,
 /// and the identity of the instrument.
@@ -42,64 +42,43 @@ pub struct ResultArgs {
 /// Judge `doc` against the limits file `path` (its hash joins the inputs).
 pub fn apply_limits(doc: &mut ResultDocument, path: &std::path::Path) -> CliResult<()> {
     let (name, text) = crate::io::read_text(path)?;
-    let limits = incal::document::limits::Limits::parse(&text)
-        .map_err(|e| crate::error::CliError::Input(format!("{name}: {e}")))?;
-    incal::document::limits::apply(doc, &limits)
-        .map_err(|e| crate::error::CliError::Input(format!("{name}: {e}")))?;
-    let shown = if name == "<stdin>" {
-        "-"
-    } else {
-        name.as_str()
+    let finish = incal::document::finish::Finish {
+        limits: Some(incal::document::finish::LimitsText { name, text }),
+        ..Default::default()
     };
-    doc.inputs.push(input_file(
-        "limits",
-        shown,
-        incal_io::sha256_hex(text.as_bytes()),
-        None,
-    ));
-    Ok(())
+    finish.apply(doc).map_err(finish_error)
+}
+
+/// An error of [`incal::document::finish::Finish::apply`]: a limits
+/// file's problem as the file says it (its keys are not options), an
+/// option's as [`crate::error::core`] spells it.
+fn finish_error(e: incal::Error) -> crate::error::CliError {
+    match e {
+        incal::Error::Input(i) => crate::error::CliError::Input(i.to_string()),
+        other => crate::error::core(other),
+    }
 }
 
 impl ResultArgs {
     /// Put the instrument identity into `doc`, render it (JSON or text)
     /// and write it to `--output` or standard output.
     pub fn emit(&self, mut doc: ResultDocument) -> CliResult<()> {
-        // A chained result (centrifuge --from) already names its instrument:
-        // --serial may repeat it, never contradict it.
-        match (&doc.instrument.serial, &self.serial) {
-            (Some(had), Some(given)) if had != given => {
-                return Err(crate::error::CliError::Input(format!(
-                    "--serial {}: the chained result is of serial {} (a result of another instrument cannot be chained)",
-                    incal_io::clip(given),
-                    incal_io::clip(had)
-                )))
+        let limits = match &self.limits {
+            Some(path) => {
+                let (name, text) = crate::io::read_text(path)?;
+                Some(incal::document::finish::LimitsText { name, text })
             }
-            (_, Some(given)) => doc.instrument.serial = Some(given.clone()),
-            _ => {}
-        }
-        if self.model.is_some() {
-            doc.instrument.model = self.model.clone();
-        }
-        for kv in &self.meta {
-            let (k, v) = kv
-                .split_once('=')
-                .ok_or_else(|| usage(format!("--meta: '{kv}' is not KEY=VALUE")))?;
-            let k = k.trim();
-            if k.is_empty() || k == "serial" || k == "model" {
-                return Err(usage(format!(
-                    "--meta: '{kv}' needs a key other than serial and model (use --serial, --model)"
-                )));
-            }
-            doc.instrument
-                .meta
-                .insert(k.to_string(), v.trim().to_string());
-        }
-        if let Some(u) = &self.output_unit {
-            doc.declare_output_unit(u).map_err(usage)?;
-        }
-        if let Some(l) = &self.limits {
-            apply_limits(&mut doc, l)?;
-        }
+            None => None,
+        };
+        let finish = incal::document::finish::Finish {
+            serial: self.serial.clone(),
+            model: self.model.clone(),
+            meta: self.meta.clone(),
+            output_unit: self.output_unit.clone(),
+            limits,
+            fail_on: None,
+        };
+        finish.apply(&mut doc).map_err(finish_error)?;
         let text = if self.json {
             format!("{}\n", doc.to_json())
         } else {

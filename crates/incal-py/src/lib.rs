@@ -8,6 +8,8 @@
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
+mod typed;
+
 /// `_run(args, stdin=None) -> (code, stdout: bytes, stderr: list[str])`:
 /// the command line `args` (without the program name) as the `incal`
 /// binary runs it, `stdin` (bytes) as its standard input.
@@ -81,5 +83,6 @@ fn _incal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_run, m)?)?;
     m.add_function(wrap_pyfunction!(_run_array, m)?)?;
     m.add_function(wrap_pyfunction!(_version, m)?)?;
+    m.add_function(wrap_pyfunction!(typed::_reduce, m)?)?;
     Ok(())
 }

@@ -144,5 +144,5 @@ def test_a_fail_on_verdict_keeps_and_records_the_result(recordings, tmp_path):
     assert [type(r).__name__ for r in b] == ["Result", "Result"]
     assert all(r.document["verdict"] == "fail" for r in b)
     assert sorted(b.stopped) == sorted(recordings[:2])
-    assert all("stopped by --fail-on fail" in m for m in b.stopped.values())
+    assert all("stopped by fail_on='fail'" in m for m in b.stopped.values())
     assert b.record_ids == [1, 2]

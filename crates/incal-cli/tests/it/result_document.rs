@@ -458,7 +458,7 @@ fn centrifuge_from_keeps_the_tumble_results_instrument() {
     other.extend_from_slice(&["--serial", "SN-6"]);
     let o = run_in(&dir, &other);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("--serial SN-6: the chained result is of serial SN-5"));
+    assert!(stderr(&o).contains("--serial: SN-6 is not the chained result's serial SN-5"));
 }
 
 /// A plan states u, the dof its reduction will have and U95,

@@ -86,13 +86,17 @@ class InputError(IncalError, ValueError):
     given), ``line`` (1-based, the header is line 1), ``column`` (the
     column's name), ``option`` (the keyword, ``rate_hz``)."""
 
-    def __init__(self, message: str):
+    def __init__(self, message: str, where: Optional[Dict[str, Any]] = None):
         super().__init__(message, 2)
         self.file: Optional[str] = None
         self.line: Optional[int] = None
         self.column: Optional[str] = None
         self.option: Optional[str] = None
         self._parse(message)
+        # What the core says of where (typed calls) wins over the parse.
+        for key, value in (where or {}).items():
+            if value is not None:
+                setattr(self, key, value)
 
     def _parse(self, message: str) -> None:
         """Read the attributes from the one-line message's documented
@@ -424,18 +428,47 @@ def _noise_positional(data: Any, options: Dict[str, Any]) -> Any:
     return None
 
 
-def _reduce(command: Sequence[str], data: Any, options: Dict[str, Any]) -> Result:
+def _raise(code: int, out: bytes, err: List[str], where: Optional[Dict[str, Any]] = None) -> None:
+    message = err[-1] if err else f"incal exited with code {code}"
+    if code == 2:
+        raise InputError(message, where)
+    raise IncalError(message, code, out)
+
+
+def _reduce(
+    entry: Dict[str, Any], data: Any, options: Dict[str, Any], flags: Dict[str, str]
+) -> Result:
+    """Reduce ``data`` by the registry entry with ``options`` (keyed by
+    option id): through the core's typed reduction (data in place), or,
+    for an option only the command line has (``from_``, ``quiet``, a
+    binary ``format``) and for noise's arrays (read as a binary record in
+    place), through the command line in process."""
+    from . import _typed
+
+    command = entry["command"].split()
     options = dict(options)
-    if list(command) == ["noise"]:
+    if command == ["noise"]:
         data = _noise_positional(data, options)
-    if list(command) == ["noise"] and data is None:
+    schema = (entry.get("options") or {}).get("reduce")
+    arrays = {k: options.pop(k) for k in list(options) if _is_array(options[k])}
+    parts = _typed.split(schema, options) if schema else None
+    binary = command == ["noise"] and (options.get("format") not in (None, "csv") or (arrays and data is None))
+    if parts is not None and not binary:
+        code, out, err, where = _typed.call(entry["id"], data, arrays, *parts)
+        if code != 0:
+            _raise(code, out, err, where)
+        return _result(out, [])
+    # The command line: options by their flags.
+    options = {flags.get(k, "--" + k)[2:].replace("-", "_"): v for k, v in options.items()}
+    options.update(arrays)
+    if command == ["noise"] and data is None:
         fast = _noise_array(options)
         if fast is not None:
             words, array = fast
-            out, err = run(list(command) + words + ["--json"] + _options(options), array=array)
+            out, err = run(command + words + ["--json"] + _options(options), array=array)
             return _result(out, err)
     words, stdin = _data(data, options)
-    out, err = run(list(command) + words + ["--json"] + _options(options), stdin)
+    out, err = run(command + words + ["--json"] + _options(options), stdin)
     return _result(out, err)
 
 
@@ -506,27 +539,27 @@ def _options_doc(args: List[Dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
-def _procedure(name: str, command: Sequence[str], doc: str, args: Optional[List[Dict[str, Any]]] = None):
-    args = args or []
-    names = {_keyword(a["name"]) for a in args}
-    # The keyword of an option is its name; its flag's spelling and aliases
-    # (``g_local``) are accepted too.
-    flags = {_keyword(a["name"]): a["flag"] for a in args}
+def _procedure(name: str, entry: Dict[str, Any]):
+    command = entry["command"].split()
+    doc = entry["title"] + "."
+    args = (entry.get("arguments") or {}).get("reduce") or []
+    # The keyword of an option is its name (``from_`` for a Python
+    # keyword); its flag's spelling and aliases (``g_local``) are accepted
+    # too. Each is turned into the option's id.
+    ids = {_keyword(a["name"]): a["name"] for a in args}
     for a in args:
         for spelling in [a["flag"][2:]] + list(a["aliases"] or []):
-            flags.setdefault(spelling.replace("-", "_"), "--" + spelling)
-    known = set(flags) - set(_NOT_KEYWORDS)
+            ids.setdefault(spelling.replace("-", "_"), a["name"])
+    flags = {a["name"]: a["flag"] for a in args}
+    known = set(ids) - set(_NOT_KEYWORDS)
 
     def reduce(data: Any = None, **options: Any) -> Result:
         if args:
             for key, value in options.items():
                 if key not in known and not _is_array(value):
                     raise TypeError(f"{name}() got an unexpected keyword argument '{key}'")
-        renamed = {}
-        for key, value in options.items():
-            flag = flags.get(key)
-            renamed[flag[2:].replace("-", "_") if flag and key in names else key] = value
-        return _reduce(command, data, renamed)
+        by_id = {ids.get(k, k) if not _is_array(v) else k: v for k, v in options.items()}
+        return _reduce(entry, data, by_id, flags)
 
     reduce.__name__ = name
     reduce.__qualname__ = name
@@ -554,9 +587,7 @@ REGISTRY: List[Dict[str, Any]] = _registry()
 for _entry in REGISTRY:
     if _entry["input"] == "recording":
         _name = _entry["python"]["function"]
-        globals()[_name] = _procedure(
-            _name, _entry["command"].split(), _entry["title"] + ".", (_entry.get("arguments") or {}).get("reduce")
-        )
+        globals()[_name] = _procedure(_name, _entry)
         __all__.append(_name)
 del _entry, _name
 

@@ -1,0 +1,191 @@
+"""Calls of the core's typed reductions (``incal._incal._reduce``): the
+procedure's options as JSON with its own keys, validated by the core as
+the CLI's are; the data as a path, or as columns handed over in place (a
+float64 column of a DataFrame or a numpy array is read where it lies, a
+column of another numeric dtype converted once; text columns as str).
+
+The document's ``inputs`` records, for data in memory, the SHA-256 of
+the columns' canonical byte form (``incal_io::frames``: ``INCALCF1``, the
+column count, each column's kind and name, then each row's cells,
+numbers as little-endian binary64): the same columns always give the
+same hash."""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Dict, List, Optional, Tuple
+
+from ._incal import _reduce
+
+#: Keywords of the input layer: ``columns`` (``NAME=HEADER,…``, a dict
+#: ``{name: header}`` or a list of names) and ``delimiter``.
+READ = ("columns", "delimiter")
+#: Keywords added to the document by the core after the reduction.
+FINISH = ("serial", "model", "meta", "output_unit", "limits", "fail_on")
+
+
+def _resolve(prop: Dict[str, Any], schema: Dict[str, Any]) -> Dict[str, Any]:
+    ref = prop.get("$ref")
+    if isinstance(ref, str) and ref.startswith("#/$defs/"):
+        return schema.get("$defs", {}).get(ref[len("#/$defs/") :], {})
+    return prop
+
+
+def _types(prop: Dict[str, Any]) -> List[str]:
+    t = prop.get("type", [])
+    return [t] if isinstance(t, str) else list(t)
+
+
+def _value(value: Any, prop: Dict[str, Any], schema: Dict[str, Any]) -> Any:
+    """A keyword's value as the JSON the option's schema wants: a tuple
+    or array as a list; ``"K0,K1"`` (the CLI's comma list) as a list where
+    the option is an array."""
+    prop = _resolve(prop, schema)
+    if hasattr(value, "tolist") and not isinstance(value, (str, bytes)):
+        value = value.tolist()
+    if isinstance(value, tuple):
+        value = list(value)
+    if "array" in _types(prop) and isinstance(value, str):
+        items = _resolve(prop.get("items", {}), schema)
+        return [_number(p.strip(), items) for p in value.split(",") if p.strip()]
+    if isinstance(value, list):
+        items = _resolve(prop.get("items", {}), schema)
+        return [_number(v, items) for v in value]
+    return _number(value, prop)
+
+
+def _number(value: Any, prop: Dict[str, Any]) -> Any:
+    """A number given as text (``"1e-4"``, as on the command line) as the
+    number, where the option is one; anything else unchanged (the core
+    names what it refuses)."""
+    if not isinstance(value, str):
+        return value
+    kinds = set(_types(prop))
+    try:
+        if "integer" in kinds and "number" not in kinds:
+            return int(value)
+        if kinds & {"number", "integer"}:
+            return float(value)
+    except ValueError:
+        pass
+    return value
+
+
+def _read_value(key: str, value: Any) -> str:
+    if key == "columns":
+        if isinstance(value, dict):
+            return ",".join(f"{k}={v}" for k, v in value.items())
+        if isinstance(value, (list, tuple)):
+            return ",".join(str(v) for v in value)
+    return str(value)
+
+
+def _finish_value(key: str, value: Any) -> Any:
+    if key == "meta":
+        if isinstance(value, dict):
+            return [f"{k}={v}" for k, v in value.items()]
+        if isinstance(value, str):
+            return [value]
+        return [str(v) for v in value]
+    if key == "limits":
+        path = os.fspath(value)
+        with open(path, "r", encoding="utf-8") as f:
+            return {"name": path, "text": f.read()}
+    return str(value)
+
+
+def split(schema: Dict[str, Any], options: Dict[str, Any]) -> Optional[Tuple[dict, dict, dict]]:
+    """The keywords (by option id) as the procedure's options, the read
+    options and the finish options; ``None`` when one is an option only
+    the command line has (then the call goes through it)."""
+    props = schema.get("properties", {})
+    opts: Dict[str, Any] = {}
+    read: Dict[str, Any] = {}
+    finish: Dict[str, Any] = {}
+    for key, value in options.items():
+        if value is None:
+            continue
+        if key in props:
+            opts[key] = _value(value, props[key], schema)
+        elif key in READ:
+            read[key] = _read_value(key, value)
+        elif key in FINISH:
+            finish[key] = _finish_value(key, value)
+        else:
+            return None
+    return opts, read, finish
+
+
+def _json_default(value: Any) -> Any:
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    raise TypeError(f"{type(value).__name__} is not an option value")
+
+
+def column(name: str, values: Any) -> Any:
+    """One column for the core: a 1-D C-contiguous float64 array (the
+    values in place when they already are; ints, unsigned and float32
+    converted; a pandas nullable column with NA as NaN), or a list of str
+    for any other dtype (labels)."""
+    import numpy as np
+
+    dtype = getattr(values, "dtype", None)
+    if dtype is not None and not isinstance(dtype, np.dtype):
+        # A pandas extension dtype (Int64, Float64, string, category).
+        try:
+            import pandas as pd
+
+            if pd.api.types.is_numeric_dtype(dtype) and not pd.api.types.is_bool_dtype(dtype):
+                return values.to_numpy(dtype=np.float64, na_value=np.nan)
+        except ImportError:
+            pass
+        return ["" if v is None or v != v else str(v) for v in values.tolist()]
+    a = np.asarray(values)
+    if a.ndim != 1:
+        from . import InputError
+
+        raise InputError(f"column '{name}': an array of {a.ndim} dimensions; give one 1-D array per column")
+    if a.dtype.kind in "fiu":
+        return np.ascontiguousarray(a, dtype=np.float64)
+    return ["" if v is None or v != v else str(v) for v in a.tolist()]
+
+
+def call(
+    procedure: str,
+    data: Any,
+    arrays: Dict[str, Any],
+    opts: Dict[str, Any],
+    read: Dict[str, Any],
+    finish: Dict[str, Any],
+) -> Tuple[int, bytes, List[str], Dict[str, Any]]:
+    """Run the typed reduction: (code, document, error lines, where)."""
+    from . import InputError
+
+    if data is not None and arrays:
+        raise InputError("give the data as one path or DataFrame, or as arrays by keyword, not both")
+    kwargs: Dict[str, Any] = {}
+    if data is None:
+        if not arrays:
+            raise InputError("no data: give a path, a DataFrame, or arrays by keyword")
+        name = "<arrays>"
+        kwargs["columns"] = [(str(k), column(str(k), v)) for k, v in arrays.items()]
+    elif isinstance(data, (str, os.PathLike)):
+        name = os.fspath(data)
+        kwargs["path"] = name
+    elif hasattr(data, "columns") and hasattr(data, "__getitem__"):
+        name = "<DataFrame>"
+        kwargs["columns"] = [(str(c), column(str(c), data[c])) for c in data.columns]
+    else:
+        raise InputError(f"data must be a path, a DataFrame or arrays by keyword, not {type(data).__name__}")
+    code, out, err, where = _reduce(
+        procedure,
+        name,
+        json.dumps(opts, default=_json_default),
+        json.dumps(read),
+        json.dumps(finish),
+        **kwargs,
+    )
+    return code, bytes(out), list(err), json.loads(where)

@@ -1,0 +1,233 @@
+//! The typed entry points: a procedure's reduction called on the core's
+//! registry ([`incal::procedures::registry`]) with its options as JSON
+//! (the procedure's own keys, validated by its `validate`), and the data
+//! as a path or as columns in memory ([`incal_io::frames`]): numpy
+//! float64 arrays are read in place, without a text round trip.
+
+use std::borrow::Cow;
+
+use incal::procedures::{registry, Silent};
+use incal_io::frames::{Column, Columns};
+use numpy::{PyReadonlyArray1, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyBytes;
+
+/// What a call did: the exit code the CLI would give (0 ok, 2 bad input
+/// or options, 1 anything else), the document's JSON text, the error
+/// message, and where the error is (JSON: `option`, `file`, `line`,
+/// `column`; `{}` when it names none).
+pub struct Outcome {
+    code: u8,
+    out: Vec<u8>,
+    err: Vec<String>,
+    place: String,
+}
+
+impl Outcome {
+    fn failed(code: u8, message: String, place: serde_json::Value) -> Self {
+        Outcome {
+            code,
+            out: Vec::new(),
+            err: vec![message],
+            place: place.to_string(),
+        }
+    }
+}
+
+/// Where a core error is: the option it names, or the file, line and
+/// column of the input.
+fn place(e: &incal::Error) -> serde_json::Value {
+    match e {
+        incal::Error::InvalidOption { key, .. } => serde_json::json!({ "option": key }),
+        incal::Error::InFile { file, source } => {
+            let mut p = place(source);
+            if p.get("file").is_none() {
+                p["file"] = serde_json::json!(file);
+            }
+            p
+        }
+        incal::Error::Input(i) => {
+            serde_json::json!({ "file": i.file, "line": i.line, "column": i.column })
+        }
+        _ => serde_json::json!({}),
+    }
+}
+
+/// The read options a Python call gives: `columns` (`NAME=HEADER,…`)
+/// and `delimiter`.
+#[derive(serde::Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+struct ReadSpec {
+    columns: Option<String>,
+    delimiter: Option<String>,
+}
+
+fn read_options(spec: &str) -> Result<incal_io::ReadOptions, Outcome> {
+    let bad = |key: &str, m: String| {
+        Outcome::failed(
+            2,
+            format!("{key}: {m}"),
+            serde_json::json!({ "option": key }),
+        )
+    };
+    let spec: ReadSpec = serde_json::from_str(spec).map_err(|e| bad("read", e.to_string()))?;
+    let mut read = incal_io::ReadOptions::default();
+    if let Some(c) = &spec.columns {
+        read.columns = incal_io::ColumnMap::parse(c).map_err(|m| bad("columns", m))?;
+    }
+    if let Some(d) = &spec.delimiter {
+        read.delimiter = Some(incal_io::parse_delimiter(d).map_err(|m| bad("delimiter", m))?);
+    }
+    Ok(read)
+}
+
+/// The data of a call: a path, or columns in memory.
+enum Data<'a> {
+    Path(std::path::PathBuf),
+    Columns(Columns<'a>),
+}
+
+/// Reduce `data` by `procedure` with `options`, then add what `finish`
+/// says (identity, output unit, limits). Runs without the GIL.
+fn reduce(
+    procedure: &str,
+    name: &str,
+    data: Data<'_>,
+    options: &str,
+    read: &str,
+    finish: &str,
+) -> Outcome {
+    let none = serde_json::json!({});
+    let Some(red) = registry::find(procedure).and_then(|e| e.reduction) else {
+        return Outcome::failed(
+            2,
+            format!("no procedure '{procedure}' reduces a recording"),
+            none,
+        );
+    };
+    let options: serde_json::Value = match serde_json::from_str(options) {
+        Ok(v) => v,
+        Err(e) => return Outcome::failed(2, format!("options: {e}"), none),
+    };
+    let mut read = match read_options(read) {
+        Ok(r) => r,
+        Err(o) => return o,
+    };
+    let finish: incal::document::finish::Finish = match serde_json::from_str(finish) {
+        Ok(f) => f,
+        Err(e) => return Outcome::failed(2, format!("identity and limits: {e}"), none),
+    };
+    let reduced = match data {
+        Data::Path(p) => match incal_io::open(&p) {
+            Ok(mut src) => (red.run)(&src.name, &mut src.reader, &read, &options, &Silent),
+            Err(e) => Err(incal::Error::Input(e)),
+        },
+        Data::Columns(mut c) => {
+            read.frames = true;
+            (red.run)(name, &mut c, &read, &options, &Silent)
+        }
+    };
+    let doc = reduced.and_then(|mut doc| finish.apply(&mut doc).map(|()| doc));
+    match doc {
+        Ok(doc) => {
+            // fail_on stops after the result is made: it is handed back
+            // with the error.
+            let stop = finish.stop(&doc);
+            Outcome {
+                code: if stop.is_some() { 3 } else { 0 },
+                out: format!("{}\n", doc.to_json()).into_bytes(),
+                err: stop
+                    .map(|m| {
+                        format!(
+                            "{m}: stopped by fail_on='{}'",
+                            finish.fail_on.map_or("", |f| f.as_str())
+                        )
+                    })
+                    .into_iter()
+                    .collect(),
+                place: "{}".into(),
+            }
+        }
+        Err(e) => Outcome::failed(2, e.to_string(), place(&e)),
+    }
+}
+
+/// A column handed over from Python, kept borrowed for the call.
+enum Held<'py> {
+    Numbers(PyReadonlyArray1<'py, f64>),
+    Text(Vec<String>),
+}
+
+/// `_reduce(procedure, name, options, read, finish, path=None,
+/// columns=None) -> (code, document: bytes, errors: list[str], place:
+/// str)`: the registry's reduction of `procedure` (its id) on the file
+/// `path`, or on `columns` (a list of `(name, column)`, each a 1-D
+/// C-contiguous float64 numpy array, read in place, or a list of str)
+/// named `name` in the document and in messages. `options`, `read`
+/// (`columns`, `delimiter`) and `finish` (`serial`, `model`, `meta`,
+/// `output_unit`, `limits`) are JSON objects. The GIL is released while
+/// the core reads and reduces.
+#[pyfunction]
+#[pyo3(signature = (procedure, name, options, read, finish, path=None, columns=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn _reduce<'py>(
+    py: Python<'py>,
+    procedure: &str,
+    name: &str,
+    options: &str,
+    read: &str,
+    finish: &str,
+    path: Option<std::path::PathBuf>,
+    columns: Option<Vec<(String, Bound<'py, PyAny>)>>,
+) -> PyResult<(u8, Py<PyBytes>, Vec<String>, String)> {
+    let mut held: Vec<(String, Held<'py>)> = Vec::new();
+    for (n, obj) in columns.unwrap_or_default() {
+        if let Ok(a) = obj.extract::<PyReadonlyArray1<'py, f64>>() {
+            if !a.is_c_contiguous() {
+                return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                    "column '{n}': the array is not contiguous"
+                )));
+            }
+            held.push((n, Held::Numbers(a)));
+        } else {
+            let t: Vec<String> = obj.extract().map_err(|_| {
+                pyo3::exceptions::PyTypeError::new_err(format!(
+                    "column '{n}': a float64 numpy array or a list of str is needed"
+                ))
+            })?;
+            held.push((n, Held::Text(t)));
+        }
+    }
+    let data = match path {
+        Some(p) => Data::Path(p),
+        None => {
+            let mut c = Columns::new();
+            for (n, h) in &held {
+                let col = match h {
+                    Held::Numbers(a) => {
+                        Column::F64(Cow::Borrowed(a.as_slice().map_err(|e| {
+                            pyo3::exceptions::PyValueError::new_err(e.to_string())
+                        })?))
+                    }
+                    Held::Text(t) => Column::Text(Cow::Borrowed(t)),
+                };
+                if let Err(m) = c.push(n, col) {
+                    return Ok((
+                        2,
+                        PyBytes::new(py, b"").unbind(),
+                        vec![format!("{name}: {m}")],
+                        "{}".into(),
+                    ));
+                }
+            }
+            Data::Columns(c)
+        }
+    };
+    let out = py.detach(|| reduce(procedure, name, data, options, read, finish));
+    Ok((
+        out.code,
+        PyBytes::new(py, &out.out).unbind(),
+        out.err,
+        out.place,
+    ))
+}
