@@ -11,8 +11,13 @@ document equals the CLI's ``--json`` output for the same data and options.
 10.0
 
 Data is a path (``str`` or ``os.PathLike``), a pandas ``DataFrame`` with
-incal's column names, or numpy arrays given by keyword (one per column:
-``incal.tumble(angle_deg=a, output=y, mount="pendulum")``). Options are
+incal's column names (or any frame whose columns convert to numpy
+arrays, such as polars'), a dict of 1-D arrays (``{"angle_deg": a,
+"output": y}``), or numpy arrays given by keyword (one per column:
+``incal.tumble(angle_deg=a, output=y, mount="pendulum")``; type checkers
+know the options' names, so typed code gives arrays as a dict). Columns
+in memory are handed to the core in place, without a text round trip,
+and rows are numbered from 0 in messages. Options are
 keyword arguments named as the CLI options with ``_`` for ``-``
 (``gravity_m_s2=9.80665``); ``True`` gives a flag, a list or tuple a
 comma-separated value. Errors raise :class:`InputError` (bad data or
@@ -210,6 +215,8 @@ def _data(data: Any, options: Dict[str, Any]) -> Tuple[List[str], Optional[bytes
         if not arrays:
             raise InputError("no data: give a path, a DataFrame, or arrays by keyword")
         return ["--input", "-"], _csv(arrays)
+    if isinstance(data, dict):
+        return ["--input", "-"], _csv({str(k): list(v) for k, v in data.items()})
     if isinstance(data, (str, os.PathLike)):
         return ["--input", os.fspath(data)], None
     if hasattr(data, "columns") and hasattr(data, "__getitem__"):

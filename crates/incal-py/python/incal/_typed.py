@@ -172,6 +172,9 @@ def call(
             raise InputError("no data: give a path, a DataFrame, or arrays by keyword")
         name = "<arrays>"
         kwargs["columns"] = [(str(k), column(str(k), v)) for k, v in arrays.items()]
+    elif isinstance(data, dict):
+        name = "<arrays>"
+        kwargs["columns"] = [(str(k), column(str(k), v)) for k, v in data.items()]
     elif isinstance(data, (str, os.PathLike)):
         name = os.fspath(data)
         kwargs["path"] = name
@@ -179,7 +182,7 @@ def call(
         name = "<DataFrame>"
         kwargs["columns"] = [(str(c), column(str(c), data[c])) for c in data.columns]
     else:
-        raise InputError(f"data must be a path, a DataFrame or arrays by keyword, not {type(data).__name__}")
+        raise InputError(f"data must be a path, a DataFrame, a dict of arrays or arrays by keyword, not {type(data).__name__}")
     code, out, err, where = _reduce(
         procedure,
         name,
