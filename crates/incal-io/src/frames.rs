@@ -117,6 +117,29 @@ impl<'a> Columns<'a> {
             }
         }
         let rows = self.rows();
+        let numbers: Option<Vec<&[f64]>> = self
+            .cols
+            .iter()
+            .map(|c| match c {
+                Column::F64(v) => Some(&v[..]),
+                Column::Text(_) => None,
+            })
+            .collect();
+        if let Some(numbers) = numbers {
+            // Numbers only: whole rows of 8 bytes per column, sized at once.
+            let width = 8 * numbers.len().max(1);
+            let take = (target.saturating_sub(self.out.len()) / width)
+                .max(1)
+                .min(rows - self.next_row);
+            self.out.reserve(take * width);
+            for r in self.next_row..self.next_row + take {
+                for col in &numbers {
+                    self.out.extend_from_slice(&col[r].to_le_bytes());
+                }
+            }
+            self.next_row += take;
+            return;
+        }
         while self.out.len() < target && self.next_row < rows {
             let r = self.next_row;
             for col in &self.cols {

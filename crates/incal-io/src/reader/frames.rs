@@ -124,8 +124,22 @@ impl<R: Read> Reader<R> {
             return Ok(false);
         }
         self.fields.clear();
+        let width = self.header.width();
+        if self.header.numeric.iter().all(|&n| n) {
+            // Numbers only: a row is a fixed 8 bytes per column.
+            if !self.need(8 * width)? {
+                return Err(self.truncated(&format!("row {}", self.rows)));
+            }
+            let base = self.pos as u32;
+            self.fields
+                .extend((0..width as u32).map(|k| (base + 8 * k, base + 8 * k + 8)));
+            self.pos += 8 * width;
+            self.row_line = self.rows;
+            self.cells = super::Cells::Buffer;
+            return Ok(true);
+        }
         let mut off = 0usize;
-        for col in 0..self.header.width() {
+        for col in 0..width {
             if self.header.numeric[col] {
                 if !self.need(off + 8)? {
                     return Err(self.truncated(&format!("row {}", self.rows)));
