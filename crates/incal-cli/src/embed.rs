@@ -47,16 +47,6 @@ pub fn run_embedded(args: &[OsString], stdin: Option<Vec<u8>>) -> Embedded {
     }
 }
 
-/// [`run_embedded`] with `memory` as the binary record that `--input -`
-/// opens (`incal noise --format f64le --input -`), read in place: a numpy
-/// array from Python is analysed without a copy.
-pub fn run_embedded_with_memory(args: &[OsString], memory: &[u8]) -> Embedded {
-    // SAFETY: a command returns only its exit code and captured output;
-    // every record it opens is dropped before `run_embedded` returns, and
-    // `memory` is borrowed (unchanged) for the whole call.
-    unsafe { incal_io::binary::with_memory(memory, || run_embedded(args, None)) }
-}
-
 /// True while a command runs embedded on this thread.
 pub(crate) fn capturing() -> bool {
     CAPTURE.with(|c| c.borrow().is_some())

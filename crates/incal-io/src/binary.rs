@@ -41,70 +41,39 @@ impl Sample {
 }
 
 /// The bytes of a record: a file's memory map, or a caller's buffer
-/// ([`with_memory`]).
-enum Bytes {
+/// borrowed for the record's life ([`MappedRecord::from_memory`]).
+enum Bytes<'a> {
     Map(memmap2::Mmap),
-    /// A buffer that outlives the record by the contract of
-    /// [`with_memory`].
-    Memory(*const u8, usize),
+    Borrowed(&'a [u8]),
 }
 
-impl std::ops::Deref for Bytes {
+impl std::ops::Deref for Bytes<'_> {
     type Target = [u8];
     fn deref(&self) -> &[u8] {
         match self {
             Bytes::Map(m) => m,
-            // SAFETY: `with_memory`'s caller keeps the buffer alive and
-            // unchanged while anything opened inside it exists.
-            Bytes::Memory(p, n) => unsafe { std::slice::from_raw_parts(*p, *n) },
+            Bytes::Borrowed(b) => b,
         }
     }
-}
-
-// SAFETY: the buffer of `Bytes::Memory` is read-only for as long as the
-// record exists (the contract of `with_memory`), as a file map is.
-unsafe impl Send for Bytes {}
-// SAFETY: as for Send: nothing writes the buffer while it is shared.
-unsafe impl Sync for Bytes {}
-
-thread_local! {
-    /// A buffer that `-` opens as a binary record on this thread.
-    static MEMORY: std::cell::Cell<Option<(*const u8, usize)>> = const { std::cell::Cell::new(None) };
 }
 
 /// The display name of a record read from memory.
 pub const MEMORY_NAME: &str = "<memory>";
 
-/// Run `f` with `bytes` as the binary record `-` opens on this thread
-/// ([`MappedRecord::open`]), read in place, never copied: for front ends
-/// that hand incal an array they hold (a numpy array from Python). The
-/// record is named [`MEMORY_NAME`] and its SHA-256 is of `bytes`.
-///
-/// # Safety
-/// Nothing opened inside `f` may outlive `f` (`f` must not return or
-/// leak a [`MappedRecord`]), and `bytes` must not change while `f` runs.
-pub unsafe fn with_memory<T>(bytes: &[u8], f: impl FnOnce() -> T) -> T {
-    struct Reset(Option<(*const u8, usize)>);
-    impl Drop for Reset {
-        fn drop(&mut self) {
-            MEMORY.with(|m| m.set(self.0));
-        }
-    }
-    let _reset = Reset(MEMORY.with(|m| m.replace(Some((bytes.as_ptr(), bytes.len())))));
-    f()
-}
-
-/// A memory-mapped record of interleaved little-endian samples.
-pub struct MappedRecord {
+/// A record of interleaved little-endian samples: a file's memory map
+/// (`MappedRecord<'static>`, [`MappedRecord::open`]) or a buffer a front
+/// end holds (a numpy array), borrowed in place for `'a`
+/// ([`MappedRecord::from_memory`]).
+pub struct MappedRecord<'a> {
     name: String,
     path: PathBuf,
-    map: Bytes,
+    map: Bytes<'a>,
     channels: usize,
     f64le: bool,
     rows: usize,
 }
 
-impl std::fmt::Debug for MappedRecord {
+impl std::fmt::Debug for MappedRecord<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("MappedRecord")
             .field("name", &self.name)
@@ -115,41 +84,64 @@ impl std::fmt::Debug for MappedRecord {
     }
 }
 
-impl MappedRecord {
+impl MappedRecord<'static> {
     /// Map the file at `path` as frames of `channels` samples. Refuses
     /// standard input (`-`: it cannot be mapped), no channel, a file that
     /// cannot be read or mapped, an empty file and a length that is not a
     /// whole number of frames.
     pub fn open(path: &Path, channels: usize, sample: Sample) -> Result<Self> {
         let name = crate::display_name(path);
-        let memory = crate::is_dash(path)
-            .then(|| MEMORY.with(|m| m.take()))
-            .flatten();
-        if crate::is_dash(path) && memory.is_none() {
+        if crate::is_dash(path) {
             return Err(InputError::file(
                 &name,
                 "a binary record must be a file (memory-mapped), not standard input",
             ));
         }
-        if channels == 0 {
-            return Err(InputError::file(
-                &name,
-                "a binary record needs at least 1 channel",
-            ));
-        }
-        let (name, map) = match memory {
-            Some((p, n)) => (MEMORY_NAME.to_string(), Bytes::Memory(p, n)),
-            None => {
-                let file = std::fs::File::open(path).map_err(|e| InputError::io(&name, &e))?;
-                // SAFETY: the map is read-only and private to this
-                // process; the file is not modified while incal runs (a
-                // concurrent writer would give wrong numbers, not memory
-                // unsafety beyond what reading a changing file does).
-                let map = unsafe { memmap2::Mmap::map(&file) }
-                    .map_err(|e| InputError::file(&name, format!("cannot map: {e}")))?;
-                (name, Bytes::Map(map))
-            }
-        };
+        check_channels(&name, channels)?;
+        let file = std::fs::File::open(path).map_err(|e| InputError::io(&name, &e))?;
+        // SAFETY: the map is read-only and private to this process; the
+        // file is not modified while incal runs (a concurrent writer would
+        // give wrong numbers, not memory unsafety beyond what reading a
+        // changing file does).
+        let map = unsafe { memmap2::Mmap::map(&file) }
+            .map_err(|e| InputError::file(&name, format!("cannot map: {e}")))?;
+        MappedRecord::new(name, path.to_path_buf(), Bytes::Map(map), channels, sample)
+    }
+}
+
+fn check_channels(name: &str, channels: usize) -> Result<()> {
+    if channels == 0 {
+        return Err(InputError::file(
+            name,
+            "a binary record needs at least 1 channel",
+        ));
+    }
+    Ok(())
+}
+
+impl<'a> MappedRecord<'a> {
+    /// The record held in `bytes` (a numpy array's buffer), read in place
+    /// for as long as the record lives, never copied: named
+    /// [`MEMORY_NAME`]; its SHA-256 is of `bytes`. The same checks as
+    /// [`MappedRecord::open`].
+    pub fn from_memory(bytes: &'a [u8], channels: usize, sample: Sample) -> Result<Self> {
+        check_channels(MEMORY_NAME, channels)?;
+        MappedRecord::new(
+            MEMORY_NAME.to_string(),
+            PathBuf::from(MEMORY_NAME),
+            Bytes::Borrowed(bytes),
+            channels,
+            sample,
+        )
+    }
+
+    fn new(
+        name: String,
+        path: PathBuf,
+        map: Bytes<'a>,
+        channels: usize,
+        sample: Sample,
+    ) -> Result<Self> {
         let frame = sample.width() * channels;
         if map.is_empty() {
             return Err(InputError::file(&name, "empty file"));
@@ -166,7 +158,7 @@ impl MappedRecord {
         let rows = map.len() / frame;
         Ok(Self {
             name,
-            path: path.to_path_buf(),
+            path,
             map,
             channels,
             f64le: sample == Sample::F64le,

@@ -127,6 +127,15 @@ fn reduce(
             (red.run)(name, &mut c, &read, &options, &Silent)
         }
     };
+    finished(reduced, &finish)
+}
+
+/// The document of a reduction with `finish` applied, as an outcome
+/// (`fail_on` stops with code 3 and the document kept).
+fn finished(
+    reduced: incal::Result<incal::document::ResultDocument>,
+    finish: &incal::document::finish::Finish,
+) -> Outcome {
     let doc = reduced.and_then(|mut doc| finish.apply(&mut doc).map(|()| doc));
     match doc {
         Ok(doc) => {
@@ -230,4 +239,82 @@ pub fn _reduce<'py>(
         out.err,
         out.place,
     ))
+}
+
+/// `_reduce_record(name, options, read, finish, record, channels, f64le)
+/// -> (code, document, errors, place)`: the noise analysis of a binary
+/// record held by Python (`record`: the bytes of a C-contiguous float64 or
+/// float32 array, as a 1-D uint8 numpy view, `channels` interleaved),
+/// read in place ([`incal_io::binary::MappedRecord::from_memory`]) while
+/// the GIL is released. `read` selects and renames channels (`columns`).
+/// With `path` instead of `record`, the binary file at `path` is read
+/// through its memory map (`incal noise --format f64le|f32le`).
+#[pyfunction]
+#[pyo3(signature = (options, read, finish, channels, f64le, record=None, path=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn _reduce_record<'py>(
+    py: Python<'py>,
+    options: &str,
+    read: &str,
+    finish: &str,
+    channels: usize,
+    f64le: bool,
+    record: Option<PyReadonlyArray1<'py, u8>>,
+    path: Option<std::path::PathBuf>,
+) -> PyResult<(u8, Py<PyBytes>, Vec<String>, String)> {
+    let bytes = match &record {
+        Some(r) => Some(
+            r.as_slice()
+                .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?,
+        ),
+        None => None,
+    };
+    let out = py.detach(|| {
+        let sample = if f64le {
+            incal_io::binary::Sample::F64le
+        } else {
+            incal_io::binary::Sample::F32le
+        };
+        let rec = match (bytes, &path) {
+            (Some(b), _) => incal_io::binary::MappedRecord::from_memory(b, channels, sample),
+            (None, Some(p)) => incal_io::binary::MappedRecord::open(p, channels, sample),
+            (None, None) => Err(incal_io::InputError::file("<memory>", "no record given")),
+        };
+        noise_record(options, read, finish, rec)
+    });
+    Ok((
+        out.code,
+        PyBytes::new(py, &out.out).unbind(),
+        out.err,
+        out.place,
+    ))
+}
+
+fn noise_record(
+    options: &str,
+    read: &str,
+    finish: &str,
+    rec: incal_io::Result<incal_io::binary::MappedRecord<'_>>,
+) -> Outcome {
+    use incal::procedures::noise::{reduce_mapped, NoiseOptions};
+    let none = serde_json::json!({});
+    let options: NoiseOptions = match serde_json::from_str::<serde_json::Value>(options)
+        .map_err(|e| incal::Error::Unsupported(format!("options: {e}")))
+        .and_then(|v| incal::options::from_json(&v))
+    {
+        Ok(o) => o,
+        Err(e) => return Outcome::failed(2, e.to_string(), place(&e)),
+    };
+    let read = match read_options(read) {
+        Ok(r) => r,
+        Err(o) => return o,
+    };
+    let finish: incal::document::finish::Finish = match serde_json::from_str(finish) {
+        Ok(f) => f,
+        Err(e) => return Outcome::failed(2, format!("identity and limits: {e}"), none),
+    };
+    let doc = rec
+        .map_err(incal::Error::Input)
+        .and_then(|rec| reduce_mapped(&rec, &read.columns, &options, &Silent));
+    finished(doc, &finish)
 }

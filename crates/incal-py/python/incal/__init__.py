@@ -33,7 +33,7 @@ import json
 import os
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
-from ._incal import _run, _run_array, _version
+from ._incal import _run, _version
 from .warnings import IncalWarning, warn_all as _warn_all
 
 __version__ = _version()
@@ -155,16 +155,11 @@ def _options(options: Dict[str, Any]) -> List[str]:
     return out
 
 
-def run(words: Sequence[str], stdin: Optional[bytes] = None, array: Any = None) -> Tuple[bytes, List[str]]:
+def run(words: Sequence[str], stdin: Optional[bytes] = None) -> Tuple[bytes, List[str]]:
     """Run the incal command line ``words`` (without ``incal``) in process:
-    its standard output and its standard-error lines (warnings). ``array``
-    (a C-contiguous float64 or float32 numpy array) is the binary record
-    ``--input -`` opens, read in place. A failure raises
-    :class:`InputError` (exit 2) or :class:`IncalError`."""
-    if array is not None:
-        code, out, err = _run_array([str(w) for w in words], array)
-    else:
-        code, out, err = _run([str(w) for w in words], stdin)
+    its standard output and its standard-error lines (warnings). A
+    failure raises :class:`InputError` (exit 2) or :class:`IncalError`."""
+    code, out, err = _run([str(w) for w in words], stdin)
     if code != 0:
         message = err[-1] if err else f"incal exited with code {code}"
         if code == 2:
@@ -367,39 +362,41 @@ def _read_csv(csv: bytes):
     return pd.read_csv(io.StringIO(text))
 
 
-def _noise_array(options: Dict[str, Any]):
-    """``incal.noise`` with channels as numpy arrays by keyword: the
-    ``--input`` words and one array of interleaved samples, read by the core
-    in place. One float64 (or float32) C-contiguous 1-D array is not
-    copied; several channels are interleaved into one array (one copy,
-    no text). ``None`` when the arrays do not fit (a ``time_s`` column,
-    non-numeric data, a big-endian machine): the CSV path then."""
+def _noise_record(arrays: Dict[str, Any], opts: Dict[str, Any], read: Dict[str, Any]) -> Any:
+    """Noise channels given as numpy arrays, as one binary record read by
+    the core in place: the record (a uint8 view of the samples' bytes),
+    its channel count and sample width, with ``opts`` and ``read`` set to
+    read it (``format``, ``channels``, ``columns`` naming each channel).
+    One float64 (or float32) C-contiguous 1-D array is not copied; several
+    channels are interleaved into one array (one copy, no text). ``None``
+    when the arrays do not fit (a ``time_s`` column, non-numeric data,
+    ``format``, ``channels`` or ``columns`` given, a big-endian machine):
+    the arrays are then read as columns."""
     import sys
 
     import numpy as np
 
-    names = [k for k in options if _is_array(options[k])]
-    if not names or "time_s" in names or sys.byteorder != "little":
+    names = list(arrays)
+    if "time_s" in names or sys.byteorder != "little":
         return None
-    if any(k in options for k in ("format", "channels", "columns")):
+    if any(k in opts for k in ("format", "channels")) or "columns" in read:
         return None
-    arrays = [np.asarray(options[k]) for k in names]
-    if any(a.ndim != 1 or a.dtype.kind not in "fiu" for a in arrays):
+    columns = [np.asarray(arrays[k]) for k in names]
+    if any(a.ndim != 1 or a.dtype.kind not in "fiu" for a in columns):
         return None
-    n = len(arrays[0])
-    for name, a in zip(names, arrays):
+    n = len(columns[0])
+    for name, a in zip(names, columns):
         if len(a) != n:
             raise InputError(f"column '{name}' has {len(a)} values, '{names[0]}' has {n}")
-    dtype = np.float32 if all(a.dtype == np.float32 for a in arrays) else np.float64
-    if len(arrays) == 1:
-        data = np.ascontiguousarray(arrays[0], dtype=dtype)  # no copy when it already is
+    dtype = np.float32 if all(a.dtype == np.float32 for a in columns) else np.float64
+    if len(columns) == 1:
+        data = np.ascontiguousarray(columns[0], dtype=dtype)  # no copy when it already is
     else:
-        data = np.column_stack([a.astype(dtype, copy=False) for a in arrays])
-    for k in names:
-        del options[k]
-    fmt = "f32le" if dtype == np.float32 else "f64le"
-    columns = ",".join(f"{k}=ch{i + 1}" for i, k in enumerate(names))
-    return ["--input", "-", "--format", fmt, "--channels", str(len(names)), "--columns", columns], data
+        data = np.column_stack([a.astype(dtype, copy=False) for a in columns])
+    opts["format"] = "f32le" if dtype == np.float32 else "f64le"
+    opts["channels"] = len(names)
+    read["columns"] = ",".join(f"{k}=ch{i + 1}" for i, k in enumerate(names))
+    return data.reshape(-1).view(np.uint8), len(names), dtype == np.float64
 
 
 def _result(out: bytes, err: List[str]) -> Result:
@@ -446,34 +443,47 @@ def _reduce(
     entry: Dict[str, Any], data: Any, options: Dict[str, Any], flags: Dict[str, str]
 ) -> Result:
     """Reduce ``data`` by the registry entry with ``options`` (keyed by
-    option id): through the core's typed reduction (data in place), or,
-    for an option only the command line has (``from_``, ``quiet``, a
-    binary ``format``) and for noise's arrays (read as a binary record in
-    place), through the command line in process."""
+    option id) through the core's typed reduction, the data in place (a
+    path, columns, or for noise a binary record); an option only the
+    command line has (centrifuge's ``from_``, gyro positions' ``k1_from``)
+    goes through the command line in process."""
     from . import _typed
 
     command = entry["command"].split()
     options = dict(options)
     if command == ["noise"]:
         data = _noise_positional(data, options)
+        # The library prints no progress; `sequential` is the core's
+        # `parallel` turned round.
+        options.pop("quiet", None)
+        if options.pop("sequential", False):
+            options["parallel"] = False
     schema = (entry.get("options") or {}).get("reduce")
     arrays = {k: options.pop(k) for k in list(options) if _is_array(options[k])}
     parts = _typed.split(schema, options) if schema else None
-    binary = command == ["noise"] and (options.get("format") not in (None, "csv") or (arrays and data is None))
-    if parts is not None and not binary:
-        code, out, err, where = _typed.call(entry["id"], data, arrays, *parts)
+    if parts is not None:
+        opts, read, finish = parts
+        if command == ["noise"] and data is None and arrays:
+            record = _noise_record(arrays, opts, read)
+            if record is not None:
+                code, out, err, where = _typed.call_record(record[0], record[1], record[2], opts, read, finish)
+                if code != 0:
+                    _raise(code, out, err, where)
+                return _result(out, [])
+        if command == ["noise"] and opts.get("format") in ("f32le", "f64le"):
+            if data is None or not isinstance(data, (str, os.PathLike)):
+                raise InputError("noise: format f32le or f64le reads a file: give its path")
+            code, out, err, where = _typed.call_record(
+                None, int(opts.get("channels") or 0), opts["format"] == "f64le", opts, read, finish, path=data
+            )
+        else:
+            code, out, err, where = _typed.call(entry["id"], data, arrays, opts, read, finish)
         if code != 0:
             _raise(code, out, err, where)
         return _result(out, [])
     # The command line: options by their flags.
     options = {flags.get(k, "--" + k)[2:].replace("-", "_"): v for k, v in options.items()}
     options.update(arrays)
-    if command == ["noise"] and data is None:
-        fast = _noise_array(options)
-        if fast is not None:
-            words, array = fast
-            out, err = run(command + words + ["--json"] + _options(options), array=array)
-            return _result(out, err)
     words, stdin = _data(data, options)
     out, err = run(command + words + ["--json"] + _options(options), stdin)
     return _result(out, err)

@@ -16,7 +16,7 @@ import json
 import os
 from typing import Any, Dict, List, Optional, Tuple
 
-from ._incal import _reduce
+from ._incal import _reduce, _reduce_record
 
 #: Keywords of the input layer: ``columns`` (``NAME=HEADER,…``, a dict
 #: ``{name: header}`` or a list of names) and ``delimiter``.
@@ -190,5 +190,28 @@ def call(
         json.dumps(read),
         json.dumps(finish),
         **kwargs,
+    )
+    return code, bytes(out), list(err), json.loads(where)
+
+
+def call_record(
+    record: Any,
+    channels: int,
+    f64le: bool,
+    opts: Dict[str, Any],
+    read: Dict[str, Any],
+    finish: Dict[str, Any],
+    path: Any = None,
+) -> Tuple[int, bytes, List[str], Dict[str, Any]]:
+    """Run the noise analysis of a binary record: ``record`` (a uint8
+    view of the samples, read in place) or the file at ``path``."""
+    code, out, err, where = _reduce_record(
+        json.dumps(opts, default=_json_default),
+        json.dumps(read),
+        json.dumps(finish),
+        channels,
+        f64le,
+        record=record,
+        path=None if path is None else os.fspath(path),
     )
     return code, bytes(out), list(err), json.loads(where)

@@ -184,7 +184,7 @@ pub(crate) enum Samples<'a> {
     Columns(&'a [Vec<f64>]),
     /// A mapped record and, per analysed channel, its channel in the frame.
     Mapped {
-        rec: &'a MappedRecord,
+        rec: &'a MappedRecord<'a>,
         index: Vec<usize>,
     },
 }
