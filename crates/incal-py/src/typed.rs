@@ -318,3 +318,82 @@ fn noise_record(
         .and_then(|rec| reduce_mapped(&rec, &read.columns, &options, &Silent));
     finished(doc, &finish)
 }
+
+/// `_plan(procedure, options) -> (code, plan document: bytes, errors,
+/// place)`: the registry's typed plan of `procedure` (its id) with
+/// `options` as JSON.
+#[pyfunction]
+pub fn _plan(
+    py: Python<'_>,
+    procedure: &str,
+    options: &str,
+) -> (u8, Py<PyBytes>, Vec<String>, String) {
+    let out = py.detach(|| {
+        let Some(plan) = registry::find(procedure).and_then(|e| e.planner) else {
+            return Outcome::failed(
+                2,
+                format!("no plan for '{procedure}'"),
+                serde_json::json!({}),
+            );
+        };
+        let doc = serde_json::from_str::<serde_json::Value>(options)
+            .map_err(|e| incal::Error::Unsupported(format!("options: {e}")))
+            .and_then(|v| (plan.run)(&v));
+        match doc.and_then(|d| {
+            serde_json::to_string(&d).map_err(|e| incal::Error::Unsupported(e.to_string()))
+        }) {
+            Ok(text) => Outcome {
+                code: 0,
+                out: text.into_bytes(),
+                err: Vec::new(),
+                place: "{}".into(),
+            },
+            Err(e) => Outcome::failed(2, e.to_string(), place(&e)),
+        }
+    });
+    (
+        out.code,
+        PyBytes::new(py, &out.out).unbind(),
+        out.err,
+        out.place,
+    )
+}
+
+/// `_simulate(procedure, options) -> (code, recording: bytes, errors,
+/// place)`: the registry's typed simulator of `procedure` (its id) with
+/// `options` as JSON: the CSV it writes.
+#[pyfunction]
+pub fn _simulate(
+    py: Python<'_>,
+    procedure: &str,
+    options: &str,
+) -> (u8, Py<PyBytes>, Vec<String>, String) {
+    let out = py.detach(|| {
+        let Some(sim) = registry::find(procedure).and_then(|e| e.simulator) else {
+            return Outcome::failed(
+                2,
+                format!("no simulator for '{procedure}'"),
+                serde_json::json!({}),
+            );
+        };
+        let mut csv = Vec::new();
+        let done = serde_json::from_str::<serde_json::Value>(options)
+            .map_err(|e| incal::Error::Unsupported(format!("options: {e}")))
+            .and_then(|v| (sim.run)(&v, &mut csv));
+        match done {
+            Ok(()) => Outcome {
+                code: 0,
+                out: csv,
+                err: Vec::new(),
+                place: "{}".into(),
+            },
+            Err(e) => Outcome::failed(2, e.to_string(), place(&e)),
+        }
+    });
+    (
+        out.code,
+        PyBytes::new(py, &out.out).unbind(),
+        out.err,
+        out.place,
+    )
+}

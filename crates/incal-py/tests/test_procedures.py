@@ -83,6 +83,50 @@ def test_dataframe_and_arrays_give_the_same_coefficients(recordings, name, words
     assert getattr(incal, name)(**arrays, **options).coefficients == from_file
 
 
+def _but_inputs(doc):
+    return {k: v for k, v in doc.items() if k != "inputs"}
+
+
+@pytest.mark.parametrize("name,words,sim,options", CASES, ids=[c[0] for c in CASES])
+def test_a_dataframe_gives_the_cli_document_with_its_own_input(recordings, name, words, sim, options):
+    """Data in memory: the whole document is the CLI's, but for the input
+    it names (``<DataFrame>``, the hash of the columns' canonical form,
+    the same rows)."""
+    path = recordings[name]
+    expected = json.loads(cli(words + ["--input", path, "--json"] + incal._options(options)))
+    frame = incal._read_csv(path.read_bytes())
+    got = getattr(incal, name)(frame, **options).document
+    assert _but_inputs(got) == _but_inputs(expected)
+    (i,) = [x for x in got["inputs"] if x["role"] == "input"]
+    assert i["path"] in ("<DataFrame>", "<memory>") and i["rows"] == len(frame)
+    again = getattr(incal, name)(frame.copy(), **options).document
+    assert again["inputs"] == got["inputs"], "the same columns give the same hash"
+
+
+@pytest.mark.parametrize("name,words,sim,options", CASES, ids=[c[0] for c in CASES])
+def test_a_simulator_gives_the_cli_recording(name, words, sim, options):
+    entry = next(e for e in incal.REGISTRY if e["python"]["function"] == name)
+    simulate = getattr(incal.simulate, entry["python"]["simulate"])
+    frame, notes = simulate(**_kwargs(entry["example"]["simulate"]))
+    expected = incal._read_csv(cli(["simulate"] + sim + ["-o", "-"]))
+    assert frame.equals(expected)
+
+
+@pytest.mark.parametrize(
+    "name,words",
+    [
+        ("tumble", ["--k1", "10", "--noise", "1e-6", "--samples", "10"]),
+        ("gyro_rate", ["--rates-deg-s", "-10,10,50", "--noise", "1e-3", "--k1", "1"]),
+        ("imu_ferraris", ["--seeds", "2"]),
+        ("noise", ["--seeds", "2", "--duration-s", "300", "--rate-hz", "10", "--seed", "3"]),
+    ],
+)
+def test_a_plan_is_the_cli_plan(name, words):
+    got = getattr(incal.plan, name)(**_kwargs(words))
+    cli_name = next(e["plan"] for e in incal.REGISTRY if e["python"]["plan"] == name).split()[1:]
+    assert got == json.loads(cli(["plan"] + cli_name + words + ["--json"]))
+
+
 def test_errors_are_exceptions_with_the_cli_message(tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("angle_deg,output\n0,0.11\n30,abc\n")

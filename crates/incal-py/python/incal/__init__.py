@@ -379,7 +379,7 @@ def _noise_record(arrays: Dict[str, Any], opts: Dict[str, Any], read: Dict[str, 
     names = list(arrays)
     if "time_s" in names or sys.byteorder != "little":
         return None
-    if any(k in opts for k in ("format", "channels")) or "columns" in read:
+    if opts.get("format", "csv") != "csv" or opts.get("channels") is not None or "columns" in read:
         return None
     columns = [np.asarray(arrays[k]) for k in names]
     if any(a.ndim != 1 or a.dtype.kind not in "fiu" for a in columns):
@@ -460,7 +460,8 @@ def _reduce(
             options["parallel"] = False
     schema = (entry.get("options") or {}).get("reduce")
     arrays = {k: options.pop(k) for k in list(options) if _is_array(options[k])}
-    parts = _typed.split(schema, options) if schema else None
+    args = (entry.get("arguments") or {}).get("reduce") or []
+    parts = _typed.split(schema, _typed.with_defaults(args, options)) if schema else None
     if parts is not None:
         opts, read, finish = parts
         if command == ["noise"] and data is None and arrays:
@@ -525,12 +526,15 @@ def _keyword(name: str) -> str:
     return name + "_" if keyword.iskeyword(name) or name == "data" else name
 
 
-def _signature(args: List[Dict[str, Any]]):
+def _signature(args: List[Dict[str, Any]], data: bool = True):
     """``(data=None, *, option=default, …)``: every option of the command
-    as a keyword-only parameter with its default (required ones without)."""
+    as a keyword-only parameter with its default (required ones without);
+    without ``data`` for a plan or a simulator."""
     import inspect
 
-    params = [inspect.Parameter("data", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=None)]
+    params = []
+    if data:
+        params.append(inspect.Parameter("data", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=None))
     for a in args:
         if a["name"] in _NOT_KEYWORDS:
             continue

@@ -95,6 +95,19 @@ def _finish_value(key: str, value: Any) -> Any:
     return str(value)
 
 
+def with_defaults(args: List[Dict[str, Any]], options: Dict[str, Any]) -> Dict[str, Any]:
+    """``options`` (by option id) with the command line's default of
+    every option not given, as text the schema's conversion reads: a call
+    from Python runs with the CLI's defaults, whatever the core's own."""
+    out = dict(options)
+    for a in args:
+        if a["name"] in ("input", "json", "output") or a["flag_only"] or not a["default"]:
+            continue
+        if out.get(a["name"]) is None:
+            out[a["name"]] = ",".join(a["default"])
+    return out
+
+
 def split(schema: Dict[str, Any], options: Dict[str, Any]) -> Optional[Tuple[dict, dict, dict]]:
     """The keywords (by option id) as the procedure's options, the read
     options and the finish options; ``None`` when one is an option only

@@ -1,33 +1,87 @@
 """Test plans before the test: ``incal.plan.tumble(k1=10, noise=1e-6)``
 returns the plan document (``incal.plan/1``) as a dict, with the predicted
 u of every coefficient. Options as ``incal plan <name> --help`` lists them,
-``_`` for ``-``. One function per plan command of the procedure registry
-(``incal.REGISTRY``)."""
+``_`` for ``-``; each function has its command's signature. One function
+per plan of the procedure registry (``incal.REGISTRY``), run by the core's
+typed plan; the plans by simulation (IMU, noise) and ``run_sheet=PATH``
+(the operator's run sheet, a file) through the command line in process."""
 
 from __future__ import annotations
 
 import json
 from typing import Any, Dict, List
 
-from . import REGISTRY, _options, run
+from . import REGISTRY, _options, _raise, _signature, _options_doc, _keyword, run
 
 __all__: List[str] = []
 
 
-def _plan(name: str):
-    def plan(**options: Any) -> Dict[str, Any]:
-        out, _ = run(["plan", name, "--json"] + _options(options))
-        return json.loads(out)
+def _nest(schema: Dict[str, Any], options: Dict[str, Any]) -> Dict[str, Any]:
+    """Flat keywords into the plan's options: a key of a nested options
+    object (an IMU plan's ``session``, a noise plan's ``reduce``) goes
+    into it, as the command line's flat options do."""
+    from ._typed import _resolve, _value
 
-    plan.__name__ = name.replace("-", "_")
-    plan.__qualname__ = plan.__name__
-    plan.__doc__ = f"The plan document of ``incal plan {name}``."
+    props = schema.get("properties", {})
+    out: Dict[str, Any] = {}
+    nested = {k: _resolve(p, schema) for k, p in props.items() if "properties" in _resolve(p, schema)}
+    for key, value in options.items():
+        if value is None:
+            continue
+        if key in props and key not in nested:
+            out[key] = _value(value, props[key], schema)
+            continue
+        for name, sub in nested.items():
+            if key in sub["properties"]:
+                out.setdefault(name, {})[key] = _value(value, sub["properties"][key], schema)
+                break
+        else:
+            out[key] = value  # the core names what it does not know
+    return out
+
+
+def _plan(entry: Dict[str, Any], name: str):
+    args = (entry.get("arguments") or {}).get("plan") or []
+    schema = (entry.get("options") or {}).get("plan")
+    ids = {_keyword(a["name"]): a["name"] for a in args}
+    for a in args:
+        for spelling in [a["flag"][2:]] + list(a["aliases"] or []):
+            ids.setdefault(spelling.replace("-", "_"), a["name"])
+    words = entry["plan"].split()[1:]
+
+    def plan(**options: Any) -> Dict[str, Any]:
+        from ._incal import _plan as typed
+
+        for key in options:
+            if args and key not in ids:
+                raise TypeError(f"{name}() got an unexpected keyword argument '{key}'")
+        by_id = {ids.get(k, k): v for k, v in options.items()}
+        # A plan by simulation (a ``session`` to simulate) derives its
+        # reduction's options from the session on the command line: it
+        # goes through it, as does a run sheet (a file the CLI writes).
+        by_cli = schema is None or "session" in schema.get("properties", {})
+        if by_cli or by_id.get("run_sheet") is not None:
+            out, _ = run(["plan"] + words + ["--json"] + _options(by_id))
+            return json.loads(out)
+        from ._typed import with_defaults
+
+        code, out, err, where = typed(entry["id"], json.dumps(_nest(schema, with_defaults(args, by_id))))
+        if code != 0:
+            _raise(code, bytes(out), list(err), json.loads(where))
+        return json.loads(bytes(out))
+
+    plan.__name__ = name
+    plan.__qualname__ = name
+    plan.__doc__ = f"The plan document of ``incal plan {' '.join(words)}``."
+    if args:
+        plan.__signature__ = _signature(args, data=False)  # type: ignore[attr-defined]
+        plan.__doc__ += " Options (keywords):\n\n" + _options_doc(args)
     return plan
 
 
 for _entry in REGISTRY:
     _name = _entry["python"]["plan"]
     if _name and _name not in __all__:
-        globals()[_name] = _plan(_entry["plan"].split()[1])
+        globals()[_name] = _plan(_entry, _name)
         __all__.append(_name)
 del _entry, _name

@@ -2,13 +2,17 @@
 gives the recording as a pandas DataFrame (the CSV that ``incal simulate``
 writes, numbers read back bit for bit) and the simulator's ``# …`` lines
 (the truth and how it was simulated) as a list of strings. Options as
-``incal simulate <name> --help`` lists them, ``_`` for ``-``."""
+``incal simulate <name> --help`` lists them, ``_`` for ``-``; each
+function has its command's signature. Run by the core's typed simulator
+(the gyro-free unit's and the thermal chamber's truth, written beside the
+CSV, through the command line)."""
 
 from __future__ import annotations
 
-from typing import Any, List, Tuple
+import json
+from typing import Any, Dict, List, Tuple
 
-from . import REGISTRY, _options, _read_csv, run
+from . import REGISTRY, _keyword, _options, _options_doc, _raise, _read_csv, _signature, run
 
 __all__: List[str] = []
 
@@ -18,40 +22,72 @@ def _frame(csv: bytes):
     return _read_csv(csv), notes
 
 
-def _simulator(words: List[str], name: str):
-    def simulate(**options: Any) -> Tuple[Any, List[str]]:
-        if words in (["gfimu"], ["thermal"]):
-            # The gyro-free unit's truth is written beside the CSV (the
-            # CSV holds rows only): read back from a temporary file.
-            import json
-            import os
-            import tempfile
+def _simulator(entry: Dict[str, Any], name: str):
+    words = entry["simulate"].split()[1:]
+    args = (entry.get("arguments") or {}).get("simulate") or []
+    schema = (entry.get("options") or {}).get("simulate")
+    ids = {_keyword(a["name"]): a["name"] for a in args}
+    for a in args:
+        for spelling in [a["flag"][2:]] + list(a["aliases"] or []):
+            ids.setdefault(spelling.replace("-", "_"), a["name"])
 
-            fd, path = tempfile.mkstemp(suffix=".json")
-            os.close(fd)
-            try:
-                out, _ = run(["simulate"] + words + _options(options) + ["--truth-out", path])
-                with open(path) as f:
-                    truth = json.load(f)
-                notes = truth["notes"] if words == ["gfimu"] else truth
-            finally:
-                os.unlink(path)
-            return _read_csv(out), notes
-        out, _ = run(["simulate"] + words + _options(options))
+    def simulate(**options: Any) -> Tuple[Any, Any]:
+        for key in options:
+            if args and key not in ids:
+                raise TypeError(f"{name}() got an unexpected keyword argument '{key}'")
+        by_id = {ids.get(k, k): v for k, v in options.items()}
+        if words in (["gfimu"], ["thermal"]):
+            return _with_truth(words, by_id)
+        if schema is not None:
+            from ._incal import _simulate as typed
+            from ._typed import split
+
+            from ._typed import with_defaults
+
+            parts = split(schema, with_defaults(args, by_id))
+            if parts is not None and not parts[1] and not parts[2]:
+                code, out, err, where = typed(entry["id"], json.dumps(parts[0]))
+                if code != 0:
+                    _raise(code, bytes(out), list(err), json.loads(where))
+                return _frame(bytes(out))
+        out, _ = run(["simulate"] + words + _options(by_id))
         return _frame(out)
 
     simulate.__name__ = name
+    simulate.__qualname__ = name
     simulate.__doc__ = f"``incal simulate {' '.join(words)}``: (DataFrame, truth lines)."
+    if args:
+        simulate.__signature__ = _signature(args, data=False)  # type: ignore[attr-defined]
+        simulate.__doc__ += " Options (keywords):\n\n" + _options_doc(args)
     return simulate
 
 
-# One function per simulator command of the procedure registry
+def _with_truth(words: List[str], options: Dict[str, Any]) -> Tuple[Any, Any]:
+    """The gyro-free unit's and the thermal chamber's simulators write
+    their truth beside the CSV (the CSV holds rows only): read back from
+    a temporary file."""
+    import os
+    import tempfile
+
+    fd, path = tempfile.mkstemp(suffix=".json")
+    os.close(fd)
+    try:
+        out, _ = run(["simulate"] + words + _options(options) + ["--truth-out", path])
+        with open(path) as f:
+            truth = json.load(f)
+        notes = truth["notes"] if words == ["gfimu"] else truth
+    finally:
+        os.unlink(path)
+    return _read_csv(out), notes
+
+
+# One function per simulator of the procedure registry
 # (``incal.REGISTRY``): ``incal simulate misalign gyro`` is
 # ``incal.simulate.misalign_gyro``.
 for _entry in REGISTRY:
     _name = _entry["python"]["simulate"]
     if _name and _name not in __all__:
-        globals()[_name] = _simulator(_entry["simulate"].split()[1:], _name)
+        globals()[_name] = _simulator(_entry, _name)
         __all__.append(_name)
 del _entry, _name
 

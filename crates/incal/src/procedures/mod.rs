@@ -146,12 +146,14 @@ pub fn plan_json<T: Plan>(
     T::plan(&crate::options::from_json(options)?)
 }
 
-/// [`Simulate::simulate`] with the options as JSON.
+/// [`Simulate::simulate`] with the options as JSON, validated first.
 pub fn simulate_json<T: Simulate>(
     options: &serde_json::Value,
     out: &mut dyn std::io::Write,
 ) -> Result<()> {
-    T::simulate(&crate::options::from_json(options)?, out)
+    let options = crate::options::from_json(options)?;
+    T::validate(&options)?;
+    T::simulate(&options, out)
 }
 
 /// Read one recording (`src`, named `name` in messages and in the
