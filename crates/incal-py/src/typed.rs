@@ -53,6 +53,74 @@ fn place(e: &incal::Error) -> serde_json::Value {
     }
 }
 
+/// Progress reported to a Python callable, `callback(stage, done, total)`,
+/// from whichever thread the core reports on (the GIL taken for the call,
+/// at most about 100 calls per stage). The first exception the callable
+/// raises is kept and raised when the reduction returns; later reports
+/// are dropped.
+pub struct PyProgress {
+    callback: Py<PyAny>,
+    state: std::sync::Mutex<(String, u64, u64, u64)>,
+    error: std::sync::Mutex<Option<PyErr>>,
+}
+
+impl PyProgress {
+    fn new(callback: Py<PyAny>) -> Self {
+        PyProgress {
+            callback,
+            state: std::sync::Mutex::new((String::new(), 0, 0, 0)),
+            error: std::sync::Mutex::new(None),
+        }
+    }
+
+    fn report(&self, stage: &str, done: u64, total: u64) {
+        let Ok(mut error) = self.error.lock() else {
+            return;
+        };
+        if error.is_some() {
+            return;
+        }
+        Python::attach(|py| {
+            if let Err(e) = self.callback.call1(py, (stage, done, total)) {
+                *error = Some(e);
+            }
+        });
+    }
+
+    /// The callable's exception, if it raised one.
+    fn take_error(&self) -> Option<PyErr> {
+        self.error.lock().ok().and_then(|mut e| e.take())
+    }
+}
+
+impl incal::procedures::Progress for PyProgress {
+    fn start(&self, what: &str, len: u64) {
+        if let Ok(mut s) = self.state.lock() {
+            *s = (what.to_string(), len, 0, 0);
+        }
+        self.report(what, 0, len);
+    }
+    fn advance(&self, n: u64) {
+        let due = self.state.lock().ok().and_then(|mut s| {
+            s.2 = s.2.saturating_add(n);
+            let step = (s.1 / 100).max(1);
+            (s.2 >= s.3 + step).then(|| {
+                s.3 = s.2;
+                (s.0.clone(), s.2, s.1)
+            })
+        });
+        if let Some((what, done, len)) = due {
+            self.report(&what, done, len);
+        }
+    }
+    fn finish(&self) {
+        let s = self.state.lock().ok().map(|s| (s.0.clone(), s.1));
+        if let Some((what, len)) = s {
+            self.report(&what, len, len);
+        }
+    }
+}
+
 /// The read options a Python call gives: `columns` (`NAME=HEADER,…`)
 /// and `delimiter`.
 #[derive(serde::Deserialize, Default)]
@@ -96,6 +164,7 @@ fn reduce(
     options: &str,
     read: &str,
     finish: &str,
+    progress: &dyn incal::procedures::Progress,
 ) -> Outcome {
     let none = serde_json::json!({});
     let Some(red) = registry::find(procedure).and_then(|e| e.reduction) else {
@@ -119,12 +188,12 @@ fn reduce(
     };
     let reduced = match data {
         Data::Path(p) => match incal_io::open(&p) {
-            Ok(mut src) => (red.run)(&src.name, &mut src.reader, &read, &options, &Silent),
+            Ok(mut src) => (red.run)(&src.name, &mut src.reader, &read, &options, progress),
             Err(e) => Err(incal::Error::Input(e)),
         },
         Data::Columns(mut c) => {
             read.frames = true;
-            (red.run)(name, &mut c, &read, &options, &Silent)
+            (red.run)(name, &mut c, &read, &options, progress)
         }
     };
     finished(reduced, &finish)
@@ -177,7 +246,7 @@ enum Held<'py> {
 /// `output_unit`, `limits`) are JSON objects. The GIL is released while
 /// the core reads and reduces.
 #[pyfunction]
-#[pyo3(signature = (procedure, name, options, read, finish, path=None, columns=None))]
+#[pyo3(signature = (procedure, name, options, read, finish, path=None, columns=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn _reduce<'py>(
     py: Python<'py>,
@@ -188,6 +257,7 @@ pub fn _reduce<'py>(
     finish: &str,
     path: Option<std::path::PathBuf>,
     columns: Option<Vec<(String, Bound<'py, PyAny>)>>,
+    progress: Option<Py<PyAny>>,
 ) -> PyResult<(u8, Py<PyBytes>, Vec<String>, String)> {
     let mut held: Vec<(String, Held<'py>)> = Vec::new();
     for (n, obj) in columns.unwrap_or_default() {
@@ -232,7 +302,14 @@ pub fn _reduce<'py>(
             Data::Columns(c)
         }
     };
-    let out = py.detach(|| reduce(procedure, name, data, options, read, finish));
+    let progress = progress.map(PyProgress::new);
+    let out = py.detach(|| match &progress {
+        Some(p) => reduce(procedure, name, data, options, read, finish, p),
+        None => reduce(procedure, name, data, options, read, finish, &Silent),
+    });
+    if let Some(e) = progress.as_ref().and_then(PyProgress::take_error) {
+        return Err(e);
+    }
     Ok((
         out.code,
         PyBytes::new(py, &out.out).unbind(),
@@ -250,7 +327,7 @@ pub fn _reduce<'py>(
 /// With `path` instead of `record`, the binary file at `path` is read
 /// through its memory map (`incal noise --format f64le|f32le`).
 #[pyfunction]
-#[pyo3(signature = (options, read, finish, channels, f64le, record=None, path=None))]
+#[pyo3(signature = (options, read, finish, channels, f64le, record=None, path=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn _reduce_record<'py>(
     py: Python<'py>,
@@ -261,7 +338,9 @@ pub fn _reduce_record<'py>(
     f64le: bool,
     record: Option<PyReadonlyArray1<'py, u8>>,
     path: Option<std::path::PathBuf>,
+    progress: Option<Py<PyAny>>,
 ) -> PyResult<(u8, Py<PyBytes>, Vec<String>, String)> {
+    let progress = progress.map(PyProgress::new);
     let bytes = match &record {
         Some(r) => Some(
             r.as_slice()
@@ -280,8 +359,14 @@ pub fn _reduce_record<'py>(
             (None, Some(p)) => incal_io::binary::MappedRecord::open(p, channels, sample),
             (None, None) => Err(incal_io::InputError::file("<memory>", "no record given")),
         };
-        noise_record(options, read, finish, rec)
+        match &progress {
+            Some(p) => noise_record(options, read, finish, rec, p),
+            None => noise_record(options, read, finish, rec, &Silent),
+        }
     });
+    if let Some(e) = progress.as_ref().and_then(PyProgress::take_error) {
+        return Err(e);
+    }
     Ok((
         out.code,
         PyBytes::new(py, &out.out).unbind(),
@@ -295,6 +380,7 @@ fn noise_record(
     read: &str,
     finish: &str,
     rec: incal_io::Result<incal_io::binary::MappedRecord<'_>>,
+    progress: &dyn incal::procedures::Progress,
 ) -> Outcome {
     use incal::procedures::noise::{reduce_mapped, NoiseOptions};
     let none = serde_json::json!({});
@@ -315,7 +401,7 @@ fn noise_record(
     };
     let doc = rec
         .map_err(incal::Error::Input)
-        .and_then(|rec| reduce_mapped(&rec, &read.columns, &options, &Silent));
+        .and_then(|rec| reduce_mapped(&rec, &read.columns, &options, progress));
     finished(doc, &finish)
 }
 

@@ -462,6 +462,47 @@ def test_signatures_list_every_option_with_its_default_and_refuse_a_misspelt_one
         if e["input"] == "recording":
             f = getattr(incal, e["python"]["function"])
             names = {incal._keyword(a["name"]) for a in e["arguments"]["reduce"]} - {"input", "json", "output"}
-            assert set(inspect.signature(f).parameters) == {"data"} | names, e["id"]
+            assert set(inspect.signature(f).parameters) == {"data", "progress"} | names, e["id"]
     with pytest.raises(TypeError, match="unexpected keyword argument 'mont'"):
         incal.tumble(str(recordings["tumble"]), mont="pendulum")
+
+
+def test_progress_goes_to_a_callable_and_its_exception_is_raised():
+    rng = np.random.default_rng(3)
+    y = rng.normal(0.0, 0.01, 200_000)
+    seen = []
+    r = incal.noise(y, rate_hz=100.0, progress=lambda stage, done, total: seen.append((stage, done, total)))
+    assert seen, "the noise analysis reports its stages"
+    stages = {s for s, _, _ in seen}
+    for s in stages:
+        steps = [(d, t) for st, d, t in seen if st == s]
+        assert steps[0][0] == 0 and steps[-1][0] == steps[-1][1], (s, steps[:3], steps[-1])
+        assert all(a[0] <= b[0] for a, b in zip(steps, steps[1:])), s
+    assert len(seen) < 500, "reports are throttled"
+    assert r.document == incal.noise(y, rate_hz=100.0).document
+
+    class Stop(Exception):
+        pass
+
+    def stop(stage, done, total):
+        raise Stop(stage)
+
+    with pytest.raises(Stop):
+        incal.noise(y, rate_hz=100.0, progress=stop)
+    with pytest.raises(TypeError, match="progress"):
+        incal.noise(y, rate_hz=100.0, progress="yes")
+
+
+def test_calls_from_several_threads_equal_the_serial_ones(recordings):
+    """The GIL is released while the core works: four threads reduce at
+    once and each gets the serial document."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    jobs = []
+    for name, _, _, options in CASES[:6]:
+        frame = incal._read_csv(recordings[name].read_bytes())
+        jobs.append((name, frame, options, getattr(incal, name)(frame, **options).document))
+    with ThreadPoolExecutor(4) as pool:
+        docs = list(pool.map(lambda j: getattr(incal, j[0])(j[1], **j[2]).document, jobs * 3))
+    for (name, _, _, serial), doc in zip(jobs * 3, docs):
+        assert doc == serial, name

@@ -451,6 +451,7 @@ def _reduce(
 
     command = entry["command"].split()
     options = dict(options)
+    progress = options.pop("progress", None)
     if command == ["noise"]:
         data = _noise_positional(data, options)
         # The library prints no progress; `sequential` is the core's
@@ -467,7 +468,9 @@ def _reduce(
         if command == ["noise"] and data is None and arrays:
             record = _noise_record(arrays, opts, read)
             if record is not None:
-                code, out, err, where = _typed.call_record(record[0], record[1], record[2], opts, read, finish)
+                code, out, err, where = _typed.call_record(
+                    record[0], record[1], record[2], opts, read, finish, progress=progress
+                )
                 if code != 0:
                     _raise(code, out, err, where)
                 return _result(out, [])
@@ -475,10 +478,11 @@ def _reduce(
             if data is None or not isinstance(data, (str, os.PathLike)):
                 raise InputError("noise: format f32le or f64le reads a file: give its path")
             code, out, err, where = _typed.call_record(
-                None, int(opts.get("channels") or 0), opts["format"] == "f64le", opts, read, finish, path=data
+                None, int(opts.get("channels") or 0), opts["format"] == "f64le", opts, read, finish,
+                path=data, progress=progress,
             )
         else:
-            code, out, err, where = _typed.call(entry["id"], data, arrays, opts, read, finish)
+            code, out, err, where = _typed.call(entry["id"], data, arrays, opts, read, finish, progress)
         if code != 0:
             _raise(code, out, err, where)
         return _result(out, [])
@@ -540,6 +544,8 @@ def _signature(args: List[Dict[str, Any]], data: bool = True):
             continue
         default = inspect.Parameter.empty if a["required"] else _default(a)
         params.append(inspect.Parameter(_keyword(a["name"]), inspect.Parameter.KEYWORD_ONLY, default=default))
+    if data:
+        params.append(inspect.Parameter("progress", inspect.Parameter.KEYWORD_ONLY, default=None))
     return inspect.Signature(params)
 
 
@@ -572,7 +578,7 @@ def _procedure(name: str, entry: Dict[str, Any]):
         for spelling in [a["flag"][2:]] + list(a["aliases"] or []):
             ids.setdefault(spelling.replace("-", "_"), a["name"])
     flags = {a["name"]: a["flag"] for a in args}
-    known = set(ids) - set(_NOT_KEYWORDS)
+    known = (set(ids) - set(_NOT_KEYWORDS)) | {"progress"}
 
     def reduce(data: Any = None, **options: Any) -> Result:
         if args:
@@ -587,7 +593,12 @@ def _procedure(name: str, entry: Dict[str, Any]):
     reduce.__doc__ = doc + f"\n\nRuns ``incal {' '.join(command)}``."
     if args:
         reduce.__signature__ = _signature(args)  # type: ignore[attr-defined]
-        reduce.__doc__ += " Options (keywords; numpy arrays by keyword are data columns):\n\n" + _options_doc(args)
+        reduce.__doc__ += (
+            " Options (keywords; numpy arrays by keyword are data columns):\n\n"
+            + _options_doc(args)
+            + "\n    progress: a callable f(stage, done, total) the core reports to"
+            " (from its own threads, the GIL taken), True for a tqdm bar, or None"
+        )
     return reduce
 
 

@@ -1,7 +1,7 @@
 """Type stubs of the incal package (see ``__init__.py`` for the docs)."""
 
 import os
-from typing import Any, Dict, List, Literal, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Literal, Mapping, Optional, Sequence, Tuple, Union
 
 from . import batch as batch
 from . import plan as plan
@@ -91,6 +91,7 @@ def tumble(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
 def centrifuge(
@@ -118,6 +119,7 @@ def centrifuge(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
 def misalign_gyro(
@@ -135,6 +137,7 @@ def misalign_gyro(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
 def misalign_accel(
@@ -150,6 +153,7 @@ def misalign_accel(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
 def gyro_rate(
@@ -168,6 +172,7 @@ def gyro_rate(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
 def gyro_positions(
@@ -190,6 +195,7 @@ def gyro_positions(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
 def imu_ferraris(
@@ -208,6 +214,7 @@ def imu_ferraris(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
 def imu_multipos(
@@ -226,6 +233,7 @@ def imu_multipos(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
 def imu_autocal(
@@ -248,6 +256,7 @@ def imu_autocal(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
 def gfimu_calibrate(
@@ -265,6 +274,7 @@ def gfimu_calibrate(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
 def noise(
@@ -292,6 +302,7 @@ def noise(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
 def thermal_ramp(
@@ -311,4 +322,5 @@ def thermal_ramp(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...

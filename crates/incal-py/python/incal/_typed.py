@@ -166,6 +166,34 @@ def column(name: str, values: Any) -> Any:
     return ["" if v is None or v != v else str(v) for v in a.tolist()]
 
 
+def progress_callback(progress: Any) -> Any:
+    """The callable the core reports progress to, ``f(stage, done,
+    total)``: ``progress`` itself when callable; for ``True`` a tqdm bar
+    per stage (none when tqdm is not installed); ``None`` for ``None`` or
+    ``False``."""
+    if progress is None or progress is False:
+        return None
+    if progress is True:
+        try:
+            from tqdm.auto import tqdm
+        except ImportError:
+            return None
+        bars: Dict[str, Any] = {}
+
+        def bar(stage: str, done: int, total: int) -> None:
+            b = bars.get(stage)
+            if b is None:
+                b = bars[stage] = tqdm(total=total, desc=stage, leave=False)
+            b.update(done - b.n)
+            if done >= total:
+                b.close()
+
+        return bar
+    if callable(progress):
+        return progress
+    raise TypeError("progress must be a callable f(stage, done, total), True (tqdm) or None")
+
+
 def call(
     procedure: str,
     data: Any,
@@ -173,6 +201,7 @@ def call(
     opts: Dict[str, Any],
     read: Dict[str, Any],
     finish: Dict[str, Any],
+    progress: Any = None,
 ) -> Tuple[int, bytes, List[str], Dict[str, Any]]:
     """Run the typed reduction: (code, document, error lines, where)."""
     from . import InputError
@@ -202,6 +231,7 @@ def call(
         json.dumps(opts, default=_json_default),
         json.dumps(read),
         json.dumps(finish),
+        progress=progress_callback(progress),
         **kwargs,
     )
     return code, bytes(out), list(err), json.loads(where)
@@ -215,6 +245,7 @@ def call_record(
     read: Dict[str, Any],
     finish: Dict[str, Any],
     path: Any = None,
+    progress: Any = None,
 ) -> Tuple[int, bytes, List[str], Dict[str, Any]]:
     """Run the noise analysis of a binary record: ``record`` (a uint8
     view of the samples, read in place) or the file at ``path``."""
@@ -226,5 +257,6 @@ def call_record(
         f64le,
         record=record,
         path=None if path is None else os.fspath(path),
+        progress=progress_callback(progress),
     )
     return code, bytes(out), list(err), json.loads(where)
