@@ -37,6 +37,8 @@ fn _incal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_run, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_reduce_record, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(typed::_check_result, m)?)?;
+    m.add_function(wrap_pyfunction!(typed::_figures, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(_version, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_reduce, m)?)?;

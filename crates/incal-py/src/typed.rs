@@ -483,3 +483,22 @@ pub fn _simulate(
         out.place,
     )
 }
+
+/// `_check_result(text) -> None | str`: `None` when `text` is a valid
+/// result document (the schema and what it cannot say:
+/// [`incal::document::ResultDocument::from_json`]), else the problem,
+/// naming the JSON path.
+#[pyfunction]
+pub fn _check_result(text: &str) -> Option<String> {
+    incal::document::ResultDocument::from_json(text).err()
+}
+
+/// `_figures(text) -> list[str]`: the certificate's plots of the result
+/// document `text` as SVG ([`incal_report::figures_svg`]).
+#[pyfunction]
+pub fn _figures(text: &str) -> PyResult<Vec<String>> {
+    let doc = incal::document::ResultDocument::from_json(text)
+        .map_err(pyo3::exceptions::PyValueError::new_err)?;
+    incal_report::figures_svg(&doc)
+        .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))
+}

@@ -506,3 +506,22 @@ def test_calls_from_several_threads_equal_the_serial_ones(recordings):
         docs = list(pool.map(lambda j: getattr(incal, j[0])(j[1], **j[2]).document, jobs * 3))
     for (name, _, _, serial), doc in zip(jobs * 3, docs):
         assert doc == serial, name
+
+
+def test_a_result_shows_its_plots_inline_and_a_bad_file_is_refused(tmp_path):
+    data, _ = incal.simulate.tumble(seed=7)
+    r = incal.tumble(data, mount="pendulum")
+    svgs = r.figures()
+    assert svgs and all(s.lstrip().startswith("<svg") for s in svgs), svgs[0][:80]
+    html = r._repr_html_()
+    assert html.count("<svg") == len(svgs) and "K1" in html
+    good = tmp_path / "r.json"
+    r.to_json(str(good))
+    assert incal.read_result(str(good)).document == r.document
+    doc = json.loads(good.read_text())
+    doc["coefficients"]["K1"]["U95"] *= 3
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(doc))
+    with pytest.raises(incal.InputError, match=r"coefficients\.K1\.U95") as e:
+        incal.read_result(str(bad))
+    assert e.value.file == str(bad)

@@ -121,6 +121,30 @@ pub struct RecordStamp {
     pub head: String,
 }
 
+/// The plots of `doc`'s certificate, in its order: the tables' (or the
+/// thermal model's), the deviations', then the coefficients' with their
+/// limits.
+pub fn figures(doc: &ResultDocument) -> Vec<plots::Plot> {
+    let mut figures: Vec<plots::Plot> = if doc.procedure == incal::document::Procedure::Thermal {
+        plots::thermal_plots(doc)
+    } else {
+        doc.tables
+            .iter()
+            .flat_map(|t| plots::table_plots_with(t, plots::model_curve(doc, &t.id).as_ref()))
+            .collect()
+    };
+    figures.extend(plots::allan_plots(doc));
+    let limits = |n: &str| verdict_of(doc, Some(n)).map(|j| (j.min, j.max));
+    figures.extend(plots::coefficient_plots(doc, figures.is_empty(), &limits));
+    figures
+}
+
+/// The certificate's plots of `doc` as SVG documents (a notebook shows
+/// them inline).
+pub fn figures_svg(doc: &ResultDocument) -> Result<Vec<String>, ReportError> {
+    figures(doc).iter().map(plots::render_svg).collect()
+}
+
 /// The report of `doc`, dated now (UTC), with the `history` plots (none
 /// when empty). See the crate docs.
 pub fn render_html(doc: &ResultDocument, history: &[HistorySeries]) -> Result<String, ReportError> {
@@ -679,17 +703,7 @@ pub fn render_html_with(
     }
     s.push_str("</section>\n");
 
-    let mut figures: Vec<plots::Plot> = if doc.procedure == incal::document::Procedure::Thermal {
-        plots::thermal_plots(doc)
-    } else {
-        doc.tables
-            .iter()
-            .flat_map(|t| plots::table_plots_with(t, plots::model_curve(doc, &t.id).as_ref()))
-            .collect()
-    };
-    figures.extend(plots::allan_plots(doc));
-    let limits = |n: &str| verdict_of(doc, Some(n)).map(|j| (j.min, j.max));
-    figures.extend(plots::coefficient_plots(doc, figures.is_empty(), &limits));
+    let figures = figures(doc);
     s.push_str("<section id=\"plots\">\n<h2>Plots</h2>\n");
     let mut index = 0;
     for p in &figures {

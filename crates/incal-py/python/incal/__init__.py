@@ -333,7 +333,16 @@ class Result:
                 f.write(out)
         return json.loads(out)
 
+    def figures(self) -> List[str]:
+        """The certificate's plots (residuals with ±U95, deviations,
+        coefficients against their limits) as SVG texts."""
+        from ._incal import _figures
+
+        return list(_figures(self.to_json()))
+
     def _repr_html_(self) -> str:
+        """The coefficient table and the certificate's plots inline (SVG),
+        as a notebook shows a result."""
         import html
 
         head = "".join(f"<th>{h}</th>" for h in ["name", "value", "u", "U95", "dof", "unit"])
@@ -342,7 +351,11 @@ class Result:
             cells = [name] + [c.get(k) for k in ["value", "u", "U95", "dof", "unit"]]
             rows.append("<tr>" + "".join(f"<td>{html.escape(str(x))}</td>" for x in cells) + "</tr>")
         title = html.escape(self.document.get("title", self.procedure))
-        return f"<p><b>{title}</b></p><table><tr>{head}</tr>{''.join(rows)}</table>"
+        try:
+            plots = "".join(f"<div>{svg}</div>" for svg in self.figures())
+        except ValueError:
+            plots = ""  # a document changed by hand into one that is not valid
+        return f"<p><b>{title}</b></p><table><tr>{head}</tr>{''.join(rows)}</table>{plots}"
 
     def __repr__(self) -> str:
         return f"<incal.Result {self.procedure}: {len(self.coefficients)} coefficients>"
@@ -679,11 +692,23 @@ def export_thermal(model: Any, stack: str = "px4", path: Optional[str] = None, *
 
 
 def read_result(path: str) -> Result:
-    """A result document from a file, checked as the CLI checks it."""
-    out, _ = run(["compare", os.fspath(path), os.fspath(path), "--json"])
-    del out  # compare checks the document; read it as written
-    with open(path, "r", encoding="utf-8-sig") as f:
-        text = f.read()
+    """A result document from a file, checked by the core as every
+    command that reads one checks it (the schema, then what it cannot
+    say: U95 = k95·u, dof > 0, table widths, …): a bad file raises
+    :class:`InputError` naming the file and the JSON path."""
+    from ._incal import _check_result
+
+    name = os.fspath(path)
+    try:
+        with open(name, "r", encoding="utf-8-sig") as f:
+            text = f.read()
+    except (OSError, UnicodeDecodeError) as e:
+        raise InputError(f"{name}: cannot read: {e}", {"file": name}) from None
+    if not text.strip():
+        raise InputError(f"{name}: empty file", {"file": name})
+    problem = _check_result(text)
+    if problem is not None:
+        raise InputError(f"{name}: {problem}", {"file": name})
     return Result(json.loads(text), text=text)
 
 
