@@ -18,6 +18,14 @@ Default files: README.md, CONTRIBUTING.md and docs/src/*.md.
    A ```text block whose lines start with `$ incal` is a transcript: each
    command is run and the lines up to the next `$` must be in its output.
 
+3. Python sessions: the ```pycon blocks of a file (`>>>` prompts, as a
+   notebook or the interpreter shows them) are run together, in order, by
+   `python -m doctest` (ELLIPSIS, NORMALIZE_WHITESPACE) with the Python
+   of $INCAL_PYTHON (one with the incal package installed; the tests use
+   target/py-venv/bin/python), in that file's temporary directory, with
+   INCAL_BIN set to $INCAL. A file with such blocks and no $INCAL_PYTHON
+   is a problem (say where the package is), never a silent skip.
+
 Exit 0 when all is well; otherwise every problem is printed and exit 1.
 """
 import os
@@ -29,6 +37,7 @@ import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 INCAL = os.environ.get("INCAL", os.path.join(ROOT, "target", "release", "incal"))
+PYTHON = os.environ.get("INCAL_PYTHON")
 SKIP = ("cargo", "cd ", "scripts/", "mdbook", "INCAL_UPDATE_SCHEMA", "INCAL_FUZZ_TARGET", "INCAL=", "#")
 
 problems = []
@@ -176,8 +185,30 @@ def check_examples(path, text):
                 last = None
             else:
                 last = None
+        check_python(path, [(body, line) for info, body, line in bl if info == "pycon"], tmp)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def check_python(path, sessions, tmp):
+    """Run the file's ```pycon blocks as one doctest session in `tmp`."""
+    if not sessions:
+        return
+    rel = os.path.relpath(path, ROOT)
+    if not PYTHON:
+        problems.append(f"{rel}:{sessions[0][1]}: pycon blocks need INCAL_PYTHON (a Python with the incal package)")
+        return
+    script = os.path.join(tmp, "session.txt")
+    with open(script, "w", encoding="utf-8") as f:
+        for body, line in sessions:
+            f.write("\n".join(body) + "\n\n")
+    env = dict(os.environ, INCAL_BIN=INCAL)
+    p = subprocess.run(
+        [PYTHON, "-W", "ignore", "-m", "doctest", "-o", "ELLIPSIS", "-o", "NORMALIZE_WHITESPACE", script],
+        cwd=tmp, capture_output=True, text=True, timeout=900, env=env,
+    )
+    if p.returncode != 0:
+        problems.append(f"{rel}:{sessions[0][1]}: the Python session failed:\n    " + (p.stdout + p.stderr).strip()[:2000])
 
 
 def main():

@@ -64,7 +64,7 @@ if [ "${INCAL_TESTS:-}" = "full" ]; then
     echo "== size: no source file over 1,000 lines, no function over 150"
     python3 scripts/check-size.py
     echo "== docs: every link and example of the README and the manual"
-    INCAL="$PWD/target/debug/incal" python3 scripts/check-docs.py
+    INCAL="$PWD/target/debug/incal" INCAL_PYTHON="$PWD/$venv/bin/python" python3 scripts/check-docs.py
     echo "== cargo doc --no-deps (warnings denied)"
     RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --lib --locked --quiet
     echo "checks: 3 passed, 0 failed"
