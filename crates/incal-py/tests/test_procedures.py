@@ -525,3 +525,79 @@ def test_a_result_shows_its_plots_inline_and_a_bad_file_is_refused(tmp_path):
     with pytest.raises(incal.InputError, match=r"coefficients\.K1\.U95") as e:
         incal.read_result(str(bad))
     assert e.value.file == str(bad)
+
+
+PAPER_TOML = """
+[[accelerometer]]
+name = "a"
+position_m = [0.1, 0.0, 0.0]
+direction = [0.0, 0.0, 1.0]
+[[accelerometer]]
+name = "b"
+position_m = [-0.1, 0.0, 0.0]
+direction = [0.0, 0.0, 1.0]
+[[accelerometer]]
+name = "c"
+position_m = [0.0, 0.1, 0.0]
+direction = [1.0, 0.0, 0.0]
+[[accelerometer]]
+name = "d"
+position_m = [0.0, -0.1, 0.0]
+direction = [1.0, 0.0, 0.0]
+[[accelerometer]]
+name = "e"
+position_m = [0.0, 0.0, 0.1]
+direction = [0.0, 1.0, 0.0]
+[[accelerometer]]
+name = "f"
+position_m = [0.0, 0.0, -0.1]
+direction = [0.0, 1.0, 0.0]
+"""
+
+
+def test_a_file_option_is_read_as_the_cli_reads_it(recordings, tmp_path):
+    """The gyro-free unit's geometry file: its name, hash and text go to
+    the core, and the document is the CLI's."""
+    name, words, _, options = next(c for c in CASES if c[0] == "gfimu_calibrate")
+    geometry = tmp_path / "paper.toml"
+    geometry.write_text(PAPER_TOML)
+    path = recordings[name]
+    options = {k: v for k, v in options.items() if k not in ("layout", "lever_arm_m")}
+    got = incal.gfimu_calibrate(str(path), geometry=str(geometry), **options).document
+    expected = json.loads(
+        cli(words + ["--input", path, "--json", "--geometry", geometry] + incal._options(options))
+    )
+    assert got == expected
+    with pytest.raises(incal.InputError) as e:
+        incal.gfimu_calibrate(str(path), geometry=str(tmp_path / "missing.toml"))
+    assert e.value.file == str(tmp_path / "missing.toml")
+
+
+def test_a_result_document_option_is_a_result_or_its_path(tmp_path):
+    """Centrifuge's ``from_`` and gyro positions' ``k1_from`` read another
+    result: from its path the document is the CLI's ``--from``; from the
+    ``incal.Result`` itself the same but for the input's name."""
+    cli(["simulate", "tumble", "--k0", "1.2e-4", "--k1", "1.3", "--seed", "21", "-o", tmp_path / "t.csv"])
+    cli(["tumble", "--mount", "pendulum", "--input", tmp_path / "t.csv", "--json", "-o", tmp_path / "t.json"])
+    cli(["simulate", "centrifuge", "--seed", "22", "-o", tmp_path / "c.csv"])
+    words = ["centrifuge", "--input", tmp_path / "c.csv", "--radius-m", "0.71", "--latitude-deg", "39.9"]
+    expected = json.loads(cli(words + ["--from", tmp_path / "t.json", "--json"]))
+    got = incal.centrifuge(str(tmp_path / "c.csv"), radius_m=0.71, latitude_deg=39.9, from_=str(tmp_path / "t.json"))
+    assert got.document == expected
+    tumble = incal.read_result(str(tmp_path / "t.json"))
+    held = incal.centrifuge(str(tmp_path / "c.csv"), radius_m=0.71, latitude_deg=39.9, from_=tumble)
+    assert held.coefficients == got.coefficients
+    assert [i for i in held.document["inputs"] if i["role"] == "from"][0]["path"] == "<Result>"
+
+    cli(["simulate", "gyro-rate", "-o", tmp_path / "r.csv"])
+    cli(["gyro", "rate", "--input", tmp_path / "r.csv", "--latitude-deg", "45", "--json", "-o", tmp_path / "r.json"])
+    cli(["simulate", "gyro-positions", "--latitude-deg", "30", "--azimuths-deg", "60", "--axial", "oa", "-o", tmp_path / "p.csv"])
+    words = ["gyro", "positions", "--input", tmp_path / "p.csv", "--latitude-deg", "30", "--azimuth-deg", "60", "--axial", "oa"]
+    expected = json.loads(cli(words + ["--from", tmp_path / "r.json", "--json"]))
+    got = incal.gyro_positions(
+        str(tmp_path / "p.csv"), latitude_deg=30, azimuth_deg=60, axial="oa", k1_from=str(tmp_path / "r.json")
+    )
+    assert got.document == expected
+    with pytest.raises(incal.InputError, match="gyro-rate result") as e:
+        incal.gyro_positions(str(tmp_path / "p.csv"), latitude_deg=30, azimuth_deg=60, axial="oa", k1_from=tumble)
+    assert e.value.option == "k1_from"

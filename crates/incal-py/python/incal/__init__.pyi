@@ -98,7 +98,7 @@ def tumble(
 def centrifuge(
     data: Data = None,
     *,
-    from_: Optional[PathLike] = None,
+    from_: Union[Union[PathLike, "Result"], None] = None,
     k0: Union[float, None] = None,
     k1: Union[float, None] = None,
     u_k0: Union[float, None] = None,
@@ -184,7 +184,7 @@ def gyro_positions(
     axial: Literal["sa", "oa"],
     k1: Union[float, None] = None,
     u_k1: Union[float, None] = None,
-    k1_from: Optional[PathLike] = None,
+    k1_from: Union[Union[PathLike, "Result"], None] = None,
     fit_k1: bool = False,
     terms: Union[Sequence[Literal["B", "D_I", "D_O", "D_S", "D_II", "D_IO", "D_IS", "D_OO", "D_SS"]], str, None] = None,
     noise: Union[float, None] = None,

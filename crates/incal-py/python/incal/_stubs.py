@@ -64,8 +64,11 @@ def schema_type(prop: Dict[str, Any], schema: Dict[str, Any]) -> str:
             if "null" in str(prop[key]):
                 parts.append("None")
             return "Union[" + ", ".join(dict.fromkeys(parts)) + "]" if len(parts) > 1 else parts[0]
-    if "toml" in prop.get("properties", {}):
+    fields = set(prop.get("properties", {}))
+    if {"name", "toml"} <= fields:
         return "PathLike"  # a file option: its path
+    if {"name", "text"} <= fields:
+        return 'Union[PathLike, "Result"]'  # a result document: a Result or its path
     types = prop.get("type", [])
     types = [types] if isinstance(types, str) else list(types)
     out: List[str] = []
@@ -97,8 +100,6 @@ def argument_type(arg: Dict[str, Any]) -> str:
     if arg["flag_only"]:
         return "bool"
     base = _literal(arg["values"]) if arg["values"] else "Union[str, float]"
-    if arg["name"] in ("from", "k1_from"):
-        base = "PathLike"
     if arg["multiple"]:
         base = f"Union[{base}, Sequence[{base}]]"
     return base if arg["required"] else f"Optional[{base}]"

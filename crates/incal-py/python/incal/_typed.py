@@ -42,6 +42,17 @@ def _value(value: Any, prop: Dict[str, Any], schema: Dict[str, Any]) -> Any:
     or array as a list; ``"K0,K1"`` (the CLI's comma list) as a list where
     the option is an array."""
     prop = _resolve(prop, schema)
+    for option in prop.get("anyOf", []):
+        if {"name", "toml"} <= set(_resolve(option, schema).get("properties", {})) or {
+            "name",
+            "text",
+        } <= set(_resolve(option, schema).get("properties", {})):
+            prop = _resolve(option, schema)
+    fields = set(prop.get("properties", {}))
+    if {"name", "toml"} <= fields and isinstance(value, (str, os.PathLike)):
+        return _file(value)
+    if {"name", "text"} <= fields:
+        return _document(value)
     if hasattr(value, "tolist") and not isinstance(value, (str, bytes)):
         value = value.tolist()
     if isinstance(value, tuple):
@@ -70,6 +81,36 @@ def _number(value: Any, prop: Dict[str, Any]) -> Any:
     except ValueError:
         pass
     return value
+
+
+def _file(path: Any) -> Dict[str, Any]:
+    """A file option (the gyro-free unit's ``geometry``) as the core takes
+    it: its name and path as given, its SHA-256 and its text."""
+    import hashlib
+
+    name = os.fspath(path)
+    try:
+        with open(name, "rb") as f:
+            data = f.read()
+    except OSError as e:
+        from . import InputError
+
+        raise InputError(f"{name}: cannot read: {e}", {"file": name}) from None
+    return {"name": name, "path": name, "sha256": hashlib.sha256(data).hexdigest(), "toml": data.decode("utf-8", "replace")}
+
+
+def _document(value: Any) -> Dict[str, Any]:
+    """A result document as an option (centrifuge's ``from_``, gyro
+    positions' ``k1_from``): an ``incal.Result`` (its JSON text, named
+    ``<Result>``) or a path (the file's name, SHA-256 and text)."""
+    from . import InputError, Result
+
+    if isinstance(value, Result):
+        return {"name": "<Result>", "text": value.to_json()}
+    if isinstance(value, (str, os.PathLike)):
+        f = _file(value)
+        return {"name": f["name"], "sha256": f["sha256"], "text": f["toml"]}
+    raise InputError(f"a result document option takes an incal.Result or a path, not {type(value).__name__}")
 
 
 def _read_value(key: str, value: Any) -> str:

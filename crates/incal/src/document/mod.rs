@@ -27,6 +27,7 @@
 //! `schema/result.schema.json` ([`json_schema`]).
 
 pub mod compare;
+pub mod file;
 pub mod finish;
 pub mod limits;
 pub use crate::procedures::misalign::document as misalign;

@@ -15,7 +15,8 @@ use super::radius::ValueU;
 /// A result document K0 and K1 are taken from (the 1 g calibration the
 /// centrifuge run chains to): its name as the user gave it, the SHA-256 of
 /// its bytes, and the document.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[serde(try_from = "crate::document::file::DocumentFile")]
 pub struct ChainedResult {
     /// The file as named by the user (`<stdin>` for standard input).
     pub name: String,
@@ -23,6 +24,20 @@ pub struct ChainedResult {
     pub sha256: String,
     /// The result document (it must be a tumble result).
     pub document: ResultDocument,
+}
+
+impl TryFrom<crate::document::file::DocumentFile> for ChainedResult {
+    type Error = String;
+
+    /// The document of a file option (`from`), parsed and checked.
+    fn try_from(f: crate::document::file::DocumentFile) -> std::result::Result<Self, String> {
+        let (sha256, document) = f.parse()?;
+        Ok(ChainedResult {
+            name: f.name,
+            sha256,
+            document,
+        })
+    }
 }
 
 impl ChainedResult {
@@ -82,9 +97,10 @@ impl ChainedResult {
 /// file is among the document's inputs).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct CentrifugeOptions {
-    /// The tumble result K0 and K1 come from, if any (a front end reads
-    /// the file; not an option of JSON callers).
-    #[serde(skip)]
+    /// The tumble result K0 and K1 come from, if any: the file as a
+    /// front end read it (name, SHA-256, text; the CLI's `--from`).
+    #[serde(default, skip_serializing)]
+    #[schemars(with = "Option<crate::document::file::DocumentFile>")]
     pub from: Option<ChainedResult>,
     /// Bias K0 (g) from the 1 g calibration; overrides `from`.
     #[serde(default)]

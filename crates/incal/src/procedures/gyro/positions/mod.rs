@@ -255,9 +255,28 @@ pub(crate) fn check_angles_deg(what: &str, v: &[f64]) -> Result<()> {
     }
 }
 
+impl TryFrom<crate::document::file::DocumentFile> for K1Source {
+    type Error = String;
+
+    /// K1 of the gyro-rate result of a file option (`k1_from`), recorded
+    /// among the inputs as role `from`.
+    fn try_from(f: crate::document::file::DocumentFile) -> std::result::Result<Self, String> {
+        let (sha256, doc) = f.parse()?;
+        let input = crate::document::InputFile {
+            role: "from".into(),
+            path: f.name.clone(),
+            sha256,
+            rows: None,
+        };
+        K1Source::from_rate_result(&doc, input)
+            .map_err(|e| format!("{}: {e}", incal_io::clip(&f.name)))
+    }
+}
+
 /// Where the scale factor K1 of a multi-position test comes from, as a
 /// front end is given it.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[serde(try_from = "crate::document::file::DocumentFile")]
 pub enum K1Source {
     /// A value (output/(deg/s)) with its standard uncertainty; without
     /// one, K1 is taken as exact and the document warns that every u
@@ -428,10 +447,11 @@ pub struct GyroPositionsOptions {
     /// Fit K1 from the Earth-rate projection (needs several azimuths).
     #[serde(default, skip_serializing)]
     pub fit_k1: bool,
-    /// K1 of a gyro-rate result document, read by the front end
-    /// ([`K1Source::from_rate_result`]; the CLI's `--from`); not a value a
-    /// caller types.
-    #[serde(skip)]
+    /// K1 of a gyro-rate result document: the file as a front end read
+    /// it (name, SHA-256, text; the CLI's `--from`), taken by
+    /// [`K1Source::from_rate_result`].
+    #[serde(default, skip_serializing)]
+    #[schemars(with = "Option<crate::document::file::DocumentFile>")]
     pub k1_from: Option<K1Source>,
 }
 
