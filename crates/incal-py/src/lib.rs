@@ -8,6 +8,7 @@
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
+mod stream;
 mod typed;
 
 /// `_run(args, stdin=None) -> (code, stdout: bytes, stderr: list[str])`:
@@ -39,6 +40,8 @@ fn _incal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(typed::_plan, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_check_result, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_figures, m)?)?;
+    m.add_function(wrap_pyfunction!(stream::_stream, m)?)?;
+    m.add_function(wrap_pyfunction!(stream::_compare, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(_version, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_reduce, m)?)?;

@@ -662,18 +662,27 @@ def thermal_fit(results: Sequence[Any], **options: Any) -> Result:
     return _result(out, err)
 
 
+def _stream(tool: str, model: Any, data: Any, columns: Dict[str, Any], sort_time: bool = False):
+    """A streaming tool of the core on data in place: the rows written as
+    a DataFrame, the run's warnings raised as Python warnings."""
+    from . import _typed
+    from ._incal import _stream as stream
+
+    name, kwargs = _typed.data_kwargs(data, columns)
+    model_name, model_text = _typed.document_text(model)
+    code, out, err, warnings = stream(tool, model_name, model_text, name, sort_time=sort_time, **kwargs)
+    if code != 0:
+        _raise(code, bytes(out), [err])
+    _warn_all(json.loads(warnings))
+    return _read_csv(bytes(out))
+
+
 def thermal_apply(model: Any, data: Any = None, **columns: Any):
     """``incal thermal apply``: a thermal model (``Result`` or path) applied
-    to raw data with a ``temperature_c`` column (path, DataFrame or arrays);
-    a pandas DataFrame."""
-    import tempfile
-
-    words, stdin = _data(data, columns)
-    with tempfile.TemporaryDirectory() as d:
-        (path,) = _as_files(d, [model], "model")
-        out, err = run(["thermal", "apply", path] + words, stdin)
-    _warn_all(err)
-    return _read_csv(out)
+    to raw data with a ``temperature_c`` column (path, DataFrame, dict of
+    arrays or arrays by keyword, read in place); a pandas DataFrame. A
+    temperature outside the model's range is clamped, with a warning."""
+    return _stream("thermal-apply", model, data, columns)
 
 
 def export_thermal(model: Any, stack: str = "px4", path: Optional[str] = None, **options: Any) -> str:
@@ -713,30 +722,24 @@ def read_result(path: str) -> Result:
 
 
 def compare(a: Any, b: Any) -> Dict[str, Any]:
-    """``incal compare`` of two results (``Result`` or paths): the JSON."""
-    if isinstance(a, Result) and isinstance(b, Result):
-        raise InputError("compare: give at most one Result; the other as a path")
-    if isinstance(a, Result):
-        out, _ = run(["compare", "-", os.fspath(b), "--json"], a.to_json().encode())
-    elif isinstance(b, Result):
-        out, _ = run(["compare", os.fspath(a), "-", "--json"], b.to_json().encode())
-    else:
-        out, _ = run(["compare", os.fspath(a), os.fspath(b), "--json"])
+    """``incal compare`` of two results (``Result`` or paths; a ``Result``
+    is named ``<Result>``): the JSON, by the core's comparison."""
+    from . import _typed
+    from ._incal import _compare
+
+    (na, ta), (nb, tb) = _typed.document_text(a), _typed.document_text(b)
+    code, out, err = _compare(na, ta, nb, tb)
+    if code != 0:
+        _raise(code, b"", [err])
     return json.loads(out)
 
 
-def apply(calibration: Any, data: Any = None, **columns: Any):
+def apply(calibration: Any, data: Any = None, sort_time: bool = False, **columns: Any):
     """``incal imu apply``: a calibration (``Result`` or path) applied to
-    raw data (path, DataFrame or arrays); a pandas DataFrame."""
-    words, stdin = _data(data, columns)
-    if isinstance(calibration, Result):
-        if stdin is not None:
-            raise InputError("apply: with in-memory data, give the calibration as a path")
-        out, err = run(["imu", "apply", "--calibration", "-"] + words, calibration.to_json().encode())
-    else:
-        out, err = run(["imu", "apply", "--calibration", os.fspath(calibration)] + words, stdin)
-    _warn_all(err)
-    return _read_csv(out)
+    raw data (path, DataFrame, dict of arrays or arrays by keyword, read in
+    place); a pandas DataFrame. ``sort_time`` sorts rows by ``time_s``
+    first."""
+    return _stream("imu-apply", calibration, data, columns, sort_time)
 
 
 def _export(kind: str, gyro: Any, accel: Any, extra: list) -> str:

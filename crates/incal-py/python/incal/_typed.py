@@ -235,6 +235,43 @@ def progress_callback(progress: Any) -> Any:
     raise TypeError("progress must be a callable f(stage, done, total), True (tqdm) or None")
 
 
+def data_kwargs(data: Any, arrays: Dict[str, Any]) -> Tuple[str, Dict[str, Any]]:
+    """The data's name in documents and messages, and the ``path=`` or
+    ``columns=`` argument of the compiled functions."""
+    from . import InputError
+
+    if data is not None and arrays:
+        raise InputError("give the data as one path or DataFrame, or as arrays by keyword, not both")
+    if data is None:
+        if not arrays:
+            raise InputError("no data: give a path, a DataFrame, or arrays by keyword")
+        return "<arrays>", {"columns": [(str(k), column(str(k), v)) for k, v in arrays.items()]}
+    if isinstance(data, dict):
+        return "<arrays>", {"columns": [(str(k), column(str(k), v)) for k, v in data.items()]}
+    if isinstance(data, (str, os.PathLike)):
+        return os.fspath(data), {"path": os.fspath(data)}
+    if hasattr(data, "columns") and hasattr(data, "__getitem__"):
+        return "<DataFrame>", {"columns": [(str(c), column(str(c), data[c])) for c in data.columns]}
+    raise InputError(
+        f"data must be a path, a DataFrame, a dict of arrays or arrays by keyword, not {type(data).__name__}"
+    )
+
+
+def document_text(value: Any) -> Tuple[str, str]:
+    """A result document given as an ``incal.Result`` (named
+    ``<Result>``) or a path: its name and text."""
+    from . import InputError, Result
+
+    if isinstance(value, Result):
+        return "<Result>", value.to_json()
+    name = os.fspath(value)
+    try:
+        with open(name, "r", encoding="utf-8-sig") as f:
+            return name, f.read()
+    except (OSError, UnicodeDecodeError) as e:
+        raise InputError(f"{name}: cannot read: {e}", {"file": name}) from None
+
+
 def call(
     procedure: str,
     data: Any,
@@ -245,27 +282,7 @@ def call(
     progress: Any = None,
 ) -> Tuple[int, bytes, List[str], Dict[str, Any]]:
     """Run the typed reduction: (code, document, error lines, where)."""
-    from . import InputError
-
-    if data is not None and arrays:
-        raise InputError("give the data as one path or DataFrame, or as arrays by keyword, not both")
-    kwargs: Dict[str, Any] = {}
-    if data is None:
-        if not arrays:
-            raise InputError("no data: give a path, a DataFrame, or arrays by keyword")
-        name = "<arrays>"
-        kwargs["columns"] = [(str(k), column(str(k), v)) for k, v in arrays.items()]
-    elif isinstance(data, dict):
-        name = "<arrays>"
-        kwargs["columns"] = [(str(k), column(str(k), v)) for k, v in data.items()]
-    elif isinstance(data, (str, os.PathLike)):
-        name = os.fspath(data)
-        kwargs["path"] = name
-    elif hasattr(data, "columns") and hasattr(data, "__getitem__"):
-        name = "<DataFrame>"
-        kwargs["columns"] = [(str(c), column(str(c), data[c])) for c in data.columns]
-    else:
-        raise InputError(f"data must be a path, a DataFrame, a dict of arrays or arrays by keyword, not {type(data).__name__}")
+    name, kwargs = data_kwargs(data, arrays)
     code, out, err, where = _reduce(
         procedure,
         name,

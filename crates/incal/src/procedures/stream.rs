@@ -39,7 +39,7 @@ pub trait Stream {
     fn stream(
         model: Self::Model,
         name: &str,
-        input: Box<dyn Read + Send>,
+        input: Box<dyn Read + Send + '_>,
         read: &incal_io::ReadOptions,
         out: &mut dyn Write,
     ) -> Result<Streamed>;

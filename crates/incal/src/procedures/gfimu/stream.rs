@@ -614,7 +614,7 @@ impl crate::procedures::stream::Stream for Solve {
     fn stream(
         model: SolveModel,
         name: &str,
-        input: Box<dyn Read + Send>,
+        input: Box<dyn Read + Send + '_>,
         read: &incal_io::ReadOptions,
         mut out: &mut dyn Write,
     ) -> Result<crate::procedures::stream::Streamed> {

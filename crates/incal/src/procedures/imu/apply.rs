@@ -451,7 +451,7 @@ impl crate::procedures::stream::Stream for Apply {
     fn stream(
         model: ApplyModel,
         name: &str,
-        input: Box<dyn std::io::Read + Send>,
+        input: Box<dyn std::io::Read + Send + '_>,
         read: &incal_io::ReadOptions,
         out: &mut dyn std::io::Write,
     ) -> Result<crate::procedures::stream::Streamed> {

@@ -116,7 +116,7 @@ impl crate::procedures::stream::Stream for Compensate {
     fn stream(
         model: Model,
         name: &str,
-        input: Box<dyn Read + Send>,
+        input: Box<dyn Read + Send + '_>,
         read: &incal_io::ReadOptions,
         out: &mut dyn Write,
     ) -> Result<crate::procedures::stream::Streamed> {
