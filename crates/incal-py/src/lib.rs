@@ -8,6 +8,7 @@
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
+mod export;
 mod stream;
 mod typed;
 
@@ -42,6 +43,7 @@ fn _incal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(typed::_figures, m)?)?;
     m.add_function(wrap_pyfunction!(stream::_stream, m)?)?;
     m.add_function(wrap_pyfunction!(stream::_compare, m)?)?;
+    m.add_function(wrap_pyfunction!(export::_export, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(_version, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_reduce, m)?)?;

@@ -363,6 +363,15 @@ def test_thermal_ramp_fit_apply_and_exports(tmp_path):
     assert "TC_G0_ID\t3\t6" in px4
     ap = incal.export_thermal(model, "ardupilot", imu=2, path=str(tmp_path / "t.parm"))
     assert (tmp_path / "t.parm").read_text() == ap and "INS_TCAL2_GYR1_X," in ap
+    # From a path, each export is the CLI's text byte for byte.
+    model_path = tmp_path / "model.json"
+    model.to_json(str(model_path))
+    assert incal.export_thermal(str(model_path), "px4", device_id=3, axes="gy,gx,gz") == cli(
+        ["export", "px4", model_path, "--device-id", "3", "--axes", "gy,gx,gz"]
+    ).decode()
+    assert incal.export_thermal(str(model_path), "ardupilot", imu=2) == cli(
+        ["export", "ardupilot", model_path, "--imu", "2"]
+    ).decode()
     # Soak: tumble results at three temperatures, by meta.
     docs = []
     for i, t in enumerate([-10, 25, 60]):

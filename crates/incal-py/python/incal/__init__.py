@@ -327,9 +327,9 @@ class Result:
         """An ``imu_ferraris``, ``imu_multipos`` or ``imu_autocal`` result as
         imucal's calibration JSON (``incal export imucal``), which imucal's
         ``load_calibration_info`` loads; written to ``path`` when given."""
-        out, _ = run(["export", "imucal", "-"], self.to_json().encode())
+        out = _export("imucal", [self], {})
         if path is not None:
-            with open(path, "wb") as f:
+            with open(path, "w", encoding="utf-8") as f:
                 f.write(out)
         return json.loads(out)
 
@@ -690,14 +690,9 @@ def export_thermal(model: Any, stack: str = "px4", path: Optional[str] = None, *
     or path) as PX4's ``TC_*`` or ArduPilot's ``INS_TCALn_*`` parameters;
     written to ``path`` when given. Options: ``axes``, ``device_id``,
     ``with_offset`` (PX4), ``imu`` (ArduPilot)."""
-    import tempfile
-
     if stack not in ("px4", "ardupilot"):
         raise InputError(f"export_thermal: stack '{stack}' is not px4 or ardupilot")
-    with tempfile.TemporaryDirectory() as d:
-        (f,) = _as_files(d, [model], "model")
-        out, _ = run(["export", stack, f] + _options(options))
-    return _write(out.decode(), path)
+    return _write(_export(stack, [model], options), path)
 
 
 def read_result(path: str) -> Result:
@@ -742,14 +737,18 @@ def apply(calibration: Any, data: Any = None, sort_time: bool = False, **columns
     return _stream("imu-apply", calibration, data, columns, sort_time)
 
 
-def _export(kind: str, gyro: Any, accel: Any, extra: list) -> str:
-    import tempfile
+def _export(kind: str, documents: Sequence[Any], options: Dict[str, Any]) -> str:
+    """The core's export ``kind`` of ``documents`` (``Result`` or paths)."""
+    from . import _typed
+    from ._incal import _export as export
 
-    with tempfile.TemporaryDirectory() as d:
-        (g,) = _as_files(d, [gyro], "gyro")
-        (a,) = _as_files(d, [accel], "accel")
-        out, _ = run(["export", kind, "--gyro", g, "--accel", a] + extra)
-    return out.decode()
+    texts = [_typed.document_text(d) for d in documents]
+    if isinstance(options.get("axes"), str):
+        options = dict(options, axes=options["axes"].split(","))
+    code, out, err = export(kind, texts, json.dumps(options))
+    if code != 0:
+        _raise(code, b"", [err])
+    return out
 
 
 def _write(text: str, path: Optional[str]) -> str:
@@ -765,7 +764,7 @@ def export_kalibr(gyro: Any, accel: Any, path: Optional[str] = None) -> str:
     ``quantity="accel"``) as Kalibr's ``imu.yaml`` text (SI continuous
     time, the largest axis per sensor); written to ``path`` when given. A
     term not identified on an axis raises :class:`InputError`."""
-    return _write(_export("kalibr", gyro, accel, []), path)
+    return _write(_export("kalibr", [gyro, accel], {}), path)
 
 
 def export_px4(
@@ -776,7 +775,7 @@ def export_px4(
     ``EKF2_GYR_B_NOISE``, ``EKF2_ACC_B_NOISE``: each continuous-time density
     times the square root of the EKF prediction rate ``ekf_rate_hz``), as a
     QGroundControl parameter file's text; written to ``path`` when given."""
-    return _write(_export("px4", gyro, accel, ["--ekf-rate-hz", repr(float(ekf_rate_hz))]), path)
+    return _write(_export("px4", [gyro, accel], {"ekf_rate_hz": float(ekf_rate_hz)}), path)
 
 
 from . import batch, plan, simulate, warnings  # noqa: E402  (they use run and _options)
