@@ -502,3 +502,51 @@ pub fn _figures(text: &str) -> PyResult<Vec<String>> {
     incal_report::figures_svg(&doc)
         .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))
 }
+
+/// `_thermal_fit(documents, options, finish) -> (code, document, errors,
+/// place)`: `incal thermal fit` of result documents given as `(name,
+/// sha256, text)` ([`incal::procedures::thermal::soak::fit_documents`]),
+/// options `t_ref_c` and `degree` as JSON, then `finish`.
+#[pyfunction]
+pub fn _thermal_fit(
+    py: Python<'_>,
+    documents: Vec<(String, String, String)>,
+    options: &str,
+    finish: &str,
+) -> (u8, Py<PyBytes>, Vec<String>, String) {
+    use incal::procedures::thermal::soak;
+    let out = py.detach(|| {
+        let none = serde_json::json!({});
+        let o: soak::SoakOptions = match serde_json::from_str::<serde_json::Value>(options)
+            .map_err(|e| incal::Error::Unsupported(format!("options: {e}")))
+            .and_then(|v| incal::options::from_json(&v))
+        {
+            Ok(o) => o,
+            Err(e) => return Outcome::failed(2, e.to_string(), place(&e)),
+        };
+        let finish: incal::document::finish::Finish = match serde_json::from_str(finish) {
+            Ok(f) => f,
+            Err(e) => return Outcome::failed(2, format!("identity and limits: {e}"), none),
+        };
+        let mut inputs = Vec::with_capacity(documents.len());
+        for (name, sha256, text) in documents {
+            match incal::document::ResultDocument::from_json(&text) {
+                Ok(doc) => inputs.push(soak::SoakInput { name, sha256, doc }),
+                Err(e) => {
+                    return Outcome::failed(
+                        2,
+                        format!("{name}: {e}"),
+                        serde_json::json!({ "file": name }),
+                    )
+                }
+            }
+        }
+        finished(soak::fit_documents(&inputs, &o), &finish)
+    });
+    (
+        out.code,
+        PyBytes::new(py, &out.out).unbind(),
+        out.err,
+        out.place,
+    )
+}

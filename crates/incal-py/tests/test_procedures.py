@@ -379,6 +379,12 @@ def test_thermal_ramp_fit_apply_and_exports(tmp_path):
         docs.append(incal.tumble(d, mount="pendulum", meta=[f"temperature_c={t}"]))
     soak = incal.thermal_fit(docs, t_ref_c=20)
     assert soak.document["thermal"]["K1"]["t_ref_c"] == 20
+    paths = []
+    for i, d in enumerate(docs):
+        paths.append(tmp_path / f"soak{i}.json")
+        d.to_json(str(paths[-1]))
+    expected = json.loads(cli(["thermal", "fit"] + paths + ["--t-ref-c", "20", "--serial", "SN-9", "--json"]))
+    assert incal.thermal_fit([str(p) for p in paths], t_ref_c=20, serial="SN-9").document == expected
     assert "K1.c0" in soak.coefficients
     with pytest.raises(incal.InputError, match="K0.c3"):
         incal.thermal_fit(docs, degree=3)

@@ -653,13 +653,35 @@ def thermal_fit(results: Sequence[Any], **options: Any) -> Result:
     """``incal thermal fit``: results (``Result`` or paths) of one instrument
     and one procedure, each at its own temperature (``meta`` ``temperature_c``
     or a ``temperature_c`` column of its recording), into a polynomial in
-    (T - T_ref) per coefficient (``NAME.c0``, ``NAME.c1``, ...)."""
-    import tempfile
+    (T - T_ref) per coefficient (``NAME.c0``, ``NAME.c1``, ...). Options:
+    ``t_ref_c``, ``degree``, and the identity, unit and limits keywords of
+    every reduction; with ``db`` (and ``procedure``), the results are the
+    store's calibrations of ``serial`` (through the command line)."""
+    import hashlib
 
-    with tempfile.TemporaryDirectory() as d:
-        files = _as_files(d, results, "plateau")
-        out, err = run(["thermal", "fit"] + files + ["--json"] + _options(options))
-    return _result(out, err)
+    from . import _typed
+    from ._incal import _thermal_fit
+
+    if options.get("db") is not None:
+        import tempfile
+
+        with tempfile.TemporaryDirectory() as d:
+            files = _as_files(d, results, "plateau")
+            out, err = run(["thermal", "fit"] + files + ["--json"] + _options(options))
+        return _result(out, err)
+    fit = {k: options.pop(k) for k in ("t_ref_c", "degree") if options.get(k) is not None}
+    parts = _typed.split({"properties": {}}, options)
+    if parts is None:
+        raise TypeError(f"thermal_fit() got an unexpected keyword argument among {sorted(options)}")
+    documents = []
+    for r in results:
+        name, text = _typed.document_text(r)
+        data = text.encode() if isinstance(r, Result) else open(name, "rb").read()
+        documents.append((name, hashlib.sha256(data).hexdigest(), text))
+    code, out, err, where = _thermal_fit(documents, json.dumps(fit, default=_typed._json_default), json.dumps(parts[2]))
+    if code != 0:
+        _raise(code, bytes(out), list(err), json.loads(where))
+    return _result(bytes(out), [])
 
 
 def _stream(tool: str, model: Any, data: Any, columns: Dict[str, Any], sort_time: bool = False):
