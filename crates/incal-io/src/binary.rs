@@ -274,14 +274,26 @@ impl<'a> MappedRecord<'a> {
     pub fn hash(&self, background: bool) -> RecordHash {
         // A buffer in memory is hashed by the pass: no thread may read it
         // after the record is gone.
-        if background && matches!(self.map, Bytes::Map(_)) {
-            RecordHash::Background(hash_in_background(
+        match (background, &self.map) {
+            (true, Bytes::Map(_)) => RecordHash::Background(hash_in_background(
                 self.name.clone(),
                 self.path.clone(),
                 self.map.len(),
-            ))
-        } else {
-            RecordHash::InPass(sha2::Sha256::new())
+            )),
+            // A borrowed buffer is hashed by the caller on a scoped thread
+            // of its own ([`MappedRecord::memory`]).
+            (true, Bytes::Borrowed(_)) => RecordHash::Caller,
+            _ => RecordHash::InPass(sha2::Sha256::new()),
+        }
+    }
+
+    /// The whole buffer of a record read from memory (`None` for a file's
+    /// map): what [`RecordHash::Caller`] leaves to the caller to hash, on
+    /// a thread of its own while the record is read and analysed.
+    pub fn memory(&self) -> Option<&'a [u8]> {
+        match self.map {
+            Bytes::Borrowed(b) => Some(b),
+            Bytes::Map(_) => None,
         }
     }
 }
@@ -293,6 +305,9 @@ pub enum RecordHash {
     InPass(sha2::Sha256),
     /// Hashed on a thread of its own.
     Background(std::thread::JoinHandle<Result<String>>),
+    /// Hashed by the caller ([`MappedRecord::memory`]): `finish` has no
+    /// digest to give.
+    Caller,
 }
 
 impl RecordHash {
@@ -312,6 +327,10 @@ impl RecordHash {
             RecordHash::Background(t) => t
                 .join()
                 .unwrap_or_else(|_| Err(InputError::file(name, "input hash: its thread failed"))),
+            RecordHash::Caller => Err(InputError::file(
+                name,
+                "input hash: left to the caller, who gave none",
+            )),
         }
     }
 }

@@ -1,5 +1,5 @@
 //! The compiled part of the Python package `incal`: the registry's typed
-//! reductions on data in place ([`typed`]: `_reduce`, `_reduce_record`),
+//! reductions on data in place (`typed`: `_reduce`, `_reduce_record`),
 //! and `_run`, which runs an incal command line in process
 //! ([`incal_cli::embed`]) for what is not typed yet. The GIL is released
 //! while the core works. Everything else of the package is Python in

@@ -554,43 +554,57 @@ pub fn reduce_mapped(
     let (quantity, unit, factor) = o.units()?;
     let build = o.build(factor, rate_hz);
     let pick = rec.select(selection)?;
-    let read =
-        input::read_mapped(rec, &pick, build, o.parallel, progress).map_err(|e| e.in_file(name))?;
-    let index: Vec<usize> = pick.iter().map(|p| p.0).collect();
-    let names: Vec<String> = pick.into_iter().map(|p| p.1).collect();
-    let results = analyse(
-        &Samples::Mapped { rec, index },
-        &names,
-        rec.rows(),
-        read.built,
-        &[],
-        build,
-        o,
-        progress,
-    )
-    .map_err(|e| e.in_file(name))?;
-    let tables = o.grid()? != TauGrid::All;
-    let mut doc = document::document(
-        &o.selection()?.shown,
-        &results,
-        &quantity,
-        &unit,
-        o.confidence,
-        tables,
-    )?;
-    let path = if name == incal_io::source::STDIN_NAME {
-        "-"
-    } else {
-        name
-    };
-    doc.inputs.push(crate::document::InputFile {
-        role: "input".into(),
-        path: path.into(),
-        sha256: read.hash.finish(name)?,
-        rows: Some(rec.rows() as u64),
-    });
-    doc.options = options_map(&o.settled(None))?;
-    Ok(doc)
+    // A record in memory is hashed on a thread of its own while it is
+    // read and analysed (a file's hash thread reads the file itself).
+    std::thread::scope(|s| {
+        let memory_hash = rec
+            .memory()
+            .filter(|_| o.parallel)
+            .map(|b| s.spawn(move || incal_io::sha256_hex(b)));
+        let read = input::read_mapped(rec, &pick, build, o.parallel, progress)
+            .map_err(|e| e.in_file(name))?;
+        let index: Vec<usize> = pick.iter().map(|p| p.0).collect();
+        let names: Vec<String> = pick.into_iter().map(|p| p.1).collect();
+        let results = analyse(
+            &Samples::Mapped { rec, index },
+            &names,
+            rec.rows(),
+            read.built,
+            &[],
+            build,
+            o,
+            progress,
+        )
+        .map_err(|e| e.in_file(name))?;
+        let tables = o.grid()? != TauGrid::All;
+        let mut doc = document::document(
+            &o.selection()?.shown,
+            &results,
+            &quantity,
+            &unit,
+            o.confidence,
+            tables,
+        )?;
+        let path = if name == incal_io::source::STDIN_NAME {
+            "-"
+        } else {
+            name
+        };
+        let sha256 = match (read.hash, memory_hash) {
+            (incal_io::binary::RecordHash::Caller, Some(h)) => h.join().map_err(|_| {
+                Error::Unsupported(format!("{name}: input hash: its thread failed"))
+            })?,
+            (hash, _) => hash.finish(name)?,
+        };
+        doc.inputs.push(crate::document::InputFile {
+            role: "input".into(),
+            path: path.into(),
+            sha256,
+            rows: Some(rec.rows() as u64),
+        });
+        doc.options = options_map(&o.settled(None))?;
+        Ok(doc)
+    })
 }
 
 /// The array each channel is analysed as: the phase of rate samples
