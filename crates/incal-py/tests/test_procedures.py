@@ -616,3 +616,31 @@ def test_a_result_document_option_is_a_result_or_its_path(tmp_path):
     with pytest.raises(incal.InputError, match="gyro-rate result") as e:
         incal.gyro_positions(str(tmp_path / "p.csv"), latitude_deg=30, azimuth_deg=60, axial="oa", k1_from=tumble)
     assert e.value.option == "k1_from"
+
+
+def test_records_work_on_the_records_crate(tmp_path):
+    """incal.Records without the command line: add (once), list, show,
+    history, verify, export and import, and the identity refused as the
+    CLI refuses it (naming the keyword)."""
+    data, _ = incal.simulate.tumble(seed=7)
+    r = incal.tumble(data, mount="pendulum", serial="SN-7")
+    store = incal.Records(tmp_path / "lab.db")
+    first = store.add(r, operator="lee")
+    assert store.add(r, operator="lee") == first, "the same document is stored once"
+    assert [x["id"] for x in store.list()] == [first]
+    shown = store.show(first)
+    assert shown["serial"] == "SN-7" and shown["result"] == r.document
+    assert store.history("SN-7", "K1")["points"]
+    v = store.verify()
+    assert v["records"] == 1 and len(v["head"]) == 64
+    assert store.export(tmp_path / "lab.jsonl")["head"] == v["head"]
+    other = incal.Records(tmp_path / "copy.db")
+    assert other.import_(tmp_path / "lab.jsonl")["added"] == 1
+    with pytest.raises(incal.InputError, match="serial 'SN-8' differs from <Result>'s instrument.serial 'SN-7'"):
+        store.add(r, serial="SN-8")
+    with pytest.raises(incal.InputError, match="no instrument.serial: give serial="):
+        store.add(incal.tumble(data, mount="pendulum"))
+    with pytest.raises(incal.InputError, match="reason: empty"):
+        store.supersede(first, r, " ")
+    with pytest.raises(incal.InputError, match="missing.db"):
+        incal.Records(tmp_path / "missing.db").list()

@@ -44,6 +44,7 @@ mod db;
 mod error;
 mod exchange;
 pub mod history;
+mod identity;
 mod open;
 mod query;
 pub mod time;
@@ -56,6 +57,7 @@ pub use db::{display_url, is_postgres_url};
 pub use error::{Error, Result};
 pub use exchange::{ExportedRecord, ExportedSupersession, Imported};
 pub use history::{Drift, HistoryPoint, Repeatability};
+pub use identity::{check_identity, IdentityError};
 pub use open::{Store, BUSY_TIMEOUT, MIGRATIONS, SCHEMA_MIGRATIONS};
 pub use query::TEMPERATURE_SPREAD_C;
 pub use types::{

@@ -252,6 +252,49 @@ pub fn history_text(h: &History) -> String {
     s
 }
 
+/// One record as `incal record show --json` writes it: its identity, the
+/// chain's hashes, its supersession either way, and the stored document
+/// under `result`, verbatim; the error says why a stored document is no
+/// longer JSON.
+pub fn show_json(r: &StoredRecord) -> Result<String, String> {
+    #[derive(serde::Serialize)]
+    struct ShowJson<'a> {
+        id: i64,
+        serial: &'a str,
+        procedure: &'a str,
+        created_utc: &'a str,
+        operator: Option<&'a str>,
+        station: Option<&'a str>,
+        sha256: &'a str,
+        record_hash: &'a str,
+        prev_hash: &'a str,
+        supersedes: Option<Value>,
+        superseded_by: Option<i64>,
+        result: &'a serde_json::value::RawValue,
+    }
+    let raw = serde_json::value::RawValue::from_string(r.document.trim().to_string())
+        .map_err(|e| format!("the stored document is not JSON: {e}"))?;
+    let j = ShowJson {
+        id: r.id,
+        serial: &r.serial,
+        procedure: &r.procedure,
+        created_utc: &r.created_utc,
+        operator: r.operator.as_deref(),
+        station: r.station.as_deref(),
+        sha256: &r.sha256,
+        record_hash: &r.record_hash,
+        prev_hash: &r.prev_hash,
+        supersedes: r
+            .supersedes
+            .as_ref()
+            .map(|s| serde_json::json!({"id": s.old_id, "reason": s.reason})),
+        superseded_by: r.superseded_by,
+        result: &raw,
+    };
+    let s = serde_json::to_string_pretty(&j).map_err(|e| format!("cannot print: {e}"))?;
+    Ok(format!("{s}\n"))
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

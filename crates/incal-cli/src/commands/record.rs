@@ -14,8 +14,7 @@ use std::path::{Path, PathBuf};
 use clap::Subcommand;
 use incal::document::ResultDocument;
 use incal_records::{Error as StoreError, NewRecord, Store};
-use serde::Serialize;
-use serde_json::{json, Value};
+use serde_json::json;
 
 use crate::error::{CliError, CliResult};
 use incal_report::records;
@@ -283,44 +282,12 @@ fn read_result(path: &Path, who: &WhoArgs) -> CliResult<(String, String, ResultD
     }
     let doc =
         ResultDocument::from_json(&text).map_err(|e| CliError::Input(format!("{name}: {e}")))?;
-    let given = [
-        (
-            "serial",
-            doc.instrument.serial.as_deref(),
-            who.serial.as_deref(),
-        ),
-        (
-            "operator",
-            doc.instrument.meta.get("operator").map(String::as_str),
-            who.operator.as_deref(),
-        ),
-        (
-            "station",
-            doc.instrument.meta.get("station").map(String::as_str),
-            who.station.as_deref(),
-        ),
-    ];
-    for (key, in_doc, opt) in given {
-        if let (Some(d), Some(g)) = (in_doc, opt) {
-            if d != g {
-                return Err(CliError::Input(format!(
-                    "--{key} '{g}' differs from {name}'s instrument.{key} '{d}'"
-                )));
-            }
+    incal_records::check_identity(&name, &doc, &request(&text, who)).map_err(|e| match e {
+        incal_records::IdentityError::Option { key, rest } => {
+            CliError::Input(format!("--{}{rest}", key.replace('_', "-")))
         }
-        if opt.is_some_and(|g| g.trim().is_empty()) {
-            return Err(CliError::Input(format!("--{key}: empty")));
-        }
-        if in_doc.is_some_and(|d| d.trim().is_empty()) {
-            return Err(CliError::Input(format!(
-                "{name}: $.instrument.{key}: empty (the record's {key} must name one)"
-            )));
-        }
-    }
-    if let Some(t) = &who.created_utc {
-        incal_records::time::normalize_utc(t)
-            .map_err(|e| CliError::Input(format!("--created-utc: {e}")))?;
-    }
+        incal_records::IdentityError::Document(m) => CliError::Input(m),
+    })?;
     Ok((name, text, doc))
 }
 
@@ -399,22 +366,6 @@ fn list(a: &ListArgs) -> CliResult<()> {
 /// `incal record show --json`: the record's identity and the stored
 /// document embedded verbatim (the exact stored text, so it is the
 /// original JSON value, every number to the last bit).
-#[derive(Serialize)]
-struct ShowJson<'a> {
-    id: i64,
-    serial: &'a str,
-    procedure: &'a str,
-    created_utc: &'a str,
-    operator: Option<&'a str>,
-    station: Option<&'a str>,
-    sha256: &'a str,
-    record_hash: &'a str,
-    prev_hash: &'a str,
-    supersedes: Option<Value>,
-    superseded_by: Option<i64>,
-    result: &'a serde_json::value::RawValue,
-}
-
 fn show(a: &ShowArgs) -> CliResult<()> {
     let store = open(&a.db, false)?;
     store.check_chain().map_err(store_err(&a.db))?;
@@ -426,28 +377,7 @@ fn show(a: &ShowArgs) -> CliResult<()> {
         ))
     };
     let text = if a.out.json {
-        let raw = serde_json::value::RawValue::from_string(r.document.trim().to_string())
-            .map_err(|e| broken(format!("the stored document is not JSON: {e}")))?;
-        let j = ShowJson {
-            id: r.id,
-            serial: &r.serial,
-            procedure: &r.procedure,
-            created_utc: &r.created_utc,
-            operator: r.operator.as_deref(),
-            station: r.station.as_deref(),
-            sha256: &r.sha256,
-            record_hash: &r.record_hash,
-            prev_hash: &r.prev_hash,
-            supersedes: r
-                .supersedes
-                .as_ref()
-                .map(|s| json!({"id": s.old_id, "reason": s.reason})),
-            superseded_by: r.superseded_by,
-            result: &raw,
-        };
-        let s =
-            serde_json::to_string_pretty(&j).map_err(|e| broken(format!("cannot print: {e}")))?;
-        format!("{s}\n")
+        records::show_json(&r).map_err(broken)?
     } else {
         let doc = ResultDocument::from_json(&r.document)
             .map_err(|e| broken(format!("the stored document no longer reads: {e}")))?;
