@@ -550,3 +550,27 @@ pub fn _thermal_fit(
         out.place,
     )
 }
+
+/// `_report(text, finish) -> (code, html, error)`: the HTML report of the
+/// result document `text` ([`incal_report::render_html`], dated now), the
+/// limits of `finish` applied first (`incal report --limits`).
+#[pyfunction]
+pub fn _report(py: Python<'_>, text: &str, finish: &str) -> (u8, String, String) {
+    py.detach(|| {
+        let finish: incal::document::finish::Finish = match serde_json::from_str(finish) {
+            Ok(f) => f,
+            Err(e) => return (2, String::new(), format!("limits: {e}")),
+        };
+        let mut doc = match incal::document::ResultDocument::from_json(text) {
+            Ok(d) => d,
+            Err(e) => return (2, String::new(), format!("<Result>: {e}")),
+        };
+        if let Err(e) = finish.apply(&mut doc) {
+            return (2, String::new(), e.to_string());
+        }
+        match incal_report::render_html(&doc, &[]) {
+            Ok(html) => (0, html, String::new()),
+            Err(e) => (1, String::new(), e.to_string()),
+        }
+    })
+}

@@ -644,3 +644,24 @@ def test_records_work_on_the_records_crate(tmp_path):
         store.supersede(first, r, " ")
     with pytest.raises(incal.InputError, match="missing.db"):
         incal.Records(tmp_path / "missing.db").list()
+
+
+def test_a_report_is_written_by_the_report_crate(tmp_path):
+    data, _ = incal.simulate.tumble(seed=7)
+    r = incal.tumble(data, mount="pendulum", serial="SN-7")
+    limits = tmp_path / "l.toml"
+    limits.write_text("[tumble]\nK1 = { min = 9.9, max = 10.1 }\n")
+    ours = pathlib.Path(r.report(str(tmp_path / "a.html"), limits=str(limits))).read_text()
+    path = tmp_path / "r.json"
+    r.to_json(str(path))
+    cli(["report", path, "--limits", limits, "-o", tmp_path / "b.html"])
+    theirs = (tmp_path / "b.html").read_text()
+    # The same report but for the time it was made.
+    import re
+
+    stamp = re.compile(r"\d{4}-\d\d-\d\d[ T]\d\d:\d\d(:\d\d)?( UTC|Z)?")
+    assert stamp.sub("T", ours) == stamp.sub("T", theirs)
+    assert "<svg" in ours and "pass" in ours
+    with pytest.raises(incal.InputError, match="l2.toml"):
+        (tmp_path / "l2.toml").write_text("[tumble]\nK1 = { mni = 1 }\n")
+        r.report(str(tmp_path / "c.html"), limits=str(tmp_path / "l2.toml"))

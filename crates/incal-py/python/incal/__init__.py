@@ -318,9 +318,23 @@ class Result:
         return pd.DataFrame(rows, columns=cols).set_index("name")
 
     def report(self, path: str, limits: Optional[str] = None, db: Optional[str] = None) -> str:
-        """Write the HTML report (printable certificate) to ``path``."""
-        words = ["report", "-", "-o", os.fspath(path)] + _options({"limits": limits, "db": db})
-        run(words, self.to_json().encode())
+        """Write the HTML report (printable certificate) to ``path``, judged
+        against ``limits`` (a limits file) when given, by the report crate;
+        with ``db`` (a records store: the record's stamp and the history
+        plots) through ``incal report``."""
+        if db is not None:
+            words = ["report", "-", "-o", os.fspath(path)] + _options({"limits": limits, "db": db})
+            run(words, self.to_json().encode())
+            return os.fspath(path)
+        from . import _typed
+        from ._incal import _report
+
+        finish = {"limits": _typed._finish_value("limits", limits)} if limits is not None else {}
+        code, html, err = _report(self.to_json(), json.dumps(finish))
+        if code != 0:
+            _raise(code, b"", [err])
+        with open(os.fspath(path), "w", encoding="utf-8") as f:
+            f.write(html)
         return os.fspath(path)
 
     def to_imucal(self, path: Optional[str] = None) -> Dict[str, Any]:
