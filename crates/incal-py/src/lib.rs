@@ -8,6 +8,7 @@
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
+mod columns;
 mod export;
 mod records;
 mod stream;

@@ -2,19 +2,9 @@
 //! `thermal apply` ([`incal::procedures::stream::Stream`]) on data in
 //! place, and `compare` of two result documents, on the core directly.
 
-use std::borrow::Cow;
-
 use incal::procedures::stream::Stream;
-use incal_io::frames::{Column, Columns};
-use numpy::PyReadonlyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
-
-/// A column from Python, kept borrowed for the call.
-enum Held<'py> {
-    Numbers(PyReadonlyArray1<'py, f64>),
-    Text(Vec<String>),
-}
 
 fn fail(m: String) -> (u8, Vec<u8>, String, String) {
     (2, Vec::new(), m, "[]".into())
@@ -39,36 +29,11 @@ pub fn _stream<'py>(
     columns: Option<Vec<(String, Bound<'py, PyAny>)>>,
     sort_time: bool,
 ) -> PyResult<(u8, Py<PyBytes>, String, String)> {
-    let mut held: Vec<(String, Held<'py>)> = Vec::new();
-    for (n, obj) in columns.unwrap_or_default() {
-        if let Ok(a) = obj.extract::<PyReadonlyArray1<'py, f64>>() {
-            held.push((n, Held::Numbers(a)));
-        } else {
-            let t: Vec<String> = obj.extract().map_err(|_| {
-                pyo3::exceptions::PyTypeError::new_err(format!(
-                    "column '{n}': a float64 numpy array or a list of str is needed"
-                ))
-            })?;
-            held.push((n, Held::Text(t)));
-        }
-    }
-    let mut cols = Columns::new();
-    for (n, h) in &held {
-        let col = match h {
-            Held::Numbers(a) => Column::F64(Cow::Borrowed(a.as_slice().map_err(|e| {
-                pyo3::exceptions::PyValueError::new_err(format!("column '{n}': {e}"))
-            })?)),
-            Held::Text(t) => Column::Text(Cow::Borrowed(t)),
-        };
-        if let Err(m) = cols.push(n, col) {
-            return Ok((
-                2,
-                PyBytes::new(py, b"").unbind(),
-                format!("{name}: {m}"),
-                "[]".into(),
-            ));
-        }
-    }
+    let held = crate::columns::hold(columns.unwrap_or_default())?;
+    let cols = match crate::columns::borrow(name, &held)? {
+        Ok(c) => c,
+        Err(m) => return Ok((2, PyBytes::new(py, b"").unbind(), m, "[]".into())),
+    };
     let (code, out, err, warnings) = py.detach(|| {
         let (input, read_name, frames): (Box<dyn std::io::Read + Send + '_>, String, bool) =
             match &path {

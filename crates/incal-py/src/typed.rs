@@ -4,11 +4,9 @@
 //! as a path or as columns in memory ([`incal_io::frames`]): numpy
 //! float64 arrays are read in place, without a text round trip.
 
-use std::borrow::Cow;
-
 use incal::procedures::{registry, Silent};
-use incal_io::frames::{Column, Columns};
-use numpy::{PyReadonlyArray1, PyUntypedArrayMethods};
+use incal_io::frames::Columns;
+use numpy::PyReadonlyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
@@ -230,12 +228,6 @@ fn finished(
     }
 }
 
-/// A column handed over from Python, kept borrowed for the call.
-enum Held<'py> {
-    Numbers(PyReadonlyArray1<'py, f64>),
-    Text(Vec<String>),
-}
-
 /// `_reduce(procedure, name, options, read, finish, path=None,
 /// columns=None) -> (code, document: bytes, errors: list[str], place:
 /// str)`: the registry's reduction of `procedure` (its id) on the file
@@ -259,48 +251,13 @@ pub fn _reduce<'py>(
     columns: Option<Vec<(String, Bound<'py, PyAny>)>>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<(u8, Py<PyBytes>, Vec<String>, String)> {
-    let mut held: Vec<(String, Held<'py>)> = Vec::new();
-    for (n, obj) in columns.unwrap_or_default() {
-        if let Ok(a) = obj.extract::<PyReadonlyArray1<'py, f64>>() {
-            if !a.is_c_contiguous() {
-                return Err(pyo3::exceptions::PyValueError::new_err(format!(
-                    "column '{n}': the array is not contiguous"
-                )));
-            }
-            held.push((n, Held::Numbers(a)));
-        } else {
-            let t: Vec<String> = obj.extract().map_err(|_| {
-                pyo3::exceptions::PyTypeError::new_err(format!(
-                    "column '{n}': a float64 numpy array or a list of str is needed"
-                ))
-            })?;
-            held.push((n, Held::Text(t)));
-        }
-    }
+    let held = crate::columns::hold(columns.unwrap_or_default())?;
     let data = match path {
         Some(p) => Data::Path(p),
-        None => {
-            let mut c = Columns::new();
-            for (n, h) in &held {
-                let col = match h {
-                    Held::Numbers(a) => {
-                        Column::F64(Cow::Borrowed(a.as_slice().map_err(|e| {
-                            pyo3::exceptions::PyValueError::new_err(e.to_string())
-                        })?))
-                    }
-                    Held::Text(t) => Column::Text(Cow::Borrowed(t)),
-                };
-                if let Err(m) = c.push(n, col) {
-                    return Ok((
-                        2,
-                        PyBytes::new(py, b"").unbind(),
-                        vec![format!("{name}: {m}")],
-                        "{}".into(),
-                    ));
-                }
-            }
-            Data::Columns(c)
-        }
+        None => match crate::columns::borrow(name, &held)? {
+            Ok(c) => Data::Columns(c),
+            Err(m) => return Ok((2, PyBytes::new(py, b"").unbind(), vec![m], "{}".into())),
+        },
     };
     let progress = progress.map(PyProgress::new);
     let out = py.detach(|| match &progress {
