@@ -531,3 +531,11 @@ pub fn _report(py: Python<'_>, text: &str, finish: &str) -> (u8, String, String)
         }
     })
 }
+
+/// `_schema() -> str`: the JSON Schema of the result document
+/// (`incal.result/1`, [`incal::document::json_schema`]), as `incal schema`
+/// writes it.
+#[pyfunction]
+pub fn _schema() -> String {
+    incal::document::json_schema().to_string()
+}

@@ -20,7 +20,7 @@ import json
 import warnings as _warnings
 from typing import Any, Dict, Iterable, List, Tuple, Type
 
-from ._incal import _run
+from ._incal import _schema
 
 __all__ = ["IncalWarning", "CATEGORIES", "category", "warn_all"]
 
@@ -39,10 +39,7 @@ def _camel(code: str) -> str:
 def _codes() -> List[Tuple[str, str]]:
     """``(code, description)`` of every warning code, from the result
     document's JSON Schema."""
-    code, out, err = _run(["schema"], None)
-    if code != 0:
-        raise RuntimeError("incal schema: " + (err[-1] if err else f"exit {code}"))
-    schema = json.loads(bytes(out))
+    schema = json.loads(_schema())
     out_codes = []
     for v in schema["$defs"]["WarningCode"]["oneOf"]:
         doc = " ".join(v.get("description", "").split())
