@@ -100,6 +100,15 @@ pub struct Args {
 }
 
 /// `incal export`.
+/// A core error of the document `name` whose option keys are spelled as
+/// the command line's flags (`--axes`).
+fn option_in(name: &str, e: incal::Error) -> crate::error::CliError {
+    crate::error::core(incal::Error::InFile {
+        file: name.to_string(),
+        source: Box::new(e),
+    })
+}
+
 pub fn run(c: &Command) -> CliResult<()> {
     match c {
         Command::Imucal(a) => {
@@ -126,7 +135,7 @@ pub fn run(c: &Command) -> CliResult<()> {
                     p.device_id,
                     p.with_offset,
                 )
-                .map_err(|e| in_file(&name, e))?;
+                .map_err(|e| option_in(&name, e))?;
                 return write_text(
                     p.output.as_deref(),
                     &incal::procedures::thermal::export::px4_text(&params, &name),
@@ -155,7 +164,7 @@ pub fn run(c: &Command) -> CliResult<()> {
                 a.thermal.axes.as_deref(),
                 a.imu,
             )
-            .map_err(|e| in_file(&name, e))?;
+            .map_err(|e| option_in(&name, e))?;
             write_text(
                 a.output.as_deref(),
                 &incal::procedures::thermal::export::ardupilot_text(&params, &name),

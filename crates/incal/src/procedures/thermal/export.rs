@@ -77,19 +77,17 @@ pub fn axes<'a>(
             .iter()
             .find(|(n, _, _)| n == name)
             .map(|(n, e, c)| (n.as_str(), e, c.as_slice()))
-            .ok_or_else(|| {
-                Error::Unsupported(format!(
-                    "--axes: the model has no channel {name} (it has {})",
-                    model.names()
-                ))
+            .ok_or_else(|| Error::InvalidOption {
+                key: "axes".into(),
+                message: format!("the model has no channel {name} (it has {})", model.names()),
             })
     };
     if let Some(a) = axes {
         if a.len() != 3 {
-            return Err(Error::Unsupported(format!(
-                "--axes: three channel names X,Y,Z, got {}",
-                a.len()
-            )));
+            return Err(Error::InvalidOption {
+                key: "axes".into(),
+                message: format!("three channel names X,Y,Z, got {}", a.len()),
+            });
         }
         return Ok([pick(&a[0])?, pick(&a[1])?, pick(&a[2])?]);
     }
