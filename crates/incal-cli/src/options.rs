@@ -58,10 +58,7 @@ pub fn check_fail_on(
 /// A records store as named in messages: its path, or its PostgreSQL URL
 /// without the password.
 pub fn store_name(path: &std::path::Path) -> String {
-    match path.to_str() {
-        Some(u) if incal_records::is_postgres_url(u) => incal_records::display_url(u),
-        _ => path.display().to_string(),
-    }
+    incal_records::store_name(path)
 }
 
 /// A procedure named by its id (`imu-ferraris`; `_` for `-` accepted), for
@@ -85,12 +82,7 @@ pub fn procedure_id(what: &str, text: &str) -> crate::error::CliResult<incal::do
 /// (`NAME: …`): bad input and unusable stores exit 2, a broken chain and
 /// database failures exit 1.
 pub fn store_error(name: &str, e: incal_records::Error) -> crate::error::CliError {
-    let msg = e.to_string();
-    let msg = if msg.starts_with(&format!("{name}: ")) {
-        msg
-    } else {
-        format!("{name}: {msg}")
-    };
+    let msg = incal_records::store_message(name, &e);
     if e.is_input() {
         crate::error::CliError::Input(msg)
     } else {

@@ -31,26 +31,11 @@ fn input(m: impl Into<String>) -> Failed {
     (2, m.into())
 }
 
-/// The store as named in messages: its path, or its URL without the
-/// password.
-fn store_name(location: &str) -> String {
-    if incal_records::is_postgres_url(location) {
-        incal_records::display_url(location)
-    } else {
-        location.to_string()
-    }
-}
-
 fn store_error(location: &str) -> impl Fn(incal_records::Error) -> Failed + '_ {
     move |e| {
-        let name = store_name(location);
-        let msg = e.to_string();
-        let msg = if msg.starts_with(&format!("{name}: ")) {
-            msg
-        } else {
-            format!("{name}: {msg}")
-        };
-        (if e.is_input() { 2 } else { 1 }, msg)
+        let name = incal_records::store_name(std::path::Path::new(location));
+        let code = if e.is_input() { 2 } else { 1 };
+        (code, incal_records::store_message(&name, &e))
     }
 }
 

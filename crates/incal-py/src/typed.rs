@@ -30,6 +30,52 @@ impl Outcome {
             place: place.to_string(),
         }
     }
+
+    /// A call that gave `out`.
+    fn ok(out: Vec<u8>) -> Self {
+        Outcome {
+            code: 0,
+            out,
+            err: Vec::new(),
+            place: "{}".into(),
+        }
+    }
+
+    /// The tuple the Python side reads: `(code, bytes, errors, place)`.
+    fn into_py(self, py: Python<'_>) -> (u8, Py<PyBytes>, Vec<String>, String) {
+        (
+            self.code,
+            PyBytes::new(py, &self.out).unbind(),
+            self.err,
+            self.place,
+        )
+    }
+}
+
+/// Options as JSON text, parsed (`options: …` when it is not JSON).
+fn json_value(options: &str) -> incal::Result<serde_json::Value> {
+    serde_json::from_str(options).map_err(|e| incal::Error::Unsupported(format!("options: {e}")))
+}
+
+/// Options of type `T` from JSON text, checked as the core reads them; an
+/// error names the key.
+fn typed_options<T: serde::de::DeserializeOwned + schemars::JsonSchema>(
+    options: &str,
+) -> Result<T, Outcome> {
+    json_value(options)
+        .and_then(|v| incal::options::from_json(&v))
+        .map_err(|e| Outcome::failed(2, e.to_string(), place(&e)))
+}
+
+/// The identity, unit and limits to apply, from JSON text.
+fn finish_of(finish: &str) -> Result<incal::document::finish::Finish, Outcome> {
+    serde_json::from_str(finish).map_err(|e| {
+        Outcome::failed(
+            2,
+            format!("identity and limits: {e}"),
+            serde_json::json!({}),
+        )
+    })
 }
 
 /// Where a core error is: the option it names, or the file, line and
@@ -164,25 +210,24 @@ fn reduce(
     finish: &str,
     progress: &dyn incal::procedures::Progress,
 ) -> Outcome {
-    let none = serde_json::json!({});
     let Some(red) = registry::find(procedure).and_then(|e| e.reduction) else {
         return Outcome::failed(
             2,
             format!("no procedure '{procedure}' reduces a recording"),
-            none,
+            serde_json::json!({}),
         );
     };
-    let options: serde_json::Value = match serde_json::from_str(options) {
+    let options = match json_value(options) {
         Ok(v) => v,
-        Err(e) => return Outcome::failed(2, format!("options: {e}"), none),
+        Err(e) => return Outcome::failed(2, e.to_string(), place(&e)),
     };
     let mut read = match read_options(read) {
         Ok(r) => r,
         Err(o) => return o,
     };
-    let finish: incal::document::finish::Finish = match serde_json::from_str(finish) {
+    let finish = match finish_of(finish) {
         Ok(f) => f,
-        Err(e) => return Outcome::failed(2, format!("identity and limits: {e}"), none),
+        Err(o) => return o,
     };
     let reduced = match data {
         Data::Path(p) => match incal_io::open(&p) {
@@ -267,12 +312,7 @@ pub fn _reduce<'py>(
     if let Some(e) = progress.as_ref().and_then(PyProgress::take_error) {
         return Err(e);
     }
-    Ok((
-        out.code,
-        PyBytes::new(py, &out.out).unbind(),
-        out.err,
-        out.place,
-    ))
+    Ok(out.into_py(py))
 }
 
 /// `_reduce_record(name, options, read, finish, record, channels, f64le)
@@ -324,12 +364,7 @@ pub fn _reduce_record<'py>(
     if let Some(e) = progress.as_ref().and_then(PyProgress::take_error) {
         return Err(e);
     }
-    Ok((
-        out.code,
-        PyBytes::new(py, &out.out).unbind(),
-        out.err,
-        out.place,
-    ))
+    Ok(out.into_py(py))
 }
 
 fn noise_record(
@@ -340,21 +375,17 @@ fn noise_record(
     progress: &dyn incal::procedures::Progress,
 ) -> Outcome {
     use incal::procedures::noise::{reduce_mapped, NoiseOptions};
-    let none = serde_json::json!({});
-    let options: NoiseOptions = match serde_json::from_str::<serde_json::Value>(options)
-        .map_err(|e| incal::Error::Unsupported(format!("options: {e}")))
-        .and_then(|v| incal::options::from_json(&v))
-    {
+    let options: NoiseOptions = match typed_options(options) {
         Ok(o) => o,
-        Err(e) => return Outcome::failed(2, e.to_string(), place(&e)),
+        Err(o) => return o,
     };
     let read = match read_options(read) {
         Ok(r) => r,
         Err(o) => return o,
     };
-    let finish: incal::document::finish::Finish = match serde_json::from_str(finish) {
+    let finish = match finish_of(finish) {
         Ok(f) => f,
-        Err(e) => return Outcome::failed(2, format!("identity and limits: {e}"), none),
+        Err(o) => return o,
     };
     let doc = rec
         .map_err(incal::Error::Input)
@@ -379,27 +410,15 @@ pub fn _plan(
                 serde_json::json!({}),
             );
         };
-        let doc = serde_json::from_str::<serde_json::Value>(options)
-            .map_err(|e| incal::Error::Unsupported(format!("options: {e}")))
-            .and_then(|v| (plan.run)(&v));
+        let doc = json_value(options).and_then(|v| (plan.run)(&v));
         match doc.and_then(|d| {
             serde_json::to_string(&d).map_err(|e| incal::Error::Unsupported(e.to_string()))
         }) {
-            Ok(text) => Outcome {
-                code: 0,
-                out: text.into_bytes(),
-                err: Vec::new(),
-                place: "{}".into(),
-            },
+            Ok(text) => Outcome::ok(text.into_bytes()),
             Err(e) => Outcome::failed(2, e.to_string(), place(&e)),
         }
     });
-    (
-        out.code,
-        PyBytes::new(py, &out.out).unbind(),
-        out.err,
-        out.place,
-    )
+    out.into_py(py)
 }
 
 /// `_simulate(procedure, options) -> (code, recording: bytes, errors,
@@ -420,25 +439,13 @@ pub fn _simulate(
             );
         };
         let mut csv = Vec::new();
-        let done = serde_json::from_str::<serde_json::Value>(options)
-            .map_err(|e| incal::Error::Unsupported(format!("options: {e}")))
-            .and_then(|v| (sim.run)(&v, &mut csv));
+        let done = json_value(options).and_then(|v| (sim.run)(&v, &mut csv));
         match done {
-            Ok(()) => Outcome {
-                code: 0,
-                out: csv,
-                err: Vec::new(),
-                place: "{}".into(),
-            },
+            Ok(()) => Outcome::ok(csv),
             Err(e) => Outcome::failed(2, e.to_string(), place(&e)),
         }
     });
-    (
-        out.code,
-        PyBytes::new(py, &out.out).unbind(),
-        out.err,
-        out.place,
-    )
+    out.into_py(py)
 }
 
 /// `_check_result(text) -> None | str`: `None` when `text` is a valid
@@ -473,17 +480,13 @@ pub fn _thermal_fit(
 ) -> (u8, Py<PyBytes>, Vec<String>, String) {
     use incal::procedures::thermal::soak;
     let out = py.detach(|| {
-        let none = serde_json::json!({});
-        let o: soak::SoakOptions = match serde_json::from_str::<serde_json::Value>(options)
-            .map_err(|e| incal::Error::Unsupported(format!("options: {e}")))
-            .and_then(|v| incal::options::from_json(&v))
-        {
+        let o: soak::SoakOptions = match typed_options(options) {
             Ok(o) => o,
-            Err(e) => return Outcome::failed(2, e.to_string(), place(&e)),
+            Err(o) => return o,
         };
-        let finish: incal::document::finish::Finish = match serde_json::from_str(finish) {
+        let finish = match finish_of(finish) {
             Ok(f) => f,
-            Err(e) => return Outcome::failed(2, format!("identity and limits: {e}"), none),
+            Err(o) => return o,
         };
         let mut inputs = Vec::with_capacity(documents.len());
         for (name, sha256, text) in documents {
@@ -500,12 +503,7 @@ pub fn _thermal_fit(
         }
         finished(soak::fit_documents(&inputs, &o), &finish)
     });
-    (
-        out.code,
-        PyBytes::new(py, &out.out).unbind(),
-        out.err,
-        out.place,
-    )
+    out.into_py(py)
 }
 
 /// `_report(text, finish) -> (code, html, error)`: the HTML report of the

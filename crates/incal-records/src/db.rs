@@ -405,6 +405,26 @@ pub fn is_postgres_url(location: &str) -> bool {
     location.starts_with("postgresql://") || location.starts_with("postgres://")
 }
 
+/// A records store as named in messages: its path, or its PostgreSQL URL
+/// without the password ([`display_url`]).
+pub fn store_name(location: &std::path::Path) -> String {
+    match location.to_str() {
+        Some(u) if is_postgres_url(u) => display_url(u),
+        _ => location.display().to_string(),
+    }
+}
+
+/// The one line of an error of the store named `name`
+/// ([`store_name`]): `NAME: …`, the name said once.
+pub fn store_message(name: &str, e: &crate::Error) -> String {
+    let msg = e.to_string();
+    if msg.starts_with(&format!("{name}: ")) {
+        msg
+    } else {
+        format!("{name}: {msg}")
+    }
+}
+
 /// A PostgreSQL URL as shown in messages: user, host, port and database,
 /// never the password.
 pub fn display_url(url: &str) -> String {

@@ -53,7 +53,7 @@ mod verify;
 mod write;
 
 pub use chain::{sha256_hex, ChainFields, InputHash, GENESIS};
-pub use db::{display_url, is_postgres_url};
+pub use db::{display_url, is_postgres_url, store_message, store_name};
 pub use error::{Error, Result};
 pub use exchange::{ExportedRecord, ExportedSupersession, Imported};
 pub use history::{Drift, HistoryPoint, Repeatability};
