@@ -174,51 +174,6 @@ def _is_array(value: Any) -> bool:
     return hasattr(value, "__array__") and not isinstance(value, (list, tuple, str))
 
 
-def _csv_cell(value: Any) -> str:
-    if isinstance(value, float) or type(value).__name__.startswith("float"):
-        return repr(float(value))
-    text = str(value)
-    if any(c in text for c in ',"\n\r'):
-        return '"' + text.replace('"', '""') + '"'
-    return text
-
-
-def _csv(columns: Dict[str, Any]) -> bytes:
-    """Columns (name → sequence) as a CSV text: numbers in shortest
-    round-trip form, so the core reads back the same values."""
-    names = list(columns)
-    if not names:
-        raise InputError("no data columns given")
-    cols = [list(columns[n]) for n in names]
-    n = len(cols[0])
-    for name, c in zip(names, cols):
-        if len(c) != n:
-            raise InputError(f"column '{name}' has {len(c)} values, '{names[0]}' has {n}")
-    lines = [",".join(_csv_cell(x) for x in names)]
-    for i in range(n):
-        lines.append(",".join(_csv_cell(c[i]) for c in cols))
-    return ("\n".join(lines) + "\n").encode()
-
-
-def _data(data: Any, options: Dict[str, Any]) -> Tuple[List[str], Optional[bytes]]:
-    """The ``--input`` words and the standard input for ``data`` (a path or
-    a DataFrame) or the array keywords of ``options`` (removed from it)."""
-    arrays = {k: options.pop(k) for k in list(options) if _is_array(options[k])}
-    if data is not None and arrays:
-        raise InputError("give the data as one path or DataFrame, or as arrays by keyword, not both")
-    if data is None:
-        if not arrays:
-            raise InputError("no data: give a path, a DataFrame, or arrays by keyword")
-        return ["--input", "-"], _csv(arrays)
-    if isinstance(data, dict):
-        return ["--input", "-"], _csv({str(k): list(v) for k, v in data.items()})
-    if isinstance(data, (str, os.PathLike)):
-        return ["--input", os.fspath(data)], None
-    if hasattr(data, "columns") and hasattr(data, "__getitem__"):
-        return ["--input", "-"], _csv({str(c): data[c].tolist() for c in data.columns})
-    raise InputError(f"data must be a path, a pandas DataFrame or arrays by keyword, not {type(data).__name__}")
-
-
 class Coefficient(dict):
     """One coefficient of a result: a dict of the document's fields
     (``value``, ``u``, ``unit``, ``dof``, ``k95``, ``U95``; JSON units) that
@@ -466,14 +421,12 @@ def _raise(code: int, out: bytes, err: List[str], where: Optional[Dict[str, Any]
     raise IncalError(message, code, out)
 
 
-def _reduce(
-    entry: Dict[str, Any], data: Any, options: Dict[str, Any], flags: Dict[str, str]
-) -> Result:
+def _reduce(entry: Dict[str, Any], data: Any, options: Dict[str, Any]) -> Result:
     """Reduce ``data`` by the registry entry with ``options`` (keyed by
     option id) through the core's typed reduction, the data in place (a
-    path, columns, or for noise a binary record); an option only the
-    command line has (centrifuge's ``from_``, gyro positions' ``k1_from``)
-    goes through the command line in process."""
+    path, columns, or for noise a binary record). Every option of the
+    command has a place there: the procedure's options, the input layer's
+    (``columns``, ``delimiter``) and the identity, unit and limits."""
     from . import _typed
 
     command = entry["command"].split()
@@ -489,36 +442,32 @@ def _reduce(
     schema = (entry.get("options") or {}).get("reduce")
     arrays = {k: options.pop(k) for k in list(options) if _is_array(options[k])}
     args = (entry.get("arguments") or {}).get("reduce") or []
-    parts = _typed.split(schema, _typed.with_defaults(args, options)) if schema else None
-    if parts is not None:
-        opts, read, finish = parts
-        if command == ["noise"] and data is None and arrays:
-            record = _noise_record(arrays, opts, read)
-            if record is not None:
-                code, out, err, where = _typed.call_record(
-                    record[0], record[1], record[2], opts, read, finish, progress=progress
-                )
-                if code != 0:
-                    _raise(code, out, err, where)
-                return _result(out, [])
-        if command == ["noise"] and opts.get("format") in ("f32le", "f64le"):
-            if data is None or not isinstance(data, (str, os.PathLike)):
-                raise InputError("noise: format f32le or f64le reads a file: give its path")
+    parts = _typed.split(schema or {}, _typed.with_defaults(args, options))
+    if parts is None:
+        unknown = sorted(set(options) - set((schema or {}).get("properties", {})))
+        raise TypeError(f"{entry['python']['function']}(): no place in the core for {unknown}")
+    opts, read, finish = parts
+    if command == ["noise"] and data is None and arrays:
+        record = _noise_record(arrays, opts, read)
+        if record is not None:
             code, out, err, where = _typed.call_record(
-                None, int(opts.get("channels") or 0), opts["format"] == "f64le", opts, read, finish,
-                path=data, progress=progress,
+                record[0], record[1], record[2], opts, read, finish, progress=progress
             )
-        else:
-            code, out, err, where = _typed.call(entry["id"], data, arrays, opts, read, finish, progress)
-        if code != 0:
-            _raise(code, out, err, where)
-        return _result(out, [])
-    # The command line: options by their flags.
-    options = {flags.get(k, "--" + k)[2:].replace("-", "_"): v for k, v in options.items()}
-    options.update(arrays)
-    words, stdin = _data(data, options)
-    out, err = run(command + words + ["--json"] + _options(options), stdin)
-    return _result(out, err)
+            if code != 0:
+                _raise(code, out, err, where)
+            return _result(out, [])
+    if command == ["noise"] and opts.get("format") in ("f32le", "f64le"):
+        if data is None or not isinstance(data, (str, os.PathLike)):
+            raise InputError("noise: format f32le or f64le reads a file: give its path")
+        code, out, err, where = _typed.call_record(
+            None, int(opts.get("channels") or 0), opts["format"] == "f64le", opts, read, finish,
+            path=data, progress=progress,
+        )
+    else:
+        code, out, err, where = _typed.call(entry["id"], data, arrays, opts, read, finish, progress)
+    if code != 0:
+        _raise(code, out, err, where)
+    return _result(out, [])
 
 
 #: Options of a command that are not keywords of its function: the data
@@ -593,27 +542,44 @@ def _options_doc(args: List[Dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
-def _procedure(name: str, entry: Dict[str, Any]):
-    command = entry["command"].split()
-    doc = entry["title"] + "."
-    args = (entry.get("arguments") or {}).get("reduce") or []
-    # The keyword of an option is its name (``from_`` for a Python
-    # keyword); its flag's spelling and aliases (``g_local``) are accepted
-    # too. Each is turned into the option's id.
+def _keyword_ids(args: List[Dict[str, Any]]) -> Dict[str, str]:
+    """Keyword → option id, from a command's argument table: the keyword
+    of an option is its name (``from_`` for a Python keyword); its flag's
+    spelling and aliases (``g_local``) are accepted too."""
     ids = {_keyword(a["name"]): a["name"] for a in args}
     for a in args:
         for spelling in [a["flag"][2:]] + list(a["aliases"] or []):
             ids.setdefault(spelling.replace("-", "_"), a["name"])
-    flags = {a["name"]: a["flag"] for a in args}
+    return ids
+
+
+def _by_id(
+    name: str,
+    args: List[Dict[str, Any]],
+    ids: Dict[str, str],
+    known: Any,
+    options: Dict[str, Any],
+    columns: bool = False,
+) -> Dict[str, Any]:
+    """The keywords of a call to ``name`` by option id; a keyword not in
+    ``known`` is a ``TypeError``, as for any Python function (with
+    ``columns``, an array by keyword is a data column, kept as given)."""
+    if args:
+        for key, value in options.items():
+            if key not in known and not (columns and _is_array(value)):
+                raise TypeError(f"{name}() got an unexpected keyword argument '{key}'")
+    return {k if columns and _is_array(v) else ids.get(k, k): v for k, v in options.items()}
+
+
+def _procedure(name: str, entry: Dict[str, Any]):
+    command = entry["command"].split()
+    doc = entry["title"] + "."
+    args = (entry.get("arguments") or {}).get("reduce") or []
+    ids = _keyword_ids(args)
     known = (set(ids) - set(_NOT_KEYWORDS)) | {"progress"}
 
     def reduce(data: Any = None, **options: Any) -> Result:
-        if args:
-            for key, value in options.items():
-                if key not in known and not _is_array(value):
-                    raise TypeError(f"{name}() got an unexpected keyword argument '{key}'")
-        by_id = {ids.get(k, k) if not _is_array(v) else k: v for k, v in options.items()}
-        return _reduce(entry, data, by_id, flags)
+        return _reduce(entry, data, _by_id(name, args, ids, known, options, columns=True))
 
     reduce.__name__ = name
     reduce.__qualname__ = name
@@ -689,9 +655,8 @@ def thermal_fit(results: Sequence[Any], **options: Any) -> Result:
         raise TypeError(f"thermal_fit() got an unexpected keyword argument among {sorted(options)}")
     documents = []
     for r in results:
-        name, text = _typed.document_text(r)
-        data = text.encode() if isinstance(r, Result) else open(name, "rb").read()
-        documents.append((name, hashlib.sha256(data).hexdigest(), text))
+        name, data = _typed.document_bytes(r)
+        documents.append((name, hashlib.sha256(data).hexdigest(), _typed.decoded(name, data)))
     code, out, err, where = _thermal_fit(documents, json.dumps(fit, default=_typed._json_default), json.dumps(parts[2]))
     if code != 0:
         _raise(code, bytes(out), list(err), json.loads(where))
@@ -736,14 +701,10 @@ def read_result(path: str) -> Result:
     command that reads one checks it (the schema, then what it cannot
     say: U95 = k95·u, dof > 0, table widths, …): a bad file raises
     :class:`InputError` naming the file and the JSON path."""
+    from . import _typed
     from ._incal import _check_result
 
-    name = os.fspath(path)
-    try:
-        with open(name, "r", encoding="utf-8-sig") as f:
-            text = f.read()
-    except (OSError, UnicodeDecodeError) as e:
-        raise InputError(f"{name}: cannot read: {e}", {"file": name}) from None
+    name, text = _typed.document_text(os.fspath(path))
     if not text.strip():
         raise InputError(f"{name}: empty file", {"file": name})
     problem = _check_result(text)

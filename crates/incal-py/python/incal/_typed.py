@@ -88,15 +88,8 @@ def _file(path: Any) -> Dict[str, Any]:
     it: its name and path as given, its SHA-256 and its text."""
     import hashlib
 
-    name = os.fspath(path)
-    try:
-        with open(name, "rb") as f:
-            data = f.read()
-    except OSError as e:
-        from . import InputError
-
-        raise InputError(f"{name}: cannot read: {e}", {"file": name}) from None
-    return {"name": name, "path": name, "sha256": hashlib.sha256(data).hexdigest(), "toml": data.decode("utf-8", "replace")}
+    name, data = document_bytes(os.fspath(path))
+    return {"name": name, "path": name, "sha256": hashlib.sha256(data).hexdigest(), "toml": decoded(name, data)}
 
 
 def _document(value: Any) -> Dict[str, Any]:
@@ -257,19 +250,37 @@ def data_kwargs(data: Any, arrays: Dict[str, Any]) -> Tuple[str, Dict[str, Any]]
     )
 
 
-def document_text(value: Any) -> Tuple[str, str]:
+def document_bytes(value: Any) -> Tuple[str, bytes]:
     """A result document given as an ``incal.Result`` (named
-    ``<Result>``) or a path: its name and text."""
+    ``<Result>``, its JSON text) or a path: its name and bytes."""
     from . import InputError, Result
 
     if isinstance(value, Result):
-        return "<Result>", value.to_json()
+        return "<Result>", value.to_json().encode()
     name = os.fspath(value)
     try:
-        with open(name, "r", encoding="utf-8-sig") as f:
+        with open(name, "rb") as f:
             return name, f.read()
-    except (OSError, UnicodeDecodeError) as e:
+    except OSError as e:
         raise InputError(f"{name}: cannot read: {e}", {"file": name}) from None
+
+
+def decoded(name: str, data: bytes) -> str:
+    """A file's bytes as text (UTF-8, a byte-order mark dropped); bytes
+    that are not UTF-8 are refused naming the file, as the CLI refuses
+    them."""
+    from . import InputError
+
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise InputError(f"{name}: not UTF-8 text", {"file": name}) from None
+
+
+def document_text(value: Any) -> Tuple[str, str]:
+    """As :func:`document_bytes`, the text (:func:`decoded`)."""
+    name, data = document_bytes(value)
+    return name, decoded(name, data)
 
 
 def call(

@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 from typing import Any, Dict, List
 
-from . import REGISTRY, _options, _raise, _signature, _options_doc, _keyword, run
+from . import REGISTRY, _by_id, _keyword_ids, _options, _options_doc, _raise, _signature, run
 
 __all__: List[str] = []
 
@@ -43,19 +43,13 @@ def _nest(schema: Dict[str, Any], options: Dict[str, Any]) -> Dict[str, Any]:
 def _plan(entry: Dict[str, Any], name: str):
     args = (entry.get("arguments") or {}).get("plan") or []
     schema = (entry.get("options") or {}).get("plan")
-    ids = {_keyword(a["name"]): a["name"] for a in args}
-    for a in args:
-        for spelling in [a["flag"][2:]] + list(a["aliases"] or []):
-            ids.setdefault(spelling.replace("-", "_"), a["name"])
+    ids = _keyword_ids(args)
     words = entry["plan"].split()[1:]
 
     def plan(**options: Any) -> Dict[str, Any]:
         from ._incal import _plan as typed
 
-        for key in options:
-            if args and key not in ids:
-                raise TypeError(f"{name}() got an unexpected keyword argument '{key}'")
-        by_id = {ids.get(k, k): v for k, v in options.items()}
+        by_id = _by_id(name, args, ids, ids, options)
         # A plan by simulation (a ``session`` to simulate) derives its
         # reduction's options from the session on the command line: it
         # goes through it, as does a run sheet (a file the CLI writes).

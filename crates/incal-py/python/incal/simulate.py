@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 from typing import Any, Dict, List, Tuple
 
-from . import REGISTRY, _keyword, _options, _options_doc, _raise, _read_csv, _signature, run
+from . import REGISTRY, _by_id, _keyword_ids, _options, _options_doc, _raise, _read_csv, _signature, run
 
 __all__: List[str] = []
 
@@ -26,16 +26,10 @@ def _simulator(entry: Dict[str, Any], name: str):
     words = entry["simulate"].split()[1:]
     args = (entry.get("arguments") or {}).get("simulate") or []
     schema = (entry.get("options") or {}).get("simulate")
-    ids = {_keyword(a["name"]): a["name"] for a in args}
-    for a in args:
-        for spelling in [a["flag"][2:]] + list(a["aliases"] or []):
-            ids.setdefault(spelling.replace("-", "_"), a["name"])
+    ids = _keyword_ids(args)
 
     def simulate(**options: Any) -> Tuple[Any, Any]:
-        for key in options:
-            if args and key not in ids:
-                raise TypeError(f"{name}() got an unexpected keyword argument '{key}'")
-        by_id = {ids.get(k, k): v for k, v in options.items()}
+        by_id = _by_id(name, args, ids, ids, options)
         if words in (["gfimu"], ["thermal"]):
             return _with_truth(words, by_id)
         if schema is not None:
