@@ -1,10 +1,8 @@
-//! incal's commands in process, for front ends that embed them (the
-//! Python package): [`run_embedded`] runs one command line as the binary
-//! does, with standard input given as bytes, and returns what the command
-//! would have written to standard output and standard error instead of
-//! writing it. The same parsing, checks and documents as the `incal`
-//! binary, so a result from Python equals the CLI's `--json` by
-//! construction.
+//! incal's commands in process, for `incal batch`: [`run_embedded`] runs
+//! one command line as the binary does on this thread and returns what
+//! the command would have written to standard output and standard error
+//! instead of writing it, so each recording's outcome is reported whole
+//! and in order.
 
 use std::cell::RefCell;
 use std::ffi::OsString;
@@ -30,15 +28,11 @@ pub struct Embedded {
 }
 
 /// Run the command line `args` (program name first, as for the binary)
-/// on this thread, with `stdin` (when given) as its standard input; the
-/// output is returned, not written. Files named with `-o` are written as
-/// the binary writes them.
-pub fn run_embedded(args: &[OsString], stdin: Option<Vec<u8>>) -> Embedded {
+/// on this thread; the output is returned, not written. Files named with
+/// `-o` are written as the binary writes them.
+pub fn run_embedded(args: &[OsString]) -> Embedded {
     CAPTURE.with(|c| *c.borrow_mut() = Some((Vec::new(), Vec::new())));
-    let code = match stdin {
-        Some(bytes) => incal_io::with_stdin(bytes, || crate::main_from(args)),
-        None => crate::main_from(args),
-    };
+    let code = crate::main_from(args);
     let (stdout, stderr) = CAPTURE.with(|c| c.borrow_mut().take()).unwrap_or_default();
     Embedded {
         code,

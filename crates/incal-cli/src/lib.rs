@@ -14,7 +14,7 @@
 
 mod commands;
 mod documents;
-pub mod embed;
+mod embed;
 mod error;
 mod input;
 mod io;

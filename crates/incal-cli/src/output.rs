@@ -130,26 +130,12 @@ impl PlanOut {
     /// sheet when asked.
     pub fn emit(&self, doc: &incal::document::plan::PlanDocument) -> CliResult<()> {
         if let Some(path) = &self.run_sheet {
-            let (header, rows) = doc.run_sheet().ok_or_else(|| {
-                crate::error::usage(format!(
-                    "--run-sheet: a {} plan lists no settings to run",
-                    doc.procedure
-                ))
-            })?;
-            // incal-io's writer: the same quoting as every CSV incal writes.
-            let hdr: Vec<&str> = header.iter().map(String::as_str).collect();
-            let bytes = (|| {
-                let mut w = incal_io::writer::CsvWriter::new(Vec::new(), &hdr)?;
-                for r in &rows {
-                    for c in r {
-                        w.cell(incal_io::writer::Cell::Text(c))?;
-                    }
-                    w.end_row()?;
+            let csv = doc.run_sheet_csv().map_err(|e| match e {
+                incal::Error::InvalidOption { message, .. } => {
+                    crate::error::usage(format!("--run-sheet: {message}"))
                 }
-                w.finish()
-            })()
-            .map_err(|e| crate::error::CliError::Failure(anyhow::anyhow!("--run-sheet: {e}")))?;
-            let csv = String::from_utf8_lossy(&bytes);
+                other => crate::error::CliError::Failure(anyhow::anyhow!("--run-sheet: {other}")),
+            })?;
             write_text(Some(path), &csv)?;
         }
         let text = if self.json {

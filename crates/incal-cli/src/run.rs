@@ -44,6 +44,23 @@ pub fn simulate<S: incal::procedures::Simulate>(
     })
 }
 
+/// `--truth-out FILE` of a simulator whose recording does not carry its
+/// truth ([`incal::procedures::Simulate::truth`]), written after the
+/// recording: the JSON the core gives, as Python's simulators return it.
+pub fn write_truth<S: incal::procedures::Simulate>(
+    options: &S::Options,
+    path: Option<&std::path::Path>,
+) -> CliResult<()> {
+    let Some(path) = path else { return Ok(()) };
+    if let Some(truth) = S::truth(options).map_err(crate::error::core)? {
+        crate::io::write_text(
+            Some(path),
+            &format!("{}\n", crate::output::json_text(&truth)),
+        )?;
+    }
+    Ok(())
+}
+
 /// The one runner of a streaming tool ([`incal::procedures::stream`]):
 /// the input opened (`-` is standard input) and read with `read`, the
 /// output opened before the first row (`None` or `-` is standard output),

@@ -36,8 +36,7 @@ pub use reader::{
     CONDITION_COLUMNS, MAX_ABS_VALUE, MAX_LINE_BYTES,
 };
 pub use source::{
-    display_name, is_dash, open, read_hashed, read_table, stream, stream_table, with_stdin,
-    MAX_DOCUMENT_BYTES,
+    display_name, is_dash, open, read_hashed, read_table, stream, stream_table, MAX_DOCUMENT_BYTES,
 };
 pub use table::{Table, TableRow};
 pub use writer::{csv_text, Cell, CsvWriter};

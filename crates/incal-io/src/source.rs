@@ -34,33 +34,10 @@ pub struct Opened {
     pub size: usize,
 }
 
-thread_local! {
-    /// Bytes that stand for standard input on this thread ([`with_stdin`]).
-    static STDIN: std::cell::RefCell<Option<Vec<u8>>> = const { std::cell::RefCell::new(None) };
-}
-
-/// Run `f` with `bytes` as this thread's standard input: `-` opens them
-/// (once) instead of the process's stdin. For front ends that embed incal
-/// and hand it data in memory (a Python DataFrame as CSV).
-pub fn with_stdin<T>(bytes: Vec<u8>, f: impl FnOnce() -> T) -> T {
-    STDIN.with(|s| *s.borrow_mut() = Some(bytes));
-    let out = f();
-    STDIN.with(|s| *s.borrow_mut() = None);
-    out
-}
-
 /// Open `path` (`-`: standard input). Fails with `NAME: cannot read: …`.
 pub fn open(path: &Path) -> Result<Opened> {
     let name = display_name(path);
     if is_dash(path) {
-        if let Some(bytes) = STDIN.with(|s| s.borrow_mut().take()) {
-            let size = bytes.len();
-            return Ok(Opened {
-                name,
-                reader: Box::new(std::io::Cursor::new(bytes)),
-                size,
-            });
-        }
         return Ok(Opened {
             name,
             reader: Box::new(std::io::stdin()),

@@ -1,12 +1,12 @@
-//! The compiled part of the Python package `incal`: the registry's typed
-//! reductions on data in place (`typed`: `_reduce`, `_reduce_record`),
-//! and `_run`, which runs an incal command line in process
-//! ([`incal_cli::embed`]) for what is not typed yet. The GIL is released
-//! while the core works. Everything else of the package is Python in
-//! `python/incal/`.
+//! The compiled part of the Python package `incal`, on the core crates
+//! (`incal`, `incal-io`, `incal-records`, `incal-report`), never the
+//! command line: the registry (`_registry`), its typed reductions on data
+//! in place (`typed`: `_reduce`, `_reduce_record`), plans, simulators,
+//! streaming tools, exports, the soak fit, reports and the records store.
+//! The GIL is released while the core works. Everything else of the
+//! package is Python in `python/incal/`.
 
 use pyo3::prelude::*;
-use pyo3::types::PyBytes;
 
 mod columns;
 mod export;
@@ -14,20 +14,17 @@ mod records;
 mod stream;
 mod typed;
 
-/// `_run(args, stdin=None) -> (code, stdout: bytes, stderr: list[str])`:
-/// the command line `args` (without the program name) as the `incal`
-/// binary runs it, `stdin` (bytes) as its standard input.
+/// `_registry() -> str`: the procedure registry as JSON, one object per
+/// procedure ([`incal::procedures::registry::Entry::to_json`]); the
+/// package adds the command line's argument tables it ships
+/// (`arguments.json`) for its keyword parameters.
 #[pyfunction]
-#[pyo3(signature = (args, stdin=None))]
-fn _run(
-    py: Python<'_>,
-    args: Vec<String>,
-    stdin: Option<Vec<u8>>,
-) -> (u8, Py<PyBytes>, Vec<String>) {
-    let mut argv: Vec<std::ffi::OsString> = vec!["incal".into()];
-    argv.extend(args.into_iter().map(Into::into));
-    let out = py.detach(move || incal_cli::embed::run_embedded(&argv, stdin));
-    (out.code, PyBytes::new(py, &out.stdout).unbind(), out.stderr)
+fn _registry() -> String {
+    let entries: Vec<serde_json::Value> = incal::procedures::registry::REGISTRY
+        .iter()
+        .map(|e| e.to_json())
+        .collect();
+    serde_json::Value::Array(entries).to_string()
 }
 
 /// The version of the incal library inside the package.
@@ -38,9 +35,10 @@ fn _version() -> &'static str {
 
 #[pymodule]
 fn _incal(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_function(wrap_pyfunction!(_run, m)?)?;
+    m.add_function(wrap_pyfunction!(_registry, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_reduce_record, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(typed::_run_sheet, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_check_result, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_figures, m)?)?;
     m.add_function(wrap_pyfunction!(stream::_stream, m)?)?;

@@ -39,6 +39,16 @@ fn store_error(location: &str) -> impl Fn(incal_records::Error) -> Failed + '_ {
     }
 }
 
+/// A procedure named by its id (`_` for `-` accepted).
+fn procedure(p: &str) -> Result<incal::document::Procedure, Failed> {
+    incal::document::Procedure::from_id(&p.replace('_', "-")).ok_or_else(|| {
+        input(format!(
+            "procedure: '{}' is not a procedure",
+            incal_io::clip(p)
+        ))
+    })
+}
+
 fn pretty(v: &Value) -> String {
     format!(
         "{}\n",
@@ -123,17 +133,32 @@ fn run(location: &str, op: &str, a: &Args) -> Result<String, Failed> {
                 .as_deref()
                 .ok_or_else(|| input("coefficient: needed"))?;
             let procedure = match &a.procedure {
-                Some(p) => Some(
-                    incal::document::Procedure::from_id(&p.replace('_', "-"))
-                        .ok_or_else(|| input(format!("procedure: '{p}' is not a procedure")))?
-                        .as_str(),
-                ),
+                Some(p) => Some(procedure(p)?.as_str()),
                 None => None,
             };
             let h = store
                 .history_of(serial, coefficient, procedure, None)
                 .map_err(&err)?;
             Ok(pretty(&incal_report::records::history_json(&h)))
+        }
+        "calibrations" => {
+            let serial = a.serial.as_deref().ok_or_else(|| input("serial: needed"))?;
+            let procedure = match &a.procedure {
+                Some(p) => Some(procedure(p)?),
+                None => None,
+            };
+            let store = existing()?;
+            store.check_chain().map_err(&err)?;
+            let found = store
+                .current_calibrations(serial, procedure)
+                .map_err(&err)?;
+            let docs: Vec<Value> = found
+                .iter()
+                .map(|(r, _)| {
+                    json!({"name": format!("record {}", r.id), "sha256": r.sha256, "text": r.document})
+                })
+                .collect();
+            Ok(pretty(&Value::Array(docs)))
         }
         "verify" => {
             let store = existing()?;
@@ -198,7 +223,8 @@ fn export(store: &Store, path: &str) -> Result<incal_records::Verified, Failed> 
 /// `_records(location, op, args) -> (code, JSON text, error)`: one
 /// operation on the store at `location` (a path or a `postgresql://`
 /// URL): `add`, `supersede`, `list`, `show`, `history`, `verify`,
-/// `export`, `import`, with `args` as JSON (`text` and `name` of a result,
+/// `export`, `import`, `calibrations` (the current calibrations of
+/// `serial`: `[{name, sha256, text}]`), with `args` as JSON (`text` and `name` of a result,
 /// `serial`, `operator`, `station`, `created_utc`, `id`, `reason`,
 /// `coefficient`, `procedure`, `head`, `path`). The GIL is released.
 #[pyfunction]

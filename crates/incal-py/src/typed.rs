@@ -421,31 +421,46 @@ pub fn _plan(
     out.into_py(py)
 }
 
+/// `_run_sheet(text) -> (code, csv, error)`: the operator's run sheet of
+/// the plan document `text` as CSV
+/// ([`incal::document::plan::PlanDocument::run_sheet_csv`]).
+#[pyfunction]
+pub fn _run_sheet(text: &str) -> (u8, String, String) {
+    let plan: incal::document::plan::PlanDocument = match serde_json::from_str(text) {
+        Ok(p) => p,
+        Err(e) => return (2, String::new(), format!("<plan>: {e}")),
+    };
+    match plan.run_sheet_csv() {
+        Ok(csv) => (0, csv, String::new()),
+        Err(e @ incal::Error::InvalidOption { .. }) => (2, String::new(), e.to_string()),
+        Err(e) => (1, String::new(), e.to_string()),
+    }
+}
+
 /// `_simulate(procedure, options) -> (code, recording: bytes, errors,
-/// place)`: the registry's typed simulator of `procedure` (its id) with
-/// `options` as JSON: the CSV it writes.
+/// place, truth)`: the registry's typed simulator of `procedure` (its id)
+/// with `options` as JSON: the CSV it writes, and its truth as JSON text
+/// (`null` where the CSV's comment lines carry it).
 #[pyfunction]
 pub fn _simulate(
     py: Python<'_>,
     procedure: &str,
     options: &str,
-) -> (u8, Py<PyBytes>, Vec<String>, String) {
-    let out = py.detach(|| {
+) -> (u8, Py<PyBytes>, Vec<String>, String, String) {
+    let (out, truth) = py.detach(|| {
         let Some(sim) = registry::find(procedure).and_then(|e| e.simulator) else {
-            return Outcome::failed(
-                2,
-                format!("no simulator for '{procedure}'"),
-                serde_json::json!({}),
-            );
+            let no = format!("no simulator for '{procedure}'");
+            return (Outcome::failed(2, no, serde_json::json!({})), None);
         };
         let mut csv = Vec::new();
-        let done = json_value(options).and_then(|v| (sim.run)(&v, &mut csv));
-        match done {
-            Ok(()) => Outcome::ok(csv),
-            Err(e) => Outcome::failed(2, e.to_string(), place(&e)),
+        match json_value(options).and_then(|v| (sim.run)(&v, &mut csv)) {
+            Ok(truth) => (Outcome::ok(csv), truth),
+            Err(e) => (Outcome::failed(2, e.to_string(), place(&e)), None),
         }
     });
-    out.into_py(py)
+    let (code, csv, err, place) = out.into_py(py);
+    let truth = truth.unwrap_or(serde_json::Value::Null).to_string();
+    (code, csv, err, place, truth)
 }
 
 /// `_check_result(text) -> None | str`: `None` when `text` is a valid
@@ -506,28 +521,97 @@ pub fn _thermal_fit(
     out.into_py(py)
 }
 
-/// `_report(text, finish) -> (code, html, error)`: the HTML report of the
-/// result document `text` ([`incal_report::render_html`], dated now), the
-/// limits of `finish` applied first (`incal report --limits`).
+/// `_report(text, finish, db=None, lab=None, issue="{}") -> (code, html,
+/// error)`: the HTML report of the result document `text`
+/// ([`incal_report::render_html_with`], dated now), the limits of `finish`
+/// applied first (`incal report --limits`); with `db` (a store's path or
+/// URL) the record stamp and history plots
+/// ([`incal_report::stored::of_document`]); with `lab` (a laboratory
+/// profile's TOML text) a calibration certificate, `issue` its `customer`,
+/// `date` and `environment`.
 #[pyfunction]
-pub fn _report(py: Python<'_>, text: &str, finish: &str) -> (u8, String, String) {
-    py.detach(|| {
-        let finish: incal::document::finish::Finish = match serde_json::from_str(finish) {
-            Ok(f) => f,
-            Err(e) => return (2, String::new(), format!("limits: {e}")),
-        };
-        let mut doc = match incal::document::ResultDocument::from_json(text) {
-            Ok(d) => d,
-            Err(e) => return (2, String::new(), format!("<Result>: {e}")),
-        };
-        if let Err(e) = finish.apply(&mut doc) {
-            return (2, String::new(), e.to_string());
-        }
-        match incal_report::render_html(&doc, &[]) {
-            Ok(html) => (0, html, String::new()),
-            Err(e) => (1, String::new(), e.to_string()),
-        }
+#[pyo3(signature = (text, finish, db=None, lab=None, issue="{}"))]
+pub fn _report(
+    py: Python<'_>,
+    text: &str,
+    finish: &str,
+    db: Option<&str>,
+    lab: Option<&str>,
+    issue: &str,
+) -> (u8, String, String) {
+    py.detach(|| match report(text, finish, db, lab, issue) {
+        Ok(html) => (0, html, String::new()),
+        Err((code, m)) => (code, String::new(), m),
     })
+}
+
+/// [`_report`]'s work: an error as its exit code and one line.
+fn report(
+    text: &str,
+    finish: &str,
+    db: Option<&str>,
+    lab: Option<&str>,
+    issue: &str,
+) -> Result<String, (u8, String)> {
+    use incal_report::stored;
+    let input = |m: String| (2u8, m);
+    let finish: incal::document::finish::Finish =
+        serde_json::from_str(finish).map_err(|e| input(format!("limits: {e}")))?;
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct IssueArgs {
+        customer: Option<String>,
+        date: Option<String>,
+        environment: Option<String>,
+    }
+    let i: IssueArgs = serde_json::from_str(issue).map_err(|e| input(format!("report: {e}")))?;
+    if let Some(d) = &i.date {
+        if !incal_report::certificate::is_date(d) {
+            let clipped = incal_io::clip(d);
+            return Err(input(format!("date: '{clipped}' is not a date YYYY-MM-DD")));
+        }
+    }
+    let mut doc = incal::document::ResultDocument::from_json(text)
+        .map_err(|e| input(format!("<Result>: {e}")))?;
+    finish.apply(&mut doc).map_err(|e| input(e.to_string()))?;
+    let profile = match lab {
+        Some(t) => Some(
+            incal_report::certificate::LabProfile::parse(t)
+                .map_err(|e| input(format!("lab: {e}")))?,
+        ),
+        None => None,
+    };
+    let held = match (db, doc.instrument.serial.is_some()) {
+        (Some(location), true) => {
+            let name = incal_records::store_name(std::path::Path::new(location));
+            let store = incal_records::Store::open_existing(location).map_err(|e| {
+                let code = if e.is_input() { 2 } else { 1 };
+                (code, incal_records::store_message(&name, &e))
+            })?;
+            stored::of_document(&store, &doc, text).map_err(|e| match e {
+                stored::StoredError::Input(m) => (2, m),
+                stored::StoredError::Failure(m) => (1, m),
+            })?
+        }
+        _ => None,
+    };
+    let issue = stored::Issue {
+        customer: i.customer,
+        date: i.date,
+        environment: i.environment,
+    };
+    let record = held.as_ref().and_then(|s| s.record.as_ref());
+    let certificate = profile.map(|p| stored::certificate(p, text, record, &issue));
+    let (history, stamp) = match held {
+        Some(s) => (s.history, Some(s.stamp)),
+        None => (Vec::new(), None),
+    };
+    let opts = incal_report::RenderOptions {
+        date: None,
+        record: stamp,
+        certificate,
+    };
+    incal_report::render_html_with(&doc, &history, &opts).map_err(|e| (1, e.to_string()))
 }
 
 /// `_schema() -> str`: the JSON Schema of the result document

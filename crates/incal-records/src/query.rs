@@ -16,6 +16,51 @@ use crate::{History, HistoryPoint, RecordSummary, StoredRecord, Supersession};
 pub const TEMPERATURE_SPREAD_C: f64 = 5.0;
 
 impl Store {
+    /// The current calibrations of `serial` (records not superseded; of
+    /// `procedure` when given, which is needed when the serial has records
+    /// of several), each as its record and its result document, oldest
+    /// first: what `incal thermal fit --db` fits. Bad input
+    /// ([`Error::Input`]) when there are none or several procedures.
+    pub fn current_calibrations(
+        &self,
+        serial: &str,
+        procedure: Option<incal::document::Procedure>,
+    ) -> Result<Vec<(StoredRecord, ResultDocument)>> {
+        let want = procedure.map(|p| p.as_str());
+        let records: Vec<_> = self
+            .list(Some(serial))?
+            .into_iter()
+            .filter(|r| r.superseded_by.is_none())
+            .filter(|r| want.is_none_or(|p| r.procedure == p))
+            .collect();
+        let mut procs: Vec<&str> = records.iter().map(|r| r.procedure.as_str()).collect();
+        procs.sort_unstable();
+        procs.dedup();
+        if procs.len() > 1 {
+            return Err(Error::Input(format!(
+                "serial '{}' has records of {}: give the procedure",
+                incal_io::clip(serial),
+                procs.join(", ")
+            )));
+        }
+        if records.is_empty() {
+            return Err(Error::Input(format!(
+                "no calibration of serial '{}'{} that is not superseded",
+                incal_io::clip(serial),
+                want.map(|p| format!(" by {p}")).unwrap_or_default()
+            )));
+        }
+        records
+            .iter()
+            .map(|r| {
+                let rec = self.show(r.id)?;
+                let doc = ResultDocument::from_json(&rec.document)
+                    .map_err(|e| Error::Input(format!("record {}: {e}", r.id)))?;
+                Ok((rec, doc))
+            })
+            .collect()
+    }
+
     /// Every record (of `serial` only, when given), by id.
     pub fn list(&self, serial: Option<&str>) -> Result<Vec<RecordSummary>> {
         let rows = self

@@ -30,6 +30,7 @@ pub mod certificate;
 pub mod format;
 pub mod plots;
 pub mod records;
+pub mod stored;
 pub mod text;
 
 use incal::document::{Cell, ResultDocument, Table};

@@ -426,7 +426,7 @@ fn reduce_all(a: &Args, words: &[String], inputs: &[PathBuf]) -> Vec<Outcome> {
             scope.spawn(|| loop {
                 let k = next.fetch_add(1, Ordering::Relaxed);
                 let Some(input) = inputs.get(k) else { break };
-                let out = run_embedded(&argv(a, words, input), None);
+                let out = run_embedded(&argv(a, words, input));
                 if let Ok(mut slot) = slots[k].lock() {
                     *slot = Some(out);
                 }

@@ -400,13 +400,8 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         gravity_m_s2: a.gravity_m_s2,
         seed: a.seed,
     };
-    if let Some(p) = &a.truth_out {
-        let cfg = options.config().map_err(core)?;
-        cfg.validate().map_err(core)?;
-        let truth = serde_json::json!({ "notes": cfg.notes() });
-        crate::io::write_text(Some(p), &crate::output::json_text(&truth))?;
-    }
-    crate::run::simulate::<GfimuCalibrate>(&options, a.output.as_deref())
+    crate::run::simulate::<GfimuCalibrate>(&options, a.output.as_deref())?;
+    crate::run::write_truth::<GfimuCalibrate>(&options, a.truth_out.as_deref())
 }
 
 /// `incal plan gfimu`: predicted u of every K0 and Ks, and the geometry's

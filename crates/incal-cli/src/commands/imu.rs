@@ -8,7 +8,7 @@ use incal::procedures::imu::apply::ImuCalibration;
 use incal::procedures::imu::autocal::{Autocal, AutocalSessionOptions, Initial, Method};
 use incal::procedures::imu::ferraris::{Convention, Ferraris, FerrarisOptions};
 use incal::procedures::imu::multipos::{MatrixForm, Multipos, MultiposSessionOptions};
-use incal::procedures::imu::sim::{ImuSimOptions, SequenceKind};
+use incal::procedures::imu::sim::{ImuSimOptions, ImuSimulator, SequenceKind};
 use incal::procedures::Silent;
 
 use crate::error::{core, in_file, CliResult};
@@ -302,58 +302,39 @@ pub struct PlanArgs {
     pub out: PlanOut,
 }
 
-/// A plan by simulation of procedure `P` ([`incal::procedures::sim_plan`]).
-fn plan_by_simulation<P: incal::procedures::Procedure>(
+/// A plan by simulation of procedure `P` ([`incal::procedures::sim_plan`]):
+/// the session as given, the procedure's sequence and the reduction's
+/// options derived from it by the core.
+fn plan_by_simulation<P: incal::procedures::sim_plan::Planned<ImuSimulator>>(
     a: &PlanArgs,
-    sequence: SequenceKind,
-    reduce: P::Options,
-) -> CliResult<()> {
+) -> CliResult<()>
+where
+    P::Options: Clone,
+{
     use incal::procedures::sim_plan::{BySimulation, SimPlanOptions};
     use incal::procedures::Plan;
     let o = SimPlanOptions {
-        session: a.session.options(sequence),
-        reduce,
+        session: a.session.options(SequenceKind::default()),
+        reduce: None,
         seeds: a.seeds,
     };
     a.out
-        .emit(&BySimulation::<P, incal::procedures::imu::sim::ImuSimulator>::plan(&o).map_err(core)?)
+        .emit(&BySimulation::<P, ImuSimulator>::plan(&o).map_err(core)?)
 }
 
 /// `incal plan imu-ferraris`.
 pub fn plan_ferraris(a: &PlanArgs) -> CliResult<()> {
-    use incal::procedures::{imu::ferraris::Ferraris, Procedure};
-    let reduce = incal::procedures::imu::ferraris::FerrarisOptions {
-        rate_hz: a.session.rate_hz,
-        gravity_m_s2: a.session.gravity_m_s2,
-        rotation_deg: a.session.rotation_deg,
-        ..Ferraris::example()
-    };
-    plan_by_simulation::<Ferraris>(a, SequenceKind::Ferraris, reduce)
+    plan_by_simulation::<incal::procedures::imu::ferraris::Ferraris>(a)
 }
 
 /// `incal plan imu-multipos`.
 pub fn plan_multipos(a: &PlanArgs) -> CliResult<()> {
-    use incal::procedures::{imu::multipos::Multipos, Procedure};
-    let reduce = incal::procedures::imu::multipos::MultiposSessionOptions {
-        rate_hz: a.session.rate_hz,
-        gravity_m_s2: a.session.gravity_m_s2,
-        latitude_deg: a.session.latitude_deg,
-        rotation_deg: a.session.rotation_deg,
-        ..Multipos::example()
-    };
-    plan_by_simulation::<Multipos>(a, SequenceKind::Positions, reduce)
+    plan_by_simulation::<incal::procedures::imu::multipos::Multipos>(a)
 }
 
 /// `incal plan imu-autocal`.
 pub fn plan_autocal(a: &PlanArgs) -> CliResult<()> {
-    use incal::procedures::{imu::autocal::Autocal, Procedure};
-    let reduce = incal::procedures::imu::autocal::AutocalSessionOptions {
-        rate_hz: a.session.rate_hz,
-        gravity_m_s2: a.session.gravity_m_s2,
-        init_static_s: a.session.init_static_s,
-        ..Autocal::example()
-    };
-    plan_by_simulation::<Autocal>(a, SequenceKind::Random, reduce)
+    plan_by_simulation::<incal::procedures::imu::autocal::Autocal>(a)
 }
 
 /// `incal simulate imu`: the core's simulator (`ImuSimulator`) with the
@@ -365,12 +346,8 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         SequenceArg::Faces => SequenceKind::Faces,
         SequenceArg::Positions => SequenceKind::Positions,
     });
-    crate::run::simulate::<incal::procedures::imu::sim::ImuSimulator>(&o, a.output.as_deref())?;
-    if let Some(p) = &a.truth_out {
-        let truth = o.truth().to_json().map_err(core)?;
-        crate::output::write_text(Some(p), &format!("{}\n", crate::output::json_text(&truth)))?;
-    }
-    Ok(())
+    crate::run::simulate::<ImuSimulator>(&o, a.output.as_deref())?;
+    crate::run::write_truth::<ImuSimulator>(&o, a.truth_out.as_deref())
 }
 
 /// Accelerometer matrix convention of `incal imu multipos`.

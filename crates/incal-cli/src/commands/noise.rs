@@ -324,19 +324,12 @@ pub struct PlanArgs {
 /// length and analysed as `incal noise` would (a few seeds): the u of every
 /// noise term it will identify.
 pub fn plan(a: &PlanArgs) -> CliResult<()> {
-    use incal::procedures::noise::Noise;
     use incal::procedures::noise::plan::NoisePlan;
     use incal::procedures::sim_plan::SimPlanOptions;
-    use incal::procedures::{Plan, Procedure};
-    let session = a.session.options(Format::Csv);
-    let reduce = incal::procedures::noise::NoiseOptions {
-        rate_hz: Some(session.rate_hz),
-        quantity: session.quantity,
-        ..Noise::example()
-    };
+    use incal::procedures::Plan;
     let o = SimPlanOptions {
-        session,
-        reduce,
+        session: a.session.options(Format::Csv),
+        reduce: None,
         seeds: a.seeds,
     };
     a.out

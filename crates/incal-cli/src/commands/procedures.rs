@@ -23,40 +23,17 @@ pub struct Args {
     pub output: Option<PathBuf>,
 }
 
-/// One registry entry as JSON.
+/// One registry entry as JSON: the core's ([`Entry::to_json`]) with the
+/// command line's argument tables (`arguments`: `reduce`, `plan`,
+/// `simulate`), which Python's keyword parameters follow.
 fn entry_json(e: &Entry) -> Value {
-    let words = |w: Option<&[&str]>| w.map(|w| w.join(" "));
-    json!({
-        "id": e.id,
-        "document": e.document.as_str(),
-        "title": e.title,
-        "command": e.command_line(),
-        "plan": words(e.plan),
-        "simulate": words(e.simulate),
-        "input": e.input,
-        "rig": e.rig,
-        "method": e.method,
-        "references": e.references,
-        "chapter": e.chapter,
-        "run_sheet": e.run_sheet.is_some(),
-        "fuzz": e.fuzz,
-        "example": e.example.map(|x| json!({"simulate": x.simulate, "options": x.options})),
-        "python": {
-            "function": e.python(),
-            "plan": e.python_plan(),
-            "simulate": e.python_simulate(),
-        },
-        "options": {
-            "reduce": e.reduction.map(|t| (t.schema)()),
-            "plan": e.planner.map(|t| (t.schema)()),
-            "simulate": e.simulator.map(|t| (t.schema)()),
-        },
-        "arguments": {
-            "reduce": arguments(e.command),
-            "plan": e.plan.map(arguments),
-            "simulate": e.simulate.map(arguments),
-        },
-    })
+    let mut v = e.to_json();
+    v["arguments"] = json!({
+        "reduce": arguments(e.command),
+        "plan": e.plan.map(arguments),
+        "simulate": e.simulate.map(arguments),
+    });
+    v
 }
 
 /// The options of the command `words` as its argument table defines them

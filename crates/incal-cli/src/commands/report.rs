@@ -4,8 +4,7 @@
 
 use std::path::PathBuf;
 
-use incal::document::ResultDocument;
-use incal_report::{HistoryPoint, HistorySeries, RecordStamp, RenderOptions};
+use incal_report::RenderOptions;
 
 use crate::documents::read_document_text;
 use crate::error::{CliError, CliResult};
@@ -72,32 +71,29 @@ pub fn run(a: &Args) -> CliResult<()> {
     }
     // What the store says about this very document: its record, when it
     // was stored and what it corrects.
-    let mut stored: Option<incal_records::StoredRecord> = None;
-    let (history, record) = match store(a, &doc)? {
-        Some((store, chain)) => {
-            let serial = doc.instrument.serial.as_deref().unwrap_or_default();
-            let id = store
-                .find(serial, &text)
-                .map_err(|e| CliError::Failure(anyhow::anyhow!("{e}")))?
-                .map(|(id, _)| id);
-            if let Some(id) = id {
-                stored = Some(
-                    store
-                        .show(id)
-                        .map_err(|e| CliError::Failure(anyhow::anyhow!("{e}")))?,
-                );
-            }
-            let record = RecordStamp {
-                store: store.path().display().to_string(),
-                id,
-                records: chain.records,
-                head: chain.head,
-            };
-            (history(&store, &doc)?, Some(record))
+    let stored = match store(a, doc.instrument.serial.as_deref())? {
+        Some(store) => {
+            incal_report::stored::of_document(&store, &doc, &text).map_err(|e| match e {
+                incal_report::stored::StoredError::Input(m) => CliError::Input(m),
+                incal_report::stored::StoredError::Failure(m) => {
+                    CliError::Failure(anyhow::anyhow!(m))
+                }
+            })?
         }
+        None => None,
+    };
+    let issue = incal_report::stored::Issue {
+        customer: a.customer.clone(),
+        date: a.date.clone(),
+        environment: a.environment.clone(),
+    };
+    let record_held = stored.as_ref().and_then(|s| s.record.as_ref());
+    let certificate = profile
+        .map(|profile| incal_report::stored::certificate(profile, &text, record_held, &issue));
+    let (history, record) = match stored {
+        Some(s) => (s.history, Some(s.stamp)),
         None => (Vec::new(), None),
     };
-    let certificate = profile.map(|profile| certificate(a, profile, &text, stored.as_ref()));
     let opts = RenderOptions {
         date: None,
         record,
@@ -112,51 +108,6 @@ pub fn run(a: &Args) -> CliResult<()> {
         }
     }
     crate::options::check_fail_on(&doc, a.fail_on)
-}
-
-/// The certificate's own data: its number (from the record id when the
-/// document is stored, else from the document's SHA-256, so the same
-/// result always gets the same number), the dates and what it replaces.
-fn certificate(
-    a: &Args,
-    profile: incal_report::certificate::LabProfile,
-    text: &str,
-    stored: Option<&incal_records::StoredRecord>,
-) -> incal_report::certificate::Certificate {
-    let prefix = profile.lab.certificate_prefix.clone().unwrap_or_default();
-    let number_of = |id: i64| format!("{prefix}{id:06}");
-    let number = match stored {
-        Some(r) => number_of(r.id),
-        None => {
-            // The first 12 hex digits of the document's SHA-256.
-            let hash = incal_io::sha256_hex(text.as_bytes());
-            format!("{prefix}{}", hash[..12].to_uppercase())
-        }
-    };
-    let (calibration_date, source) = match (&a.date, stored) {
-        (Some(d), _) => (Some(d.clone()), "as given".to_string()),
-        (None, Some(r)) => (
-            Some(r.created_utc.chars().take(10).collect()),
-            format!("the date record {} was stored", r.id),
-        ),
-        (None, None) => (None, String::new()),
-    };
-    let today: String = incal_report::format::now_utc_text()
-        .chars()
-        .take(10)
-        .collect();
-    incal_report::certificate::Certificate {
-        profile,
-        number,
-        customer: a.customer.clone(),
-        calibration_date,
-        calibration_date_source: source,
-        issue_date: today,
-        environment: a.environment.clone(),
-        replaces: stored
-            .and_then(|r| r.supersedes.as_ref())
-            .map(|s| (number_of(s.old_id), s.reason.clone())),
-    }
 }
 
 /// Print `html` (a file just written) to `html` with `.pdf`, through
@@ -209,76 +160,23 @@ fn print_pdf(html: &std::path::Path) -> CliResult<()> {
     }
 }
 
-/// The records store, checked whole, when the result has a serial and a
-/// store is named (`--db`, else `$INCAL_DB`: it must exist either way).
-fn store(
-    a: &Args,
-    doc: &ResultDocument,
-) -> CliResult<Option<(incal_records::Store, incal_records::Verified)>> {
-    // A store named (--db or $INCAL_DB) must exist; incal.db is used when
-    // present.
-    // Only a store named (--db or $INCAL_DB) is opened: an incal.db that
-    // happens to lie in the working directory never changes a certificate.
+/// The records store named (`--db`, else `$INCAL_DB`: it must exist
+/// either way); an `incal.db` that happens to lie in the working directory
+/// never changes a certificate.
+/// A result without a serial has no place in a store: none is opened.
+fn store(a: &Args, serial: Option<&str>) -> CliResult<Option<incal_records::Store>> {
     let (path, named) = db_choice(a.db.as_deref());
-    if doc.instrument.serial.is_none() || !named {
+    if serial.is_none() || !named {
         return Ok(None);
     }
     // Store errors name the path themselves.
-    let store = incal_records::Store::open_existing(&path).map_err(|e| {
-        if e.is_input() {
-            CliError::Input(e.to_string())
-        } else {
-            CliError::Failure(anyhow::anyhow!("{e}"))
-        }
-    })?;
-    let chain = store
-        .check_chain()
-        .map_err(|e| CliError::Failure(anyhow::anyhow!("{}: {e}", store.path().display())))?;
-    Ok(Some((store, chain)))
-}
-
-/// The history of every limited coefficient of the instrument, from the
-/// store, when there are two or more calibrations.
-fn history(store: &incal_records::Store, doc: &ResultDocument) -> CliResult<Vec<HistorySeries>> {
-    let (Some(serial), Some(verdicts)) = (&doc.instrument.serial, &doc.verdicts) else {
-        return Ok(Vec::new());
-    };
-    let path = store.path().display().to_string();
-    let mut out = Vec::new();
-    for (name, v) in verdicts {
-        // A new instrument, or a coefficient not recorded before, has no
-        // history to plot.
-        let Ok(h) = store
-            .history_if_any(serial, name, Some(doc.procedure.as_str()), None)
-            .map_err(|e| CliError::Input(format!("{path}: {e}")))?
-        else {
-            continue;
-        };
-        if h.points.len() < 2 {
-            continue;
-        }
-        out.push(HistorySeries {
-            coefficient: name.clone(),
-            unit: h.unit.clone(),
-            points: h
-                .points
-                .iter()
-                .map(|p| HistoryPoint {
-                    id: p.id,
-                    created_utc: p.created_utc.clone(),
-                    value: p.value,
-                    u95: p.u95,
-                })
-                .collect(),
-            min: v.min,
-            max: v.max,
-            drift: h.drift.as_ref().map(|d| incal_report::DriftLine {
-                intercept: d.intercept,
-                rate_per_day: d.value,
-                covariance: d.covariance,
-                k95: incal::estimation::coverage_factor(d.dof.unwrap_or(f64::INFINITY), 0.95),
-            }),
-        });
-    }
-    Ok(out)
+    incal_records::Store::open_existing(&path)
+        .map(Some)
+        .map_err(|e| {
+            if e.is_input() {
+                CliError::Input(e.to_string())
+            } else {
+                CliError::Failure(anyhow::anyhow!("{e}"))
+            }
+        })
 }

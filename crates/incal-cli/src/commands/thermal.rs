@@ -11,7 +11,7 @@ use incal::procedures::{Plan, Silent};
 
 use crate::commands::noise::QuantityArg;
 use crate::documents::read_document;
-use crate::error::{core, in_file, usage, CliError, CliResult};
+use crate::error::{core, in_file, usage, CliResult};
 use crate::input::ReadArgs;
 use crate::output::ResultArgs;
 
@@ -143,7 +143,7 @@ fn run_fit(a: &FitArgs) -> CliResult<()> {
 
 /// The calibrations of `serial` in the store `db` (not superseded; of
 /// `procedure` when given, which is needed when there are several), as
-/// inputs named `record N`.
+/// inputs named `record N` ([`incal_records::Store::current_calibrations`]).
 fn from_store(
     db: &std::path::Path,
     serial: &str,
@@ -151,51 +151,21 @@ fn from_store(
 ) -> CliResult<Vec<soak::SoakInput>> {
     let name = crate::options::store_name(db);
     let err = |e| crate::options::store_error(&name, e);
-    let store = incal_records::Store::open_existing(db).map_err(err)?;
-    store.check_chain().map_err(err)?;
     let want = match procedure {
-        Some(p) => Some(
-            crate::options::procedure_id("--procedure", p)?
-                .as_str()
-                .to_string(),
-        ),
+        Some(p) => Some(crate::options::procedure_id("--procedure", p)?),
         None => None,
     };
-    let records: Vec<_> = store
-        .list(Some(serial))
-        .map_err(err)?
+    let store = incal_records::Store::open_existing(db).map_err(err)?;
+    store.check_chain().map_err(err)?;
+    let records = store.current_calibrations(serial, want).map_err(err)?;
+    Ok(records
         .into_iter()
-        .filter(|r| r.superseded_by.is_none())
-        .filter(|r| want.as_ref().is_none_or(|p| &r.procedure == p))
-        .collect();
-    let mut procs: Vec<&str> = records.iter().map(|r| r.procedure.as_str()).collect();
-    procs.sort_unstable();
-    procs.dedup();
-    if procs.len() > 1 {
-        return Err(CliError::Input(format!(
-            "{name}: serial '{serial}' has records of {}: give --procedure",
-            procs.join(", ")
-        )));
-    }
-    if records.is_empty() {
-        return Err(CliError::Input(format!(
-            "{name}: no calibration of serial '{serial}'{} that is not superseded",
-            want.map(|p| format!(" by {p}")).unwrap_or_default()
-        )));
-    }
-    records
-        .iter()
-        .map(|r| {
-            let rec = store.show(r.id).map_err(err)?;
-            let doc = incal::document::ResultDocument::from_json(&rec.document)
-                .map_err(|e| CliError::Input(format!("{name}: record {}: {e}", r.id)))?;
-            Ok(soak::SoakInput {
-                name: format!("record {}", r.id),
-                sha256: rec.sha256,
-                doc,
-            })
+        .map(|(rec, doc)| soak::SoakInput {
+            name: format!("record {}", rec.id),
+            sha256: rec.sha256,
+            doc,
         })
-        .collect()
+        .collect())
 }
 
 fn run_apply(a: &ApplyArgs) -> CliResult<()> {
@@ -271,12 +241,8 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         t_ref_c: a.t_ref_c,
         seed: a.seed,
     };
-    if let Some(p) = &a.truth_out {
-        let cfg = options.config();
-        cfg.validate().map_err(core)?;
-        crate::io::write_text(Some(p), &crate::output::json_text(&cfg.truth_json()))?;
-    }
-    crate::run::simulate::<Ramp>(&options, a.output.as_deref())
+    crate::run::simulate::<Ramp>(&options, a.output.as_deref())?;
+    crate::run::write_truth::<Ramp>(&options, a.truth_out.as_deref())
 }
 
 /// `incal plan thermal`.

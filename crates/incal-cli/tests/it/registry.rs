@@ -283,3 +283,35 @@ fn batch_runs_every_procedure_that_reduces_a_recording() {
         );
     }
 }
+
+/// Python's keyword parameters follow the command line's argument tables;
+/// the package ships them (`arguments.json`, so it needs no CLI) and this
+/// test keeps that file equal to `incal procedures --json`'s `arguments`.
+/// Regenerate with `INCAL_UPDATE_SCHEMA=1 cargo test -p incal-cli --test
+/// it registry`.
+#[test]
+fn python_ships_the_command_lines_argument_tables() {
+    let out = crate::common::run(&["procedures", "--json"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let registry: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let mut tables = serde_json::Map::new();
+    for e in registry.as_array().unwrap() {
+        tables.insert(e["id"].as_str().unwrap().into(), e["arguments"].clone());
+    }
+    let want = format!(
+        "{}\n",
+        serde_json::to_string_pretty(&serde_json::Value::Object(tables)).unwrap()
+    );
+    let rel = "crates/incal-py/python/incal/arguments.json";
+    if std::env::var_os("INCAL_UPDATE_SCHEMA").is_some() {
+        std::fs::write(root().join(rel), &want).unwrap();
+    }
+    assert!(
+        read(rel) == want,
+        "{rel} is stale: run INCAL_UPDATE_SCHEMA=1 cargo test -p incal-cli --test it registry"
+    );
+}

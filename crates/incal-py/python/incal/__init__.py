@@ -33,7 +33,7 @@ import json
 import os
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
-from ._incal import _run, _version
+from ._incal import _version
 from .warnings import IncalWarning, warn_all as _warn_all
 
 __version__ = _version()
@@ -125,47 +125,26 @@ class InputError(IncalError, ValueError):
             self.file, self.column = m.group(1), m.group(2)
 
 
-def _word(value: Any) -> str:
-    """An option value as the CLI reads it (floats in shortest round-trip
-    form, so Python and the CLI see the same number)."""
-    if isinstance(value, bool):
-        raise TypeError("a boolean is a flag, not a value")
-    if isinstance(value, float):
-        return repr(value)
-    if isinstance(value, os.PathLike):
-        return os.fspath(value)
-    return str(value)
-
-
-def _options(options: Dict[str, Any]) -> List[str]:
-    """Keyword arguments into CLI options: ``name_x=v`` → ``--name-x v``;
-    ``True`` → the flag alone; ``False`` and ``None`` → nothing; a list or
-    tuple → its items joined by commas."""
-    out: List[str] = []
-    for key, value in options.items():
-        if value is None or value is False:
-            continue
-        flag = "--" + key.replace("_", "-")
-        if value is True:
-            out.append(flag)
-        elif isinstance(value, (list, tuple)):
-            out += [flag, ",".join(_word(v) for v in value)]
-        else:
-            out += [flag, _word(value)]
-    return out
-
-
 def run(words: Sequence[str], stdin: Optional[bytes] = None) -> Tuple[bytes, List[str]]:
-    """Run the incal command line ``words`` (without ``incal``) in process:
-    its standard output and its standard-error lines (warnings). A
-    failure raises :class:`InputError` (exit 2) or :class:`IncalError`."""
-    code, out, err = _run([str(w) for w in words], stdin)
-    if code != 0:
-        message = err[-1] if err else f"incal exited with code {code}"
-        if code == 2:
+    """Run the ``incal`` command line ``words`` (without ``incal``): the
+    program named by ``$INCAL_BIN``, else ``incal`` on the ``PATH`` (the
+    package itself never needs it). Returns its standard output and its
+    standard-error lines (warnings); a failure raises :class:`InputError`
+    (exit 2) or :class:`IncalError`."""
+    import shutil
+    import subprocess
+
+    program = os.environ.get("INCAL_BIN") or shutil.which("incal")
+    if not program:
+        raise IncalError("incal.run: no incal program (set INCAL_BIN or put incal on the PATH)", 1, b"")
+    done = subprocess.run([program] + [str(w) for w in words], input=stdin, capture_output=True)
+    err = done.stderr.decode("utf-8", "replace").splitlines()
+    if done.returncode != 0:
+        message = err[-1] if err else f"incal exited with code {done.returncode}"
+        if done.returncode == 2:
             raise InputError(message)
-        raise IncalError(message, code, bytes(out))
-    return bytes(out), list(err)
+        raise IncalError(message, done.returncode, done.stdout)
+    return done.stdout, err
 
 
 def _is_array(value: Any) -> bool:
@@ -272,20 +251,34 @@ class Result:
         cols = ["name", "value", "u", "U95", "dof", "k95", "unit"]
         return pd.DataFrame(rows, columns=cols).set_index("name")
 
-    def report(self, path: str, limits: Optional[str] = None, db: Optional[str] = None) -> str:
-        """Write the HTML report (printable certificate) to ``path``, judged
-        against ``limits`` (a limits file) when given, by the report crate;
-        with ``db`` (a records store: the record's stamp and the history
-        plots) through ``incal report``."""
-        if db is not None:
-            words = ["report", "-", "-o", os.fspath(path)] + _options({"limits": limits, "db": db})
-            run(words, self.to_json().encode())
-            return os.fspath(path)
+    def report(
+        self,
+        path: str,
+        limits: Optional[str] = None,
+        db: Optional[str] = None,
+        lab: Optional[str] = None,
+        customer: Optional[str] = None,
+        date: Optional[str] = None,
+        environment: Optional[str] = None,
+    ) -> str:
+        """Write the HTML report (printable certificate) to ``path`` by the
+        report crate, as ``incal report``: judged against ``limits`` (a
+        limits file) when given; with ``db`` (a records store's path or
+        URL) the record's stamp and the history plots; with ``lab`` (a
+        laboratory profile, TOML) a calibration certificate naming
+        ``customer``, the calibration ``date`` (YYYY-MM-DD; default the day
+        the record was stored) and the ``environment``."""
         from . import _typed
         from ._incal import _report
 
         finish = {"limits": _typed._finish_value("limits", limits)} if limits is not None else {}
-        code, html, err = _report(self.to_json(), json.dumps(finish))
+        profile = None
+        if lab is not None:
+            name, data = _typed.document_bytes(lab)
+            profile = _typed.decoded(name, data)
+        issue = {"customer": customer, "date": date, "environment": environment}
+        location = os.fspath(db) if db is not None else None
+        code, html, err = _report(self.to_json(), json.dumps(finish), location, profile, json.dumps(issue))
         if code != 0:
             _raise(code, b"", [err])
         with open(os.fspath(path), "w", encoding="utf-8") as f:
@@ -597,11 +590,19 @@ def _procedure(name: str, entry: Dict[str, Any]):
 
 def _registry() -> List[Dict[str, Any]]:
     """The procedure registry of the library (``incal procedures --json``):
-    one dict per procedure, with its id, commands, title, rig, chapter and
-    Python names. Every table of procedures in this package is built from
-    it."""
-    out, _ = run(["procedures", "--json"])
-    return json.loads(out)
+    one dict per procedure, with its id, commands, title, rig, chapter,
+    Python names and options' schemas from the core, and ``arguments``, the
+    command line's argument tables the keyword parameters follow (shipped
+    with the package in ``arguments.json``, kept equal to the CLI's by a
+    test). Every table of procedures in this package is built from it."""
+    from ._incal import _registry as core
+
+    with open(os.path.join(os.path.dirname(__file__), "arguments.json"), encoding="utf-8") as f:
+        arguments = json.load(f)
+    entries = json.loads(core())
+    for e in entries:
+        e["arguments"] = arguments.get(e["id"], {"reduce": None, "plan": None, "simulate": None})
+    return entries
 
 
 #: The procedure registry (see :func:`_registry`).
@@ -635,25 +636,31 @@ def thermal_fit(results: Sequence[Any], **options: Any) -> Result:
     or a ``temperature_c`` column of its recording), into a polynomial in
     (T - T_ref) per coefficient (``NAME.c0``, ``NAME.c1``, ...). Options:
     ``t_ref_c``, ``degree``, and the identity, unit and limits keywords of
-    every reduction; with ``db`` (and ``procedure``), the results are the
-    store's calibrations of ``serial`` (through the command line)."""
+    every reduction; with ``db`` (a records store; and ``procedure`` when
+    the serial has records of several) and no results, the store's current
+    calibrations of ``serial``."""
     import hashlib
 
     from . import _typed
     from ._incal import _thermal_fit
 
-    if options.get("db") is not None:
-        import tempfile
-
-        with tempfile.TemporaryDirectory() as d:
-            files = _as_files(d, results, "plateau")
-            out, err = run(["thermal", "fit"] + files + ["--json"] + _options(options))
-        return _result(out, err)
+    db = options.pop("db", None)
+    procedure = options.pop("procedure", None)
     fit = {k: options.pop(k) for k in ("t_ref_c", "degree") if options.get(k) is not None}
     parts = _typed.split({"properties": {}}, options)
     if parts is None:
         raise TypeError(f"thermal_fit() got an unexpected keyword argument among {sorted(options)}")
     documents = []
+    if db is not None:
+        from .records import Records
+
+        serial = parts[2].get("serial")
+        if serial is None:
+            raise InputError("serial: needed with db=", {"option": "serial"})
+        if results:
+            raise InputError("results: give results or db=, not both", {"option": "db"})
+        found = Records(db)._call("calibrations", serial=serial, procedure=procedure)
+        documents = [(d["name"], d["sha256"], d["text"]) for d in found]
     for r in results:
         name, data = _typed.document_bytes(r)
         documents.append((name, hashlib.sha256(data).hexdigest(), _typed.decoded(name, data)))
@@ -775,5 +782,5 @@ def export_px4(
     return _write(_export("px4", [gyro, accel], {"ekf_rate_hz": float(ekf_rate_hz)}), path)
 
 
-from . import batch, plan, simulate, warnings  # noqa: E402  (they use run and _options)
+from . import batch, plan, simulate, warnings  # noqa: E402  (they use the tables above)
 from .records import Records  # noqa: E402

@@ -3,15 +3,16 @@ returns the plan document (``incal.plan/1``) as a dict, with the predicted
 u of every coefficient. Options as ``incal plan <name> --help`` lists them,
 ``_`` for ``-``; each function has its command's signature. One function
 per plan of the procedure registry (``incal.REGISTRY``), run by the core's
-typed plan; the plans by simulation (IMU, noise) and ``run_sheet=PATH``
-(the operator's run sheet, a file) through the command line in process."""
+typed plan (the plans by simulation, IMU and noise, take the session's
+keywords and derive the reduction's options from them as the CLI does);
+``run_sheet=PATH`` also writes the operator's run sheet (CSV)."""
 
 from __future__ import annotations
 
 import json
 from typing import Any, Dict, List
 
-from . import REGISTRY, _by_id, _keyword_ids, _options, _options_doc, _raise, _signature, run
+from . import REGISTRY, _by_id, _keyword_ids, _options_doc, _raise, _signature
 
 __all__: List[str] = []
 
@@ -48,20 +49,22 @@ def _plan(entry: Dict[str, Any], name: str):
 
     def plan(**options: Any) -> Dict[str, Any]:
         from ._incal import _plan as typed
-
-        by_id = _by_id(name, args, ids, ids, options)
-        # A plan by simulation (a ``session`` to simulate) derives its
-        # reduction's options from the session on the command line: it
-        # goes through it, as does a run sheet (a file the CLI writes).
-        by_cli = schema is None or "session" in schema.get("properties", {})
-        if by_cli or by_id.get("run_sheet") is not None:
-            out, _ = run(["plan"] + words + ["--json"] + _options(by_id))
-            return json.loads(out)
+        from ._incal import _run_sheet
         from ._typed import with_defaults
 
-        code, out, err, where = typed(entry["id"], json.dumps(_nest(schema, with_defaults(args, by_id))))
+        by_id = _by_id(name, args, ids, ids, options)
+        sheet = by_id.pop("run_sheet", None)
+        code, out, err, where = typed(entry["id"], json.dumps(_nest(schema or {}, with_defaults(args, by_id))))
         if code != 0:
             _raise(code, bytes(out), list(err), json.loads(where))
+        if sheet is not None:
+            code, csv, message = _run_sheet(bytes(out).decode())
+            if code != 0:
+                _raise(code, b"", [f"run_sheet: {message}" if code == 2 else message], {"option": "run_sheet"})
+            import os
+
+            with open(os.fspath(sheet), "w", encoding="utf-8", newline="") as f:
+                f.write(csv)
         return json.loads(bytes(out))
 
     plan.__name__ = name

@@ -3,16 +3,17 @@ gives the recording as a pandas DataFrame (the CSV that ``incal simulate``
 writes, numbers read back bit for bit) and the simulator's ``# …`` lines
 (the truth and how it was simulated) as a list of strings. Options as
 ``incal simulate <name> --help`` lists them, ``_`` for ``-``; each
-function has its command's signature. Run by the core's typed simulator
-(the gyro-free unit's and the thermal chamber's truth, written beside the
-CSV, through the command line)."""
+function has its command's signature. Run by the core's typed simulator;
+the gyro-free unit's and the thermal chamber's truth, which their CSV does
+not carry, is the core's truth value (``truth_out=PATH`` also writes it
+as ``--truth-out`` does)."""
 
 from __future__ import annotations
 
 import json
 from typing import Any, Dict, List, Tuple
 
-from . import REGISTRY, _by_id, _keyword_ids, _options, _options_doc, _raise, _read_csv, _signature, run
+from . import REGISTRY, InputError, _by_id, _keyword_ids, _options_doc, _raise, _read_csv, _signature
 
 __all__: List[str] = []
 
@@ -29,23 +30,31 @@ def _simulator(entry: Dict[str, Any], name: str):
     ids = _keyword_ids(args)
 
     def simulate(**options: Any) -> Tuple[Any, Any]:
+        from ._incal import _simulate as typed
+        from ._typed import split, with_defaults
+
         by_id = _by_id(name, args, ids, ids, options)
-        if words in (["gfimu"], ["thermal"]):
-            return _with_truth(words, by_id)
-        if schema is not None:
-            from ._incal import _simulate as typed
-            from ._typed import split
+        truth_out = by_id.pop("truth_out", None)
+        if by_id.get("format") not in (None, "csv"):
+            raise InputError("format: a simulator in Python gives a DataFrame (csv)", {"option": "format"})
+        parts = split(schema or {}, with_defaults(args, by_id))
+        if parts is None or parts[1] or parts[2]:
+            unknown = sorted(set(by_id) - set((schema or {}).get("properties", {})))
+            raise TypeError(f"{name}() got an unexpected keyword argument among {unknown}")
+        code, out, err, where, truth_text = typed(entry["id"], json.dumps(parts[0]))
+        if code != 0:
+            _raise(code, bytes(out), list(err), json.loads(where))
+        truth = json.loads(truth_text)
+        if truth_out is not None and truth is not None:
+            import os
 
-            from ._typed import with_defaults
-
-            parts = split(schema, with_defaults(args, by_id))
-            if parts is not None and not parts[1] and not parts[2]:
-                code, out, err, where = typed(entry["id"], json.dumps(parts[0]))
-                if code != 0:
-                    _raise(code, bytes(out), list(err), json.loads(where))
-                return _frame(bytes(out))
-        out, _ = run(["simulate"] + words + _options(by_id))
-        return _frame(out)
+            with open(os.fspath(truth_out), "w", encoding="utf-8") as f:
+                f.write(json.dumps(truth, indent=2, ensure_ascii=False) + "\n")
+        if words == ["gfimu"]:
+            return _read_csv(bytes(out)), truth["notes"]
+        if words == ["thermal"]:
+            return _read_csv(bytes(out)), truth
+        return _frame(bytes(out))
 
     simulate.__name__ = name
     simulate.__qualname__ = name
@@ -54,25 +63,6 @@ def _simulator(entry: Dict[str, Any], name: str):
         simulate.__signature__ = _signature(args, data=False)  # type: ignore[attr-defined]
         simulate.__doc__ += " Options (keywords):\n\n" + _options_doc(args)
     return simulate
-
-
-def _with_truth(words: List[str], options: Dict[str, Any]) -> Tuple[Any, Any]:
-    """The gyro-free unit's and the thermal chamber's simulators write
-    their truth beside the CSV (the CSV holds rows only): read back from
-    a temporary file."""
-    import os
-    import tempfile
-
-    fd, path = tempfile.mkstemp(suffix=".json")
-    os.close(fd)
-    try:
-        out, _ = run(["simulate"] + words + _options(options) + ["--truth-out", path])
-        with open(path) as f:
-            truth = json.load(f)
-        notes = truth["notes"] if words == ["gfimu"] else truth
-    finally:
-        os.unlink(path)
-    return _read_csv(out), notes
 
 
 # One function per simulator of the procedure registry

@@ -178,6 +178,31 @@ impl PlanDocument {
         Some((header, rows))
     }
 
+    /// The run sheet ([`Self::run_sheet`]) as CSV text, quoted as every
+    /// CSV incal writes; `InvalidOption` (`run_sheet`) for a plan that lists
+    /// no settings to run.
+    pub fn run_sheet_csv(&self) -> Result<String> {
+        let Some((header, rows)) = self.run_sheet() else {
+            return crate::options::invalid(
+                "run_sheet",
+                format!("a {} plan lists no settings to run", self.procedure),
+            );
+        };
+        let hdr: Vec<&str> = header.iter().map(String::as_str).collect();
+        let bytes = (|| {
+            let mut w = incal_io::writer::CsvWriter::new(Vec::new(), &hdr)?;
+            for r in &rows {
+                for c in r {
+                    w.cell(incal_io::writer::Cell::Text(c))?;
+                }
+                w.end_row()?;
+            }
+            w.finish()
+        })()
+        .map_err(|e| Error::Write(format!("run sheet: {e}")))?;
+        String::from_utf8(bytes).map_err(|e| Error::Write(format!("run sheet: {e}")))
+    }
+
     /// Set the degrees of freedom the reduction will have and every
     /// term's `predicted_U95 = k95 u` (k95 the Student t quantile for
     /// `dof`, JCGM 100 Annex G); nothing for `dof < 1`. Call it after the

@@ -123,6 +123,16 @@ pub trait Simulate {
 
     /// Draw the recording (same options and seed, same bytes) into `out`.
     fn simulate(options: &Self::Options, out: &mut dyn std::io::Write) -> Result<()>;
+
+    /// The truth of a simulation whose recording does not carry it (the
+    /// CSV holds rows only: the gyro-free unit's, the thermal chamber's and
+    /// the IMU session's), as JSON: what `--truth-out` writes and Python's
+    /// simulators return beside the rows. `None` (the default) where the
+    /// recording's comment lines carry the truth.
+    fn truth(options: &Self::Options) -> Result<Option<serde_json::Value>> {
+        let _ = options;
+        Ok(None)
+    }
 }
 
 /// [`reduce_source`] with the options as JSON (a Python keyword dict, a
@@ -146,14 +156,16 @@ pub fn plan_json<T: Plan>(
     T::plan(&crate::options::from_json(options)?)
 }
 
-/// [`Simulate::simulate`] with the options as JSON, validated first.
+/// [`Simulate::simulate`] with the options as JSON, validated first; the
+/// simulation's [`Simulate::truth`] returned.
 pub fn simulate_json<T: Simulate>(
     options: &serde_json::Value,
     out: &mut dyn std::io::Write,
-) -> Result<()> {
+) -> Result<Option<serde_json::Value>> {
     let options = crate::options::from_json(options)?;
     T::validate(&options)?;
-    T::simulate(&options, out)
+    T::simulate(&options, out)?;
+    T::truth(&options)
 }
 
 /// Read one recording (`src`, named `name` in messages and in the

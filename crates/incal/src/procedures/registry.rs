@@ -178,8 +178,11 @@ pub type ReduceFn = fn(
 /// A plan with options as JSON ([`super::plan_json`]).
 pub type PlanFn = fn(&serde_json::Value) -> crate::Result<PlanDocument>;
 
-/// A simulator with options as JSON ([`super::simulate_json`]).
-pub type SimulateFn = fn(&serde_json::Value, &mut dyn std::io::Write) -> crate::Result<()>;
+/// A simulator with options as JSON ([`super::simulate_json`]): the
+/// recording into the writer, its truth returned where the recording does
+/// not carry it ([`super::Simulate::truth`]).
+pub type SimulateFn =
+    fn(&serde_json::Value, &mut dyn std::io::Write) -> crate::Result<Option<serde_json::Value>>;
 
 /// One typed entry point of a procedure: the JSON Schema of its options
 /// (the keys every front end spells its own way) and the function.
@@ -234,6 +237,43 @@ pub struct Example {
 }
 
 impl Entry {
+    /// The entry as JSON, as `incal procedures --json` prints it (without
+    /// the command line's argument tables) and Python builds its functions
+    /// from it: `id`, `document`, `title`, `command`, `plan`, `simulate`
+    /// (command words joined by spaces), `input`, `rig`, `method`,
+    /// `references`, `chapter`, `run_sheet`, `fuzz`, `example`, `python`
+    /// (`function`, `plan`, `simulate`) and `options` (the JSON Schemas of
+    /// the typed `reduce`, `plan` and `simulate`).
+    pub fn to_json(&self) -> serde_json::Value {
+        let words = |w: Option<&[&str]>| w.map(|w| w.join(" "));
+        serde_json::json!({
+            "id": self.id,
+            "document": self.document.as_str(),
+            "title": self.title,
+            "command": self.command_line(),
+            "plan": words(self.plan),
+            "simulate": words(self.simulate),
+            "input": self.input,
+            "rig": self.rig,
+            "method": self.method,
+            "references": self.references,
+            "chapter": self.chapter,
+            "run_sheet": self.run_sheet.is_some(),
+            "fuzz": self.fuzz,
+            "example": self.example.map(|x| serde_json::json!({"simulate": x.simulate, "options": x.options})),
+            "python": {
+                "function": self.python(),
+                "plan": self.python_plan(),
+                "simulate": self.python_simulate(),
+            },
+            "options": {
+                "reduce": self.reduction.map(|t| (t.schema)()),
+                "plan": self.planner.map(|t| (t.schema)()),
+                "simulate": self.simulator.map(|t| (t.schema)()),
+            },
+        })
+    }
+
     /// The Python function of the reduction (`incal.gyro_rate`): the
     /// command words joined by `_`, with `-` as `_`.
     pub fn python(&self) -> String {

@@ -27,15 +27,36 @@ use crate::error::{Error, Result};
 pub struct SimPlanOptions<S, R> {
     /// The planned session: the simulator's options.
     pub session: S,
-    /// The reduction's options.
-    pub reduce: R,
+    /// The reduction's options; when absent, those that match the session
+    /// (its rate, gravity, rotation, …; `Planned::reduce_options`).
+    #[serde(default = "no_reduce::<R>", skip_serializing_if = "Option::is_none")]
+    pub reduce: Option<R>,
     /// Sessions simulated (seeds `seed`, `seed + 1`, …), 1 to 50.
     #[serde(default = "default_seeds")]
     pub seeds: usize,
 }
 
+fn no_reduce<R>() -> Option<R> {
+    None
+}
+
 fn default_seeds() -> usize {
     5
+}
+
+/// A procedure planned by simulating its session with `S`: the session
+/// as the procedure takes it (its sequence) and the reduction's options
+/// that match a session, so that a plan needs only the session.
+pub trait Planned<S: Simulate>: Procedure {
+    /// The session as this procedure records it (the IMU procedures fix
+    /// the sequence; the default is the session as given).
+    fn session(session: S::Options) -> S::Options {
+        session
+    }
+
+    /// The reduction's options for a recording of `session` (rate,
+    /// gravity, …; the rest the procedure's defaults).
+    fn reduce_options(session: &S::Options) -> Self::Options;
 }
 
 /// The plan of procedure `P` by simulating its session with `S` (module
@@ -57,26 +78,35 @@ fn with_seed<S: Serialize + serde::de::DeserializeOwned + JsonSchema>(
     crate::options::from_json(&v)
 }
 
-impl<P: Procedure, S: Simulate> Plan for BySimulation<P, S> {
+impl<P: Planned<S>, S: Simulate> Plan for BySimulation<P, S>
+where
+    S::Options: Clone,
+    P::Options: Clone,
+{
     type Options = SimPlanOptions<S::Options, P::Options>;
 
     fn plan(o: &Self::Options) -> Result<PlanDocument> {
         if !(1..=50).contains(&o.seeds) {
             return crate::options::invalid("seeds", format!("1 to 50, got {}", o.seeds));
         }
-        S::validate(&o.session)?;
-        P::validate(&o.reduce)?;
+        let session = P::session(o.session.clone());
+        let reduce = o
+            .reduce
+            .clone()
+            .unwrap_or_else(|| P::reduce_options(&session));
+        S::validate(&session)?;
+        P::validate(&reduce)?;
         // term → (unit, u² summed, values) over the seeds.
         let mut terms: Vec<(String, String, f64, Vec<f64>)> = Vec::new();
         let mut dof = f64::INFINITY;
         let mut title = String::new();
         for k in 0..o.seeds {
-            let session = with_seed(&o.session, k)?;
+            let drawn = with_seed(&session, k)?;
             let mut bytes = Vec::new();
-            S::simulate(&session, &mut bytes)?;
+            S::simulate(&drawn, &mut bytes)?;
             let read = incal_io::ReadOptions::default();
             let doc =
-                reduce_source::<P, _>("planned session", &bytes[..], &read, &o.reduce, &Silent)?;
+                reduce_source::<P, _>("planned session", &bytes[..], &read, &reduce, &Silent)?;
             title.clone_from(&doc.title);
             for (name, c) in doc.coefficients.iter() {
                 dof = dof.min(c.dof.unwrap_or(f64::INFINITY));
@@ -95,8 +125,7 @@ impl<P: Procedure, S: Simulate> Plan for BySimulation<P, S> {
             }
         }
         let mut plan = PlanDocument::new(P::ID, format!("Plan by simulation: {title}"));
-        let options =
-            serde_json::json!({"session": o.session, "reduce": o.reduce, "seeds": o.seeds});
+        let options = serde_json::json!({"session": session, "reduce": reduce, "seeds": o.seeds});
         plan.with_options(&options)?;
         let mut scatter = serde_json::Map::new();
         let mut fixed = Vec::new();

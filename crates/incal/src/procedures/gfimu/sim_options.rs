@@ -174,4 +174,12 @@ impl crate::procedures::Simulate for super::GfimuCalibrate {
         o.config()?.write(out)?;
         Ok(())
     }
+
+    /// `{"notes": [...]}`: every accelerometer's K0 and Ks and how the
+    /// run was simulated.
+    fn truth(o: &GfimuSimOptions) -> Result<Option<serde_json::Value>> {
+        let cfg = o.config()?;
+        cfg.validate()?;
+        Ok(Some(serde_json::json!({ "notes": cfg.notes() })))
+    }
 }

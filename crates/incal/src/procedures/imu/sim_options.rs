@@ -237,6 +237,12 @@ impl crate::procedures::Simulate for ImuSimulator {
         super::input::write(&samples, &layout, out)?;
         Ok(())
     }
+
+    /// The sensor's scales, biases, misalignments and g-sensitivity
+    /// ([`ImuTruth::to_json`]).
+    fn truth(o: &ImuSimOptions) -> Result<Option<serde_json::Value>> {
+        Ok(Some(o.truth().to_json()?))
+    }
 }
 
 #[cfg(test)]

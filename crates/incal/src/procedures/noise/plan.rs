@@ -7,3 +7,15 @@
 
 /// `incal plan noise` ([`crate::procedures::Plan`]).
 pub type NoisePlan = crate::procedures::sim_plan::BySimulation<super::Noise, super::Noise>;
+
+impl crate::procedures::sim_plan::Planned<super::Noise> for super::Noise {
+    /// The record's rate and quantity; the rest `incal noise`'s defaults.
+    fn reduce_options(s: &super::sim::NoiseSim) -> super::NoiseOptions {
+        use crate::procedures::Procedure;
+        super::NoiseOptions {
+            rate_hz: Some(s.rate_hz),
+            quantity: s.quantity,
+            ..Self::example()
+        }
+    }
+}

@@ -398,4 +398,11 @@ impl crate::procedures::Simulate for super::ramp::Ramp {
     fn simulate(o: &ThermalSimOptions, out: &mut dyn Write) -> Result<()> {
         o.config().write(out)
     }
+
+    /// The truth polynomials, hysteresis and lag ([`RampSim::truth_json`]).
+    fn truth(o: &ThermalSimOptions) -> Result<Option<serde_json::Value>> {
+        let cfg = o.config();
+        cfg.validate()?;
+        Ok(Some(cfg.truth_json()))
+    }
 }
