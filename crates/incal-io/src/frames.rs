@@ -101,6 +101,41 @@ impl<'a> Columns<'a> {
         self.cols.first().map_or(0, Column::len)
     }
 
+    /// A reader of the same columns from their first byte, borrowing them
+    /// (nothing copied): to read the canonical form twice at once, e.g.
+    /// hash it on one thread while a procedure reads it on another.
+    pub fn view(&self) -> Columns<'_> {
+        let cols = self
+            .cols
+            .iter()
+            .map(|c| match c {
+                Column::F64(v) => Column::F64(Cow::Borrowed(&v[..])),
+                Column::Text(v) => Column::Text(Cow::Borrowed(&v[..])),
+            })
+            .collect();
+        Columns {
+            names: self.names.clone(),
+            cols,
+            ..Columns::default()
+        }
+    }
+
+    /// The SHA-256 (lowercase hex) of the canonical byte form, as the
+    /// reader records it for the document's `inputs` when it hashes.
+    pub fn sha256(&self) -> String {
+        use sha2::Digest;
+        let mut view = self.view();
+        let mut hasher = sha2::Sha256::new();
+        let mut buf = vec![0u8; 1 << 16];
+        loop {
+            match Read::read(&mut view, &mut buf) {
+                Ok(0) | Err(_) => break,
+                Ok(n) => hasher.update(&buf[..n]),
+            }
+        }
+        crate::digest::hex(&hasher.finalize())
+    }
+
     /// Encode the header (once) and whole rows until `out` holds about
     /// `target` bytes.
     fn refill(&mut self, target: usize) {
@@ -252,6 +287,16 @@ mod tests {
         let canonical = bytes(&c);
         assert_eq!(&canonical[..8], MAGIC);
         assert_eq!(t.sha256(), crate::sha256_hex(&canonical));
+        // Hashed beside the reader (a view each), the same hash; numbers
+        // only too (whole rows at once).
+        assert_eq!(c.sha256(), t.sha256());
+        assert_eq!(bytes(&c.view()), canonical);
+        let mut numbers = Columns::new();
+        numbers
+            .push("angle_deg", Column::F64(Cow::Borrowed(&angle)))
+            .unwrap();
+        let n = Table::read("n", numbers.view(), &frames(), 0).unwrap();
+        assert_eq!(numbers.sha256(), n.sha256());
         let again = Table::read("y", sample(&angle, &out, &pos), &frames(), 0).unwrap();
         assert_eq!(t.sha256(), again.sha256());
         let other = [1.5, 2.5000000000000004];

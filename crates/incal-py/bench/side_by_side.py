@@ -69,7 +69,7 @@ def noise(n, rate_hz=100.0):
     import allantools
 
     x = record(n, rate_hz)
-    repeat = 3 if n <= 1_000_000 else 1
+    repeat = 7 if n <= 1_000_000 else 1
     t_incal, r = best(lambda: incal.noise(gx=x, rate_hz=rate_hz, quantity="gyro"), repeat)
 
     def five():

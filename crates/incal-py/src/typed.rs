@@ -234,9 +234,23 @@ fn reduce(
             Ok(mut src) => (red.run)(&src.name, &mut src.reader, &read, &options, progress),
             Err(e) => Err(incal::Error::Input(e)),
         },
-        Data::Columns(mut c) => {
+        Data::Columns(c) => {
+            // The canonical form hashed on a thread of its own while the
+            // procedure reads it (the same hash the reader would record).
             read.frames = true;
-            (red.run)(name, &mut c, &read, &options, progress)
+            read.hash = false;
+            std::thread::scope(|s| {
+                let hash = s.spawn(|| c.sha256());
+                let mut view = c.view();
+                let mut doc = (red.run)(name, &mut view, &read, &options, progress)?;
+                let sha256 = hash.join().map_err(|_| {
+                    incal::Error::Unsupported(format!("{name}: input hash: its thread failed"))
+                })?;
+                if let Some(input) = doc.inputs.iter_mut().find(|i| i.role == "input") {
+                    input.sha256 = sha256;
+                }
+                Ok(doc)
+            })
         }
     };
     finished(reduced, &finish)

@@ -107,3 +107,24 @@ def test_a_report_and_a_soak_fit_from_a_store_are_the_clis(tmp_path):
         incal.thermal_fit([], db=str(db), serial="SN-5")
     with pytest.raises(incal.InputError, match="date: '2026-13-01' is not a date"):
         r.report(str(tmp_path / "c.html"), lab=str(lab), date="2026-13-01")
+
+
+def test_columns_are_hashed_in_their_documented_canonical_form():
+    """``inputs[0].sha256`` of columns in memory is the SHA-256 of
+    ``INCALCF1``, the column count, each column's kind and name, then the
+    rows as little-endian binary64 (hashed beside the reduction)."""
+    import hashlib
+    import struct
+
+    import numpy as np
+
+    data, _ = incal.simulate.tumble(seed=7)
+    angle = np.ascontiguousarray(data["angle_deg"], dtype=np.float64)
+    out = np.ascontiguousarray(data["output"], dtype=np.float64)
+    r = incal.tumble(angle_deg=angle, output=out, mount="pendulum")
+    form = b"INCALCF1" + struct.pack("<I", 2)
+    for name in ("angle_deg", "output"):
+        form += b"\x00" + struct.pack("<I", len(name)) + name.encode()
+    form += np.column_stack([angle, out]).astype("<f8").tobytes()
+    assert r.document["inputs"][0]["sha256"] == hashlib.sha256(form).hexdigest()
+    assert incal.tumble(data, mount="pendulum").document["inputs"][0]["sha256"] == hashlib.sha256(form).hexdigest()

@@ -76,6 +76,8 @@ pub(crate) fn ordered_map<T: Send>(
 pub mod corr;
 pub mod dev;
 pub mod edf;
+mod point;
+use point::{point, push, Point};
 pub mod id;
 pub mod other_stats;
 pub mod terms;
@@ -670,23 +672,6 @@ pub fn phase_fill(
     acc
 }
 
-fn push(s: &mut DevSeries, v: Option<(f64, usize)>, edf: Option<f64>, p: f64) {
-    let (val, n) = match v {
-        Some((var, n)) if var.is_finite() && var >= 0.0 => (Some(var.sqrt()), n),
-        Some((_, n)) => (None, n),
-        None => (None, 0),
-    };
-    let b = match (val, edf) {
-        (Some(d), Some(e)) => edf::chi2_bounds(d, e, p),
-        _ => None,
-    };
-    s.value.push(val);
-    s.lo.push(b.map(|b| b.0));
-    s.hi.push(b.map(|b| b.1));
-    s.edf.push(edf.filter(|e| e.is_finite()));
-    s.n.push(n);
-}
-
 /// Every deviation of phase record `x` at every τ of the grid, with the
 /// noise identified per τ, Greenhall & Riley EDF and χ² bounds.
 /// Fails on fewer than 5 points, a non-finite sample, τ0 ≤ 0 or a
@@ -842,13 +827,25 @@ fn stability_run(
     let n = x.len();
     let (t0, p, par) = (opts.tau0_s, opts.confidence, opts.parallel);
     let mut st = Stability::empty(&ms, t0);
-    let ids = id::identify_many(x, &ms, par);
+    // The noise identification and the variances read the record
+    // independently: side by side when parallel.
+    let (ids, vars) = if par {
+        rayon::join(
+            || id::identify_many(x, &ms, par),
+            || dev::stability_vars(x, &ms, t0, par),
+        )
+    } else {
+        (
+            id::identify_many(x, &ms, par),
+            dev::stability_vars(x, &ms, t0, par),
+        )
+    };
     let dev::StabilityVars {
         oa: oas,
         oh: ohs,
         tot: tots,
         md: mvs,
-    } = dev::stability_vars(x, &ms, t0, par);
+    } = vars;
     // B1 and R(n) where the lag-1 method has too few points.
     let fall: Vec<usize> = (0..ms.len()).filter(|&k| ids[k].is_none()).collect();
     let fm: Vec<usize> = fall.iter().map(|&k| ms[k]).collect();
@@ -880,42 +877,47 @@ fn stability_run(
         let found = found.or(last);
         last = found;
         let nid = found.map(|f| f.0);
-        let (aa, ah) = (nid.map(|n| n.alpha_allan), nid.map(|n| n.alpha_hadamard));
-        st.alpha.push(aa);
-        st.alpha_hadamard.push(ah);
+        st.alpha.push(nid.map(|n| n.alpha_allan));
+        st.alpha_hadamard.push(nid.map(|n| n.alpha_hadamard));
         st.id_method.push(found.map(|f| f.1));
+    }
+    // The EDF and χ² bounds of every deviation at every τ: each τ on its
+    // own (the same values serial or parallel, in τ order).
+    let at = |k: usize| -> [Point; 5] {
+        let m = ms[k];
+        let (aa, ah) = (st.alpha[k], st.alpha_hadamard[k]);
         let pair = |v: Option<dev::VarN>| v.map(|v| (v.var, v.n));
-        let oa = oas[k];
-        push(
-            &mut st.oadev,
-            pair(oa),
-            aa.and_then(|a| edf::greenhall(a, 2, m, n, true, false)),
-            p,
-        );
         let mv = mvs[k];
         let medf = aa.and_then(|a| edf::greenhall(a, 2, m, n, true, true));
-        push(&mut st.mdev, pair(mv), medf, p);
         let tau = m as f64 * t0;
-        push(
-            &mut st.tdev,
-            mv.map(|v| (dev::tvar(v.var, tau), v.n)),
-            medf,
-            p,
-        );
-        let oh = ohs[k];
-        push(
-            &mut st.ohdev,
-            pair(oh),
-            ah.and_then(|a| edf::greenhall(a, 3, m, n, true, false)),
-            p,
-        );
-        let tv = tots[k];
-        push(
-            &mut st.totdev,
-            pair(tv),
-            aa.and_then(|a| edf::totdev(a, m, n)),
-            p,
-        );
+        [
+            point(
+                pair(oas[k]),
+                aa.and_then(|a| edf::greenhall(a, 2, m, n, true, false)),
+                p,
+            ),
+            point(pair(mv), medf, p),
+            point(mv.map(|v| (dev::tvar(v.var, tau), v.n)), medf, p),
+            point(
+                pair(ohs[k]),
+                ah.and_then(|a| edf::greenhall(a, 3, m, n, true, false)),
+                p,
+            ),
+            point(pair(tots[k]), aa.and_then(|a| edf::totdev(a, m, n)), p),
+        ]
+    };
+    let points: Vec<[Point; 5]> = if par {
+        use rayon::prelude::*;
+        (0..ms.len()).into_par_iter().map(at).collect()
+    } else {
+        (0..ms.len()).map(at).collect()
+    };
+    for (k, [oa, md, td, oh, tot]) in points.into_iter().enumerate() {
+        oa.push_to(&mut st.oadev);
+        md.push_to(&mut st.mdev);
+        td.push_to(&mut st.tdev);
+        oh.push_to(&mut st.ohdev);
+        tot.push_to(&mut st.totdev);
         tick(k + 1);
     }
     Ok(st)
