@@ -47,6 +47,7 @@ fn _incal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(typed::_thermal_fit, m)?)?;
     m.add_function(wrap_pyfunction!(records::_records, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_report, m)?)?;
+    m.add_function(wrap_pyfunction!(typed::_pdf, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_schema, m)?)?;
     m.add_function(wrap_pyfunction!(typed::_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(_version, m)?)?;

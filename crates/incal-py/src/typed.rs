@@ -559,6 +559,17 @@ pub fn _report(
     })
 }
 
+/// `_pdf(html) -> (code, pdf path, error)`: the HTML report at `html`
+/// printed to PDF beside it by headless Chromium
+/// ([`incal_report::pdf::print`]); a failure is code 1.
+#[pyfunction]
+pub fn _pdf(py: Python<'_>, html: std::path::PathBuf) -> (u8, String, String) {
+    py.detach(|| match incal_report::pdf::print(&html) {
+        Ok(pdf) => (0, pdf.display().to_string(), String::new()),
+        Err(e) => (1, String::new(), format!("pdf: {e}")),
+    })
+}
+
 /// [`_report`]'s work: an error as its exit code and one line.
 fn report(
     text: &str,

@@ -128,3 +128,26 @@ def test_columns_are_hashed_in_their_documented_canonical_form():
     form += np.column_stack([angle, out]).astype("<f8").tobytes()
     assert r.document["inputs"][0]["sha256"] == hashlib.sha256(form).hexdigest()
     assert incal.tumble(data, mount="pendulum").document["inputs"][0]["sha256"] == hashlib.sha256(form).hexdigest()
+
+
+def test_a_report_prints_to_pdf_or_says_why_not(tmp_path, monkeypatch):
+    import shutil
+
+    data, _ = incal.simulate.tumble(seed=7)
+    r = incal.tumble(data, mount="pendulum", serial="SN-7")
+    fake = tmp_path / "bin"
+    fake.mkdir()
+    browser = fake / "chromium"
+    browser.write_text("#!/bin/sh\necho 'cannot open display' >&2\nexit 1\n")
+    browser.chmod(0o755)
+    real = shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
+    with monkeypatch.context() as m:
+        m.setenv("PATH", str(fake))
+        with pytest.raises(incal.IncalError, match="cannot start: cannot open display") as e:
+            r.report(str(tmp_path / "a.html"), pdf=True)
+        assert e.value.code == 1
+    assert (tmp_path / "a.html").exists(), "the HTML is kept"
+    if real is None:
+        pytest.skip("no Chromium here to print with")
+    r.report(str(tmp_path / "b.html"), pdf=True)
+    assert (tmp_path / "b.pdf").read_bytes().startswith(b"%PDF")

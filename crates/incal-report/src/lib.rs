@@ -28,6 +28,7 @@
 
 pub mod certificate;
 pub mod format;
+pub mod pdf;
 pub mod plots;
 pub mod records;
 pub mod stored;

@@ -110,54 +110,12 @@ pub fn run(a: &Args) -> CliResult<()> {
     crate::options::check_fail_on(&doc, a.fail_on)
 }
 
-/// Print `html` (a file just written) to `html` with `.pdf`, through
-/// headless Chromium with the page margins of the print stylesheet.
+/// Print `html` (a file just written) to `html` with `.pdf`
+/// ([`incal_report::pdf::print`]); a failure (exit 1) names why.
 fn print_pdf(html: &std::path::Path) -> CliResult<()> {
-    let browser = ["chromium", "chromium-browser", "google-chrome"]
-        .into_iter()
-        .find(|b| {
-            std::process::Command::new(b)
-                .arg("--version")
-                .stdout(std::process::Stdio::null())
-                .stderr(std::process::Stdio::null())
-                .status()
-                .is_ok_and(|s| s.success())
-        })
-        .ok_or_else(|| {
-            CliError::Failure(anyhow::anyhow!(
-                "--pdf: headless Chromium is not installed (apt-get install chromium); the HTML was written"
-            ))
-        })?;
-    let abs = std::fs::canonicalize(html)
-        .map_err(|e| CliError::Failure(anyhow::anyhow!("{}: {e}", html.display())))?;
-    let pdf = abs.with_extension("pdf");
-    let profile = std::env::temp_dir().join(format!("incal-chromium-{}", std::process::id()));
-    let status = std::process::Command::new(browser)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--disable-extensions",
-            "--no-pdf-header-footer",
-        ])
-        .arg(format!("--user-data-dir={}", profile.display()))
-        .arg(format!("--print-to-pdf={}", pdf.display()))
-        .arg(format!("file://{}", abs.display()))
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .status();
-    let _ = std::fs::remove_dir_all(&profile);
-    match status {
-        Ok(s) if s.success() && pdf.metadata().is_ok_and(|m| m.len() > 0) => Ok(()),
-        _ => Err(CliError::Failure(anyhow::anyhow!(
-            "--pdf: {browser} printed no {}",
-            pdf.display()
-        ))),
-    }
+    incal_report::pdf::print(html)
+        .map(|_| ())
+        .map_err(|e| CliError::Failure(anyhow::anyhow!("--pdf: {e}")))
 }
 
 /// The records store named (`--db`, else `$INCAL_DB`: it must exist

@@ -8,6 +8,7 @@ mod common;
 mod gfimu_cli;
 mod gyro_cli;
 mod hardening;
+mod hardening3;
 mod imu_cli;
 mod limits_cli;
 mod misalign_cli;

@@ -260,6 +260,7 @@ class Result:
         customer: Optional[str] = None,
         date: Optional[str] = None,
         environment: Optional[str] = None,
+        pdf: bool = False,
     ) -> str:
         """Write the HTML report (printable certificate) to ``path`` by the
         report crate, as ``incal report``: judged against ``limits`` (a
@@ -267,7 +268,10 @@ class Result:
         URL) the record's stamp and the history plots; with ``lab`` (a
         laboratory profile, TOML) a calibration certificate naming
         ``customer``, the calibration ``date`` (YYYY-MM-DD; default the day
-        the record was stored) and the ``environment``."""
+        the record was stored) and the ``environment``; with ``pdf`` also
+        printed to ``path`` with ``.pdf`` by headless Chromium (an
+        :class:`IncalError` naming why when it cannot be, the HTML kept).
+        Returns ``path``."""
         from . import _typed
         from ._incal import _report
 
@@ -283,6 +287,12 @@ class Result:
             _raise(code, b"", [err])
         with open(os.fspath(path), "w", encoding="utf-8") as f:
             f.write(html)
+        if pdf:
+            from ._incal import _pdf
+
+            code, _, err = _pdf(os.fspath(path))
+            if code != 0:
+                _raise(code, b"", [err])
         return os.fspath(path)
 
     def to_imucal(self, path: Optional[str] = None) -> Dict[str, Any]:
