@@ -48,7 +48,20 @@ pub(crate) fn capturing() -> bool {
 
 /// One line for standard error (without `incal: `): kept when embedded,
 /// else written.
+///
+/// Control characters (ESC, a carriage return, a bell from a file name or
+/// a stored text) are shown as `?`, so nothing a user's data holds reaches
+/// the terminal raw.
 pub(crate) fn stderr_line(line: &str) {
+    let line: String = line
+        .chars()
+        .map(|c| match c {
+            '\t' => ' ',
+            c if c.is_control() => '?',
+            c => c,
+        })
+        .collect();
+    let line = line.as_str();
     let kept = CAPTURE.with(|c| match c.borrow_mut().as_mut() {
         Some((_, err)) => {
             err.push(line.to_string());

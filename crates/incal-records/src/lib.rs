@@ -47,6 +47,7 @@ pub mod history;
 mod identity;
 mod open;
 mod query;
+mod readonly;
 pub mod time;
 mod types;
 mod verify;

@@ -30,6 +30,9 @@ pub struct Store {
     pub(crate) conn: RefCell<Conn>,
     /// The SQLite path, or the PostgreSQL URL without its password.
     pub(crate) path: PathBuf,
+    /// The private copy a read-only store is read from, if one was needed
+    /// ([`crate::readonly`]); removed when the store is closed.
+    pub(crate) _copy: Option<crate::readonly::TempCopy>,
 }
 
 /// How a store is opened.
@@ -116,22 +119,29 @@ impl Store {
                 message: "not an incal records store (an empty file)".into(),
             });
         }
-        let flags = if create {
-            OpenFlags::SQLITE_OPEN_READ_WRITE
-                | OpenFlags::SQLITE_OPEN_CREATE
-                | OpenFlags::SQLITE_OPEN_NO_MUTEX
-        } else {
-            OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX
-        };
-        let conn = Connection::open_with_flags(path, flags).map_err(|e| Error::Store {
+        let cannot_open = |e: rusqlite::Error| Error::Store {
             path: name.clone(),
             message: format!("cannot open: {e}"),
-        })?;
+        };
+        let (conn, copy) = if create {
+            let flags = OpenFlags::SQLITE_OPEN_READ_WRITE
+                | OpenFlags::SQLITE_OPEN_CREATE
+                | OpenFlags::SQLITE_OPEN_NO_MUTEX;
+            (
+                Connection::open_with_flags(path, flags).map_err(cannot_open)?,
+                None,
+            )
+        } else {
+            // Nothing is written beside a store opened to read (an
+            // auditor's read-only copy).
+            crate::readonly::open(path).map_err(cannot_open)?
+        };
         conn.busy_timeout(BUSY_TIMEOUT)
             .map_err(|e| db_err(&name, e.into()))?;
         let store = Store {
             conn: RefCell::new(Conn::Sqlite(conn)),
             path: path.to_path_buf(),
+            _copy: copy,
         };
         if create {
             // Another application's SQLite file is not made a store.
@@ -160,6 +170,7 @@ impl Store {
         let store = Store {
             conn: RefCell::new(Conn::Postgres(Box::new(client))),
             path: PathBuf::from(&name),
+            _copy: None,
         };
         if how == Opening::Read {
             // Reading never writes, whatever the code path.

@@ -480,15 +480,8 @@ pub(crate) fn front_html(
 /// page, annexes from the second page on, no page that holds only a
 /// heading.
 pub(crate) fn print_css(number: &str) -> String {
-    // The number is quoted as a CSS string: escape what could end it.
-    let quoted: String = number
-        .chars()
-        .map(|ch| match ch {
-            '"' | '\\' => format!("\\{:x} ", ch as u32),
-            c if c.is_control() => " ".into(),
-            c => c.to_string(),
-        })
-        .collect();
+    // The number is quoted as a CSS string: escaped for that context.
+    let quoted = crate::format::css_string(number);
     format!(
         r#"
 #lab-name {{ font-size: 1.3em; font-weight: bold; }}

@@ -19,6 +19,23 @@ pub fn esc(text: &str) -> String {
     out
 }
 
+/// `text` as the content of a double-quoted CSS string inside a `<style>`
+/// element: every character but letters, digits, space and `-_.,:/+#()`
+/// written as a CSS escape (`\3c ` for `<`), so nothing can end the
+/// string, the rule or the style element (CSS Syntax Level 3 §4.3.7).
+/// Control characters become a space.
+pub fn css_string(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            c if c.is_control() => out.push(' '),
+            c if c.is_alphanumeric() || " -_.,:/+#()".contains(c) => out.push(c),
+            c => out.push_str(&format!("\\{:x} ", c as u32)),
+        }
+    }
+    out
+}
+
 /// A number with `digits` significant digits, plain or scientific as fits
 /// (the text report's rule); `-` when not finite.
 pub fn sig(x: f64, digits: usize) -> String {
@@ -197,6 +214,17 @@ pub fn now_utc_text() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_css_string_cannot_end_itself_its_rule_or_the_style_element() {
+        assert_eq!(css_string("ITL-2026/"), "ITL-2026/");
+        let e = css_string("</style>\"; }\\\n");
+        for bad in ['<', '>', '"', ';', '}', '\n'] {
+            assert!(!e.contains(bad), "{bad:?} in {e}");
+        }
+        assert_eq!(css_string("<"), "\\3c ");
+        assert_eq!(css_string("\\"), "\\5c ");
+    }
 
     #[test]
     fn escapes_markup_and_quotes() {
