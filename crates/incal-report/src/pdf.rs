@@ -1,7 +1,7 @@
 //! The certificate as PDF: the HTML report printed by headless Chromium
 //! with the page margins of its print stylesheet. Every front end
 //! (`incal report --pdf`, Python's `Result.report(pdf=True)`) prints
-//! through [`print`], so a missing browser, one that cannot start and one
+//! through [`print()`], so a missing browser, one that cannot start and one
 //! that printed nothing are told apart, and a PDF left from an earlier
 //! run is never taken for this one.
 

@@ -11,6 +11,19 @@ pub const ARCSEC_PER_RAD: f64 = 180.0 * 3600.0 / std::f64::consts::PI;
 /// Earth's sidereal rotation rate Ωe in rad/s (IERS / WGS-84 value).
 pub const EARTH_RATE_RAD_S: f64 = 7.292_115_0e-5;
 
+/// Absolute zero, °C: no temperature is below it.
+pub const ABSOLUTE_ZERO_C: f64 = -273.15;
+
+/// The highest temperature a test of inertial instruments states, °C
+/// (a chamber's, a plateau's, a model's range or reference).
+pub const MAX_TEMPERATURE_C: f64 = 1000.0;
+
+/// A temperature, °C: finite and within [`ABSOLUTE_ZERO_C`] ..
+/// [`MAX_TEMPERATURE_C`], or [`crate::Error::InvalidOption`] naming `key`.
+pub fn check_temperature_c(key: &str, t: f64) -> crate::Result<()> {
+    crate::options::check_range(key, t, ABSOLUTE_ZERO_C, MAX_TEMPERATURE_C, "degC")
+}
+
 /// Standard gravity gn in m/s² (CGPM 1901), used only to convert user
 /// inputs given in m/s²; the models themselves work in local-g units.
 pub const STANDARD_GRAVITY_M_S2: f64 = 9.806_65;

@@ -79,6 +79,9 @@ pub enum WarningCode {
     /// The data's magnitudes contradict the unit given (an accelerometer
     /// record in m/s² analysed as g, or the reverse).
     UnitSuspect,
+    /// Empty or NaN cells of a channel were taken as missing samples and
+    /// left out (how many, per channel).
+    MissingSamples,
 }
 
 impl WarningCode {
@@ -107,6 +110,7 @@ impl WarningCode {
             WarningCode::Saturated => "saturated",
             WarningCode::TimeSorted => "time-sorted",
             WarningCode::UnitSuspect => "unit-suspect",
+            WarningCode::MissingSamples => "missing-samples",
         }
     }
 }

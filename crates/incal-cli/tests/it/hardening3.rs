@@ -220,7 +220,16 @@ fn a_read_only_store_of_another_user_is_read_and_never_written() {
         );
         for args in [
             vec!["record", "show", "1", "--db", s],
-            vec!["record", "history", "--serial", "SN-1", "--coefficient", "K1", "--db", s],
+            vec![
+                "record",
+                "history",
+                "--serial",
+                "SN-1",
+                "--coefficient",
+                "K1",
+                "--db",
+                s,
+            ],
         ] {
             let o = as_other_user(&args);
             assert!(o.status.success(), "{args:?}: {}", stderr(&o));
@@ -241,5 +250,310 @@ fn a_read_only_store_of_another_user_is_read_and_never_written() {
             "nothing written beside the store ({pending})"
         );
         std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+}
+
+/// Tumble results at three temperatures in `dir` (by `--meta
+/// temperature_c`), as JSON values.
+fn plateaus(dir: &Path) -> Vec<serde_json::Value> {
+    [-10, 25, 60]
+        .iter()
+        .map(|t| {
+            let csv = dir.join(format!("t{t}.csv"));
+            let seed = (t + 100).to_string();
+            common::ok(&common::run(&[
+                "simulate",
+                "tumble",
+                "--seed",
+                &seed,
+                "-o",
+                p(&csv),
+            ]));
+            let meta = format!("temperature_c={t}");
+            common::json_of(&common::run(&[
+                "tumble",
+                "--input",
+                p(&csv),
+                "--mount",
+                "pendulum",
+                "--meta",
+                &meta,
+                "--json",
+            ]))
+        })
+        .collect()
+}
+
+/// Class 3: every malformed plateau document is exit 2 naming its JSON
+/// path, never a panic or a silent number: a correlation matrix of the
+/// wrong size, |r| > 1, an asymmetric one, an environment with min > max,
+/// a value no recording gives, a temperature below absolute zero.
+#[test]
+fn thermal_fit_refuses_every_malformed_plateau_naming_the_json_path() {
+    let dir = common::workdir("soak");
+    let docs = plateaus(&dir);
+    type Edit = fn(&mut serde_json::Value);
+    let cases: [(&str, Edit, &str); 7] = [
+        (
+            "short",
+            |d| {
+                d["correlation"]["matrix"].as_array_mut().unwrap().pop();
+            },
+            "$.correlation.matrix: 5 rows for 6 names",
+        ),
+        (
+            "narrow",
+            |d| {
+                d["correlation"]["matrix"][2].as_array_mut().unwrap().pop();
+            },
+            "$.correlation.matrix[2]: 5 entries",
+        ),
+        (
+            "r2",
+            |d| {
+                d["correlation"]["matrix"][0][1] = 2.into();
+                d["correlation"]["matrix"][1][0] = 2.into();
+            },
+            "$.correlation.matrix[0][1]: 2 is not a correlation",
+        ),
+        (
+            "asym",
+            |d| {
+                d["correlation"]["matrix"][0][1] = 0.3.into();
+                d["correlation"]["matrix"][1][0] = (-0.3).into();
+            },
+            "symmetric",
+        ),
+        (
+            "env",
+            |d| {
+                d["environment"] = serde_json::json!({"temperature_c": {"mean": 25, "min": 30, "max": 20, "count": 5}});
+            },
+            "$.environment.temperature_c: min 30 is above max 20",
+        ),
+        (
+            "big",
+            |d| {
+                d["coefficients"]["K0"]["value"] = 1e200.into();
+            },
+            "$.coefficients.K0: value 1e200",
+        ),
+        (
+            "cold",
+            |d| {
+                d["instrument"]["temperature_c"] = "-300".into();
+            },
+            "$.instrument.temperature_c: '-300' is not a temperature",
+        ),
+    ];
+    let good: Vec<std::path::PathBuf> = docs
+        .iter()
+        .enumerate()
+        .map(|(i, d)| common::write(&format!("soak{i}.json"), &d.to_string()))
+        .collect();
+    common::ok(&common::run(&[
+        "thermal",
+        "fit",
+        p(&good[0]),
+        p(&good[1]),
+        p(&good[2]),
+        "--json",
+    ]));
+    for (name, edit, needle) in cases {
+        let mut bad = docs[1].clone();
+        edit(&mut bad);
+        let f = common::write(&format!("bad_{name}.json"), &bad.to_string());
+        let o = common::run(&["thermal", "fit", p(&good[0]), p(&f), p(&good[2]), "--json"]);
+        common::refused(&o, &[&format!("bad_{name}.json"), needle]);
+    }
+}
+
+/// Class 4: `thermal ramp` warns of the cells it takes as missing samples,
+/// refuses a `--rate-hz` its `time_s` stamps contradict, and a block that
+/// holds fewer than two samples.
+#[test]
+fn thermal_ramp_says_what_it_left_out_and_checks_its_time_base() {
+    let dir = common::workdir("ramp");
+    let csv = dir.join("ramp.csv");
+    common::ok(&common::run(&[
+        "simulate",
+        "thermal",
+        "--seed",
+        "5",
+        "--rate-hz",
+        "1",
+        "--hold-s",
+        "300",
+        "-o",
+        p(&csv),
+    ]));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let k = header.iter().position(|h| *h == "gx").unwrap();
+    for (i, line) in lines.iter_mut().enumerate().skip(100).take(11) {
+        let mut cells: Vec<String> = line.split(',').map(String::from).collect();
+        cells[k] = if i == 110 {
+            "NaN".into()
+        } else {
+            String::new()
+        };
+        *line = cells.join(",");
+    }
+    let holed = common::write("holed.csv", &(lines.join("\n") + "\n"));
+    let v = common::json_of(&common::run(&[
+        "thermal",
+        "ramp",
+        "--input",
+        p(&holed),
+        "--rate-hz",
+        "1",
+        "--quantity",
+        "gyro",
+        "--json",
+    ]));
+    let w = common::warnings_with(&v, "missing-samples");
+    assert!(w.len() == 1 && w[0].contains("gx 11"), "{w:?}");
+    let o = common::run(&[
+        "thermal",
+        "ramp",
+        "--input",
+        p(&csv),
+        "--rate-hz",
+        "100",
+        "--quantity",
+        "gyro",
+    ]);
+    common::refused(&o, &["--rate-hz", "disagrees with the time_s stamps"]);
+    let o = common::run(&[
+        "thermal",
+        "ramp",
+        "--input",
+        p(&csv),
+        "--rate-hz",
+        "1",
+        "--block-s",
+        "1e-320",
+        "--quantity",
+        "gyro",
+    ]);
+    common::refused(&o, &["--block-s", "fewer than two samples"]);
+}
+
+/// Class 5: physical bounds in the thermal plan and simulator: no
+/// temperature below absolute zero, low below high, no absurd lag, ramp or
+/// hold.
+#[test]
+fn thermal_plans_and_simulations_keep_to_physics() {
+    let out = common::tmp("x.csv");
+    let o = p(&out);
+    for (args, needle) in [
+        (
+            vec![
+                "simulate",
+                "thermal",
+                "--seed",
+                "1",
+                "--t-low-c",
+                "50",
+                "--t-high-c",
+                "10",
+                "-o",
+                o,
+            ],
+            "--t-low-c",
+        ),
+        (
+            vec![
+                "simulate",
+                "thermal",
+                "--seed",
+                "1",
+                "--t-low-c",
+                "-300",
+                "-o",
+                o,
+            ],
+            "--t-low-c",
+        ),
+        (
+            vec![
+                "simulate", "thermal", "--seed", "1", "--lag-s", "1e300", "-o", o,
+            ],
+            "--lag-s",
+        ),
+        (
+            vec![
+                "simulate",
+                "thermal",
+                "--seed",
+                "1",
+                "--ramp-c-per-min",
+                "1e9",
+                "-o",
+                o,
+            ],
+            "--ramp-c-per-min",
+        ),
+        (
+            vec![
+                "simulate",
+                "thermal",
+                "--seed",
+                "1",
+                "--t-ref-c",
+                "-280",
+                "-o",
+                o,
+            ],
+            "--t-ref-c",
+        ),
+        (
+            vec![
+                "plan",
+                "thermal",
+                "--plateaus-c",
+                "-300,20",
+                "--u",
+                "1e-3",
+                "--degree",
+                "1",
+            ],
+            "--plateaus-c",
+        ),
+        (
+            vec![
+                "plan",
+                "thermal",
+                "--t-low-c",
+                "30",
+                "--t-high-c",
+                "10",
+                "--noise",
+                "1e-3",
+                "--ramp-c-per-min",
+                "1",
+                "--degree",
+                "1",
+            ],
+            "--t-low-c",
+        ),
+        (
+            vec![
+                "plan",
+                "thermal",
+                "--t-ref-c",
+                "-274",
+                "--plateaus-c",
+                "0,20",
+                "--u",
+                "1e-3",
+                "--degree",
+                "1",
+            ],
+            "--t-ref-c",
+        ),
+    ] {
+        common::refused(&common::run(&args), &[needle]);
     }
 }

@@ -34,6 +34,7 @@ pub use crate::procedures::misalign::document as misalign;
 /// The noise result document (lives with its procedure).
 pub use crate::procedures::noise::document as noise;
 mod builder;
+mod check;
 pub mod plan;
 mod table;
 pub use builder::*;
@@ -413,8 +414,11 @@ impl ResultDocument {
 
     /// What the schema cannot say: every u and U95 not negative, U95 =
     /// k95·u (to 1e-9 relative, for rounding), k95 at least 1, dof
-    /// positive, no number beyond [`Self::MAX_MAGNITUDE`], and every table
-    /// row as wide as its header. The error names the JSON path.
+    /// positive, no number beyond [`Self::MAX_MAGNITUDE`], every table
+    /// row as wide as its header, the correlation matrix square over
+    /// distinct coefficients, symmetric with unit diagonal and |ρ| ≤ 1, and
+    /// the recorded environment with min ≤ mean ≤ max. The error names the
+    /// JSON path.
     pub fn check(&self) -> std::result::Result<(), String> {
         let big = |x: f64| x.is_nan() || x.abs() > Self::MAX_MAGNITUDE;
         for (name, c) in self.coefficients.iter() {
@@ -472,7 +476,8 @@ impl ResultDocument {
                 }
             }
         }
-        Ok(())
+        check::correlation(self)?;
+        check::environment(self)
     }
 
     /// Pretty JSON text (ends without a newline).

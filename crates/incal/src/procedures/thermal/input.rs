@@ -52,6 +52,25 @@ pub struct RampInput {
     pub blocks: Vec<Block>,
     /// True when the recording has `chamber_c`.
     pub has_chamber: bool,
+    /// Per channel, the empty or NaN cells left out as missing samples.
+    pub missing: Vec<usize>,
+}
+
+/// `rate_hz` as given against the rate of the `time_s` stamps (rows − 1
+/// over their span): more than 1 % apart is [`crate::Error::InvalidOption`]
+/// on `rate_hz` (the blocks and the lag would be scaled wrong).
+fn check_rate(rate_hz: f64, stamps_hz: f64) -> Result<()> {
+    if (rate_hz / stamps_hz - 1.0).abs() > 0.01 {
+        return crate::options::invalid(
+            "rate_hz",
+            format!(
+                "{} Hz disagrees with the time_s stamps ({:.6} Hz from their span): give the recording's rate",
+                crate::error::short_number(&rate_hz.to_string()),
+                stamps_hz
+            ),
+        );
+    }
+    Ok(())
 }
 
 /// Rows per block.
@@ -94,6 +113,8 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &RampOptions) -> Result<
     let mut index = 0usize;
     let mut in_block = 0usize;
     let mut last_t = f64::NEG_INFINITY;
+    let mut first_t = f64::NAN;
+    let mut missing = vec![0usize; pick.len()];
     while let Some(row) = rows.next_row()? {
         let t = match time {
             Some(c) => {
@@ -104,6 +125,9 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &RampOptions) -> Result<
                         .into());
                 }
                 last_t = t;
+                if index == 0 {
+                    first_t = t;
+                }
                 t
             }
             None => index as f64 / o.rate_hz,
@@ -120,9 +144,10 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &RampOptions) -> Result<
         if let Some(c) = chamber {
             cur.chamber.push(row.f64(c)?);
         }
-        for (a, &k) in cur.channels.iter_mut().zip(&pick) {
-            if let Some(v) = row.f64_or_missing(k)? {
-                a.push(v);
+        for ((a, &k), gone) in cur.channels.iter_mut().zip(&pick).zip(&mut missing) {
+            match row.f64_or_missing(k)? {
+                Some(v) => a.push(v),
+                None => *gone += 1,
             }
         }
         in_block += 1;
@@ -134,9 +159,13 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &RampOptions) -> Result<
     if in_block * 2 >= per {
         blocks.push(cur);
     }
+    if time.is_some() && index > 1 {
+        check_rate(o.rate_hz, (index - 1) as f64 / (last_t - first_t))?;
+    }
     Ok(RampInput {
         names,
         blocks,
         has_chamber: chamber.is_some(),
+        missing,
     })
 }

@@ -474,9 +474,10 @@ impl Model {
                     e.degree
                 )));
             }
-            if !(e.t_min_c.is_finite() && e.t_max_c.is_finite() && e.t_min_c <= e.t_max_c) {
+            let in_range = |t: f64| crate::units::check_temperature_c("t", t).is_ok();
+            if !(in_range(e.t_min_c) && in_range(e.t_max_c) && e.t_min_c <= e.t_max_c) {
                 return Err(Error::Unsupported(format!(
-                    "$.thermal.{name}: t_min_c and t_max_c are not a range"
+                    "$.thermal.{name}: t_min_c and t_max_c are not a range of temperatures (absolute zero to 1000 degC, min <= max)"
                 )));
             }
             let c = (0..=e.degree)
@@ -636,10 +637,15 @@ mod tests {
         };
         assert_eq!(key_of(ramp::Ramp::validate(&bad)), "block_s");
         let bad = ramp::RampOptions {
-            t_ref_c: 600.0,
+            t_ref_c: -300.0,
             ..Default::default()
         };
         assert_eq!(key_of(ramp::Ramp::validate(&bad)), "t_ref_c");
+        let bad = ramp::RampOptions {
+            block_s: 1e-320,
+            ..Default::default()
+        };
+        assert_eq!(key_of(ramp::Ramp::validate(&bad)), "block_s");
     }
 
     #[test]

@@ -216,8 +216,9 @@ fn default_block_s() -> f64 {
 
 impl ThermalPlanOptions {
     /// Refuse options no plan can use, naming the key: a degree above
-    /// [`MAX_DEGREE`], a `u` or `noise` that is not positive, a `T_ref`
-    /// beyond ±500 °C. The ramp's profile is checked by the simulator
+    /// [`MAX_DEGREE`], a `u` or `noise` that is not positive, a
+    /// temperature below absolute zero, `t_low_c` not below `t_high_c`,
+    /// a ramp rate beyond 100 °C/min, a hold, lag or block beyond a week. The ramp's profile is checked by the simulator
     /// and the reduction it predicts.
     pub fn validate(&self) -> Result<()> {
         use crate::options::{check_positive, invalid};
@@ -233,6 +234,15 @@ impl ThermalPlanOptions {
         if let Some(noise) = self.noise {
             check_positive("noise", noise)?;
         }
+        super::sim::check_profile(&super::sim::Profile {
+            plateaus_c: self.plateaus_c.as_deref(),
+            t_low_c: self.t_low_c,
+            t_high_c: self.t_high_c,
+            ramp_c_per_min: self.ramp_c_per_min,
+            hold_s: self.hold_s,
+            lag_s: self.lag_s,
+        })?;
+        crate::options::check_range("block_s", self.block_s, 1e-3, 7.0 * 86400.0, "s")?;
         super::ramp::check_t_ref_c(self.t_ref_c)
     }
 }

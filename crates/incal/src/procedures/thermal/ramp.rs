@@ -98,10 +98,10 @@ impl Default for RampOptions {
     }
 }
 
-/// `T_ref` finite and within ±500 °C, or [`Error::InvalidOption`] naming
-/// `t_ref_c`.
+/// `T_ref` a temperature ([`crate::units::check_temperature_c`]: not
+/// below absolute zero), or [`Error::InvalidOption`] naming `t_ref_c`.
 pub(crate) fn check_t_ref_c(t_ref_c: f64) -> Result<()> {
-    crate::options::check_range("t_ref_c", t_ref_c, -500.0, 500.0, "degC")
+    crate::units::check_temperature_c("t_ref_c", t_ref_c)
 }
 
 /// The ramp reduction as a [`crate::procedures::Procedure`].
@@ -131,6 +131,16 @@ impl ProcedureShape for Ramp {
             return invalid(
                 "block_s",
                 format!("must be at most 86400 s, got {}", o.block_s),
+            );
+        }
+        if o.block_s * o.rate_hz < 2.0 {
+            return invalid(
+                "block_s",
+                format!(
+                    "{} s holds fewer than two samples at {} Hz",
+                    crate::error::short_number(&o.block_s.to_string()),
+                    crate::error::short_number(&o.rate_hz.to_string())
+                ),
             );
         }
         check_t_ref_c(o.t_ref_c)
@@ -266,6 +276,22 @@ pub fn reduce(input: &RampInput, o: &RampOptions) -> Result<ResultDocument> {
         Procedure::Thermal,
         "Thermal model of the bias (chamber ramp)".to_string(),
     );
+    let gone: Vec<String> = input
+        .names
+        .iter()
+        .zip(&input.missing)
+        .filter(|(_, &n)| n > 0)
+        .map(|(name, n)| format!("{name} {n}"))
+        .collect();
+    if !gone.is_empty() {
+        b.warnings([crate::warning::Warning::new(
+            crate::warning::WarningCode::MissingSamples,
+            format!(
+                "empty or NaN cells taken as missing samples and left out of their blocks: {}",
+                gone.join(", ")
+            ),
+        )]);
+    }
     let mut extra: Vec<(String, Vec<f64>)> = Vec::new();
     if both {
         extra.push((

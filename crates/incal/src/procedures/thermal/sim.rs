@@ -358,7 +358,93 @@ fn d_t_ref() -> f64 {
     super::DEFAULT_T_REF_C
 }
 
+/// A chamber's temperature profile as a plan or a simulation gives it.
+pub(crate) struct Profile<'a> {
+    pub plateaus_c: Option<&'a [f64]>,
+    pub t_low_c: f64,
+    pub t_high_c: f64,
+    pub ramp_c_per_min: Option<f64>,
+    pub hold_s: f64,
+    pub lag_s: f64,
+}
+
+/// The physical bounds of a chamber profile, naming the key: every
+/// temperature within absolute zero to 1000 °C, `t_low_c` below
+/// `t_high_c` (a ramp), a ramp rate above 0 and at most 100 °C/min, a hold
+/// and a sensor lag of at most a week.
+pub(crate) fn check_profile(p: &Profile<'_>) -> Result<()> {
+    use crate::options::{check_range, invalid};
+    use crate::units::check_temperature_c;
+    check_temperature_c("t_low_c", p.t_low_c)?;
+    check_temperature_c("t_high_c", p.t_high_c)?;
+    match p.plateaus_c {
+        Some(plateaus) => {
+            for &t in plateaus {
+                check_temperature_c("plateaus_c", t)?;
+            }
+        }
+        None if p.t_low_c >= p.t_high_c => {
+            return invalid(
+                "t_low_c",
+                format!(
+                    "{} degC is not below the high temperature {} degC",
+                    p.t_low_c, p.t_high_c
+                ),
+            );
+        }
+        None => {}
+    }
+    const WEEK_S: f64 = 7.0 * 86400.0;
+    if let Some(r) = p.ramp_c_per_min {
+        if !(r.is_finite() && r > 0.0) {
+            return invalid("ramp_c_per_min", format!("must be above 0, got {r}"));
+        }
+        check_range("ramp_c_per_min", r, 0.0, 100.0, "degC/min")?;
+    }
+    check_range("hold_s", p.hold_s, 0.0, WEEK_S, "s")?;
+    check_range("lag_s", p.lag_s, 0.0, WEEK_S, "s")
+}
+
 impl ThermalSimOptions {
+    /// Physical bounds, naming the key: temperatures not below absolute
+    /// zero, `t_low_c` below `t_high_c`, a chamber's ramp rate (0 to
+    /// 100 °C/min), a hold and a lag of at most a week, a rate of at most
+    /// 10 kHz, and at most 10⁸ samples in all.
+    pub fn check(&self) -> Result<()> {
+        use crate::options::{check_range, invalid};
+        check_profile(&Profile {
+            plateaus_c: self.plateaus_c.as_deref(),
+            t_low_c: self.t_low_c,
+            t_high_c: self.t_high_c,
+            ramp_c_per_min: Some(self.ramp_c_per_min),
+            hold_s: self.hold_s,
+            lag_s: self.lag_s,
+        })?;
+        crate::units::check_temperature_c("t_ref_c", self.t_ref_c)?;
+        check_range("rate_hz", self.rate_hz, 0.0, 1e4, "Hz")?;
+        check_range(
+            "temperature_noise_c",
+            self.temperature_noise_c,
+            0.0,
+            100.0,
+            "degC",
+        )?;
+        let c = self.config();
+        let span: f64 = c.waypoints_c.windows(2).map(|w| (w[1] - w[0]).abs()).sum();
+        let duration_s =
+            span / self.ramp_c_per_min * 60.0 + self.hold_s * c.waypoints_c.len() as f64;
+        if duration_s * self.rate_hz > 1e8 {
+            return invalid(
+                "rate_hz",
+                format!(
+                    "{:.3e} samples over the profile's {duration_s:.0} s: at most 1e8",
+                    duration_s * self.rate_hz
+                ),
+            );
+        }
+        Ok(())
+    }
+
     /// The simulator's configuration ([`RampSim`]).
     pub fn config(&self) -> RampSim {
         let gyro = self.quantity == SimQuantity::Gyro;
@@ -392,6 +478,7 @@ impl crate::procedures::Simulate for super::ramp::Ramp {
     type Options = ThermalSimOptions;
 
     fn validate(o: &ThermalSimOptions) -> Result<()> {
+        o.check()?;
         o.config().validate()
     }
 

@@ -69,9 +69,12 @@ pub fn temperature_of(doc: &ResultDocument) -> std::result::Result<f64, String> 
             .trim()
             .parse::<f64>()
             .ok()
-            .filter(|t| t.is_finite() && t.abs() < 1000.0)
+            .filter(|t| crate::units::check_temperature_c("temperature_c", *t).is_ok())
             .ok_or_else(|| {
-                format!("$.instrument.temperature_c: '{t}' is not a temperature in degC")
+                format!(
+                    "$.instrument.temperature_c: '{}' is not a temperature in degC (absolute zero to 1000)",
+                    incal_io::clip(t)
+                )
             });
     }
     doc.extra
@@ -79,7 +82,7 @@ pub fn temperature_of(doc: &ResultDocument) -> std::result::Result<f64, String> 
         .and_then(|e| e.get("temperature_c"))
         .and_then(|t| t.get("mean"))
         .and_then(Value::as_f64)
-        .filter(|t| t.is_finite())
+        .filter(|t| crate::units::check_temperature_c("temperature_c", *t).is_ok())
         .ok_or_else(|| {
             "no temperature: reduce it with --meta temperature_c=T, or from a recording with a temperature_c column"
                 .to_string()
@@ -228,6 +231,23 @@ fn plateau_values(
     for i in inputs {
         match i.doc.coefficients.get(name) {
             Some(c) if c.unit == *unit && c.u > 0.0 && c.u.is_finite() => {
+                // A value a recording can give (the CSV reader's bound), and
+                // a u the double precision of that value can carry: else
+                // the fit's u would be round-off (0).
+                let at = format!("{}: $.coefficients.{name}", i.name);
+                let max = incal_io::MAX_ABS_VALUE;
+                if !(c.value.abs() <= max && c.u <= max) {
+                    return Err(Error::Unsupported(format!(
+                        "{at}: value {:e} or u {:e} beyond {max:e} in magnitude (not a plateau incal fits)",
+                        c.value, c.u
+                    )));
+                }
+                if c.u < c.value.abs() * 1e-13 {
+                    return Err(Error::Unsupported(format!(
+                        "{at}.u: {:e} is below the precision of the value {:e} (13 digits)",
+                        c.u, c.value
+                    )));
+                }
                 y.push(c.value);
                 u.push(c.u);
                 dof = dof.min(c.dof_value());
