@@ -187,9 +187,9 @@ fn run(location: &str, op: &str, a: &Args) -> Result<String, Failed> {
             let path = a.path.as_deref().ok_or_else(|| input("no path given"))?;
             let opened =
                 incal_io::open(std::path::Path::new(path)).map_err(|e| input(e.to_string()))?;
-            let mut store = Store::open(location).map_err(&err)?;
             let reader = std::io::BufReader::with_capacity(1 << 16, opened.reader);
-            let done = store.import(reader, &opened.name).map_err(&err)?;
+            let at = std::path::Path::new(location);
+            let done = Store::import_at(at, reader, &opened.name).map_err(&err)?;
             Ok(pretty(&json!({
                 "added": done.added,
                 "present": done.present,

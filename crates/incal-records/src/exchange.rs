@@ -6,7 +6,7 @@
 use incal::document::ResultDocument;
 use serde::{Deserialize, Serialize};
 
-use crate::db::{Conn, Mode, P};
+use crate::db::{Conn, DbError, Mode, P};
 use crate::error::db_err;
 use crate::write::{chain_head, instrument_of, new_instrument, write_record};
 use crate::{sha256_hex, time, ChainFields, Error, InputHash, Result, Store, Verified};
@@ -134,6 +134,25 @@ impl Store {
         Ok(Verified { records: n, head })
     }
 
+    /// [`Store::import`] into the store at `location`, created when
+    /// missing: a refused import leaves no store file it created (nor its
+    /// `-wal` and `-shm`).
+    pub fn import_at(
+        location: &std::path::Path,
+        lines: impl std::io::BufRead,
+        source: &str,
+    ) -> Result<Imported> {
+        let is_file = !location.to_str().is_some_and(crate::is_postgres_url);
+        let existed = !is_file || location.exists();
+        let done = Store::open(location).and_then(|mut store| store.import(lines, source));
+        if done.is_err() && !existed {
+            for suffix in ["", "-wal", "-shm", "-journal"] {
+                let _ = std::fs::remove_file(format!("{}{suffix}", location.display()));
+            }
+        }
+        done
+    }
+
     /// Append the records of an export ([`Store::export`]: JSON lines, in
     /// chain order) to this store, keeping their ids, times and hashes, in
     /// one transaction: all of them or none. Records the store already
@@ -177,18 +196,41 @@ impl Store {
             let r: ExportedRecord = serde_json::from_str(buf.trim())
                 .map_err(|err| at(format!("not an exported record ({err})")))?;
             if r.id <= head_id {
+                // A line the store holds is compared whole, not skipped on
+                // its id: its document and every field its record hash
+                // covers must be the store's.
                 let have = tx
                     .query_opt(
-                        "SELECT record_hash FROM records WHERE id = ?1",
+                        "SELECT r.record_hash, i.model FROM records r
+                         LEFT JOIN instruments i ON i.id = r.instrument_id
+                         WHERE r.id = ?1",
                         &[P::I(r.id)],
                     )
                     .map_err(e)?
-                    .map(|row| row.t(0))
+                    .map(|row| Ok::<_, DbError>((row.t(0)?, row.ot(1)?)))
                     .transpose()
                     .map_err(e)?;
-                if have.as_deref() != Some(r.record_hash.as_str()) {
+                let Some((hash, model)) = have else {
+                    return Err(at(format!("record {}: the store has no such record", r.id)));
+                };
+                if hash != r.record_hash {
                     return Err(at(format!(
                         "record {} differs from the store's record {}: the store holds another chain",
+                        r.id, r.id
+                    )));
+                }
+                let tampered = if sha256_hex(r.document.as_bytes()) != r.sha256 {
+                    Some("its document does not match its sha256")
+                } else if r.fields().record_hash() != r.record_hash {
+                    Some("its fields do not match its record_hash")
+                } else if model != r.model {
+                    Some("its model is not the store's")
+                } else {
+                    None
+                };
+                if let Some(why) = tampered {
+                    return Err(at(format!(
+                        "record {}: {why}: the line was changed after the export (the store's record {} is kept)",
                         r.id, r.id
                     )));
                 }
@@ -263,6 +305,19 @@ fn check_next(
     }
     let doc = ResultDocument::from_json(&r.document)
         .map_err(|err| at(format!("record {}: {err}", r.id)))?;
+    if r.serial.trim().is_empty() {
+        return Err(at(format!("record {}: an empty serial", r.id)));
+    }
+    if let Some(own) = doc.instrument.serial.as_deref() {
+        if own != r.serial {
+            return Err(at(format!(
+                "record {}: serial '{}' is not its document's instrument.serial '{}'",
+                r.id,
+                incal_io::clip(&r.serial),
+                incal_io::clip(own)
+            )));
+        }
+    }
     if doc.procedure.as_str() != r.procedure {
         return Err(at(format!(
             "record {}: procedure '{}' is not the document's '{}'",

@@ -78,7 +78,7 @@ impl Store {
             }
         }
         let instrument_id = instrument_of(&mut tx, &serial).map_err(e)?;
-        if let (Some(_), None) = (instrument_id, supersedes) {
+        if instrument_id.is_some() {
             let same = tx
                 .query_opt(
                     "SELECT r.id, r.record_hash FROM records r
@@ -88,6 +88,15 @@ impl Store {
                     &[P::T(Some(&serial)), P::T(Some(&document_sha256))],
                 )
                 .map_err(e)?;
+            if let (Some(r), Some((old, _))) = (&same, supersedes) {
+                // A correction brings a new document: one the instrument
+                // already holds would be stored twice.
+                return Err(Error::Input(format!(
+                    "record {} already holds this document for serial '{}': a correction of record {old} must be a different result",
+                    r.i(0).map_err(e)?,
+                    incal_io::clip(&serial)
+                )));
+            }
             if let Some(r) = same {
                 return Ok(Added {
                     id: r.i(0).map_err(e)?,

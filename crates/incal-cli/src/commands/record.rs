@@ -236,11 +236,9 @@ fn export(a: &ExportArgs) -> CliResult<()> {
 
 fn import(a: &ImportArgs) -> CliResult<()> {
     let opened = incal_io::open(&a.export).map_err(|e| CliError::Input(e.to_string()))?;
-    let mut store = open(&a.db, true)?;
     let reader = std::io::BufReader::with_capacity(1 << 16, opened.reader);
-    let done = store
-        .import(reader, &opened.name)
-        .map_err(store_err(&a.db))?;
+    // A refused import leaves no store it created.
+    let done = Store::import_at(&a.db.path(), reader, &opened.name).map_err(store_err(&a.db))?;
     let text = if a.out.json {
         json_text(&json!({
             "added": done.added,
@@ -310,18 +308,25 @@ fn print_added(out: &OutArgs, added: &incal_records::Added) -> CliResult<()> {
     } else {
         format!("{}\n", added.id)
     };
+    write_text(out.output.as_deref(), &text).map_err(|e| {
+        // Said once and truly: stored now, or held already.
+        let what = if added.existing {
+            "already holds this document"
+        } else {
+            "stored"
+        };
+        CliError::Stored(format!(
+            "record {} {what}; writing the output failed: {e}",
+            added.id
+        ))
+    })?;
     if added.existing {
         crate::embed::stderr_line(&format!(
             "record {} already holds this document for this instrument: nothing stored",
             added.id
         ));
     }
-    write_text(out.output.as_deref(), &text).map_err(|e| {
-        CliError::Stored(format!(
-            "record {} stored; writing the output failed: {e}",
-            added.id
-        ))
-    })
+    Ok(())
 }
 
 fn add(a: &AddArgs) -> CliResult<()> {

@@ -557,3 +557,127 @@ fn thermal_plans_and_simulations_keep_to_physics() {
         common::refused(&common::run(&args), &[needle]);
     }
 }
+
+/// Class 8: `record import` compares every line the store already holds
+/// and refuses one changed after the export; a new line with an empty
+/// serial or one its document contradicts is refused; a refused import
+/// leaves no store behind; `supersede` never stores a document the
+/// instrument already holds.
+#[test]
+fn record_import_and_supersede_never_take_a_changed_or_repeated_record() {
+    let dir = common::workdir("import");
+    let json = result_in(&dir);
+    let db = dir.join("lab.db");
+    common::ok(&common::run(&[
+        "record",
+        "add",
+        p(&json),
+        "--db",
+        p(&db),
+        "--operator",
+        "lee",
+    ]));
+    let export = dir.join("lab.jsonl");
+    common::ok(&common::run(&[
+        "record",
+        "export",
+        "--db",
+        p(&db),
+        "-o",
+        p(&export),
+    ]));
+    let line: serde_json::Value =
+        serde_json::from_str(std::fs::read_to_string(&export).unwrap().trim()).unwrap();
+    // The same export again: every line present, nothing added.
+    common::ok(&common::run(&[
+        "record",
+        "import",
+        p(&export),
+        "--db",
+        p(&db),
+    ]));
+    type Edit = fn(&mut serde_json::Value);
+    let changed: [(Edit, &str); 3] = [
+        (
+            |l| l["operator"] = "eve".into(),
+            "its fields do not match its record_hash",
+        ),
+        (
+            |l| {
+                l["document"] = l["document"]
+                    .as_str()
+                    .unwrap()
+                    .replace("SN-1", "SN-1 ")
+                    .into()
+            },
+            "its document does not match its sha256",
+        ),
+        (
+            |l| l["model"] = "other".into(),
+            "its model is not the store's",
+        ),
+    ];
+    for (edit, needle) in changed {
+        let mut l = line.clone();
+        edit(&mut l);
+        let f = common::write_unique("changed.jsonl", &format!("{l}\n"));
+        let o = common::run(&["record", "import", p(&f), "--db", p(&db)]);
+        common::refused(&o, &["line 1", "record 1", needle]);
+    }
+    let fresh = dir.join("fresh.db");
+    let new_lines: [(Edit, &str); 2] = [
+        (|l| l["serial"] = " ".into(), "an empty serial"),
+        (
+            |l| l["serial"] = "SN-X".into(),
+            "is not its document's instrument.serial 'SN-1'",
+        ),
+    ];
+    for (edit, needle) in new_lines {
+        let mut l = line.clone();
+        edit(&mut l);
+        let f = common::write_unique("new.jsonl", &format!("{l}\n"));
+        let o = common::run(&["record", "import", p(&f), "--db", p(&fresh)]);
+        common::refused(&o, &[needle]);
+        assert!(!fresh.exists(), "a refused import leaves no store behind");
+    }
+    let o = common::run(&[
+        "record",
+        "supersede",
+        "1",
+        p(&json),
+        "--reason",
+        "again",
+        "--db",
+        p(&db),
+    ]);
+    common::refused(&o, &["record 1 already holds this document"]);
+    let listed = common::json_of(&common::run(&["record", "list", "--db", p(&db), "--json"]));
+    assert_eq!(
+        listed["records"].as_array().unwrap().len(),
+        1,
+        "stored once"
+    );
+}
+
+/// Class 12: `record add -o` on a full disk says once what happened to
+/// the record (held already, or stored now), not "nothing stored" and
+/// then "stored".
+#[test]
+fn record_add_says_once_whether_it_stored() {
+    let dir = common::workdir("addfull");
+    let json = result_in(&dir);
+    let db = dir.join("lab.db");
+    let o = common::run(&["record", "add", p(&json), "--db", p(&db), "-o", "/dev/full"]);
+    assert_eq!(o.status.code(), Some(3));
+    assert_eq!(stderr(&o).trim_end().lines().count(), 1, "{}", stderr(&o));
+    assert!(stderr(&o).contains("record 1 stored; writing the output failed"));
+    let o = common::run(&["record", "add", p(&json), "--db", p(&db), "-o", "/dev/full"]);
+    assert_eq!(o.status.code(), Some(3));
+    let err = stderr(&o);
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("record 1 already holds this document; writing the output failed"),
+        "{err}"
+    );
+    assert!(!err.contains("nothing stored"), "{err}");
+}
