@@ -148,11 +148,10 @@ pub fn run(c: &Command) -> CliResult<()> {
             };
             let (gname, _, gyro) = read_document(g)?;
             let (aname, _, accel) = read_document(acc)?;
-            let to_input = |e: incal::Error| crate::error::CliError::Input(e.to_string());
             let imu = incal::procedures::noise::export::kalibr(&gyro, &gname, &accel, &aname)
-                .map_err(to_input)?;
-            let params =
-                incal::procedures::noise::export::px4(&imu, p.ekf_rate_hz).map_err(to_input)?;
+                .map_err(crate::error::core)?;
+            let params = incal::procedures::noise::export::px4(&imu, p.ekf_rate_hz)
+                .map_err(crate::error::core)?;
             write_text(p.output.as_deref(), &params.to_params())
         }
         Command::Ardupilot(a) => {

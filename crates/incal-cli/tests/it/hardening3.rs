@@ -681,3 +681,159 @@ fn record_add_says_once_whether_it_stored() {
     );
     assert!(!err.contains("nothing stored"), "{err}");
 }
+
+/// A thermal model of the ramp simulated in `dir`, as JSON, and the ramp.
+fn thermal_model(dir: &Path) -> (serde_json::Value, std::path::PathBuf) {
+    let csv = dir.join("ramp.csv");
+    common::ok(&common::run(&[
+        "simulate",
+        "thermal",
+        "--seed",
+        "5",
+        "--rate-hz",
+        "1",
+        "--hold-s",
+        "300",
+        "-o",
+        p(&csv),
+    ]));
+    let model = common::json_of(&common::run(&[
+        "thermal",
+        "ramp",
+        "--input",
+        p(&csv),
+        "--rate-hz",
+        "1",
+        "--quantity",
+        "gyro",
+        "--json",
+    ]));
+    (model, csv)
+}
+
+/// Rename every `from.` coefficient and the `from` entry of a thermal
+/// model to `to`.
+fn rename_channel(m: &mut serde_json::Value, from: &str, to: &str) {
+    let entry = m["thermal"].as_object_mut().unwrap().remove(from).unwrap();
+    m["thermal"][to] = entry;
+    let coefficients = m["coefficients"].as_object_mut().unwrap();
+    let keys: Vec<String> = coefficients
+        .keys()
+        .filter(|k| k.starts_with(&format!("{from}.")))
+        .cloned()
+        .collect();
+    for k in keys {
+        let v = coefficients.remove(&k).unwrap();
+        coefficients.insert(k.replacen(from, to, 1), v);
+    }
+    for n in m["correlation"]["names"].as_array_mut().unwrap() {
+        if let Some(s) = n.as_str().and_then(|s| s.strip_prefix(&format!("{from}."))) {
+            *n = format!("{to}.{s}").into();
+        }
+    }
+}
+
+/// Class 6: `thermal apply` refuses a model that would correct the
+/// temperature column or whose degree contradicts its coefficients.
+#[test]
+fn thermal_apply_refuses_a_model_read_wrong() {
+    let dir = common::workdir("apply");
+    let (model, csv) = thermal_model(&dir);
+    let mut temp = model.clone();
+    rename_channel(&mut temp, "gx", "temperature_c");
+    let f = common::write("m_temp.json", &temp.to_string());
+    let o = common::run(&["thermal", "apply", p(&f), "--input", p(&csv)]);
+    common::refused(
+        &o,
+        &["$.thermal.temperature_c", "not a channel a model corrects"],
+    );
+    let mut degree = model.clone();
+    let d = degree["thermal"]["gx"]["degree"].as_u64().unwrap();
+    degree["thermal"]["gx"]["degree"] = (d - 1).into();
+    let f = common::write("m_deg.json", &degree.to_string());
+    let o = common::run(&["thermal", "apply", p(&f), "--input", p(&csv)]);
+    common::refused(&o, &["$.thermal.gx.degree", &format!("has gx.c{d}")]);
+}
+
+/// Class 7: exports refuse repeated axes, a parameter a float32 cannot
+/// hold, an absurd EKF rate and a negative noise density.
+#[test]
+fn exports_write_only_what_a_flight_stack_reads_back() {
+    let dir = common::workdir("exports");
+    let (model, _) = thermal_model(&dir);
+    let f = common::write("model.json", &model.to_string());
+    let o = common::run(&["export", "px4", p(&f), "--axes", "gx,gx,gx"]);
+    common::refused(&o, &["--axes", "three different channels"]);
+    let mut tiny = model.clone();
+    let mut c2 = tiny["coefficients"]["gx.c2"].clone();
+    for k in ["value", "u", "U95"] {
+        c2[k] = 1e-320.into();
+    }
+    c2["u"] = 0.into();
+    c2["U95"] = 0.into();
+    tiny["coefficients"]["gx.c2"] = c2;
+    let f = common::write("tiny.json", &tiny.to_string());
+    for fmt in ["px4", "ardupilot"] {
+        let o = common::run(&["export", fmt, p(&f)]);
+        common::refused(&o, &["does not fit the flight stack's float32 parameter"]);
+    }
+    let sim = |q: &str, args: &[&str]| {
+        let csv = dir.join(format!("{q}.csv"));
+        let mut a = vec![
+            "simulate",
+            "noise",
+            "--rate-hz",
+            "100",
+            "--duration-s",
+            "3600",
+            "--seed",
+            "11",
+            "--quantity",
+            q,
+            "-o",
+            p(&csv),
+        ];
+        a.extend_from_slice(args);
+        common::ok(&common::run(&a));
+        common::json_of(&common::run(&[
+            "noise",
+            "--input",
+            p(&csv),
+            "--rate-hz",
+            "100",
+            "--quantity",
+            q,
+            "--json",
+        ]))
+    };
+    let g = sim("gyro", &["--arw-deg-rth", "0.2", "--rrw-deg-h-rth", "40"]);
+    let a = sim("accel", &["--vrw-ug-rthz", "60", "--accel-rw-ug-rts", "30"]);
+    let gj = common::write("g.json", &g.to_string());
+    let aj = common::write("a.json", &a.to_string());
+    let o = common::run(&[
+        "export",
+        "px4",
+        "--gyro",
+        p(&gj),
+        "--accel",
+        p(&aj),
+        "--ekf-rate-hz",
+        "1e300",
+    ]);
+    common::refused(&o, &["--ekf-rate-hz"]);
+    let mut neg = g.clone();
+    let arw = neg["coefficients"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .find(|k| k.ends_with(".ARW"))
+        .cloned()
+        .unwrap();
+    let v = neg["coefficients"][&arw]["value"].as_f64().unwrap();
+    neg["coefficients"][&arw]["value"] = (-v).into();
+    let nj = common::write("neg.json", &neg.to_string());
+    for fmt in ["kalibr", "px4"] {
+        let o = common::run(&["export", fmt, "--gyro", p(&nj), "--accel", p(&aj)]);
+        common::refused(&o, &[&arw, "is positive"]);
+    }
+}

@@ -725,7 +725,7 @@ fn kalibr_export_converts_the_terms_and_refuses_what_is_missing() {
             "--ekf-rate-hz",
             "0",
         ]),
-        "ekf_rate_hz",
+        "--ekf-rate-hz",
     );
 
     // Refusals, one line each, exit 2.

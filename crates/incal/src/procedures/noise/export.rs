@@ -113,6 +113,12 @@ fn largest(
                 c.unit, tunit
             )));
         }
+        if !(c.value.is_finite() && c.value > 0.0) {
+            return Err(bad(format!(
+                "{name}: $.coefficients[\"{cname}\"].value is {}: a noise density or random walk is positive",
+                c.value
+            )));
+        }
         let k = si / factor;
         let t = KalibrTerm {
             key,
@@ -293,12 +299,7 @@ pub struct Px4Params {
 /// [`Px4Params`] at prediction rate `ekf_rate_hz` (PX4's default 100 Hz,
 /// `EKF2_PREDICT_US` = 10 000).
 pub fn px4(imu: &KalibrImu, ekf_rate_hz: f64) -> Result<Px4Params> {
-    if !(ekf_rate_hz.is_finite() && ekf_rate_hz > 0.0) {
-        return Err(Error::InvalidValue {
-            what: "ekf_rate_hz (a positive rate, Hz)".into(),
-            value: ekf_rate_hz.to_string(),
-        });
-    }
+    crate::options::check_range("ekf_rate_hz", ekf_rate_hz, 1.0, 1e4, "Hz")?;
     let k = ekf_rate_hz.sqrt();
     let name = |key: &str| match key {
         "gyroscope_noise_density" => Some(("EKF2_GYR_NOISE", "rad/s")),
@@ -312,6 +313,10 @@ pub fn px4(imu: &KalibrImu, ekf_rate_hz: f64) -> Result<Px4Params> {
         .iter()
         .filter_map(|t| name(t.key).map(|(n, u)| (n, t.value * k, u, t.clone())))
         .collect();
+    let params: Vec<(&'static str, f64, &'static str, KalibrTerm)> = params;
+    for (n, v, _, _) in &params {
+        crate::procedures::thermal::export::float32_parameter(n, *v)?;
+    }
     Ok(Px4Params {
         params,
         ekf_rate_hz,

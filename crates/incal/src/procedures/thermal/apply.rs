@@ -77,7 +77,13 @@ pub fn apply_with<R: Read, W: Write>(
             if let Some(v) = row.f64_or_missing(*k)? {
                 let tc = t.clamp(e.t_min_c, e.t_max_c);
                 was_clamped |= tc != t;
-                fixed[*k] = Some(v - (poly(c, e.t_ref_c, tc) - at_ref));
+                let out = v - (poly(c, e.t_ref_c, tc) - at_ref);
+                if !(out.is_finite() && out.abs() <= incal_io::MAX_ABS_VALUE) {
+                    return Err(row
+                        .cell_error(*k, format!("the compensated value {out:e} is beyond 1e15"))
+                        .into());
+                }
+                fixed[*k] = Some(out);
             }
         }
         for (k, f) in fixed.iter().enumerate() {

@@ -89,6 +89,18 @@ pub fn axes<'a>(
                 message: format!("three channel names X,Y,Z, got {}", a.len()),
             });
         }
+        if a[0] == a[1] || a[0] == a[2] || a[1] == a[2] {
+            return Err(Error::InvalidOption {
+                key: "axes".into(),
+                message: format!(
+                    "three different channels X,Y,Z, got {}",
+                    a.iter()
+                        .map(|s| incal_io::clip(s))
+                        .collect::<Vec<_>>()
+                        .join(",")
+                ),
+            });
+        }
         return Ok([pick(&a[0])?, pick(&a[1])?, pick(&a[2])?]);
     }
     let by_suffix = |s: char| {
@@ -191,7 +203,32 @@ pub fn px4(
             out.push((format!("{p}0_X{k}_{i}"), v, 9));
         }
     }
+    float32_all(out.iter().map(|(n, v, _)| (n.as_str(), *v)))?;
     Ok(out)
+}
+
+/// A flight stack's parameter `name` holds `value` as a float32: finite,
+/// at most `f32::MAX` in magnitude and, when not 0, at least the smallest
+/// normal float32 (1.2e-38; below it the parameter would read 0 or lose
+/// its digits). Else [`Error::Unsupported`] naming the parameter.
+pub fn float32_parameter(name: &str, value: f64) -> Result<()> {
+    let a = value.abs();
+    if value.is_finite()
+        && a <= f64::from(f32::MAX)
+        && (a == 0.0 || a >= f64::from(f32::MIN_POSITIVE))
+    {
+        return Ok(());
+    }
+    Err(Error::Unsupported(format!(
+        "{name}: {value:e} does not fit the flight stack's float32 parameter (1.2e-38 to 3.4e38 in magnitude, or 0)"
+    )))
+}
+
+/// Every parameter of `params` checked by [`float32_parameter`].
+fn float32_all<'a>(params: impl IntoIterator<Item = (&'a str, f64)>) -> Result<()> {
+    params
+        .into_iter()
+        .try_for_each(|(n, v)| float32_parameter(n, v))
 }
 
 /// The PX4 parameters as a QGroundControl parameter file.
@@ -240,6 +277,7 @@ pub fn ardupilot(
             out.push((format!("{p}_{kind}{k}_{axis}"), v));
         }
     }
+    float32_all(out.iter().map(|(n, v)| (n.as_str(), *v)))?;
     Ok(out)
 }
 

@@ -468,6 +468,11 @@ impl Model {
         for (name, v) in map {
             let e: ThermalEntry = serde_json::from_value(v.clone())
                 .map_err(|e| Error::Unsupported(format!("$.thermal.{name}: {e}")))?;
+            if input::NOT_CHANNELS.contains(&name.as_str()) {
+                return Err(Error::Unsupported(format!(
+                    "$.thermal.{name}: {name} is the recording's time or temperature, not a channel a model corrects"
+                )));
+            }
             if e.degree > MAX_DEGREE {
                 return Err(Error::Unsupported(format!(
                     "$.thermal.{name}.degree: {} is above {MAX_DEGREE}",
@@ -490,6 +495,20 @@ impl Model {
                         })
                 })
                 .collect::<Result<Vec<f64>>>()?;
+            // The degree says how many coefficients there are: one more
+            // is a model read wrong.
+            let extra = format!("{name}.c{}", e.degree + 1);
+            if doc.coefficients.get(&extra).is_some() {
+                return Err(Error::Unsupported(format!(
+                    "$.thermal.{name}.degree: {} but the document has {extra}",
+                    e.degree
+                )));
+            }
+            if let Some(k) = c.iter().position(|x| !x.is_finite()) {
+                return Err(Error::Unsupported(format!(
+                    "$.coefficients.{name}.c{k}: not a finite number"
+                )));
+            }
             entries.push((name.clone(), e, c));
         }
         if entries.is_empty() {
