@@ -63,17 +63,46 @@ pub fn open_output(path: Option<&Path>) -> CliResult<std::io::BufWriter<Box<dyn 
 /// Write `text` to the file `path`, or to standard output when `path` is
 /// `None` or `-`. Any write or flush error is a failure (exit 1) with one
 /// line: `stdout: ...` or `PATH: cannot write: ...`.
+///
+/// A regular file (or a new one) is written beside its place and renamed
+/// into it once whole, so a full disk leaves neither an empty nor a half
+/// file, and an earlier file of that name stays as it was; a device
+/// (`/dev/stdout`, `/dev/full`) is written in place.
 pub fn write_text(path: Option<&Path>, text: &str) -> CliResult<()> {
     match path {
         Some(p) if !is_dash(p) => {
-            let write = || -> std::io::Result<()> {
+            let failed = |e: std::io::Error| {
+                CliError::Failure(anyhow::anyhow!("{}: cannot write: {e}", p.display()))
+            };
+            let direct = || -> std::io::Result<()> {
                 let mut file = std::fs::File::create(p)?;
                 file.write_all(text.as_bytes())?;
                 file.flush()
             };
-            write().map_err(|e| {
-                CliError::Failure(anyhow::anyhow!("{}: cannot write: {e}", p.display()))
-            })
+            let regular = std::fs::metadata(p).map_or(true, |m| m.is_file());
+            let name = p.file_name().map(|n| n.to_string_lossy().into_owned());
+            let (true, Some(name)) = (regular, name) else {
+                return direct().map_err(failed);
+            };
+            let tmp = p.with_file_name(format!(".{name}.incal-{}", std::process::id()));
+            let whole = || -> std::io::Result<()> {
+                let mut file = std::fs::File::create(&tmp)?;
+                file.write_all(text.as_bytes())?;
+                file.sync_all()?;
+                std::fs::rename(&tmp, p)
+            };
+            match whole() {
+                Ok(()) => Ok(()),
+                Err(e) => {
+                    let _ = std::fs::remove_file(&tmp);
+                    // A directory that takes no new file but a writable
+                    // file in it: written in place.
+                    if e.kind() == std::io::ErrorKind::PermissionDenied {
+                        return direct().map_err(failed);
+                    }
+                    Err(failed(e))
+                }
+            }
         }
         _ => {
             let mut out = crate::embed::stdout();

@@ -104,7 +104,8 @@ pub struct LabProfile {
     pub standard: Vec<Standard>,
 }
 
-/// True for a `YYYY-MM-DD` date with a real month and day.
+/// True for a `YYYY-MM-DD` date with a real year (1 to 9999), month and
+/// day.
 pub fn is_date(s: &str) -> bool {
     let b = s.as_bytes();
     if b.len() != 10 || b[4] != b'-' || b[7] != b'-' {
@@ -114,7 +115,8 @@ pub fn is_date(s: &str) -> bool {
     let (Some(y), Some(m), Some(d)) = (num(0..4), num(5..7), num(8..10)) else {
         return false;
     };
-    if !s[0..4].bytes().all(|c| c.is_ascii_digit()) {
+    // Year 0 does not exist (the records' dates start at year 1 too).
+    if !s[0..4].bytes().all(|c| c.is_ascii_digit()) || y == 0 {
         return false;
     }
     let leap = (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
@@ -237,6 +239,10 @@ pub struct Certificate {
     pub environment: Option<String>,
     /// For a correction: the certificate number it replaces and why.
     pub replaces: Option<(String, String)>,
+    /// For a record corrected since: the certificate number that replaces
+    /// this one. The certificate then says on its first page that it is
+    /// withdrawn.
+    pub superseded_by: Option<String>,
 }
 
 /// The environment the recording itself recorded (its `temperature_c` and
@@ -374,6 +380,12 @@ pub(crate) fn front_html(
         esc(&c.number),
         esc(&doc.title)
     ));
+    if let Some(new) = &c.superseded_by {
+        s.push_str(&format!(
+            "<p id=\"superseded\" class=\"replaces\"><strong>Withdrawn:</strong> this certificate was replaced by certificate {}; it is not valid.</p>\n",
+            esc(new)
+        ));
+    }
     if let Some((old, why)) = &c.replaces {
         s.push_str(&format!(
             "<p id=\"replaces\" class=\"replaces\">This certificate replaces certificate {}. Reason: {}</p>\n",

@@ -176,5 +176,6 @@ pub fn certificate(
         replaces: record
             .and_then(|r| r.supersedes.as_ref())
             .map(|s| (number_of(s.old_id), s.reason.clone())),
+        superseded_by: record.and_then(|r| r.superseded_by).map(number_of),
     }
 }

@@ -181,6 +181,7 @@ fn hostile_options(p: &str) -> RenderOptions {
             issue_date: p.into(),
             environment: Some(p.into()),
             replaces: Some((p.into(), p.into())),
+            superseded_by: Some(p.into()),
         }),
     }
 }

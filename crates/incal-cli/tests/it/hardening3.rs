@@ -837,3 +837,114 @@ fn exports_write_only_what_a_flight_stack_reads_back() {
         common::refused(&o, &[&arw, "is positive"]);
     }
 }
+
+/// Class 9: a superseded record's certificate says it is withdrawn and by
+/// which certificate; a date of year 0 is refused as `record add` refuses
+/// it.
+#[test]
+fn a_withdrawn_certificate_says_so_and_year_zero_is_no_date() {
+    let dir = common::workdir("withdrawn");
+    let json = result_in(&dir);
+    let db = dir.join("lab.db");
+    common::ok(&common::run(&[
+        "record",
+        "add",
+        p(&json),
+        "--db",
+        p(&db),
+        "--operator",
+        "lee",
+    ]));
+    let csv = dir.join("t2.csv");
+    common::ok(&common::run(&[
+        "simulate",
+        "tumble",
+        "--seed",
+        "4",
+        "-o",
+        p(&csv),
+    ]));
+    let second = dir.join("r2.json");
+    common::ok(&common::run(&[
+        "tumble",
+        "--input",
+        p(&csv),
+        "--mount",
+        "pendulum",
+        "--serial",
+        "SN-1",
+        "--json",
+        "-o",
+        p(&second),
+    ]));
+    common::ok(&common::run(&[
+        "record",
+        "supersede",
+        "1",
+        p(&second),
+        "--reason",
+        "wrong mount",
+        "--db",
+        p(&db),
+    ]));
+    let lab = common::write(
+        "lab.toml",
+        "[lab]\nname = \"Lab\"\naddress = \"1 Road\"\ncertificate_prefix = \"C-\"\n[[signatory]]\nname = \"Ann\"\nrole = \"Head\"\n",
+    );
+    let html = dir.join("old.html");
+    common::ok(&common::run(&[
+        "report",
+        p(&json),
+        "--db",
+        p(&db),
+        "--lab",
+        p(&lab),
+        "-o",
+        p(&html),
+    ]));
+    let old = std::fs::read_to_string(&html).unwrap();
+    assert!(old.contains("Withdrawn:") && old.contains("replaced by certificate C-000002"));
+    let html = dir.join("new.html");
+    common::ok(&common::run(&[
+        "report",
+        p(&second),
+        "--db",
+        p(&db),
+        "--lab",
+        p(&lab),
+        "-o",
+        p(&html),
+    ]));
+    let new = std::fs::read_to_string(&html).unwrap();
+    assert!(!new.contains("Withdrawn:") && new.contains("replaces certificate C-000001"));
+    let o = common::run(&["report", p(&json), "--lab", p(&lab), "--date", "0000-01-01"]);
+    common::refused(&o, &["--date", "0000-01-01"]);
+}
+
+/// Class 11: `noise` refuses the time stamps as a channel and a bias
+/// stability time shorter than the sample period.
+#[test]
+fn noise_refuses_stamps_as_a_channel_and_a_time_below_the_period() {
+    let csv = common::tmp("n.csv");
+    common::ok(&common::run(&[
+        "simulate",
+        "noise",
+        "--rate-hz",
+        "100",
+        "--duration-s",
+        "60",
+        "--seed",
+        "2",
+        "--arw-deg-rth",
+        "0.2",
+        "-o",
+        p(&csv),
+    ]));
+    let o = common::run(&["noise", "--input", p(&csv), "--columns", "time_s"]);
+    common::refused(&o, &["time_s is the record's time stamps, not a channel"]);
+    let o = common::run(&["noise", "--input", p(&csv), "--stability-tau-s", "0.001"]);
+    common::refused(
+        &o,
+        &["--stability-tau-s", "shorter than the sample period 0.01 s"],
+    );
+}

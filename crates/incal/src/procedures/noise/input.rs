@@ -74,6 +74,11 @@ pub fn read<R: Read>(
     } else {
         h.selected().to_vec()
     };
+    if pick.iter().any(|&k| h.names()[k] == "time_s") {
+        return Err(h
+            .error("time_s is the record's time stamps, not a channel: select the data columns")
+            .into());
+    }
     if pick.is_empty() {
         return Err(h.error("no channel column besides time_s").into());
     }

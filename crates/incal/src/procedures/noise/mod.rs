@@ -681,6 +681,17 @@ fn analyse(
     }
     let grid = o.grid()?;
     let tau0 = build.tau0;
+    if let Some(&t) = o.stability_tau_s.iter().find(|&&t| t < tau0 * (1.0 - 1e-9)) {
+        return crate::options::invalid(
+            "stability_tau_s",
+            format!(
+                "{} s is shorter than the sample period {} s: no averaging time below it is measured",
+                crate::error::short_f64(t),
+                // The period to the nanosecond (stamps carry round-off).
+                (tau0 * 1e9).round() / 1e9
+            ),
+        );
+    }
     let factor = build.factor;
     let opts = StabilityOptions {
         tau0_s: tau0,
