@@ -29,6 +29,46 @@ pub fn invalid<T>(key: &str, message: impl Into<String>) -> Result<T> {
     })
 }
 
+/// Every non-integral number of `options` (a procedure's options as JSON)
+/// within 1e15 in magnitude, the bound the CSV reader puts on a recording:
+/// an option is echoed into the result document, and a number beyond it
+/// (`k1 = 1e300`, an angle of 1e300) is nothing a rig sets and would make
+/// the result unusable downstream. Else [`Error::InvalidOption`] naming
+/// the key (`key`, `runs[2].rate_deg_s`).
+pub fn check_magnitudes(options: &serde_json::Value) -> Result<()> {
+    fn walk(v: &serde_json::Value, path: &str) -> Result<()> {
+        match v {
+            serde_json::Value::Number(n) if !(n.is_i64() || n.is_u64()) => {
+                let x = n.as_f64().unwrap_or(f64::NAN);
+                if x.abs() > incal_io::MAX_ABS_VALUE {
+                    return invalid(
+                        path,
+                        format!(
+                            "{} is beyond 1e15 in magnitude",
+                            crate::error::short_number(&x.to_string())
+                        ),
+                    );
+                }
+                Ok(())
+            }
+            serde_json::Value::Array(a) => a
+                .iter()
+                .enumerate()
+                .try_for_each(|(i, x)| walk(x, &format!("{path}[{i}]"))),
+            serde_json::Value::Object(m) => m.iter().try_for_each(|(k, x)| {
+                let at = if path.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{path}.{k}")
+                };
+                walk(x, &at)
+            }),
+            _ => Ok(()),
+        }
+    }
+    walk(options, "")
+}
+
 /// A finite number within `lo..=hi`, or [`Error::InvalidOption`] naming
 /// `key`, the range and the value (`unit` is appended to the bounds).
 pub fn check_range(key: &str, value: f64, lo: f64, hi: f64, unit: &str) -> Result<()> {

@@ -259,6 +259,27 @@ fn text_summary(items: &[Item], failed: usize) -> String {
     s
 }
 
+/// The first recording reduced alone, then the rest: an option the
+/// procedure refuses (its one line names the option, `--key: …`) would be
+/// refused for every recording, so it is said once, as bad usage (exit 2),
+/// and nothing else is reduced.
+fn first_then_rest(a: &Args, words: &[String], inputs: &[PathBuf]) -> CliResult<Vec<Outcome>> {
+    let Some((first, rest)) = inputs.split_first() else {
+        return Ok(Vec::new());
+    };
+    let mut outcomes = reduce_all(a, words, std::slice::from_ref(first));
+    if let Some(o) = outcomes.first() {
+        let line = o.run.stderr.last().map(String::as_str).unwrap_or_default();
+        if o.run.code == 2 && line.starts_with("--") {
+            return Err(CliError::Input(format!(
+                "{line} (the options of every recording; nothing reduced)"
+            )));
+        }
+    }
+    outcomes.extend(reduce_all(a, words, rest));
+    Ok(outcomes)
+}
+
 /// `incal batch`.
 pub fn run(a: &Args) -> CliResult<()> {
     let procedure = entry(&a.procedure)?;
@@ -268,7 +289,7 @@ pub fn run(a: &Args) -> CliResult<()> {
         Some(db) => Some(incal_records::Store::open(db).map_err(|e| store_error(db, e))?),
         None => None,
     };
-    let outcomes = reduce_all(a, &words, &inputs);
+    let outcomes = first_then_rest(a, &words, &inputs)?;
     let mut items = Vec::with_capacity(outcomes.len());
     let (mut failed_input, mut failed_other, mut stopped) = (0usize, 0usize, 0usize);
     for o in outcomes {

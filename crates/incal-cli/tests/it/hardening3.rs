@@ -948,3 +948,109 @@ fn noise_refuses_stamps_as_a_channel_and_a_time_below_the_period() {
         &["--stability-tau-s", "shorter than the sample period 0.01 s"],
     );
 }
+
+/// Class 12: `batch` says an option the procedure refuses once, not once
+/// per recording, and reduces nothing.
+#[test]
+fn batch_says_an_option_error_once() {
+    let dir = common::workdir("batchopt");
+    let mut files = Vec::new();
+    for k in 0..3 {
+        let f = dir.join(format!("n{k}.csv"));
+        common::ok(&common::run(&[
+            "simulate",
+            "noise",
+            "--rate-hz",
+            "10",
+            "--duration-s",
+            "100",
+            "--seed",
+            &k.to_string(),
+            "-o",
+            p(&f),
+        ]));
+        files.push(f);
+    }
+    let mut args = vec!["batch", "noise"];
+    args.extend(files.iter().map(|f| p(f)));
+    args.extend(["--", "--stability-tau-s", "-1"]);
+    let o = common::run(&args);
+    common::refused(&o, &["--stability-tau-s", "nothing reduced"]);
+}
+
+/// Class 5: options a rig cannot have are refused before they reach a
+/// result: a centrifuge alignment tolerance above 10 deg, a K1 beyond
+/// 1e15 either way, a plan's u(K1) not below |K1|.
+#[test]
+fn options_a_rig_cannot_have_never_reach_a_result() {
+    let c = common::tmp("c.csv");
+    common::ok(&common::run(&[
+        "simulate",
+        "centrifuge",
+        "--seed",
+        "12",
+        "-o",
+        p(&c),
+    ]));
+    let o = common::run(&[
+        "centrifuge",
+        "--input",
+        p(&c),
+        "--k0",
+        "1.2e-4",
+        "--u-k0",
+        "2e-6",
+        "--k1",
+        "1.3",
+        "--u-k1",
+        "1.3e-6",
+        "--radius-m",
+        "0.71",
+        "--latitude-deg",
+        "39.9",
+        "--alignment-tolerance-deg",
+        "1e300",
+    ]);
+    common::refused(&o, &["--alignment-tolerance-deg", "0..10 deg"]);
+    let g = common::tmp("gp.csv");
+    common::ok(&common::run(&[
+        "simulate",
+        "gyro-positions",
+        "--samples",
+        "4",
+        "--seed",
+        "17",
+        "-o",
+        p(&g),
+    ]));
+    for k1 in ["1e300", "1e-300"] {
+        let o = common::run(&[
+            "gyro",
+            "positions",
+            "--input",
+            p(&g),
+            "--latitude-deg",
+            "39",
+            "--axial",
+            "sa",
+            "--azimuth-deg",
+            "10",
+            "--k1",
+            k1,
+        ]);
+        common::refused(&o, &["k1", "1e-15 to 1e15"]);
+    }
+    let o = common::run(&[
+        "plan",
+        "gyro-positions",
+        "--latitude-deg",
+        "39",
+        "--k1",
+        "1",
+        "--u-k1",
+        "2",
+        "--noise",
+        "0.01",
+    ]);
+    common::refused(&o, &["--u-k1", "not below |k1|"]);
+}

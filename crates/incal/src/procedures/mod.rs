@@ -181,6 +181,9 @@ pub fn reduce_source<P: Procedure, R: Read>(
     progress: &dyn Progress,
 ) -> Result<ResultDocument> {
     P::validate(options)?;
+    if let Ok(v) = serde_json::to_value(options) {
+        crate::options::check_magnitudes(&v)?;
+    }
     let mut rows = incal_io::Reader::new(name, src, read)?;
     let input = P::read(&mut rows, options).map_err(|e| e.in_file(name))?;
     let summary = rows.finish()?;
@@ -200,6 +203,11 @@ pub fn reduce_source<P: Procedure, R: Read>(
         },
     );
     doc.options = P::recorded(&input, options)?;
+    // What the document echoes (some options are recorded apart from the
+    // options' own form, such as a K1 and its source).
+    crate::options::check_magnitudes(&serde_json::Value::Object(
+        doc.options.clone().into_iter().collect(),
+    ))?;
     record_environment(&mut doc, &summary.conditions);
     Ok(doc)
 }

@@ -351,11 +351,13 @@ pub(super) fn check_options(o: &CentrifugeOptions) -> Result<()> {
     check_positive("radius_m", o.radius_m)?;
     check_positive("gravity_m_s2", o.gravity_m_s2)?;
     check_latitude_deg(o.latitude_deg)?;
-    if !(o.alignment_tolerance_deg.is_finite() && o.alignment_tolerance_deg >= 0.0) {
+    // A tolerance is a small angle; the plan refuses one above 10 deg too.
+    if !(o.alignment_tolerance_deg.is_finite() && (0.0..=10.0).contains(&o.alignment_tolerance_deg))
+    {
         return invalid(
             "alignment_tolerance_deg",
             format!(
-                "must be a non-negative number, got {}",
+                "must be within 0..10 deg, got {}",
                 num(o.alignment_tolerance_deg)
             ),
         );

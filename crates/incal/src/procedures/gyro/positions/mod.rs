@@ -368,9 +368,13 @@ impl K1Source {
             K1Source::Result { k1, u, .. } => (*k1, Some(*u)),
             K1Source::Fit => return Ok(()),
         };
-        if !(k1.is_finite() && k1 != 0.0) {
+        // A recording's numbers are within 1e15 (the CSV reader's bound):
+        // a scale factor beyond that either way is nothing a gyro has.
+        let max = incal_io::MAX_ABS_VALUE;
+        if !(k1.is_finite() && (1.0 / max..=max).contains(&k1.abs())) {
             return Err(Error::InvalidValue {
-                what: "k1 (a finite, non-zero scale factor, output/(deg/s))".into(),
+                what: "k1 (a finite scale factor, 1e-15 to 1e15 in magnitude, output/(deg/s))"
+                    .into(),
                 value: k1.to_string(),
             });
         }

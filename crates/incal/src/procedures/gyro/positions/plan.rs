@@ -94,23 +94,37 @@ fn spin_axis() -> Axial {
 impl PositionsPlanOptions {
     /// Refuse options no prediction can use: a noise that is not a
     /// positive number, no samples or too many, no angles or azimuths or
-    /// one beyond 1e4 deg, a K1 that is not finite, a u(K1) that is not a
-    /// non-negative number, a latitude outside ±90°.
+    /// one beyond 1e4 deg, a K1 that is not finite, zero or beyond 1e15, a
+    /// u(K1) that is not a non-negative number below |K1| (when K1 is
+    /// given), a latitude outside ±90°.
     pub fn validate(&self) -> Result<()> {
         use crate::options::invalid;
         check_plan_noise(self.noise, self.samples)?;
         check_angles_deg("angles_deg", &self.angles_deg)?;
         check_angles_deg("azimuths_deg", &self.azimuths_deg)?;
-        if !self.k1.is_finite() {
+        if !(self.k1.is_finite() && self.k1 != 0.0 && self.k1.abs() <= incal_io::MAX_ABS_VALUE) {
             return invalid(
                 "k1",
-                format!("must be a finite scale factor, got {}", self.k1),
+                format!(
+                    "must be a finite, non-zero scale factor up to 1e15, got {}",
+                    crate::error::short_f64(self.k1)
+                ),
             );
         }
         if !(self.u_k1.is_finite() && self.u_k1 >= 0.0) {
             return invalid(
                 "u_k1",
                 format!("must be a non-negative number, got {}", self.u_k1),
+            );
+        }
+        if !self.fit_k1 && self.u_k1 >= self.k1.abs() {
+            return invalid(
+                "u_k1",
+                format!(
+                    "{} is not below |k1| = {}: K1 would not be known at all",
+                    crate::error::short_f64(self.u_k1),
+                    crate::error::short_f64(self.k1.abs())
+                ),
             );
         }
         crate::options::check_latitude_deg(self.latitude_deg)
