@@ -25,3 +25,10 @@ $INCAL imu ferraris --input "$D/imu-ferraris" --rate-hz 100 --json -o "$D/imu-ca
 $INCAL tumble --mount pendulum --input "$D/tumble" --json -o "$D/result"
 $INCAL simulate thermal --seed 3 --t-low-c 20 --t-high-c 40 --ramp-c-per-min 20 --hold-s 30 --lag-s 5 --rate-hz 1 -o "$D/thermal-ramp"
 $INCAL tumble --mount pendulum --input "$D/tumble" --json --meta temperature_c=25 -o "$D/thermal-fit"
+$INCAL thermal ramp --input "$D/thermal-ramp" --rate-hz 1 --quantity gyro --json -o "$D/thermal-model"
+# lab-profile is written by hand; record-import is the export of a store
+# holding the result seed.
+STORE=$(mktemp -d)/seed.db
+$INCAL record add "$D/result" --serial SN-1 --db "$STORE" --created-utc 2026-01-01T00:00:00Z > /dev/null
+$INCAL record export --db "$STORE" -o "$D/record-import"
+rm -rf "$(dirname "$STORE")"

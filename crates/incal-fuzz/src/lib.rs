@@ -45,6 +45,12 @@ pub const EXTRA: &[(&str, &str)] = &[
     ),
     ("result", "result document JSON (compare)"),
     ("limits", "limits TOML (--limits)"),
+    (
+        "thermal-model",
+        "thermal model JSON (thermal apply, export px4 and ardupilot)",
+    ),
+    ("lab-profile", "laboratory profile TOML (report --lab)"),
+    ("record-import", "records export JSON lines (record import)"),
 ];
 
 /// Every target: `(name, what the fuzzed bytes are)`: those of the
@@ -258,6 +264,9 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
         "imu-calibration" => apply_imu(data, seed(Id::ImuFerraris.as_str())),
         "result" => compare_result(data),
         "limits" => limits(data),
+        "thermal-model" => thermal_model(data),
+        "lab-profile" => lab_profile(data),
+        "record-import" => record_import(data),
         t if REGISTRY
             .iter()
             .any(|e| e.input == InputKind::Results && e.fuzz.contains(&t)) =>
@@ -332,6 +341,105 @@ fn limits(data: &[u8]) -> Outcome {
             Err(e) => Outcome::Refused(format!("{NAME}: {e}")),
         },
         Err(e) => Outcome::Refused(format!("seed: {e}")),
+    }
+}
+
+/// `thermal apply` of the fuzzed model to the thermal-ramp seed, and its
+/// PX4 and ArduPilot exports: the outputs as one JSON document.
+fn thermal_model(data: &[u8]) -> Outcome {
+    use incal::procedures::thermal::{apply, export, Model};
+    let run = || -> Result<String, String> {
+        let doc = document(data)?;
+        let model = Model::of(&doc).map_err(|e| format!("{NAME}: {e}"))?;
+        let mut csv = Vec::new();
+        let done = apply::apply(&model, "ramp", seed("thermal-ramp"), &mut csv)
+            .map_err(|e| e.to_string())?;
+        let px4 = export::px4(&model, None, 0, true).map_err(|e| e.to_string())?;
+        let ap = export::ardupilot(&model, None, 1).map_err(|e| e.to_string())?;
+        let values: Vec<f64> = px4
+            .iter()
+            .map(|p| p.1)
+            .chain(ap.iter().map(|p| p.1))
+            .collect();
+        Ok(serde_json::json!({"rows": done.rows, "parameters": values}).to_string())
+    };
+    match run() {
+        Ok(s) => Outcome::Accepted(s),
+        Err(e) => Outcome::Refused(e),
+    }
+}
+
+/// `report --lab`: the fuzzed profile's certificate of the result seed,
+/// whose HTML must carry no element the profile's text could open.
+fn lab_profile(data: &[u8]) -> Outcome {
+    use incal_report::certificate::LabProfile;
+    let run = || -> Result<String, String> {
+        let text = std::str::from_utf8(data).map_err(|_| format!("{NAME}: not UTF-8 text"))?;
+        let profile = LabProfile::parse(text).map_err(|e| format!("{NAME}: {e}"))?;
+        let seed_text = std::str::from_utf8(seed("result")).map_err(|e| e.to_string())?;
+        let doc = document(seed("result"))?;
+        let cert = incal_report::stored::certificate(
+            profile,
+            seed_text,
+            None,
+            &incal_report::stored::Issue::default(),
+        );
+        let opts = incal_report::RenderOptions {
+            date: Some("2026-01-01 00:00 UTC".into()),
+            record: None,
+            certificate: Some(cert),
+        };
+        let html = incal_report::render_html_with(&doc, &[], &opts).map_err(|e| e.to_string())?;
+        // The page's own markup only: a profile opens no element.
+        for tag in ["<script", "<img", "<iframe", "<object", "<embed", "<link"] {
+            if html.contains(tag) {
+                return Ok(format!("not JSON: the certificate holds {tag}"));
+            }
+        }
+        if html.matches("</style>").count() != 1 {
+            return Ok("not JSON: the profile closed the style element".into());
+        }
+        Ok(serde_json::json!({"html_bytes": html.len()}).to_string())
+    };
+    match run() {
+        Ok(s) => Outcome::Accepted(s),
+        Err(e) => Outcome::Refused(e),
+    }
+}
+
+/// `record import` of the fuzzed lines into a new store (a file of its own
+/// in the temporary directory, removed after): imported whole or refused
+/// whole, with the store then verified.
+fn record_import(data: &[u8]) -> Outcome {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static N: AtomicUsize = AtomicUsize::new(0);
+    let path = std::env::temp_dir().join(format!(
+        "incal-fuzz-import-{}-{}.db",
+        std::process::id(),
+        N.fetch_add(1, Ordering::SeqCst)
+    ));
+    let run = || -> Result<String, String> {
+        let done = incal_records::Store::import_at(&path, data, NAME).map_err(|e| e.to_string())?;
+        if done.added + done.present == 0 {
+            // Nothing to import (the CLI says "imported 0 records").
+            return Err(format!("{NAME}: no record to import"));
+        }
+        let store = incal_records::Store::open_existing(&path).map_err(|e| e.to_string())?;
+        let v = store
+            .verify()
+            .map_err(|e| format!("imported, then verify failed: {e}"))?;
+        if v.records != done.chain.records || v.head != done.chain.head {
+            return Ok("not JSON: the chain verified is not the chain imported".into());
+        }
+        Ok(serde_json::json!({"added": done.added, "records": v.records}).to_string())
+    };
+    let out = run();
+    for suffix in ["", "-wal", "-shm", "-journal"] {
+        let _ = std::fs::remove_file(format!("{}{suffix}", path.display()));
+    }
+    match out {
+        Ok(s) => Outcome::Accepted(s),
+        Err(e) => Outcome::Refused(e),
     }
 }
 
