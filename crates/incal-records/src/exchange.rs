@@ -193,8 +193,16 @@ impl Store {
             if buf.trim().is_empty() {
                 continue;
             }
-            let r: ExportedRecord = serde_json::from_str(buf.trim())
-                .map_err(|err| at(format!("not an exported record ({err})")))?;
+            let r: ExportedRecord = serde_json::from_str(buf.trim()).map_err(|err| {
+                // serde echoes an unknown key whole: one short line.
+                let why: String = err
+                    .to_string()
+                    .chars()
+                    .map(|c| if c.is_control() { ' ' } else { c })
+                    .take(160)
+                    .collect();
+                at(format!("not an exported record ({why})"))
+            })?;
             if r.id <= head_id {
                 // A line the store holds is compared whole, not skipped on
                 // its id: its document and every field its record hash

@@ -1054,3 +1054,26 @@ fn options_a_rig_cannot_have_never_reach_a_result() {
     ]);
     common::refused(&o, &["--u-k1", "not below |k1|"]);
 }
+
+/// The fuzz campaign of this round found two messages too long for one
+/// line: a correlation entry of 1e38 echoed in full, and an unknown key of
+/// an export line (serde echoes it whole, newlines included). Both are one
+/// short line now.
+#[test]
+fn refusals_found_by_the_fuzz_campaign_are_one_short_line() {
+    let dir = common::workdir("fuzzfound");
+    let docs = plateaus(&dir);
+    let mut bad = docs[1].clone();
+    bad["correlation"]["matrix"][1][2] = (-1.5478958639871e-6).into();
+    bad["correlation"]["matrix"][2][1] = (-1.5478958639871e38).into();
+    let f = common::write("asym.json", &bad.to_string());
+    let good0 = common::write("g0.json", &docs[0].to_string());
+    let good2 = common::write("g2.json", &docs[2].to_string());
+    let o = common::run(&["thermal", "fit", p(&good0), p(&f), p(&good2)]);
+    common::refused(&o, &["$.correlation.matrix[1][2]"]);
+    let key = format!("document{}", "x\\n".repeat(2000));
+    let line = format!("{{\"id\": 1, \"{key}\": 1}}\n");
+    let export = common::write("long_key.jsonl", &line);
+    let o = common::run(&["record", "import", p(&export), "--db", p(&dir.join("s.db"))]);
+    common::refused(&o, &["line 1: not an exported record"]);
+}

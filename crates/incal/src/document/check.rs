@@ -8,6 +8,18 @@ use serde_json::Value;
 
 use super::ResultDocument;
 
+/// A number as a message shows it: at most 7 significant digits.
+fn shown(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e6).contains(&x.abs()) {
+        format!("{}", (x * 1e6).round() / 1e6)
+            .chars()
+            .take(12)
+            .collect()
+    } else {
+        format!("{x:.6e}")
+    }
+}
+
 /// Slack for round-off in a matrix written by incal.
 const TOL: f64 = 1e-9;
 
@@ -45,15 +57,16 @@ pub(super) fn correlation(doc: &ResultDocument) -> Result<(), String> {
         for (k, &r) in row.iter().enumerate() {
             let at = format!("$.correlation.matrix[{j}][{k}]");
             if !(r.is_finite() && r.abs() <= 1.0 + TOL) {
-                return Err(format!("{at}: {r} is not a correlation (-1 to 1)"));
+                return Err(format!("{at}: {} is not a correlation (-1 to 1)", shown(r)));
             }
             if j == k && (r - 1.0).abs() > TOL {
-                return Err(format!("{at}: {r} on the diagonal (must be 1)"));
+                return Err(format!("{at}: {} on the diagonal (must be 1)", shown(r)));
             }
             if (r - c.matrix[k][j]).abs() > TOL {
                 return Err(format!(
-                    "{at}: {r} differs from [{k}][{j}] = {} (the matrix is symmetric)",
-                    c.matrix[k][j]
+                    "{at}: {} differs from [{k}][{j}] = {} (the matrix is symmetric)",
+                    shown(r),
+                    shown(c.matrix[k][j])
                 ));
             }
         }
@@ -80,15 +93,25 @@ pub(super) fn environment(doc: &ResultDocument) -> Result<(), String> {
         };
         let (mean, min, max, count) = (num("mean")?, num("min")?, num("max")?, num("count")?);
         if min > max {
-            return Err(format!("{at}: min {min} is above max {max}"));
+            return Err(format!(
+                "{at}: min {} is above max {}",
+                shown(min),
+                shown(max)
+            ));
         }
         if !(min - TOL * min.abs().max(1.0) <= mean && mean <= max + TOL * max.abs().max(1.0)) {
             return Err(format!(
-                "{at}.mean: {mean} is outside min {min} to max {max}"
+                "{at}.mean: {} is outside min {} to max {}",
+                shown(mean),
+                shown(min),
+                shown(max)
             ));
         }
         if count < 1.0 || count.fract() != 0.0 {
-            return Err(format!("{at}.count: {count} is not a number of samples"));
+            return Err(format!(
+                "{at}.count: {} is not a number of samples",
+                shown(count)
+            ));
         }
     }
     Ok(())
