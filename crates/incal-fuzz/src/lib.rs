@@ -434,9 +434,7 @@ fn record_import(data: &[u8]) -> Outcome {
         Ok(serde_json::json!({"added": done.added, "records": v.records}).to_string())
     };
     let out = run();
-    for suffix in ["", "-wal", "-shm", "-journal"] {
-        let _ = std::fs::remove_file(format!("{}{suffix}", path.display()));
-    }
+    incal_records::remove_sqlite_files(&path);
     match out {
         Ok(s) => Outcome::Accepted(s),
         Err(e) => Outcome::Refused(e),

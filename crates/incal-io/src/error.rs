@@ -81,18 +81,21 @@ pub type Result<T> = std::result::Result<T, InputError>;
 /// line whatever the input holds. The one such function of incal: every
 /// crate and front end echoes values through it.
 pub fn clip(s: &str) -> String {
-    const MAX: usize = 40;
+    clip_to(s, 40)
+}
+
+/// [`clip`] at `max` characters: control characters as `?`, and past
+/// `max` the head and `... (N characters)`.
+pub fn clip_to(s: &str, max: usize) -> String {
     let n = s.chars().count();
-    if n <= MAX {
-        s.chars()
-            .map(|c| if c.is_control() { '?' } else { c })
-            .collect()
+    let head: String = s
+        .chars()
+        .take(max)
+        .map(|c| if c.is_control() { '?' } else { c })
+        .collect();
+    if n <= max {
+        head
     } else {
-        let head: String = s
-            .chars()
-            .take(MAX)
-            .map(|c| if c.is_control() { '?' } else { c })
-            .collect();
         format!("{head}... ({n} characters)")
     }
 }

@@ -30,7 +30,7 @@ pub mod writer;
 
 pub use columns::{ColumnEntry, ColumnMap};
 pub use digest::{hex, sha256_hex};
-pub use error::{clip, InputError, Result};
+pub use error::{clip, clip_to, InputError, Result};
 pub use reader::{
     parse_delimiter, parse_f64, Condition, Header, ReadOptions, Reader, Row, Summary,
     CONDITION_COLUMNS, MAX_ABS_VALUE, MAX_LINE_BYTES,

@@ -606,17 +606,13 @@ fn report(
         ),
         None => None,
     };
-    let held = match (db, doc.instrument.serial.is_some()) {
+    let store = match (db, doc.instrument.serial.is_some()) {
         (Some(location), true) => {
             let name = incal_records::store_name(std::path::Path::new(location));
-            let store = incal_records::Store::open_existing(location).map_err(|e| {
+            Some(incal_records::Store::open_existing(location).map_err(|e| {
                 let code = if e.is_input() { 2 } else { 1 };
                 (code, incal_records::store_message(&name, &e))
-            })?;
-            stored::of_document(&store, &doc, text).map_err(|e| match e {
-                stored::StoredError::Input(m) => (2, m),
-                stored::StoredError::Failure(m) => (1, m),
-            })?
+            })?)
         }
         _ => None,
     };
@@ -625,18 +621,10 @@ fn report(
         date: i.date,
         environment: i.environment,
     };
-    let record = held.as_ref().and_then(|s| s.record.as_ref());
-    let certificate = profile.map(|p| stored::certificate(p, text, record, &issue));
-    let (history, stamp) = match held {
-        Some(s) => (s.history, Some(s.stamp)),
-        None => (Vec::new(), None),
-    };
-    let opts = incal_report::RenderOptions {
-        date: None,
-        record: stamp,
-        certificate,
-    };
-    incal_report::render_html_with(&doc, &history, &opts).map_err(|e| (1, e.to_string()))
+    stored::report_html(&doc, text, store.as_ref(), profile, &issue).map_err(|e| match e {
+        stored::StoredError::Input(m) => (2, m),
+        stored::StoredError::Failure(m) => (1, m),
+    })
 }
 
 /// `_schema() -> str`: the JSON Schema of the result document

@@ -86,6 +86,15 @@ impl ExportedRecord {
     }
 }
 
+/// Remove an SQLite store file and the files SQLite keeps beside it
+/// (`-wal`, `-shm`, `-journal`), whichever exist: a store this process
+/// created and must not leave behind.
+pub fn remove_sqlite_files(path: &std::path::Path) {
+    for suffix in ["", "-wal", "-shm", "-journal"] {
+        let _ = std::fs::remove_file(format!("{}{suffix}", path.display()));
+    }
+}
+
 impl Store {
     /// Write every record, in chain order, to `out` as one JSON object
     /// per line ([`ExportedRecord`]), after checking the chain (a broken
@@ -146,9 +155,7 @@ impl Store {
         let existed = !is_file || location.exists();
         let done = Store::open(location).and_then(|mut store| store.import(lines, source));
         if done.is_err() && !existed {
-            for suffix in ["", "-wal", "-shm", "-journal"] {
-                let _ = std::fs::remove_file(format!("{}{suffix}", location.display()));
-            }
+            remove_sqlite_files(location);
         }
         done
     }
@@ -195,12 +202,7 @@ impl Store {
             }
             let r: ExportedRecord = serde_json::from_str(buf.trim()).map_err(|err| {
                 // serde echoes an unknown key whole: one short line.
-                let why: String = err
-                    .to_string()
-                    .chars()
-                    .map(|c| if c.is_control() { ' ' } else { c })
-                    .take(160)
-                    .collect();
+                let why = incal_io::clip_to(&err.to_string(), 160);
                 at(format!("not an exported record ({why})"))
             })?;
             if r.id <= head_id {

@@ -56,7 +56,7 @@ mod write;
 pub use chain::{sha256_hex, ChainFields, InputHash, GENESIS};
 pub use db::{display_url, is_postgres_url, store_message, store_name};
 pub use error::{Error, Result};
-pub use exchange::{ExportedRecord, ExportedSupersession, Imported};
+pub use exchange::{remove_sqlite_files, ExportedRecord, ExportedSupersession, Imported};
 pub use history::{Drift, HistoryPoint, Repeatability};
 pub use identity::{check_identity, IdentityError};
 pub use open::{Store, BUSY_TIMEOUT, MIGRATIONS, SCHEMA_MIGRATIONS};

@@ -50,19 +50,14 @@ fn find_browser() -> Option<PathBuf> {
     })
 }
 
-/// The first non-empty line a process wrote to standard error (at most
-/// 160 characters, control characters shown as `?`), else its exit status.
+/// The first non-empty line a process wrote to standard error (clipped at
+/// 160 characters, [`incal_io::clip_to`]), else its exit status.
 fn why(out: &std::process::Output) -> String {
     String::from_utf8_lossy(&out.stderr)
         .lines()
         .map(str::trim)
         .find(|l| !l.is_empty())
-        .map(|l| {
-            l.chars()
-                .take(160)
-                .map(|c| if c.is_control() { '?' } else { c })
-                .collect()
-        })
+        .map(|l| incal_io::clip_to(l, 160))
         .unwrap_or_else(|| format!("exit status {}", out.status))
 }
 

@@ -122,6 +122,36 @@ fn history(store: &Store, doc: &ResultDocument) -> Result<Vec<HistorySeries>, St
     Ok(out)
 }
 
+/// The HTML report of `doc` (its JSON text `text`), as `incal report`
+/// writes it for every front end: with what `store` says about it (the
+/// record stamp and the history plots), and as a certificate under
+/// `profile` when one is given. A report that cannot be rendered is a
+/// failure.
+pub fn report_html(
+    doc: &ResultDocument,
+    text: &str,
+    store: Option<&Store>,
+    profile: Option<LabProfile>,
+    issue: &Issue,
+) -> Result<String, StoredError> {
+    let held = match store {
+        Some(s) => of_document(s, doc, text)?,
+        None => None,
+    };
+    let record = held.as_ref().and_then(|s| s.record.as_ref());
+    let certificate = profile.map(|p| certificate(p, text, record, issue));
+    let (history, stamp) = match held {
+        Some(s) => (s.history, Some(s.stamp)),
+        None => (Vec::new(), None),
+    };
+    let opts = crate::RenderOptions {
+        date: None,
+        record: stamp,
+        certificate,
+    };
+    crate::render_html_with(doc, &history, &opts).map_err(|e| StoredError::Failure(e.to_string()))
+}
+
 /// What the certificate states beside the profile: the customer, the date
 /// of calibration (as given, else the day the record was stored) and the
 /// environment.

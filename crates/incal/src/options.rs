@@ -36,37 +36,39 @@ pub fn invalid<T>(key: &str, message: impl Into<String>) -> Result<T> {
 /// the result unusable downstream. Else [`Error::InvalidOption`] naming
 /// the key (`key`, `runs[2].rate_deg_s`).
 pub fn check_magnitudes(options: &serde_json::Value) -> Result<()> {
-    fn walk(v: &serde_json::Value, path: &str) -> Result<()> {
-        match v {
-            serde_json::Value::Number(n) if !(n.is_i64() || n.is_u64()) => {
-                let x = n.as_f64().unwrap_or(f64::NAN);
-                if x.abs() > incal_io::MAX_ABS_VALUE {
-                    return invalid(
-                        path,
-                        format!(
-                            "{} is beyond 1e15 in magnitude",
-                            crate::error::short_number(&x.to_string())
-                        ),
-                    );
-                }
-                Ok(())
+    check_magnitudes_at(options, "")
+}
+
+/// [`check_magnitudes`] of the value at key `path` (`""`: the top).
+pub fn check_magnitudes_at(v: &serde_json::Value, path: &str) -> Result<()> {
+    match v {
+        serde_json::Value::Number(n) if !(n.is_i64() || n.is_u64()) => {
+            let x = n.as_f64().unwrap_or(f64::NAN);
+            if x.abs() > incal_io::MAX_ABS_VALUE {
+                return invalid(
+                    path,
+                    format!(
+                        "{} is beyond 1e15 in magnitude",
+                        crate::error::short_number(&x.to_string())
+                    ),
+                );
             }
-            serde_json::Value::Array(a) => a
-                .iter()
-                .enumerate()
-                .try_for_each(|(i, x)| walk(x, &format!("{path}[{i}]"))),
-            serde_json::Value::Object(m) => m.iter().try_for_each(|(k, x)| {
-                let at = if path.is_empty() {
-                    k.clone()
-                } else {
-                    format!("{path}.{k}")
-                };
-                walk(x, &at)
-            }),
-            _ => Ok(()),
+            Ok(())
         }
+        serde_json::Value::Array(a) => a
+            .iter()
+            .enumerate()
+            .try_for_each(|(i, x)| check_magnitudes_at(x, &format!("{path}[{i}]"))),
+        serde_json::Value::Object(m) => m.iter().try_for_each(|(k, x)| {
+            let at = if path.is_empty() {
+                k.clone()
+            } else {
+                format!("{path}.{k}")
+            };
+            check_magnitudes_at(x, &at)
+        }),
+        _ => Ok(()),
     }
-    walk(options, "")
 }
 
 /// A finite number within `lo..=hi`, or [`Error::InvalidOption`] naming

@@ -4,8 +4,6 @@
 
 use std::path::PathBuf;
 
-use incal_report::RenderOptions;
-
 use crate::documents::read_document_text;
 use crate::error::{CliError, CliResult};
 use crate::options::db_choice;
@@ -71,36 +69,17 @@ pub fn run(a: &Args) -> CliResult<()> {
     }
     // What the store says about this very document: its record, when it
     // was stored and what it corrects.
-    let stored = match store(a, doc.instrument.serial.as_deref())? {
-        Some(store) => {
-            incal_report::stored::of_document(&store, &doc, &text).map_err(|e| match e {
-                incal_report::stored::StoredError::Input(m) => CliError::Input(m),
-                incal_report::stored::StoredError::Failure(m) => {
-                    CliError::Failure(anyhow::anyhow!(m))
-                }
-            })?
-        }
-        None => None,
-    };
+    let store = store(a, doc.instrument.serial.as_deref())?;
     let issue = incal_report::stored::Issue {
         customer: a.customer.clone(),
         date: a.date.clone(),
         environment: a.environment.clone(),
     };
-    let record_held = stored.as_ref().and_then(|s| s.record.as_ref());
-    let certificate = profile
-        .map(|profile| incal_report::stored::certificate(profile, &text, record_held, &issue));
-    let (history, record) = match stored {
-        Some(s) => (s.history, Some(s.stamp)),
-        None => (Vec::new(), None),
-    };
-    let opts = RenderOptions {
-        date: None,
-        record,
-        certificate,
-    };
-    let html = incal_report::render_html_with(&doc, &history, &opts)
-        .map_err(|e| CliError::Failure(anyhow::anyhow!("{e}")))?;
+    let html = incal_report::stored::report_html(&doc, &text, store.as_ref(), profile, &issue)
+        .map_err(|e| match e {
+            incal_report::stored::StoredError::Input(m) => CliError::Input(m),
+            incal_report::stored::StoredError::Failure(m) => CliError::Failure(anyhow::anyhow!(m)),
+        })?;
     write_text(a.output.as_deref(), &html)?;
     if a.pdf {
         if let Some(out) = &a.output {

@@ -9,16 +9,23 @@ use crate::common::{self, p, stderr};
 
 /// A tumble result with a serial, as a file in `dir`.
 fn result_in(dir: &Path) -> std::path::PathBuf {
-    let csv = dir.join("t.csv");
+    tumble_result(dir, 3, "r")
+}
+
+/// The tumble result of the simulation with `seed`, serial SN-1, as
+/// `dir/STEM.json` (its recording `dir/STEM.csv`).
+fn tumble_result(dir: &Path, seed: u64, stem: &str) -> std::path::PathBuf {
+    let csv = dir.join(format!("{stem}.csv"));
+    let seed = seed.to_string();
     common::ok(&common::run(&[
         "simulate",
         "tumble",
         "--seed",
-        "3",
+        &seed,
         "-o",
         p(&csv),
     ]));
-    let json = dir.join("r.json");
+    let json = dir.join(format!("{stem}.json"));
     common::ok(&common::run(&[
         "tumble",
         "--input",
@@ -855,28 +862,7 @@ fn a_withdrawn_certificate_says_so_and_year_zero_is_no_date() {
         "--operator",
         "lee",
     ]));
-    let csv = dir.join("t2.csv");
-    common::ok(&common::run(&[
-        "simulate",
-        "tumble",
-        "--seed",
-        "4",
-        "-o",
-        p(&csv),
-    ]));
-    let second = dir.join("r2.json");
-    common::ok(&common::run(&[
-        "tumble",
-        "--input",
-        p(&csv),
-        "--mount",
-        "pendulum",
-        "--serial",
-        "SN-1",
-        "--json",
-        "-o",
-        p(&second),
-    ]));
+    let second = tumble_result(&dir, 4, "r2");
     common::ok(&common::run(&[
         "record",
         "supersede",

@@ -205,9 +205,9 @@ pub fn reduce_source<P: Procedure, R: Read>(
     doc.options = P::recorded(&input, options)?;
     // What the document echoes (some options are recorded apart from the
     // options' own form, such as a K1 and its source).
-    crate::options::check_magnitudes(&serde_json::Value::Object(
-        doc.options.clone().into_iter().collect(),
-    ))?;
+    for (key, value) in &doc.options {
+        crate::options::check_magnitudes_at(value, key)?;
+    }
     record_environment(&mut doc, &summary.conditions);
     Ok(doc)
 }
