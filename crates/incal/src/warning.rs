@@ -82,6 +82,14 @@ pub enum WarningCode {
     /// Empty or NaN cells of a channel were taken as missing samples and
     /// left out (how many, per channel).
     MissingSamples,
+    /// A phase known only up to whole cycles: the fitted delay is longer
+    /// than one period of the highest dwell, so it rests on the dwells
+    /// below (the dynamic response).
+    PhaseAmbiguous,
+    /// A signal within 3 u of zero where one was expected (the output at a
+    /// dwell of the dynamic response): its amplitude is biased up and its
+    /// phase is noise.
+    WeakSignal,
 }
 
 impl WarningCode {
@@ -111,6 +119,8 @@ impl WarningCode {
             WarningCode::TimeSorted => "time-sorted",
             WarningCode::UnitSuspect => "unit-suspect",
             WarningCode::MissingSamples => "missing-samples",
+            WarningCode::PhaseAmbiguous => "phase-ambiguous",
+            WarningCode::WeakSignal => "weak-signal",
         }
     }
 }

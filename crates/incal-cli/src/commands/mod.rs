@@ -73,4 +73,4 @@ macro_rules! procedure_families {
     };
 }
 
-procedure_families!(tumble, centrifuge, misalign, gfimu, gyro, noise, imu, thermal);
+procedure_families!(tumble, centrifuge, misalign, gfimu, gyro, noise, imu, thermal, response);

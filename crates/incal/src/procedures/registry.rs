@@ -52,6 +52,9 @@ pub enum Procedure {
     /// soak plateaus or a chamber ramp (IEEE Std 1293 / 952; Niu et al.
     /// 2013).
     Thermal,
+    /// Dynamic response by stepped sine: gain, phase, bandwidth and delay
+    /// (IEEE Std 1431 §12.15, IEEE Std 1057 sine fits).
+    ResponseSine,
 }
 
 impl Procedure {
@@ -89,6 +92,7 @@ impl Procedure {
             Procedure::ImuMultipos => "imu-multipos",
             Procedure::ImuAutocal => "imu-autocal",
             Procedure::Thermal => "thermal",
+            Procedure::ResponseSine => "response-sine",
         }
     }
 }
@@ -631,6 +635,28 @@ pub static REGISTRY: &[Entry] = &[
         reduction: None,
         planner: planner::<super::thermal::Thermal>(),
         simulator: simulator::<super::thermal::ramp::Ramp>(),
+    },
+    Entry {
+        id: "response-sine",
+        document: Procedure::ResponseSine,
+        command: &["response", "sine"],
+        plan: Some(&["plan", "response-sine"]),
+        simulate: Some(&["simulate", "response-sine"]),
+        title: "Dynamic response by stepped sine: gain, phase, bandwidth and delay",
+        rig: RATE_TABLE,
+        method: "Frequency response by stepped sine (dwells) against a reference motion: IEEE Std 1431-2004 §12.15 and IEEE Std 1293-2018 (frequency response), ISO 16063-21:2003 (comparison with a reference transducer); sine fits by IEEE Std 1057-2017 §4.1.3; first- and second-order low-pass models with a pure delay fitted to gain and phase",
+        references: &["ieee1431", "ieee1057", "iso16063-21", "ieee1293"],
+        chapter: "response.md",
+        input: InputKind::Recording,
+        fuzz: &["response-sine"],
+        run_sheet: Some(super::response::plan::run_sheet),
+        example: Some(Example {
+            simulate: &["--seed", "21"],
+            options: &[],
+        }),
+        reduction: reduction::<super::response::ResponseSine>(),
+        planner: planner::<super::response::ResponseSine>(),
+        simulator: simulator::<super::response::ResponseSine>(),
     },
 ];
 

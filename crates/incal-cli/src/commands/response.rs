@@ -1,0 +1,327 @@
+//! `incal response sine`, `incal plan response-sine`, `incal simulate
+//! response-sine`.
+
+use std::path::PathBuf;
+
+use clap::{ArgAction, Subcommand, ValueEnum};
+use incal::procedures::response::model::Order;
+use incal::procedures::response::plan::{DwellChoice, ModelGuess, ResponsePlanOptions};
+use incal::procedures::response::sim::ResponseSimOptions;
+use incal::procedures::response::{BandwidthMethod, OrderChoice, ResponseOptions, ResponseSine};
+use incal::procedures::{Plan, Silent};
+
+use crate::error::{core, CliResult};
+use crate::input::ReadArgs;
+use crate::output::{PlanOut, ResultArgs};
+
+/// `incal response …`.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Stepped sine (dwells): gain and phase per dwell, a low-pass model with delay, bandwidth, latency and flatness.
+    Sine(SineArgs),
+}
+
+/// Model order of the reduction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum OrderArg {
+    /// First order unless its fit fails the 5 % lack-of-fit test.
+    Auto,
+    /// First-order low-pass with delay.
+    First,
+    /// Second-order low-pass with delay.
+    Second,
+}
+
+/// Model order of a plan or a simulation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FixedOrderArg {
+    /// First-order low-pass with delay.
+    First,
+    /// Second-order low-pass with delay.
+    Second,
+}
+
+impl From<FixedOrderArg> for Order {
+    fn from(o: FixedOrderArg) -> Order {
+        match o {
+            FixedOrderArg::First => Order::First,
+            FixedOrderArg::Second => Order::Second,
+        }
+    }
+}
+
+/// Which bandwidth is `bandwidth_hz`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BandwidthArg {
+    /// The fitted model's half-power frequency.
+    Model,
+    /// Interpolated between the dwells that bracket -3.01 dB (refused when none do).
+    Interpolated,
+}
+
+/// `incal response sine`.
+#[derive(clap::Args, Debug)]
+pub struct SineArgs {
+    /// Recording: `freq_hz`, `reference`, `output`, and `time_s` (or --rate-hz).
+    #[arg(long)]
+    pub input: PathBuf,
+    /// Sampling rate, Hz, when the file has no `time_s`.
+    #[arg(long)]
+    pub rate_hz: Option<f64>,
+    /// Harmonic order fitted (1: the fundamental only); THD from 2 on.
+    #[arg(long, default_value_t = 3)]
+    pub harmonics: usize,
+    /// Fit a linear drift in each dwell (true or false).
+    #[arg(long, action = ArgAction::Set, default_value_t = true)]
+    pub drift: bool,
+    /// Seconds left out at the start of each dwell (the transient).
+    #[arg(long, default_value_t = 0.0)]
+    pub settle_s: f64,
+    /// Model order.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub order: OrderArg,
+    /// Scale factor the gains are normalised to (output per reference unit); default the fitted k_dc.
+    #[arg(long)]
+    pub k1: Option<f64>,
+    /// Standard uncertainty of --k1.
+    #[arg(long)]
+    pub u_k1: Option<f64>,
+    /// The reference's relative amplitude uncertainty, % (type B).
+    #[arg(long, default_value_t = 0.0)]
+    pub u_reference_pct: f64,
+    /// The reference's phase uncertainty, deg (type B).
+    #[arg(long, default_value_t = 0.0)]
+    pub u_reference_phase_deg: f64,
+    /// Which bandwidth is `bandwidth_hz`.
+    #[arg(long, value_enum, default_value = "model")]
+    pub bandwidth: BandwidthArg,
+    /// Upper end of the gain-flatness band, Hz (default: the model bandwidth).
+    #[arg(long)]
+    pub flatness_to_hz: Option<f64>,
+    #[command(flatten)]
+    pub read: ReadArgs,
+    #[command(flatten)]
+    pub result: ResultArgs,
+}
+
+/// `incal response sine`.
+pub fn run_sine(a: &SineArgs) -> CliResult<()> {
+    let options = ResponseOptions {
+        rate_hz: a.rate_hz,
+        harmonics: a.harmonics,
+        drift: a.drift,
+        settle_s: a.settle_s,
+        order: match a.order {
+            OrderArg::Auto => OrderChoice::Auto,
+            OrderArg::First => OrderChoice::First,
+            OrderArg::Second => OrderChoice::Second,
+        },
+        k1: a.k1,
+        u_k1: a.u_k1,
+        u_reference_pct: a.u_reference_pct,
+        u_reference_phase_deg: a.u_reference_phase_deg,
+        bandwidth: match a.bandwidth {
+            BandwidthArg::Model => BandwidthMethod::Model,
+            BandwidthArg::Interpolated => BandwidthMethod::Interpolated,
+        },
+        flatness_to_hz: a.flatness_to_hz,
+    };
+    crate::run::reduce::<ResponseSine>(&a.input, &a.read, &options, &a.result, &Silent)
+}
+
+/// The dwells of a plan or simulation.
+#[derive(clap::Args, Debug, Clone)]
+pub struct DwellArgs {
+    /// Dwell frequencies, Hz, in test order (default: a log sweep from --f-min-hz to --f-max-hz).
+    #[arg(long, value_delimiter = ',')]
+    pub dwells_hz: Option<Vec<f64>>,
+    /// Lowest dwell of the log sweep, Hz.
+    #[arg(long, default_value_t = 1.0)]
+    pub f_min_hz: f64,
+    /// Highest dwell of the log sweep, Hz.
+    #[arg(long, default_value_t = 200.0)]
+    pub f_max_hz: f64,
+    /// Dwells of the log sweep.
+    #[arg(long, default_value_t = 12)]
+    pub dwells: usize,
+    /// Seconds per dwell (lengthened to --min-cycles).
+    #[arg(long, default_value_t = 2.0)]
+    pub seconds_per_dwell: f64,
+    /// Fewest cycles per dwell (at least 2).
+    #[arg(long, default_value_t = 10.0)]
+    pub min_cycles: f64,
+    /// Model order.
+    #[arg(long, value_enum, default_value = "second")]
+    pub order: FixedOrderArg,
+    /// Low-frequency gain k_dc (output per reference unit).
+    #[arg(long, default_value_t = 1.0)]
+    pub k_dc: f64,
+    /// Corner f_c (first order) or natural frequency f_n (second order), Hz.
+    #[arg(long, default_value_t = 80.0)]
+    pub corner_hz: f64,
+    /// Damping ratio of the second order.
+    #[arg(long, default_value_t = 0.6)]
+    pub zeta: f64,
+    /// Pure delay, s.
+    #[arg(long, default_value_t = 0.002)]
+    pub delay_s: f64,
+    /// Sampling rate, Hz.
+    #[arg(long, default_value_t = 1000.0)]
+    pub rate_hz: f64,
+    /// Reference amplitude (reference units).
+    #[arg(long, default_value_t = 10.0)]
+    pub amplitude: f64,
+    /// Output noise of one sample (output units).
+    #[arg(long, default_value_t = 0.02)]
+    pub noise: f64,
+    /// Reference noise of one sample (reference units).
+    #[arg(long, default_value_t = 0.005)]
+    pub reference_noise: f64,
+}
+
+impl DwellArgs {
+    fn dwells(&self) -> DwellChoice {
+        DwellChoice {
+            dwells_hz: self.dwells_hz.clone(),
+            f_min_hz: self.f_min_hz,
+            f_max_hz: self.f_max_hz,
+            dwells: self.dwells,
+            seconds_per_dwell: self.seconds_per_dwell,
+            min_cycles: self.min_cycles,
+        }
+    }
+
+    fn model(&self) -> ModelGuess {
+        ModelGuess {
+            order: self.order.into(),
+            k_dc: self.k_dc,
+            corner_hz: self.corner_hz,
+            zeta: self.zeta,
+            delay_s: self.delay_s,
+        }
+    }
+}
+
+/// `incal plan response-sine`.
+#[derive(clap::Args, Debug)]
+pub struct PlanArgs {
+    #[command(flatten)]
+    pub test: DwellArgs,
+    /// The reference's relative amplitude uncertainty, % (type B).
+    #[arg(long, default_value_t = 0.0)]
+    pub u_reference_pct: f64,
+    /// The reference's phase uncertainty, deg (type B).
+    #[arg(long, default_value_t = 0.0)]
+    pub u_reference_phase_deg: f64,
+    #[command(flatten)]
+    pub out: PlanOut,
+}
+
+/// `incal plan response-sine`.
+pub fn plan(a: &PlanArgs) -> CliResult<()> {
+    let t = &a.test;
+    let options = ResponsePlanOptions {
+        dwells: t.dwells(),
+        model: t.model(),
+        rate_hz: t.rate_hz,
+        amplitude: t.amplitude,
+        noise: t.noise,
+        reference_noise: t.reference_noise,
+        u_reference_pct: a.u_reference_pct,
+        u_reference_phase_deg: a.u_reference_phase_deg,
+    };
+    a.out
+        .emit(&<ResponseSine as Plan>::plan(&options).map_err(core)?)
+}
+
+/// `incal simulate response-sine`.
+#[derive(clap::Args, Debug)]
+pub struct SimArgs {
+    #[command(flatten)]
+    pub test: DwellArgs,
+    /// Output bias (output units).
+    #[arg(long, default_value_t = 0.0)]
+    pub bias: f64,
+    /// Second harmonic of the output, % of the fundamental.
+    #[arg(long, default_value_t = 0.0)]
+    pub distortion_pct: f64,
+    /// Standard deviation of the reference's amplitude error, drawn once per dwell, %.
+    #[arg(long, default_value_t = 0.0)]
+    pub reference_error_pct: f64,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Write the truth (model, bandwidth, latency, each dwell's gain and phase) as JSON to this file.
+    #[arg(long, value_name = "FILE")]
+    pub truth_out: Option<PathBuf>,
+    /// Output CSV (default: standard output).
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+/// `incal simulate response-sine`.
+pub fn simulate(a: &SimArgs) -> CliResult<()> {
+    let t = &a.test;
+    let options = ResponseSimOptions {
+        dwells: t.dwells(),
+        model: t.model(),
+        rate_hz: t.rate_hz,
+        amplitude: t.amplitude,
+        noise: t.noise,
+        reference_noise: t.reference_noise,
+        bias: a.bias,
+        distortion_pct: a.distortion_pct,
+        reference_error_pct: a.reference_error_pct,
+        seed: a.seed,
+    };
+    crate::run::simulate::<ResponseSine>(&options, a.output.as_deref())?;
+    crate::run::write_truth::<ResponseSine>(&options, a.truth_out.as_deref())
+}
+
+// The commands of this file in the command tree (`crate::commands`).
+
+/// This file's commands at the top level (`incal …`).
+#[derive(Subcommand, Debug)]
+pub enum Reductions {
+    /// Dynamic response: stepped sine (IEEE Std 1431 §12.15, IEEE Std 1057 sine fits, ISO 16063-21).
+    #[command(subcommand)]
+    Response(Command),
+}
+
+impl crate::commands::Run for Reductions {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::Response(Command::Sine(a)) => run_sine(a),
+        }
+    }
+}
+
+/// This file's plans (`incal plan …`).
+#[derive(Subcommand, Debug)]
+pub enum Plans {
+    /// Stepped-sine plan: predicted u of every dwell's gain and phase and of bandwidth, delay and latency.
+    ResponseSine(PlanArgs),
+}
+
+impl crate::commands::Run for Plans {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::ResponseSine(a) => plan(a),
+        }
+    }
+}
+
+/// This file's simulators (`incal simulate …`).
+#[derive(Subcommand, Debug)]
+pub enum Simulations {
+    /// Stepped sine on a rate table or shaker; writes the input CSV of `incal response sine`.
+    ResponseSine(SimArgs),
+}
+
+impl crate::commands::Run for Simulations {
+    fn run(&self) -> CliResult<()> {
+        match self {
+            Self::ResponseSine(a) => simulate(a),
+        }
+    }
+}

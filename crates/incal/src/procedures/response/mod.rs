@@ -1,0 +1,530 @@
+//! Dynamic response by stepped sine (dwells): gain, phase, bandwidth and
+//! delay of a gyro or accelerometer on a rate table in its angular
+//! vibration mode or on a shaker (IEEE Std 1431-2004 §12.15, IEEE Std
+//! 952-2020, IEEE Std 1293-2018; ISO 16063-21 for comparison with a
+//! reference accelerometer; docs/src/response.md).
+//!
+//! # Model
+//! At each dwell of frequency `f` the reference `r(t)` and the output
+//! `y(t)` are fitted by sines at `f` ([`sine`], IEEE Std 1057-2017 three
+//! parameter fit, with harmonics and drift): amplitudes `R_r, R_y`, phases
+//! `φ_r, φ_y`. The dwell's
+//!
+//! * gain `G = R_y/R_r` (output per reference unit), with
+//!   `u²(G)/G² = u²(R_y)/R_y² + u²(R_r)/R_r² + u_ref²` (`u_ref` the
+//!   reference's relative amplitude uncertainty, type B, one draw per
+//!   dwell);
+//! * phase `Δφ = φ_y − φ_r`, with `u²(Δφ) = u²(φ_y) + u²(φ_r) + u²_ref,φ`.
+//!
+//! A low-pass model with a pure delay ([`model`]) is fitted to all
+//! dwells' gain and phase; its order is chosen by the one statistics rule
+//! (the first order unless its fit fails the 5 % lack-of-fit test); the
+//! half-power bandwidth, phase frequency and latency follow with u
+//! through the Jacobian. A model-free bandwidth interpolates the
+//! normalised gain in dB against `ln f` between the two dwells that
+//! bracket −3.01 dB.
+//!
+//! # Uncertainty
+//! The sine fits take their variance from their residuals (white noise
+//! within a dwell; the drift term absorbs a slow wander). Gain and phase
+//! are taken as uncorrelated (exact for whole cycles and equal variances
+//! of the cosine and sine coefficients). The reference's type-B terms are
+//! independent between dwells, which is conservative for the bandwidth
+//! (a common sensitivity error scales `K` only).
+
+pub mod document;
+pub mod input;
+pub mod model;
+pub mod plan;
+pub mod sim;
+pub mod sine;
+
+use std::f64::consts::PI;
+
+use crate::error::{Error, Result};
+use crate::estimation::Estimates;
+use crate::warning::{Warning, WarningCode};
+use input::Dwell;
+use model::{ModelFit, Order, Point};
+use sine::{ChannelFit, SineDesign};
+
+/// Which model order (`auto`: the one statistics rule).
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum OrderChoice {
+    /// First order unless it fails the lack-of-fit test, then second.
+    #[default]
+    Auto,
+    /// First-order low-pass with delay.
+    First,
+    /// Second-order low-pass with delay.
+    Second,
+}
+
+/// Which bandwidth is the headline `bandwidth_hz`.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum BandwidthMethod {
+    /// The fitted model's half-power frequency (the interpolated one is
+    /// given beside it as `bandwidth_interp_hz` when the dwells bracket it).
+    #[default]
+    Model,
+    /// Interpolated between the dwells bracketing −3.01 dB; refused when
+    /// no two dwells bracket it.
+    Interpolated,
+}
+
+/// Options of the stepped-sine reduction. In the document: every key.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ResponseOptions {
+    /// Sampling rate (Hz) when the file has no `time_s` column.
+    #[serde(default)]
+    pub rate_hz: Option<f64>,
+    /// Harmonic order fitted (1: the fundamental only; default 3). THD is
+    /// reported from 2 on.
+    #[serde(default = "three")]
+    pub harmonics: usize,
+    /// Fit a linear drift in each dwell (default true).
+    #[serde(default = "yes")]
+    pub drift: bool,
+    /// Seconds left out at the start of every dwell (the transient).
+    #[serde(default)]
+    pub settle_s: f64,
+    /// Model order (default auto).
+    #[serde(default)]
+    pub order: OrderChoice,
+    /// Scale factor the gains are normalised to (output per reference
+    /// unit); default: the fitted `k_dc`.
+    #[serde(default)]
+    pub k1: Option<f64>,
+    /// Standard uncertainty of `k1`.
+    #[serde(default)]
+    pub u_k1: Option<f64>,
+    /// The reference's relative amplitude uncertainty (%, type B).
+    #[serde(default)]
+    pub u_reference_pct: f64,
+    /// The reference's phase uncertainty (deg, type B).
+    #[serde(default)]
+    pub u_reference_phase_deg: f64,
+    /// Which bandwidth `bandwidth_hz` is (default model).
+    #[serde(default)]
+    pub bandwidth: BandwidthMethod,
+    /// Upper end of the gain-flatness band (Hz); default the model
+    /// bandwidth.
+    #[serde(default)]
+    pub flatness_to_hz: Option<f64>,
+}
+
+fn three() -> usize {
+    3
+}
+fn yes() -> bool {
+    true
+}
+
+impl Default for ResponseOptions {
+    fn default() -> Self {
+        Self {
+            rate_hz: None,
+            harmonics: 3,
+            drift: true,
+            settle_s: 0.0,
+            order: OrderChoice::Auto,
+            k1: None,
+            u_k1: None,
+            u_reference_pct: 0.0,
+            u_reference_phase_deg: 0.0,
+            bandwidth: BandwidthMethod::Model,
+            flatness_to_hz: None,
+        }
+    }
+}
+
+impl ResponseOptions {
+    /// Every range check of the reduction.
+    pub fn validate(&self) -> Result<()> {
+        use crate::options::{check_positive, check_range, invalid};
+        if let Some(r) = self.rate_hz {
+            check_range("rate_hz", r, 1e-3, 1e7, "Hz")?;
+        }
+        if !(1..=10).contains(&self.harmonics) {
+            return invalid(
+                "harmonics",
+                format!("a whole number from 1 to 10, got {}", self.harmonics),
+            );
+        }
+        check_range("settle_s", self.settle_s, 0.0, 1e6, "s")?;
+        if let Some(k) = self.k1 {
+            if !(k.is_finite() && k != 0.0) {
+                return invalid("k1", "must be a finite number other than 0");
+            }
+        }
+        if let Some(u) = self.u_k1 {
+            if self.k1.is_none() {
+                return invalid("u_k1", "given without `k1`");
+            }
+            check_range("u_k1", u, 0.0, f64::MAX, "")?;
+        }
+        check_range("u_reference_pct", self.u_reference_pct, 0.0, 100.0, "%")?;
+        check_range(
+            "u_reference_phase_deg",
+            self.u_reference_phase_deg,
+            0.0,
+            180.0,
+            "deg",
+        )?;
+        if let Some(f) = self.flatness_to_hz {
+            check_positive("flatness_to_hz", f)?;
+        }
+        Ok(())
+    }
+}
+
+/// One dwell reduced.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DwellResult {
+    /// Dwell frequency (Hz).
+    pub freq_hz: f64,
+    /// Samples fitted (after the settle time).
+    pub samples: usize,
+    /// Whole and part cycles fitted.
+    pub cycles: f64,
+    /// Sampling rate of the dwell (Hz).
+    pub rate_hz: f64,
+    /// The reference's fundamental.
+    pub reference: ChannelFit,
+    /// The output's fundamental.
+    pub output: ChannelFit,
+    /// Gain and phase for the model fit (type B included).
+    pub point: Point,
+    /// File lines of the dwell.
+    pub lines: (usize, usize),
+}
+
+/// Everything a stepped-sine reduction produces.
+#[derive(Debug, Clone)]
+pub struct ResponseResult {
+    /// The dwells in file order.
+    pub dwells: Vec<DwellResult>,
+    /// The model chosen.
+    pub model: ModelFit,
+    /// Why that order (the decision's message).
+    pub order_reason: String,
+    /// Model parameters and derived quantities (one correlation block).
+    pub coefficients: Estimates,
+    /// The normalising scale: value, u and where it came from.
+    pub scale: (f64, f64, &'static str),
+    /// Model-free bandwidth `(value, u)` (Hz), or why there is none.
+    pub interpolated: std::result::Result<(f64, f64), String>,
+    /// Gain flatness `(max |dB|, u, at Hz, band Hz)`, if a dwell is in the band.
+    pub flatness: Option<(f64, f64, f64, f64)>,
+    /// Warnings.
+    pub warnings: Vec<Warning>,
+    /// The options used.
+    pub options: ResponseOptions,
+}
+
+/// Fit one dwell's sines; refuse a dwell the fit cannot use, naming it.
+fn reduce_dwell(k: usize, d: &Dwell, o: &ResponseOptions) -> Result<DwellResult> {
+    let name = || d.label(k);
+    let start = d.time_s.first().copied().unwrap_or(0.0) + o.settle_s;
+    let skip = d.time_s.partition_point(|t| *t < start);
+    let t = &d.time_s[skip..];
+    let n = t.len();
+    let span = match (t.first(), t.last()) {
+        (Some(a), Some(b)) => b - a,
+        _ => 0.0,
+    };
+    if n < 8 || span <= 0.0 {
+        return Err(Error::Unsupported(format!(
+            "{}: {n} samples over {span} s after the settle time: too few to fit a sine",
+            name()
+        )));
+    }
+    let rate = (n - 1) as f64 / span;
+    if d.freq_hz >= rate / 2.0 {
+        return Err(Error::Unsupported(format!(
+            "{}: the frequency is at or above the Nyquist frequency ({:.6} Hz of a {:.6} Hz sampling)",
+            name(),
+            rate / 2.0,
+            rate
+        )));
+    }
+    let cycles = d.freq_hz * n as f64 / rate;
+    if cycles < 2.0 {
+        return Err(Error::Unsupported(format!(
+            "{}: {cycles:.3} cycles fitted; a dwell needs at least 2",
+            name()
+        )));
+    }
+    let design = SineDesign::new(t, d.freq_hz, o.harmonics, o.drift, rate / 2.0)?;
+    let reference = design.fit(&d.reference[skip..])?;
+    let output = design.fit(&d.output[skip..])?;
+    if !(reference.amplitude > 10.0 * reference.u_amplitude) {
+        return Err(Error::Unsupported(format!(
+            "{}: the reference does not move (amplitude {:.3e}, u {:.3e}): no gain or phase can be referred to it",
+            name(),
+            reference.amplitude,
+            reference.u_amplitude
+        )));
+    }
+    let gain = output.amplitude / reference.amplitude;
+    let rel = (output.u_amplitude / output.amplitude.max(f64::MIN_POSITIVE)).powi(2)
+        + (reference.u_amplitude / reference.amplitude).powi(2)
+        + (o.u_reference_pct / 100.0).powi(2);
+    let u_phase = (output.u_phase_rad.powi(2)
+        + reference.u_phase_rad.powi(2)
+        + o.u_reference_phase_deg.to_radians().powi(2))
+    .sqrt()
+    .min(PI);
+    Ok(DwellResult {
+        freq_hz: d.freq_hz,
+        samples: n,
+        cycles,
+        rate_hz: rate,
+        reference,
+        output,
+        point: Point {
+            freq_hz: d.freq_hz,
+            gain,
+            u_gain: (gain * rel.sqrt()).max(f64::MIN_POSITIVE),
+            phase_rad: sine::wrap_pi(output.phase_rad - reference.phase_rad),
+            u_phase_rad: u_phase.max(f64::MIN_POSITIVE),
+        },
+        lines: (d.first_line, d.last_line),
+    })
+}
+
+/// Fit the model order the options ask for (module docs): the model and
+/// the reason for its order.
+fn choose_model(points: &[Point], o: &ResponseOptions, dof: f64) -> Result<(ModelFit, String)> {
+    let fit = |order: Order| model::fit_model(order, points, &model::starts(order, points), dof);
+    let p_of = |m: &ModelFit| m.fit.chi2_p_value.unwrap_or(1.0);
+    match o.order {
+        OrderChoice::First => {
+            let m = fit(Order::First)?;
+            let r = format!("first order, as asked (lack-of-fit p = {:.3})", p_of(&m));
+            Ok((m, r))
+        }
+        OrderChoice::Second => {
+            let m = fit(Order::Second)?;
+            let r = format!("second order, as asked (lack-of-fit p = {:.3})", p_of(&m));
+            Ok((m, r))
+        }
+        OrderChoice::Auto => {
+            let first = fit(Order::First);
+            if let Ok(m) = &first {
+                if p_of(m) >= crate::estimation::linear::LACK_OF_FIT_ALPHA {
+                    let r = format!(
+                        "first order: its fit passes the lack-of-fit test (chi-square p = {:.3} >= 0.05), so no second-order term is needed",
+                        p_of(m)
+                    );
+                    return Ok((first?, r));
+                }
+            }
+            let why = match &first {
+                Ok(m) => format!("the first-order fit fails the lack-of-fit test (p = {:.2e} < 0.05)", p_of(m)),
+                Err(e) => format!("the first-order model does not fit ({e})"),
+            };
+            match fit(Order::Second) {
+                Ok(m) => {
+                    let r = format!(
+                        "second order: {why}; the second-order fit gives p = {:.3}",
+                        p_of(&m)
+                    );
+                    Ok((m, r))
+                }
+                Err(e2) => match first {
+                    Ok(m) => Ok((m, format!("first order: {why}, and the second-order model does not fit ({e2}); u is scaled by the residual scatter"))),
+                    Err(e) => Err(e),
+                },
+            }
+        }
+    }
+}
+
+/// The dwells' gains in dB against `scale`, sorted by frequency:
+/// `(f, dB, u_dB)`.
+fn levels_db(dwells: &[DwellResult], scale: f64) -> Vec<(f64, f64, f64)> {
+    let c = 20.0 / std::f64::consts::LN_10;
+    let mut v: Vec<(f64, f64, f64)> = dwells
+        .iter()
+        .map(|d| {
+            let g = d.point.gain / scale.abs();
+            (d.freq_hz, 20.0 * g.log10(), c * d.point.u_gain / d.point.gain)
+        })
+        .collect();
+    v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    v
+}
+
+/// The half-power level in dB, `20 log10(1/√2)`.
+pub const HALF_POWER_DB: f64 = -3.010_299_956_639_812;
+
+/// Model-free bandwidth: `ln f` interpolated linearly in dB between the
+/// first two dwells that bracket [`HALF_POWER_DB`]; u from both dwells'
+/// u(dB) and the scale's (which shifts both). Err: the gap, for people.
+pub fn interpolated_bandwidth(
+    levels: &[(f64, f64, f64)],
+    u_scale_db: f64,
+) -> std::result::Result<(f64, f64), String> {
+    let l = HALF_POWER_DB;
+    let (Some(lo), Some(hi)) = (levels.first(), levels.last()) else {
+        return Err("no dwells".into());
+    };
+    if lo.1 < l {
+        return Err(format!(
+            "the gain is below -3.01 dB already at the lowest dwell ({} Hz, {:.2} dB): add dwells below it",
+            lo.0, lo.1
+        ));
+    }
+    let Some(w) = levels.windows(2).find(|w| w[0].1 >= l && w[1].1 < l) else {
+        return Err(format!(
+            "the gain stays above -3.01 dB up to the highest dwell ({} Hz, {:.2} dB): add dwells above it",
+            hi.0, hi.1
+        ));
+    };
+    let (f0, d0, u0) = w[0];
+    let (f1, d1, u1) = w[1];
+    let at = |a: f64, b: f64| ((f0.ln()) + (a - l) / (a - b) * (f1.ln() - f0.ln())).exp();
+    let f = at(d0, d1);
+    let h = 1e-6;
+    let g0 = (at(d0 + h, d1) - at(d0 - h, d1)) / (2.0 * h);
+    let g1 = (at(d0, d1 + h) - at(d0, d1 - h)) / (2.0 * h);
+    let u = ((g0 * u0).powi(2) + (g1 * u1).powi(2) + ((g0 + g1) * u_scale_db).powi(2)).sqrt();
+    Ok((f, u))
+}
+
+/// The reduction (module docs).
+pub fn calibrate(dwells: &[Dwell], o: &ResponseOptions) -> Result<ResponseResult> {
+    o.validate()?;
+    let reduced: Vec<DwellResult> = dwells
+        .iter()
+        .enumerate()
+        .map(|(k, d)| reduce_dwell(k, d, o))
+        .collect::<Result<_>>()?;
+    let points: Vec<Point> = reduced.iter().map(|d| d.point).collect();
+    let dof = reduced
+        .iter()
+        .map(|d| d.reference.dof.min(d.output.dof) as f64)
+        .fold(f64::INFINITY, f64::min);
+    let (model, order_reason) = choose_model(&points, o, dof)?;
+    let coefficients = model::coefficients(&model)?;
+    let (k_dc, u_k_dc) = coefficients.get("k_dc").unwrap_or((1.0, 0.0));
+    let scale = match o.k1 {
+        Some(k) => (k, o.u_k1.unwrap_or(0.0), "k1"),
+        None => (k_dc, u_k_dc, "k_dc"),
+    };
+    let c = 20.0 / std::f64::consts::LN_10;
+    let u_scale_db = c * scale.1 / scale.0.abs();
+    let levels = levels_db(&reduced, scale.0);
+    let interpolated = interpolated_bandwidth(&levels, u_scale_db);
+    if o.bandwidth == BandwidthMethod::Interpolated {
+        if let Err(gap) = &interpolated {
+            return Err(Error::Unsupported(format!(
+                "no model-free bandwidth: {gap}"
+            )));
+        }
+    }
+    let bw = coefficients.value("bandwidth_hz").unwrap_or(f64::INFINITY);
+    let band = o.flatness_to_hz.unwrap_or(bw);
+    let flatness = levels
+        .iter()
+        .filter(|l| l.0 <= band)
+        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+        .map(|l| (l.1.abs(), l.2.hypot(u_scale_db), l.0, band));
+    let warnings = warnings(&reduced, &model, &coefficients, o);
+    Ok(ResponseResult {
+        dwells: reduced,
+        model,
+        order_reason,
+        coefficients,
+        scale,
+        interpolated,
+        flatness,
+        warnings,
+        options: o.clone(),
+    })
+}
+
+/// What the engineer must be told (module docs).
+fn warnings(
+    dwells: &[DwellResult],
+    model: &ModelFit,
+    e: &Estimates,
+    o: &ResponseOptions,
+) -> Vec<Warning> {
+    let mut w = model.fit.quality_warnings(
+        "the model order, a resonance or filter the model lacks, or a reference error beyond u_reference_pct",
+    );
+    let f_max = dwells.iter().map(|d| d.freq_hz).fold(0.0, f64::max);
+    if let Some(bw) = e.value("bandwidth_hz") {
+        if bw > f_max {
+            w.push(Warning::new(
+                WarningCode::ModelRange,
+                format!("the model's bandwidth ({bw:.4} Hz) is above the highest dwell ({f_max} Hz): it is extrapolated by the model"),
+            ));
+        }
+    }
+    if let Some(tau) = e.value("delay_s") {
+        if f_max > 0.0 && tau.abs() > 1.0 / f_max {
+            w.push(Warning::new(
+                WarningCode::PhaseAmbiguous,
+                format!("the delay ({:.4} ms) is longer than one period of the highest dwell ({f_max} Hz, {:.4} ms): its phase is known only up to whole cycles, so the delay rests on the dwells below", tau * 1e3, 1e3 / f_max),
+            ));
+        }
+    }
+    for (k, d) in dwells.iter().enumerate() {
+        if d.output.amplitude < 3.0 * d.output.u_amplitude {
+            w.push(Warning::new(
+                WarningCode::WeakSignal,
+                format!("dwell {} ({} Hz): the output amplitude is within 3 u of zero: its gain is biased up and its phase is noise", k + 1, d.freq_hz),
+            ));
+        }
+    }
+    if o.k1.is_some() && o.u_k1.is_none() {
+        w.push(Warning::new(
+            WarningCode::MissingUncertainty,
+            "k1 given without u_k1: the normalised gains take it as exact",
+        ));
+    }
+    w
+}
+
+/// Stepped-sine dynamic response as one [`super::Procedure`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ResponseSine;
+
+impl super::Procedure for ResponseSine {
+    const ID: crate::document::Procedure = crate::document::Procedure::ResponseSine;
+    type Options = ResponseOptions;
+    type Input = Vec<Dwell>;
+
+    fn example() -> ResponseOptions {
+        ResponseOptions::default()
+    }
+
+    fn validate(o: &ResponseOptions) -> Result<()> {
+        o.validate()
+    }
+
+    fn read<R: std::io::Read>(
+        rows: &mut incal_io::Reader<R>,
+        o: &ResponseOptions,
+    ) -> Result<Vec<Dwell>> {
+        input::read(rows, o.rate_hz)
+    }
+
+    fn reduce(
+        dwells: &Vec<Dwell>,
+        o: &ResponseOptions,
+        _: &dyn super::Progress,
+    ) -> Result<crate::document::ResultDocument> {
+        calibrate(dwells, o)?.document()
+    }
+}

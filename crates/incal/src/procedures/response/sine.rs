@@ -1,0 +1,191 @@
+//! Least-squares sine fit of one dwell (IEEE Std 1057-2017, §4.1.3.1: the
+//! three-parameter fit at a known frequency), extended by harmonics and a
+//! linear drift.
+//!
+//! At the dwell frequency `f` (`ω = 2πf`), with `t' = t − t₀` from the
+//! dwell's first stamp, each channel is fitted by
+//!
+//! `y(t) = A₁ cos ωt' + B₁ sin ωt' + Σ_{k=2..h} (A_k cos kωt' + B_k sin kωt') + C + D (t' − t̄')`
+//!
+//! on the estimation core ([`crate::estimation::fit`], variance from the
+//! residuals, `n − p` degrees of freedom). The fundamental is
+//! `y₁ = R cos(ωt' + φ)` with
+//!
+//! `R = √(A₁² + B₁²)`, `φ = atan2(−B₁, A₁)`,
+//!
+//! and by first-order propagation (JCGM 100 §5.1.2)
+//! `∂R/∂(A₁, B₁) = (A₁, B₁)/R`, `∂φ/∂(A₁, B₁) = (B₁, −A₁)/R²`.
+//! The total harmonic distortion is `THD = √(Σ_{k≥2} R_k²)/R` (harmonics at
+//! or above the Nyquist frequency are not fitted). Reference and output
+//! share one design (one time base), so their phases have one origin and
+//! their difference does not depend on `t₀`.
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::error::Result;
+use crate::estimation::{fit, Design, FitOptions};
+
+/// The fundamental of one channel at one dwell.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChannelFit {
+    /// Amplitude `R` (channel units).
+    pub amplitude: f64,
+    /// Standard uncertainty of `R`.
+    pub u_amplitude: f64,
+    /// Phase `φ` of `R cos(ωt' + φ)` (rad, in (−π, π]).
+    pub phase_rad: f64,
+    /// Standard uncertainty of `φ` (rad).
+    pub u_phase_rad: f64,
+    /// Constant term `C` (channel units).
+    pub offset: f64,
+    /// Total harmonic distortion (ratio), `None` when no harmonic is fitted.
+    pub thd: Option<f64>,
+    /// Residual standard deviation (channel units).
+    pub residual_sd: f64,
+    /// Residual degrees of freedom `n − p`.
+    pub dof: usize,
+}
+
+/// The shared design of a dwell: columns and their names.
+#[derive(Debug, Clone)]
+pub struct SineDesign {
+    design: Design,
+    /// Harmonics fitted besides the fundamental (orders 2..).
+    harmonics: usize,
+}
+
+impl SineDesign {
+    /// The design at `freq_hz` for stamps `t_s` (s): the fundamental,
+    /// harmonics `2..=harmonics` below `nyquist_hz`, a constant, and a
+    /// linear drift when `drift`.
+    pub fn new(
+        t_s: &[f64],
+        freq_hz: f64,
+        harmonics: usize,
+        drift: bool,
+        nyquist_hz: f64,
+    ) -> Result<Self> {
+        let n = t_s.len();
+        let t0 = t_s.first().copied().unwrap_or(0.0);
+        let mean = t_s.iter().map(|t| t - t0).sum::<f64>() / n.max(1) as f64;
+        let orders: Vec<usize> = (1..=harmonics.max(1))
+            .filter(|&k| k == 1 || (k as f64) * freq_hz < nyquist_hz)
+            .collect();
+        let mut names: Vec<String> = Vec::new();
+        for k in &orders {
+            names.push(format!("A{k}"));
+            names.push(format!("B{k}"));
+        }
+        names.push("C".into());
+        if drift {
+            names.push("D".into());
+        }
+        let p = names.len();
+        let w = std::f64::consts::TAU * freq_hz;
+        let mut m = DMatrix::zeros(n, p);
+        for (i, t) in t_s.iter().enumerate() {
+            let tp = t - t0;
+            for (j, &k) in orders.iter().enumerate() {
+                let (s, c) = (k as f64 * w * tp).sin_cos();
+                m[(i, 2 * j)] = c;
+                m[(i, 2 * j + 1)] = s;
+            }
+            m[(i, 2 * orders.len())] = 1.0;
+            if drift {
+                m[(i, 2 * orders.len() + 1)] = tp - mean;
+            }
+        }
+        Ok(Self {
+            design: Design::new(names, m)?,
+            harmonics: orders.len() - 1,
+        })
+    }
+
+    /// Fit one channel `y` (same length as the stamps).
+    pub fn fit(&self, y: &[f64]) -> Result<ChannelFit> {
+        let f = fit(
+            &self.design,
+            &DVector::from_column_slice(y),
+            &FitOptions::default(),
+        )?;
+        let e = &f.estimates;
+        let v = e.values();
+        let c = e.covariance();
+        let (a, b) = (v[0], v[1]);
+        let r = a.hypot(b);
+        let (u_r, u_phi) = if r > 0.0 {
+            let ja = [a / r, b / r];
+            let jp = [b / (r * r), -a / (r * r)];
+            let quad = |j: [f64; 2]| {
+                (j[0] * j[0] * c[(0, 0)] + 2.0 * j[0] * j[1] * c[(0, 1)] + j[1] * j[1] * c[(1, 1)])
+                    .max(0.0)
+                    .sqrt()
+            };
+            (quad(ja), quad(jp))
+        } else {
+            (c[(0, 0)].max(0.0).sqrt(), std::f64::consts::PI)
+        };
+        let thd = (self.harmonics > 0 && r > 0.0).then(|| {
+            let h: f64 = (1..=self.harmonics)
+                .map(|j| v[2 * j].powi(2) + v[2 * j + 1].powi(2))
+                .sum();
+            h.sqrt() / r
+        });
+        let offset = v[2 * (self.harmonics + 1)];
+        Ok(ChannelFit {
+            amplitude: r,
+            u_amplitude: u_r,
+            phase_rad: (-b).atan2(a),
+            u_phase_rad: u_phi,
+            offset,
+            thd,
+            residual_sd: f.sigma,
+            dof: f.dof,
+        })
+    }
+}
+
+/// `x` wrapped into (−π, π].
+pub fn wrap_pi(x: f64) -> f64 {
+    let tau = std::f64::consts::TAU;
+    let y = x - tau * (x / tau).round();
+    if y <= -std::f64::consts::PI {
+        y + tau
+    } else {
+        y
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_noiseless_sine_with_harmonics_and_drift_is_recovered_exactly() {
+        let t: Vec<f64> = (0..2000).map(|i| i as f64 / 1000.0).collect();
+        let w = std::f64::consts::TAU * 7.0;
+        let y: Vec<f64> = t
+            .iter()
+            .map(|t| 2.5 * (w * t + 0.7).cos() + 0.1 * (2.0 * w * t).sin() + 0.3 + 0.05 * t)
+            .collect();
+        let d = SineDesign::new(&t, 7.0, 3, true, 500.0).unwrap();
+        let f = d.fit(&y).unwrap();
+        assert!((f.amplitude - 2.5).abs() < 1e-9, "{f:?}");
+        assert!((f.phase_rad - 0.7).abs() < 1e-9);
+        assert!((f.thd.unwrap() - 0.1 / 2.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn harmonics_at_or_above_nyquist_are_not_fitted() {
+        let t: Vec<f64> = (0..400).map(|i| i as f64 / 100.0).collect();
+        let d = SineDesign::new(&t, 20.0, 3, false, 50.0).unwrap();
+        assert_eq!(d.harmonics, 1);
+    }
+
+    #[test]
+    fn wrap_is_into_the_half_open_interval() {
+        assert!((wrap_pi(3.0 * std::f64::consts::PI) - std::f64::consts::PI).abs() < 1e-12);
+        assert!((wrap_pi(-std::f64::consts::PI) - std::f64::consts::PI).abs() < 1e-12);
+        assert!((wrap_pi(0.5) - 0.5).abs() < 1e-15);
+    }
+}
