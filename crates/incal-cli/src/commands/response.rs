@@ -3,11 +3,13 @@
 
 use std::path::PathBuf;
 
-use clap::{ArgAction, Subcommand, ValueEnum};
+use clap::{Subcommand, ValueEnum};
 use incal::procedures::response::model::Order;
 use incal::procedures::response::plan::{DwellChoice, ModelGuess, ResponsePlanOptions};
 use incal::procedures::response::sim::ResponseSimOptions;
-use incal::procedures::response::{BandwidthMethod, OrderChoice, ResponseOptions, ResponseSine};
+use incal::procedures::response::{
+    BandwidthMethod, Drift, OrderChoice, ResponseOptions, ResponseSine,
+};
 use incal::procedures::{Plan, Silent};
 
 use crate::error::{core, CliResult};
@@ -50,6 +52,15 @@ impl From<FixedOrderArg> for Order {
     }
 }
 
+/// The slow terms of each dwell.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum DriftArg {
+    /// An offset and a linear drift.
+    Linear,
+    /// An offset only.
+    None,
+}
+
 /// Which bandwidth is `bandwidth_hz`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum BandwidthArg {
@@ -71,9 +82,9 @@ pub struct SineArgs {
     /// Harmonic order fitted (1: the fundamental only); THD from 2 on.
     #[arg(long, default_value_t = 3)]
     pub harmonics: usize,
-    /// Fit a linear drift in each dwell (true or false).
-    #[arg(long, action = ArgAction::Set, default_value_t = true)]
-    pub drift: bool,
+    /// The slow terms of each dwell: an offset and a linear drift, or an offset only.
+    #[arg(long, value_enum, default_value = "linear")]
+    pub drift: DriftArg,
     /// Seconds left out at the start of each dwell (the transient).
     #[arg(long, default_value_t = 0.0)]
     pub settle_s: f64,
@@ -109,7 +120,10 @@ pub fn run_sine(a: &SineArgs) -> CliResult<()> {
     let options = ResponseOptions {
         rate_hz: a.rate_hz,
         harmonics: a.harmonics,
-        drift: a.drift,
+        drift: match a.drift {
+            DriftArg::Linear => Drift::Linear,
+            DriftArg::None => Drift::None,
+        },
         settle_s: a.settle_s,
         order: match a.order {
             OrderArg::Auto => OrderChoice::Auto,

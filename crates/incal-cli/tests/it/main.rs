@@ -18,6 +18,7 @@ mod record_cli;
 mod recordings_cli;
 mod registry;
 mod report_cli;
+mod response_cli;
 mod result_document;
 mod thermal_cli;
 mod tumble_cli;

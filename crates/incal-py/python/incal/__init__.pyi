@@ -335,3 +335,28 @@ def thermal_ramp(
     fail_on: Optional[Literal["fail", "conditional"]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
+
+def response_sine(
+    data: Data = None,
+    *,
+    rate_hz: Union[float, None] = None,
+    harmonics: int = 3,
+    drift: Literal["linear", "none"] = "linear",
+    settle_s: float = 0,
+    order: Literal["auto", "first", "second"] = "auto",
+    k1: Union[float, None] = None,
+    u_k1: Union[float, None] = None,
+    u_reference_pct: float = 0,
+    u_reference_phase_deg: float = 0,
+    bandwidth: Literal["model", "interpolated"] = "model",
+    flatness_to_hz: Union[float, None] = None,
+    columns: Union[str, Sequence[str], Mapping[str, str], None] = None,
+    delimiter: Optional[str] = None,
+    serial: Optional[str] = None,
+    model: Optional[str] = None,
+    meta: Union[str, Sequence[str], Mapping[str, Any], None] = None,
+    output_unit: Optional[str] = None,
+    limits: Optional[PathLike] = None,
+    fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
+) -> Result: ...

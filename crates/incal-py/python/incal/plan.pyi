@@ -210,3 +210,25 @@ def thermal(
     t_ref_c: float = 25,
     run_sheet: Optional[Union[str, float]] = None,
 ) -> Dict[str, Any]: ...
+
+def response_sine(
+    *,
+    dwells_hz: Union[Sequence[float], str, None] = None,
+    f_min_hz: float = 1,
+    f_max_hz: float = 200,
+    dwells: int = 12,
+    seconds_per_dwell: float = 2,
+    min_cycles: float = 10,
+    order: Literal["first", "second"] = "second",
+    k_dc: float = 1,
+    corner_hz: float = 80,
+    zeta: float = 0.6,
+    delay_s: float = 0.002,
+    rate_hz: float = 1000,
+    amplitude: float = 10,
+    noise: float = 0.02,
+    reference_noise: float = 0.005,
+    u_reference_pct: float = 0,
+    u_reference_phase_deg: float = 0,
+    run_sheet: Optional[Union[str, float]] = None,
+) -> Dict[str, Any]: ...

@@ -50,11 +50,12 @@ def _simulator(entry: Dict[str, Any], name: str):
 
             with open(os.fspath(truth_out), "w", encoding="utf-8") as f:
                 f.write(json.dumps(truth, indent=2, ensure_ascii=False) + "\n")
-        if words == ["gfimu"]:
-            return _read_csv(bytes(out)), truth["notes"]
-        if words == ["thermal"]:
-            return _read_csv(bytes(out)), truth
-        return _frame(bytes(out))
+        data, notes = _frame(bytes(out))
+        # The truth: the CSV's notes where it carries them, else the core's
+        # truth value (its notes, or the truth as a dict).
+        if notes or not isinstance(truth, dict):
+            return data, notes
+        return data, truth.get("notes", truth)
 
     simulate.__name__ = name
     simulate.__qualname__ = name

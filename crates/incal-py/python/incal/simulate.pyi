@@ -214,3 +214,27 @@ def thermal(
     seed: int,
     truth_out: Optional[Union[str, float]] = None,
 ) -> Tuple[Any, Dict[str, Any]]: ...
+
+def response_sine(
+    *,
+    dwells_hz: Union[Sequence[float], str, None] = None,
+    f_min_hz: float = 1,
+    f_max_hz: float = 200,
+    dwells: int = 12,
+    seconds_per_dwell: float = 2,
+    min_cycles: float = 10,
+    order: Literal["first", "second"] = "second",
+    k_dc: float = 1,
+    corner_hz: float = 80,
+    zeta: float = 0.6,
+    delay_s: float = 0.002,
+    rate_hz: float = 1000,
+    amplitude: float = 10,
+    noise: float = 0.02,
+    reference_noise: float = 0.005,
+    bias: float = 0,
+    distortion_pct: float = 0,
+    reference_error_pct: float = 0,
+    seed: int = 1,
+    truth_out: Optional[Union[str, float]] = None,
+) -> Tuple[Any, List[str]]: ...

@@ -56,7 +56,9 @@ impl ResponseResult {
         let (lo, hi) = self
             .dwells
             .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), d| (a.min(d.freq_hz), b.max(d.freq_hz)));
+            .fold((f64::INFINITY, 0.0f64), |(a, b), d| {
+                (a.min(d.freq_hz), b.max(d.freq_hz))
+            });
         let (lo, hi) = (lo / 2f64.sqrt(), hi * 2f64.sqrt());
         let n = 80;
         let mut out = (vec![], vec![], vec![], vec![], vec![]);
@@ -164,26 +166,52 @@ impl ResponseResult {
             let names: Vec<String> = e
                 .names()
                 .iter()
-                .map(|n| if n == "bandwidth_hz" { "bandwidth_model_hz".into() } else { n.clone() })
+                .map(|n| {
+                    if n == "bandwidth_hz" {
+                        "bandwidth_model_hz".into()
+                    } else {
+                        n.clone()
+                    }
+                })
                 .collect();
-            e = e.map(names, |x| x.clone(), |x| nalgebra::DMatrix::identity(x.len(), x.len()))?;
+            e = e.map(
+                names,
+                |x| x.clone(),
+                |x| nalgebra::DMatrix::identity(x.len(), x.len()),
+            )?;
         }
         b.estimates(&e, "", unit_of)?;
         match &self.interpolated {
             Ok((v, u)) => {
-                let name = if interp_headline { "bandwidth_hz" } else { "bandwidth_interp_hz" };
-                b.coefficient(name, Coefficient::new(name, *v, *u, unit_of(name)?, f.estimates.dof())?)?;
+                let name = if interp_headline {
+                    "bandwidth_hz"
+                } else {
+                    "bandwidth_interp_hz"
+                };
+                b.coefficient(
+                    name,
+                    Coefficient::new(name, *v, *u, unit_of(name)?, f.estimates.dof())?,
+                )?;
             }
             Err(gap) => {
-                b.decision(DecisionCode::NotDetermined, format!("no model-free bandwidth: {gap}"));
+                b.decision(
+                    DecisionCode::NotDetermined,
+                    format!("no model-free bandwidth: {gap}"),
+                );
             }
         }
         if let Some((v, u, at, band)) = self.flatness {
-            b.coefficient("flatness_db", Coefficient::new("flatness_db", v, u, unit_of("flatness_db")?, f64::INFINITY)?)?;
+            b.coefficient(
+                "flatness_db",
+                Coefficient::new("flatness_db", v, u, unit_of("flatness_db")?, f64::INFINITY)?,
+            )?;
             b.extra("flatness", json!({"band_hz": band, "worst_at_hz": at}))?;
         }
         b.fit(FitSummary::of("model", f, Unit::One));
-        b.decision(DecisionCode::ModelDegree, format!("model order: {}", self.order_reason));
+        b.decision(
+            DecisionCode::ModelDegree,
+            format!("model order: {}", self.order_reason),
+        );
         b.decision(
             DecisionCode::VarianceSource,
             crate::document::variance_decision(f.variance_source, false)
@@ -201,7 +229,10 @@ impl ResponseResult {
             "scale",
             json!({"value": self.scale.0, "u": self.scale.1, "source": self.scale.2, "unit": "output/reference"}),
         )?;
-        b.extra("model", json!({"order": order.name(), "phase_lag_deg": order.phase_lag_rad().to_degrees()}))?;
+        b.extra(
+            "model",
+            json!({"order": order.name(), "phase_lag_deg": order.phase_lag_rad().to_degrees()}),
+        )?;
         b.warnings(self.warnings.iter().cloned());
         b.table(self.dwell_table()?);
         b.extra("bode", self.bode())?;

@@ -73,29 +73,16 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, rate_hz: Option<f64>) -> Re
         if t < last_t {
             let c = ct.unwrap_or(cf);
             return Err(row
-                .cell_error(c, format!("time {t} s is before the row above ({last_t} s)"))
+                .cell_error(
+                    c,
+                    format!("time {t} s is before the row above ({last_t} s)"),
+                )
                 .into());
         }
         last_t = t;
         index += 1;
         let (r, y) = (row.f64(cr)?, row.f64(co)?);
-        let line = row.line();
-        match dwells.last_mut() {
-            Some(d) if d.freq_hz == f => {
-                d.last_line = line;
-                d.time_s.push(t);
-                d.reference.push(r);
-                d.output.push(y);
-            }
-            _ => dwells.push(Dwell {
-                freq_hz: f,
-                first_line: line,
-                last_line: line,
-                time_s: vec![t],
-                reference: vec![r],
-                output: vec![y],
-            }),
-        }
+        push(&mut dwells, row.line(), t, f, r, y);
     }
     if dwells.is_empty() {
         return Err(rows.header().error("no data rows").into());
@@ -132,4 +119,43 @@ pub fn write_each<W: std::io::Write>(
         w.end_row()
     })?;
     w.finish()
+}
+
+/// Samples in time order into dwells as [`read`] forms them (a change of
+/// `freq_hz` starts a dwell; lines counted from 2, below a header): the
+/// in-memory path of the simulator's rows.
+pub fn dwells_from(samples: impl IntoIterator<Item = Sample>) -> Vec<Dwell> {
+    let mut dwells: Vec<Dwell> = Vec::new();
+    for (k, s) in samples.into_iter().enumerate() {
+        push(
+            &mut dwells,
+            k + 2,
+            s.time_s,
+            s.freq_hz,
+            s.reference,
+            s.output,
+        );
+    }
+    dwells
+}
+
+/// One row into the dwells: onto the last when it has the same
+/// frequency, else as a new dwell.
+fn push(dwells: &mut Vec<Dwell>, line: usize, t: f64, f: f64, r: f64, y: f64) {
+    match dwells.last_mut() {
+        Some(d) if d.freq_hz == f => {
+            d.last_line = line;
+            d.time_s.push(t);
+            d.reference.push(r);
+            d.output.push(y);
+        }
+        _ => dwells.push(Dwell {
+            freq_hz: f,
+            first_line: line,
+            last_line: line,
+            time_s: vec![t],
+            reference: vec![r],
+            output: vec![y],
+        }),
+    }
 }

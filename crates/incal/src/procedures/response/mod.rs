@@ -50,7 +50,15 @@ use sine::{ChannelFit, SineDesign};
 
 /// Which model order (`auto`: the one statistics rule).
 #[derive(
-    Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
 )]
 #[serde(rename_all = "lowercase")]
 pub enum OrderChoice {
@@ -63,9 +71,38 @@ pub enum OrderChoice {
     Second,
 }
 
+/// The slow terms fitted beside the sines in each dwell.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Drift {
+    /// An offset and a linear drift.
+    #[default]
+    Linear,
+    /// An offset only.
+    None,
+}
+
 /// Which bandwidth is the headline `bandwidth_hz`.
 #[derive(
-    Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
 )]
 #[serde(rename_all = "lowercase")]
 pub enum BandwidthMethod {
@@ -89,9 +126,9 @@ pub struct ResponseOptions {
     /// reported from 2 on.
     #[serde(default = "three")]
     pub harmonics: usize,
-    /// Fit a linear drift in each dwell (default true).
-    #[serde(default = "yes")]
-    pub drift: bool,
+    /// The slow terms of each dwell (default linear: offset and drift).
+    #[serde(default)]
+    pub drift: Drift,
     /// Seconds left out at the start of every dwell (the transient).
     #[serde(default)]
     pub settle_s: f64,
@@ -123,16 +160,13 @@ pub struct ResponseOptions {
 fn three() -> usize {
     3
 }
-fn yes() -> bool {
-    true
-}
 
 impl Default for ResponseOptions {
     fn default() -> Self {
         Self {
             rate_hz: None,
             harmonics: 3,
-            drift: true,
+            drift: Drift::Linear,
             settle_s: 0.0,
             order: OrderChoice::Auto,
             k1: None,
@@ -170,19 +204,36 @@ impl ResponseOptions {
             }
             check_range("u_k1", u, 0.0, f64::MAX, "")?;
         }
-        check_range("u_reference_pct", self.u_reference_pct, 0.0, 100.0, "%")?;
-        check_range(
-            "u_reference_phase_deg",
-            self.u_reference_phase_deg,
-            0.0,
-            180.0,
-            "deg",
-        )?;
+        check_reference_u(self.u_reference_pct, self.u_reference_phase_deg)?;
         if let Some(f) = self.flatness_to_hz {
             check_positive("flatness_to_hz", f)?;
         }
         Ok(())
     }
+}
+
+/// The reference's type-B terms: `u_reference_pct` (0..100 %) and
+/// `u_reference_phase_deg` (0..180 deg).
+pub fn check_reference_u(pct: f64, phase_deg: f64) -> Result<()> {
+    crate::options::check_range("u_reference_pct", pct, 0.0, 100.0, "%")?;
+    crate::options::check_range("u_reference_phase_deg", phase_deg, 0.0, 180.0, "deg")
+}
+
+/// `(u(G), u(Δφ))` of a dwell's gain `gain` from both channels'
+/// `(R, u(R), u(φ))` (output first) and the reference's type-B terms
+/// (module docs): `u²(G)/G² = Σ u²(R)/R² + (pct/100)²`,
+/// `u²(Δφ) = Σ u²(φ) + phase²`, never 0, the phase's at most π.
+pub fn dwell_u(gain: f64, ch: [(f64, f64, f64); 2], pct: f64, phase_deg: f64) -> (f64, f64) {
+    let rel: f64 = ch
+        .iter()
+        .map(|(r, u, _)| (u / r.max(f64::MIN_POSITIVE)).powi(2))
+        .sum::<f64>()
+        + (pct / 100.0).powi(2);
+    let ph: f64 = ch.iter().map(|c| c.2 * c.2).sum::<f64>() + phase_deg.to_radians().powi(2);
+    (
+        (gain * rel.sqrt()).max(f64::MIN_POSITIVE),
+        ph.sqrt().clamp(f64::MIN_POSITIVE, PI),
+    )
 }
 
 /// One dwell reduced.
@@ -262,10 +313,18 @@ fn reduce_dwell(k: usize, d: &Dwell, o: &ResponseOptions) -> Result<DwellResult>
             name()
         )));
     }
-    let design = SineDesign::new(t, d.freq_hz, o.harmonics, o.drift, rate / 2.0)?;
+    let design = SineDesign::new(
+        t,
+        d.freq_hz,
+        o.harmonics,
+        o.drift == Drift::Linear,
+        rate / 2.0,
+    )?;
     let reference = design.fit(&d.reference[skip..])?;
     let output = design.fit(&d.output[skip..])?;
-    if !(reference.amplitude > 10.0 * reference.u_amplitude) {
+    // Still within its noise, or within rounding of its own offset.
+    let floor = (10.0 * reference.u_amplitude).max(1e-9 * reference.offset.abs());
+    if reference.amplitude.is_nan() || reference.amplitude <= floor {
         return Err(Error::Unsupported(format!(
             "{}: the reference does not move (amplitude {:.3e}, u {:.3e}): no gain or phase can be referred to it",
             name(),
@@ -274,14 +333,19 @@ fn reduce_dwell(k: usize, d: &Dwell, o: &ResponseOptions) -> Result<DwellResult>
         )));
     }
     let gain = output.amplitude / reference.amplitude;
-    let rel = (output.u_amplitude / output.amplitude.max(f64::MIN_POSITIVE)).powi(2)
-        + (reference.u_amplitude / reference.amplitude).powi(2)
-        + (o.u_reference_pct / 100.0).powi(2);
-    let u_phase = (output.u_phase_rad.powi(2)
-        + reference.u_phase_rad.powi(2)
-        + o.u_reference_phase_deg.to_radians().powi(2))
-    .sqrt()
-    .min(PI);
+    let (u_gain, u_phase) = dwell_u(
+        gain,
+        [
+            (output.amplitude, output.u_amplitude, output.u_phase_rad),
+            (
+                reference.amplitude,
+                reference.u_amplitude,
+                reference.u_phase_rad,
+            ),
+        ],
+        o.u_reference_pct,
+        o.u_reference_phase_deg,
+    );
     Ok(DwellResult {
         freq_hz: d.freq_hz,
         samples: n,
@@ -292,9 +356,9 @@ fn reduce_dwell(k: usize, d: &Dwell, o: &ResponseOptions) -> Result<DwellResult>
         point: Point {
             freq_hz: d.freq_hz,
             gain,
-            u_gain: (gain * rel.sqrt()).max(f64::MIN_POSITIVE),
+            u_gain,
             phase_rad: sine::wrap_pi(output.phase_rad - reference.phase_rad),
-            u_phase_rad: u_phase.max(f64::MIN_POSITIVE),
+            u_phase_rad: u_phase,
         },
         lines: (d.first_line, d.last_line),
     })
@@ -328,7 +392,11 @@ fn choose_model(points: &[Point], o: &ResponseOptions, dof: f64) -> Result<(Mode
                 }
             }
             let why = match &first {
-                Ok(m) => format!("the first-order fit fails the lack-of-fit test (p = {:.2e} < 0.05)", p_of(m)),
+                Ok(m) if p_of(m) > 0.0 => format!(
+                    "the first-order fit fails the lack-of-fit test (p = {:.2e} < 0.05)",
+                    p_of(m)
+                ),
+                Ok(_) => "the first-order fit fails the lack-of-fit test (p < 1e-300)".to_string(),
                 Err(e) => format!("the first-order model does not fit ({e})"),
             };
             match fit(Order::Second) {
@@ -356,7 +424,11 @@ fn levels_db(dwells: &[DwellResult], scale: f64) -> Vec<(f64, f64, f64)> {
         .iter()
         .map(|d| {
             let g = d.point.gain / scale.abs();
-            (d.freq_hz, 20.0 * g.log10(), c * d.point.u_gain / d.point.gain)
+            (
+                d.freq_hz,
+                20.0 * g.log10(),
+                c * d.point.u_gain / d.point.gain,
+            )
         })
         .collect();
     v.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -367,8 +439,13 @@ fn levels_db(dwells: &[DwellResult], scale: f64) -> Vec<(f64, f64, f64)> {
 pub const HALF_POWER_DB: f64 = -3.010_299_956_639_812;
 
 /// Model-free bandwidth: `ln f` interpolated linearly in dB between the
-/// first two dwells that bracket [`HALF_POWER_DB`]; u from both dwells'
-/// u(dB) and the scale's (which shifts both). Err: the gap, for people.
+/// first two dwells that bracket [`HALF_POWER_DB`]. Its u has the
+/// dwells' u(dB) and the scale's (which shifts both) and the
+/// interpolation's own error: the largest difference `Δ` between the
+/// linear crossing and the crossing of a parabola through the pair and
+/// one neighbour (below or above), taken as a standard uncertainty
+/// `u = |Δ|` (the curvature the dwells show, type B).
+/// Err: the gap, for people.
 pub fn interpolated_bandwidth(
     levels: &[(f64, f64, f64)],
     u_scale_db: f64,
@@ -383,21 +460,62 @@ pub fn interpolated_bandwidth(
             lo.0, lo.1
         ));
     }
-    let Some(w) = levels.windows(2).find(|w| w[0].1 >= l && w[1].1 < l) else {
+    let Some(i) = levels.windows(2).position(|w| w[0].1 >= l && w[1].1 < l) else {
         return Err(format!(
             "the gain stays above -3.01 dB up to the highest dwell ({} Hz, {:.2} dB): add dwells above it",
             hi.0, hi.1
         ));
     };
-    let (f0, d0, u0) = w[0];
-    let (f1, d1, u1) = w[1];
+    let (f0, d0, u0) = levels[i];
+    let (f1, d1, u1) = levels[i + 1];
     let at = |a: f64, b: f64| ((f0.ln()) + (a - l) / (a - b) * (f1.ln() - f0.ln())).exp();
     let f = at(d0, d1);
     let h = 1e-6;
     let g0 = (at(d0 + h, d1) - at(d0 - h, d1)) / (2.0 * h);
     let g1 = (at(d0, d1 + h) - at(d0, d1 - h)) / (2.0 * h);
-    let u = ((g0 * u0).powi(2) + (g1 * u1).powi(2) + ((g0 + g1) * u_scale_db).powi(2)).sqrt();
+    let thirds = [
+        levels.get(i + 2),
+        i.checked_sub(1).and_then(|j| levels.get(j)),
+    ];
+    let u_interp = thirds
+        .iter()
+        .flatten()
+        .map(|t| (parabola_crossing([(f0, d0), (f1, d1), (t.0, t.1)], l) - f).abs())
+        .fold(0.0, f64::max);
+    let u = ((g0 * u0).powi(2)
+        + (g1 * u1).powi(2)
+        + ((g0 + g1) * u_scale_db).powi(2)
+        + u_interp.powi(2))
+    .sqrt();
     Ok((f, u))
+}
+
+/// The frequency between the first two points where the parabola in
+/// `ln f` through the three points `(f, dB)` crosses `level` (bisection;
+/// the first two points bracket it).
+fn parabola_crossing(p: [(f64, f64); 3], level: f64) -> f64 {
+    let x: Vec<f64> = p.iter().map(|q| q.0.ln()).collect();
+    let y = |z: f64| {
+        (0..3)
+            .map(|i| {
+                let mut w = p[i].1;
+                for j in (0..3).filter(|j| *j != i) {
+                    w *= (z - x[j]) / (x[i] - x[j]);
+                }
+                w
+            })
+            .sum::<f64>()
+    };
+    let (mut a, mut b) = (x[0], x[1]);
+    for _ in 0..100 {
+        let m = 0.5 * (a + b);
+        if y(m) >= level {
+            a = m;
+        } else {
+            b = m;
+        }
+    }
+    (0.5 * (a + b)).exp()
 }
 
 /// The reduction (module docs).
@@ -408,6 +526,19 @@ pub fn calibrate(dwells: &[Dwell], o: &ResponseOptions) -> Result<ResponseResult
         .enumerate()
         .map(|(k, d)| reduce_dwell(k, d, o))
         .collect::<Result<_>>()?;
+    let mut amplitudes: Vec<f64> = reduced.iter().map(|d| d.reference.amplitude).collect();
+    amplitudes.sort_by(f64::total_cmp);
+    let median = amplitudes[amplitudes.len() / 2];
+    if let Some(k) = reduced
+        .iter()
+        .position(|d| d.reference.amplitude < 1e-6 * median)
+    {
+        return Err(Error::Unsupported(format!(
+            "{}: the reference does not move (amplitude {:.3e}, a millionth of the other dwells' {median:.3e}): no gain or phase can be referred to it",
+            dwells[k].label(k),
+            reduced[k].reference.amplitude
+        )));
+    }
     let points: Vec<Point> = reduced.iter().map(|d| d.point).collect();
     let dof = reduced
         .iter()

@@ -12,7 +12,7 @@
 //! adds π to the phase. The fit minimises
 //! `Σ_i [(|K||L_i| − G_i)/u(G_i)]² + [wrap(∠H_i − Δφ_i)/u(Δφ_i)]²` by damped
 //! Gauss–Newton on the estimation core
-//! ([`crate::estimation::gauss_newton`]); the phase residual is wrapped into
+//! ([`crate::estimation::gauss_newton()`]); the phase residual is wrapped into
 //! (−π, π], so no unwrapping of the data enters the fit. The variance
 //! follows the one statistics rule ([`Variance::AtLeast`]): the dwells' u
 //! stand unless the residuals show lack of fit at 5 %.
@@ -273,7 +273,8 @@ pub fn phase_freq_hz(order: Order, x: &[f64]) -> Option<f64> {
         -p + TAU * f * x[x.len() - 1]
     };
     let (mut lo, mut hi) = (0.0, 1000.0 * x[1].abs());
-    if !(lag(hi) >= target) {
+    let top = lag(hi);
+    if top.is_nan() || top < target {
         return None;
     }
     for _ in 0..200 {

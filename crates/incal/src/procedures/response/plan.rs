@@ -5,7 +5,7 @@
 //! sine fit gives `u(A) = u(B) = σ√(2/N)`, so `u(R) = σ√(2/N)` and
 //! `u(φ) = σ√(2/N)/R` (IEEE Std 1057-2017 §4.1.3.1). With the guessed
 //! model these give each dwell's `u(G)` and `u(Δφ)`
-//! ([`super::reduce_dwell`]'s formulas), and the model fit's own Jacobian
+//! ([`super::dwell_u`], the reduction's formulas), and the model fit's own Jacobian
 //! at the guess gives the covariance of `k_dc, f_c|f_n, ζ, τ` and, through
 //! [`super::model::derived`], of the bandwidth, phase frequency and
 //! latency: plan and reduction share one design.
@@ -102,8 +102,7 @@ impl DwellChoice {
                     .map(|k| {
                         let f = (a + (b - a) * k as f64 / n as f64).exp();
                         // Four significant digits: a table can set it.
-                        let p = 10f64.powf(f.log10().floor() - 3.0);
-                        (f / p).round() * p
+                        format!("{f:.3e}").parse().unwrap_or(f)
                     })
                     .collect()
             }
@@ -210,43 +209,64 @@ pub struct ResponsePlanOptions {
     pub u_reference_phase_deg: f64,
 }
 
-fn thousand() -> f64 {
+pub(super) fn thousand() -> f64 {
     1000.0
 }
-fn amplitude() -> f64 {
+pub(super) fn amplitude() -> f64 {
     10.0
 }
-fn noise() -> f64 {
+pub(super) fn noise() -> f64 {
     0.02
 }
-fn reference_noise() -> f64 {
+pub(super) fn reference_noise() -> f64 {
     0.005
+}
+
+/// The checks a plan and a simulation share: the noises, the reference's
+/// type-B terms, the model and the dwells; the schedule `(freq_hz,
+/// seconds)`, each dwell below the Nyquist frequency of `rate_hz`.
+pub fn check_test(
+    dwells: &DwellChoice,
+    model: &ModelGuess,
+    rate_hz: f64,
+    noises: [f64; 2],
+    u_reference: [f64; 2],
+) -> Result<Vec<(f64, f64)>> {
+    check_range("rate_hz", rate_hz, 1e-3, 1e7, "Hz")?;
+    check_range("noise", noises[0], 0.0, 1e12, "")?;
+    check_range("reference_noise", noises[1], 0.0, 1e12, "")?;
+    super::check_reference_u(u_reference[0], u_reference[1])?;
+    model.x()?;
+    let s = dwells.schedule()?;
+    if let Some((f, _)) = s.iter().find(|(f, _)| *f >= rate_hz / 2.0) {
+        return invalid(
+            "dwells_hz",
+            format!(
+                "{f} Hz is at or above the Nyquist frequency ({} Hz) of rate_hz",
+                rate_hz / 2.0
+            ),
+        );
+    }
+    crate::sim::check_rows(&[(
+        "samples of all dwells",
+        s.iter()
+            .map(|(_, sec)| (sec * rate_hz).round())
+            .sum::<f64>(),
+    )])?;
+    Ok(s)
 }
 
 impl ResponsePlanOptions {
     /// Range checks; the schedule `(freq_hz, seconds)`.
     pub fn validate(&self) -> Result<Vec<(f64, f64)>> {
-        check_range("rate_hz", self.rate_hz, 1e-3, 1e7, "Hz")?;
         check_positive("amplitude", self.amplitude)?;
-        check_range("noise", self.noise, 0.0, 1e12, "")?;
-        check_range("reference_noise", self.reference_noise, 0.0, 1e12, "")?;
-        check_range("u_reference_pct", self.u_reference_pct, 0.0, 100.0, "%")?;
-        check_range("u_reference_phase_deg", self.u_reference_phase_deg, 0.0, 180.0, "deg")?;
-        self.model.x()?;
-        let s = self.dwells.schedule()?;
-        for (f, _) in &s {
-            if *f >= self.rate_hz / 2.0 {
-                return invalid(
-                    "dwells_hz",
-                    format!("{f} Hz is at or above the Nyquist frequency ({} Hz) of rate_hz", self.rate_hz / 2.0),
-                );
-            }
-        }
-        crate::sim::check_rows(&[(
-            "samples of all dwells",
-            s.iter().map(|(_, sec)| sec * self.rate_hz).sum::<f64>(),
-        )])?;
-        Ok(s)
+        check_test(
+            &self.dwells,
+            &self.model,
+            self.rate_hz,
+            [self.noise, self.reference_noise],
+            [self.u_reference_pct, self.u_reference_phase_deg],
+        )
     }
 
     /// Each dwell's predicted point (gain and phase of the guess, with u).
@@ -260,16 +280,18 @@ impl ResponsePlanOptions {
                 let ry = m * self.amplitude;
                 let ur = self.reference_noise * (2.0 / n).sqrt();
                 let uy = self.noise * (2.0 / n).sqrt();
-                let rel2 = (uy / ry).powi(2) + (ur / self.amplitude).powi(2);
+                let (u_gain, u_phase_rad) = super::dwell_u(
+                    m,
+                    [(ry, uy, uy / ry), (self.amplitude, ur, ur / self.amplitude)],
+                    self.u_reference_pct,
+                    self.u_reference_phase_deg,
+                );
                 Point {
                     freq_hz: f,
                     gain: m,
-                    u_gain: (m * (rel2 + (self.u_reference_pct / 100.0).powi(2)).sqrt())
-                        .max(f64::MIN_POSITIVE),
+                    u_gain,
                     phase_rad: ph,
-                    u_phase_rad: (rel2 + self.u_reference_phase_deg.to_radians().powi(2))
-                        .sqrt()
-                        .max(f64::MIN_POSITIVE),
+                    u_phase_rad,
                 }
             })
             .collect())
@@ -309,8 +331,8 @@ pub fn plan_document(o: &ResponsePlanOptions) -> Result<PlanDocument> {
         });
     }
     let j = model::jacobian(order, &points, &x);
-    let cov = Design::new(order.names(), j)?
-        .predict(&DVector::from_element(2 * points.len(), 1.0))?;
+    let cov =
+        Design::new(order.names(), j)?.predict(&DVector::from_element(2 * points.len(), 1.0))?;
     let e = crate::estimation::Estimates::new(
         order.names(),
         DVector::from_vec(x.clone()),
@@ -329,8 +351,14 @@ pub fn plan_document(o: &ResponsePlanOptions) -> Result<PlanDocument> {
         ),
     );
     d.with_options(o)?;
-    d.set("dwells_hz", json!(schedule.iter().map(|s| s.0).collect::<Vec<_>>()))?;
-    d.set("seconds", json!(schedule.iter().map(|s| s.1).collect::<Vec<_>>()))?;
+    d.set(
+        "dwells_hz",
+        json!(schedule.iter().map(|s| s.0).collect::<Vec<_>>()),
+    )?;
+    d.set(
+        "seconds",
+        json!(schedule.iter().map(|s| s.1).collect::<Vec<_>>()),
+    )?;
     d.set("amplitude", json!(o.amplitude))?;
     for (k, n) in all.names().iter().enumerate() {
         d.predict(n, all.u_at(k), super::document::unit_of(n)?.as_str())?;
@@ -339,7 +367,11 @@ pub fn plan_document(o: &ResponsePlanOptions) -> Result<PlanDocument> {
     for p in &points {
         let f = crate::error::short_number(&p.freq_hz.to_string());
         d.predict(&format!("gain_db@{f}Hz"), c * p.u_gain / p.gain, "dB")?;
-        d.predict(&format!("phase_deg@{f}Hz"), p.u_phase_rad.to_degrees(), "deg")?;
+        d.predict(
+            &format!("phase_deg@{f}Hz"),
+            p.u_phase_rad.to_degrees(),
+            "deg",
+        )?;
     }
     d.note("predicted u for white noise of the stated σ on both channels and whole cycles per dwell; the reduction takes the noise from each dwell's residuals");
     Ok(d)
@@ -350,7 +382,11 @@ pub fn run_sheet(d: &PlanDocument) -> crate::procedures::registry::RunSheet {
     use crate::document::plan::{sheet_number as num, values};
     let f = values(&d.plan, "dwells_hz");
     let s = values(&d.plan, "seconds");
-    let a = d.plan.get("amplitude").and_then(|v| v.as_f64()).unwrap_or(f64::NAN);
+    let a = d
+        .plan
+        .get("amplitude")
+        .and_then(|v| v.as_f64())
+        .unwrap_or(f64::NAN);
     (
         vec!["freq_hz", "seconds", "cycles", "amplitude"],
         f.iter()

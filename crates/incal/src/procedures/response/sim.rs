@@ -20,9 +20,9 @@ use serde_json::json;
 
 use super::input::{write_each, Sample};
 use super::model::{self, response};
-use super::plan::{DwellChoice, ModelGuess};
+use super::plan::{amplitude, noise, reference_noise, thousand, DwellChoice, ModelGuess};
 use crate::error::Result;
-use crate::options::{check_range, invalid};
+use crate::options::check_range;
 use crate::sim::{normal, rng};
 
 /// Options of `incal simulate response-sine`, in engineering units.
@@ -38,7 +38,7 @@ pub struct ResponseSimOptions {
     #[serde(default = "thousand")]
     pub rate_hz: f64,
     /// Reference amplitude `A` (reference units; default 10).
-    #[serde(default = "ten")]
+    #[serde(default = "amplitude")]
     pub amplitude: f64,
     /// Output noise σ of one sample (default 0.02).
     #[serde(default = "noise")]
@@ -60,18 +60,6 @@ pub struct ResponseSimOptions {
     pub seed: u64,
 }
 
-fn thousand() -> f64 {
-    1000.0
-}
-fn ten() -> f64 {
-    10.0
-}
-fn noise() -> f64 {
-    0.02
-}
-fn reference_noise() -> f64 {
-    0.005
-}
 fn seed_one() -> u64 {
     1
 }
@@ -82,7 +70,7 @@ impl Default for ResponseSimOptions {
             dwells: DwellChoice::default(),
             model: ModelGuess::default(),
             rate_hz: thousand(),
-            amplitude: ten(),
+            amplitude: amplitude(),
             noise: noise(),
             reference_noise: reference_noise(),
             bias: 0.0,
@@ -96,28 +84,23 @@ impl Default for ResponseSimOptions {
 impl ResponseSimOptions {
     /// Every range check; the schedule `(freq_hz, seconds)`.
     pub fn schedule(&self) -> Result<Vec<(f64, f64)>> {
-        check_range("rate_hz", self.rate_hz, 1e-3, 1e7, "Hz")?;
         check_range("amplitude", self.amplitude, 1e-12, 1e12, "")?;
-        check_range("noise", self.noise, 0.0, 1e12, "")?;
-        check_range("reference_noise", self.reference_noise, 0.0, 1e12, "")?;
         check_range("bias", self.bias, -1e12, 1e12, "")?;
         check_range("distortion_pct", self.distortion_pct, 0.0, 100.0, "%")?;
-        check_range("reference_error_pct", self.reference_error_pct, 0.0, 50.0, "%")?;
-        self.model.x()?;
-        let s = self.dwells.schedule()?;
-        for (f, _) in &s {
-            if *f >= self.rate_hz / 2.0 {
-                return invalid(
-                    "dwells_hz",
-                    format!("{f} Hz is at or above the Nyquist frequency ({} Hz) of rate_hz", self.rate_hz / 2.0),
-                );
-            }
-        }
-        crate::sim::check_rows(&[(
-            "samples of all dwells",
-            s.iter().map(|(_, sec)| (sec * self.rate_hz).round()).sum::<f64>(),
-        )])?;
-        Ok(s)
+        check_range(
+            "reference_error_pct",
+            self.reference_error_pct,
+            0.0,
+            50.0,
+            "%",
+        )?;
+        super::plan::check_test(
+            &self.dwells,
+            &self.model,
+            self.rate_hz,
+            [self.noise, self.reference_noise],
+            [0.0, 0.0],
+        )
     }
 
     /// Each row in turn, without holding them (options checked first).
@@ -205,5 +188,18 @@ impl crate::procedures::Simulate for super::ResponseSine {
 
     fn truth(o: &ResponseSimOptions) -> Result<Option<serde_json::Value>> {
         o.truth_json().map(Some)
+    }
+}
+
+impl ResponseSimOptions {
+    /// The simulated dwells in memory (what [`super::input::read`] makes
+    /// of the written CSV, up to its digits).
+    pub fn dwells(&self) -> Result<Vec<super::input::Dwell>> {
+        let mut v = Vec::new();
+        self.for_each(|s| {
+            v.push(s);
+            Ok(())
+        })?;
+        Ok(super::input::dwells_from(v))
     }
 }

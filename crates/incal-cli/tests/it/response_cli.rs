@@ -1,0 +1,158 @@
+//! `incal response sine`, `incal plan response-sine` and `incal simulate
+//! response-sine` from outside: the contract keys and units, the run
+//! sheet, and bad input refused in one line naming the file, the line or
+//! dwell, or the option.
+
+use crate::common;
+
+use common::*;
+
+const HEADER: &str = "time_s,freq_hz,reference,output\n";
+
+/// A small recording: 4 dwells (2, 5, 10, 20 Hz) of 200 samples at 200 Hz.
+fn small(dir: &std::path::Path) -> std::path::PathBuf {
+    let csv = dir.join("sine.csv");
+    ok(&run(&[
+        "simulate",
+        "response-sine",
+        "--dwells-hz",
+        "2,5,10,20",
+        "--seconds-per-dwell",
+        "1",
+        "--rate-hz",
+        "200",
+        "--order",
+        "first",
+        "--corner-hz",
+        "8",
+        "--seed",
+        "5",
+        "-o",
+        p(&csv),
+    ]));
+    csv
+}
+
+#[test]
+fn a_simulated_sweep_reduces_to_the_contract() {
+    let dir = workdir("response_contract");
+    let csv = small(&dir);
+    let v = json_of(&run(&["response", "sine", "--input", p(&csv), "--json"]));
+    assert_eq!(v["procedure"], "response-sine");
+    for (name, unit) in [
+        ("k_dc", "output/reference"),
+        ("fc_hz", "Hz"),
+        ("delay_s", "s"),
+        ("bandwidth_hz", "Hz"),
+        ("latency_s", "s"),
+        ("bandwidth_interp_hz", "Hz"),
+        ("flatness_db", "dB"),
+    ] {
+        assert_eq!(v["coefficients"][name]["unit"], unit, "{name}");
+    }
+    let t = &v["tables"][0];
+    assert_eq!(t["id"], "dwells");
+    assert_eq!(t["rows"].as_array().unwrap().len(), 4);
+    assert_eq!(v["bode"]["freq_hz"].as_array().unwrap().len(), 80);
+    assert_eq!(v["options"]["drift"], "linear");
+}
+
+#[test]
+fn the_plan_writes_its_run_sheet() {
+    let dir = workdir("response_plan");
+    let sheet = dir.join("sheet.csv");
+    ok(&run(&[
+        "plan",
+        "response-sine",
+        "--dwells-hz",
+        "1,10,100,200",
+        "--run-sheet",
+        p(&sheet),
+    ]));
+    let s = std::fs::read_to_string(&sheet).unwrap();
+    assert!(
+        s.starts_with("step,freq_hz,seconds,cycles,amplitude"),
+        "{s}"
+    );
+    assert_eq!(s.lines().count(), 5, "{s}");
+}
+
+#[test]
+fn bad_input_is_refused_in_one_line() {
+    let dir = workdir("response_bad");
+    let f = |name: &str, text: &str| {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    let missing = f("missing.csv", "time_s,freq_hz,output\n0,1,0\n");
+    refused(
+        &run(&["response", "sine", "--input", p(&missing)]),
+        &["missing.csv", "missing column 'reference'"],
+    );
+    let text = f("text.csv", &format!("{HEADER}0,1,abc,0\n"));
+    refused(
+        &run(&["response", "sine", "--input", p(&text)]),
+        &["text.csv:2:", "reference"],
+    );
+    let empty = f("empty.csv", HEADER);
+    refused(
+        &run(&["response", "sine", "--input", p(&empty)]),
+        &["empty.csv", "no data rows"],
+    );
+    let back = f(
+        "back.csv",
+        &format!("{HEADER}0,1,0,0\n0.1,1,1,1\n0.05,1,0,0\n"),
+    );
+    refused(
+        &run(&["response", "sine", "--input", p(&back)]),
+        &["back.csv:4:", "before the row above"],
+    );
+    let zero = f("zero.csv", &format!("{HEADER}0,0,0,0\n"));
+    refused(
+        &run(&["response", "sine", "--input", p(&zero)]),
+        &["zero.csv:2:", "not a positive frequency"],
+    );
+    let no_time = f("notime.csv", "freq_hz,reference,output\n1,0,0\n");
+    refused(
+        &run(&["response", "sine", "--input", p(&no_time)]),
+        &["notime.csv", "rate_hz"],
+    );
+    let csv = small(&dir);
+    refused(
+        &run(&["response", "sine", "--input", p(&csv), "--harmonics", "0"]),
+        &["--harmonics"],
+    );
+    refused(
+        &run(&["response", "sine", "--input", p(&csv), "--u-k1", "0.1"]),
+        &["--u-k1", "--k1"],
+    );
+    refused(
+        &run(&["plan", "response-sine", "--dwells-hz", "1,10,600"]),
+        &["--dwells-hz", "Nyquist"],
+    );
+    refused(
+        &run(&["simulate", "response-sine", "--min-cycles", "1"]),
+        &["--min-cycles"],
+    );
+}
+
+#[test]
+fn a_dwell_above_nyquist_in_a_recording_is_named_with_its_lines() {
+    let dir = workdir("response_nyquist");
+    let mut s = String::from(HEADER);
+    for k in 0..40 {
+        let t = k as f64 / 100.0;
+        s.push_str(&format!(
+            "{t},60,{},{}\n",
+            (k as f64).sin(),
+            (k as f64).cos()
+        ));
+    }
+    let path = dir.join("fast.csv");
+    std::fs::write(&path, s).unwrap();
+    refused(
+        &run(&["response", "sine", "--input", p(&path)]),
+        &["fast.csv", "dwell 1 (60 Hz, lines 2-41)", "Nyquist"],
+    );
+}

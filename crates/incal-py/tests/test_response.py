@@ -1,0 +1,61 @@
+"""Dynamic response by stepped sine: incal's dwell sine fits against an
+independent least-squares fit (numpy) on the same samples, and the
+simulated truth inside U95."""
+
+import math
+
+import numpy as np
+import pytest
+
+import incal
+
+
+def _numpy_fit(t, y, f, harmonics, nyquist):
+    """The IEEE Std 1057 three-parameter fit with harmonics and a linear
+    drift, by numpy's least squares: (R, phi) of the fundamental."""
+    tp = t - t[0]
+    cols = []
+    for k in range(1, harmonics + 1):
+        if k == 1 or k * f < nyquist:
+            cols += [np.cos(2 * math.pi * k * f * tp), np.sin(2 * math.pi * k * f * tp)]
+    cols += [np.ones_like(tp), tp - tp.mean()]
+    x, *_ = np.linalg.lstsq(np.column_stack(cols), y, rcond=None)
+    return math.hypot(x[0], x[1]), math.atan2(-x[1], x[0])
+
+
+@pytest.fixture(scope="module")
+def reduced():
+    data, truth = incal.simulate.response_sine(seed=21, dwells=7, seconds_per_dwell=0.5, distortion_pct=1.0)
+    return data, truth, incal.response_sine(data)
+
+
+def test_the_dwell_sine_fits_equal_numpy_least_squares(reduced):
+    data, _, r = reduced
+    dwells = r.table("dwells")
+    t = np.asarray(data["time_s"], dtype=float)
+    f_all = np.asarray(data["freq_hz"], dtype=float)
+    for _, row in dwells.iterrows():
+        f = row["freq_hz [Hz]"]
+        m = f_all == f
+        rate = (m.sum() - 1) / (t[m][-1] - t[m][0])
+        for channel, amp, ph in (("reference", "ref_amplitude [reference]", "ref_phase_deg [deg]"),
+                                 ("output", "out_amplitude [output]", "out_phase_deg [deg]")):
+            R, phi = _numpy_fit(t[m], np.asarray(data[channel], dtype=float)[m], f, 3, rate / 2)
+            assert row[amp] == pytest.approx(R, rel=1e-9), (f, channel)
+            assert math.radians(row[ph]) == pytest.approx(phi, rel=1e-9, abs=1e-12), (f, channel)
+
+
+def test_the_simulated_truth_lies_inside_u95(reduced):
+    _, truth, r = reduced
+    c = r.coefficients
+    for name in ("bandwidth_hz", "delay_s", "latency_s", "phase_freq_hz"):
+        assert abs(c[name].value - truth[name]) <= c[name].U95, name
+    assert r.document["procedure"] == "response-sine"
+    # The distortion the simulator put in the output shows as its THD.
+    thd = r.table("dwells")["thd_out_pct [%]"]
+    assert thd.min() == pytest.approx(1.0, abs=0.05)
+
+
+def test_a_plan_without_a_dwell_above_the_corner_is_refused_naming_the_bandwidth():
+    with pytest.raises(incal.IncalError, match="bandwidth_hz is not determined"):
+        incal.plan.response_sine(f_max_hz=40)
