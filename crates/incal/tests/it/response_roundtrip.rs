@@ -56,7 +56,7 @@ fn coverage_run(order: Order, seed: u64) -> Vec<(String, bool)> {
         Order::Second => OrderChoice::Second,
     };
     let r = calibrate(&s.dwells().unwrap(), &options(fixed)).expect("reduces");
-    let e = &r.coefficients;
+    let e = &r.part.coefficients;
     let k95 = e.coverage_factor(0.95);
     let corner = if order == Order::First {
         "fc_hz"
@@ -140,14 +140,14 @@ fn a_two_millisecond_delay_at_one_kilohertz_is_recovered_within_its_u95() {
         ..ResponseSimOptions::default()
     };
     let r = calibrate(&s.dwells().unwrap(), &ResponseOptions::default()).unwrap();
-    let (v, u) = r.coefficients.get("delay_s").unwrap();
-    let k = r.coefficients.coverage_factor(0.95);
+    let (v, u) = r.part.coefficients.get("delay_s").unwrap();
+    let k = r.part.coefficients.coverage_factor(0.95);
     assert!((v - 0.002).abs() <= k * u, "delay {v} ± {}", k * u);
     assert!(k * u < 1e-5, "U95 {} s", k * u);
     // The model-free bandwidth between 76 and 124 Hz, where the response
     // bends: its U95 carries the interpolation's error and covers the
     // truth.
-    let (f, uf) = r.interpolated.clone().unwrap();
+    let (f, uf) = r.part.interpolated.clone().unwrap();
     let truth = s.truth_json().unwrap()["bandwidth_hz"].as_f64().unwrap();
     assert!(
         (f - truth).abs() <= 1.96 * uf,
@@ -163,7 +163,7 @@ fn order_rates(first: ResponseSimOptions, second: ResponseSimOptions, n: usize) 
         let mut o = o.clone();
         o.seed = s;
         calibrate(&o.dwells().unwrap(), &options(OrderChoice::Auto))
-            .map(|r| r.model.order)
+            .map(|r| r.part.model.order)
             .ok()
     };
     let a = monte_carlo(5, n, |s| pick(&first, s));
@@ -220,7 +220,7 @@ fn the_plan_predicts_the_scatter_of_the_estimates() {
         o.seed = seed;
         o.reference_error_pct = 0.0;
         let r = calibrate(&o.dwells().unwrap(), &ResponseOptions::default()).unwrap();
-        ["fn_hz", "zeta", "delay_s", "bandwidth_hz"].map(|n| r.coefficients.value(n).unwrap())
+        ["fn_hz", "zeta", "delay_s", "bandwidth_hz"].map(|n| r.part.coefficients.value(n).unwrap())
     });
     for (k, name) in ["fn_hz", "zeta", "delay_s", "bandwidth_hz"]
         .iter()
@@ -324,7 +324,7 @@ fn an_interpolated_bandwidth_the_dwells_do_not_bracket_is_refused_naming_the_gap
     );
     // With the model's bandwidth the same data reduce, the gap a decision.
     let r = calibrate(&s.dwells().unwrap(), &ResponseOptions::default()).unwrap();
-    assert!(r.interpolated.is_err());
+    assert!(r.part.interpolated.is_err());
     let doc = r.document().unwrap();
     assert!(doc.coefficients.get("bandwidth_interp_hz").is_none());
 }

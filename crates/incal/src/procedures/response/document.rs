@@ -9,6 +9,7 @@ use std::f64::consts::{LN_10, PI};
 use nalgebra::DVector;
 use serde_json::json;
 
+use super::fit::ModelPart;
 use super::model::response;
 use super::sine::wrap_pi;
 use super::{BandwidthMethod, ResponseResult};
@@ -35,54 +36,6 @@ pub fn unit_of(name: &str) -> Result<Unit> {
 }
 
 impl ResponseResult {
-    /// The model's gain (dB against the scale) and phase lag relative to
-    /// the sign of `k_dc` (deg, continuous) at `f_hz`.
-    fn model_db_deg(&self, x: &[f64], f_hz: f64) -> (f64, f64) {
-        let (m, p) = response(self.model.order, x, f_hz);
-        let sign = if x[0] < 0.0 { PI } else { 0.0 };
-        (
-            20.0 * (m / self.scale.0.abs()).log10(),
-            (p - sign).to_degrees(),
-        )
-    }
-
-    /// The Bode curve of the model on a log grid over the dwells (half an
-    /// octave either side, 80 points) with `U95` from the model's
-    /// covariance (JCGM 100 §5.1.2).
-    fn bode(&self) -> serde_json::Value {
-        let e = &self.model.fit.estimates;
-        let x = e.values().clone();
-        let k95 = e.coverage_factor(0.95);
-        let (lo, hi) = self
-            .dwells
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), d| {
-                (a.min(d.freq_hz), b.max(d.freq_hz))
-            });
-        let (lo, hi) = (lo / 2f64.sqrt(), hi * 2f64.sqrt());
-        let n = 80;
-        let mut out = (vec![], vec![], vec![], vec![], vec![]);
-        for k in 0..n {
-            let f = (lo.ln() + (hi.ln() - lo.ln()) * k as f64 / (n - 1) as f64).exp();
-            let g = |z: &DVector<f64>| {
-                let (a, b) = self.model_db_deg(z.as_slice(), f);
-                DVector::from_vec(vec![a, b])
-            };
-            let steps: Vec<f64> = (0..x.len())
-                .map(|j| 1e-6 * x[j].abs().max(e.u_at(j)).max(1e-12))
-                .collect();
-            let j = numeric_jacobian(&g, &x, &steps);
-            let c = crate::estimation::propagate(e.covariance(), &j);
-            let (db, deg) = self.model_db_deg(x.as_slice(), f);
-            out.0.push(f);
-            out.1.push(db);
-            out.2.push(deg);
-            out.3.push(k95 * c[(0, 0)].max(0.0).sqrt());
-            out.4.push(k95 * c[(1, 1)].max(0.0).sqrt());
-        }
-        json!({"freq_hz": out.0, "gain_db": out.1, "phase_deg": out.2, "u95_gain_db": out.3, "u95_phase_deg": out.4})
-    }
-
     /// The `dwells` table.
     fn dwell_table(&self) -> Result<Table> {
         let o = |s: &str| Some(Unit::Other(s.into()));
@@ -113,14 +66,14 @@ impl ResponseResult {
                 ("residual_phase", Some(Unit::One)),
             ],
         );
-        let x = self.model.fit.estimates.values().as_slice().to_vec();
+        let x = self.part.model.fit.estimates.values().as_slice().to_vec();
         let sign = if x[0] < 0.0 { PI } else { 0.0 };
         let c = 20.0 / LN_10;
         for d in &self.dwells {
             let p = &d.point;
-            let (m, ph) = response(self.model.order, &x, p.freq_hz);
+            let (m, ph) = response(self.part.model.order, &x, p.freq_hz);
             let dphi = wrap_pi(p.phase_rad - ph);
-            let (mdb, mdeg) = self.model_db_deg(&x, p.freq_hz);
+            let (mdb, mdeg) = self.part.model_db_deg(&x, p.freq_hz);
             t.push(vec![
                 Cell::num(d.freq_hz),
                 Cell::num(d.samples as f64),
@@ -133,7 +86,7 @@ impl ResponseResult {
                 Cell::num(d.output.phase_rad.to_degrees()),
                 Cell::num(p.gain),
                 Cell::num(p.u_gain),
-                Cell::num(20.0 * (p.gain / self.scale.0.abs()).log10()),
+                Cell::num(20.0 * (p.gain / self.part.scale.0.abs()).log10()),
                 Cell::num(c * p.u_gain / p.gain),
                 Cell::num((ph - sign + dphi).to_degrees()),
                 Cell::num(p.u_phase_rad.to_degrees()),
@@ -150,17 +103,30 @@ impl ResponseResult {
 
     /// The result document.
     pub fn document(&self) -> Result<ResultDocument> {
-        let f = &self.model.fit;
-        let order = self.model.order;
         let mut b = DocumentBuilder::new(
             Procedure::ResponseSine,
             format!(
                 "Dynamic response by stepped sine: {} dwells, {} order model with delay",
                 self.dwells.len(),
-                order.name()
+                self.part.model.order.name()
             ),
         );
-        let interp_headline = self.options.bandwidth == BandwidthMethod::Interpolated;
+        self.part.write(&mut b)?;
+        b.warnings(self.warnings.iter().cloned());
+        b.table(self.dwell_table()?);
+        b.extra("bode", self.part.bode())?;
+        Ok(b.finish())
+    }
+}
+
+impl ModelPart {
+    /// The model's coefficients, fit, decisions and the `scale`, `model`
+    /// and `flatness` keys into a document (the caller adds its warnings,
+    /// its tables and `bode`).
+    pub fn write(&self, b: &mut DocumentBuilder) -> Result<()> {
+        let f = &self.model.fit;
+        let order = self.model.order;
+        let interp_headline = self.bandwidth == BandwidthMethod::Interpolated;
         let mut e = self.coefficients.clone();
         if interp_headline {
             let names: Vec<String> = e
@@ -214,8 +180,10 @@ impl ResponseResult {
         );
         b.decision(
             DecisionCode::VarianceSource,
-            crate::document::variance_decision(f.variance_source, false)
-                .replace("repeated samples", "the dwells' sine fits"),
+            match f.variance_source {
+                crate::estimation::VarianceSource::Prior => "variance from each point's own u (a dwell's sine fits, or a bin's coherence and averages): the model's residuals agree with it",
+                crate::estimation::VarianceSource::Residuals => "variance from the model's residuals: they exceed the points' own u (lack of fit)",
+            },
         );
         if let Some((tau, u)) = self.coefficients.get("delay_s") {
             if tau.abs() <= self.coefficients.coverage_factor(0.95) * u {
@@ -233,9 +201,48 @@ impl ResponseResult {
             "model",
             json!({"order": order.name(), "phase_lag_deg": order.phase_lag_rad().to_degrees()}),
         )?;
-        b.warnings(self.warnings.iter().cloned());
-        b.table(self.dwell_table()?);
-        b.extra("bode", self.bode())?;
-        Ok(b.finish())
+        Ok(())
+    }
+
+    /// The model's gain (dB against the scale) and phase lag relative to
+    /// the sign of `k_dc` (deg, continuous) at `f_hz`.
+    pub fn model_db_deg(&self, x: &[f64], f_hz: f64) -> (f64, f64) {
+        let (m, p) = response(self.model.order, x, f_hz);
+        let sign = if x[0] < 0.0 { PI } else { 0.0 };
+        (
+            20.0 * (m / self.scale.0.abs()).log10(),
+            (p - sign).to_degrees(),
+        )
+    }
+
+    /// The Bode curve of the model on a log grid over the points (half an
+    /// octave either side, 80 points) with `U95` from the model's
+    /// covariance (JCGM 100 §5.1.2).
+    pub fn bode(&self) -> serde_json::Value {
+        let e = &self.model.fit.estimates;
+        let x = e.values().clone();
+        let k95 = e.coverage_factor(0.95);
+        let (lo, hi) = (self.range_hz.0 / 2f64.sqrt(), self.range_hz.1 * 2f64.sqrt());
+        let n = 80;
+        let mut out = (vec![], vec![], vec![], vec![], vec![]);
+        for k in 0..n {
+            let f = (lo.ln() + (hi.ln() - lo.ln()) * k as f64 / (n - 1) as f64).exp();
+            let g = |z: &DVector<f64>| {
+                let (a, b) = self.model_db_deg(z.as_slice(), f);
+                DVector::from_vec(vec![a, b])
+            };
+            let steps: Vec<f64> = (0..x.len())
+                .map(|j| 1e-6 * x[j].abs().max(e.u_at(j)).max(1e-12))
+                .collect();
+            let j = numeric_jacobian(&g, &x, &steps);
+            let c = crate::estimation::propagate(e.covariance(), &j);
+            let (db, deg) = self.model_db_deg(x.as_slice(), f);
+            out.0.push(f);
+            out.1.push(db);
+            out.2.push(deg);
+            out.3.push(k95 * c[(0, 0)].max(0.0).sqrt());
+            out.4.push(k95 * c[(1, 1)].max(0.0).sqrt());
+        }
+        json!({"freq_hz": out.0, "gain_db": out.1, "phase_deg": out.2, "u95_gain_db": out.3, "u95_phase_deg": out.4})
     }
 }
