@@ -36,7 +36,7 @@ fn bench_response(c: &mut Criterion) {
     group.sample_size(10);
     group.throughput(Throughput::Elements(rows as u64));
     group.bench_function("60 dwells x 10 s at 1 kHz, in memory", |b| {
-        b.iter(|| black_box(calibrate(&dwells, &o).unwrap().coefficients.len()))
+        b.iter(|| black_box(calibrate(&dwells, &o).unwrap().part.coefficients.len()))
     });
     group.bench_function("60 dwells x 10 s at 1 kHz, from CSV", |b| {
         b.iter(|| {
