@@ -7,6 +7,7 @@ use clap::{Subcommand, ValueEnum};
 use incal::procedures::response::model::Order;
 use incal::procedures::response::plan::{DwellChoice, ModelGuess, ResponsePlanOptions};
 use incal::procedures::response::sim::ResponseSimOptions;
+use incal::procedures::response::fit::ModelOptions;
 use incal::procedures::response::{
     BandwidthMethod, Drift, OrderChoice, ResponseOptions, ResponseSine,
 };
@@ -70,24 +71,9 @@ pub enum BandwidthArg {
     Interpolated,
 }
 
-/// `incal response sine`.
+/// The model's options, the same for every response method.
 #[derive(clap::Args, Debug)]
-pub struct SineArgs {
-    /// Recording: `freq_hz`, `reference`, `output`, and `time_s` (or --rate-hz).
-    #[arg(long)]
-    pub input: PathBuf,
-    /// Sampling rate, Hz, when the file has no `time_s`.
-    #[arg(long)]
-    pub rate_hz: Option<f64>,
-    /// Harmonic order fitted (1: the fundamental only); THD from 2 on.
-    #[arg(long, default_value_t = 3)]
-    pub harmonics: usize,
-    /// The slow terms of each dwell: an offset and a linear drift, or an offset only.
-    #[arg(long, value_enum, default_value = "linear")]
-    pub drift: DriftArg,
-    /// Seconds left out at the start of each dwell (the transient).
-    #[arg(long, default_value_t = 0.0)]
-    pub settle_s: f64,
+pub struct ModelArgs {
     /// Model order.
     #[arg(long, value_enum, default_value = "auto")]
     pub order: OrderArg,
@@ -109,6 +95,50 @@ pub struct SineArgs {
     /// Upper end of the gain-flatness band, Hz (default: the model bandwidth).
     #[arg(long)]
     pub flatness_to_hz: Option<f64>,
+}
+
+impl ModelArgs {
+    /// The core's model options.
+    pub fn options(&self) -> ModelOptions {
+        ModelOptions {
+            order: match self.order {
+                OrderArg::Auto => OrderChoice::Auto,
+                OrderArg::First => OrderChoice::First,
+                OrderArg::Second => OrderChoice::Second,
+            },
+            k1: self.k1,
+            u_k1: self.u_k1,
+            u_reference_pct: self.u_reference_pct,
+            u_reference_phase_deg: self.u_reference_phase_deg,
+            bandwidth: match self.bandwidth {
+                BandwidthArg::Model => BandwidthMethod::Model,
+                BandwidthArg::Interpolated => BandwidthMethod::Interpolated,
+            },
+            flatness_to_hz: self.flatness_to_hz,
+        }
+    }
+}
+
+/// `incal response sine`.
+#[derive(clap::Args, Debug)]
+pub struct SineArgs {
+    /// Recording: `freq_hz`, `reference`, `output`, and `time_s` (or --rate-hz).
+    #[arg(long)]
+    pub input: PathBuf,
+    /// Sampling rate, Hz, when the file has no `time_s`.
+    #[arg(long)]
+    pub rate_hz: Option<f64>,
+    /// Harmonic order fitted (1: the fundamental only); THD from 2 on.
+    #[arg(long, default_value_t = 3)]
+    pub harmonics: usize,
+    /// The slow terms of each dwell: an offset and a linear drift, or an offset only.
+    #[arg(long, value_enum, default_value = "linear")]
+    pub drift: DriftArg,
+    /// Seconds left out at the start of each dwell (the transient).
+    #[arg(long, default_value_t = 0.0)]
+    pub settle_s: f64,
+    #[command(flatten)]
+    pub model: ModelArgs,
     #[command(flatten)]
     pub read: ReadArgs,
     #[command(flatten)]
@@ -125,20 +155,7 @@ pub fn run_sine(a: &SineArgs) -> CliResult<()> {
             DriftArg::None => Drift::None,
         },
         settle_s: a.settle_s,
-        order: match a.order {
-            OrderArg::Auto => OrderChoice::Auto,
-            OrderArg::First => OrderChoice::First,
-            OrderArg::Second => OrderChoice::Second,
-        },
-        k1: a.k1,
-        u_k1: a.u_k1,
-        u_reference_pct: a.u_reference_pct,
-        u_reference_phase_deg: a.u_reference_phase_deg,
-        bandwidth: match a.bandwidth {
-            BandwidthArg::Model => BandwidthMethod::Model,
-            BandwidthArg::Interpolated => BandwidthMethod::Interpolated,
-        },
-        flatness_to_hz: a.flatness_to_hz,
+        model: a.model.options(),
     };
     crate::run::reduce::<ResponseSine>(&a.input, &a.read, &options, &a.result, &Silent)
 }

@@ -38,11 +38,10 @@ fn sim(order: Order, seed: u64) -> ResponseSimOptions {
 }
 
 fn options(order: OrderChoice) -> ResponseOptions {
-    ResponseOptions {
-        order,
-        u_reference_pct: 0.1,
-        ..ResponseOptions::default()
-    }
+    let mut o = ResponseOptions::default();
+    o.model.order = order;
+    o.model.u_reference_pct = 0.1;
+    o
 }
 
 /// Per trial: for each named quantity whether U95 covers the truth, then
@@ -313,10 +312,8 @@ fn a_dwell_above_nyquist_is_refused_naming_it() {
 fn an_interpolated_bandwidth_the_dwells_do_not_bracket_is_refused_naming_the_gap() {
     let mut s = sim(Order::Second, 4);
     s.dwells.f_max_hz = 60.0;
-    let o = ResponseOptions {
-        bandwidth: BandwidthMethod::Interpolated,
-        ..ResponseOptions::default()
-    };
+    let mut o = ResponseOptions::default();
+    o.model.bandwidth = BandwidthMethod::Interpolated;
     let e = calibrate(&s.dwells().unwrap(), &o).unwrap_err().to_string();
     assert!(
         e.contains("stays above -3.01 dB up to the highest dwell (60 Hz"),

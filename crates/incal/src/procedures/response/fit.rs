@@ -10,19 +10,58 @@ use crate::error::{Error, Result};
 use crate::estimation::Estimates;
 use crate::warning::{Warning, WarningCode};
 
-/// The options of the model part.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ModelChoice {
-    /// Model order.
+/// The options of the model part, flattened into each response method's
+/// options (the same keys everywhere).
+#[derive(
+    Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
+pub struct ModelOptions {
+    /// Model order (default auto: the one statistics rule).
+    #[serde(default)]
     pub order: OrderChoice,
-    /// Normalising scale, else the fitted `k_dc`.
+    /// Scale factor the gains are normalised to (output per reference
+    /// unit); default: the fitted `k_dc`.
+    #[serde(default)]
     pub k1: Option<f64>,
-    /// Its u.
+    /// Standard uncertainty of `k1`.
+    #[serde(default)]
     pub u_k1: Option<f64>,
-    /// Which bandwidth is the headline.
+    /// The reference's relative amplitude uncertainty (%, type B).
+    #[serde(default)]
+    pub u_reference_pct: f64,
+    /// The reference's phase uncertainty (deg, type B).
+    #[serde(default)]
+    pub u_reference_phase_deg: f64,
+    /// Which bandwidth `bandwidth_hz` is (default model).
+    #[serde(default)]
     pub bandwidth: BandwidthMethod,
-    /// Top of the flatness band (default the model bandwidth).
+    /// Upper end of the gain-flatness band (Hz); default the model
+    /// bandwidth.
+    #[serde(default)]
     pub flatness_to_hz: Option<f64>,
+}
+
+impl ModelOptions {
+    /// The range checks of these options.
+    pub fn validate(&self) -> Result<()> {
+        use crate::options::{check_positive, check_range, invalid};
+        if let Some(k) = self.k1 {
+            if !(k.is_finite() && k != 0.0) {
+                return invalid("k1", "must be a finite number other than 0");
+            }
+        }
+        if let Some(u) = self.u_k1 {
+            if self.k1.is_none() {
+                return invalid("u_k1", "given without `k1`");
+            }
+            check_range("u_k1", u, 0.0, f64::MAX, "")?;
+        }
+        super::check_reference_u(self.u_reference_pct, self.u_reference_phase_deg)?;
+        if let Some(f) = self.flatness_to_hz {
+            check_positive("flatness_to_hz", f)?;
+        }
+        Ok(())
+    }
 }
 
 /// The model part of a response result (module docs).
@@ -52,7 +91,7 @@ impl ModelPart {
     /// Fit the model to `points` (`prior_dof`: the degrees of freedom of
     /// their u; `inflation`: a factor on the model's covariance for points
     /// that are not independent, 1 for dwells) and derive the rest.
-    pub fn fit(points: &[Point], c: &ModelChoice, prior_dof: f64, inflation: f64) -> Result<Self> {
+    pub fn fit(points: &[Point], c: &ModelOptions, prior_dof: f64, inflation: f64) -> Result<Self> {
         let (mut model, order_reason) = choose_model(points, c, prior_dof)?;
         if inflation != 1.0 {
             let e = &model.fit.estimates;
@@ -105,7 +144,7 @@ impl ModelPart {
     }
 
     /// What the engineer must be told about the model.
-    fn model_warnings(&self, c: &ModelChoice) -> Vec<Warning> {
+    fn model_warnings(&self, c: &ModelOptions) -> Vec<Warning> {
         let e = &self.coefficients;
         let mut w = self.model.fit.quality_warnings(
             "the model order, a resonance or filter the model lacks, or a reference error beyond u_reference_pct",
@@ -139,7 +178,7 @@ impl ModelPart {
 
 /// Fit the model order the options ask for (module docs): the model and
 /// the reason for its order.
-fn choose_model(points: &[Point], o: &ModelChoice, dof: f64) -> Result<(ModelFit, String)> {
+fn choose_model(points: &[Point], o: &ModelOptions, dof: f64) -> Result<(ModelFit, String)> {
     let fit = |order: Order| model::fit_model(order, points, &model::starts(order, points), dof);
     let p_of = |m: &ModelFit| m.fit.chi2_p_value.unwrap_or(1.0);
     match o.order {

@@ -44,7 +44,7 @@ use std::f64::consts::PI;
 
 use crate::error::{Error, Result};
 use crate::warning::{Warning, WarningCode};
-use fit::{ModelChoice, ModelPart};
+use fit::{ModelOptions, ModelPart};
 use input::Dwell;
 use model::Point;
 use sine::{ChannelFit, SineDesign};
@@ -116,9 +116,9 @@ pub enum BandwidthMethod {
     Interpolated,
 }
 
-/// Options of the stepped-sine reduction. In the document: every key.
+/// Options of the stepped-sine reduction. In the document: every key
+/// (the model's flattened beside the dwells').
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
 pub struct ResponseOptions {
     /// Sampling rate (Hz) when the file has no `time_s` column.
     #[serde(default)]
@@ -133,29 +133,9 @@ pub struct ResponseOptions {
     /// Seconds left out at the start of every dwell (the transient).
     #[serde(default)]
     pub settle_s: f64,
-    /// Model order (default auto).
-    #[serde(default)]
-    pub order: OrderChoice,
-    /// Scale factor the gains are normalised to (output per reference
-    /// unit); default: the fitted `k_dc`.
-    #[serde(default)]
-    pub k1: Option<f64>,
-    /// Standard uncertainty of `k1`.
-    #[serde(default)]
-    pub u_k1: Option<f64>,
-    /// The reference's relative amplitude uncertainty (%, type B).
-    #[serde(default)]
-    pub u_reference_pct: f64,
-    /// The reference's phase uncertainty (deg, type B).
-    #[serde(default)]
-    pub u_reference_phase_deg: f64,
-    /// Which bandwidth `bandwidth_hz` is (default model).
-    #[serde(default)]
-    pub bandwidth: BandwidthMethod,
-    /// Upper end of the gain-flatness band (Hz); default the model
-    /// bandwidth.
-    #[serde(default)]
-    pub flatness_to_hz: Option<f64>,
+    /// The model, the scale, the reference's type-B terms.
+    #[serde(flatten)]
+    pub model: ModelOptions,
 }
 
 fn three() -> usize {
@@ -163,38 +143,22 @@ fn three() -> usize {
 }
 
 impl Default for ResponseOptions {
+    /// 3 harmonics, a linear drift, no settle time, the model's defaults.
     fn default() -> Self {
         Self {
             rate_hz: None,
             harmonics: 3,
             drift: Drift::Linear,
             settle_s: 0.0,
-            order: OrderChoice::Auto,
-            k1: None,
-            u_k1: None,
-            u_reference_pct: 0.0,
-            u_reference_phase_deg: 0.0,
-            bandwidth: BandwidthMethod::Model,
-            flatness_to_hz: None,
+            model: ModelOptions::default(),
         }
     }
 }
 
 impl ResponseOptions {
-    /// The options of the model part.
-    pub fn model_choice(&self) -> ModelChoice {
-        ModelChoice {
-            order: self.order,
-            k1: self.k1,
-            u_k1: self.u_k1,
-            bandwidth: self.bandwidth,
-            flatness_to_hz: self.flatness_to_hz,
-        }
-    }
-
     /// Every range check of the reduction.
     pub fn validate(&self) -> Result<()> {
-        use crate::options::{check_positive, check_range, invalid};
+        use crate::options::{check_range, invalid};
         if let Some(r) = self.rate_hz {
             check_range("rate_hz", r, 1e-3, 1e7, "Hz")?;
         }
@@ -205,22 +169,7 @@ impl ResponseOptions {
             );
         }
         check_range("settle_s", self.settle_s, 0.0, 1e6, "s")?;
-        if let Some(k) = self.k1 {
-            if !(k.is_finite() && k != 0.0) {
-                return invalid("k1", "must be a finite number other than 0");
-            }
-        }
-        if let Some(u) = self.u_k1 {
-            if self.k1.is_none() {
-                return invalid("u_k1", "given without `k1`");
-            }
-            check_range("u_k1", u, 0.0, f64::MAX, "")?;
-        }
-        check_reference_u(self.u_reference_pct, self.u_reference_phase_deg)?;
-        if let Some(f) = self.flatness_to_hz {
-            check_positive("flatness_to_hz", f)?;
-        }
-        Ok(())
+        self.model.validate()
     }
 }
 
@@ -345,8 +294,8 @@ fn reduce_dwell(k: usize, d: &Dwell, o: &ResponseOptions) -> Result<DwellResult>
                 reference.u_phase_rad,
             ),
         ],
-        o.u_reference_pct,
-        o.u_reference_phase_deg,
+        o.model.u_reference_pct,
+        o.model.u_reference_phase_deg,
     );
     Ok(DwellResult {
         freq_hz: d.freq_hz,
@@ -392,7 +341,7 @@ pub fn calibrate(dwells: &[Dwell], o: &ResponseOptions) -> Result<ResponseResult
         .iter()
         .map(|d| d.reference.dof.min(d.output.dof) as f64)
         .fold(f64::INFINITY, f64::min);
-    let part = ModelPart::fit(&points, &o.model_choice(), dof, 1.0)?;
+    let part = ModelPart::fit(&points, &o.model, dof, 1.0)?;
     let mut warnings = part.warnings.clone();
     for (k, d) in reduced.iter().enumerate() {
         if d.output.amplitude < 3.0 * d.output.u_amplitude {
