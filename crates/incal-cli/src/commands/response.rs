@@ -1,5 +1,6 @@
-//! `incal response sine`, `incal plan response-sine`, `incal simulate
-//! response-sine`.
+//! `incal response sine|broadband`, `incal plan
+//! response-sine|response-broadband`, `incal simulate
+//! response-sine|response-broadband`.
 
 use std::path::PathBuf;
 
@@ -7,6 +8,9 @@ use clap::{Subcommand, ValueEnum};
 use incal::procedures::response::model::Order;
 use incal::procedures::response::plan::{DwellChoice, ModelGuess, ResponsePlanOptions};
 use incal::procedures::response::sim::ResponseSimOptions;
+use incal::procedures::response::broadband::plan::BroadbandPlanOptions;
+use incal::procedures::response::broadband::sim::BroadbandSimOptions;
+use incal::procedures::response::broadband::{Align, BroadbandOptions, ResponseBroadband};
 use incal::procedures::response::fit::ModelOptions;
 use incal::procedures::response::{
     BandwidthMethod, Drift, OrderChoice, ResponseOptions, ResponseSine,
@@ -22,6 +26,8 @@ use crate::output::{PlanOut, ResultArgs};
 pub enum Command {
     /// Stepped sine (dwells): gain and phase per dwell, a low-pass model with delay, bandwidth, latency and flatness.
     Sine(SineArgs),
+    /// Broadband record (random, chirp, multisine): H1 and coherence by Welch averaging, the same model.
+    Broadband(BroadbandArgs),
 }
 
 /// Model order of the reduction.
@@ -62,6 +68,15 @@ pub enum DriftArg {
     None,
 }
 
+/// Whether the output is aligned to the reference before the spectra.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum AlignArg {
+    /// Shifted by the whole samples of a first pass's latency.
+    Latency,
+    /// Not shifted: the plain H1.
+    None,
+}
+
 /// Which bandwidth is `bandwidth_hz`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum BandwidthArg {
@@ -92,7 +107,7 @@ pub struct ModelArgs {
     /// Which bandwidth is `bandwidth_hz`.
     #[arg(long, value_enum, default_value = "model")]
     pub bandwidth: BandwidthArg,
-    /// Upper end of the gain-flatness band, Hz (default: the model bandwidth).
+    /// Upper end of the gain-flatness band, Hz: flatness_db is reported only with it.
     #[arg(long)]
     pub flatness_to_hz: Option<f64>,
 }
@@ -160,6 +175,38 @@ pub fn run_sine(a: &SineArgs) -> CliResult<()> {
     crate::run::reduce::<ResponseSine>(&a.input, &a.read, &options, &a.result, &Silent)
 }
 
+/// The expected (or simulated) response.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ModelGuessArgs {
+    /// Model order.
+    #[arg(long, value_enum, default_value = "second")]
+    pub order: FixedOrderArg,
+    /// Low-frequency gain k_dc (output per reference unit).
+    #[arg(long, default_value_t = 1.0)]
+    pub k_dc: f64,
+    /// Corner f_c (first order) or natural frequency f_n (second order), Hz.
+    #[arg(long, default_value_t = 80.0)]
+    pub corner_hz: f64,
+    /// Damping ratio of the second order.
+    #[arg(long, default_value_t = 0.6)]
+    pub zeta: f64,
+    /// Pure delay, s.
+    #[arg(long, default_value_t = 0.002)]
+    pub delay_s: f64,
+}
+
+impl ModelGuessArgs {
+    fn model(&self) -> ModelGuess {
+        ModelGuess {
+            order: self.order.into(),
+            k_dc: self.k_dc,
+            corner_hz: self.corner_hz,
+            zeta: self.zeta,
+            delay_s: self.delay_s,
+        }
+    }
+}
+
 /// The dwells of a plan or simulation.
 #[derive(clap::Args, Debug, Clone)]
 pub struct DwellArgs {
@@ -181,21 +228,8 @@ pub struct DwellArgs {
     /// Fewest cycles per dwell (at least 2).
     #[arg(long, default_value_t = 10.0)]
     pub min_cycles: f64,
-    /// Model order.
-    #[arg(long, value_enum, default_value = "second")]
-    pub order: FixedOrderArg,
-    /// Low-frequency gain k_dc (output per reference unit).
-    #[arg(long, default_value_t = 1.0)]
-    pub k_dc: f64,
-    /// Corner f_c (first order) or natural frequency f_n (second order), Hz.
-    #[arg(long, default_value_t = 80.0)]
-    pub corner_hz: f64,
-    /// Damping ratio of the second order.
-    #[arg(long, default_value_t = 0.6)]
-    pub zeta: f64,
-    /// Pure delay, s.
-    #[arg(long, default_value_t = 0.002)]
-    pub delay_s: f64,
+    #[command(flatten)]
+    pub guess: ModelGuessArgs,
     /// Sampling rate, Hz.
     #[arg(long, default_value_t = 1000.0)]
     pub rate_hz: f64,
@@ -223,13 +257,7 @@ impl DwellArgs {
     }
 
     fn model(&self) -> ModelGuess {
-        ModelGuess {
-            order: self.order.into(),
-            k_dc: self.k_dc,
-            corner_hz: self.corner_hz,
-            zeta: self.zeta,
-            delay_s: self.delay_s,
-        }
+        self.guess.model()
     }
 }
 
@@ -309,6 +337,162 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
     crate::run::write_truth::<ResponseSine>(&options, a.truth_out.as_deref())
 }
 
+/// `incal response broadband`.
+#[derive(clap::Args, Debug)]
+pub struct BroadbandArgs {
+    /// Recording: `reference`, `output`, and `time_s` (or --rate-hz).
+    #[arg(long)]
+    pub input: PathBuf,
+    /// Sampling rate, Hz, when the file has no `time_s`.
+    #[arg(long)]
+    pub rate_hz: Option<f64>,
+    /// Samples per Welch segment (the resolution is rate / segment).
+    #[arg(long, default_value_t = 1024)]
+    pub segment_samples: usize,
+    /// Overlap of the segments, samples (default: half a segment).
+    #[arg(long)]
+    pub overlap_samples: Option<usize>,
+    /// Bins below this coherence are flagged, not fitted.
+    #[arg(long, default_value_t = 0.9)]
+    pub min_coherence: f64,
+    /// Lowest frequency fitted, Hz.
+    #[arg(long)]
+    pub f_min_hz: Option<f64>,
+    /// Highest frequency fitted, Hz.
+    #[arg(long)]
+    pub f_max_hz: Option<f64>,
+    /// Align the output to the reference by the latency before the spectra (none: the plain H1, as scipy gives it).
+    #[arg(long, value_enum, default_value = "latency")]
+    pub align: AlignArg,
+    #[command(flatten)]
+    pub model: ModelArgs,
+    #[command(flatten)]
+    pub read: ReadArgs,
+    #[command(flatten)]
+    pub result: ResultArgs,
+}
+
+/// `incal response broadband`.
+pub fn run_broadband(a: &BroadbandArgs) -> CliResult<()> {
+    let options = BroadbandOptions {
+        rate_hz: a.rate_hz,
+        segment_samples: a.segment_samples,
+        overlap_samples: a.overlap_samples,
+        min_coherence: a.min_coherence,
+        f_min_hz: a.f_min_hz,
+        f_max_hz: a.f_max_hz,
+        align: match a.align {
+            AlignArg::Latency => Align::Latency,
+            AlignArg::None => Align::None,
+        },
+        model: a.model.options(),
+    };
+    crate::run::reduce::<ResponseBroadband>(&a.input, &a.read, &options, &a.result, &Silent)
+}
+
+/// The expected response of a broadband plan or simulation.
+#[derive(clap::Args, Debug, Clone)]
+pub struct GuessArgs {
+    #[command(flatten)]
+    pub guess: ModelGuessArgs,
+    /// Record length, s.
+    #[arg(long, default_value_t = 60.0)]
+    pub duration_s: f64,
+    /// Sampling rate, Hz.
+    #[arg(long, default_value_t = 1000.0)]
+    pub rate_hz: f64,
+    /// RMS of the reference (reference units).
+    #[arg(long, default_value_t = 10.0)]
+    pub amplitude: f64,
+    /// Output noise of one sample (output units).
+    #[arg(long, default_value_t = 0.02)]
+    pub noise: f64,
+}
+
+impl GuessArgs {
+    fn model(&self) -> ModelGuess {
+        self.guess.model()
+    }
+}
+
+/// `incal plan response-broadband`.
+#[derive(clap::Args, Debug)]
+pub struct BroadbandPlanArgs {
+    #[command(flatten)]
+    pub test: GuessArgs,
+    /// Samples per Welch segment.
+    #[arg(long, default_value_t = 1024)]
+    pub segment_samples: usize,
+    /// Bins below this coherence are not fitted.
+    #[arg(long, default_value_t = 0.9)]
+    pub min_coherence: f64,
+    /// Highest frequency fitted, Hz.
+    #[arg(long)]
+    pub f_max_hz: Option<f64>,
+    /// Seed of the first of the simulated records the prediction reduces.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    #[command(flatten)]
+    pub out: PlanOut,
+}
+
+/// `incal plan response-broadband`.
+pub fn plan_broadband(a: &BroadbandPlanArgs) -> CliResult<()> {
+    let t = &a.test;
+    let options = BroadbandPlanOptions {
+        model: t.model(),
+        duration_s: t.duration_s,
+        rate_hz: t.rate_hz,
+        amplitude: t.amplitude,
+        noise: t.noise,
+        segment_samples: a.segment_samples,
+        min_coherence: a.min_coherence,
+        f_max_hz: a.f_max_hz,
+        seed: a.seed,
+    };
+    a.out
+        .emit(&<ResponseBroadband as Plan>::plan(&options).map_err(core)?)
+}
+
+/// `incal simulate response-broadband`.
+#[derive(clap::Args, Debug)]
+pub struct BroadbandSimArgs {
+    #[command(flatten)]
+    pub test: GuessArgs,
+    /// Reference noise of one sample (it biases H1 low).
+    #[arg(long, default_value_t = 0.0)]
+    pub reference_noise: f64,
+    /// Output bias (output units).
+    #[arg(long, default_value_t = 0.0)]
+    pub bias: f64,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Write the truth (model, bandwidth, latency) as JSON to this file.
+    #[arg(long, value_name = "FILE")]
+    pub truth_out: Option<PathBuf>,
+    /// Output CSV (default: standard output).
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+/// `incal simulate response-broadband`.
+pub fn simulate_broadband(a: &BroadbandSimArgs) -> CliResult<()> {
+    let t = &a.test;
+    let options = BroadbandSimOptions {
+        model: t.model(),
+        duration_s: t.duration_s,
+        rate_hz: t.rate_hz,
+        amplitude: t.amplitude,
+        noise: t.noise,
+        reference_noise: a.reference_noise,
+        bias: a.bias,
+        seed: a.seed,
+    };
+    crate::run::simulate::<ResponseBroadband>(&options, a.output.as_deref())?;
+    crate::run::write_truth::<ResponseBroadband>(&options, a.truth_out.as_deref())
+}
+
 // The commands of this file in the command tree (`crate::commands`).
 
 /// This file's commands at the top level (`incal …`).
@@ -323,6 +507,7 @@ impl crate::commands::Run for Reductions {
     fn run(&self) -> CliResult<()> {
         match self {
             Self::Response(Command::Sine(a)) => run_sine(a),
+            Self::Response(Command::Broadband(a)) => run_broadband(a),
         }
     }
 }
@@ -332,12 +517,15 @@ impl crate::commands::Run for Reductions {
 pub enum Plans {
     /// Stepped-sine plan: predicted u of every dwell's gain and phase and of bandwidth, delay and latency.
     ResponseSine(PlanArgs),
+    /// Broadband plan: predicted coherence and u of bandwidth, delay and latency for a record length and noise.
+    ResponseBroadband(BroadbandPlanArgs),
 }
 
 impl crate::commands::Run for Plans {
     fn run(&self) -> CliResult<()> {
         match self {
             Self::ResponseSine(a) => plan(a),
+            Self::ResponseBroadband(a) => plan_broadband(a),
         }
     }
 }
@@ -347,12 +535,15 @@ impl crate::commands::Run for Plans {
 pub enum Simulations {
     /// Stepped sine on a rate table or shaker; writes the input CSV of `incal response sine`.
     ResponseSine(SimArgs),
+    /// White broadband excitation through a known low-pass with delay; writes the input CSV of `incal response broadband`.
+    ResponseBroadband(BroadbandSimArgs),
 }
 
 impl crate::commands::Run for Simulations {
     fn run(&self) -> CliResult<()> {
         match self {
             Self::ResponseSine(a) => simulate(a),
+            Self::ResponseBroadband(a) => simulate_broadband(a),
         }
     }
 }

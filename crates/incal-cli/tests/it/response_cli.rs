@@ -37,7 +37,15 @@ fn small(dir: &std::path::Path) -> std::path::PathBuf {
 fn a_simulated_sweep_reduces_to_the_contract() {
     let dir = workdir("response_contract");
     let csv = small(&dir);
-    let v = json_of(&run(&["response", "sine", "--input", p(&csv), "--json"]));
+    let v = json_of(&run(&[
+        "response",
+        "sine",
+        "--input",
+        p(&csv),
+        "--flatness-to-hz",
+        "5",
+        "--json",
+    ]));
     assert_eq!(v["procedure"], "response-sine");
     for (name, unit) in [
         ("k_dc", "output/reference"),
@@ -154,5 +162,100 @@ fn a_dwell_above_nyquist_in_a_recording_is_named_with_its_lines() {
     refused(
         &run(&["response", "sine", "--input", p(&path)]),
         &["fast.csv", "dwell 1 (60 Hz, lines 2-41)", "Nyquist"],
+    );
+}
+
+#[test]
+fn a_broadband_record_reduces_to_the_contract() {
+    let dir = workdir("response_broadband");
+    let csv = dir.join("bb.csv");
+    ok(&run(&[
+        "simulate",
+        "response-broadband",
+        "--duration-s",
+        "8",
+        "--seed",
+        "3",
+        "-o",
+        p(&csv),
+    ]));
+    let v = json_of(&run(&[
+        "response",
+        "broadband",
+        "--input",
+        p(&csv),
+        "--segment-samples",
+        "512",
+        "--json",
+    ]));
+    assert_eq!(v["procedure"], "response-broadband");
+    for name in [
+        "k_dc",
+        "fn_hz",
+        "zeta",
+        "delay_s",
+        "bandwidth_hz",
+        "latency_s",
+    ] {
+        assert!(
+            v["coefficients"][name]["U95"].as_f64().unwrap() > 0.0,
+            "{name}"
+        );
+    }
+    assert_eq!(v["tables"][0]["id"], "spectrum");
+    assert_eq!(v["tables"][0]["rows"].as_array().unwrap().len(), 256);
+    assert_eq!(v["welch"]["segment_samples"], 512);
+    assert_eq!(v["options"]["align"], "latency");
+}
+
+#[test]
+fn a_broadband_record_with_a_gap_or_a_contradicting_rate_is_refused() {
+    let dir = workdir("response_broadband_bad");
+    let mut s = String::from("time_s,reference,output\n");
+    for k in 0..3000 {
+        let t = if k < 1500 { k } else { k + 10 } as f64 / 1000.0;
+        let x = ((k * 7919) % 1000) as f64 / 1000.0;
+        s.push_str(&format!("{t},{x},{x}\n"));
+    }
+    let gap = dir.join("gap.csv");
+    std::fs::write(&gap, &s).unwrap();
+    refused(
+        &run(&["response", "broadband", "--input", p(&gap)]),
+        &["gap.csv", "line 1502", "gap"],
+    );
+    let csv = dir.join("bb.csv");
+    ok(&run(&[
+        "simulate",
+        "response-broadband",
+        "--duration-s",
+        "3",
+        "-o",
+        p(&csv),
+    ]));
+    refused(
+        &run(&[
+            "response",
+            "broadband",
+            "--input",
+            p(&csv),
+            "--rate-hz",
+            "500",
+        ]),
+        &["--rate-hz", "contradicts"],
+    );
+    refused(
+        &run(&[
+            "response",
+            "broadband",
+            "--input",
+            p(&csv),
+            "--segment-samples",
+            "4096",
+        ]),
+        &["bb.csv", "segments of 4096"],
+    );
+    refused(
+        &run(&["plan", "response-broadband", "--f-max-hz", "50"]),
+        &["--f-max-hz", "bandwidth_hz is not determined"],
     );
 }

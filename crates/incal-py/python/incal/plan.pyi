@@ -232,3 +232,21 @@ def response_sine(
     u_reference_phase_deg: float = 0,
     run_sheet: Optional[Union[str, float]] = None,
 ) -> Dict[str, Any]: ...
+
+def response_broadband(
+    *,
+    order: Literal["first", "second"] = "second",
+    k_dc: float = 1,
+    corner_hz: float = 80,
+    zeta: float = 0.6,
+    delay_s: float = 0.002,
+    duration_s: float = 60,
+    rate_hz: float = 1000,
+    amplitude: float = 10,
+    noise: float = 0.02,
+    segment_samples: int = 1024,
+    min_coherence: float = 0.9,
+    f_max_hz: Union[float, None] = None,
+    seed: int = 1,
+    run_sheet: Optional[Union[str, float]] = None,
+) -> Dict[str, Any]: ...

@@ -55,6 +55,9 @@ pub enum Procedure {
     /// Dynamic response by stepped sine: gain, phase, bandwidth and delay
     /// (IEEE Std 1431 §12.15, IEEE Std 1057 sine fits).
     ResponseSine,
+    /// Dynamic response from a broadband record: H1 by Welch averaging,
+    /// coherence (Bendat & Piersol).
+    ResponseBroadband,
 }
 
 impl Procedure {
@@ -93,6 +96,7 @@ impl Procedure {
             Procedure::ImuAutocal => "imu-autocal",
             Procedure::Thermal => "thermal",
             Procedure::ResponseSine => "response-sine",
+            Procedure::ResponseBroadband => "response-broadband",
         }
     }
 }
@@ -657,6 +661,28 @@ pub static REGISTRY: &[Entry] = &[
         reduction: reduction::<super::response::ResponseSine>(),
         planner: planner::<super::response::ResponseSine>(),
         simulator: simulator::<super::response::ResponseSine>(),
+    },
+    Entry {
+        id: "response-broadband",
+        document: Procedure::ResponseBroadband,
+        command: &["response", "broadband"],
+        plan: Some(&["plan", "response-broadband"]),
+        simulate: Some(&["simulate", "response-broadband"]),
+        title: "Dynamic response from a broadband record: H1, coherence, bandwidth and delay",
+        rig: RATE_TABLE,
+        method: "Frequency response from a broadband excitation by the H1 estimator with Welch averaging and its coherence-based random errors: Bendat J. S., Piersol A. G., Random Data: Analysis and Measurement Procedures, 4th ed., Wiley, 2010; Welch P. D., The use of fast Fourier transform for the estimation of power spectra, IEEE Transactions on Audio and Electroacoustics, 1967, vol. AU-15, no. 2, pp. 70-73; IEEE Std 1431-2004 §12.15; first- and second-order low-pass models with a pure delay fitted to gain and phase",
+        references: &["bendat-piersol", "welch1967", "ieee1431"],
+        chapter: "response.md",
+        input: InputKind::Recording,
+        fuzz: &["response-broadband"],
+        run_sheet: None,
+        example: Some(Example {
+            simulate: &["--seed", "22", "--duration-s", "20"],
+            options: &["--segment-samples", "256"],
+        }),
+        reduction: reduction::<super::response::broadband::ResponseBroadband>(),
+        planner: planner::<super::response::broadband::ResponseBroadband>(),
+        simulator: simulator::<super::response::broadband::ResponseBroadband>(),
     },
 ];
 

@@ -22,6 +22,7 @@ mod noise_reference;
 mod noise_roundtrip;
 mod noise_stable32;
 mod properties;
+mod response_broadband;
 mod response_roundtrip;
 mod schema_file;
 mod sim_plan;

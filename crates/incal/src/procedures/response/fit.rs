@@ -35,8 +35,9 @@ pub struct ModelOptions {
     /// Which bandwidth `bandwidth_hz` is (default model).
     #[serde(default)]
     pub bandwidth: BandwidthMethod,
-    /// Upper end of the gain-flatness band (Hz); default the model
-    /// bandwidth.
+    /// Upper end of the gain-flatness band (Hz): `flatness_db` is
+    /// reported only with it (a band up to the bandwidth would hold the
+    /// −3 dB point itself).
     #[serde(default)]
     pub flatness_to_hz: Option<f64>,
 }
@@ -89,19 +90,14 @@ pub struct ModelPart {
 
 impl ModelPart {
     /// Fit the model to `points` (`prior_dof`: the degrees of freedom of
-    /// their u; `inflation`: a factor on the model's covariance for points
-    /// that are not independent, 1 for dwells) and derive the rest.
-    pub fn fit(points: &[Point], c: &ModelOptions, prior_dof: f64, inflation: f64) -> Result<Self> {
-        let (mut model, order_reason) = choose_model(points, c, prior_dof)?;
-        if inflation != 1.0 {
-            let e = &model.fit.estimates;
-            model.fit.estimates = Estimates::new(
-                e.names().to_vec(),
-                e.values().clone(),
-                e.covariance() * inflation,
-                e.dof(),
-            )?;
-        }
+    /// their u) and derive the rest.
+    pub fn fit(
+        points: &[Point],
+        c: &ModelOptions,
+        prior_dof: f64,
+        smoothing: Option<model::Smoothing>,
+    ) -> Result<Self> {
+        let (model, order_reason) = choose_model(points, c, prior_dof, smoothing)?;
         let coefficients = model::coefficients(&model)?;
         let (k_dc, u_k_dc) = coefficients.get("k_dc").unwrap_or((1.0, 0.0));
         let scale = match c.k1 {
@@ -118,13 +114,13 @@ impl ModelPart {
                 )));
             }
         }
-        let bw = coefficients.value("bandwidth_hz").unwrap_or(f64::INFINITY);
-        let band = c.flatness_to_hz.unwrap_or(bw);
-        let flatness = levels
-            .iter()
-            .filter(|l| l.0 <= band)
-            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
-            .map(|l| (l.1.abs(), l.2.hypot(u_scale_db), l.0, band));
+        let flatness = c.flatness_to_hz.and_then(|band| {
+            levels
+                .iter()
+                .filter(|l| l.0 <= band)
+                .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+                .map(|l| (l.1.abs(), l.2.hypot(u_scale_db), l.0, band))
+        });
         let range_hz = levels.iter().fold((f64::INFINITY, 0.0f64), |(a, b), l| {
             (a.min(l.0), b.max(l.0))
         });
@@ -141,6 +137,26 @@ impl ModelPart {
         };
         part.warnings = part.model_warnings(c);
         Ok(part)
+    }
+
+    /// Replace the model's covariance (and its degrees of freedom) by one
+    /// estimated otherwise (the broadband jackknife), and the derived
+    /// quantities with it; `var_interp` adds to the model-free bandwidth's
+    /// variance.
+    pub fn set_covariance(
+        &mut self,
+        cov: nalgebra::DMatrix<f64>,
+        dof: f64,
+        var_interp: Option<f64>,
+    ) -> Result<()> {
+        let e = &self.model.fit.estimates;
+        self.model.fit.estimates =
+            Estimates::new(e.names().to_vec(), e.values().clone(), cov, dof)?;
+        self.coefficients = model::coefficients(&self.model)?;
+        if let (Ok((_, u)), Some(v)) = (&mut self.interpolated, var_interp) {
+            *u = (*u * *u + v).sqrt();
+        }
+        Ok(())
     }
 
     /// What the engineer must be told about the model.
@@ -178,8 +194,15 @@ impl ModelPart {
 
 /// Fit the model order the options ask for (module docs): the model and
 /// the reason for its order.
-fn choose_model(points: &[Point], o: &ModelOptions, dof: f64) -> Result<(ModelFit, String)> {
-    let fit = |order: Order| model::fit_model(order, points, &model::starts(order, points), dof);
+fn choose_model(
+    points: &[Point],
+    o: &ModelOptions,
+    dof: f64,
+    smoothing: Option<model::Smoothing>,
+) -> Result<(ModelFit, String)> {
+    let fit = |order: Order| {
+        model::fit_model(order, points, &model::starts(order, points), dof, smoothing)
+    };
     let p_of = |m: &ModelFit| m.fit.chi2_p_value.unwrap_or(1.0);
     match o.order {
         OrderChoice::First => {
@@ -230,7 +253,7 @@ fn choose_model(points: &[Point], o: &ModelOptions, dof: f64) -> Result<(ModelFi
 
 /// The points' gains in dB against `scale`, sorted by frequency:
 /// `(f, dB, u_dB)`.
-fn levels_db(points: &[Point], scale: f64) -> Vec<(f64, f64, f64)> {
+pub fn levels_db(points: &[Point], scale: f64) -> Vec<(f64, f64, f64)> {
     let c = 20.0 / std::f64::consts::LN_10;
     let mut v: Vec<(f64, f64, f64)> = points
         .iter()

@@ -32,6 +32,7 @@
 //! independent between dwells, which is conservative for the bandwidth
 //! (a common sensitivity error scales `K` only).
 
+pub mod broadband;
 pub mod document;
 pub mod fit;
 pub mod input;
@@ -341,7 +342,7 @@ pub fn calibrate(dwells: &[Dwell], o: &ResponseOptions) -> Result<ResponseResult
         .iter()
         .map(|d| d.reference.dof.min(d.output.dof) as f64)
         .fold(f64::INFINITY, f64::min);
-    let part = ModelPart::fit(&points, &o.model, dof, 1.0)?;
+    let part = ModelPart::fit(&points, &o.model, dof, None)?;
     let mut warnings = part.warnings.clone();
     for (k, d) in reduced.iter().enumerate() {
         if d.output.amplitude < 3.0 * d.output.u_amplitude {

@@ -163,6 +163,28 @@ impl Default for ModelGuess {
 }
 
 impl ModelGuess {
+    /// The model as a simulation's truth: `order`, `k_dc`, `corner_hz`,
+    /// `zeta` (second order), `delay_s`, `bandwidth_hz`, `phase_freq_hz`,
+    /// `latency_s`.
+    pub fn truth(&self) -> Result<serde_json::Map<String, serde_json::Value>> {
+        let x = self.x()?;
+        let order = self.order;
+        let v = json!({
+            "order": order.name(),
+            "k_dc": x[0],
+            "corner_hz": x[1],
+            "zeta": (order == Order::Second).then_some(x[2]),
+            "delay_s": x[x.len() - 1],
+            "bandwidth_hz": model::bandwidth_hz(order, &x),
+            "phase_freq_hz": model::phase_freq_hz(order, &x),
+            "latency_s": model::latency_s(order, &x),
+        });
+        match v {
+            serde_json::Value::Object(m) => Ok(m),
+            _ => Ok(serde_json::Map::new()),
+        }
+    }
+
     /// The parameter vector `x` of [`model`], checked.
     pub fn x(&self) -> Result<Vec<f64>> {
         if !(self.k_dc.is_finite() && self.k_dc != 0.0 && self.k_dc.abs() <= 1e12) {

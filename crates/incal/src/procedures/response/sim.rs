@@ -19,7 +19,7 @@ use std::f64::consts::TAU;
 use serde_json::json;
 
 use super::input::{write_each, Sample};
-use super::model::{self, response};
+use super::model::response;
 use super::plan::{amplitude, noise, reference_noise, thousand, DwellChoice, ModelGuess};
 use crate::error::Result;
 use crate::options::check_range;
@@ -157,17 +157,9 @@ impl ResponseSimOptions {
                 json!({"freq_hz": f, "gain": m, "gain_db": 20.0 * (m / x[0].abs()).log10(), "phase_deg": (ph - sign).to_degrees()})
             })
             .collect();
-        Ok(json!({
-            "order": order.name(),
-            "k_dc": x[0],
-            "corner_hz": x[1],
-            "zeta": (order == model::Order::Second).then_some(x[2]),
-            "delay_s": x[x.len() - 1],
-            "bandwidth_hz": model::bandwidth_hz(order, &x),
-            "phase_freq_hz": model::phase_freq_hz(order, &x),
-            "latency_s": model::latency_s(order, &x),
-            "dwells": dwells,
-        }))
+        let mut t = self.model.truth()?;
+        t.insert("dwells".into(), serde_json::Value::Array(dwells));
+        Ok(serde_json::Value::Object(t))
     }
 }
 

@@ -1,0 +1,98 @@
+//! Reading a broadband recording (chirp, random or multisine): columns
+//! `reference` and `output`, and `time_s` (s) or the option `rate_hz`.
+//! The spectral estimate needs evenly spaced samples: stamps must not
+//! decrease, a step above 1.5 periods (a gap) is refused naming its line,
+//! and a `rate_hz` given beside the stamps must agree with them within
+//! [`crate::timebase::RATE_TOLERANCE`].
+
+use std::io::Read;
+
+use crate::error::{Error, Result};
+
+/// One evenly sampled record.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Record {
+    /// The sampling rate (Hz): from the stamps, or as given.
+    pub rate_hz: f64,
+    /// The reference channel.
+    pub reference: Vec<f64>,
+    /// The instrument's output.
+    pub output: Vec<f64>,
+}
+
+/// The record of a recording, row by row.
+pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, rate_hz: Option<f64>) -> Result<Record> {
+    let h = rows.header();
+    let (cr, co) = (h.column("reference")?, h.column("output")?);
+    let ct = h.opt_column("time_s");
+    if ct.is_none() && rate_hz.is_none() {
+        return Err(h
+            .error("no column 'time_s': give the sampling rate (rate_hz) or the stamps")
+            .into());
+    }
+    let mut rec = Record::default();
+    let mut stamps: Vec<(f64, usize)> = Vec::new();
+    while let Some(row) = rows.next_row()? {
+        if let Some(c) = ct {
+            let t = row.f64(c)?;
+            if let Some((last, _)) = stamps.last() {
+                if t <= *last {
+                    return Err(row
+                        .cell_error(
+                            c,
+                            format!("time {t} s does not follow the row above ({last} s)"),
+                        )
+                        .into());
+                }
+            }
+            stamps.push((t, row.line()));
+        }
+        rec.reference.push(row.f64(cr)?);
+        rec.output.push(row.f64(co)?);
+    }
+    let n = rec.reference.len();
+    if n < 16 {
+        return Err(rows
+            .header()
+            .error(format!("{n} data rows: a spectrum needs at least 16"))
+            .into());
+    }
+    rec.rate_hz = match (stamps.first(), stamps.last()) {
+        (Some(a), Some(b)) => {
+            let rate = (n - 1) as f64 / (b.0 - a.0);
+            let period = 1.0 / rate;
+            if let Some(w) = stamps.windows(2).find(|w| w[1].0 - w[0].0 > 1.5 * period) {
+                return Err(Error::Unsupported(format!(
+                    "line {}: a gap of {:.6} s after {} s (the period is {period:.6} s): a spectrum needs evenly spaced samples; cut the record at the gap",
+                    w[1].1,
+                    w[1].0 - w[0].0,
+                    w[0].0
+                )));
+            }
+            if let Some(r) = rate_hz {
+                if ((r - rate) / rate).abs() > crate::timebase::RATE_TOLERANCE {
+                    return crate::options::invalid(
+                        "rate_hz",
+                        format!("{r} Hz contradicts the stamps' {rate:.6} Hz"),
+                    );
+                }
+            }
+            rate
+        }
+        _ => rate_hz.unwrap_or(1.0),
+    };
+    Ok(rec)
+}
+
+/// The CSV `time_s,reference,output` of a record.
+pub fn write<W: std::io::Write>(rec: &Record, out: W) -> std::io::Result<W> {
+    use incal_io::{Cell, CsvWriter};
+    let mut w = CsvWriter::new(out, &["time_s", "reference", "output"])?;
+    for (k, (x, y)) in rec.reference.iter().zip(&rec.output).enumerate() {
+        w.cell(Cell::Num(k as f64 / rec.rate_hz))?;
+        w.cell(Cell::Num(*x))?;
+        w.cell(Cell::Num(*y))?;
+        w.end_row()?;
+    }
+    w.finish()
+}

@@ -1,0 +1,177 @@
+//! Dynamic response from a broadband record: round trips from a known
+//! transfer function over many seeds (U95 coverage of the model's
+//! coefficients, bandwidth, delay and latency for both orders), the plan
+//! against the Monte Carlo scatter, and the refusals.
+
+use incal::procedures::response::broadband::plan::{plan_document, BroadbandPlanOptions};
+use incal::procedures::response::broadband::sim::BroadbandSimOptions;
+use incal::procedures::response::broadband::{calibrate, BroadbandOptions};
+use incal::procedures::response::model::Order;
+use incal::procedures::response::plan::ModelGuess;
+use incal::procedures::response::OrderChoice;
+use incal::sim::monte_carlo;
+use incal::sim::tier::{band, trials};
+
+fn sim(order: Order, seed: u64) -> BroadbandSimOptions {
+    let mut o = BroadbandSimOptions {
+        duration_s: 40.0,
+        seed,
+        ..BroadbandSimOptions::default()
+    };
+    if order == Order::First {
+        o.model = ModelGuess {
+            order: Order::First,
+            corner_hz: 40.0,
+            ..ModelGuess::default()
+        };
+    }
+    o
+}
+
+fn options(order: Order) -> BroadbandOptions {
+    let mut o = BroadbandOptions::default();
+    o.model.order = match order {
+        Order::First => OrderChoice::First,
+        Order::Second => OrderChoice::Second,
+    };
+    o
+}
+
+const NAMES: [(&str, &str); 7] = [
+    ("k_dc", "k_dc"),
+    ("corner", "corner_hz"),
+    ("zeta", "zeta"),
+    ("delay_s", "delay_s"),
+    ("bandwidth_hz", "bandwidth_hz"),
+    ("phase_freq_hz", "phase_freq_hz"),
+    ("latency_s", "latency_s"),
+];
+
+fn coverage_run(order: Order, seed: u64) -> Vec<Option<bool>> {
+    let s = sim(order, seed);
+    let truth = s.truth_json().unwrap();
+    let r = calibrate(&s.record().unwrap(), &options(order)).expect("reduces");
+    let e = &r.part.coefficients;
+    let k95 = e.coverage_factor(0.95);
+    let corner = if order == Order::First {
+        "fc_hz"
+    } else {
+        "fn_hz"
+    };
+    NAMES
+        .iter()
+        .map(|(name, key)| {
+            let name = if *name == "corner" { corner } else { name };
+            let t = truth[*key].as_f64()?;
+            let (v, u) = e.get(name)?;
+            Some((v - t).abs() <= k95 * u)
+        })
+        .collect()
+}
+
+fn check_coverage(order: Order, seed: u64) {
+    let n = trials(40, 300);
+    let runs = monte_carlo(seed, n, |s| coverage_run(order, s));
+    let (lo, hi) = band(n, 0.93, 0.97);
+    for (k, (name, _)) in NAMES.iter().enumerate() {
+        let hits: Vec<bool> = runs.iter().filter_map(|r| r[k]).collect();
+        if hits.is_empty() {
+            continue;
+        }
+        let rate = hits.iter().filter(|h| **h).count() as f64 / hits.len() as f64;
+        eprintln!(
+            "broadband {order:?} order, {name}: {rate:.3} of {}",
+            hits.len()
+        );
+        assert!(
+            (lo..=hi).contains(&rate),
+            "broadband {order:?} order, {name}: U95 covers the truth in {rate:.3} of {} (band {lo:.3}..{hi:.3})",
+            hits.len()
+        );
+    }
+}
+
+#[test]
+fn broadband_second_order_u95_covers_the_truth() {
+    check_coverage(Order::Second, 301);
+}
+
+#[test]
+fn broadband_first_order_u95_covers_the_truth() {
+    check_coverage(Order::First, 302);
+}
+
+#[test]
+fn the_broadband_plan_predicts_the_scatter_of_the_estimates() {
+    let n = trials(40, 300);
+    let s = sim(Order::Second, 0);
+    let plan = BroadbandPlanOptions {
+        model: s.model.clone(),
+        duration_s: s.duration_s,
+        rate_hz: s.rate_hz,
+        amplitude: s.amplitude,
+        noise: s.noise,
+        segment_samples: 1024,
+        min_coherence: 0.9,
+        f_max_hz: None,
+        seed: 1000,
+    };
+    let predicted = plan_document(&plan).unwrap().predicted_u.unwrap();
+    let names = ["fn_hz", "zeta", "delay_s", "bandwidth_hz"];
+    let runs = monte_carlo(19, n, |seed| {
+        let mut o = s.clone();
+        o.seed = seed;
+        let r = calibrate(&o.record().unwrap(), &options(Order::Second)).unwrap();
+        names.map(|n| r.part.coefficients.value(n).unwrap())
+    });
+    for (k, name) in names.iter().enumerate() {
+        let v: Vec<f64> = runs.iter().map(|r| r[k]).collect();
+        let m = v.iter().sum::<f64>() / n as f64;
+        let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt();
+        let ratio = sd / predicted[*name];
+        let tol = 3.0 / (2.0 * (n as f64 - 1.0)).sqrt();
+        eprintln!("broadband plan, {name}: Monte Carlo sd / predicted u = {ratio:.3}");
+        assert!(
+            (ratio - 1.0).abs() <= tol.max(0.1),
+            "{name}: Monte Carlo sd {sd:.3e} against the plan's u {:.3e} (ratio {ratio:.3})",
+            predicted[*name]
+        );
+    }
+}
+
+#[test]
+fn a_broadband_plan_whose_coherent_bins_stop_below_the_corner_is_refused() {
+    let plan = BroadbandPlanOptions {
+        model: ModelGuess::default(),
+        duration_s: 60.0,
+        rate_hz: 1000.0,
+        amplitude: 10.0,
+        noise: 0.02,
+        segment_samples: 1024,
+        min_coherence: 0.9,
+        f_max_hz: Some(50.0),
+        seed: 1,
+    };
+    let e = plan_document(&plan).unwrap_err().to_string();
+    assert!(e.contains("bandwidth_hz is not determined"), "{e}");
+}
+
+#[test]
+fn a_reference_that_does_not_move_is_refused() {
+    let mut rec = sim(Order::Second, 1).record().unwrap();
+    rec.reference.iter_mut().for_each(|v| *v = 3.0);
+    let e = calibrate(&rec, &BroadbandOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("reference does not move"), "{e}");
+}
+
+#[test]
+fn too_few_coherent_bins_are_refused_naming_the_coherence() {
+    let mut s = sim(Order::Second, 2);
+    s.noise = 1e3;
+    let e = calibrate(&s.record().unwrap(), &BroadbandOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("min_coherence"), "{e}");
+}
