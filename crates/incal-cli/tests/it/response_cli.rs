@@ -259,3 +259,36 @@ fn a_broadband_record_with_a_gap_or_a_contradicting_rate_is_refused() {
         &["--f-max-hz", "bandwidth_hz is not determined"],
     );
 }
+
+#[test]
+fn limits_judge_the_bandwidth_and_delay_and_the_report_draws_the_bode_plot() {
+    let dir = workdir("response_limits");
+    let csv = small(&dir);
+    let limits = dir.join("limits.toml");
+    std::fs::write(
+        &limits,
+        "[response-sine]\nbandwidth_hz = { min = 7 }\ndelay_s = { max = 0.003 }\n",
+    )
+    .unwrap();
+    let doc = dir.join("r.json");
+    ok(&run(&[
+        "response",
+        "sine",
+        "--input",
+        p(&csv),
+        "--limits",
+        p(&limits),
+        "--json",
+        "-o",
+        p(&doc),
+    ]));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&doc).unwrap()).unwrap();
+    assert_eq!(v["verdicts"]["bandwidth_hz"]["verdict"], "pass");
+    assert_eq!(v["verdicts"]["delay_s"]["verdict"], "pass");
+    let html = dir.join("r.html");
+    ok(&run(&["report", p(&doc), "-o", p(&html)]));
+    let h = std::fs::read_to_string(&html).unwrap();
+    assert!(h.contains("Frequency response: gain (dB)"), "no gain plot");
+    assert!(h.contains("Frequency response: phase (deg)"), "no phase plot");
+}

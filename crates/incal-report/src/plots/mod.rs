@@ -14,7 +14,11 @@
 //!   with its limits;
 //! * a top-level `channels` object with `taus_s` and `oadev` (the noise
 //!   result): the Allan plot of each channel, log–log, with its bounds and
-//!   the fitted IEEE 952 lines ([`allan_plots`]).
+//!   the fitted IEEE 952 lines ([`allan_plots`]);
+//! * a top-level `bode` object (the dynamic response): gain in dB and phase
+//!   in degrees against log frequency, the measured points with U95 bars
+//!   from the table holding `gain_db`, the fitted model with its U95 band
+//!   ([`bode_plots`]).
 //!
 //! The abscissa of a table is its numeric column, before the statistics
 //! columns (`n`, `mean`, `std`, `residual`, …), with the most distinct
@@ -25,12 +29,13 @@
 //! loaded from outside the file.
 //!
 //! One file per plot kind: `table` and `rows` (the residual and fitted
-//! plots of a table), `coefficients`, `history`, `allan` and `thermal`;
+//! plots of a table), `coefficients`, `history`, `allan`, `bode` and `thermal`;
 //! `svg` draws any of them. This file holds what they share: the plot
 //! model ([`Plot`], [`Series`], [`Pt`]), the colours and the display
 //! units.
 
 mod allan;
+mod bode;
 mod coefficients;
 mod history;
 mod rows;
@@ -42,6 +47,7 @@ use incal::document::{Cell, Table};
 use incal::units::Unit;
 
 pub use allan::allan_plots;
+pub use bode::bode_plots;
 pub use coefficients::{coefficient_plots, Limits};
 pub use history::history_plot;
 pub use svg::{figure_html, render_svg};
@@ -109,6 +115,9 @@ pub enum XAxis {
     Numeric,
     /// Named positions 0, 1, …
     Categories(Vec<String>),
+    /// Numbers drawn as their log10 (the points' x are log10 of the
+    /// value): ticks are labelled with the values (a Bode plot).
+    Log10,
 }
 
 /// A horizontal reference line (zero, a limit).

@@ -38,7 +38,7 @@ fn plot_err<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> R
 /// lower for category plots (coefficients, history).
 fn size(p: &Plot) -> (u32, u32) {
     match p.x_axis {
-        XAxis::Numeric => (760, 380),
+        XAxis::Numeric | XAxis::Log10 => (760, 380),
         XAxis::Categories(_) => (760, 300),
     }
 }
@@ -73,7 +73,9 @@ pub fn render_svg(p: &Plot) -> Result<String, ReportError> {
         let root = SVGBackend::with_string(&mut buf, size(p)).into_drawing_area();
         root.fill(&WHITE).map_err(plot_err)?;
         let (x0, x1) = match &p.x_axis {
-            XAxis::Numeric => padded(p.series.iter().flat_map(|s| s.points.iter().map(|q| q.x))),
+            XAxis::Numeric | XAxis::Log10 => {
+                padded(p.series.iter().flat_map(|s| s.points.iter().map(|q| q.x)))
+            }
             XAxis::Categories(c) => (-0.5, c.len().max(1) as f64 - 0.5),
         };
         let (y0, y1) = padded(
@@ -135,9 +137,10 @@ fn chart<'a, 'b>(
         .map_err(plot_err)?;
     let categories = match &p.x_axis {
         XAxis::Categories(c) => Some(c.clone()),
-        XAxis::Numeric => None,
+        XAxis::Numeric | XAxis::Log10 => None,
     };
     let log_log = p.log_log;
+    let log_x = log_log || p.x_axis == XAxis::Log10;
     let x_fmt = |x: &f64| match &categories {
         Some(c) => {
             let i = x.round();
@@ -147,7 +150,7 @@ fn chart<'a, 'b>(
                 String::new()
             }
         }
-        None if log_log => trimmed(10f64.powf(*x), 3),
+        None if log_x => trimmed(10f64.powf(*x), 3),
         None => tick(*x, x1 - x0),
     };
     let y_fmt = |y: &f64| {
