@@ -25,6 +25,7 @@ $INCAL imu ferraris --input "$D/imu-ferraris" --rate-hz 100 --json -o "$D/imu-ca
 $INCAL tumble --mount pendulum --input "$D/tumble" --json -o "$D/result"
 $INCAL simulate response-sine --dwells-hz 2,5,10,20,40 --seconds-per-dwell 0.1 --min-cycles 3 --rate-hz 200 --corner-hz 20 --order first --delay-s 0.005 --seed 3 -o "$D/response-sine"
 $INCAL simulate response-broadband --duration-s 0.6 --seed 3 -o "$D/response-broadband"
+$INCAL simulate response-step --duration-s 0.2 --step-s 0.05 --rate-hz 500 --corner-hz 40 --seed 3 -o "$D/response-step"
 $INCAL simulate thermal --seed 3 --t-low-c 20 --t-high-c 40 --ramp-c-per-min 20 --hold-s 30 --lag-s 5 --rate-hz 1 -o "$D/thermal-ramp"
 $INCAL tumble --mount pendulum --input "$D/tumble" --json --meta temperature_c=25 -o "$D/thermal-fit"
 $INCAL thermal ramp --input "$D/thermal-ramp" --rate-hz 1 --quantity gyro --json -o "$D/thermal-model"

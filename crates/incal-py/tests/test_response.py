@@ -89,3 +89,12 @@ def test_the_broadband_h1_and_coherence_equal_scipy():
     c = r.coefficients
     for name in ("bandwidth_hz", "delay_s", "latency_s"):
         assert abs(c[name].value - truth[name]) <= c[name].U95, name
+
+
+def test_a_simulated_step_reduces_with_its_truth_inside_u95():
+    data, truth = incal.simulate.response_step(seed=8)
+    r = incal.response_step(data)
+    c = r.coefficients
+    assert r.document["procedure"] == "response-step"
+    for name in ("rise_time_s", "overshoot_pct", "bandwidth_hz"):
+        assert abs(c[name].value - truth[name]) <= c[name].U95, name

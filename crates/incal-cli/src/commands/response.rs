@@ -1,6 +1,5 @@
-//! `incal response sine|broadband`, `incal plan
-//! response-sine|response-broadband`, `incal simulate
-//! response-sine|response-broadband`.
+//! `incal response sine|broadband|step`, and their plans and simulators
+//! (`incal plan|simulate response-sine|response-broadband|response-step`).
 
 use std::path::PathBuf;
 
@@ -12,6 +11,9 @@ use incal::procedures::response::broadband::plan::BroadbandPlanOptions;
 use incal::procedures::response::broadband::sim::BroadbandSimOptions;
 use incal::procedures::response::broadband::{Align, BroadbandOptions, ResponseBroadband};
 use incal::procedures::response::fit::ModelOptions;
+use incal::procedures::response::step::plan::StepPlanOptions;
+use incal::procedures::response::step::sim::StepSimOptions;
+use incal::procedures::response::step::{ResponseStep, StepOptions};
 use incal::procedures::response::{
     BandwidthMethod, Drift, OrderChoice, ResponseOptions, ResponseSine,
 };
@@ -28,6 +30,8 @@ pub enum Command {
     Sine(SineArgs),
     /// Broadband record (random, chirp, multisine): H1 and coherence by Welch averaging, the same model.
     Broadband(BroadbandArgs),
+    /// Step (a rate or tilt step): the same model in the time domain, delay, rise time, overshoot, settling time.
+    Step(StepArgs),
 }
 
 /// Model order of the reduction.
@@ -112,15 +116,21 @@ pub struct ModelArgs {
     pub flatness_to_hz: Option<f64>,
 }
 
+impl From<OrderArg> for OrderChoice {
+    fn from(o: OrderArg) -> OrderChoice {
+        match o {
+            OrderArg::Auto => OrderChoice::Auto,
+            OrderArg::First => OrderChoice::First,
+            OrderArg::Second => OrderChoice::Second,
+        }
+    }
+}
+
 impl ModelArgs {
     /// The core's model options.
     pub fn options(&self) -> ModelOptions {
         ModelOptions {
-            order: match self.order {
-                OrderArg::Auto => OrderChoice::Auto,
-                OrderArg::First => OrderChoice::First,
-                OrderArg::Second => OrderChoice::Second,
-            },
+            order: self.order.into(),
             k1: self.k1,
             u_k1: self.u_k1,
             u_reference_pct: self.u_reference_pct,
@@ -493,6 +503,128 @@ pub fn simulate_broadband(a: &BroadbandSimArgs) -> CliResult<()> {
     crate::run::write_truth::<ResponseBroadband>(&options, a.truth_out.as_deref())
 }
 
+/// `incal response step`.
+#[derive(clap::Args, Debug)]
+pub struct StepArgs {
+    /// Recording: `reference` (the step input), `output`, and `time_s` (or --rate-hz).
+    #[arg(long)]
+    pub input: PathBuf,
+    /// Sampling rate, Hz, when the file has no `time_s`.
+    #[arg(long)]
+    pub rate_hz: Option<f64>,
+    /// Model order.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub order: OrderArg,
+    /// Half-width of the settling band, % of the step.
+    #[arg(long, default_value_t = 2.0)]
+    pub settling_band_pct: f64,
+    #[command(flatten)]
+    pub read: ReadArgs,
+    #[command(flatten)]
+    pub result: ResultArgs,
+}
+
+/// `incal response step`.
+pub fn run_step(a: &StepArgs) -> CliResult<()> {
+    let options = StepOptions {
+        rate_hz: a.rate_hz,
+        order: a.order.into(),
+        settling_band_pct: a.settling_band_pct,
+    };
+    crate::run::reduce::<ResponseStep>(&a.input, &a.read, &options, &a.result, &Silent)
+}
+
+/// A step test: the expected response, the record and the step.
+#[derive(clap::Args, Debug, Clone)]
+pub struct StepTestArgs {
+    #[command(flatten)]
+    pub guess: ModelGuessArgs,
+    /// Record length, s.
+    #[arg(long, default_value_t = 1.0)]
+    pub duration_s: f64,
+    /// Sampling rate, Hz.
+    #[arg(long, default_value_t = 1000.0)]
+    pub rate_hz: f64,
+    /// Time of the step, s.
+    #[arg(long, default_value_t = 0.3)]
+    pub step_s: f64,
+    /// Step of the reference (reference units).
+    #[arg(long, default_value_t = 10.0)]
+    pub amplitude: f64,
+    /// Output noise of one sample (output units).
+    #[arg(long, default_value_t = 0.02)]
+    pub noise: f64,
+    /// Reference noise of one sample (reference units).
+    #[arg(long, default_value_t = 0.005)]
+    pub reference_noise: f64,
+}
+
+/// `incal plan response-step`.
+#[derive(clap::Args, Debug)]
+pub struct StepPlanArgs {
+    #[command(flatten)]
+    pub test: StepTestArgs,
+    /// Seed of the first of the simulated records the prediction reduces.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    #[command(flatten)]
+    pub out: PlanOut,
+}
+
+/// `incal plan response-step`.
+pub fn plan_step(a: &StepPlanArgs) -> CliResult<()> {
+    let t = &a.test;
+    let options = StepPlanOptions {
+        model: t.guess.model(),
+        duration_s: t.duration_s,
+        rate_hz: t.rate_hz,
+        step_s: t.step_s,
+        amplitude: t.amplitude,
+        noise: t.noise,
+        reference_noise: t.reference_noise,
+        seed: a.seed,
+    };
+    a.out
+        .emit(&<ResponseStep as Plan>::plan(&options).map_err(core)?)
+}
+
+/// `incal simulate response-step`.
+#[derive(clap::Args, Debug)]
+pub struct StepSimArgs {
+    #[command(flatten)]
+    pub test: StepTestArgs,
+    /// Output bias (output units).
+    #[arg(long, default_value_t = 0.0)]
+    pub bias: f64,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Write the truth (model, step metrics, the true step time) as JSON to this file.
+    #[arg(long, value_name = "FILE")]
+    pub truth_out: Option<PathBuf>,
+    /// Output CSV (default: standard output).
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+/// `incal simulate response-step`.
+pub fn simulate_step(a: &StepSimArgs) -> CliResult<()> {
+    let t = &a.test;
+    let options = StepSimOptions {
+        model: t.guess.model(),
+        duration_s: t.duration_s,
+        rate_hz: t.rate_hz,
+        step_s: t.step_s,
+        amplitude: t.amplitude,
+        noise: t.noise,
+        reference_noise: t.reference_noise,
+        bias: a.bias,
+        seed: a.seed,
+    };
+    crate::run::simulate::<ResponseStep>(&options, a.output.as_deref())?;
+    crate::run::write_truth::<ResponseStep>(&options, a.truth_out.as_deref())
+}
+
 // The commands of this file in the command tree (`crate::commands`).
 
 /// This file's commands at the top level (`incal …`).
@@ -508,17 +640,21 @@ impl crate::commands::Run for Reductions {
         match self {
             Self::Response(Command::Sine(a)) => run_sine(a),
             Self::Response(Command::Broadband(a)) => run_broadband(a),
+            Self::Response(Command::Step(a)) => run_step(a),
         }
     }
 }
 
 /// This file's plans (`incal plan …`).
 #[derive(Subcommand, Debug)]
+#[allow(clippy::enum_variant_names)] // the command names: response-sine, …
 pub enum Plans {
     /// Stepped-sine plan: predicted u of every dwell's gain and phase and of bandwidth, delay and latency.
     ResponseSine(PlanArgs),
     /// Broadband plan: predicted coherence and u of bandwidth, delay and latency for a record length and noise.
     ResponseBroadband(BroadbandPlanArgs),
+    /// Step plan: predicted u of delay, rise time, overshoot, settling time and the model for a record and noise.
+    ResponseStep(StepPlanArgs),
 }
 
 impl crate::commands::Run for Plans {
@@ -526,17 +662,21 @@ impl crate::commands::Run for Plans {
         match self {
             Self::ResponseSine(a) => plan(a),
             Self::ResponseBroadband(a) => plan_broadband(a),
+            Self::ResponseStep(a) => plan_step(a),
         }
     }
 }
 
 /// This file's simulators (`incal simulate …`).
 #[derive(Subcommand, Debug)]
+#[allow(clippy::enum_variant_names)] // the command names: response-sine, …
 pub enum Simulations {
     /// Stepped sine on a rate table or shaker; writes the input CSV of `incal response sine`.
     ResponseSine(SimArgs),
     /// White broadband excitation through a known low-pass with delay; writes the input CSV of `incal response broadband`.
     ResponseBroadband(BroadbandSimArgs),
+    /// A reference step through a known low-pass with delay; writes the input CSV of `incal response step`.
+    ResponseStep(StepSimArgs),
 }
 
 impl crate::commands::Run for Simulations {
@@ -544,6 +684,7 @@ impl crate::commands::Run for Simulations {
         match self {
             Self::ResponseSine(a) => simulate(a),
             Self::ResponseBroadband(a) => simulate_broadband(a),
+            Self::ResponseStep(a) => simulate_step(a),
         }
     }
 }

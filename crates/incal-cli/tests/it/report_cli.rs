@@ -167,6 +167,9 @@ fn every_procedure_gets_a_complete_self_contained_report() {
             // A noise result is its Allan family: the deviations with their
             // bounds and the fitted terms, drawn in one plot.
             assert!(kinds.contains(&"allan"), "{procedure}: {kinds:?}");
+        } else if doc.get("bode").is_some() {
+            // A frequency response: its Bode plots, gain and phase.
+            assert_eq!(kinds, ["bode", "bode"], "{procedure}");
         } else if with_residuals {
             assert!(kinds.contains(&"residual"), "{procedure}: {kinds:?}");
             assert!(kinds.contains(&"fitted"), "{procedure}: {kinds:?}");

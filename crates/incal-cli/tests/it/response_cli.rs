@@ -290,5 +290,61 @@ fn limits_judge_the_bandwidth_and_delay_and_the_report_draws_the_bode_plot() {
     ok(&run(&["report", p(&doc), "-o", p(&html)]));
     let h = std::fs::read_to_string(&html).unwrap();
     assert!(h.contains("Frequency response: gain (dB)"), "no gain plot");
-    assert!(h.contains("Frequency response: phase (deg)"), "no phase plot");
+    assert!(
+        h.contains("Frequency response: phase (deg)"),
+        "no phase plot"
+    );
+}
+
+#[test]
+fn a_step_reduces_to_the_contract_and_bad_steps_are_refused() {
+    let dir = workdir("response_step");
+    let csv = dir.join("step.csv");
+    ok(&run(&[
+        "simulate",
+        "response-step",
+        "--seed",
+        "4",
+        "-o",
+        p(&csv),
+    ]));
+    let v = json_of(&run(&["response", "step", "--input", p(&csv), "--json"]));
+    assert_eq!(v["procedure"], "response-step");
+    for (name, unit) in [
+        ("delay_s", "s"),
+        ("rise_time_s", "s"),
+        ("settling_time_s", "s"),
+        ("overshoot_pct", "%"),
+        ("bandwidth_hz", "Hz"),
+    ] {
+        assert_eq!(v["coefficients"][name]["unit"], unit, "{name}");
+    }
+    assert_eq!(v["tables"][0]["id"], "step");
+    assert!(v["step"]["u_t0_s"].as_f64().unwrap() > 0.0);
+    let flat = dir.join("flat.csv");
+    let mut s = String::from("time_s,reference,output\n");
+    for k in 0..200 {
+        s.push_str(&format!(
+            "{},{},{}\n",
+            k as f64 / 100.0,
+            1.0,
+            (k % 7) as f64
+        ));
+    }
+    std::fs::write(&flat, s).unwrap();
+    refused(
+        &run(&["response", "step", "--input", p(&flat)]),
+        &["flat.csv", "does not step"],
+    );
+    refused(
+        &run(&[
+            "plan",
+            "response-step",
+            "--corner-hz",
+            "1",
+            "--order",
+            "first",
+        ]),
+        &["--duration-s", "settling_time_s is not determined"],
+    );
 }

@@ -388,3 +388,20 @@ def response_broadband(
     fail_on: Optional[Literal["fail", "conditional"]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
+
+def response_step(
+    data: Data = None,
+    *,
+    rate_hz: Union[float, None] = None,
+    order: Literal["auto", "first", "second"] = "auto",
+    settling_band_pct: float = 2,
+    columns: Union[str, Sequence[str], Mapping[str, str], None] = None,
+    delimiter: Optional[str] = None,
+    serial: Optional[str] = None,
+    model: Optional[str] = None,
+    meta: Union[str, Sequence[str], Mapping[str, Any], None] = None,
+    output_unit: Optional[str] = None,
+    limits: Optional[PathLike] = None,
+    fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
+) -> Result: ...

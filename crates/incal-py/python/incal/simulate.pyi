@@ -255,3 +255,21 @@ def response_broadband(
     seed: int = 1,
     truth_out: Optional[Union[str, float]] = None,
 ) -> Tuple[Any, List[str]]: ...
+
+def response_step(
+    *,
+    order: Literal["first", "second"] = "second",
+    k_dc: float = 1,
+    corner_hz: float = 80,
+    zeta: float = 0.6,
+    delay_s: float = 0.002,
+    duration_s: float = 1,
+    rate_hz: float = 1000,
+    step_s: float = 0.3,
+    amplitude: float = 10,
+    noise: float = 0.02,
+    reference_noise: float = 0.005,
+    bias: float = 0,
+    seed: int = 1,
+    truth_out: Optional[Union[str, float]] = None,
+) -> Tuple[Any, List[str]]: ...

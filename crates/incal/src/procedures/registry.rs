@@ -58,6 +58,9 @@ pub enum Procedure {
     /// Dynamic response from a broadband record: H1 by Welch averaging,
     /// coherence (Bendat & Piersol).
     ResponseBroadband,
+    /// Step response: the same model fitted in the time domain, rise time,
+    /// overshoot, settling time and delay.
+    ResponseStep,
 }
 
 impl Procedure {
@@ -97,6 +100,7 @@ impl Procedure {
             Procedure::Thermal => "thermal",
             Procedure::ResponseSine => "response-sine",
             Procedure::ResponseBroadband => "response-broadband",
+            Procedure::ResponseStep => "response-step",
         }
     }
 }
@@ -683,6 +687,28 @@ pub static REGISTRY: &[Entry] = &[
         reduction: reduction::<super::response::broadband::ResponseBroadband>(),
         planner: planner::<super::response::broadband::ResponseBroadband>(),
         simulator: simulator::<super::response::broadband::ResponseBroadband>(),
+    },
+    Entry {
+        id: "response-step",
+        document: Procedure::ResponseStep,
+        command: &["response", "step"],
+        plan: Some(&["plan", "response-step"]),
+        simulate: Some(&["simulate", "response-step"]),
+        title: "Step response: delay, rise time, overshoot, settling time and the model",
+        rig: RATE_TABLE,
+        method: "Step response to a rate or tilt step against the reference: IEEE Std 1431-2004 and IEEE Std 1293-2018 (dynamic response); first- and second-order low-pass models with a pure delay fitted in the time domain, rise time (10-90 %), overshoot and settling time from the fitted model",
+        references: &["ieee1431", "ieee1293"],
+        chapter: "response.md",
+        input: InputKind::Recording,
+        fuzz: &["response-step"],
+        run_sheet: None,
+        example: Some(Example {
+            simulate: &["--seed", "23"],
+            options: &[],
+        }),
+        reduction: reduction::<super::response::step::ResponseStep>(),
+        planner: planner::<super::response::step::ResponseStep>(),
+        simulator: simulator::<super::response::step::ResponseStep>(),
     },
 ];
 

@@ -24,6 +24,7 @@ mod noise_stable32;
 mod properties;
 mod response_broadband;
 mod response_roundtrip;
+mod response_step;
 mod schema_file;
 mod sim_plan;
 mod thermal_roundtrip;

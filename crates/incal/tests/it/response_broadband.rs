@@ -101,9 +101,13 @@ fn broadband_first_order_u95_covers_the_truth() {
     check_coverage(Order::First, 302);
 }
 
+/// The plan's u are the reduction's own on four simulated records: they
+/// predict the u the reduction reports (whose honesty the coverage tests
+/// check), each within the spread of an RMS over four jackknife variances
+/// of 19 degrees of freedom (about 8 %, three of them allowed).
 #[test]
-fn the_broadband_plan_predicts_the_scatter_of_the_estimates() {
-    let n = trials(40, 300);
+fn the_broadband_plan_predicts_the_u_the_reduction_reports() {
+    let n = trials(20, 100);
     let s = sim(Order::Second, 0);
     let plan = BroadbandPlanOptions {
         model: s.model.clone(),
@@ -122,18 +126,15 @@ fn the_broadband_plan_predicts_the_scatter_of_the_estimates() {
         let mut o = s.clone();
         o.seed = seed;
         let r = calibrate(&o.record().unwrap(), &options(Order::Second)).unwrap();
-        names.map(|n| r.part.coefficients.value(n).unwrap())
+        names.map(|n| r.part.coefficients.u(n).unwrap().powi(2))
     });
     for (k, name) in names.iter().enumerate() {
-        let v: Vec<f64> = runs.iter().map(|r| r[k]).collect();
-        let m = v.iter().sum::<f64>() / n as f64;
-        let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt();
-        let ratio = sd / predicted[*name];
-        let tol = 3.0 / (2.0 * (n as f64 - 1.0)).sqrt();
-        eprintln!("broadband plan, {name}: Monte Carlo sd / predicted u = {ratio:.3}");
+        let rms = (runs.iter().map(|r| r[k]).sum::<f64>() / n as f64).sqrt();
+        let ratio = rms / predicted[*name];
+        eprintln!("broadband plan, {name}: reported u / predicted u = {ratio:.3}");
         assert!(
-            (ratio - 1.0).abs() <= tol.max(0.1),
-            "{name}: Monte Carlo sd {sd:.3e} against the plan's u {:.3e} (ratio {ratio:.3})",
+            (ratio - 1.0).abs() <= 0.25,
+            "{name}: the reductions report u {rms:.3e} (RMS), the plan {:.3e} (ratio {ratio:.3})",
             predicted[*name]
         );
     }

@@ -40,6 +40,7 @@ pub mod model;
 pub mod plan;
 pub mod sim;
 pub mod sine;
+pub mod step;
 
 use std::f64::consts::PI;
 
@@ -71,6 +72,16 @@ pub enum OrderChoice {
     First,
     /// Second-order low-pass with delay.
     Second,
+}
+
+impl From<model::Order> for OrderChoice {
+    /// A fixed order.
+    fn from(o: model::Order) -> OrderChoice {
+        match o {
+            model::Order::First => OrderChoice::First,
+            model::Order::Second => OrderChoice::Second,
+        }
+    }
 }
 
 /// The slow terms fitted beside the sines in each dwell.

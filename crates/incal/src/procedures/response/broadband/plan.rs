@@ -107,10 +107,7 @@ fn simulated_u(o: &BroadbandPlanOptions) -> Result<Vec<(String, f64)>> {
             f_max_hz: o.f_max_hz,
             ..super::BroadbandOptions::default()
         };
-        r.model.order = match o.model.order {
-            model::Order::First => crate::procedures::response::OrderChoice::First,
-            model::Order::Second => crate::procedures::response::OrderChoice::Second,
-        };
+        r.model.order = o.model.order.into();
         let res = super::calibrate(&sim.record()?, &r)?;
         let e = &res.part.coefficients;
         for (i, name) in e.names().iter().enumerate() {
