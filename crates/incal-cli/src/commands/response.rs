@@ -317,6 +317,9 @@ pub struct SimArgs {
     /// Standard deviation of the reference's amplitude error, drawn once per dwell, %.
     #[arg(long, default_value_t = 0.0)]
     pub reference_error_pct: f64,
+    /// The reference sampled on its own clock this much later than the output, s (writes a time_ref_s column).
+    #[arg(long, default_value_t = 0.0)]
+    pub reference_clock_offset_s: f64,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -341,6 +344,7 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         bias: a.bias,
         distortion_pct: a.distortion_pct,
         reference_error_pct: a.reference_error_pct,
+        reference_clock_offset_s: a.reference_clock_offset_s,
         seed: a.seed,
     };
     crate::run::simulate::<ResponseSine>(&options, a.output.as_deref())?;

@@ -348,3 +348,49 @@ fn a_step_reduces_to_the_contract_and_bad_steps_are_refused() {
         &["--duration-s", "settling_time_s is not determined"],
     );
 }
+
+#[test]
+fn a_reference_clock_is_read_and_its_bad_stamps_are_refused() {
+    let dir = workdir("response_clock");
+    let csv = dir.join("clock.csv");
+    ok(&run(&[
+        "simulate",
+        "response-sine",
+        "--dwells-hz",
+        "2,5,10,20",
+        "--rate-hz",
+        "200",
+        "--reference-clock-offset-s",
+        "0.003",
+        "--order",
+        "first",
+        "--corner-hz",
+        "8",
+        "-o",
+        p(&csv),
+    ]));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(text.starts_with("time_s,time_ref_s,freq_hz,reference,output"));
+    let v = json_of(&run(&["response", "sine", "--input", p(&csv), "--json"]));
+    let (d, u) = (
+        v["coefficients"]["delay_s"]["value"].as_f64().unwrap(),
+        v["coefficients"]["delay_s"]["U95"].as_f64().unwrap(),
+    );
+    assert!((d - 0.002).abs() <= u, "delay {d} ± {u}");
+    let back = dir.join("back.csv");
+    std::fs::write(
+        &back,
+        "time_s,time_ref_s,freq_hz,reference,output\n0,0.1,1,0,0\n0.01,0.05,1,1,1\n",
+    )
+    .unwrap();
+    refused(
+        &run(&["response", "sine", "--input", p(&back)]),
+        &["back.csv:3:", "time_ref_s", "before the row above"],
+    );
+    let alone = dir.join("alone.csv");
+    std::fs::write(&alone, "time_ref_s,freq_hz,reference,output\n0,1,0,0\n").unwrap();
+    refused(
+        &run(&["response", "sine", "--input", p(&alone), "--rate-hz", "100"]),
+        &["alone.csv", "needs 'time_s'"],
+    );
+}

@@ -235,6 +235,7 @@ def response_sine(
     bias: float = 0,
     distortion_pct: float = 0,
     reference_error_pct: float = 0,
+    reference_clock_offset_s: float = 0,
     seed: int = 1,
     truth_out: Optional[Union[str, float]] = None,
 ) -> Tuple[Any, List[str]]: ...

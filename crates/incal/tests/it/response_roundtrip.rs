@@ -325,3 +325,24 @@ fn an_interpolated_bandwidth_the_dwells_do_not_bracket_is_refused_naming_the_gap
     let doc = r.document().unwrap();
     assert!(doc.coefficients.get("bandwidth_interp_hz").is_none());
 }
+
+#[test]
+fn a_reference_on_its_own_clock_is_fitted_at_its_own_stamps() {
+    let s = ResponseSimOptions {
+        reference_clock_offset_s: 0.0037,
+        seed: 8,
+        ..ResponseSimOptions::default()
+    };
+    let d = s.dwells().unwrap();
+    assert!(d.iter().all(|d| d.time_ref_s.len() == d.time_s.len()));
+    let r = calibrate(&d, &ResponseOptions::default()).unwrap();
+    let (v, u) = r.part.coefficients.get("delay_s").unwrap();
+    let k = r.part.coefficients.coverage_factor(0.95);
+    assert!((v - 0.002).abs() <= k * u, "delay {v} ± {}", k * u);
+    // Taken as one clock, the offset would be read as delay.
+    let mut one = d.clone();
+    one.iter_mut().for_each(|d| d.time_ref_s.clear());
+    let r1 = calibrate(&one, &ResponseOptions::default()).unwrap();
+    let v1 = r1.part.coefficients.value("delay_s").unwrap();
+    assert!((v1 - 0.002 - 0.0037).abs() < 1e-4, "one clock: delay {v1}");
+}

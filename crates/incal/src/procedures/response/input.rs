@@ -1,7 +1,10 @@
 //! Reading a stepped-sine recording: columns `freq_hz` (the dwell's
 //! frequency, Hz), `reference` (the reference motion: the table's rate or
 //! angle, or a reference accelerometer) and `output` (the instrument), and
-//! `time_s` (s) or the option `rate_hz`. Consecutive rows with one
+//! `time_s` (s) or the option `rate_hz`, and optionally `time_ref_s`: the
+//! reference's own stamps when it is sampled by another clock than the
+//! output (each channel is then fitted at its own times, on one origin).
+//! Consecutive rows with one
 //! `freq_hz` form a dwell; a change of `freq_hz` starts the next (a
 //! frequency visited twice is two dwells). Other columns are ignored.
 
@@ -20,6 +23,8 @@ pub struct Dwell {
     pub last_line: usize,
     /// Sample times (s).
     pub time_s: Vec<f64>,
+    /// The reference's own sample times (s), empty when it shares `time_s`.
+    pub time_ref_s: Vec<f64>,
     /// The reference channel.
     pub reference: Vec<f64>,
     /// The instrument's output.
@@ -55,9 +60,16 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, rate_hz: Option<f64>) -> Re
             .error("no column 'time_s': give the sampling rate (rate_hz) or the stamps")
             .into());
     }
+    let cref = h.opt_column("time_ref_s");
+    if cref.is_some() && ct.is_none() {
+        return Err(h
+            .error("column 'time_ref_s' (the reference's clock) needs 'time_s' (the output's)")
+            .into());
+    }
     let mut dwells: Vec<Dwell> = Vec::new();
     let mut index = 0usize;
     let mut last_t = f64::NEG_INFINITY;
+    let mut last_ref = f64::NEG_INFINITY;
     while let Some(row) = rows.next_row()? {
         let f = row.f64(cf)?;
         if f <= 0.0 {
@@ -81,8 +93,24 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, rate_hz: Option<f64>) -> Re
         }
         last_t = t;
         index += 1;
+        let t_ref = match cref {
+            Some(c) => {
+                let v = row.f64(c)?;
+                if v < last_ref {
+                    return Err(row
+                        .cell_error(
+                            c,
+                            format!("time {v} s is before the row above ({last_ref} s)"),
+                        )
+                        .into());
+                }
+                last_ref = v;
+                Some(v)
+            }
+            None => None,
+        };
         let (r, y) = (row.f64(cr)?, row.f64(co)?);
-        push(&mut dwells, row.line(), t, f, r, y);
+        push(&mut dwells, row.line(), (t, t_ref), f, r, y);
     }
     if dwells.is_empty() {
         return Err(rows.header().error("no data rows").into());
@@ -95,6 +123,8 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, rate_hz: Option<f64>) -> Re
 pub struct Sample {
     /// Time (s).
     pub time_s: f64,
+    /// The reference's own time (s), when it has its own clock.
+    pub time_ref_s: Option<f64>,
     /// Dwell frequency (Hz).
     pub freq_hz: f64,
     /// Reference channel.
@@ -103,16 +133,26 @@ pub struct Sample {
     pub output: f64,
 }
 
-/// The CSV `time_s,freq_hz,reference,output` of samples produced one at a
-/// time by `each`, in constant memory.
+/// The CSV `time_s,freq_hz,reference,output` (and `time_ref_s` when
+/// `own_clock`) of samples produced one at a time by `each`, in constant
+/// memory.
 pub fn write_each<W: std::io::Write>(
     out: W,
+    own_clock: bool,
     each: impl FnOnce(&mut dyn FnMut(Sample) -> std::io::Result<()>) -> std::io::Result<()>,
 ) -> std::io::Result<W> {
     use incal_io::{Cell, CsvWriter};
-    let mut w = CsvWriter::new(out, &["time_s", "freq_hz", "reference", "output"])?;
+    let header: &[&str] = if own_clock {
+        &["time_s", "time_ref_s", "freq_hz", "reference", "output"]
+    } else {
+        &["time_s", "freq_hz", "reference", "output"]
+    };
+    let mut w = CsvWriter::new(out, header)?;
     each(&mut |s: Sample| {
         w.cell(Cell::Num(s.time_s))?;
+        if own_clock {
+            w.cell(Cell::Num(s.time_ref_s.unwrap_or(s.time_s)))?;
+        }
         w.cell(Cell::Num(s.freq_hz))?;
         w.cell(Cell::Num(s.reference))?;
         w.cell(Cell::Num(s.output))?;
@@ -130,7 +170,7 @@ pub fn dwells_from(samples: impl IntoIterator<Item = Sample>) -> Vec<Dwell> {
         push(
             &mut dwells,
             k + 2,
-            s.time_s,
+            (s.time_s, s.time_ref_s),
             s.freq_hz,
             s.reference,
             s.output,
@@ -141,21 +181,28 @@ pub fn dwells_from(samples: impl IntoIterator<Item = Sample>) -> Vec<Dwell> {
 
 /// One row into the dwells: onto the last when it has the same
 /// frequency, else as a new dwell.
-fn push(dwells: &mut Vec<Dwell>, line: usize, t: f64, f: f64, r: f64, y: f64) {
-    match dwells.last_mut() {
-        Some(d) if d.freq_hz == f => {
-            d.last_line = line;
-            d.time_s.push(t);
-            d.reference.push(r);
-            d.output.push(y);
-        }
-        _ => dwells.push(Dwell {
+fn push(
+    dwells: &mut Vec<Dwell>,
+    line: usize,
+    (t, t_ref): (f64, Option<f64>),
+    f: f64,
+    r: f64,
+    y: f64,
+) {
+    if !matches!(dwells.last(), Some(d) if d.freq_hz == f) {
+        dwells.push(Dwell {
             freq_hz: f,
             first_line: line,
-            last_line: line,
-            time_s: vec![t],
-            reference: vec![r],
-            output: vec![y],
-        }),
+            ..Dwell::default()
+        });
+    }
+    if let Some(d) = dwells.last_mut() {
+        d.last_line = line;
+        d.time_s.push(t);
+        if let Some(tr) = t_ref {
+            d.time_ref_s.push(tr);
+        }
+        d.reference.push(r);
+        d.output.push(y);
     }
 }

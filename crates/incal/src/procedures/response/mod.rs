@@ -276,15 +276,23 @@ fn reduce_dwell(k: usize, d: &Dwell, o: &ResponseOptions) -> Result<DwellResult>
             name()
         )));
     }
-    let design = SineDesign::new(
-        t,
-        d.freq_hz,
-        o.harmonics,
-        o.drift == Drift::Linear,
-        rate / 2.0,
-    )?;
-    let reference = design.fit(&d.reference[skip..])?;
+    let drift = o.drift == Drift::Linear;
+    let design = SineDesign::new(t, t[0], d.freq_hz, o.harmonics, drift, rate / 2.0)?;
     let output = design.fit(&d.output[skip..])?;
+    // A reference on its own clock: fitted at its own stamps, one origin.
+    let reference = if d.time_ref_s.len() == d.time_s.len() {
+        SineDesign::new(
+            &d.time_ref_s[skip..],
+            t[0],
+            d.freq_hz,
+            o.harmonics,
+            drift,
+            rate / 2.0,
+        )?
+        .fit(&d.reference[skip..])?
+    } else {
+        design.fit(&d.reference[skip..])?
+    };
     // Still within its noise, or within rounding of its own offset.
     let floor = (10.0 * reference.u_amplitude).max(1e-9 * reference.offset.abs());
     if reference.amplitude.is_nan() || reference.amplitude <= floor {

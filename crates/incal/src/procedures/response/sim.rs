@@ -5,8 +5,10 @@
 //! its scheduled seconds at `rate_hz`. With `t' = t − t_i` and the true
 //! motion `m = A sin 2πf t'`, the rows hold
 //!
-//! * `reference = (1 + e_i) m + n_r`, `e_i ~ N(0, (reference_error_pct/100)²)`
-//!   once per dwell (the reference standard's amplitude error), `n_r ~ N(0, σ_r²)`;
+//! * `reference = (1 + e_i) m(t' + δ) + n_r`, `e_i ~ N(0, (reference_error_pct/100)²)`
+//!   once per dwell (the reference standard's amplitude error),
+//!   `n_r ~ N(0, σ_r²)`, `δ` = `reference_clock_offset_s` (the reference
+//!   sampled by its own clock, its stamps in a `time_ref_s` column);
 //! * `output = b + |H| A [sin(2πf t' + ∠H) + d sin(2(2πf t' + ∠H))] + n_y`,
 //!   `d = distortion_pct/100` (a second harmonic), `n_y ~ N(0, σ_y²)`,
 //!
@@ -55,6 +57,10 @@ pub struct ResponseSimOptions {
     /// σ of the reference's amplitude error, drawn once per dwell (%).
     #[serde(default)]
     pub reference_error_pct: f64,
+    /// The reference sampled on its own clock, this much later than the
+    /// output (s; default 0: one clock). Not 0: a `time_ref_s` column.
+    #[serde(default)]
+    pub reference_clock_offset_s: f64,
     /// Random seed (same seed, same file; default 1).
     #[serde(default = "seed_one")]
     pub seed: u64,
@@ -76,6 +82,7 @@ impl Default for ResponseSimOptions {
             bias: 0.0,
             distortion_pct: 0.0,
             reference_error_pct: 0.0,
+            reference_clock_offset_s: 0.0,
             seed: 1,
         }
     }
@@ -93,6 +100,13 @@ impl ResponseSimOptions {
             0.0,
             50.0,
             "%",
+        )?;
+        check_range(
+            "reference_clock_offset_s",
+            self.reference_clock_offset_s,
+            -1.0,
+            1.0,
+            "s",
         )?;
         super::plan::check_test(
             &self.dwells,
@@ -127,13 +141,15 @@ impl ResponseSimOptions {
             for k in 0..n {
                 let tp = k as f64 / self.rate_hz;
                 let w = TAU * freq * tp;
-                let motion = self.amplitude * w.sin();
+                let offset = self.reference_clock_offset_s;
+                let motion = self.amplitude * (TAU * freq * (tp + offset)).sin();
                 let reference = (1.0 + e) * motion + normal(&mut r, self.reference_noise);
                 let output = self.bias
                     + m * self.amplitude * ((w + ph).sin() + d * (2.0 * (w + ph)).sin())
                     + normal(&mut r, self.noise);
                 f(Sample {
                     time_s: t_start + tp,
+                    time_ref_s: (offset != 0.0).then_some(t_start + tp + offset),
                     freq_hz: freq,
                     reference,
                     output,
@@ -174,7 +190,9 @@ impl crate::procedures::Simulate for super::ResponseSine {
     fn simulate(o: &ResponseSimOptions, out: &mut dyn std::io::Write) -> Result<()> {
         let schedule = o.schedule()?;
         let x = o.model.x()?;
-        write_each(out, |row| o.rows(&schedule, &x, row))?;
+        write_each(out, o.reference_clock_offset_s != 0.0, |row| {
+            o.rows(&schedule, &x, row)
+        })?;
         Ok(())
     }
 

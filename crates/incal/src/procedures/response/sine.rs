@@ -3,7 +3,8 @@
 //! linear drift.
 //!
 //! At the dwell frequency `f` (`ω = 2πf`), with `t' = t − t₀` from the
-//! dwell's first stamp, each channel is fitted by
+//! dwell's first stamp (of the output, when the reference has a clock of
+//! its own), each channel is fitted at its own stamps by
 //!
 //! `y(t) = A₁ cos ωt' + B₁ sin ωt' + Σ_{k=2..h} (A_k cos kωt' + B_k sin kωt') + C + D (t' − t̄')`
 //!
@@ -17,8 +18,8 @@
 //! `∂R/∂(A₁, B₁) = (A₁, B₁)/R`, `∂φ/∂(A₁, B₁) = (B₁, −A₁)/R²`.
 //! The total harmonic distortion is `THD = √(Σ_{k≥2} R_k²)/R` (harmonics at
 //! or above the Nyquist frequency are not fitted). Reference and output
-//! share one design (one time base), so their phases have one origin and
-//! their difference does not depend on `t₀`.
+//! share one origin, so their phase difference does not depend on `t₀`;
+//! on one clock they share one design.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -55,18 +56,20 @@ pub struct SineDesign {
 }
 
 impl SineDesign {
-    /// The design at `freq_hz` for stamps `t_s` (s): the fundamental,
-    /// harmonics `2..=harmonics` below `nyquist_hz`, a constant, and a
-    /// linear drift when `drift`.
+    /// The design at `freq_hz` for stamps `t_s` (s) with time measured
+    /// from `origin_s` (one origin for channels on their own clocks): the
+    /// fundamental, harmonics `2..=harmonics` below `nyquist_hz`, a
+    /// constant, and a linear drift when `drift`.
     pub fn new(
         t_s: &[f64],
+        origin_s: f64,
         freq_hz: f64,
         harmonics: usize,
         drift: bool,
         nyquist_hz: f64,
     ) -> Result<Self> {
         let n = t_s.len();
-        let t0 = t_s.first().copied().unwrap_or(0.0);
+        let t0 = origin_s;
         let mean = t_s.iter().map(|t| t - t0).sum::<f64>() / n.max(1) as f64;
         let orders: Vec<usize> = (1..=harmonics.max(1))
             .filter(|&k| k == 1 || (k as f64) * freq_hz < nyquist_hz)
@@ -168,7 +171,7 @@ mod tests {
             .iter()
             .map(|t| 2.5 * (w * t + 0.7).cos() + 0.1 * (2.0 * w * t).sin() + 0.3 + 0.05 * t)
             .collect();
-        let d = SineDesign::new(&t, 7.0, 3, true, 500.0).unwrap();
+        let d = SineDesign::new(&t, 0.0, 7.0, 3, true, 500.0).unwrap();
         let f = d.fit(&y).unwrap();
         assert!((f.amplitude - 2.5).abs() < 1e-9, "{f:?}");
         assert!((f.phase_rad - 0.7).abs() < 1e-9);
@@ -178,7 +181,7 @@ mod tests {
     #[test]
     fn harmonics_at_or_above_nyquist_are_not_fitted() {
         let t: Vec<f64> = (0..400).map(|i| i as f64 / 100.0).collect();
-        let d = SineDesign::new(&t, 20.0, 3, false, 50.0).unwrap();
+        let d = SineDesign::new(&t, 0.0, 20.0, 3, false, 50.0).unwrap();
         assert_eq!(d.harmonics, 1);
     }
 
