@@ -5,7 +5,7 @@
 # tests. Needs cargo, python3 (3.9 or later) with venv, and the PostgreSQL
 # 15 server binaries and, for the certificate PDF checks, chromium and
 # poppler-utils (installed here with apt-get when run as root); pip
-# fetches maturin, pytest, mypy, numpy, pandas, imucal and dask from PyPI.
+# fetches maturin, pytest, mypy, numpy, scipy, pandas, imucal and dask from PyPI.
 #
 #   scripts/test.sh          the fast tier: every behaviour and refusal,
 #                            Monte Carlo at the smallest telling count
