@@ -47,18 +47,23 @@ const NAMES: [(&str, &str); 7] = [
     ("latency_s", "latency_s"),
 ];
 
-fn coverage_run(order: Order, seed: u64) -> Vec<Option<bool>> {
-    let s = sim(order, seed);
-    let truth = s.truth_json().unwrap();
-    let r = calibrate(&s.record().unwrap(), &options(order)).expect("reduces");
-    let e = &r.part.coefficients;
+/// Whether each of `names` (`(coefficient, truth key)`; `corner` is
+/// `fc_hz` or `fn_hz` by the order) covers the truth within its U95;
+/// `None` where the truth or the result lacks it. Shared with the step's
+/// round trips.
+pub(crate) fn covered(
+    e: &incal::estimation::Estimates,
+    truth: &serde_json::Value,
+    order: Order,
+    names: &[(&str, &str)],
+) -> Vec<Option<bool>> {
     let k95 = e.coverage_factor(0.95);
     let corner = if order == Order::First {
         "fc_hz"
     } else {
         "fn_hz"
     };
-    NAMES
+    names
         .iter()
         .map(|(name, key)| {
             let name = if *name == "corner" { corner } else { name };
@@ -69,26 +74,43 @@ fn coverage_run(order: Order, seed: u64) -> Vec<Option<bool>> {
         .collect()
 }
 
-fn check_coverage(order: Order, seed: u64) {
-    let n = trials(40, 300);
-    let runs = monte_carlo(seed, n, |s| coverage_run(order, s));
-    let (lo, hi) = band(n, 0.93, 0.97);
-    for (k, (name, _)) in NAMES.iter().enumerate() {
+/// Assert the coverage rate of every name over `runs` (rows of
+/// [`covered`]) within the tier's band around 93–97 %; for the names in
+/// `whole`, only its lower end (their u holds a rectangular part that U95
+/// covers wholly).
+pub(crate) fn assert_coverage(
+    label: &str,
+    names: &[(&str, &str)],
+    runs: &[Vec<Option<bool>>],
+    whole: &[&str],
+) {
+    let (lo, hi) = band(runs.len(), 0.93, 0.97);
+    for (k, (name, _)) in names.iter().enumerate() {
         let hits: Vec<bool> = runs.iter().filter_map(|r| r[k]).collect();
         if hits.is_empty() {
             continue;
         }
         let rate = hits.iter().filter(|h| **h).count() as f64 / hits.len() as f64;
-        eprintln!(
-            "broadband {order:?} order, {name}: {rate:.3} of {}",
-            hits.len()
-        );
+        eprintln!("{label}, {name}: {rate:.3} of {}", hits.len());
+        let hi = if whole.contains(name) { 1.0 } else { hi };
         assert!(
             (lo..=hi).contains(&rate),
-            "broadband {order:?} order, {name}: U95 covers the truth in {rate:.3} of {} (band {lo:.3}..{hi:.3})",
+            "{label}, {name}: U95 covers the truth in {rate:.3} of {} (band {lo:.3}..{hi:.3})",
             hits.len()
         );
     }
+}
+
+fn coverage_run(order: Order, seed: u64) -> Vec<Option<bool>> {
+    let s = sim(order, seed);
+    let truth = s.truth_json().unwrap();
+    let r = calibrate(&s.record().unwrap(), &options(order)).expect("reduces");
+    covered(&r.part.coefficients, &truth, order, &NAMES)
+}
+
+fn check_coverage(order: Order, seed: u64) {
+    let runs = monte_carlo(seed, trials(40, 300), |s| coverage_run(order, s));
+    assert_coverage(&format!("broadband {order:?} order"), &NAMES, &runs, &[]);
 }
 
 #[test]

@@ -10,7 +10,9 @@ use incal::procedures::response::step::sim::StepSimOptions;
 use incal::procedures::response::step::{calibrate, StepOptions};
 use incal::procedures::response::OrderChoice;
 use incal::sim::monte_carlo;
-use incal::sim::tier::{band, trials};
+use incal::sim::tier::trials;
+
+use crate::response_broadband::{assert_coverage, covered};
 
 fn sim(order: Order, seed: u64) -> StepSimOptions {
     let mut o = StepSimOptions {
@@ -53,49 +55,20 @@ fn coverage_run(order: Order, seed: u64) -> Vec<Option<bool>> {
     let s = sim(order, seed);
     let truth = s.truth_json().unwrap();
     let r = calibrate(&s.record().unwrap().0, &options(order)).expect("reduces");
-    let e = &r.coefficients;
-    let k95 = e.coverage_factor(0.95);
-    let corner = if order == Order::First {
-        "fc_hz"
-    } else {
-        "fn_hz"
-    };
-    NAMES
-        .iter()
-        .map(|(name, key)| {
-            let name = if *name == "corner" { corner } else { name };
-            let t = truth[*key].as_f64()?;
-            let (v, u) = e.get(name)?;
-            Some((v - t).abs() <= k95 * u)
-        })
-        .collect()
+    covered(&r.coefficients, &truth, order, &NAMES)
 }
 
 fn check_coverage(order: Order, seed: u64) {
-    let n = trials(40, 300);
-    let runs = monte_carlo(seed, n, |s| coverage_run(order, s));
-    let (lo, hi) = band(n, 0.93, 0.97);
-    for (k, (name, _)) in NAMES.iter().enumerate() {
-        let hits: Vec<bool> = runs.iter().filter_map(|r| r[k]).collect();
-        if hits.is_empty() {
-            continue;
-        }
-        let rate = hits.iter().filter(|h| **h).count() as f64 / hits.len() as f64;
-        eprintln!("step {order:?} order, {name}: {rate:.3} of {}", hits.len());
-        // The delay (and what holds it) is dominated by the step's time,
-        // rectangular within one sample: U95 = 1.96 u of a rectangular
-        // covers it wholly (GUM's normal k is conservative there).
-        let hi = if ["delay_s", "latency_s", "settling_time_s"].contains(name) {
-            1.0
-        } else {
-            hi
-        };
-        assert!(
-            (lo..=hi).contains(&rate),
-            "step {order:?} order, {name}: U95 covers the truth in {rate:.3} of {} (band {lo:.3}..{hi:.3})",
-            hits.len()
-        );
-    }
+    let runs = monte_carlo(seed, trials(40, 300), |s| coverage_run(order, s));
+    // The delay (and what holds it) is dominated by the step's time,
+    // rectangular within one sample: U95 = 1.96 u of a rectangular covers
+    // it wholly (GUM's normal k is conservative there).
+    assert_coverage(
+        &format!("step {order:?} order"),
+        &NAMES,
+        &runs,
+        &["delay_s", "latency_s", "settling_time_s"],
+    );
 }
 
 #[test]

@@ -192,8 +192,8 @@ impl ModelPart {
     }
 }
 
-/// Fit the model order the options ask for (module docs): the model and
-/// the reason for its order.
+/// The model fitted at the order the options ask for (the one statistics
+/// rule, [`choose_order`]) and the reason for its order.
 fn choose_model(
     points: &[Point],
     o: &ModelOptions,
@@ -203,17 +203,32 @@ fn choose_model(
     let fit = |order: Order| {
         model::fit_model(order, points, &model::starts(order, points), dof, smoothing)
     };
-    let p_of = |m: &ModelFit| m.fit.chi2_p_value.unwrap_or(1.0);
-    match o.order {
+    let (_, m, reason) = choose_order(o.order, fit, |m: &ModelFit| {
+        m.fit.chi2_p_value.unwrap_or(1.0)
+    })?;
+    Ok((m, reason))
+}
+
+/// The one order rule of every response method: the order asked for, or
+/// (`auto`) the first order unless its fit fails the lack-of-fit test at
+/// 5 % (`p_of`: the fit's χ² p value), then the second; the first again,
+/// with its lack of fit, when the second does not fit. `fit` fits one
+/// order. Returns the order, its fit and the reason for the decision.
+pub fn choose_order<T>(
+    choice: OrderChoice,
+    fit: impl Fn(Order) -> Result<T>,
+    p_of: impl Fn(&T) -> f64,
+) -> Result<(Order, T, String)> {
+    match choice {
         OrderChoice::First => {
             let m = fit(Order::First)?;
             let r = format!("first order, as asked (lack-of-fit p = {:.3})", p_of(&m));
-            Ok((m, r))
+            Ok((Order::First, m, r))
         }
         OrderChoice::Second => {
             let m = fit(Order::Second)?;
             let r = format!("second order, as asked (lack-of-fit p = {:.3})", p_of(&m));
-            Ok((m, r))
+            Ok((Order::Second, m, r))
         }
         OrderChoice::Auto => {
             let first = fit(Order::First);
@@ -223,7 +238,7 @@ fn choose_model(
                         "first order: its fit passes the lack-of-fit test (chi-square p = {:.3} >= 0.05), so no second-order term is needed",
                         p_of(m)
                     );
-                    return Ok((first?, r));
+                    return Ok((Order::First, first?, r));
                 }
             }
             let why = match &first {
@@ -240,10 +255,10 @@ fn choose_model(
                         "second order: {why}; the second-order fit gives p = {:.3}",
                         p_of(&m)
                     );
-                    Ok((m, r))
+                    Ok((Order::Second, m, r))
                 }
                 Err(e2) => match first {
-                    Ok(m) => Ok((m, format!("first order: {why}, and the second-order model does not fit ({e2}); u is scaled by the residual scatter"))),
+                    Ok(m) => Ok((Order::First, m, format!("first order: {why}, and the second-order model does not fit ({e2}); u is scaled by the residual scatter"))),
                     Err(e) => Err(e),
                 },
             }

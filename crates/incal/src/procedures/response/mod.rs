@@ -338,6 +338,13 @@ fn reduce_dwell(k: usize, d: &Dwell, o: &ResponseOptions) -> Result<DwellResult>
 /// The reduction (module docs).
 pub fn calibrate(dwells: &[Dwell], o: &ResponseOptions) -> Result<ResponseResult> {
     o.validate()?;
+    if dwells.is_empty() {
+        return Err(Error::TooFew {
+            what: "dwells".into(),
+            needed: 2,
+            got: 0,
+        });
+    }
     let reduced: Vec<DwellResult> = dwells
         .iter()
         .enumerate()

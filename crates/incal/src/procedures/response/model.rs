@@ -188,6 +188,25 @@ impl NonlinearModel for Residuals<'_> {
     }
 }
 
+/// The Gauss–Newton options of every response model fit: damped by step
+/// halving, the variance by the one statistics rule
+/// ([`Variance::AtLeast`] with the data's `prior_dof`).
+pub fn gauss_newton_options(prior_dof: f64) -> GaussNewtonOptions {
+    GaussNewtonOptions {
+        fit: FitOptions {
+            variance: Variance::AtLeast { dof: prior_dof },
+            ..FitOptions::default()
+        },
+        max_iter: 200,
+        step: StepControl::Halving {
+            halvings: 40,
+            polish: 1e-3,
+            polish_steps: 8,
+        },
+        ..GaussNewtonOptions::default()
+    }
+}
+
 /// A fitted model: its order, the fit (estimates `x̂` and the lack-of-fit
 /// test) and the cost `Σ r²`.
 #[derive(Debug, Clone)]
@@ -227,19 +246,7 @@ pub fn fit_model(
         points,
         smoothing,
     };
-    let opts = GaussNewtonOptions {
-        fit: FitOptions {
-            variance: Variance::AtLeast { dof: prior_dof },
-            ..FitOptions::default()
-        },
-        max_iter: 200,
-        step: StepControl::Halving {
-            halvings: 40,
-            polish: 1e-3,
-            polish_steps: 8,
-        },
-        ..GaussNewtonOptions::default()
-    };
+    let opts = gauss_newton_options(prior_dof);
     let y = DVector::zeros(2 * points.len());
     let mut best: Option<ModelFit> = None;
     let mut last_err = None;

@@ -399,6 +399,32 @@ pub fn plan_document(o: &ResponsePlanOptions) -> Result<PlanDocument> {
     Ok(d)
 }
 
+/// Records simulated and reduced by a plan that predicts by simulation
+/// (the broadband and step plans).
+pub const PLAN_RECORDS: u64 = 4;
+
+/// The root mean square over the reductions of `runs` (each the
+/// coefficients of one simulated record) of every coefficient's u, in the
+/// order of the first: what a plan by simulation predicts.
+pub fn rms_u(
+    runs: impl IntoIterator<Item = Result<crate::estimation::Estimates>>,
+) -> Result<Vec<(String, f64)>> {
+    let mut sums: Vec<(String, f64)> = Vec::new();
+    let mut n = 0usize;
+    for e in runs {
+        let e = e?;
+        n += 1;
+        for (i, name) in e.names().iter().enumerate() {
+            match sums.iter_mut().find(|s| &s.0 == name) {
+                Some(s) => s.1 += e.u_at(i).powi(2),
+                None => sums.push((name.clone(), e.u_at(i).powi(2))),
+            }
+        }
+    }
+    let n = n.max(1) as f64;
+    Ok(sums.into_iter().map(|(k, v)| (k, (v / n).sqrt())).collect())
+}
+
 /// The run sheet: each dwell's frequency, duration, cycles and amplitude.
 pub fn run_sheet(d: &PlanDocument) -> crate::procedures::registry::RunSheet {
     use crate::document::plan::{sheet_number as num, values};

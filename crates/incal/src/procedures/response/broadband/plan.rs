@@ -83,14 +83,19 @@ impl crate::procedures::Plan for super::ResponseBroadband {
     }
 }
 
-/// Records simulated and reduced by a plan.
-pub const PLAN_RECORDS: u64 = 4;
+pub use crate::procedures::response::plan::PLAN_RECORDS;
 
 /// The u of every coefficient as the reduction gives it on
 /// [`PLAN_RECORDS`] simulated records of the plan (root mean square).
 fn simulated_u(o: &BroadbandPlanOptions) -> Result<Vec<(String, f64)>> {
-    let mut sums: Vec<(String, f64)> = Vec::new();
-    for k in 0..PLAN_RECORDS {
+    let mut r = super::BroadbandOptions {
+        segment_samples: o.segment_samples,
+        min_coherence: o.min_coherence,
+        f_max_hz: o.f_max_hz,
+        ..super::BroadbandOptions::default()
+    };
+    r.model.order = o.model.order.into();
+    crate::procedures::response::plan::rms_u((0..PLAN_RECORDS).map(|k| {
         let sim = super::sim::BroadbandSimOptions {
             model: o.model.clone(),
             duration_s: o.duration_s,
@@ -101,26 +106,8 @@ fn simulated_u(o: &BroadbandPlanOptions) -> Result<Vec<(String, f64)>> {
             bias: 0.0,
             seed: o.seed.wrapping_add(k),
         };
-        let mut r = super::BroadbandOptions {
-            segment_samples: o.segment_samples,
-            min_coherence: o.min_coherence,
-            f_max_hz: o.f_max_hz,
-            ..super::BroadbandOptions::default()
-        };
-        r.model.order = o.model.order.into();
-        let res = super::calibrate(&sim.record()?, &r)?;
-        let e = &res.part.coefficients;
-        for (i, name) in e.names().iter().enumerate() {
-            match sums.iter_mut().find(|s| &s.0 == name) {
-                Some(s) => s.1 += e.u_at(i).powi(2),
-                None => sums.push((name.clone(), e.u_at(i).powi(2))),
-            }
-        }
-    }
-    Ok(sums
-        .into_iter()
-        .map(|(n, v)| (n, (v / PLAN_RECORDS as f64).sqrt()))
-        .collect())
+        Ok(super::calibrate(&sim.record()?, &r)?.part.coefficients)
+    }))
 }
 
 /// The plan document (module docs). Refused when the bins fitted stop

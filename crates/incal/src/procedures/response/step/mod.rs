@@ -45,8 +45,8 @@ use super::broadband::input::Record;
 use super::model::{self, Order};
 use super::OrderChoice;
 use crate::error::{Error, Result};
-use crate::estimation::gauss_newton::{gauss_newton, GaussNewtonOptions, NonlinearModel};
-use crate::estimation::{numeric_jacobian, Estimates, Fit, FitOptions, StepControl, Variance};
+use crate::estimation::gauss_newton::{gauss_newton, NonlinearModel};
+use crate::estimation::{numeric_jacobian, Estimates, Fit};
 
 /// Options of the step reduction. In the document: every key.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
@@ -276,19 +276,7 @@ fn fit_order(order: Order, rec: &Record, at: Located, sigma: f64, dof: f64) -> R
             .map(|z| vec![y0, k, corner * 1.5, *z, 0.0])
             .collect(),
     };
-    let opts = GaussNewtonOptions {
-        fit: FitOptions {
-            variance: Variance::AtLeast { dof },
-            ..FitOptions::default()
-        },
-        max_iter: 200,
-        step: StepControl::Halving {
-            halvings: 40,
-            polish: 1e-3,
-            polish_steps: 8,
-        },
-        ..GaussNewtonOptions::default()
-    };
+    let opts = model::gauss_newton_options(dof);
     let y = DVector::zeros(n);
     let mut best: Option<(f64, Fit)> = None;
     let mut last = None;
@@ -361,49 +349,11 @@ pub fn calibrate(rec: &Record, o: &StepOptions) -> Result<StepResult> {
         ));
     }
     let dof = (at.pre - 1) as f64;
-    let p_of = |f: &Fit| f.chi2_p_value.unwrap_or(1.0);
-    let (order, fit, reason) = match o.order {
-        OrderChoice::First => {
-            let f = fit_order(Order::First, rec, at, sigma, dof)?;
-            (Order::First, f, "first order, as asked".to_string())
-        }
-        OrderChoice::Second => {
-            let f = fit_order(Order::Second, rec, at, sigma, dof)?;
-            (Order::Second, f, "second order, as asked".to_string())
-        }
-        OrderChoice::Auto => {
-            match fit_order(Order::First, rec, at, sigma, dof) {
-                Ok(f) if p_of(&f) >= crate::estimation::linear::LACK_OF_FIT_ALPHA => {
-                    let r = format!(
-                        "first order: its fit passes the lack-of-fit test (p = {:.3})",
-                        p_of(&f)
-                    );
-                    (Order::First, f, r)
-                }
-                first => {
-                    let why = match &first {
-                        Ok(f) if p_of(f) > 0.0 => format!(
-                            "the first-order fit fails the lack-of-fit test (p = {:.2e})",
-                            p_of(f)
-                        ),
-                        Ok(_) => "the first-order fit fails the lack-of-fit test (p < 1e-300)"
-                            .to_string(),
-                        Err(e) => format!("the first-order model does not fit ({e})"),
-                    };
-                    match fit_order(Order::Second, rec, at, sigma, dof) {
-                    Ok(f) => {
-                        let r = format!("second order: {why}; the second-order fit gives p = {:.3}", p_of(&f));
-                        (Order::Second, f, r)
-                    }
-                    Err(e) => match first {
-                        Ok(f) => (Order::First, f, format!("first order: {why}, and the second-order model does not fit ({e})")),
-                        Err(e1) => return Err(e1),
-                    },
-                }
-                }
-            }
-        }
-    };
+    let (order, fit, reason) = super::fit::choose_order(
+        o.order,
+        |order| fit_order(order, rec, at, sigma, dof),
+        |f: &Fit| f.chi2_p_value.unwrap_or(1.0),
+    )?;
     let coefficients = derive(order, &fit.estimates, at.u_t0_s, o.settling_band_pct)?;
     Ok(StepResult {
         located: at,

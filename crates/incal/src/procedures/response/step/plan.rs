@@ -14,8 +14,8 @@ use crate::options::invalid;
 use crate::procedures::response::plan::ModelGuess;
 use crate::procedures::response::OrderChoice;
 
-/// Records simulated and reduced by a plan.
-pub const PLAN_RECORDS: u64 = 4;
+use crate::procedures::response::plan::rms_u;
+pub use crate::procedures::response::plan::PLAN_RECORDS;
 
 /// Options of `incal plan response-step`.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
@@ -88,17 +88,10 @@ pub fn plan_document(o: &StepPlanOptions) -> Result<PlanDocument> {
         order: OrderChoice::from(o.model.order),
         ..StepOptions::default()
     };
-    let mut sums: Vec<(String, f64)> = Vec::new();
-    for k in 0..PLAN_RECORDS {
-        let res = super::calibrate(&sim(o.seed.wrapping_add(k)).record()?.0, &r)?;
-        let e = &res.coefficients;
-        for (i, name) in e.names().iter().enumerate() {
-            match sums.iter_mut().find(|s| &s.0 == name) {
-                Some(s) => s.1 += e.u_at(i).powi(2),
-                None => sums.push((name.clone(), e.u_at(i).powi(2))),
-            }
-        }
-    }
+    let all = rms_u((0..PLAN_RECORDS).map(|k| {
+        let rec = sim(o.seed.wrapping_add(k)).record()?.0;
+        Ok(super::calibrate(&rec, &r)?.coefficients)
+    }))?;
     let mut d = PlanDocument::new(
         crate::document::Procedure::ResponseStep,
         format!(
@@ -111,8 +104,7 @@ pub fn plan_document(o: &StepPlanOptions) -> Result<PlanDocument> {
     );
     d.with_options(o)?;
     d.set("expected_settling_time_s", json!(settle))?;
-    for (name, v) in sums {
-        let u = (v / PLAN_RECORDS as f64).sqrt();
+    for (name, u) in all {
         d.predict(
             &name,
             u,
