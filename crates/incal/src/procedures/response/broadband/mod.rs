@@ -296,22 +296,27 @@ fn jackknife(
 /// in whole samples (at most a quarter segment).
 pub fn calibrate(rec: &Record, o: &BroadbandOptions) -> Result<BroadbandResult> {
     o.validate()?;
-    let first = reduce_shifted(rec, o, 0)?;
+    // The first pass gives the latency only: its jackknife (which moves
+    // no estimate) runs when it is the result.
+    let first = reduce_shifted(rec, o, 0, o.align == Align::None)?;
     if o.align == Align::None {
         return Ok(first);
     }
     let latency = first.part.coefficients.value("latency_s").unwrap_or(0.0);
     let limit = (o.segment_samples / 4) as f64;
     let d = (latency * rec.rate_hz).round().clamp(-limit, limit) as isize;
-    if d == 0 {
-        return Ok(first);
-    }
-    reduce_shifted(rec, o, d)
+    reduce_shifted(rec, o, d, true)
 }
 
 /// One pass with the output shifted by `d` samples (`y'_n = y_{n+d}`),
-/// the shift put back into each bin's phase.
-fn reduce_shifted(rec: &Record, o: &BroadbandOptions, d: isize) -> Result<BroadbandResult> {
+/// the shift put back into each bin's phase; the model's covariance by the
+/// jackknife when `jackknifed`.
+fn reduce_shifted(
+    rec: &Record,
+    o: &BroadbandOptions,
+    d: isize,
+    jackknifed: bool,
+) -> Result<BroadbandResult> {
     let n = rec.reference.len().min(rec.output.len());
     let a = d.unsigned_abs().min(n);
     let (x, y) = if d >= 0 {
@@ -362,21 +367,20 @@ fn reduce_shifted(rec: &Record, o: &BroadbandOptions, d: isize) -> Result<Broadb
     };
     let mut part = ModelPart::fit(&points, &o.model, 2.0 * spectra.effective, Some(smoothing))?;
     let mut warnings = part.warnings.clone();
-    let method = match jackknife(&w, smoothing, &bins, &part, o) {
-        Some((cov, dof, var_interp)) => {
-            part.set_covariance(cov, dof, var_interp)?;
-            format!(
-                "delete-a-group jackknife over {} groups of segments",
-                w.groups.len()
-            )
-        }
-        None => {
-            warnings.push(Warning::new(
-                WarningCode::PartFailed,
-                "the jackknife of the model could not run (fewer than 4 groups of segments, or a refit failed): u is the fit's own, which takes neighbouring bins as independent",
-            ));
-            "the model fit's own covariance".to_string()
-        }
+    let method = if !jackknifed {
+        "the model fit's own covariance (a first pass, for the latency)".to_string()
+    } else if let Some((cov, dof, var_interp)) = jackknife(&w, smoothing, &bins, &part, o) {
+        part.set_covariance(cov, dof, var_interp)?;
+        format!(
+            "delete-a-group jackknife over {} groups of segments",
+            w.groups.len()
+        )
+    } else {
+        warnings.push(Warning::new(
+            WarningCode::PartFailed,
+            "the jackknife of the model could not run (fewer than 4 groups of segments, or a refit failed): u is the fit's own, which takes neighbouring bins as independent",
+        ));
+        "the model fit's own covariance".to_string()
     };
     let skipped = bins
         .iter()
