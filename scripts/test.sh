@@ -56,7 +56,25 @@ if [ ! -x "$venv/bin/python" ]; then
     python3 -m venv "$venv"
 fi
 "$venv/bin/pip" install --quiet --disable-pip-version-check -r crates/incal-py/requirements-test.txt
-"$venv/bin/pip" install --quiet --disable-pip-version-check --force-reinstall --no-deps crates/incal-py
+# The wheel build (maturin, release) writes its whole log to a file; when
+# it fails, the log's end (the error) is printed last, the disk it ran on
+# is shown, and the build is tried once more: a failure that repeats
+# stops the run.
+wheel_log=target/py-wheel.log
+build_wheel() {
+    "$venv/bin/pip" install --verbose --disable-pip-version-check --force-reinstall --no-deps crates/incal-py >"$wheel_log" 2>&1
+}
+if ! build_wheel; then
+    echo "scripts/test.sh: building the incal wheel failed; the end of $wheel_log:" >&2
+    tail -n 60 "$wheel_log" >&2
+    df -h . >&2
+    echo "scripts/test.sh: building the wheel once more" >&2
+    if ! build_wheel; then
+        tail -n 60 "$wheel_log" >&2
+        echo "scripts/test.sh: the incal wheel does not build (twice); its log is $wheel_log" >&2
+        exit 1
+    fi
+fi
 echo "== Python: pytest crates/incal-py/tests"
 INCAL_BIN="$PWD/target/debug/incal" "$venv/bin/python" -m pytest -q crates/incal-py/tests
 

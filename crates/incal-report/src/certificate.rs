@@ -82,10 +82,11 @@ pub struct Standard {
 }
 
 /// The rigs a standard may belong to.
-pub const RIGS: [&str; 5] = [
+pub const RIGS: [&str; 6] = [
     "dividing-head",
     "centrifuge",
     "rate-table",
+    "shaker",
     "thermal-chamber",
     "reference",
 ];
@@ -276,6 +277,18 @@ pub fn rig_of(p: Procedure) -> Option<&'static str> {
     registry::first_of(p).and_then(|e| e.rig)
 }
 
+/// The rig of one result: the `rig` its options record when it is one of
+/// [`RIGS`] (a procedure run on more than one kind of rig, such as the
+/// dynamic response on a rate table or a shaker), else [`rig_of`] its
+/// procedure.
+pub fn rig_of_document(doc: &ResultDocument) -> Option<&'static str> {
+    let chosen = doc.options.get("rig").and_then(|v| v.as_str());
+    match chosen.and_then(|r| RIGS.iter().find(|x| **x == r)) {
+        Some(r) if rig_of(doc.procedure).is_some() => Some(r),
+        _ => rig_of(doc.procedure),
+    }
+}
+
 /// The method of a procedure: the standards and the paper it follows, by
 /// title, authors, venue and year, from the procedure registry.
 pub fn method_of(p: Procedure) -> &'static str {
@@ -319,7 +332,7 @@ fn row(id: &str, label: &str, value_html: &str) -> String {
 /// flagged, or why no rig standard enters the result.
 fn traceability(s: &mut String, doc: &ResultDocument, c: &Certificate) {
     s.push_str("<div id=\"traceability\">");
-    match rig_of(doc.procedure) {
+    match rig_of_document(doc) {
         None => s.push_str("<p><b>Traceability.</b> The results are derived from the instrument's own record and its time base; no reference standard of a rig enters them.</p>"),
         Some(rig) => {
             let used: Vec<&Standard> = c.profile.standard.iter().filter(|x| x.rig == rig).collect();

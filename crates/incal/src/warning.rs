@@ -51,7 +51,8 @@ pub enum WarningCode {
     /// differ (e.g. bias instability and rate random walk over a short τ
     /// range); the chosen set is reported.
     NoiseTermsNotSeparated,
-    /// The record is too short for a requested averaging time.
+    /// The record, or a stretch of it, is too short for what is asked (an
+    /// averaging time; a dwell found from the reference).
     ShortRecord,
     /// A statistic whose cost grows as N·m was computed up to an
     /// averaging time only (the longer ones would take too long).

@@ -10,7 +10,7 @@ use incal::procedures::response::sim::ResponseSimOptions;
 use incal::procedures::response::broadband::plan::BroadbandPlanOptions;
 use incal::procedures::response::broadband::sim::BroadbandSimOptions;
 use incal::procedures::response::broadband::{Align, BroadbandOptions, ResponseBroadband};
-use incal::procedures::response::fit::ModelOptions;
+use incal::procedures::response::fit::{ModelOptions, Rig};
 use incal::procedures::response::step::plan::StepPlanOptions;
 use incal::procedures::response::step::sim::StepSimOptions;
 use incal::procedures::response::step::{ResponseStep, StepOptions};
@@ -90,6 +90,15 @@ pub enum BandwidthArg {
     Interpolated,
 }
 
+/// The rig of the test (its reference standard makes the result traceable).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum RigArg {
+    /// A rate table in its angular-vibration mode.
+    RateTable,
+    /// A vibration exciter (shaker).
+    Shaker,
+}
+
 /// The model's options, the same for every response method.
 #[derive(clap::Args, Debug)]
 pub struct ModelArgs {
@@ -114,6 +123,9 @@ pub struct ModelArgs {
     /// Upper end of the gain-flatness band, Hz: flatness_db is reported only with it.
     #[arg(long)]
     pub flatness_to_hz: Option<f64>,
+    /// The rig whose reference standard the reference channel is (the certificate's traceability).
+    #[arg(long, value_enum, default_value = "rate-table")]
+    pub rig: RigArg,
 }
 
 impl From<OrderArg> for OrderChoice {
@@ -140,6 +152,10 @@ impl ModelArgs {
                 BandwidthArg::Interpolated => BandwidthMethod::Interpolated,
             },
             flatness_to_hz: self.flatness_to_hz,
+            rig: match self.rig {
+                RigArg::RateTable => Rig::RateTable,
+                RigArg::Shaker => Rig::Shaker,
+            },
         }
     }
 }
@@ -147,7 +163,7 @@ impl ModelArgs {
 /// `incal response sine`.
 #[derive(clap::Args, Debug)]
 pub struct SineArgs {
-    /// Recording: `freq_hz`, `reference`, `output`, and `time_s` (or --rate-hz).
+    /// Recording: `reference`, `output`, `time_s` (or --rate-hz) and `freq_hz` (without it the dwells are found from the reference).
     #[arg(long)]
     pub input: PathBuf,
     /// Sampling rate, Hz, when the file has no `time_s`.
@@ -162,6 +178,12 @@ pub struct SineArgs {
     /// Seconds left out at the start of each dwell (the transient).
     #[arg(long, default_value_t = 0.0)]
     pub settle_s: f64,
+    /// Estimate each dwell's frequency from the reference (four-parameter fit from freq_hz) instead of taking freq_hz as exact; always so without a freq_hz column.
+    #[arg(long)]
+    pub estimate_frequency: bool,
+    /// Window of the dwell search without a freq_hz column, s: dwells must last about three windows.
+    #[arg(long, default_value_t = 1.0)]
+    pub dwell_window_s: f64,
     #[command(flatten)]
     pub model: ModelArgs,
     #[command(flatten)]
@@ -180,6 +202,8 @@ pub fn run_sine(a: &SineArgs) -> CliResult<()> {
             DriftArg::None => Drift::None,
         },
         settle_s: a.settle_s,
+        estimate_frequency: a.estimate_frequency,
+        dwell_window_s: a.dwell_window_s,
         model: a.model.options(),
     };
     crate::run::reduce::<ResponseSine>(&a.input, &a.read, &options, &a.result, &Silent)
@@ -320,6 +344,12 @@ pub struct SimArgs {
     /// The reference sampled on its own clock this much later than the output, s (writes a time_ref_s column).
     #[arg(long, default_value_t = 0.0)]
     pub reference_clock_offset_s: f64,
+    /// The table's frequency error, %: it runs at freq_hz (1 + this/100).
+    #[arg(long, default_value_t = 0.0)]
+    pub frequency_error_pct: f64,
+    /// Write no freq_hz column (the reduction then finds the dwells from the reference).
+    #[arg(long)]
+    pub no_freq_column: bool,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -345,6 +375,8 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         distortion_pct: a.distortion_pct,
         reference_error_pct: a.reference_error_pct,
         reference_clock_offset_s: a.reference_clock_offset_s,
+        frequency_error_pct: a.frequency_error_pct,
+        no_freq_column: a.no_freq_column,
         seed: a.seed,
     };
     crate::run::simulate::<ResponseSine>(&options, a.output.as_deref())?;

@@ -394,3 +394,100 @@ fn a_reference_clock_is_read_and_its_bad_stamps_are_refused() {
         &["alone.csv", "needs 'time_s'"],
     );
 }
+
+#[test]
+fn dwells_are_found_without_freq_hz_and_a_shaker_is_traced_to_its_standards() {
+    let dir = workdir("response_found");
+    let csv = dir.join("found.csv");
+    ok(&run(&[
+        "simulate",
+        "response-sine",
+        "--dwells-hz",
+        "3,8,20,50",
+        "--seconds-per-dwell",
+        "4",
+        "--frequency-error-pct",
+        "0.2",
+        "--no-freq-column",
+        "-o",
+        p(&csv),
+    ]));
+    let head = std::fs::read_to_string(&csv).unwrap();
+    assert!(
+        head.starts_with("time_s,reference,output\n"),
+        "no freq_hz column"
+    );
+    let doc = dir.join("r.json");
+    ok(&run(&[
+        "response",
+        "sine",
+        "--input",
+        p(&csv),
+        "--rig",
+        "shaker",
+        "--order",
+        "second",
+        "--json",
+        "-o",
+        p(&doc),
+    ]));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&doc).unwrap()).unwrap();
+    assert_eq!(v["options"]["rig"], "shaker");
+    let t = &v["tables"][0];
+    assert_eq!(t["id"], "dwells");
+    let cols: Vec<&str> = t["columns"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["name"].as_str().unwrap())
+        .collect();
+    let (fc, uc) = (
+        cols.iter().position(|c| *c == "freq_hz").unwrap(),
+        cols.iter().position(|c| *c == "u_freq_hz").unwrap(),
+    );
+    let rows = t["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 4, "four dwells found");
+    for (row, nominal) in rows.iter().zip([3.0, 8.0, 20.0, 50.0]) {
+        let (f, u) = (row[fc].as_f64().unwrap(), row[uc].as_f64().unwrap());
+        assert!(
+            (f - 1.002 * nominal).abs() < 4.0 * u.max(1e-9),
+            "{f} ± {u} for {nominal}"
+        );
+    }
+    // The certificate lists the shaker's standard, not the rate table's.
+    let lab = dir.join("lab.toml");
+    std::fs::write(
+        &lab,
+        "[lab]\nname = \"L\"\naddress = \"A\"\naccreditation = \"C\"\ncertificate_prefix = \"X-\"\n\n[[signatory]]\nname = \"S\"\nrole = \"R\"\n\n[[standard]]\nrig = \"shaker\"\nid = \"Reference accelerometer RA-9\"\ncertificate = \"NIM-1\"\ndue = \"2030-01-01\"\n\n[[standard]]\nrig = \"rate-table\"\nid = \"Rate table RT-02\"\ncertificate = \"NIM-2\"\ndue = \"2030-01-01\"\n",
+    )
+    .unwrap();
+    let html = dir.join("c.html");
+    ok(&run(&["report", p(&doc), "--lab", p(&lab), "-o", p(&html)]));
+    let h = std::fs::read_to_string(&html).unwrap();
+    assert!(h.contains("RA-9") && !h.contains("RT-02"), "shaker traced");
+    // A recording without freq_hz and without a held frequency: refused.
+    let sweep = dir.join("sweep.csv");
+    let mut text = String::from("time_s,reference,output\n");
+    for i in 0..4000 {
+        let t = i as f64 / 1000.0;
+        let r = (std::f64::consts::TAU * (1.0 + 5.0 * t) * t).sin();
+        text.push_str(&format!("{t},{r},{}\n", 0.9 * r));
+    }
+    std::fs::write(&sweep, text).unwrap();
+    refused(
+        &run(&["response", "sine", "--input", p(&sweep)]),
+        &["sweep.csv", "no dwell found", "dwell_window_s"],
+    );
+    refused(
+        &run(&[
+            "response",
+            "sine",
+            "--input",
+            p(&sweep),
+            "--dwell-window-s",
+            "0",
+        ]),
+        &["--dwell-window-s"],
+    );
+}

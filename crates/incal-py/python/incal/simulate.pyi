@@ -236,6 +236,8 @@ def response_sine(
     distortion_pct: float = 0,
     reference_error_pct: float = 0,
     reference_clock_offset_s: float = 0,
+    frequency_error_pct: float = 0,
+    no_freq_column: bool = False,
     seed: int = 1,
     truth_out: Optional[Union[str, float]] = None,
 ) -> Tuple[Any, List[str]]: ...

@@ -44,6 +44,7 @@ impl ResponseResult {
             "Dwells: sine fits, gain and phase against the model",
             &[
                 ("freq_hz", o("Hz")),
+                ("u_freq_hz", o("Hz")),
                 ("samples", Some(Unit::One)),
                 ("cycles", Some(Unit::One)),
                 ("ref_amplitude", o("reference")),
@@ -76,6 +77,7 @@ impl ResponseResult {
             let (mdb, mdeg) = self.part.model_db_deg(&x, p.freq_hz);
             t.push(vec![
                 Cell::num(d.freq_hz),
+                Cell::opt(d.u_freq_hz),
                 Cell::num(d.samples as f64),
                 Cell::num(d.cycles),
                 Cell::num(d.reference.amplitude),

@@ -40,6 +40,39 @@ pub struct ModelOptions {
     /// −3 dB point itself).
     #[serde(default)]
     pub flatness_to_hz: Option<f64>,
+    /// The rig whose reference standard the reference channel is (the
+    /// certificate's traceability; default rate-table).
+    #[serde(default)]
+    pub rig: Rig,
+}
+
+/// A frequency in a message, to a micro-hertz (an estimated dwell's has
+/// sixteen digits).
+fn fmax_text(f_hz: f64) -> String {
+    crate::error::short_f64((f_hz * 1e6).round() / 1e6)
+}
+
+/// The rig of a dynamic-response test: its reference standard makes the
+/// result traceable (the table's encoder or rate sensor, or the shaker's
+/// reference accelerometer or laser vibrometer, ISO 16063-21/-11).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Rig {
+    /// A rate table in its angular-vibration mode.
+    #[default]
+    RateTable,
+    /// A vibration exciter (shaker).
+    Shaker,
 }
 
 impl ModelOptions {
@@ -170,7 +203,7 @@ impl ModelPart {
             if bw > f_max {
                 w.push(Warning::new(
                     WarningCode::ModelRange,
-                    format!("the model's bandwidth ({bw:.4} Hz) is above the highest frequency fitted ({f_max} Hz): it is extrapolated by the model"),
+                    format!("the model's bandwidth ({bw:.4} Hz) is above the highest frequency fitted ({} Hz): it is extrapolated by the model", fmax_text(f_max)),
                 ));
             }
         }
@@ -178,7 +211,7 @@ impl ModelPart {
             if f_max > 0.0 && tau.abs() > 1.0 / f_max {
                 w.push(Warning::new(
                     WarningCode::PhaseAmbiguous,
-                    format!("the delay ({:.4} ms) is longer than one period of the highest frequency fitted ({f_max} Hz, {:.4} ms): its phase is known only up to whole cycles, so the delay rests on the frequencies below", tau * 1e3, 1e3 / f_max),
+                    format!("the delay ({:.4} ms) is longer than one period of the highest frequency fitted ({} Hz, {:.4} ms): its phase is known only up to whole cycles, so the delay rests on the frequencies below", tau * 1e3, fmax_text(f_max), 1e3 / f_max),
                 ));
             }
         }

@@ -6,7 +6,9 @@
 //! output (each channel is then fitted at its own times, on one origin).
 //! Consecutive rows with one
 //! `freq_hz` form a dwell; a change of `freq_hz` starts the next (a
-//! frequency visited twice is two dwells). Other columns are ignored.
+//! frequency visited twice is two dwells). Without a `freq_hz` column the
+//! dwells are found from the reference ([`super::find`]) and their
+//! frequencies estimated. Other columns are ignored.
 
 use std::io::Read;
 
@@ -29,6 +31,18 @@ pub struct Dwell {
     pub reference: Vec<f64>,
     /// The instrument's output.
     pub output: Vec<f64>,
+    /// Found from the reference: `freq_hz` is only the start of the
+    /// four-parameter fit.
+    pub found: bool,
+}
+
+/// A stepped-sine recording read: its dwells and what finding them said.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Recorded {
+    /// The dwells in file order.
+    pub dwells: Vec<Dwell>,
+    /// Warnings of the dwell search (runs too short to be dwells).
+    pub warnings: Vec<crate::warning::Warning>,
 }
 
 impl Dwell {
@@ -46,11 +60,17 @@ impl Dwell {
 
 /// The dwells of a recording, row by row. `rate_hz` gives the times when
 /// the file has no `time_s` (sample index / rate, counted over the whole
-/// file). Stamps must not decrease; a frequency must be positive.
-pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, rate_hz: Option<f64>) -> Result<Vec<Dwell>> {
+/// file). Stamps must not decrease; a frequency must be positive. Without
+/// a `freq_hz` column the dwells are found from the reference in windows
+/// of `window_s` seconds ([`super::find`]).
+pub fn read<R: Read>(
+    rows: &mut incal_io::Reader<R>,
+    rate_hz: Option<f64>,
+    window_s: f64,
+) -> Result<Recorded> {
     let h = rows.header();
     let (cf, cr, co) = (
-        h.column("freq_hz")?,
+        h.opt_column("freq_hz"),
         h.column("reference")?,
         h.column("output")?,
     );
@@ -67,23 +87,30 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, rate_hz: Option<f64>) -> Re
             .into());
     }
     let mut dwells: Vec<Dwell> = Vec::new();
+    let mut whole = super::find::Recording::default();
     let mut index = 0usize;
     let mut last_t = f64::NEG_INFINITY;
     let mut last_ref = f64::NEG_INFINITY;
     while let Some(row) = rows.next_row()? {
-        let f = row.f64(cf)?;
-        if f <= 0.0 {
-            return Err(row
-                .cell_error(cf, format!("{f} is not a positive frequency"))
-                .into());
-        }
+        let f = match cf {
+            Some(cf) => {
+                let f = row.f64(cf)?;
+                if f <= 0.0 {
+                    return Err(row
+                        .cell_error(cf, format!("{f} is not a positive frequency"))
+                        .into());
+                }
+                f
+            }
+            None => 0.0,
+        };
         let t = match (ct, rate_hz) {
             (Some(c), _) => row.f64(c)?,
             (None, Some(r)) => index as f64 / r,
             (None, None) => 0.0,
         };
         if t < last_t {
-            let c = ct.unwrap_or(cf);
+            let c = ct.unwrap_or(cr);
             return Err(row
                 .cell_error(
                     c,
@@ -110,12 +137,24 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, rate_hz: Option<f64>) -> Re
             None => None,
         };
         let (r, y) = (row.f64(cr)?, row.f64(co)?);
+        if cf.is_none() {
+            whole.lines.push(row.line());
+        }
         push(&mut dwells, row.line(), (t, t_ref), f, r, y);
     }
     if dwells.is_empty() {
         return Err(rows.header().error("no data rows").into());
     }
-    Ok(dwells)
+    if cf.is_some() {
+        return Ok(Recorded {
+            dwells,
+            warnings: Vec::new(),
+        });
+    }
+    // Without freq_hz every row went into one dwell (frequency 0).
+    whole.samples = dwells.pop().unwrap_or_default();
+    let (dwells, warnings) = super::find::find(&whole, window_s)?;
+    Ok(Recorded { dwells, warnings })
 }
 
 /// One row of a stepped-sine recording as the simulator writes it.
@@ -133,27 +172,32 @@ pub struct Sample {
     pub output: f64,
 }
 
-/// The CSV `time_s,freq_hz,reference,output` (and `time_ref_s` when
-/// `own_clock`) of samples produced one at a time by `each`, in constant
-/// memory.
+/// The CSV `time_s,freq_hz,reference,output` (with `time_ref_s` when
+/// `own_clock`, without `freq_hz` unless `freq_column`) of samples
+/// produced one at a time by `each`, in constant memory.
 pub fn write_each<W: std::io::Write>(
     out: W,
-    own_clock: bool,
+    (own_clock, freq_column): (bool, bool),
     each: impl FnOnce(&mut dyn FnMut(Sample) -> std::io::Result<()>) -> std::io::Result<()>,
 ) -> std::io::Result<W> {
     use incal_io::{Cell, CsvWriter};
-    let header: &[&str] = if own_clock {
-        &["time_s", "time_ref_s", "freq_hz", "reference", "output"]
-    } else {
-        &["time_s", "freq_hz", "reference", "output"]
-    };
-    let mut w = CsvWriter::new(out, header)?;
+    let mut header: Vec<&str> = vec!["time_s"];
+    if own_clock {
+        header.push("time_ref_s");
+    }
+    if freq_column {
+        header.push("freq_hz");
+    }
+    header.extend(["reference", "output"]);
+    let mut w = CsvWriter::new(out, &header)?;
     each(&mut |s: Sample| {
         w.cell(Cell::Num(s.time_s))?;
         if own_clock {
             w.cell(Cell::Num(s.time_ref_s.unwrap_or(s.time_s)))?;
         }
-        w.cell(Cell::Num(s.freq_hz))?;
+        if freq_column {
+            w.cell(Cell::Num(s.freq_hz))?;
+        }
         w.cell(Cell::Num(s.reference))?;
         w.cell(Cell::Num(s.output))?;
         w.end_row()

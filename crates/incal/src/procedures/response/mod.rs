@@ -34,6 +34,7 @@
 
 pub mod broadband;
 pub mod document;
+pub mod find;
 pub mod fit;
 pub mod input;
 pub mod model;
@@ -145,6 +146,16 @@ pub struct ResponseOptions {
     /// Seconds left out at the start of every dwell (the transient).
     #[serde(default)]
     pub settle_s: f64,
+    /// Estimate each dwell's frequency from the reference (IEEE Std 1057
+    /// four-parameter fit, `freq_hz` its start) instead of taking
+    /// `freq_hz` as exact. Always so when the file has no `freq_hz`.
+    #[serde(default)]
+    pub estimate_frequency: bool,
+    /// Window (s) of the dwell search when the file has no `freq_hz`
+    /// (default 1): dwells must last about three windows and differ by
+    /// more than a quarter of `1/dwell_window_s` Hz.
+    #[serde(default = "one")]
+    pub dwell_window_s: f64,
     /// The model, the scale, the reference's type-B terms.
     #[serde(flatten)]
     pub model: ModelOptions,
@@ -152,6 +163,10 @@ pub struct ResponseOptions {
 
 fn three() -> usize {
     3
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 impl Default for ResponseOptions {
@@ -162,6 +177,8 @@ impl Default for ResponseOptions {
             harmonics: 3,
             drift: Drift::Linear,
             settle_s: 0.0,
+            estimate_frequency: false,
+            dwell_window_s: 1.0,
             model: ModelOptions::default(),
         }
     }
@@ -181,6 +198,7 @@ impl ResponseOptions {
             );
         }
         check_range("settle_s", self.settle_s, 0.0, 1e6, "s")?;
+        check_range("dwell_window_s", self.dwell_window_s, 1e-3, 1e5, "s")?;
         self.model.validate()
     }
 }
@@ -212,8 +230,11 @@ pub fn dwell_u(gain: f64, ch: [(f64, f64, f64); 2], pct: f64, phase_deg: f64) ->
 /// One dwell reduced.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DwellResult {
-    /// Dwell frequency (Hz).
+    /// Dwell frequency (Hz): as given, or estimated.
     pub freq_hz: f64,
+    /// Standard uncertainty of an estimated frequency (Hz), `None` when
+    /// `freq_hz` was given and taken as exact.
+    pub u_freq_hz: Option<f64>,
     /// Samples fitted (after the settle time).
     pub samples: usize,
     /// Whole and part cycles fitted.
@@ -277,14 +298,43 @@ fn reduce_dwell(k: usize, d: &Dwell, o: &ResponseOptions) -> Result<DwellResult>
         )));
     }
     let drift = o.drift == Drift::Linear;
-    let design = SineDesign::new(t, t[0], d.freq_hz, o.harmonics, drift, rate / 2.0)?;
+    let (freq_hz, u_freq_hz) = if o.estimate_frequency || d.found {
+        let t_ref = if d.time_ref_s.len() == d.time_s.len() {
+            &d.time_ref_s[skip..]
+        } else {
+            t
+        };
+        // The start: the reference's spectral peak within 10 % (and two
+        // bins) of the nominal frequency, which may be off by many bins.
+        let reach = 0.1 * d.freq_hz + 2.0 * rate / n as f64;
+        let start = find::peak_freq_hz(
+            &d.reference[skip..],
+            rate,
+            d.freq_hz - reach,
+            d.freq_hz + reach,
+        )
+        .unwrap_or(d.freq_hz);
+        let (f, u) = sine::fit_frequency(
+            t_ref,
+            start,
+            o.harmonics,
+            drift,
+            rate / 2.0,
+            &d.reference[skip..],
+        )
+        .map_err(|e| Error::Unsupported(format!("{}: {e}", name())))?;
+        (f, Some(u))
+    } else {
+        (d.freq_hz, None)
+    };
+    let design = SineDesign::new(t, t[0], freq_hz, o.harmonics, drift, rate / 2.0)?;
     let output = design.fit(&d.output[skip..])?;
     // A reference on its own clock: fitted at its own stamps, one origin.
     let reference = if d.time_ref_s.len() == d.time_s.len() {
         SineDesign::new(
             &d.time_ref_s[skip..],
             t[0],
-            d.freq_hz,
+            freq_hz,
             o.harmonics,
             drift,
             rate / 2.0,
@@ -318,14 +368,15 @@ fn reduce_dwell(k: usize, d: &Dwell, o: &ResponseOptions) -> Result<DwellResult>
         o.model.u_reference_phase_deg,
     );
     Ok(DwellResult {
-        freq_hz: d.freq_hz,
+        freq_hz,
+        u_freq_hz,
         samples: n,
-        cycles,
+        cycles: freq_hz * n as f64 / rate,
         rate_hz: rate,
         reference,
         output,
         point: Point {
-            freq_hz: d.freq_hz,
+            freq_hz,
             gain,
             u_gain,
             phase_rad: sine::wrap_pi(output.phase_rad - reference.phase_rad),
@@ -393,7 +444,7 @@ pub struct ResponseSine;
 impl super::Procedure for ResponseSine {
     const ID: crate::document::Procedure = crate::document::Procedure::ResponseSine;
     type Options = ResponseOptions;
-    type Input = Vec<Dwell>;
+    type Input = input::Recorded;
 
     fn example() -> ResponseOptions {
         ResponseOptions::default()
@@ -406,15 +457,17 @@ impl super::Procedure for ResponseSine {
     fn read<R: std::io::Read>(
         rows: &mut incal_io::Reader<R>,
         o: &ResponseOptions,
-    ) -> Result<Vec<Dwell>> {
-        input::read(rows, o.rate_hz)
+    ) -> Result<input::Recorded> {
+        input::read(rows, o.rate_hz, o.dwell_window_s)
     }
 
     fn reduce(
-        dwells: &Vec<Dwell>,
+        rec: &input::Recorded,
         o: &ResponseOptions,
         _: &dyn super::Progress,
     ) -> Result<crate::document::ResultDocument> {
-        calibrate(dwells, o)?.document()
+        let mut r = calibrate(&rec.dwells, o)?;
+        r.warnings.extend(rec.warnings.iter().cloned());
+        r.document()
     }
 }

@@ -2,8 +2,11 @@
 //! driven by a sine at each dwell, in steady state.
 //!
 //! Dwell `i` at `f_i` starts at `t_i` (the previous dwell's end) and lasts
-//! its scheduled seconds at `rate_hz`. With `t' = t − t_i` and the true
-//! motion `m = A sin 2πf t'`, the rows hold
+//! its scheduled seconds at `rate_hz`. The table runs at
+//! `f = f_i (1 + frequency_error_pct/100)` (its oscillator's error; the
+//! `freq_hz` column holds `f_i`, or is left out with `no_freq_column`).
+//! With `t' = t − t_i` and the true motion `m = A sin 2πf t'`, the rows
+//! hold
 //!
 //! * `reference = (1 + e_i) m(t' + δ) + n_r`, `e_i ~ N(0, (reference_error_pct/100)²)`
 //!   once per dwell (the reference standard's amplitude error),
@@ -14,7 +17,7 @@
 //!
 //! deterministic for a seed. The truth ([`crate::procedures::Simulate::truth`]):
 //! the model, its bandwidth, phase frequency and latency, and each dwell's
-//! `|H|/k_dc` in dB and `∠H` in degrees.
+//! true frequency, `|H|/k_dc` in dB and `∠H` in degrees.
 
 use std::f64::consts::TAU;
 
@@ -61,6 +64,14 @@ pub struct ResponseSimOptions {
     /// output (s; default 0: one clock). Not 0: a `time_ref_s` column.
     #[serde(default)]
     pub reference_clock_offset_s: f64,
+    /// The table's frequency error (%, −10..10; default 0): it runs at
+    /// `freq_hz (1 + frequency_error_pct/100)`.
+    #[serde(default)]
+    pub frequency_error_pct: f64,
+    /// Write no `freq_hz` column (the reduction then finds the dwells
+    /// from the reference).
+    #[serde(default)]
+    pub no_freq_column: bool,
     /// Random seed (same seed, same file; default 1).
     #[serde(default = "seed_one")]
     pub seed: u64,
@@ -83,6 +94,8 @@ impl Default for ResponseSimOptions {
             distortion_pct: 0.0,
             reference_error_pct: 0.0,
             reference_clock_offset_s: 0.0,
+            frequency_error_pct: 0.0,
+            no_freq_column: false,
             seed: 1,
         }
     }
@@ -107,6 +120,13 @@ impl ResponseSimOptions {
             -1.0,
             1.0,
             "s",
+        )?;
+        check_range(
+            "frequency_error_pct",
+            self.frequency_error_pct,
+            -10.0,
+            10.0,
+            "%",
         )?;
         super::plan::check_test(
             &self.dwells,
@@ -134,7 +154,8 @@ impl ResponseSimOptions {
         let mut r = rng(self.seed);
         let mut t_start = 0.0;
         let d = self.distortion_pct / 100.0;
-        for &(freq, seconds) in schedule {
+        for &(nominal, seconds) in schedule {
+            let freq = self.true_freq(nominal);
             let n = (seconds * self.rate_hz).round().max(1.0) as usize;
             let (m, ph) = response(self.model.order, x, freq);
             let e = normal(&mut r, self.reference_error_pct / 100.0);
@@ -150,7 +171,7 @@ impl ResponseSimOptions {
                 f(Sample {
                     time_s: t_start + tp,
                     time_ref_s: (offset != 0.0).then_some(t_start + tp + offset),
-                    freq_hz: freq,
+                    freq_hz: nominal,
                     reference,
                     output,
                 })?;
@@ -160,6 +181,11 @@ impl ResponseSimOptions {
         Ok(())
     }
 
+    /// The table's true frequency at a dwell of nominal `freq_hz`.
+    fn true_freq(&self, freq_hz: f64) -> f64 {
+        freq_hz * (1.0 + self.frequency_error_pct / 100.0)
+    }
+
     /// The truth as JSON (module docs).
     pub fn truth_json(&self) -> Result<serde_json::Value> {
         let x = self.model.x()?;
@@ -167,8 +193,9 @@ impl ResponseSimOptions {
         let dwells: Vec<serde_json::Value> = self
             .schedule()?
             .iter()
-            .map(|(f, _)| {
-                let (m, ph) = response(order, &x, *f);
+            .map(|(nominal, _)| {
+                let f = self.true_freq(*nominal);
+                let (m, ph) = response(order, &x, f);
                 let sign = if x[0] < 0.0 { std::f64::consts::PI } else { 0.0 };
                 json!({"freq_hz": f, "gain": m, "gain_db": 20.0 * (m / x[0].abs()).log10(), "phase_deg": (ph - sign).to_degrees()})
             })
@@ -190,9 +217,8 @@ impl crate::procedures::Simulate for super::ResponseSine {
     fn simulate(o: &ResponseSimOptions, out: &mut dyn std::io::Write) -> Result<()> {
         let schedule = o.schedule()?;
         let x = o.model.x()?;
-        write_each(out, o.reference_clock_offset_s != 0.0, |row| {
-            o.rows(&schedule, &x, row)
-        })?;
+        let columns = (o.reference_clock_offset_s != 0.0, !o.no_freq_column);
+        write_each(out, columns, |row| o.rows(&schedule, &x, row))?;
         Ok(())
     }
 

@@ -20,6 +20,17 @@
 //! or above the Nyquist frequency are not fitted). Reference and output
 //! share one origin, so their phase difference does not depend on `t₀`;
 //! on one clock they share one design.
+//!
+//! When the frequency is not known, [`fit_frequency`] estimates it from
+//! one channel by the four-parameter fit (IEEE Std 1057-2017 §4.1.3.2):
+//! starting from `ω₀`, each step fits the three-parameter model at `ω_i`
+//! and then the same model with the column
+//! `∂y/∂ω = Σ_k k t' (−A_k sin kωt' + B_k cos kωt')` added; its
+//! coefficient is the step `Δω`, `ω_{i+1} = ω_i + Δω`, until `|Δω|` is
+//! below 10⁻¹⁰ of `ω`; `u(f)` is the last step's `u(Δω)/2π`. Both channels
+//! are then fitted at the estimated frequency on one origin: an error of
+//! `f` moves both phases alike, so gain and phase difference do not
+//! depend on it to first order.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -148,6 +159,65 @@ impl SineDesign {
     }
 }
 
+/// The frequency (Hz) of `y` at stamps `t_s` and its standard
+/// uncertainty, by the four-parameter fit from `f0_hz` (module docs),
+/// with the harmonics and drift of [`SineDesign::new`]. Refused when the
+/// steps do not settle in 50 or leave `(0, nyquist_hz)`: the start is
+/// more than about half a cycle over the record away.
+pub fn fit_frequency(
+    t_s: &[f64],
+    f0_hz: f64,
+    harmonics: usize,
+    drift: bool,
+    nyquist_hz: f64,
+    y: &[f64],
+) -> Result<(f64, f64)> {
+    let n = t_s.len();
+    let origin = t_s.first().copied().unwrap_or(0.0);
+    // t' from the record's middle: the step is the least correlated with
+    // the phase there (the result does not depend on it).
+    let mid = 0.5 * (origin + t_s.last().copied().unwrap_or(origin));
+    let y_v = DVector::from_column_slice(y);
+    let mut f = f0_hz;
+    for _ in 0..50 {
+        let d = SineDesign::new(t_s, mid, f, harmonics, drift, nyquist_hz)?;
+        let three = fit(&d.design, &y_v, &FitOptions::default())?;
+        let v = three.estimates.values();
+        let w = std::f64::consts::TAU * f;
+        let orders = d.harmonics + 1;
+        let mut m = d
+            .design
+            .matrix()
+            .clone()
+            .insert_column(d.design.matrix().ncols(), 0.0);
+        let last = m.ncols() - 1;
+        for (i, t) in t_s.iter().enumerate() {
+            let tp = t - mid;
+            m[(i, last)] = (1..=orders)
+                .map(|k| {
+                    let (s, c) = (k as f64 * w * tp).sin_cos();
+                    k as f64 * tp * (-v[2 * (k - 1)] * s + v[2 * k - 1] * c)
+                })
+                .sum();
+        }
+        let mut names = d.design.names().to_vec();
+        names.push("dw".into());
+        let step = fit(&Design::new(names, m)?, &y_v, &FitOptions::default())?;
+        let dw = step.estimates.values()[last];
+        let u_dw = step.estimates.covariance()[(last, last)].max(0.0).sqrt();
+        f += dw / std::f64::consts::TAU;
+        if !(f > 0.0 && f < nyquist_hz) || n < 8 {
+            break;
+        }
+        if dw.abs() <= 1e-10 * w {
+            return Ok((f, u_dw / std::f64::consts::TAU));
+        }
+    }
+    Err(crate::error::Error::Unsupported(format!(
+        "the four-parameter sine fit from {f0_hz} Hz does not settle on a frequency"
+    )))
+}
+
 /// `x` wrapped into (−π, π].
 pub fn wrap_pi(x: f64) -> f64 {
     let tau = std::f64::consts::TAU;
@@ -176,6 +246,21 @@ mod tests {
         assert!((f.amplitude - 2.5).abs() < 1e-9, "{f:?}");
         assert!((f.phase_rad - 0.7).abs() < 1e-9);
         assert!((f.thd.unwrap() - 0.1 / 2.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_four_parameter_fit_finds_the_frequency_from_a_start_a_bin_away() {
+        let t: Vec<f64> = (0..5000).map(|i| i as f64 / 1000.0).collect();
+        let f_true = 12.3456;
+        let w = std::f64::consts::TAU * f_true;
+        let y: Vec<f64> = t
+            .iter()
+            .map(|t| 1.5 * (w * t + 0.3).cos() + 0.05 * (2.0 * w * t).cos() + 0.2 + 0.01 * t)
+            .collect();
+        // A bin of a 5 s record is 0.2 Hz: start 0.15 Hz away.
+        let (f, u) = fit_frequency(&t, f_true + 0.15, 3, true, 500.0, &y).unwrap();
+        assert!((f - f_true).abs() < 1e-9, "{f}");
+        assert!(u < 1e-9, "{u}");
     }
 
     #[test]
