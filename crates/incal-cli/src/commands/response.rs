@@ -8,7 +8,8 @@ use incal::procedures::response::model::Order;
 use incal::procedures::response::plan::{DwellChoice, ModelGuess, ResponsePlanOptions};
 use incal::procedures::response::sim::ResponseSimOptions;
 use incal::procedures::response::broadband::plan::BroadbandPlanOptions;
-use incal::procedures::response::broadband::sim::BroadbandSimOptions;
+use incal::procedures::response::broadband::sim::{BroadbandSimOptions, Excitation};
+use incal::procedures::response::broadband::welch::Window;
 use incal::procedures::response::broadband::{Align, BroadbandOptions, ResponseBroadband};
 use incal::procedures::response::fit::{ModelOptions, Rig};
 use incal::procedures::response::step::plan::StepPlanOptions;
@@ -79,6 +80,15 @@ pub enum AlignArg {
     Latency,
     /// Not shifted: the plain H1.
     None,
+}
+
+/// The window of each Welch segment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum WindowArg {
+    /// The periodic Hann window (random or chirp excitation).
+    Hann,
+    /// No window: for a periodic excitation whose period divides the segment.
+    Rectangular,
 }
 
 /// Which bandwidth is `bandwidth_hz`.
@@ -410,6 +420,9 @@ pub struct BroadbandArgs {
     /// Align the output to the reference by the latency before the spectra (none: the plain H1, as scipy gives it).
     #[arg(long, value_enum, default_value = "latency")]
     pub align: AlignArg,
+    /// The window of each segment (rectangular: for a multisine whose period divides the segment).
+    #[arg(long, value_enum, default_value = "hann")]
+    pub window: WindowArg,
     #[command(flatten)]
     pub model: ModelArgs,
     #[command(flatten)]
@@ -430,6 +443,10 @@ pub fn run_broadband(a: &BroadbandArgs) -> CliResult<()> {
         align: match a.align {
             AlignArg::Latency => Align::Latency,
             AlignArg::None => Align::None,
+        },
+        window: match a.window {
+            WindowArg::Hann => Window::Hann,
+            WindowArg::Rectangular => Window::Rectangular,
         },
         model: a.model.options(),
     };
@@ -500,6 +517,17 @@ pub fn plan_broadband(a: &BroadbandPlanArgs) -> CliResult<()> {
         .emit(&<ResponseBroadband as Plan>::plan(&options).map_err(core)?)
 }
 
+/// The excitation of a simulated broadband test.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ExcitationArg {
+    /// White Gaussian noise.
+    Random,
+    /// A linear sweep from --f-low-hz to --f-high-hz over the record.
+    Chirp,
+    /// Equal sines at the bins of --period-samples in the band, Schroeder phases.
+    Multisine,
+}
+
 /// `incal simulate response-broadband`.
 #[derive(clap::Args, Debug)]
 pub struct BroadbandSimArgs {
@@ -511,6 +539,21 @@ pub struct BroadbandSimArgs {
     /// Output bias (output units).
     #[arg(long, default_value_t = 0.0)]
     pub bias: f64,
+    /// The excitation.
+    #[arg(long, value_enum, default_value = "random")]
+    pub excitation: ExcitationArg,
+    /// Lowest frequency of a chirp or multisine, Hz.
+    #[arg(long, default_value_t = 0.5)]
+    pub f_low_hz: f64,
+    /// Highest frequency of a chirp or multisine, Hz (default 0.4 of the sampling rate).
+    #[arg(long)]
+    pub f_high_hz: Option<f64>,
+    /// Period of a multisine, samples (give the reduction the same --segment-samples).
+    #[arg(long, default_value_t = 1024)]
+    pub period_samples: usize,
+    /// The reference sampled on its own clock this much later than the output, s (writes a time_ref_s column).
+    #[arg(long, default_value_t = 0.0)]
+    pub reference_clock_offset_s: f64,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -533,6 +576,15 @@ pub fn simulate_broadband(a: &BroadbandSimArgs) -> CliResult<()> {
         noise: t.noise,
         reference_noise: a.reference_noise,
         bias: a.bias,
+        excitation: match a.excitation {
+            ExcitationArg::Random => Excitation::Random,
+            ExcitationArg::Chirp => Excitation::Chirp,
+            ExcitationArg::Multisine => Excitation::Multisine,
+        },
+        f_low_hz: a.f_low_hz,
+        f_high_hz: a.f_high_hz,
+        period_samples: a.period_samples,
+        reference_clock_offset_s: a.reference_clock_offset_s,
         seed: a.seed,
     };
     crate::run::simulate::<ResponseBroadband>(&options, a.output.as_deref())?;
@@ -632,6 +684,9 @@ pub struct StepSimArgs {
     /// Output bias (output units).
     #[arg(long, default_value_t = 0.0)]
     pub bias: f64,
+    /// The reference sampled on its own clock this much later than the output, s (writes a time_ref_s column).
+    #[arg(long, default_value_t = 0.0)]
+    pub reference_clock_offset_s: f64,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -655,6 +710,7 @@ pub fn simulate_step(a: &StepSimArgs) -> CliResult<()> {
         noise: t.noise,
         reference_noise: t.reference_noise,
         bias: a.bias,
+        reference_clock_offset_s: a.reference_clock_offset_s,
         seed: a.seed,
     };
     crate::run::simulate::<ResponseStep>(&options, a.output.as_deref())?;

@@ -491,3 +491,89 @@ fn dwells_are_found_without_freq_hz_and_a_shaker_is_traced_to_its_standards() {
         &["--dwell-window-s"],
     );
 }
+
+#[test]
+fn broadband_and_step_records_read_the_reference_clock_and_refuse_a_drifting_one() {
+    let dir = workdir("response_clocks");
+    let bb = dir.join("bb.csv");
+    ok(&run(&[
+        "simulate",
+        "response-broadband",
+        "--duration-s",
+        "10",
+        "--excitation",
+        "multisine",
+        "--reference-clock-offset-s",
+        "0.00037",
+        "-o",
+        p(&bb),
+    ]));
+    let text = std::fs::read_to_string(&bb).unwrap();
+    assert!(
+        text.starts_with("time_s,time_ref_s,reference,output\n"),
+        "own clock"
+    );
+    let v = json_of(&run(&[
+        "response",
+        "broadband",
+        "--input",
+        p(&bb),
+        "--window",
+        "rectangular",
+        "--json",
+    ]));
+    let d = &v["coefficients"]["delay_s"];
+    let (val, u95) = (d["value"].as_f64().unwrap(), d["U95"].as_f64().unwrap());
+    assert!((val - 0.002).abs() <= u95, "delay {val} ± {u95}");
+    assert_eq!(v["options"]["window"], "rectangular");
+    // The reference's clock runs 1 % fast: the offset moves by 0.1 s.
+    let drift: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i == 0 {
+                return format!("{l}\n");
+            }
+            let mut c: Vec<String> = l.split(',').map(str::to_string).collect();
+            let t: f64 = c[0].parse().unwrap();
+            c[1] = format!("{}", t * 1.01);
+            format!("{}\n", c.join(","))
+        })
+        .collect();
+    let bad = dir.join("drift.csv");
+    std::fs::write(&bad, drift).unwrap();
+    refused(
+        &run(&["response", "broadband", "--input", p(&bad)]),
+        &["drift.csv", "line", "drift apart", "one clock"],
+    );
+    let st = dir.join("st.csv");
+    ok(&run(&[
+        "simulate",
+        "response-step",
+        "--reference-clock-offset-s",
+        "0.00037",
+        "--truth-out",
+        p(&dir.join("t.json")),
+        "-o",
+        p(&st),
+    ]));
+    let v = json_of(&run(&[
+        "response",
+        "step",
+        "--input",
+        p(&st),
+        "--order",
+        "second",
+        "--json",
+    ]));
+    let d = &v["coefficients"]["delay_s"];
+    let (val, u95) = (d["value"].as_f64().unwrap(), d["U95"].as_f64().unwrap());
+    assert!((val - 0.002).abs() <= u95, "step delay {val} ± {u95}");
+    // time_ref_s without time_s is refused naming the header.
+    let lone = dir.join("lone.csv");
+    std::fs::write(&lone, "time_ref_s,reference,output\n0,1,1\n").unwrap();
+    refused(
+        &run(&["response", "step", "--input", p(&lone), "--rate-hz", "100"]),
+        &["lone.csv", "time_ref_s", "time_s"],
+    );
+}

@@ -23,6 +23,7 @@ mod noise_roundtrip;
 mod noise_stable32;
 mod properties;
 mod response_broadband;
+mod response_excitation;
 mod response_found;
 mod response_roundtrip;
 mod response_step;

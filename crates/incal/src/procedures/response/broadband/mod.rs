@@ -15,6 +15,10 @@
 //!   Analysis and Measurement Procedures*, 4th ed., Wiley 2010, §9.2.4,
 //!   Table 9.6), plus the reference's type-B terms as for a dwell.
 //!
+//! A reference on its own clock, `δ` late ([`input`]), is put back into
+//! each bin's phase, `H = H_meas e^{j2πfδ}`. A rectangular window (for a
+//! multisine whose period divides the segment) takes no smoothing term.
+//!
 //! Bins with `γ² < min_coherence` are flagged in the table and not fitted
 //! (their errors are no longer small and `γ²` is biased up). The model
 //! ([`super::fit::ModelPart`]) is fitted to the coherent bins within
@@ -39,7 +43,7 @@ use super::fit::{self, ModelOptions, ModelPart};
 use super::model::{self, Point};
 use input::Record;
 use plan::{coherence, segment};
-use welch::{Spectra, Welch};
+use welch::{Spectra, Welch, Window};
 
 /// Options of the broadband reduction. In the document: every key.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
@@ -68,6 +72,10 @@ pub struct BroadbandOptions {
     /// `scipy.signal.csd`/`welch` give it).
     #[serde(default)]
     pub align: Align,
+    /// The window of each segment (default hann; rectangular for a
+    /// multisine whose period divides the segment).
+    #[serde(default)]
+    pub window: Window,
     /// The model, the scale, the reference's type-B terms.
     #[serde(flatten)]
     pub model: ModelOptions,
@@ -104,6 +112,7 @@ impl Default for BroadbandOptions {
             f_min_hz: None,
             f_max_hz: None,
             align: Align::Latency,
+            window: Window::Hann,
             model: ModelOptions::default(),
         }
     }
@@ -175,6 +184,15 @@ pub struct BroadbandResult {
     pub shift_samples: isize,
     /// The options used.
     pub options: BroadbandOptions,
+}
+
+impl Window {
+    /// The model's smoothing by the window: the Hann window's kernel on a
+    /// random excitation's spectrum (module docs); none without a window
+    /// (a periodic excitation on the bins leaks nothing).
+    fn smoothing(self, s: model::Smoothing) -> Option<model::Smoothing> {
+        (self == Window::Hann).then_some(s)
+    }
 }
 
 /// Groups of the delete-a-group jackknife (module docs).
@@ -267,7 +285,7 @@ fn jackknife(
             &points,
             std::slice::from_ref(&x0),
             f64::INFINITY,
-            Some(smoothing),
+            o.window.smoothing(smoothing),
         )
         .ok()?;
         thetas.push(m.fit.estimates.values().clone());
@@ -304,7 +322,10 @@ pub fn calibrate(rec: &Record, o: &BroadbandOptions) -> Result<BroadbandResult> 
     }
     let latency = first.part.coefficients.value("latency_s").unwrap_or(0.0);
     let limit = (o.segment_samples / 4) as f64;
-    let d = (latency * rec.rate_hz).round().clamp(-limit, limit) as isize;
+    // The data's misalignment: the latency plus the reference clock's offset.
+    let d = ((latency + rec.reference_offset_s) * rec.rate_hz)
+        .round()
+        .clamp(-limit, limit) as isize;
     reduce_shifted(rec, o, d, true)
 }
 
@@ -324,7 +345,9 @@ fn reduce_shifted(
     } else {
         (&rec.reference[a..n], &rec.output[..n - a])
     };
-    let shift_s = d as f64 / rec.rate_hz;
+    // The output shifted by d samples against a reference whose samples
+    // are taken δ late: against true time, the output moves d/rate − δ.
+    let shift_s = d as f64 / rec.rate_hz - rec.reference_offset_s;
     let w = welch::welch(
         x,
         y,
@@ -332,6 +355,7 @@ fn reduce_shifted(
         o.segment_samples,
         o.overlap(),
         JACKKNIFE_GROUPS,
+        o.window,
     )?;
     let spectra = &w.spectra;
     if spectra.pxx.iter().skip(1).all(|p| *p <= 0.0) {
@@ -365,7 +389,12 @@ fn reduce_shifted(
         segment_s: o.segment_samples as f64 / rec.rate_hz,
         shift_s,
     };
-    let mut part = ModelPart::fit(&points, &o.model, 2.0 * spectra.effective, Some(smoothing))?;
+    let mut part = ModelPart::fit(
+        &points,
+        &o.model,
+        2.0 * spectra.effective,
+        o.window.smoothing(smoothing),
+    )?;
     let mut warnings = part.warnings.clone();
     let method = if !jackknifed {
         "the model fit's own covariance (a first pass, for the latency)".to_string()

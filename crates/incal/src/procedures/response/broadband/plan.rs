@@ -102,9 +102,8 @@ fn simulated_u(o: &BroadbandPlanOptions) -> Result<Vec<(String, f64)>> {
             rate_hz: o.rate_hz,
             amplitude: o.amplitude,
             noise: o.noise,
-            reference_noise: 0.0,
-            bias: 0.0,
             seed: o.seed.wrapping_add(k),
+            ..super::sim::BroadbandSimOptions::default()
         };
         Ok(super::calibrate(&sim.record()?, &r)?.part.coefficients)
     }))

@@ -1,7 +1,7 @@
 //! Welch's averaged, windowed periodograms: the auto- and cross-spectral
 //! densities of a reference `x` and an output `y`, one-sided, in the
 //! conventions of `scipy.signal.welch` and `scipy.signal.csd` (periodic
-//! Hann window, mean removed from each segment, density scaling, mean of
+//! Hann window, or none, mean removed from each segment, density scaling, mean of
 //! the segments), so the two agree on the same data to rounding.
 //!
 //! Segment `m` starts at `m·S` (`S = L − overlap`, `L` the segment
@@ -40,6 +40,38 @@ pub struct Spectra {
     pub effective: f64,
     /// Equivalent noise bandwidth of the window in bins, `L Σw²/(Σw)²`.
     pub enbw_bins: f64,
+}
+
+/// The window of each segment.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Window {
+    /// The periodic Hann window (random or chirp excitation).
+    #[default]
+    Hann,
+    /// No window (`scipy`'s `boxcar`): for a periodic excitation whose
+    /// period divides the segment (a multisine), which then leaks nothing.
+    Rectangular,
+}
+
+impl Window {
+    /// Its `l` samples.
+    pub fn samples(self, l: usize) -> Vec<f64> {
+        match self {
+            Window::Hann => hann(l),
+            Window::Rectangular => vec![1.0; l],
+        }
+    }
 }
 
 /// The periodic Hann window of length `l`: `w_n = ½ − ½ cos(2πn/l)`
@@ -138,7 +170,8 @@ impl Welch {
 }
 
 /// Welch's estimate of `P_xx`, `P_yy` and `P_xy` (module docs) with
-/// segments of `l` samples overlapping by `overlap` at `fs_hz`, their
+/// segments of `l` samples under `window` overlapping by `overlap` at
+/// `fs_hz`, their
 /// sums also kept in `groups` runs of consecutive segments. Refuses fewer
 /// than two segments, a segment shorter than 8 samples, or an overlap not
 /// below the segment.
@@ -149,6 +182,7 @@ pub fn welch(
     l: usize,
     overlap: usize,
     groups: usize,
+    window: Window,
 ) -> Result<Welch> {
     if l < 8 {
         return crate::options::invalid("segment_samples", format!("at least 8, got {l}"));
@@ -170,7 +204,7 @@ pub fn welch(
         });
     }
     let groups = groups.clamp(1, k);
-    let w = hann(l);
+    let w = window.samples(l);
     let s2: f64 = w.iter().map(|v| v * v).sum();
     let sum: f64 = w.iter().sum();
     let fft = plan(l);
@@ -260,7 +294,9 @@ mod tests {
         let fs = 100.0;
         let x: Vec<f64> = (0..4096).map(|i| (0.3 * i as f64).sin()).collect();
         let y: Vec<f64> = x.iter().map(|v| 2.0 * v).collect();
-        let s = welch(&x, &y, fs, 256, 128, 1).unwrap().spectra;
+        let s = welch(&x, &y, fs, 256, 128, 1, Window::Hann)
+            .unwrap()
+            .spectra;
         let k = (0..s.pxx.len())
             .max_by(|a, b| s.pxx[*a].total_cmp(&s.pxx[*b]))
             .unwrap();

@@ -173,7 +173,8 @@ pub fn locate(rec: &Record) -> Result<Located> {
     let frac = ((mid - r[i]) / (r[i + 1] - r[i])).clamp(0.0, 1.0);
     let width = (r[i + 1] - r[i]).abs() / (r1 - r0).abs();
     Ok(Located {
-        t0_s: (i as f64 + frac) * dt,
+        // The reference's sample of row n is taken δ after the output's.
+        t0_s: (i as f64 + frac) * dt + rec.reference_offset_s,
         r0,
         r1,
         // A jump within one sample: the time is anywhere in it.

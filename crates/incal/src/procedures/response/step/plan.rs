@@ -69,6 +69,7 @@ pub fn plan_document(o: &StepPlanOptions) -> Result<PlanDocument> {
         noise: o.noise,
         reference_noise: o.reference_noise,
         bias: 0.0,
+        reference_clock_offset_s: 0.0,
         seed,
     };
     sim(o.seed).samples()?;

@@ -4,7 +4,9 @@
 //! falls anywhere within a sample interval, so the reduction's `u(t₀)` is
 //! exercised); the rows hold `reference = A·[t ≥ t_s] + n_r` and
 //! `output = b + K A s(t − t_s − τ) + n_y` with `s` the model's unit step
-//! ([`super::unit_step`]); deterministic for a seed.
+//! ([`super::unit_step`]); deterministic for a seed. A reference on its
+//! own clock (`reference_clock_offset_s` δ) samples row n at `t_n + δ`
+//! (its stamps in a `time_ref_s` column): it shows the step `δ` earlier.
 
 use rand::RngExt;
 
@@ -42,6 +44,10 @@ pub struct StepSimOptions {
     /// Output bias `b` (default 0).
     #[serde(default)]
     pub bias: f64,
+    /// The reference sampled on its own clock, this much later than the
+    /// output (s; default 0: one clock). Not 0: a `time_ref_s` column.
+    #[serde(default)]
+    pub reference_clock_offset_s: f64,
     /// Random seed (same seed, same file; default 1).
     #[serde(default = "seed_one")]
     pub seed: u64,
@@ -80,6 +86,7 @@ impl Default for StepSimOptions {
             noise: noise(),
             reference_noise: reference_noise(),
             bias: 0.0,
+            reference_clock_offset_s: 0.0,
             seed: 1,
         }
     }
@@ -98,6 +105,13 @@ impl StepSimOptions {
         check_range("noise", self.noise, 0.0, 1e12, "")?;
         check_range("reference_noise", self.reference_noise, 0.0, 1e12, "")?;
         check_range("bias", self.bias, -1e12, 1e12, "")?;
+        check_range(
+            "reference_clock_offset_s",
+            self.reference_clock_offset_s,
+            -1.0,
+            1.0,
+            "s",
+        )?;
         self.model.x()?;
         let n = (self.duration_s * self.rate_hz).round();
         crate::sim::check_rows(&[("duration_s x rate_hz", n)])?;
@@ -118,7 +132,8 @@ impl StepSimOptions {
         let (mut reference, mut output) = (Vec::with_capacity(n), Vec::with_capacity(n));
         for k in 0..n {
             let t = k as f64 * dt;
-            let a = if t >= t_step { self.amplitude } else { 0.0 };
+            let seen = t + self.reference_clock_offset_s;
+            let a = if seen >= t_step { self.amplitude } else { 0.0 };
             reference.push(a + normal(&mut r, self.reference_noise));
             let s = unit_step(self.model.order, &x, t - t_step - delay);
             output.push(self.bias + x[0] * self.amplitude * s + normal(&mut r, self.noise));
@@ -128,6 +143,7 @@ impl StepSimOptions {
                 rate_hz: self.rate_hz,
                 reference,
                 output,
+                reference_offset_s: self.reference_clock_offset_s,
             },
             t_step,
         ))
