@@ -1,5 +1,8 @@
 //! Speed of the Allan-family kernels (`cargo bench -p incal --bench noise`).
-//! Compare with allantools by `scripts/bench-allantools.sh`.
+//! Compare with allantools by `scripts/bench-allantools.sh`. The `psd`
+//! group times the power spectral density (`--psd`, default segment)
+//! beside the whole stability analysis of the same record: what `--psd`
+//! adds to a run.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use incal::noise::{dev, id, phase_from_rate, stability, StabilityOptions, TauGrid};
@@ -96,5 +99,24 @@ fn kernels(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, kernels);
+fn spectrum(c: &mut Criterion) {
+    use incal::procedures::noise::spectrum::SpectrumOptions;
+    let mut g = c.benchmark_group("psd");
+    g.sample_size(10);
+    let n = 10_000_000usize;
+    let x = phase(n);
+    let o = SpectrumOptions {
+        psd: true,
+        ..SpectrumOptions::default()
+    };
+    g.bench_with_input(BenchmarkId::new("stability", n), &x, |b, x| {
+        b.iter(|| stability(x, &StabilityOptions::default()).unwrap())
+    });
+    g.bench_with_input(BenchmarkId::new("psd", n), &x, |b, x| {
+        b.iter(|| o.compute(x, 1.0).unwrap().map(|s| s.psd.segments))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, kernels, spectrum);
 criterion_main!(benches);

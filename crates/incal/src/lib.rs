@@ -36,4 +36,5 @@ pub mod options;
 pub mod procedures;
 pub mod rigs;
 pub mod sim;
+pub mod spectral;
 pub mod timebase;

@@ -91,6 +91,9 @@ pub enum WarningCode {
     /// dwell of the dynamic response): its amplitude is biased up and its
     /// phase is noise.
     WeakSignal,
+    /// Two estimates of one noise term disagree beyond the U95 of their
+    /// difference (the PSD's white level against the Allan fit's N).
+    NoiseInconsistent,
 }
 
 impl WarningCode {
@@ -122,6 +125,7 @@ impl WarningCode {
             WarningCode::MissingSamples => "missing-samples",
             WarningCode::PhaseAmbiguous => "phase-ambiguous",
             WarningCode::WeakSignal => "weak-signal",
+            WarningCode::NoiseInconsistent => "noise-inconsistent",
         }
     }
 }

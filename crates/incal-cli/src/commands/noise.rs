@@ -9,6 +9,7 @@ use std::sync::Mutex;
 
 use clap::ValueEnum;
 use incal::procedures::noise::sim::NoiseSim;
+use incal::procedures::noise::spectrum::SpectrumOptions;
 use incal::procedures::noise::{
     reduce_mapped, DataKind, Format, Noise, NoiseOptions, QuantityKind,
 };
@@ -118,11 +119,50 @@ pub struct Args {
     /// One thread (same numbers as the parallel default, bit for bit).
     #[arg(long)]
     pub sequential: bool,
+    #[command(flatten)]
+    pub psd: PsdArgs,
     /// Channels to analyse (default: every column but time_s; of a binary record every channel).
     #[command(flatten)]
     pub read: ReadArgs,
     #[command(flatten)]
     pub result: ResultArgs,
+}
+
+/// The power spectral density of `incal noise`.
+#[derive(clap::Args, Debug)]
+pub struct PsdArgs {
+    /// Also the power spectral density of every channel (Welch, chi-square bounds, the white level and its N beside the Allan fit's).
+    #[arg(long)]
+    pub psd: bool,
+    /// Samples per PSD segment (default: the largest power of two with at least 8 segments, 16 to 65536).
+    #[arg(long)]
+    pub psd_segment_samples: Option<usize>,
+    /// Overlap of the PSD segments, samples (default half a segment).
+    #[arg(long)]
+    pub psd_overlap_samples: Option<usize>,
+    /// The window of each PSD segment.
+    #[arg(long, value_enum, default_value = "hann")]
+    pub psd_window: super::response::WindowArg,
+    /// Confidence of the PSD's chi-square bounds (default 0.95).
+    #[arg(long)]
+    pub psd_confidence: Option<f64>,
+    /// The band of the white level, Hz: LOW,HIGH (default 5 % to 25 % of the rate).
+    #[arg(long, value_delimiter = ',', num_args = 2)]
+    pub psd_white_band_hz: Option<Vec<f64>>,
+}
+
+impl PsdArgs {
+    /// The core's options.
+    fn options(&self) -> SpectrumOptions {
+        SpectrumOptions {
+            psd: self.psd,
+            psd_segment_samples: self.psd_segment_samples,
+            psd_overlap_samples: self.psd_overlap_samples,
+            psd_window: self.psd_window.into(),
+            psd_confidence: self.psd_confidence,
+            psd_white_band_hz: self.psd_white_band_hz.clone(),
+        }
+    }
 }
 
 /// Progress bars on stderr, one per stage of the core's [`Progress`],
@@ -203,6 +243,7 @@ pub fn run(a: &Args) -> CliResult<()> {
         parallel: !a.sequential,
         sort_time: a.sort_time,
         three_cornered_hat: a.three_cornered_hat,
+        spectrum: a.psd.options(),
     };
     let bars = Bars::new(a.quiet);
     let sample = match a.format {

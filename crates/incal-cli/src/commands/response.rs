@@ -91,6 +91,15 @@ pub enum WindowArg {
     Rectangular,
 }
 
+impl From<WindowArg> for Window {
+    fn from(w: WindowArg) -> Window {
+        match w {
+            WindowArg::Hann => Window::Hann,
+            WindowArg::Rectangular => Window::Rectangular,
+        }
+    }
+}
+
 /// Which bandwidth is `bandwidth_hz`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum BandwidthArg {
@@ -444,10 +453,7 @@ pub fn run_broadband(a: &BroadbandArgs) -> CliResult<()> {
             AlignArg::Latency => Align::Latency,
             AlignArg::None => Align::None,
         },
-        window: match a.window {
-            WindowArg::Hann => Window::Hann,
-            WindowArg::Rectangular => Window::Rectangular,
-        },
+        window: a.window.into(),
         model: a.model.options(),
     };
     crate::run::reduce::<ResponseBroadband>(&a.input, &a.read, &options, &a.result, &Silent)

@@ -255,6 +255,11 @@ def response_broadband(
     noise: float = 0.02,
     reference_noise: float = 0,
     bias: float = 0,
+    excitation: Literal["random", "chirp", "multisine"] = "random",
+    f_low_hz: float = 0.5,
+    f_high_hz: Union[float, None] = None,
+    period_samples: int = 1024,
+    reference_clock_offset_s: float = 0,
     seed: int = 1,
     truth_out: Optional[Union[str, float]] = None,
 ) -> Tuple[Any, List[str]]: ...
@@ -273,6 +278,7 @@ def response_step(
     noise: float = 0.02,
     reference_noise: float = 0.005,
     bias: float = 0,
+    reference_clock_offset_s: float = 0,
     seed: int = 1,
     truth_out: Optional[Union[str, float]] = None,
 ) -> Tuple[Any, List[str]]: ...

@@ -14,7 +14,9 @@
 //!   with its limits;
 //! * a top-level `channels` object with `taus_s` and `oadev` (the noise
 //!   result): the Allan plot of each channel, log–log, with its bounds and
-//!   the fitted IEEE 952 lines ([`allan_plots`]);
+//!   the fitted IEEE 952 lines ([`allan_plots`]), and with `psd` its
+//!   amplitude spectral density with χ² bounds and white level
+//!   ([`psd_plots`]);
 //! * a top-level `bode` object (the dynamic response): gain in dB and phase
 //!   in degrees against log frequency, the measured points with U95 bars
 //!   from the table holding `gain_db`, the fitted model with its U95 band
@@ -38,6 +40,7 @@ mod allan;
 mod bode;
 mod coefficients;
 mod history;
+mod psd;
 mod rows;
 mod svg;
 mod table;
@@ -50,6 +53,7 @@ pub use allan::allan_plots;
 pub use bode::bode_plots;
 pub use coefficients::{coefficient_plots, Limits};
 pub use history::history_plot;
+pub use psd::psd_plots;
 pub use svg::{figure_html, render_svg};
 pub use table::{model_curve, table_plots, table_plots_with, Curve};
 pub use thermal::thermal_plots;

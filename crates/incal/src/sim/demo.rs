@@ -712,6 +712,7 @@ fn noise(seed: u64) -> Result<DemoSection> {
         bias_stability,
         more: Vec::new(),
         to_input: 1.0,
+        spectrum: None,
     };
     let doc = document(
         &crate::noise::Deviation::ALL,

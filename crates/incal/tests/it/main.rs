@@ -18,6 +18,7 @@ mod imu_tedaldi_reference;
 mod imu_tk_recordings;
 mod li2012;
 mod misalign_roundtrip;
+mod noise_psd;
 mod noise_reference;
 mod noise_roundtrip;
 mod noise_stable32;

@@ -52,7 +52,7 @@ fn check(
     window: Window,
     (seed, conservative): (u64, bool),
 ) {
-    let runs = monte_carlo(seed, trials(12, 300), |k| {
+    let runs = monte_carlo(seed, trials(24, 300), |k| {
         let s = s(k);
         let truth = s.truth_json().unwrap();
         let r = calibrate(&s.record().unwrap(), &options(window)).expect("reduces");

@@ -100,6 +100,8 @@ pub struct ChannelResult {
     /// Factor from the internal rate unit back to the input unit (for the
     /// deviations, which are reported in the input unit).
     pub to_input: f64,
+    /// The power spectral density, when asked for.
+    pub spectrum: Option<super::spectrum::ChannelSpectrum>,
 }
 
 /// The identified terms of a gyro or accelerometer in SI continuous-time
@@ -187,7 +189,7 @@ pub fn document(
     for c in channels {
         let o = channel_json(c, shown, quantity, &units, unit, &mut warnings);
         chans.insert(c.name.clone(), Value::Object(o));
-        channel_coefficients(&mut b, c, &units, &mut warnings)?;
+        channel_coefficients(&mut b, c, (&units, unit), &mut warnings)?;
         for w in &c.fit.warnings {
             warnings.push(Warning::new(w.code, format!("{}: {}", c.name, w.message)));
         }
@@ -252,6 +254,10 @@ fn channel_json(
     o.insert("slope_readings".into(), Value::Object(slope));
     if let Some(si) = si_terms(quantity, &c.fit) {
         o.insert("si_terms".into(), si);
+    }
+    if let Some(s) = &c.spectrum {
+        let (_, n_unit, n_k) = &units.terms[1];
+        o.insert("psd".into(), s.json(f, (*n_k, n_unit.as_str())));
     }
     o
 }
@@ -324,7 +330,7 @@ fn insert_fit(o: &mut serde_json::Map<String, Value>, c: &ChannelResult) {
 fn channel_coefficients(
     b: &mut DocumentBuilder,
     c: &ChannelResult,
-    units: &NoiseUnits,
+    (units, unit): (&NoiseUnits, &str),
     warnings: &mut Vec<Warning>,
 ) -> Result<()> {
     for (j, t) in c.fit.terms.iter().enumerate() {
@@ -337,6 +343,9 @@ fn channel_coefficients(
             )?;
         }
     }
+    if let Some(s) = &c.spectrum {
+        spectrum_coefficient(b, c, s, (units, unit), warnings)?;
+    }
     for (tau, t) in &c.bias_stability {
         let full = format!("{}.bias_stability_{}", c.name, tau_label(*tau));
         match t {
@@ -348,6 +357,52 @@ fn channel_coefficients(
                 WarningCode::ShortRecord,
                 format!("{}: the record holds fewer than two windows of {tau} s: no bias stability at {tau} s", c.name),
             )),
+        }
+    }
+    Ok(())
+}
+
+/// The PSD's white level as `NAME.white_asd` (input unit/√Hz), and a
+/// `noise-inconsistent` warning when its N and the Allan fit's differ
+/// beyond the U95 of their difference (or a `short-record` warning when
+/// the band holds too few bins for a level).
+fn spectrum_coefficient(
+    b: &mut DocumentBuilder,
+    c: &ChannelResult,
+    s: &super::spectrum::ChannelSpectrum,
+    (units, unit): (&NoiseUnits, &str),
+    warnings: &mut Vec<Warning>,
+) -> Result<()> {
+    let Some(w) = s.white else {
+        warnings.push(Warning::new(
+            WarningCode::ShortRecord,
+            format!("{}: the PSD's white band holds fewer than 3 independent bins: no white level (lengthen psd_segment_samples or widen psd_white_band_hz)", c.name),
+        ));
+        return Ok(());
+    };
+    let f = c.to_input;
+    let asd = (w.density * f * f).sqrt();
+    let u_asd = asd * w.u / (2.0 * w.density);
+    let full = format!("{}.white_asd", c.name);
+    let asd_unit = Unit::Other(format!("{unit}/sqrt(Hz)"));
+    b.coefficient(&full, Coefficient::new(&full, asd, u_asd, asd_unit, w.dof)?)?;
+    if let (Some((n, un)), Some(t)) = (s.n_equivalent(), c.fit.terms[1].as_ref()) {
+        let (name, u_name, k) = &units.terms[1];
+        let d = n - t.value;
+        let u = (un * un + t.u * t.u).sqrt();
+        if d.abs() > 1.96 * u {
+            warnings.push(Warning::new(
+                WarningCode::NoiseInconsistent,
+                format!(
+                    "{}: the PSD's white level gives {name} = {:.4} {}, the Allan fit {:.4} {}: they differ by {:.1} u of their difference (a filtered or coloured band, a tone, or a term the fit lacks)",
+                    c.name,
+                    n * k,
+                    u_name.as_str(),
+                    t.value * k,
+                    u_name.as_str(),
+                    d.abs() / u
+                ),
+            ));
         }
     }
     Ok(())

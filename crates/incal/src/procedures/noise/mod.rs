@@ -52,6 +52,7 @@ pub mod export;
 pub mod input;
 pub mod plan;
 pub mod sim;
+pub mod spectrum;
 
 use rayon::prelude::*;
 use schemars::JsonSchema;
@@ -175,6 +176,9 @@ pub struct NoiseOptions {
     /// ([`crate::noise::three_cornered_hat`]), in `three_cornered_hat`.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub three_cornered_hat: bool,
+    /// The power spectral density (`psd` and its settings).
+    #[serde(flatten)]
+    pub spectrum: spectrum::SpectrumOptions,
 }
 
 fn default_taus() -> String {
@@ -213,6 +217,7 @@ impl Default for NoiseOptions {
             parallel: true,
             sort_time: false,
             three_cornered_hat: false,
+            spectrum: spectrum::SpectrumOptions::default(),
         }
     }
 }
@@ -751,6 +756,7 @@ fn analyse(
             .map(|&t| (t, terms::bias_stability(x, tau0, t)))
             .collect();
         let more = more_statistics(x, &sel.more, &st, &opts).map_err(in_channel(k))?;
+        let spectrum = o.spectrum.compute(x, tau0).map_err(in_channel(k))?;
         Ok(ChannelResult {
             name: names[k].clone(),
             samples: rows,
@@ -760,6 +766,7 @@ fn analyse(
             bias_stability,
             more,
             to_input: 1.0 / factor,
+            spectrum,
         })
     };
     let results = if o.parallel {
@@ -910,6 +917,18 @@ fn gapped(
         .iter()
         .map(|&t| (t, terms::bias_stability_segments(&parts, build.tau0, t)))
         .collect();
+    // The spectrum of the longest stretch (Welch's segments need no gap).
+    let spectrum = match xs.iter().max_by_key(|x| x.len()) {
+        Some(x) => o.spectrum.compute(x, build.tau0)?.map(|mut s| {
+            s.note = Some(format!(
+                "the longest of {} stretches between gaps ({} samples)",
+                xs.len(),
+                x.len().saturating_sub(1)
+            ));
+            s
+        }),
+        None => None,
+    };
     Ok(ChannelResult {
         name: name.to_string(),
         samples: n_phase - xs.len() * usize::from(build.rate),
@@ -919,6 +938,7 @@ fn gapped(
         bias_stability,
         more: Vec::new(),
         to_input: 1.0 / factor,
+        spectrum,
     })
 }
 

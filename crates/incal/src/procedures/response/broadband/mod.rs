@@ -31,7 +31,7 @@ pub mod document;
 pub mod input;
 pub mod plan;
 pub mod sim;
-pub mod welch;
+pub use crate::spectral::welch;
 
 use crate::error::{Error, Result};
 use crate::warning::{Warning, WarningCode};

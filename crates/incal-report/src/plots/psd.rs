@@ -1,0 +1,143 @@
+//! The power spectral density plots of a noise result run with `psd`:
+//! per channel, the amplitude spectral density (unit/√Hz) against
+//! frequency on log–log axes, its χ² bounds as dashed lines and the white
+//! level of its band.
+
+use incal::document::ResultDocument;
+use serde_json::Value;
+
+use super::{Plot, Pt, Series, Style, XAxis};
+use crate::format::trimmed;
+
+/// The PSD plot of each channel holding `psd` in `channels`.
+pub fn psd_plots(doc: &ResultDocument) -> Vec<Plot> {
+    let Some(chans) = doc.extra.get("channels").and_then(|c| c.as_object()) else {
+        return Vec::new();
+    };
+    chans
+        .iter()
+        .filter_map(|(name, c)| psd_plot(name, c))
+        .collect()
+}
+
+/// Bins drawn at most: a long segment's thousands of bins are shown at
+/// log-spaced frequencies (each a bin's own value, none averaged).
+const DRAWN: usize = 400;
+
+/// `(log10 f, log10 √g)` of the bins above 0 Hz with a positive value,
+/// at most [`DRAWN`] of them, log-spaced.
+fn curve(p: &Value, key: &str) -> Vec<Pt> {
+    let (Some(f), Some(g)) = (p["freq_hz"].as_array(), p[key].as_array()) else {
+        return Vec::new();
+    };
+    let pts: Vec<Pt> = f
+        .iter()
+        .zip(g)
+        .filter_map(|(f, g)| {
+            let (f, g) = (f.as_f64()?, g.as_f64()?);
+            (f > 0.0 && g > 0.0).then(|| Pt {
+                x: f.log10(),
+                y: 0.5 * g.log10(),
+                bar: None,
+            })
+        })
+        .collect();
+    if pts.len() <= DRAWN {
+        return pts;
+    }
+    let (a, b) = (pts[0].x, pts[pts.len() - 1].x);
+    let mut out: Vec<Pt> = Vec::with_capacity(DRAWN);
+    let mut j = 0;
+    for k in 0..DRAWN {
+        let target = a + (b - a) * k as f64 / (DRAWN - 1) as f64;
+        while j + 1 < pts.len() && (pts[j + 1].x - target).abs() <= (pts[j].x - target).abs() {
+            j += 1;
+        }
+        if out.last().is_none_or(|p: &Pt| p.x < pts[j].x) {
+            out.push(pts[j]);
+        }
+    }
+    out
+}
+
+fn psd_plot(name: &str, c: &Value) -> Option<Plot> {
+    let p = c.get("psd").filter(|p| p.is_object())?;
+    let unit = c["unit"].as_str().unwrap_or("").to_string();
+    let conf = p["confidence"].as_f64().unwrap_or(0.95);
+    let asd = curve(p, "density");
+    if asd.len() < 2 {
+        return None;
+    }
+    let (x0, x1) = (asd[0].x, asd[asd.len() - 1].x);
+    let mut legend = vec![
+        "amplitude spectral density".to_string(),
+        format!("{} % chi-square bounds", trimmed(100.0 * conf, 3)),
+    ];
+    let mut series = Vec::new();
+    for key in ["lo", "hi"] {
+        series.push(Series {
+            key: 1,
+            style: Style::Dashed,
+            points: curve(p, key),
+        });
+    }
+    series.push(Series {
+        key: 0,
+        style: Style::Line,
+        points: asd,
+    });
+    if let Some(w) = p["white"].as_object() {
+        if let (Some(a), Some(u)) = (w["asd"].as_f64(), w["u_asd"].as_f64()) {
+            legend.push(format!(
+                "white level {} +- {} {unit}/sqrt(Hz) (u)",
+                trimmed(a, 4),
+                trimmed(u, 2)
+            ));
+            series.push(Series {
+                key: 2,
+                style: Style::Line,
+                points: vec![
+                    Pt {
+                        x: x0,
+                        y: a.log10(),
+                        bar: None,
+                    },
+                    Pt {
+                        x: x1,
+                        y: a.log10(),
+                        bar: None,
+                    },
+                ],
+            });
+        }
+    }
+    Some(Plot {
+        kind: "psd",
+        source: name.to_string(),
+        title: format!("{name}: amplitude spectral density"),
+        x_desc: "frequency (Hz)".into(),
+        y_desc: format!("ASD ({unit}/sqrt(Hz))"),
+        x_axis: XAxis::Numeric,
+        dodge: false,
+        series,
+        legend,
+        hlines: Vec::new(),
+        caption: format!(
+            "One-sided amplitude spectral density by Welch's method ({} segments of {} samples, {} window), log-log, drawn at up to 400 log-spaced bins; dashed: chi-square bounds at {} % confidence with {} equivalent degrees of freedom (Percival & Walden); the line: the white level read over {}.",
+            p["segments"].as_u64().unwrap_or(0),
+            p["segment_samples"].as_u64().unwrap_or(0),
+            p["window"].as_str().unwrap_or("hann"),
+            trimmed(100.0 * conf, 3),
+            trimmed(p["edf"].as_f64().unwrap_or(0.0), 3),
+            p["white"]["band_hz"]
+                .as_array()
+                .map(|b| format!(
+                    "{}-{} Hz",
+                    trimmed(b[0].as_f64().unwrap_or(0.0), 4),
+                    trimmed(b[1].as_f64().unwrap_or(0.0), 4)
+                ))
+                .unwrap_or_else(|| "no band (too few bins)".into()),
+        ),
+        log_log: true,
+    })
+}

@@ -1,0 +1,6 @@
+//! Spectral estimates shared by the procedures: Welch's averaged
+//! periodograms of one or two channels ([`welch`]) and the power spectral
+//! density of a noise record with its χ² bounds ([`psd`]).
+
+pub mod psd;
+pub mod welch;
