@@ -763,3 +763,91 @@ fn kalibr_export_converts_the_terms_and_refuses_what_is_missing() {
     let e = run(&["export", "kalibr", "--gyro", p(&tumble), "--accel", p(&aj)]);
     refused(&e, &["a tumble result, not a noise result"]);
 }
+
+#[test]
+fn the_psd_carries_its_bounds_the_white_level_and_the_allan_terms_as_a_psd() {
+    let dir = workdir("noise_psd");
+    let csv = dir.join("n.csv");
+    ok(&run(&[
+        "simulate",
+        "noise",
+        "--rate-hz",
+        "100",
+        "--duration-s",
+        "7200",
+        "--arw-deg-rth",
+        "0.15",
+        "--bias-instability-deg-h",
+        "3",
+        "--rrw-deg-h-rth",
+        "20",
+        "--seed",
+        "3",
+        "--output",
+        p(&csv),
+    ]));
+    let v = json_of(&run(&[
+        "noise",
+        "--input",
+        p(&csv),
+        "--quantity",
+        "gyro",
+        "--psd",
+        "--json",
+    ]));
+    let psd = &v["channels"]["ch1"]["psd"];
+    let arr = |k: &str| -> Vec<f64> {
+        psd[k]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    let (lo, hi) = (arr("lo"), arr("hi"));
+    let m = &psd["model"];
+    let total: Vec<f64> = m["total"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(total.len(), lo.len() - 1, "every bin above 0 Hz");
+    // The Allan fit's terms as a PSD lie within the measured PSD's 95 %
+    // bounds in about 95 % of the bins: the two analyses agree.
+    let inside = total
+        .iter()
+        .zip(lo.iter().zip(&hi).skip(1))
+        .filter(|(t, (a, b))| *a <= *t && *t <= *b)
+        .count() as f64
+        / total.len() as f64;
+    assert!(inside > 0.9, "{inside}");
+    assert!(m["terms"]["N"].is_array() && m["terms"]["B"].is_array());
+    let w = &v["coefficients"]["ch1.white_asd"];
+    assert_eq!(w["unit"], "deg/s/sqrt(Hz)");
+    let asd = std::f64::consts::SQRT_2 * 0.15 / 60.0;
+    assert!((w["value"].as_f64().unwrap() - asd).abs() <= w["U95"].as_f64().unwrap());
+    // Bad settings are named.
+    refused(
+        &run(&[
+            "noise",
+            "--input",
+            p(&csv),
+            "--psd",
+            "--psd-white-band-hz",
+            "20,5",
+        ]),
+        &["--psd-white-band-hz"],
+    );
+    refused(
+        &run(&[
+            "noise",
+            "--input",
+            p(&csv),
+            "--psd",
+            "--psd-segment-samples",
+            "4",
+        ]),
+        &["--psd-segment-samples"],
+    );
+}

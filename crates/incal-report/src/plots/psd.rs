@@ -1,7 +1,7 @@
 //! The power spectral density plots of a noise result run with `psd`:
 //! per channel, the amplitude spectral density (unit/√Hz) against
-//! frequency on log–log axes, its χ² bounds as dashed lines and the white
-//! level of its band.
+//! frequency on log–log axes, its χ² bounds as dashed lines, the white
+//! level of its band and the Allan fit's terms as a PSD.
 
 use incal::document::ResultDocument;
 use serde_json::Value;
@@ -86,6 +86,22 @@ fn psd_plot(name: &str, c: &Value) -> Option<Plot> {
         style: Style::Line,
         points: asd,
     });
+    let model = curve(&p["model"], "total");
+    if model.len() >= 2 {
+        let names: Vec<&str> = p["model"]["terms"]
+            .as_object()
+            .map(|t| t.keys().map(String::as_str).collect())
+            .unwrap_or_default();
+        legend.push(format!(
+            "the Allan fit's terms as a PSD ({})",
+            names.join(" + ")
+        ));
+        series.push(Series {
+            key: legend.len() - 1,
+            style: Style::Line,
+            points: model,
+        });
+    }
     if let Some(w) = p["white"].as_object() {
         if let (Some(a), Some(u)) = (w["asd"].as_f64(), w["u_asd"].as_f64()) {
             legend.push(format!(
@@ -94,7 +110,7 @@ fn psd_plot(name: &str, c: &Value) -> Option<Plot> {
                 trimmed(u, 2)
             ));
             series.push(Series {
-                key: 2,
+                key: legend.len() - 1,
                 style: Style::Line,
                 points: vec![
                     Pt {
@@ -123,7 +139,7 @@ fn psd_plot(name: &str, c: &Value) -> Option<Plot> {
         legend,
         hlines: Vec::new(),
         caption: format!(
-            "One-sided amplitude spectral density by Welch's method ({} segments of {} samples, {} window), log-log, drawn at up to 400 log-spaced bins; dashed: chi-square bounds at {} % confidence with {} equivalent degrees of freedom (Percival & Walden); the line: the white level read over {}.",
+            "One-sided amplitude spectral density by Welch's method ({} segments of {} samples, {} window), log-log, drawn at up to 400 log-spaced bins; dashed: chi-square bounds at {} % confidence with {} equivalent degrees of freedom (Percival & Walden); the flat line: the white level read over {}; the other: the IEEE Std 952 terms of the Allan fit as a one-sided PSD (Annex C), the consistency check of the two analyses.",
             p["segments"].as_u64().unwrap_or(0),
             p["segment_samples"].as_u64().unwrap_or(0),
             p["window"].as_str().unwrap_or("hann"),

@@ -32,6 +32,25 @@ pub fn regressor(j: usize, tau: f64) -> f64 {
     }
 }
 
+/// One-sided PSD (u²/Hz) of term `j` of amplitude `a` at `f_hz` > 0, with
+/// the sample period `tau0_s` for quantization: IEEE Std 952-1997 Annex C
+/// gives the two-sided `S(f)` of each term (`(2πf)² Q² τ0`, `N²`,
+/// `B²/(2πf)`, `(K/2π)²/f²`, `R²/(2πf)³`); the one-sided `G = 2S`, which
+/// the Allan variance model [`regressor`] matches (`σ²_A = G/(2τ)` for
+/// white rate noise, `2 ln 2 · B²/π` for flicker).
+pub fn term_psd(j: usize, a: f64, f_hz: f64, tau0_s: f64) -> f64 {
+    let w = std::f64::consts::TAU * f_hz;
+    2.0 * a
+        * a
+        * match j {
+            0 => w * w * tau0_s,
+            1 => 1.0,
+            2 => 1.0 / w,
+            3 => 1.0 / (w * w),
+            _ => 1.0 / (w * w * w),
+        }
+}
+
 /// One identified term: amplitude and its standard uncertainty, in the
 /// rate unit's base (Q in u·s, N in u·√s, B in u, K in u/√s, R in u/s).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -527,4 +546,25 @@ pub fn bias_stability_segments(segs: &[&[f64]], tau0: f64, tau: f64) -> Option<T
 /// each τ (for the report's fit lines); unused terms contribute nothing.
 pub fn model_curve(fit: &TermFit, taus: &[f64]) -> Vec<f64> {
     taus.iter().map(|&t| fit.model(t)).collect()
+}
+
+#[cfg(test)]
+mod psd_tests {
+    use super::*;
+
+    #[test]
+    fn term_psds_are_the_one_sided_forms_of_the_allan_model() {
+        // White rate: σ²_A = G/(2τ) = N²/τ.
+        let (n, tau) = (0.3, 7.0);
+        assert!((term_psd(1, n, 1.0, 0.01) / (2.0 * tau) - n * n / tau).abs() < 1e-15);
+        // Flicker: G = h₋₁/f with σ²_A = 2 ln 2 h₋₁ = (2 ln 2/π) B².
+        let (b, f) = (0.2, 0.5);
+        let h = term_psd(2, b, f, 0.01) * f;
+        assert!((2.0 * std::f64::consts::LN_2 * h - FLICKER * b * b).abs() < 1e-15);
+        // Random walk: G = h₋₂/f², σ²_A = (2π²/3) h₋₂ τ = K² τ/3.
+        let k = 0.05;
+        let h2 = term_psd(3, k, f, 0.01) * f * f;
+        let pi2 = std::f64::consts::PI.powi(2);
+        assert!((2.0 * pi2 / 3.0 * h2 * tau - k * k * tau / 3.0).abs() < 1e-15);
+    }
 }

@@ -257,7 +257,7 @@ fn channel_json(
     }
     if let Some(s) = &c.spectrum {
         let (_, n_unit, n_k) = &units.terms[1];
-        o.insert("psd".into(), s.json(f, (*n_k, n_unit.as_str())));
+        o.insert("psd".into(), s.json(f, (*n_k, n_unit.as_str()), &c.fit));
     }
     o
 }

@@ -421,6 +421,7 @@ impl Procedure for Noise {
             ));
         }
         o.units()?;
+        o.spectrum.validate()?;
         match (o.format, o.channels) {
             (Format::Csv, Some(_)) => Err(invalid(
                 "channels",

@@ -11,7 +11,11 @@
 //! u_n_equivalent, n_unit}`) when the band holds three independent bins;
 //! the coefficient `NAME.white_asd` (unit/√Hz) is the white level's square
 //! root. A `noise-inconsistent` warning names a channel whose PSD's N and
-//! the Allan fit's N differ beyond the U95 of their difference.
+//! the Allan fit's N differ beyond the U95 of their difference. `model`
+//! holds the one-sided PSD of each IEEE Std 952 term the Allan fit
+//! identified (`terms.Q` … `terms.R`) and their sum (`total`), at
+//! `freq_hz` (the consistency check of the two analyses;
+//! [`crate::noise::terms::term_psd`]).
 
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
@@ -63,6 +67,8 @@ pub struct ChannelSpectrum {
     pub window: Window,
     /// Where it comes from when not the whole record (gaps).
     pub note: Option<String>,
+    /// The sample period (s).
+    pub tau0_s: f64,
 }
 
 impl SpectrumOptions {
@@ -128,6 +134,7 @@ impl SpectrumOptions {
             segment,
             window: self.psd_window,
             note: None,
+            tau0_s,
         }))
     }
 }
@@ -142,9 +149,42 @@ impl ChannelSpectrum {
         })
     }
 
+    /// The `model` object (module docs): each identified term's PSD and
+    /// their sum at the bins above 0 Hz, times `f2` (into the input unit).
+    fn model_json(&self, fit: &crate::noise::terms::TermFit, tau0_s: f64, f2: f64) -> Value {
+        use crate::noise::terms::{term_psd, TERMS};
+        let freqs: Vec<f64> = self
+            .psd
+            .freq_hz
+            .iter()
+            .copied()
+            .filter(|f| *f > 0.0)
+            .collect();
+        let mut total = vec![0.0; freqs.len()];
+        let mut terms = serde_json::Map::new();
+        for (j, t) in fit.terms.iter().enumerate() {
+            let Some(t) = t else { continue };
+            let g: Vec<f64> = freqs
+                .iter()
+                .map(|f| term_psd(j, t.value, *f, tau0_s) * f2)
+                .collect();
+            for (a, v) in total.iter_mut().zip(&g) {
+                *a += v;
+            }
+            terms.insert(TERMS[j].into(), json!(g));
+        }
+        json!({"freq_hz": freqs, "total": total, "terms": terms})
+    }
+
     /// `channels.NAME.psd` (module docs): densities times `f²` (into the
-    /// input unit), N times `n_factor` into `n_unit`.
-    pub fn json(&self, f: f64, (n_factor, n_unit): (f64, &str)) -> Value {
+    /// input unit), N times `n_factor` into `n_unit`, the Allan fit's
+    /// terms as PSDs (`fit`).
+    pub fn json(
+        &self,
+        f: f64,
+        (n_factor, n_unit): (f64, &str),
+        fit: &crate::noise::terms::TermFit,
+    ) -> Value {
         let p = &self.psd;
         let f2 = f * f;
         let scale = |v: &[f64]| -> Vec<f64> { v.iter().map(|g| g * f2).collect() };
@@ -177,6 +217,7 @@ impl ChannelSpectrum {
             "window": self.window,
             "white": white,
             "note": self.note,
+            "model": self.model_json(fit, self.tau0_s, f2),
         })
     }
 }
