@@ -145,15 +145,26 @@ fn psd_plot(name: &str, c: &Value) -> Option<Plot> {
             p["window"].as_str().unwrap_or("hann"),
             trimmed(100.0 * conf, 3),
             trimmed(p["edf"].as_f64().unwrap_or(0.0), 3),
-            p["white"]["band_hz"]
-                .as_array()
-                .map(|b| format!(
-                    "{}-{} Hz",
-                    trimmed(b[0].as_f64().unwrap_or(0.0), 4),
-                    trimmed(b[1].as_f64().unwrap_or(0.0), 4)
-                ))
-                .unwrap_or_else(|| "no band (too few bins)".into()),
+            match (p["white"]["band_hz"][0].as_f64(), p["white"]["band_hz"][1].as_f64()) {
+                (Some(lo), Some(hi)) => format!("{}-{} Hz", trimmed(lo, 4), trimmed(hi, 4)),
+                _ => "no band (too few bins)".into(),
+            },
         ),
         log_log: true,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_hand_edited_white_band_draws_without_a_band_instead_of_failing() {
+        let c = serde_json::json!({"unit": "deg/s", "psd": {
+            "freq_hz": [0.0, 1.0, 2.0, 3.0], "density": [1.0, 1.0, 1.0, 1.0],
+            "lo": [0.5, 0.5, 0.5, 0.5], "hi": [2.0, 2.0, 2.0, 2.0],
+            "white": {"asd": 1.0, "u_asd": 0.1, "band_hz": []}}});
+        let p = psd_plot("ch1", &c).unwrap();
+        assert!(p.caption.contains("no band"), "{}", p.caption);
+    }
 }

@@ -52,8 +52,6 @@ pub struct Psd {
     pub segments: usize,
     /// Independent averages `K_eff`.
     pub effective: f64,
-    /// Equivalent noise bandwidth of the window (bins).
-    pub enbw_bins: f64,
     /// Variance factor `c` of a mean over neighbouring bins (module docs).
     pub bin_correlation: f64,
     /// Confidence of the bounds.
@@ -165,7 +163,6 @@ pub fn psd_of_phase(
             (g * a, g * b)
         })
         .unzip();
-    let sw: f64 = w.iter().sum();
     let v = |j: usize| -> f64 {
         let (re, im) = w.iter().enumerate().fold((0.0, 0.0), |(a, b), (n, x)| {
             let (sn, cn) = (std::f64::consts::TAU * (j * n) as f64 / l as f64).sin_cos();
@@ -182,10 +179,25 @@ pub fn psd_of_phase(
         hi,
         segments: k,
         effective,
-        enbw_bins: l as f64 * s2 / (sw * sw),
         bin_correlation,
         confidence,
     })
+}
+
+impl White {
+    /// The amplitude spectral density `√(f² Ḡ)` and its u
+    /// (`√(f² Ḡ) u(Ḡ)/(2Ḡ)`), the level in a unit `f` times the one
+    /// estimated.
+    pub fn asd(&self, f: f64) -> (f64, f64) {
+        let a = (self.density * f * f).sqrt();
+        (a, a * self.u / (2.0 * self.density))
+    }
+
+    /// `(N, u(N))`, `N = √(Ḡ/2)` (module docs), in the estimate's unit·√s.
+    pub fn n_equivalent(&self) -> (f64, f64) {
+        let n = (self.density / 2.0).sqrt();
+        (n, n * self.u / (2.0 * self.density))
+    }
 }
 
 impl Psd {

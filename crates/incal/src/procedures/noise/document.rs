@@ -380,13 +380,12 @@ fn spectrum_coefficient(
         ));
         return Ok(());
     };
-    let f = c.to_input;
-    let asd = (w.density * f * f).sqrt();
-    let u_asd = asd * w.u / (2.0 * w.density);
+    let (asd, u_asd) = w.asd(c.to_input);
     let full = format!("{}.white_asd", c.name);
     let asd_unit = Unit::Other(format!("{unit}/sqrt(Hz)"));
     b.coefficient(&full, Coefficient::new(&full, asd, u_asd, asd_unit, w.dof)?)?;
-    if let (Some((n, un)), Some(t)) = (s.n_equivalent(), c.fit.terms[1].as_ref()) {
+    if let Some(t) = c.fit.terms[1].as_ref() {
+        let (n, un) = w.n_equivalent();
         let (name, u_name, k) = &units.terms[1];
         let d = n - t.value;
         let u = (un * un + t.u * t.u).sqrt();

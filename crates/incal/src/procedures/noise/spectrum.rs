@@ -124,9 +124,9 @@ impl SpectrumOptions {
         let conf = self.psd_confidence.unwrap_or(0.95);
         let psd = psd_of_phase(x, tau0_s, segment, self.psd_window, conf)?;
         let fs = 1.0 / tau0_s;
-        let band = match &self.psd_white_band_hz {
-            Some(b) => (b[0], b[1]),
-            None => (0.05 * fs, 0.25 * fs),
+        let band = match self.psd_white_band_hz.as_deref() {
+            Some(&[lo, hi]) => (lo, hi),
+            _ => (0.05 * fs, 0.25 * fs),
         };
         Ok(Some(ChannelSpectrum {
             white: psd.white(band),
@@ -140,15 +140,6 @@ impl SpectrumOptions {
 }
 
 impl ChannelSpectrum {
-    /// `(N, u(N))` of the white level in the internal unit·√s (module
-    /// docs of [`crate::spectral::psd`]).
-    pub fn n_equivalent(&self) -> Option<(f64, f64)> {
-        self.white.map(|w| {
-            let n = (w.density / 2.0).sqrt();
-            (n, n * w.u / (2.0 * w.density))
-        })
-    }
-
     /// The `model` object (module docs): each identified term's PSD and
     /// their sum at the bins above 0 Hz, times `f2` (into the input unit).
     fn model_json(&self, fit: &crate::noise::terms::TermFit, tau0_s: f64, f2: f64) -> Value {
@@ -189,13 +180,13 @@ impl ChannelSpectrum {
         let f2 = f * f;
         let scale = |v: &[f64]| -> Vec<f64> { v.iter().map(|g| g * f2).collect() };
         let white = self.white.map(|w| {
-            let (n, un) = self.n_equivalent().unwrap_or((f64::NAN, f64::NAN));
-            let asd = (w.density * f2).sqrt();
+            let (n, un) = w.n_equivalent();
+            let (asd, u_asd) = w.asd(f);
             json!({
                 "density": w.density * f2,
                 "u_density": w.u * f2,
                 "asd": asd,
-                "u_asd": asd * w.u / (2.0 * w.density),
+                "u_asd": u_asd,
                 "dof": w.dof,
                 "band_hz": [w.band_hz.0, w.band_hz.1],
                 "n_equivalent": n * n_factor,

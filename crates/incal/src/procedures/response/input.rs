@@ -80,12 +80,7 @@ pub fn read<R: Read>(
             .error("no column 'time_s': give the sampling rate (rate_hz) or the stamps")
             .into());
     }
-    let cref = h.opt_column("time_ref_s");
-    if cref.is_some() && ct.is_none() {
-        return Err(h
-            .error("column 'time_ref_s' (the reference's clock) needs 'time_s' (the output's)")
-            .into());
-    }
+    let cref = reference_clock(h, ct)?;
     let mut dwells: Vec<Dwell> = Vec::new();
     let mut whole = super::find::Recording::default();
     let mut index = 0usize;
@@ -155,6 +150,19 @@ pub fn read<R: Read>(
     whole.samples = dwells.pop().unwrap_or_default();
     let (dwells, warnings) = super::find::find(&whole, window_s)?;
     Ok(Recorded { dwells, warnings })
+}
+
+/// The column `time_ref_s` (the reference's own clock) when the header
+/// has one; refused without the output's `time_s` (`ct`). Every response
+/// reader's.
+pub fn reference_clock(h: &incal_io::Header, ct: Option<usize>) -> Result<Option<usize>> {
+    let cref = h.opt_column("time_ref_s");
+    if cref.is_some() && ct.is_none() {
+        return Err(h
+            .error("column 'time_ref_s' (the reference's clock) needs 'time_s' (the output's)")
+            .into());
+    }
+    Ok(cref)
 }
 
 /// One row of a stepped-sine recording as the simulator writes it.

@@ -231,6 +231,11 @@ pub struct ResponsePlanOptions {
     pub u_reference_phase_deg: f64,
 }
 
+/// A simulator's `reference_clock_offset_s` (s): from −1 to 1.
+pub fn check_clock_offset(s: f64) -> Result<()> {
+    check_range("reference_clock_offset_s", s, -1.0, 1.0, "s")
+}
+
 pub(super) fn thousand() -> f64 {
     1000.0
 }

@@ -114,13 +114,7 @@ impl ResponseSimOptions {
             50.0,
             "%",
         )?;
-        check_range(
-            "reference_clock_offset_s",
-            self.reference_clock_offset_s,
-            -1.0,
-            1.0,
-            "s",
-        )?;
+        super::plan::check_clock_offset(self.reference_clock_offset_s)?;
         check_range(
             "frequency_error_pct",
             self.frequency_error_pct,

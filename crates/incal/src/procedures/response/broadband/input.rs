@@ -41,21 +41,16 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, rate_hz: Option<f64>) -> Re
             .error("no column 'time_s': give the sampling rate (rate_hz) or the stamps")
             .into());
     }
-    let cref = h.opt_column("time_ref_s");
-    if cref.is_some() && ct.is_none() {
-        return Err(h
-            .error("column 'time_ref_s' (the reference's clock) needs 'time_s' (the output's)")
-            .into());
-    }
+    let cref = crate::procedures::response::input::reference_clock(h, ct)?;
     let mut rec = Record::default();
     let mut stamps: Vec<(f64, usize)> = Vec::new();
     let mut offsets: Vec<f64> = Vec::new();
     while let Some(row) = rows.next_row()? {
-        if let (Some(c), Some(ct)) = (cref, ct) {
-            offsets.push(row.f64(c)? - row.f64(ct)?);
-        }
         if let Some(c) = ct {
             let t = row.f64(c)?;
+            if let Some(r) = cref {
+                offsets.push(row.f64(r)? - t);
+            }
             if let Some((last, _)) = stamps.last() {
                 if t <= *last {
                     return Err(row

@@ -147,13 +147,7 @@ impl BroadbandSimOptions {
         check_range("noise", self.noise, 0.0, 1e12, "")?;
         check_range("reference_noise", self.reference_noise, 0.0, 1e12, "")?;
         check_range("bias", self.bias, -1e12, 1e12, "")?;
-        check_range(
-            "reference_clock_offset_s",
-            self.reference_clock_offset_s,
-            -1.0,
-            1.0,
-            "s",
-        )?;
+        crate::procedures::response::plan::check_clock_offset(self.reference_clock_offset_s)?;
         let (_, hi) = self.band();
         check_range("f_high_hz", hi, 1e-9, self.rate_hz / 2.0, "Hz")?;
         check_range("f_low_hz", self.f_low_hz, 0.0, hi, "Hz")?;

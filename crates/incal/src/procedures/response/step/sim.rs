@@ -105,13 +105,7 @@ impl StepSimOptions {
         check_range("noise", self.noise, 0.0, 1e12, "")?;
         check_range("reference_noise", self.reference_noise, 0.0, 1e12, "")?;
         check_range("bias", self.bias, -1e12, 1e12, "")?;
-        check_range(
-            "reference_clock_offset_s",
-            self.reference_clock_offset_s,
-            -1.0,
-            1.0,
-            "s",
-        )?;
+        crate::procedures::response::plan::check_clock_offset(self.reference_clock_offset_s)?;
         self.model.x()?;
         let n = (self.duration_s * self.rate_hz).round();
         crate::sim::check_rows(&[("duration_s x rate_hz", n)])?;
