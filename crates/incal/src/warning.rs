@@ -94,6 +94,12 @@ pub enum WarningCode {
     /// Two estimates of one noise term disagree beyond the U95 of their
     /// difference (the PSD's white level against the Allan fit's N).
     NoiseInconsistent,
+    /// A fitted term within its U95 of zero: the data do not distinguish
+    /// it from zero (a term asked for, not chosen by the rule).
+    NotSignificant,
+    /// The temperature moved during a test meant to run at one
+    /// temperature (the warm-up): its sensitivity mixes into the result.
+    TemperatureNotConstant,
 }
 
 impl WarningCode {
@@ -126,6 +132,8 @@ impl WarningCode {
             WarningCode::PhaseAmbiguous => "phase-ambiguous",
             WarningCode::WeakSignal => "weak-signal",
             WarningCode::NoiseInconsistent => "noise-inconsistent",
+            WarningCode::NotSignificant => "not-significant",
+            WarningCode::TemperatureNotConstant => "temperature-not-constant",
         }
     }
 }

@@ -73,4 +73,6 @@ macro_rules! procedure_families {
     };
 }
 
-procedure_families!(tumble, centrifuge, misalign, gfimu, gyro, noise, imu, thermal, response);
+procedure_families!(
+    tumble, centrifuge, misalign, gfimu, gyro, noise, imu, thermal, response, warmup
+);

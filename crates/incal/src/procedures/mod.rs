@@ -23,6 +23,7 @@ pub mod sim_plan;
 pub mod stream;
 pub mod thermal;
 pub mod tumble;
+pub mod warmup;
 
 use std::io::Read;
 

@@ -61,6 +61,10 @@ pub enum Procedure {
     /// Step response: the same model fitted in the time domain, rise time,
     /// overshoot, settling time and delay.
     ResponseStep,
+    /// Turn-on time and warm-up from power-on at one temperature: the
+    /// settled value, the warm-up curve, settling time and drift
+    /// (IEEE Std 952 / 1431, GJB 2426A).
+    Warmup,
 }
 
 impl Procedure {
@@ -101,6 +105,7 @@ impl Procedure {
             Procedure::ResponseSine => "response-sine",
             Procedure::ResponseBroadband => "response-broadband",
             Procedure::ResponseStep => "response-step",
+            Procedure::Warmup => "warmup",
         }
     }
 }
@@ -709,6 +714,28 @@ pub static REGISTRY: &[Entry] = &[
         reduction: reduction::<super::response::step::ResponseStep>(),
         planner: planner::<super::response::step::ResponseStep>(),
         simulator: simulator::<super::response::step::ResponseStep>(),
+    },
+    Entry {
+        id: "warmup",
+        document: Procedure::Warmup,
+        command: &["warmup"],
+        plan: Some(&["plan", "warmup"]),
+        simulate: Some(&["simulate", "warmup"]),
+        title: "Turn-on time and warm-up: settled value, warm-up curve, settling time and drift",
+        rig: Some("thermal-chamber"),
+        method: "Turn-on time and warm-up from power-on at constant temperature: IEEE Std 952-1997 and IEEE Std 1431-2004 (turn-on time and warm-up tests), GJB 2426A-2004, Test methods for fiber optic gyroscopes (start-up time); the output fitted by one or two exponentials and a linear drift chosen by a lack-of-fit test, on block means weighted by the long-run noise variance from the overlapping Hadamard variance (NIST SP 1065)",
+        references: &["ieee952", "ieee1431", "gjb2426a", "nist1065"],
+        chapter: "warmup.md",
+        input: InputKind::Recording,
+        fuzz: &["warmup"],
+        run_sheet: None,
+        example: Some(Example {
+            simulate: &["--seed", "24", "--duration-s", "1800", "--rate-hz", "2"],
+            options: &[],
+        }),
+        reduction: reduction::<super::warmup::Warmup>(),
+        planner: planner::<super::warmup::Warmup>(),
+        simulator: simulator::<super::warmup::Warmup>(),
     },
 ];
 

@@ -32,4 +32,5 @@ mod schema_file;
 mod sim_plan;
 mod thermal_roundtrip;
 mod tumble_roundtrip;
+mod warmup;
 mod wu2015;
