@@ -23,3 +23,4 @@ mod result_document;
 mod thermal_cli;
 mod tumble_cli;
 mod typed;
+mod warmup_cli;

@@ -416,3 +416,27 @@ def response_step(
     fail_on: Optional[Literal["fail", "conditional"]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
+
+def warmup(
+    data: Data = None,
+    *,
+    rate_hz: Union[float, None] = None,
+    column: str = "output",
+    power_on_s: float = 0,
+    valid_min: Union[float, None] = None,
+    valid_max: Union[float, None] = None,
+    curve: Literal["auto", "exp1", "exp1-drift", "exp2", "exp2-drift"] = "auto",
+    settle_band: Union[float, None] = None,
+    first_window_s: float = 60,
+    block_s: Union[float, None] = None,
+    max_temperature_span_c: float = 1,
+    columns: Union[str, Sequence[str], Mapping[str, str], None] = None,
+    delimiter: Optional[str] = None,
+    serial: Optional[str] = None,
+    model: Optional[str] = None,
+    meta: Union[str, Sequence[str], Mapping[str, Any], None] = None,
+    output_unit: Optional[str] = None,
+    limits: Optional[PathLike] = None,
+    fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
+) -> Result: ...

@@ -267,3 +267,18 @@ def response_step(
     seed: int = 1,
     run_sheet: Optional[Union[str, float]] = None,
 ) -> Dict[str, Any]: ...
+
+def warmup(
+    *,
+    rate_hz: float = 10,
+    duration_s: float = 3600,
+    turn_on_s: float = 2,
+    bias_settled: float = 0.5,
+    amplitude: float = 0.2,
+    tau_s: float = 300,
+    noise: float = 0.01,
+    gm_sigma: float = 0,
+    gm_tau_s: float = 5,
+    seed: int = 1,
+    run_sheet: Optional[Union[str, float]] = None,
+) -> Dict[str, Any]: ...

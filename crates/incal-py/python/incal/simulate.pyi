@@ -282,3 +282,22 @@ def response_step(
     seed: int = 1,
     truth_out: Optional[Union[str, float]] = None,
 ) -> Tuple[Any, List[str]]: ...
+
+def warmup(
+    *,
+    rate_hz: float = 10,
+    duration_s: float = 3600,
+    turn_on_s: float = 2,
+    bias_settled: float = 0.5,
+    amplitude: float = 0.2,
+    tau_s: float = 300,
+    noise: float = 0.01,
+    gm_sigma: float = 0,
+    gm_tau_s: float = 5,
+    amplitude_2: float = 0,
+    tau_2_s: float = 30,
+    drift_per_s: float = 0,
+    temperature_c: float = 25,
+    seed: int = 1,
+    truth_out: Optional[Union[str, float]] = None,
+) -> Tuple[Any, List[str]]: ...

@@ -177,7 +177,10 @@ impl WarmupOptions {
         }
         if let (Some(a), Some(b)) = (self.valid_min, self.valid_max) {
             if a >= b {
-                return invalid("valid_min", format!("{a} is not below valid_max {b}"));
+                return invalid(
+                    "valid_min",
+                    format!("{a} is not below the largest valid output {b}"),
+                );
             }
         }
         if let Some(b) = self.settle_band {
