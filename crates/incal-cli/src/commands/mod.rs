@@ -74,5 +74,15 @@ macro_rules! procedure_families {
 }
 
 procedure_families!(
-    tumble, centrifuge, misalign, gfimu, gyro, noise, imu, thermal, response, warmup
+    tumble,
+    centrifuge,
+    misalign,
+    gfimu,
+    gyro,
+    noise,
+    imu,
+    thermal,
+    response,
+    warmup,
+    repeatability
 );

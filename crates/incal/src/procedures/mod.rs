@@ -18,6 +18,7 @@ pub mod imu;
 pub mod misalign;
 pub mod noise;
 pub mod registry;
+pub mod repeatability;
 pub mod response;
 pub mod sim_plan;
 pub mod stream;

@@ -65,6 +65,10 @@ pub enum Procedure {
     /// settled value, the warm-up curve, settling time and drift
     /// (IEEE Std 952 / 1431, GJB 2426A).
     Warmup,
+    /// Repeatability turn-on to turn-on and day to day: variance
+    /// components of one coefficient over runs (IEEE Std 952 / 1431, GJB
+    /// 2426A, GJB 1037A).
+    Repeatability,
 }
 
 impl Procedure {
@@ -106,6 +110,7 @@ impl Procedure {
             Procedure::ResponseBroadband => "response-broadband",
             Procedure::ResponseStep => "response-step",
             Procedure::Warmup => "warmup",
+            Procedure::Repeatability => "repeatability",
         }
     }
 }
@@ -736,6 +741,28 @@ pub static REGISTRY: &[Entry] = &[
         reduction: reduction::<super::warmup::Warmup>(),
         planner: planner::<super::warmup::Warmup>(),
         simulator: simulator::<super::warmup::Warmup>(),
+    },
+    Entry {
+        id: "repeatability",
+        document: Procedure::Repeatability,
+        command: &["repeatability"],
+        plan: Some(&["plan", "repeatability"]),
+        simulate: Some(&["simulate", "repeatability"]),
+        title: "Repeatability turn-on to turn-on and day to day: variance components of a coefficient",
+        rig: None,
+        method: "Bias and scale-factor repeatability turn-on to turn-on and day to day: IEEE Std 952-1997 and IEEE Std 1431-2004, GJB 2426A-2004 and GJB 1037A-2004; the variance components by a nested random-effects analysis of variance with each run's own u as its within-run variance (Paule-Mandel weighting where the runs' u differ by more than a factor of 3), degrees of freedom by Satterthwaite (JCGM 100:2008 G.4)",
+        references: &["ieee952", "ieee1431", "gjb2426a", "gjb1037a", "paule-mandel", "jcgm100"],
+        chapter: "repeatability.md",
+        input: InputKind::Recording,
+        fuzz: &["repeatability"],
+        run_sheet: None,
+        example: Some(Example {
+            simulate: &["--seed", "25"],
+            options: &[],
+        }),
+        reduction: reduction::<super::repeatability::Repeatability>(),
+        planner: planner::<super::repeatability::Repeatability>(),
+        simulator: simulator::<super::repeatability::Repeatability>(),
     },
 ];
 

@@ -23,6 +23,7 @@ mod noise_reference;
 mod noise_roundtrip;
 mod noise_stable32;
 mod properties;
+mod repeatability;
 mod response_broadband;
 mod response_excitation;
 mod response_found;
