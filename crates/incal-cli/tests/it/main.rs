@@ -17,6 +17,7 @@ mod one_reader;
 mod record_cli;
 mod recordings_cli;
 mod registry;
+mod repeatability_cli;
 mod report_cli;
 mod response_cli;
 mod result_document;

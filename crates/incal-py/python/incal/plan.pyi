@@ -282,3 +282,13 @@ def warmup(
     seed: int = 1,
     run_sheet: Optional[Union[str, float]] = None,
 ) -> Dict[str, Any]: ...
+
+def repeatability(
+    *,
+    days: int = 5,
+    turn_ons_per_day: int = 3,
+    day_sd: float = 0.02,
+    turn_on_sd: float = 0.01,
+    within_u: float = 0.005,
+    run_sheet: Optional[Union[str, float]] = None,
+) -> Dict[str, Any]: ...

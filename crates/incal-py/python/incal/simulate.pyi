@@ -301,3 +301,17 @@ def warmup(
     seed: int = 1,
     truth_out: Optional[Union[str, float]] = None,
 ) -> Tuple[Any, List[str]]: ...
+
+def repeatability(
+    *,
+    days: int = 5,
+    turn_ons_per_day: int = 3,
+    day_sd: float = 0.02,
+    turn_on_sd: float = 0.01,
+    within_u: float = 0.005,
+    mean: float = 0.5,
+    u_spread: float = 1,
+    within_dof: Union[float, None] = None,
+    seed: int = 1,
+    truth_out: Optional[Union[str, float]] = None,
+) -> Tuple[Any, List[str]]: ...

@@ -203,7 +203,10 @@ pub fn analyse(runs: &[Run], o: &RepeatabilityOptions) -> Result<RepeatResult> {
             runs.len()
         )));
     }
-    if let Some(r) = runs.iter().find(|r| !(r.u > 0.0) || !r.u.is_finite()) {
+    if let Some(r) = runs
+        .iter()
+        .find(|r| r.u.is_nan() || r.u <= 0.0 || r.u.is_infinite())
+    {
         return Err(Error::Unsupported(format!(
             "{}: u = {} is not a positive number: the within-run variance is each run's own u",
             r.source, r.u

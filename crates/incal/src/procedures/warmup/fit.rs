@@ -1,7 +1,8 @@
 //! The warm-up curve fitted to block means (module docs of
-//! [`super`]): the blocks, the noise of a block mean from the Hadamard
-//! variance, the Gauss–Newton fit of one model shape and the choice of
-//! the shape by the lack-of-fit rule.
+//! [`super`]): the blocks, the noise of a block mean (batch means of the
+//! richest curve's residuals), the Gauss–Newton fit of one model shape
+//! and the choice of the shape by the lack-of-fit rule at the batch
+//! scale.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -343,7 +344,13 @@ fn order_taus(shape: Shape, f: Fit) -> Result<Fit> {
     Ok(Fit { estimates, ..f })
 }
 
-/// The noise scale `m_n` of a valid run of `n` samples: a thirtieth of
+/// Batches of the noise estimate: long against the noise's correlation
+/// (a Gauss–Markov bias correlated over a tenth of a batch is 90 % in),
+/// with enough degrees of freedom left after the richest curve's six
+/// parameters.
+pub const BATCHES: usize = 20;
+
+/// The noise scale `m_n` of a valid run of `n` samples: a twentieth of
 /// it (refused below 60 samples).
 pub fn noise_scale(n: usize) -> Result<usize> {
     if n < 60 {
@@ -351,7 +358,7 @@ pub fn noise_scale(n: usize) -> Result<usize> {
             "the longest run of consecutive valid samples after turn-on holds {n}: the noise estimate needs at least 60"
         )));
     }
-    Ok(n / 30)
+    Ok(n / BATCHES)
 }
 
 /// Every shape's fit on one set of blocks, each fitted once (weights
@@ -476,7 +483,7 @@ impl<'a> Fits<'a> {
     /// a drift unless a simpler shape fits better) in `N` batches of `m` samples (batch means, the
     /// pure error every simpler shape is tested against):
     /// `σ²_LR = m Σ r̄ⱼ² / (N − p)` with `N − p` degrees of freedom
-    /// (`N = 30`: batches long against the noise's correlation).
+    /// (`N` = [`BATCHES`]).
     pub fn noise(&mut self, run: (usize, usize)) -> Result<(f64, f64)> {
         let b = self.blocks;
         let y = &b.y[run.0..run.1];

@@ -20,8 +20,8 @@
 //! the record). Each block mean is weighted by `σ²_LR / n_b`, with
 //! `σ²_LR` the long-run variance of one sample: the residuals of the
 //! richest curve that fits (two exponentials and a drift, else the next
-//! simpler), over the longest valid run, in 30 batches of `m_n` samples,
-//! `σ²_LR = m_n Σ r̄ⱼ² / (30 − p)` with `30 − p` degrees of freedom
+//! simpler), over the longest valid run, in 20 batches of `m_n` samples,
+//! `σ²_LR = m_n Σ r̄ⱼ² / (20 − p)` with `20 − p` degrees of freedom
 //! (batch means: noise correlated over a batch, a Gauss–Markov bias or
 //! flicker at that scale, is in u, not `σ/√n`). The one lack-of-fit rule
 //! of incal ([`crate::estimation::linear::LACK_OF_FIT_ALPHA`]), in its
@@ -343,7 +343,13 @@ pub fn calibrate(rec: &Record, o: &WarmupOptions) -> Result<WarmupResult> {
         Some(b) => b,
         None => 0.01 * fit::transient(shape, p.as_slice(), 0.0).abs(),
     };
-    let coefficients = derive(shape, &fit.estimates, on.time_s, band, o.first_window_s)?;
+    let coefficients = derive(
+        shape,
+        &fit.estimates,
+        on.time_s,
+        o.settle_band,
+        o.first_window_s,
+    )?;
     let mut warnings = Vec::new();
     significance(shape, &coefficients, o.curve, &mut warnings);
     let dropped = n - on.row - t.len();
@@ -429,7 +435,7 @@ fn block_length(
                 return crate::options::invalid(
                     "block_s",
                     format!(
-                        "{b} s is {m} rows: at most {most} (a thirtieth of the longest valid run)"
+                        "{b} s is {m} rows: at most {most} (a twentieth of the longest valid run)"
                     ),
                 );
             }
@@ -557,10 +563,18 @@ pub fn warmup_drift(shape: Shape, p: &[f64], t_on: f64, w: f64) -> f64 {
 }
 
 /// The curve's parameters with `settling_time_s` and `warmup_drift`
-/// appended (u by the Jacobian, module docs).
-fn derive(shape: Shape, e: &Estimates, t_on: f64, band: f64, w: f64) -> Result<Estimates> {
+/// appended (u by the Jacobian, module docs); the default band, 1 % of
+/// the transient at power-on, moves with the parameters.
+fn derive(
+    shape: Shape,
+    e: &Estimates,
+    t_on: f64,
+    settle_band: Option<f64>,
+    w: f64,
+) -> Result<Estimates> {
     let g = move |v: &DVector<f64>| {
         let p = v.as_slice();
+        let band = settle_band.unwrap_or_else(|| 0.01 * fit::transient(shape, p, 0.0).abs());
         DVector::from_vec(vec![
             settling_time(shape, p, band, t_on),
             warmup_drift(shape, p, t_on, w),
