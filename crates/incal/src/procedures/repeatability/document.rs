@@ -1,8 +1,9 @@
 //! The result document of a repeatability analysis: the mean, the
-//! within-run, turn-on-to-turn-on and day-to-day standard deviations and
+//! turn-on-to-turn-on and day-to-day standard deviations and
 //! the standards' simple formula as coefficients (names the limits use:
 //! `turn_on_repeatability`, `day_repeatability`, …), the `repeatability`
-//! extra (method, mean squares, days) and the `runs` table.
+//! extra (method, the within-run part `√ū²` the runs bring, mean
+//! squares, days) and the `runs` table.
 
 use serde_json::json;
 
@@ -67,7 +68,6 @@ impl RepeatResult {
             "mean",
             Coefficient::new("mean", self.mean.0, self.mean.1, self.unit(), dof_mean)?,
         )?;
-        self.push(&mut b, "within_run_sd", &self.within)?;
         if let Some(c) = &self.turn_on {
             self.push(&mut b, "turn_on_repeatability", c)?;
         }
@@ -128,7 +128,8 @@ impl RepeatResult {
             "ms_turn_on": self.anova.0.is_finite().then_some(self.anova.0),
             "ms_day": self.anova.1,
             "t0": self.anova.2,
-            "within_run_variance": self.within.variance,
+            "within_run_sd": self.within.sd,
+            "within_run_dof": self.within.dof.is_finite().then_some(self.within.dof),
             "turn_on": var(&self.turn_on),
             "day": var(&self.day),
             "days": days,

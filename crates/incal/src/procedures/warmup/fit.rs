@@ -444,7 +444,7 @@ impl<'a> Fits<'a> {
     /// [`LACK_OF_FIT_ALPHA`] the covariance is scaled by the ratio of the
     /// mean squares, with `N − p` degrees of freedom. The p-value is the
     /// fit's `chi2_p_value`.
-    fn lack_of_fit(&self, s: Shape, mut f: Fit) -> Result<Fit> {
+    pub fn lack_of_fit(&self, s: Shape, mut f: Fit) -> Result<Fit> {
         use statrs::distribution::{ContinuousCDF, FisherSnedecor};
         let Some((run, m, s_r, p_r)) = self.pure else {
             return Ok(f);

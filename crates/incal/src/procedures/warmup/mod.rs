@@ -24,13 +24,12 @@
 //! `σ²_LR = m_n Σ r̄ⱼ² / (20 − p)` with `20 − p` degrees of freedom
 //! (batch means: noise correlated over a batch, a Gauss–Markov bias or
 //! flicker at that scale, is in u, not `σ/√n`). The one lack-of-fit rule
-//! of incal ([`crate::estimation::linear::LACK_OF_FIT_ALPHA`]), in its
-//! form for a prior variance with finite degrees of freedom
-//! (`Σ w r²/(n − p)` against `F(n − p, ν)`, [`fit::lack_of_fit`]),
-//! chooses the shape: the first of `exp1`, `exp1-drift`, `exp2`,
-//! `exp2-drift` that passes with τ at most a third of the record (a
-//! longer τ cannot be told from a drift); u is scaled by the residual
-//! scatter where none passes.
+//! of incal ([`crate::estimation::linear::LACK_OF_FIT_ALPHA`]), at the
+//! batch scale against that pure error ([`fit::Fits::lack_of_fit`]: the
+//! extra-sum-of-squares F test), chooses the shape: the first of `exp1`,
+//! `exp1-drift`, `exp2`, `exp2-drift` that passes with τ at most a third
+//! of the record (a longer τ cannot be told from a drift); u is scaled by
+//! the ratio of the mean squares where none passes.
 //!
 //! # Derived (u through the Jacobian)
 //! `settling_time_s`: the last time, from power-on, the transient
