@@ -70,7 +70,7 @@ pub struct WarmupArgs {
     /// The warm-up drift's window after turn-on, s.
     #[arg(long, default_value_t = 60.0)]
     pub first_window_s: f64,
-    /// Block length, s (default: the longest keeping 50 blocks and at most tau/10).
+    /// Block length, s (default: at most tau/10 and a 400th of the record).
     #[arg(long)]
     pub block_s: Option<f64>,
     /// Largest temperature span after turn-on before a warning, °C.

@@ -195,3 +195,26 @@ fn the_plan_predicts_the_spread_of_the_turn_on_component() {
         "predicted {predicted} against {sd}"
     );
 }
+
+#[test]
+fn a_component_at_zero_is_flagged_with_the_size_it_would_show() {
+    // No turn-on variation: its estimate falls at or below zero in about
+    // half the records; reported as 0 with a positive u, and flagged.
+    let hit = (1..40).find_map(|seed| {
+        let o = RepeatSimOptions {
+            turn_on_sd: 0.0,
+            ..sim(seed)
+        };
+        let r = analyse(&o.runs().unwrap(), &RepeatabilityOptions::default()).unwrap();
+        let c = r.turn_on.unwrap();
+        (c.variance <= 0.0).then_some((r, c))
+    });
+    let (r, c) = hit.expect("a record with the turn-on estimate at zero");
+    assert_eq!(c.sd, 0.0);
+    assert!(c.u > 0.0 && c.u.is_finite(), "{c:?}");
+    let d = r.document().unwrap();
+    assert!(d
+        .warnings
+        .iter()
+        .any(|w| w.message.contains("turn_on_repeatability")));
+}

@@ -268,3 +268,36 @@ fn warmup_turn_on_follows_status_and_validity_band() {
         "{e}"
     );
 }
+
+#[test]
+fn warmup_valid_from_the_first_row_widens_the_turn_on_and_says_so() {
+    let (rec, _) = sim(4).record().unwrap();
+    // Power-on 5 s before the record: the first row is valid and late.
+    let mut rec = rec;
+    let on = rec.output.iter().position(|y| y.is_some()).unwrap();
+    rec.time_s.drain(..on);
+    rec.output.drain(..on);
+    rec.lines.drain(..on);
+    for v in [rec.status.as_mut(), rec.temperature_c.as_mut()]
+        .into_iter()
+        .flatten()
+    {
+        v.drain(..on);
+    }
+    let t0 = rec.time_s[0];
+    let o = WarmupOptions {
+        power_on_s: t0 - 5.0,
+        ..WarmupOptions::default()
+    };
+    let r = calibrate(&rec, &o).unwrap();
+    assert!(r.turn_on.valid_at_start);
+    assert!((r.turn_on.time_s - 2.5).abs() < 1e-9, "{:?}", r.turn_on);
+    assert!((r.turn_on.u_s - 5.0 / 12f64.sqrt()).abs() < 1e-9);
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w.message.contains("within [0, 5")),
+        "{:?}",
+        r.warnings
+    );
+}

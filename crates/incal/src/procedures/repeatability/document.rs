@@ -127,7 +127,7 @@ impl RepeatResult {
             "u_ratio": self.u_ratio,
             "ms_turn_on": self.anova.0.is_finite().then_some(self.anova.0),
             "ms_day": self.anova.1,
-            "t0": self.anova.2,
+            "t0": (self.method == Method::Anova).then_some(self.anova.2),
             "within_run_sd": self.within.sd,
             "within_run_dof": self.within.dof.is_finite().then_some(self.within.dof),
             "turn_on": var(&self.turn_on),

@@ -95,7 +95,18 @@ pub fn runs_from_documents(
                 d.doc.coefficients.names().join(", ")
             ))
         })?;
-        unit.get_or_insert_with(|| c.unit.as_str().to_string());
+        let this = c.unit.as_str().to_string();
+        match &unit {
+            None => unit = Some(this),
+            Some(u) if *u != this => {
+                return Err(Error::Unsupported(format!(
+                    "{}: {} is in {this}, the documents before in {u}: one unit at a time",
+                    d.name,
+                    incal_io::clip(coefficient)
+                )))
+            }
+            Some(_) => {}
+        }
         let day = d
             .doc
             .instrument

@@ -120,18 +120,28 @@ pub struct Component {
 }
 
 impl Component {
-    /// From a variance estimate and its degrees of freedom.
-    fn of(variance: f64, dof: f64) -> Component {
-        let dof = if dof.is_finite() {
+    /// From a variance estimate, its degrees of freedom and the standard
+    /// uncertainty of the variance estimate (`u_var`): a variance at or
+    /// below zero is reported as 0 with `u = √u_var`, the size at which
+    /// the component would show.
+    fn of(variance: f64, dof: f64, u_var: f64) -> Component {
+        let dof = if dof.is_nan() {
+            1.0
+        } else if dof.is_finite() {
             dof.max(1.0)
         } else {
             f64::INFINITY
         };
         if variance <= 0.0 {
+            let u = if u_var.is_finite() {
+                u_var.max(0.0).sqrt()
+            } else {
+                0.0
+            };
             return Component {
                 variance,
                 sd: 0.0,
-                u: 0.0,
+                u,
                 dof,
             };
         }
@@ -237,7 +247,7 @@ pub fn analyse(runs: &[Run], o: &RepeatabilityOptions) -> Result<RepeatResult> {
             .iter()
             .map(|r| (r.u * r.u).powi(2) / r.dof)
             .sum::<f64>();
-    let within = Component::of(u2_mean, nu_u);
+    let within = Component::of(u2_mean, nu_u, 0.0);
     let method = if u_ratio > 3.0 {
         Method::Weighted
     } else {
@@ -246,9 +256,25 @@ pub fn analyse(runs: &[Run], o: &RepeatabilityOptions) -> Result<RepeatResult> {
     let x: Vec<f64> = runs.iter().map(|r| r.value).collect();
     let mean_all = x.iter().sum::<f64>() / n;
     let ss_all: f64 = x.iter().map(|v| (v - mean_all).powi(2)).sum();
-    let simple = Component::of(ss_all / (n - 1.0), n - 1.0);
+    let simple = Component::of(ss_all / (n - 1.0), n - 1.0, 0.0);
     let (turn_on, day, anova, mean) = match method {
-        Method::Anova => anova(&x, &days, u2_mean, nu_u, dated),
+        Method::Anova => {
+            // E[MS_on] = σ²_on + Σ (1 − 1/T_d) u²_dt / (N − D): a day's
+            // single run adds nothing to MS_on.
+            let df_on = n - days.len() as f64;
+            let u2_on = if df_on > 0.0 {
+                days.iter()
+                    .map(|(_, ix)| {
+                        let f = 1.0 - 1.0 / ix.len() as f64;
+                        ix.iter().map(|&k| f * u2[k]).sum::<f64>()
+                    })
+                    .sum::<f64>()
+                    / df_on
+            } else {
+                u2_mean
+            };
+            anova(&x, &days, (u2_on, u2_mean), nu_u, dated)
+        }
         Method::Weighted => weighted(&x, &u2, &days, u2_mean, dated),
     };
     Ok(RepeatResult {
@@ -274,7 +300,13 @@ type Parts = (
 );
 
 /// The analysis of variance (module docs).
-fn anova(x: &[f64], days: &[(String, Vec<usize>)], u2: f64, nu_u: f64, dated: bool) -> Parts {
+fn anova(
+    x: &[f64],
+    days: &[(String, Vec<usize>)],
+    (u2, u2_mean): (f64, f64),
+    nu_u: f64,
+    dated: bool,
+) -> Parts {
     let n = x.len() as f64;
     let d = days.len() as f64;
     let means: Vec<f64> = days
@@ -306,8 +338,8 @@ fn anova(x: &[f64], days: &[(String, Vec<usize>)], u2: f64, nu_u: f64, dated: bo
     };
     let turn_on = (df_on > 0.0).then(|| {
         let v = ms_on - u2;
-        let nu = v * v / (ms_on * ms_on / df_on + u2 * u2 / nu_u);
-        Component::of(v, nu)
+        let var_v = 2.0 * (ms_on * ms_on / df_on + u2 * u2 / nu_u);
+        Component::of(v, 2.0 * v * v / var_v, var_v.sqrt())
     });
     let (day, ms_day) = if dated {
         let ms_day = ss_day / (d - 1.0);
@@ -316,21 +348,28 @@ fn anova(x: &[f64], days: &[(String, Vec<usize>)], u2: f64, nu_u: f64, dated: bo
         let (inner, inner_var) = if df_on > 0.0 {
             (ms_on, ms_on * ms_on / df_on)
         } else {
-            (u2, u2 * u2 / nu_u)
+            (u2_mean, u2_mean * u2_mean / nu_u)
         };
         let v = (ms_day - inner) / t0;
-        let nu = (t0 * v).powi(2) / (ms_day * ms_day / (d - 1.0) + inner_var);
-        (Some(Component::of(v, nu)), Some(ms_day))
+        let denom = ms_day * ms_day / (d - 1.0) + inner_var;
+        let nu = (t0 * v).powi(2) / denom;
+        (
+            Some(Component::of(v, nu, (2.0 * denom).sqrt() / t0)),
+            Some(ms_day),
+        )
     } else {
         (None, None)
     };
-    // u of the grand mean: the spread of day means (or of runs).
-    let u_mean = if dated {
-        (means.iter().map(|m| (m - grand).powi(2)).sum::<f64>() / (d - 1.0) / d).sqrt()
+    // The mean: of the day means (each day once), u from their spread;
+    // without days, of the runs.
+    let mean = if dated {
+        let m = means.iter().sum::<f64>() / d;
+        let u = (means.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (d - 1.0) / d).sqrt();
+        (m, u)
     } else {
-        (ms_on / n).sqrt()
+        (grand, (ms_on / n).sqrt())
     };
-    (turn_on, day, (ms_on, ms_day, t0), (grand, u_mean))
+    (turn_on, day, (ms_on, ms_day, t0), mean)
 }
 
 /// Paule–Mandel: the `τ² ≥ 0` with `Σ (x − x̃)²/(v + τ²) = dof` (`x̃` the
@@ -414,19 +453,27 @@ fn weighted(
     let turn_on = (df_on > 0.0).then(|| {
         let info: f64 = u2.iter().map(|v| (v + s2_on).powi(-2)).sum();
         let nu = s2_on * s2_on * info * df_on / n;
-        Component::of(s2_on, nu)
+        Component::of(s2_on, nu, (2.0 * n / (info * df_on)).sqrt())
     });
     let all = vec![day_means.clone()];
     let (day, ms_day, grand) = if dated {
         let s2_day = paule_mandel(&all, d - 1.0);
         let v_mean = day_means.iter().map(|m| m.1).sum::<f64>() / d;
         let ms_day = s2_day + v_mean;
-        let nu = s2_day * s2_day / (ms_day * ms_day / (d - 1.0) + v_mean * v_mean / df_on.max(1.0));
+        // The day means' own variances are known as well as the u's and
+        // the turn-on component behind them (N − D degrees of freedom).
+        let inner = if df_on > 0.0 {
+            v_mean * v_mean / df_on
+        } else {
+            0.0
+        };
+        let denom = ms_day * ms_day / (d - 1.0) + inner;
+        let nu = s2_day * s2_day / denom;
         let w: Vec<f64> = day_means.iter().map(|m| 1.0 / (m.1 + s2_day)).collect();
         let sw: f64 = w.iter().sum();
         let g = day_means.iter().zip(&w).map(|(m, w)| m.0 * w).sum::<f64>() / sw;
         (
-            Some(Component::of(s2_day, nu)),
+            Some(Component::of(s2_day, nu, (2.0 * denom).sqrt())),
             Some(ms_day),
             (g, sw.recip().sqrt()),
         )

@@ -59,7 +59,11 @@ pub fn plan_document(o: &RepeatPlanOptions) -> Result<PlanDocument> {
             format!("day level: {} days; at least 3 are needed", o.days),
         );
     }
-    if o.turn_ons_per_day < 1 || o.days * o.turn_ons_per_day > 1_000_000 {
+    if o.turn_ons_per_day < 1
+        || o.days
+            .checked_mul(o.turn_ons_per_day)
+            .is_none_or(|n| n > 1_000_000)
+    {
         return invalid("turn_ons_per_day", "1 to 1000000 runs in all");
     }
     check_range("day_sd", o.day_sd, 0.0, 1e12, "")?;
@@ -90,7 +94,12 @@ pub fn plan_document(o: &RepeatPlanOptions) -> Result<PlanDocument> {
     } else {
         0.0
     };
-    let v = o.day_sd * o.day_sd;
+    // One turn-on a day: the day component holds the turn-on variance too.
+    let v = if o.turn_ons_per_day >= 2 {
+        o.day_sd * o.day_sd
+    } else {
+        o.day_sd * o.day_sd + o.turn_on_sd * o.turn_on_sd
+    };
     let nu = (t * v).powi(2) / (ms_day * ms_day / (d - 1.0) + inner);
     doc.predict("day_repeatability", u_sd(v, nu), "output")?;
     doc.predict(

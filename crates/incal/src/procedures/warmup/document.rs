@@ -85,11 +85,12 @@ impl WarmupResult {
         b.decision(
             DecisionCode::VarianceSource,
             format!(
-                "block means of {} rows ({:.6} s) weighted by the long-run variance of one sample, {:.4e} (output units squared, {:.0} degrees of freedom): batch means, 30 over the longest valid run, of the residuals of the richest curve that fits; noise correlated over a batch is in u and in the lack-of-fit test",
+                "block means of {} rows ({:.6} s) weighted by the long-run variance of one sample, {:.4e} (output units squared, {:.0} degrees of freedom): batch means, {} or more over the longest valid run, of the residuals of the richest curve that fits; noise correlated over a batch is in u and in the lack-of-fit test",
                 self.blocks.rows,
                 self.blocks.rows as f64 / self.rate_hz,
                 self.var_lr.0,
-                self.var_lr.1
+                self.var_lr.1,
+                super::fit::BATCHES
             ),
         );
         b.warnings(self.fit.quality_warnings(

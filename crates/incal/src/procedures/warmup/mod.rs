@@ -269,7 +269,9 @@ pub fn turn_on(rec: &Record, o: &WarmupOptions) -> Result<TurnOn> {
             ))
         })?;
     let t = rec.time_s[row] - o.power_on_s;
-    let step = dt.min(t);
+    // Valid from the first row after power-on: the turn-on lies anywhere
+    // in [0, t]; else within the sample interval before the row.
+    let step = if row == first { t } else { dt.min(t) };
     Ok(TurnOn {
         row,
         first_valid_s: t,
@@ -359,6 +361,20 @@ pub fn calibrate(rec: &Record, o: &WarmupOptions) -> Result<WarmupResult> {
                 "{dropped} rows after turn-on are not valid ({}) and were left out of the fit",
                 validity(o, rec.status.is_some())
             ),
+        ));
+    }
+    if on.valid_at_start && on.first_valid_s > 0.0 {
+        warnings.push(Warning::new(
+            WarningCode::ShortRecord,
+            format!("the output is valid from the first row after power-on ({:.6} s): the turn-on time is known only to lie within [0, {:.6}] s; record from before power-on", on.first_valid_s, on.first_valid_s),
+        ));
+    }
+    let settle = coefficients.value("settling_time_s").unwrap_or(0.0);
+    let end = t[t.len() - 1];
+    if settle > end {
+        warnings.push(Warning::new(
+            WarningCode::ShortRecord,
+            format!("settling_time_s {settle:.1} s lies beyond the record's end ({end:.1} s): extrapolated along the fitted curve"),
         ));
     }
     if span < 5.0 * tau {
@@ -492,7 +508,7 @@ fn choose(
                     } else {
                         format!("; before it {}", tried.join(", "))
                     };
-                    let r = format!("{}: the first shape that passes the lack-of-fit test (chi-square p = {p:.3} >= 0.05){why}", s.name());
+                    let r = format!("{}: the first shape that passes the lack-of-fit test (F test p = {p:.3} >= 0.05){why}", s.name());
                     return Ok((s, f, r));
                 }
                 tried.push(format!("{} p = {p:.2e}", s.name()));
