@@ -168,6 +168,37 @@ pub fn gap_indices(times: &[f64]) -> Vec<usize> {
         .unwrap_or_default()
 }
 
+/// The rate (Hz) of `n` increasing stamps that must be evenly spaced
+/// (`stamp(k)` = time in s and file line of sample `k`, `n ≥ 2`): the
+/// span over the steps. Refused naming the line: a step above 1.5
+/// periods (`remedy` says what to do), and a nominal `rate_hz` that
+/// differs from it by more than [`RATE_TOLERANCE`].
+pub fn even_rate(
+    n: usize,
+    stamp: impl Fn(usize) -> (f64, usize),
+    rate_hz: Option<f64>,
+    remedy: &str,
+) -> crate::error::Result<f64> {
+    let rate = (n - 1) as f64 / (stamp(n - 1).0 - stamp(0).0);
+    let period = 1.0 / rate;
+    if let Some(k) = (1..n).find(|&k| stamp(k).0 - stamp(k - 1).0 > 1.5 * period) {
+        let ((t0, _), (t1, line)) = (stamp(k - 1), stamp(k));
+        return Err(crate::error::Error::Unsupported(format!(
+            "line {line}: a gap of {:.6} s after {t0} s (the period is {period:.6} s): {remedy}",
+            t1 - t0
+        )));
+    }
+    if let Some(r) = rate_hz {
+        if ((r - rate) / rate).abs() > RATE_TOLERANCE {
+            return crate::options::invalid(
+                "rate_hz",
+                format!("{r} Hz contradicts the stamps' {rate:.6} Hz"),
+            );
+        }
+    }
+    Ok(rate)
+}
+
 /// The `time-sorted` warning for `moved` of `rows` rows put in order.
 pub fn sorted_warning(moved: usize, rows: usize) -> crate::warning::Warning {
     crate::warning::Warning::new(

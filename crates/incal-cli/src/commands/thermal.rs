@@ -149,15 +149,7 @@ fn from_store(
     serial: &str,
     procedure: Option<&str>,
 ) -> CliResult<Vec<soak::SoakInput>> {
-    let name = crate::options::store_name(db);
-    let err = |e| crate::options::store_error(&name, e);
-    let want = match procedure {
-        Some(p) => Some(crate::options::procedure_id("--procedure", p)?),
-        None => None,
-    };
-    let store = incal_records::Store::open_existing(db).map_err(err)?;
-    store.check_chain().map_err(err)?;
-    let records = store.current_calibrations(serial, want).map_err(err)?;
+    let (_, records) = crate::documents::store_calibrations(db, serial, procedure)?;
     Ok(records
         .into_iter()
         .map(|(rec, doc)| soak::SoakInput {

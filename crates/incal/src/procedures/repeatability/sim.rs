@@ -106,14 +106,22 @@ impl RepeatSimOptions {
 
     /// The simulated runs.
     pub fn runs(&self) -> Result<Vec<Run>> {
+        Ok(self.draw()?.0)
+    }
+
+    /// The runs and the mean of the true u² (the reported u differ from
+    /// it with `within_dof`).
+    fn draw(&self) -> Result<(Vec<Run>, f64)> {
         self.validate()?;
         let mut r = rng(self.seed);
         let mut out = Vec::new();
+        let mut u2 = 0.0;
         for d in 0..self.days {
             let a = normal(&mut r, self.day_sd);
             for t in 0..self.turn_ons_per_day {
                 let b = normal(&mut r, self.turn_on_sd);
                 let u = self.within_u * self.u_spread.powf(r.random::<f64>() - 0.5);
+                u2 += u * u;
                 let e = normal(&mut r, u);
                 let reported = match self.within_dof {
                     Some(nu) => {
@@ -132,35 +140,19 @@ impl RepeatSimOptions {
                 });
             }
         }
-        Ok(out)
+        let n = out.len() as f64;
+        Ok((out, u2 / n))
     }
 
     /// The truth as JSON: the mean and the components as standard
     /// deviations (`within_run_sd` the root mean square of the true u).
     pub fn truth_json(&self) -> Result<serde_json::Value> {
-        self.validate()?;
-        let mut r = rng(self.seed);
-        let mut u2 = 0.0;
-        let n = self.days * self.turn_ons_per_day;
-        for _ in 0..self.days {
-            normal(&mut r, self.day_sd);
-            for _ in 0..self.turn_ons_per_day {
-                normal(&mut r, self.turn_on_sd);
-                let u = self.within_u * self.u_spread.powf(r.random::<f64>() - 0.5);
-                u2 += u * u;
-                normal(&mut r, u);
-                if let Some(nu) = self.within_dof {
-                    for _ in 0..nu.round().max(1.0) as usize {
-                        normal(&mut r, 1.0);
-                    }
-                }
-            }
-        }
+        let u2 = self.draw()?.1;
         Ok(serde_json::json!({
             "mean": self.mean,
             "day_repeatability": self.day_sd,
             "turn_on_repeatability": self.turn_on_sd,
-            "within_run_sd": (u2 / n as f64).sqrt(),
+            "within_run_sd": u2.sqrt(),
         }))
     }
 }

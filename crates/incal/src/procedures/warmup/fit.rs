@@ -424,15 +424,12 @@ impl<'a> Fits<'a> {
         self.lack_of_fit(s, f)
     }
 
-    /// The batch sum of squares `S = Σ r̄ⱼ²` of shape `s`'s residuals.
-    fn batch_ss(&self, s: Shape, x: &[f64], run: (usize, usize), m: usize) -> f64 {
+    /// Shape `s`'s residuals (parameters `x`) over the samples `run`.
+    fn residuals(&self, s: Shape, x: &[f64], run: (usize, usize)) -> Vec<f64> {
         let b = self.blocks;
-        let r: Vec<f64> = (run.0..run.1)
+        (run.0..run.1)
             .map(|k| b.y[k] - curve(s, x, b.t[k]))
-            .collect();
-        r.chunks_exact(m)
-            .map(|c| (c.iter().sum::<f64>() / m as f64).powi(2))
-            .sum()
+            .collect()
     }
 
     /// incal's lack-of-fit rule at the batch scale, against the pure
@@ -452,7 +449,7 @@ impl<'a> Fits<'a> {
         let x = f.estimates.values().as_slice().to_vec();
         let p = x.len();
         let n = ((run.1 - run.0) / m) as f64;
-        let ss = self.batch_ss(s, &x, run, m);
+        let ss = batch_ss(&self.residuals(s, &x, run), m);
         let (ms, ms_r) = (ss / (n - p as f64), s_r / (n - p_r as f64));
         let pv = if p < p_r {
             let fstat = ((ss - s_r).max(0.0) / (p_r - p) as f64) / ms_r;
@@ -504,20 +501,14 @@ impl<'a> Fits<'a> {
         let (r, p): (Vec<f64>, usize) = match &rich {
             Some((s, f)) => {
                 let x = f.estimates.values().as_slice();
-                let r = (run.0..run.1)
-                    .map(|k| b.y[k] - curve(*s, x, b.t[k]))
-                    .collect();
-                (r, x.len())
+                (self.residuals(*s, x, run), x.len())
             }
             None => {
                 let mean = y.iter().sum::<f64>() / y.len() as f64;
                 (y.iter().map(|v| v - mean).collect(), 1)
             }
         };
-        let sum: f64 = r
-            .chunks_exact(m_n)
-            .map(|c| (c.iter().sum::<f64>() / m_n as f64).powi(2))
-            .sum();
+        let sum = batch_ss(&r, m_n);
         let dof = (r.len() / m_n - p) as f64;
         let var = m_n as f64 * sum / dof;
         if rich.is_some() {
@@ -529,6 +520,14 @@ impl<'a> Fits<'a> {
             Err(flat())
         }
     }
+}
+
+/// The batch sum of squares `Σ r̄ⱼ²` of `r` in batches of `m` samples
+/// (the remainder left out).
+fn batch_ss(r: &[f64], m: usize) -> f64 {
+    r.chunks_exact(m)
+        .map(|c| (c.iter().sum::<f64>() / m as f64).powi(2))
+        .sum()
 }
 
 fn flat() -> Error {

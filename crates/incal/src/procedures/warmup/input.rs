@@ -8,7 +8,7 @@
 
 use std::io::Read;
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 
 /// A warm-up record: one row per sample, evenly spaced.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -84,36 +84,15 @@ pub fn read<R: Read>(
             .into());
     }
     rec.rate_hz = match ct {
-        Some(_) => stamp_rate(&rec, rate_hz)?,
+        Some(_) => crate::timebase::even_rate(
+            n,
+            |k| (rec.time_s[k], rec.lines[k]),
+            rate_hz,
+            "write the rows the instrument missed with an empty output cell",
+        )?,
         None => rate_hz.unwrap_or(1.0),
     };
     Ok(rec)
-}
-
-/// The rate of evenly spaced stamps; a gap or a contradicting `rate_hz`
-/// refused.
-fn stamp_rate(rec: &Record, rate_hz: Option<f64>) -> Result<f64> {
-    let t = &rec.time_s;
-    let n = t.len();
-    let rate = (n - 1) as f64 / (t[n - 1] - t[0]);
-    let period = 1.0 / rate;
-    if let Some(k) = (1..n).find(|&k| t[k] - t[k - 1] > 1.5 * period) {
-        return Err(Error::Unsupported(format!(
-            "line {}: a gap of {:.6} s after {} s (the period is {period:.6} s): write the rows the instrument missed with an empty output cell",
-            rec.lines[k],
-            t[k] - t[k - 1],
-            t[k - 1]
-        )));
-    }
-    if let Some(r) = rate_hz {
-        if ((r - rate) / rate).abs() > crate::timebase::RATE_TOLERANCE {
-            return crate::options::invalid(
-                "rate_hz",
-                format!("{r} Hz contradicts the stamps' {rate:.6} Hz"),
-            );
-        }
-    }
-    Ok(rate)
 }
 
 /// The CSV `time_s,output,status[,temperature_c]` of a record (an empty

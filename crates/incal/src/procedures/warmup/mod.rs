@@ -340,10 +340,7 @@ pub fn calibrate(rec: &Record, o: &WarmupOptions) -> Result<WarmupResult> {
             3.0 * tau
         )));
     }
-    let band = match o.settle_band {
-        Some(b) => b,
-        None => 0.01 * fit::transient(shape, p.as_slice(), 0.0).abs(),
-    };
+    let band = settle_band(shape, p.as_slice(), o.settle_band);
     let coefficients = derive(
         shape,
         &fit.estimates,
@@ -541,6 +538,12 @@ fn choose(
     Ok((s, f, r))
 }
 
+/// The settling band: as given (output units), else 1 % of the
+/// transient at power-on at parameters `p`.
+pub fn settle_band(shape: Shape, p: &[f64], given: Option<f64>) -> f64 {
+    given.unwrap_or_else(|| 0.01 * fit::transient(shape, p, 0.0).abs())
+}
+
 /// The settling time (s from power-on) of the transient at parameters
 /// `p` for `band`, never before `t_on` (module docs).
 pub fn settling_time(shape: Shape, p: &[f64], band: f64, t_on: f64) -> f64 {
@@ -589,7 +592,7 @@ fn derive(
 ) -> Result<Estimates> {
     let g = move |v: &DVector<f64>| {
         let p = v.as_slice();
-        let band = settle_band.unwrap_or_else(|| 0.01 * fit::transient(shape, p, 0.0).abs());
+        let band = self::settle_band(shape, p, settle_band);
         DVector::from_vec(vec![
             settling_time(shape, p, band, t_on),
             warmup_drift(shape, p, t_on, w),

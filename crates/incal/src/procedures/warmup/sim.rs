@@ -17,6 +17,7 @@ use super::input::{write, Record};
 use crate::error::Result;
 use crate::options::check_range;
 use crate::sim::{normal, rng};
+use rand::rngs::ChaCha8Rng;
 
 /// Options of `incal simulate warmup`, in engineering units.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
@@ -151,13 +152,18 @@ impl WarmupSimOptions {
         (shape, p)
     }
 
+    /// The true turn-on time (s): the first draw of the seed's stream.
+    fn turn_on(&self, r: &mut ChaCha8Rng) -> f64 {
+        self.turn_on_s + (1.0 / self.rate_hz) * r.random::<f64>()
+    }
+
     /// The simulated record and the true turn-on time (s).
     pub fn record(&self) -> Result<(Record, f64)> {
         let n = self.rows()?;
         let (shape, p) = self.parameters();
         let mut r = rng(self.seed);
         let dt = 1.0 / self.rate_hz;
-        let t_on = self.turn_on_s + dt * r.random::<f64>();
+        let t_on = self.turn_on(&mut r);
         let phi = (-dt / self.gm_tau_s).exp();
         let drive = self.gm_sigma * (1.0 - phi * phi).sqrt();
         let mut g = normal(&mut r, self.gm_sigma);
@@ -190,9 +196,10 @@ impl WarmupSimOptions {
     /// settling time (the default band: 1 % of the transient at
     /// power-on) and the warm-up drift over the first 60 s.
     pub fn truth_json(&self) -> Result<serde_json::Value> {
+        self.rows()?;
         let (shape, p) = self.parameters();
-        let t_on = self.record()?.1;
-        let band = 0.01 * super::fit::transient(shape, &p, 0.0).abs();
+        let t_on = self.turn_on(&mut rng(self.seed));
+        let band = super::settle_band(shape, &p, None);
         let mut t = serde_json::Map::new();
         for (name, v) in shape.names().iter().zip(&p) {
             t.insert(name.clone(), (*v).into());

@@ -73,29 +73,15 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, rate_hz: Option<f64>) -> Re
             .error(format!("{n} data rows: a spectrum needs at least 16"))
             .into());
     }
-    rec.rate_hz = match (stamps.first(), stamps.last()) {
-        (Some(a), Some(b)) => {
-            let rate = (n - 1) as f64 / (b.0 - a.0);
-            let period = 1.0 / rate;
-            if let Some(w) = stamps.windows(2).find(|w| w[1].0 - w[0].0 > 1.5 * period) {
-                return Err(Error::Unsupported(format!(
-                    "line {}: a gap of {:.6} s after {} s (the period is {period:.6} s): a spectrum needs evenly spaced samples; cut the record at the gap",
-                    w[1].1,
-                    w[1].0 - w[0].0,
-                    w[0].0
-                )));
-            }
-            if let Some(r) = rate_hz {
-                if ((r - rate) / rate).abs() > crate::timebase::RATE_TOLERANCE {
-                    return crate::options::invalid(
-                        "rate_hz",
-                        format!("{r} Hz contradicts the stamps' {rate:.6} Hz"),
-                    );
-                }
-            }
-            rate
-        }
-        _ => rate_hz.unwrap_or(1.0),
+    rec.rate_hz = if stamps.is_empty() {
+        rate_hz.unwrap_or(1.0)
+    } else {
+        crate::timebase::even_rate(
+            n,
+            |k| stamps[k],
+            rate_hz,
+            "a spectrum needs evenly spaced samples; cut the record at the gap",
+        )?
     };
     if !offsets.is_empty() {
         rec.reference_offset_s = one_offset(&offsets, &stamps, rec.rate_hz)?;
