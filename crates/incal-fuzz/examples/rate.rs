@@ -7,6 +7,9 @@
 //! * `cargo run --release -p incal-fuzz --example rate -- --executions N
 //!   [TARGET…]`: N executions of each target (or of those named), the
 //!   campaign recorded in the README (10⁶ per target).
+//! * `... --executions N --from-chunk K TARGET`: the same campaign resumed
+//!   at chunk K (executions 10⁴·K onwards, the same inputs as an unbroken
+//!   run), for a long target run over several sittings.
 //!
 //! Any broken contract stops the run with the target, the execution and
 //! the input's size (exit 1).
@@ -29,7 +32,16 @@ fn main() {
             .get(1)
             .and_then(|s| s.parse().ok())
             .expect("--executions N");
-        let named: Vec<&str> = args[2..].iter().map(String::as_str).collect();
+        let mut rest = &args[2..];
+        let mut first_chunk = 0u64;
+        if rest.first().map(String::as_str) == Some("--from-chunk") {
+            first_chunk = rest
+                .get(1)
+                .and_then(|s| s.parse().ok())
+                .expect("--from-chunk K");
+            rest = &rest[2..];
+        }
+        let named: Vec<&str> = rest.iter().map(String::as_str).collect();
         for t in target_names() {
             if !named.is_empty() && !named.contains(&t) {
                 continue;
@@ -38,7 +50,7 @@ fn main() {
             // running count on standard error, so a long campaign shows
             // where it is.
             let start = Instant::now();
-            let (mut done, mut accepted, mut k) = (0u64, 0u64, 0u64);
+            let (mut done, mut accepted, mut k) = (first_chunk * 10_000, 0u64, first_chunk);
             while done < n {
                 let m = (n - done).min(10_000);
                 match campaign(t, m, STREAM.wrapping_add(k)) {
@@ -57,7 +69,8 @@ fn main() {
                     start.elapsed().as_secs_f64()
                 );
             }
-            report(t, done, accepted, start);
+            // This sitting's executions (a resumed run counts from chunk K).
+            report(t, done - first_chunk * 10_000, accepted, start);
         }
         return;
     }

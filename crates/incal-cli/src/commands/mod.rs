@@ -84,5 +84,6 @@ procedure_families!(
     thermal,
     response,
     warmup,
-    repeatability
+    repeatability,
+    threshold
 );

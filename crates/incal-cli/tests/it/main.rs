@@ -22,6 +22,7 @@ mod report_cli;
 mod response_cli;
 mod result_document;
 mod thermal_cli;
+mod threshold_cli;
 mod tumble_cli;
 mod typed;
 mod warmup_cli;

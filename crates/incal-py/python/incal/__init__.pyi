@@ -458,3 +458,24 @@ def repeatability(
     fail_on: Optional[Literal["fail", "conditional"]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
+
+def threshold(
+    data: Data = None,
+    *,
+    scale_factor: Union[float, None] = None,
+    scale_factor_u: float = 0,
+    base_input: Union[float, None] = None,
+    settle_s: float = 0,
+    rate_hz: Union[float, None] = None,
+    response_fraction: float = 0.5,
+    test_level: float = 0.05,
+    columns: Union[str, Sequence[str], Mapping[str, str], None] = None,
+    delimiter: Optional[str] = None,
+    serial: Optional[str] = None,
+    model: Optional[str] = None,
+    meta: Union[str, Sequence[str], Mapping[str, Any], None] = None,
+    output_unit: Optional[str] = None,
+    limits: Optional[PathLike] = None,
+    fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
+) -> Result: ...

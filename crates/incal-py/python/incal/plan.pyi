@@ -292,3 +292,20 @@ def repeatability(
     within_u: float = 0.005,
     run_sheet: Optional[Union[str, float]] = None,
 ) -> Dict[str, Any]: ...
+
+def threshold(
+    *,
+    sensor: Literal["gyro", "accel"] = "gyro",
+    rate_hz: float = 10,
+    dwell_s: float = 30,
+    steps: Union[Sequence[float], str, None] = None,
+    base_input: Union[float, None] = None,
+    scale_factor: float = 1,
+    noise: Union[float, None] = None,
+    gm_sigma: float = 0,
+    gm_tau_s: float = 2,
+    expected_threshold: Union[float, None] = None,
+    expected_resolution: Union[float, None] = None,
+    seed: int = 1,
+    run_sheet: Optional[Union[str, float]] = None,
+) -> Dict[str, Any]: ...

@@ -315,3 +315,22 @@ def repeatability(
     seed: int = 1,
     truth_out: Optional[Union[str, float]] = None,
 ) -> Tuple[Any, List[str]]: ...
+
+def threshold(
+    *,
+    sensor: Literal["gyro", "accel"] = "gyro",
+    rate_hz: float = 10,
+    dwell_s: float = 30,
+    steps: Union[Sequence[float], str, None] = None,
+    base_input: Union[float, None] = None,
+    scale_factor: float = 1,
+    noise: Union[float, None] = None,
+    gm_sigma: float = 0,
+    gm_tau_s: float = 2,
+    bias: float = 0.01,
+    dead_band: Union[float, None] = None,
+    resolution_band: Union[float, None] = None,
+    quantum: float = 0,
+    seed: int = 1,
+    truth_out: Optional[Union[str, float]] = None,
+) -> Tuple[Any, List[str]]: ...

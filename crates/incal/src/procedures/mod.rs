@@ -23,6 +23,7 @@ pub mod response;
 pub mod sim_plan;
 pub mod stream;
 pub mod thermal;
+pub mod threshold;
 pub mod tumble;
 pub mod warmup;
 

@@ -69,6 +69,9 @@ pub enum Procedure {
     /// components of one coefficient over runs (IEEE Std 952 / 1431, GJB
     /// 2426A, GJB 1037A).
     Repeatability,
+    /// Threshold and resolution: the smallest input step answered at zero
+    /// and at a base input (IEEE Std 952 / 1431, GJB 2426A, GJB 1037A).
+    Threshold,
 }
 
 impl Procedure {
@@ -111,6 +114,7 @@ impl Procedure {
             Procedure::ResponseStep => "response-step",
             Procedure::Warmup => "warmup",
             Procedure::Repeatability => "repeatability",
+            Procedure::Threshold => "threshold",
         }
     }
 }
@@ -763,6 +767,28 @@ pub static REGISTRY: &[Entry] = &[
         reduction: reduction::<super::repeatability::Repeatability>(),
         planner: planner::<super::repeatability::Repeatability>(),
         simulator: simulator::<super::repeatability::Repeatability>(),
+    },
+    Entry {
+        id: "threshold",
+        document: Procedure::Threshold,
+        command: &["threshold"],
+        plan: Some(&["plan", "threshold"]),
+        simulate: Some(&["simulate", "threshold"]),
+        title: "Threshold and resolution: the smallest input step answered at zero and at a base input",
+        rig: RATE_TABLE,
+        method: "Threshold and resolution from steps of increasing size about zero and about a base input, a gyro on a rate table or an accelerometer tilted on a dividing head: IEEE Std 952-1997 and IEEE Std 1431-2004, GJB 2426A-2004, GJB 1037A-2004; each step size's output change against K1 times the step, noise of the plateau means from the record's revisits of its levels, a one-sided test at 5 % for reaching 50 %, and the 50 % point interpolated in 1/step between the sizes that bracket it",
+        references: &["ieee952", "ieee1431", "gjb2426a", "gjb1037a", "fieller"],
+        chapter: "threshold.md",
+        input: InputKind::Recording,
+        fuzz: &["threshold"],
+        run_sheet: None,
+        example: Some(Example {
+            simulate: &["--seed", "26"],
+            options: &[],
+        }),
+        reduction: reduction::<super::threshold::Threshold>(),
+        planner: planner::<super::threshold::Threshold>(),
+        simulator: simulator::<super::threshold::Threshold>(),
     },
 ];
 

@@ -32,6 +32,7 @@ mod response_step;
 mod schema_file;
 mod sim_plan;
 mod thermal_roundtrip;
+mod threshold;
 mod tumble_roundtrip;
 mod warmup;
 mod wu2015;
