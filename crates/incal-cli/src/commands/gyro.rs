@@ -108,6 +108,12 @@ pub struct RateArgs {
     /// Relative standard uncertainty of the table rate (ppm), a type-B component of K1, B, K2, K3.
     #[arg(long, default_value_t = 0.0)]
     pub rate_uncertainty_ppm: f64,
+    /// Largest nonlinearity over the input range, ppm of its full-scale output: the input range is found and rates beyond it are named and left out of the fit.
+    #[arg(long)]
+    pub linearity_ppm: Option<f64>,
+    /// The output's limit (output units): a rate with a sample at or beyond it is clipped (default: rates at the record's extreme output).
+    #[arg(long)]
+    pub output_limit: Option<f64>,
     #[command(flatten)]
     pub read: ReadArgs,
     #[command(flatten)]
@@ -122,6 +128,8 @@ pub fn run_rate(a: &RateArgs) -> CliResult<()> {
         terms: rate_terms(&a.terms)?,
         noise: Noise::from_option(a.noise).map_err(core)?,
         rate_uncertainty_ppm: a.rate_uncertainty_ppm,
+        linearity_ppm: a.linearity_ppm,
+        output_limit: a.output_limit,
     };
     crate::run::reduce::<GyroRate>(&a.input, &a.read, &options, &a.result, &Silent)
 }
@@ -340,6 +348,9 @@ pub struct SimRateArgs {
     /// Run-to-run scatter of K1 (ppm, standard deviation).
     #[arg(long, default_value_t = 0.0)]
     pub run_scatter_ppm: f64,
+    /// The output clips at plus or minus this (output units; 0: never).
+    #[arg(long, default_value_t = 0.0)]
+    pub clip: f64,
     /// Random seed (same seed, same file).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -363,6 +374,7 @@ pub fn simulate_rate_cmd(a: &SimRateArgs) -> CliResult<()> {
         noise: a.noise,
         runs: a.runs,
         run_scatter_ppm: a.run_scatter_ppm,
+        clip: a.clip,
         seed: a.seed,
     };
     crate::run::simulate::<GyroRate>(&options, a.output.as_deref())

@@ -506,3 +506,65 @@ fn simulators_refuse_sizes_and_nonsense() {
         &["B"],
     );
 }
+
+#[test]
+fn the_input_range_and_clipped_rates_reach_the_document() {
+    let csv = simulate_rate(
+        "gyro_range",
+        &[
+            "--rates-deg-s=-500,-400,-300,-200,-100,-50,-10,10,50,100,200,300,400,500",
+            "--k3",
+            "1e-8",
+            "--clip",
+            "9",
+        ],
+    );
+    let v = json_of(&run(&[
+        "gyro",
+        "rate",
+        "--input",
+        p(&csv),
+        "--latitude-deg",
+        "45",
+        "--linearity-ppm",
+        "300",
+        "--json",
+    ]));
+    assert_eq!(v["coefficients"]["input_range_deg_s"]["value"], 300.0);
+    assert_eq!(unit(&v, "input_range_deg_s"), "deg/s");
+    assert_eq!(
+        v["input_range"]["clipped_deg_s"],
+        serde_json::json!([-500.0, 500.0])
+    );
+    assert_eq!(
+        v["input_range"]["beyond_deg_s"],
+        serde_json::json!([-400.0, 400.0])
+    );
+    assert_eq!(v["options"]["linearity_ppm"], 300.0);
+    refused(
+        &run(&[
+            "gyro",
+            "rate",
+            "--input",
+            p(&csv),
+            "--latitude-deg",
+            "45",
+            "--linearity-ppm",
+            "-1",
+        ]),
+        &["linearity-ppm"],
+    );
+    refused(
+        &run(&[
+            "gyro",
+            "rate",
+            "--input",
+            p(&csv),
+            "--latitude-deg",
+            "45",
+            "--output-limit",
+            "0",
+        ]),
+        &["output-limit"],
+    );
+}

@@ -175,6 +175,8 @@ def gyro_rate(
     terms: Optional[Union[Sequence[Literal["B", "K1", "K2", "K3"]], str]] = None,
     noise: Union[float, None] = None,
     rate_uncertainty_ppm: float = 0,
+    linearity_ppm: Union[float, None] = None,
+    output_limit: Union[float, None] = None,
     columns: Union[str, Sequence[str], Mapping[str, str], None] = None,
     delimiter: Optional[str] = None,
     serial: Optional[str] = None,

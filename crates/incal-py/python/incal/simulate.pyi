@@ -109,6 +109,7 @@ def gyro_rate(
     noise: float = 2e-05,
     runs: int = 1,
     run_scatter_ppm: float = 0,
+    clip: float = 0,
     seed: int = 1,
 ) -> Tuple[Any, List[str]]: ...
 

@@ -471,6 +471,7 @@ fn gyro(seed: u64) -> Result<DemoSection> {
         noise: 2e-5,
         runs: 1,
         run_scatter_ppm: 0.0,
+        clip: 0.0,
         seed: seed.wrapping_add(40),
     };
     let ropts = GyroRateOptions {
@@ -479,6 +480,8 @@ fn gyro(seed: u64) -> Result<DemoSection> {
         terms: vec![RateTerm::K1, RateTerm::B, RateTerm::K2],
         noise: Noise::Auto,
         rate_uncertainty_ppm: 0.0,
+        linearity_ppm: None,
+        output_limit: None,
     };
     let rr = gr::calibrate(&simulate_rate(&rcfg), &ropts)?;
     // K1 seen by the main fit: the mean of K1+ and K1- (the asymmetry is

@@ -36,6 +36,7 @@ fn rate_sim(seed: u64) -> GyroRateSim {
         noise: 2e-5,
         runs: 1,
         run_scatter_ppm: 0.0,
+        clip: 0.0,
         seed,
     }
 }
@@ -47,6 +48,8 @@ fn rate_opts(terms: &[RateTerm], noise: Noise) -> GyroRateOptions {
         terms: terms.to_vec(),
         noise,
         rate_uncertainty_ppm: 0.0,
+        linearity_ppm: None,
+        output_limit: None,
     }
 }
 

@@ -10,6 +10,7 @@ mod gfimu_note;
 mod gfimu_plan;
 mod gfimu_roundtrip;
 mod gfimu_solve_long;
+mod gyro_range;
 mod gyro_roundtrip;
 mod he2017;
 mod imu_ferraris_imucal;

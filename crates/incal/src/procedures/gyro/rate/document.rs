@@ -48,6 +48,7 @@ impl RateResult {
             });
         }
         b.extra("nonlinearity_ppm_fs", json!(self.nonlinearity_ppm_fs))?;
+        self.range_document(&mut b)?;
         b.extra("full_scale_output", json!(self.full_scale_output))?;
         if let Some((ppm, dof)) = self.repeatability {
             b.extra(
@@ -146,5 +147,51 @@ impl RateResult {
             b.table(t);
         }
         Ok(b.finish())
+    }
+}
+
+impl RateResult {
+    /// The input range as the coefficient `input_range_deg_s` (a tested
+    /// rate: u = 0) and the `input_range` extra (the limit, the largest
+    /// deviation within the range, the next tested rate, the rates beyond
+    /// it and the clipped ones).
+    fn range_document(&self, b: &mut crate::document::DocumentBuilder) -> Result<()> {
+        if let Some(r) = &self.range {
+            if let Some(v) = r.range_deg_s {
+                b.coefficient(
+                    "input_range_deg_s",
+                    crate::document::Coefficient::new(
+                        "input_range_deg_s",
+                        v,
+                        0.0,
+                        Unit::DegPerS,
+                        f64::INFINITY,
+                    )?,
+                )?;
+                b.decision(
+                    DecisionCode::ModelDegree,
+                    format!(
+                        "input range {v} deg/s: the largest tested input rate up to which every mean lies within {} ppm of the range's full-scale output from the straight line (largest {:.3} ppm){}",
+                        r.linearity_ppm,
+                        r.ppm_at_range.unwrap_or(0.0),
+                        r.next_deg_s.map_or(String::new(), |n| format!("; at {n} deg/s it does not"))
+                    ),
+                );
+            }
+        }
+        if self.range.is_some() || !self.clipped_deg_s.is_empty() {
+            b.extra(
+                "input_range",
+                json!({
+                    "linearity_ppm": self.range.as_ref().map(|r| r.linearity_ppm),
+                    "input_range_deg_s": self.range.as_ref().and_then(|r| r.range_deg_s),
+                    "ppm_at_range": self.range.as_ref().and_then(|r| r.ppm_at_range),
+                    "next_rate_deg_s": self.range.as_ref().and_then(|r| r.next_deg_s),
+                    "beyond_deg_s": self.beyond_deg_s,
+                    "clipped_deg_s": self.clipped_deg_s,
+                }),
+            )?;
+        }
+        Ok(())
     }
 }

@@ -43,6 +43,7 @@
 pub mod document;
 pub mod input;
 pub mod plan;
+pub mod range;
 pub mod sim;
 
 pub use plan::plan;
@@ -206,6 +207,16 @@ pub struct GyroRateOptions {
     /// 0…[`MAX_RATE_UNCERTAINTY_PPM`]).
     #[serde(default)]
     pub rate_uncertainty_ppm: f64,
+    /// Largest nonlinearity over the input range (ppm of the range's
+    /// full-scale output): with it the input range is found and rates
+    /// beyond it are left out of the fit ([`range`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub linearity_ppm: Option<f64>,
+    /// The output's limit (output units): a rate with a sample at or
+    /// beyond it is clipped (default: clipped rates found at the record's
+    /// rails, [`range`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output_limit: Option<f64>,
 }
 
 fn default_ia() -> InputAxis {
@@ -227,6 +238,13 @@ impl GyroRateOptions {
     pub fn validate(&self) -> Result<()> {
         crate::options::check_latitude_deg(self.latitude_deg)?;
         self.noise.validate()?;
+        if let Some(l) = self.linearity_ppm {
+            crate::options::check_range("linearity_ppm", l, 1e-6, 1e6, "ppm")?;
+        }
+        if let Some(l) = self.output_limit {
+            crate::options::check_positive("output_limit", l)?;
+            crate::options::check_range("output_limit", l, 0.0, 1e300, "")?;
+        }
         crate::options::check_range(
             "rate_uncertainty_ppm",
             self.rate_uncertainty_ppm,
@@ -263,6 +281,8 @@ impl crate::procedures::Procedure for GyroRate {
             terms: default_terms(),
             noise: crate::estimation::Noise::Auto,
             rate_uncertainty_ppm: 0.0,
+            linearity_ppm: None,
+            output_limit: None,
         }
     }
 
@@ -346,6 +366,12 @@ pub struct RateResult {
     pub terms: Vec<RateTerm>,
     /// Warnings.
     pub warnings: Vec<Warning>,
+    /// The clipped rates (deg/s, commanded), left out of the fit.
+    pub clipped_deg_s: Vec<f64>,
+    /// The input range, with `linearity_ppm`.
+    pub range: Option<range::InputRange>,
+    /// The commanded rates beyond the input range, left out of the fit.
+    pub beyond_deg_s: Vec<f64>,
 }
 
 /// Input rate along IA (deg/s): `s (ω_table + Ω_e sin φ)`.
@@ -483,7 +509,8 @@ fn fit_best(
 pub fn calibrate(obs: &[RateObservation], opts: &GyroRateOptions) -> Result<RateResult> {
     opts.validate()?;
     let terms = normalized_terms(&opts.terms);
-    let pos = positions_of(obs)?;
+    let mut early = Vec::new();
+    let (pos, clipped_deg_s, range, beyond_deg_s) = in_range(obs, opts, &mut early)?;
     check_distinct_rates(&pos, &terms)?;
     crate::validity::require_varying(obs.iter().map(|o| o.output), "output")?;
     let inputs: Vec<f64> = pos
@@ -498,6 +525,7 @@ pub fn calibrate(obs: &[RateObservation], opts: &GyroRateOptions) -> Result<Rate
         "table-rate errors, a nonlinearity not modelled (add K2/K3), or drift between rates",
     );
     warnings.extend(asym_warning);
+    warnings.extend(early);
 
     let (base, mut dof) = with_rate_error(&phys, &terms, opts.rate_uncertainty_ppm)?;
     let coefficients = if asymmetric {
@@ -542,7 +570,91 @@ pub fn calibrate(obs: &[RateObservation], opts: &GyroRateOptions) -> Result<Rate
         repeatability,
         terms,
         warnings,
+        clipped_deg_s,
+        range,
+        beyond_deg_s,
     })
+}
+
+/// The positions left for the fit, with the clipped rates, the input
+/// range and the rates beyond it ([`range`]): each named in a warning.
+#[allow(clippy::type_complexity)]
+fn in_range(
+    obs: &[RateObservation],
+    opts: &GyroRateOptions,
+    warnings: &mut Vec<Warning>,
+) -> Result<(
+    Vec<(f64, Option<String>, PositionStats)>,
+    Vec<f64>,
+    Option<range::InputRange>,
+    Vec<f64>,
+)> {
+    let all = positions_of(obs)?;
+    let clip = range::clipped(obs, &all, opts.output_limit);
+    let clipped: Vec<f64> = (0..all.len())
+        .filter(|&i| clip[i])
+        .map(|i| all[i].0)
+        .collect();
+    let mut pos: Vec<_> = all
+        .into_iter()
+        .zip(&clip)
+        .filter(|(_, c)| !**c)
+        .map(|(p, _)| p)
+        .collect();
+    if !clipped.is_empty() {
+        let at = match opts.output_limit {
+            Some(l) => format!("a sample at or beyond output_limit {l}"),
+            None => "most samples at the record's extreme output".into(),
+        };
+        warnings.push(Warning::new(
+            WarningCode::Saturated,
+            format!(
+                "the output clips at {} deg/s ({at}): left out of the fit",
+                list(&clipped)
+            ),
+        ));
+    }
+    let Some(limit) = opts.linearity_ppm else {
+        return Ok((pos, clipped, None, Vec::new()));
+    };
+    let inputs: Vec<f64> = pos
+        .iter()
+        .map(|p| input_rate_deg_s(p.0, opts.latitude_rad(), opts.ia))
+        .collect();
+    let stats: Vec<PositionStats> = pos.iter().map(|p| p.2).collect();
+    let rates: Vec<f64> = pos.iter().map(|p| p.0).collect();
+    let r = range::input_range(&rates, &inputs, &stats, limit);
+    let beyond: Vec<f64> = r.beyond.iter().map(|&i| pos[i].0).collect();
+    match r.range_deg_s {
+        Some(range) if !beyond.is_empty() => warnings.push(Warning::new(
+            WarningCode::ModelRange,
+            format!(
+                "the nonlinearity exceeds {limit} ppm beyond the input range {range} deg/s: the rates {} deg/s are left out of the fit",
+                list(&beyond)
+            ),
+        )),
+        Some(_) => {}
+        None => warnings.push(Warning::new(
+            WarningCode::ModelRange,
+            format!("no range of three rates or more meets a nonlinearity of {limit} ppm: no input range, every rate fitted"),
+        )),
+    }
+    let keep: Vec<bool> = (0..pos.len()).map(|i| !r.beyond.contains(&i)).collect();
+    let mut k = 0;
+    pos.retain(|_| {
+        k += 1;
+        keep[k - 1]
+    });
+    Ok((pos, clipped, Some(r), beyond))
+}
+
+/// Rates as a short list (`-500, 500`, at most 8 then `…`).
+fn list(rates: &[f64]) -> String {
+    let mut v: Vec<String> = rates.iter().take(8).map(|r| format!("{r}")).collect();
+    if rates.len() > 8 {
+        v.push(format!("and {} more", rates.len() - 8));
+    }
+    v.join(", ")
 }
 
 /// Refuse fewer distinct table rates than terms.

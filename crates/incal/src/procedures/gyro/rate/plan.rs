@@ -125,6 +125,8 @@ impl RatePlanOptions {
             terms: self.terms.clone(),
             noise: Noise::Known { sigma: self.noise },
             rate_uncertainty_ppm: self.rate_uncertainty_ppm,
+            linearity_ppm: None,
+            output_limit: None,
         }
     }
 }

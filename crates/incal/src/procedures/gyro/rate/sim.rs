@@ -44,6 +44,8 @@ pub struct GyroRateSim {
     pub runs: usize,
     /// Run-to-run scatter of K1 (ppm, standard deviation), one draw per run.
     pub run_scatter_ppm: f64,
+    /// The output clips at ±`clip` (output units; 0: never).
+    pub clip: f64,
     /// Seed.
     pub seed: u64,
 }
@@ -114,6 +116,9 @@ impl GyroRateSim {
         if !(self.run_scatter_ppm.is_finite() && (0.0..1e5).contains(&self.run_scatter_ppm)) {
             return bad("run_scatter_ppm (within 0..1e5)", self.run_scatter_ppm);
         }
+        if !(self.clip.is_finite() && self.clip >= 0.0) {
+            return bad("clip (a non-negative output, 0 for none)", self.clip);
+        }
         for &rate in &self.rates_deg_s {
             let (w_in, k1) = self.input_and_scale(rate);
             if !self.output(w_in, k1).is_finite() {
@@ -150,8 +155,9 @@ impl GyroRateSim {
 }
 
 /// Simulate a rate-transfer test: `E = K1± (ω_in + B + K2 ω_in² + K3 ω_in³) + n`
-/// with `ω_in` the table rate plus the Earth rate projected on IA
-/// (deterministic for a given seed).
+/// with `ω_in` the table rate plus the Earth rate projected on IA, clipped
+/// at `±clip` when it is not 0 (a converter at full scale; deterministic
+/// for a given seed).
 pub fn simulate_rate(cfg: &GyroRateSim) -> Vec<RateObservation> {
     let mut r = rng(cfg.seed);
     let mut out = Vec::new();
@@ -162,9 +168,14 @@ pub fn simulate_rate(cfg: &GyroRateSim) -> Vec<RateObservation> {
             let (w_in, k1) = cfg.input_and_scale(rate);
             let e0 = cfg.output(w_in, k1 * scale);
             for _ in 0..cfg.samples.max(1) {
+                let y = e0 + normal(&mut r, cfg.noise);
                 out.push(RateObservation {
                     rate_deg_s: rate,
-                    output: e0 + normal(&mut r, cfg.noise),
+                    output: if cfg.clip > 0.0 {
+                        y.clamp(-cfg.clip, cfg.clip)
+                    } else {
+                        y
+                    },
                     run: label.clone(),
                 });
             }
@@ -202,6 +213,8 @@ pub struct GyroRateSimOptions {
     pub runs: usize,
     /// Run-to-run scatter of K1 (ppm, standard deviation).
     pub run_scatter_ppm: f64,
+    /// The output clips at ±clip (output units; 0: never).
+    pub clip: f64,
     /// Random seed (same seed, same file).
     pub seed: u64,
 }
@@ -223,6 +236,7 @@ impl Default for GyroRateSimOptions {
             noise: 2e-5,
             runs: 1,
             run_scatter_ppm: 0.0,
+            clip: 0.0,
             seed: 1,
         }
     }
@@ -248,6 +262,7 @@ impl GyroRateSimOptions {
             noise: self.noise,
             runs: self.runs,
             run_scatter_ppm: self.run_scatter_ppm,
+            clip: self.clip,
             seed: self.seed,
         };
         cfg.validate()?;
