@@ -62,3 +62,27 @@ pub fn require_plan_inputs(samples: usize, noise: f64, k1: f64, k1_what: &str) -
     }
     Ok(())
 }
+
+/// Which positions sit at a converter's rail (saturation): position `i`
+/// has `n[i]` samples of which `rail[i]` equal the record's largest or
+/// smallest output exactly; it is clipped when `rail[i] ≥ 2` and
+/// `2·rail[i] ≥ n[i]`, provided some other position scatters beyond
+/// rounding (`scatter[i]`: its sample standard deviation relative to its
+/// mean exceeds 1e-9), since a noiseless record has no rail to find.
+pub fn at_rail(n: &[usize], rail: &[usize], scatter: &[bool]) -> Vec<bool> {
+    let clipped: Vec<bool> = (0..n.len())
+        .map(|i| rail[i] >= 2 && 2 * rail[i] >= n[i])
+        .collect();
+    let noisy = (0..n.len()).any(|i| !clipped[i] && scatter[i]);
+    if noisy {
+        clipped
+    } else {
+        vec![false; n.len()]
+    }
+}
+
+/// Whether samples of standard deviation `std` about `mean` scatter
+/// beyond the rounding of a mean of equal samples.
+pub fn scatters(n: usize, mean: f64, std: f64) -> bool {
+    n > 1 && std > 1e-9 * mean.abs().max(f64::MIN_POSITIVE)
+}

@@ -2,6 +2,7 @@
 //! one per file); each file is a module. The statistical tier runs with
 //! `INCAL_TESTS=full` (see `incal::sim::tier`).
 
+mod centrifuge_clip;
 mod centrifuge_covariance;
 mod centrifuge_mc;
 mod centrifuge_roundtrip;

@@ -121,8 +121,8 @@ pub fn calibrate(obs: &[Observation], opts: &CentrifugeOptions) -> Result<Centri
         opposite_sense: opts.opposite_sense,
         tilt_rad: 0.0,
     };
-    let groups = group(obs);
     let mut warnings = Vec::new();
+    let groups = super::stations::drop_clipped(group(obs), &mut warnings);
 
     // --- IA-radial station: tilt and radius -------------------------------
     let ia = [(Plane::Ip, 0i64), (Plane::Io, 0i64)]

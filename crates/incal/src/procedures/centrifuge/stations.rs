@@ -135,6 +135,69 @@ pub(super) fn group(obs: &[Observation]) -> Vec<((Plane, i64), Vec<Point>)> {
     stations
 }
 
+/// The points whose output sits at the record's rail
+/// ([`crate::validity::at_rail`]: a converter at full scale) removed from
+/// `groups` (a station left with none goes too), named in a `saturated`
+/// warning: a clipped point is never fitted.
+pub(super) fn drop_clipped(
+    groups: Vec<((Plane, i64), Vec<Point>)>,
+    warnings: &mut Vec<crate::warning::Warning>,
+) -> Vec<((Plane, i64), Vec<Point>)> {
+    let all = groups.iter().flat_map(|g| &g.1).flat_map(|p| &p.samples);
+    let (lo, hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |a, y| {
+        (a.0.min(*y), a.1.max(*y))
+    });
+    let points: Vec<&Point> = groups.iter().flat_map(|g| &g.1).collect();
+    let n: Vec<usize> = points.iter().map(|p| p.samples.len()).collect();
+    let rail: Vec<usize> = points
+        .iter()
+        .map(|p| p.samples.iter().filter(|y| **y == lo || **y == hi).count())
+        .collect();
+    let scatter: Vec<bool> = points
+        .iter()
+        .map(|p| {
+            PositionStats::of(&p.samples)
+                .is_ok_and(|st| crate::validity::scatters(st.n, st.mean, st.std))
+        })
+        .collect();
+    let clipped = crate::validity::at_rail(&n, &rail, &scatter);
+    if !clipped.contains(&true) {
+        return groups;
+    }
+    let mut named = Vec::new();
+    let mut k = 0;
+    let mut out = Vec::new();
+    for (key, pts) in groups {
+        let mut kept = Vec::new();
+        for p in pts {
+            if clipped[k] {
+                named.push(format!(
+                    "{} {:+} at {:.6} rad/s",
+                    station_label(key.0, (key.1 as f64 / 1e6).to_radians()),
+                    p.position.polarity,
+                    p.omega
+                ));
+            } else {
+                kept.push(p);
+            }
+            k += 1;
+        }
+        if !kept.is_empty() {
+            out.push((key, kept));
+        }
+    }
+    let shown: Vec<&str> = named.iter().take(8).map(String::as_str).collect();
+    warnings.push(crate::warning::Warning::new(
+        crate::warning::WarningCode::Saturated,
+        format!(
+            "the output clips (most samples at the record's extreme output) at {}{}: left out of the fit",
+            shown.join("; "),
+            if named.len() > 8 { format!(" and {} more", named.len() - 8) } else { String::new() }
+        ),
+    ));
+    out
+}
+
 /// Samples, mean and scatter of `E/K1` (g) of raw outputs `samples`.
 pub(super) fn e_over_k1(samples: &[f64], k1: f64) -> Result<PositionStats> {
     let y: Vec<f64> = samples.iter().map(|e| e / k1).collect();

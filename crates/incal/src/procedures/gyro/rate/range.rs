@@ -50,19 +50,12 @@ pub fn clipped(
     if output_limit.is_some() {
         return over.iter().map(|c| *c > 0).collect();
     }
-    let rails: Vec<bool> = (0..pos.len())
-        .map(|i| rail[i] >= 2 && 2 * rail[i] >= pos[i].2.n)
+    let n: Vec<usize> = pos.iter().map(|p| p.2.n).collect();
+    let scatter: Vec<bool> = pos
+        .iter()
+        .map(|p| crate::validity::scatters(p.2.n, p.2.mean, p.2.std))
         .collect();
-    // Scatter beyond the rounding of a mean of equal samples.
-    let noisy = (0..pos.len()).any(|i| {
-        let p = &pos[i].2;
-        !rails[i] && p.n > 1 && p.std > 1e-9 * p.mean.abs().max(f64::MIN_POSITIVE)
-    });
-    if noisy {
-        rails
-    } else {
-        vec![false; pos.len()]
-    }
+    crate::validity::at_rail(&n, &rail, &scatter)
 }
 
 /// The input range found (module docs).
