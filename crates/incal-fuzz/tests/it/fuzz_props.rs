@@ -137,3 +137,20 @@ fn every_target_runs_its_fixed_executions() {
         assert_eq!(c.executions, n);
     }
 }
+
+/// Inputs the long campaign (`examples/rate.rs`, stream
+/// 0x9E3779B97F4A7C15) found breaking the contract, rebuilt from the
+/// stream and checked: each is now refused in one short line.
+#[test]
+fn inputs_the_long_campaign_found_keep_the_contract() {
+    // warmup, chunk 0, execution 8040 (2026-11-29): "no warm-up curve
+    // fits" listed every curve's failure, 567 characters.
+    let base = incal_fuzz::seed("warmup");
+    let mut r = incal_fuzz::Rng(0x9E37_79B9_7F4A_7C15 | 1);
+    let mut data = Vec::new();
+    for _ in 0..=8040 {
+        data = incal_fuzz::mutate(base, &mut r);
+    }
+    assert_eq!(data.len(), 5846, "the stream no longer rebuilds the input");
+    incal_fuzz::check("warmup", &data).unwrap();
+}

@@ -522,11 +522,13 @@ fn choose(
             // Every fit has tau beyond a third of the record: the
             // one-exponential fit, refused by the record's length.
             Ok(f) => (Shape::Exp1, f),
-            Err(_) => {
+            Err(e) => {
+                // One short line: the simplest curve's reason, clipped.
                 return Err(Error::Unsupported(format!(
-                    "no warm-up curve fits: {}",
-                    tried.join("; ")
-                )))
+                    "no warm-up curve fits ({} tried); the one-exponential: {}",
+                    Shape::ALL.len(),
+                    incal_io::clip_to(&e.to_string(), 240)
+                )));
             }
         },
     };
