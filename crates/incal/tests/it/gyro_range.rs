@@ -137,3 +137,24 @@ fn the_input_range_is_the_truths() {
         );
     }
 }
+
+/// A record of more distinct rates than any rate test holds (a ramp) is
+/// refused for the input range, naming the option, instead of refitting
+/// the line once per rate.
+#[test]
+fn a_ramp_is_refused_for_the_input_range() {
+    let ramp: Vec<f64> = (1..=1500).map(|k| k as f64 * 0.2).collect();
+    let obs = simulate_rate(&GyroRateSim {
+        rates_deg_s: ramp,
+        samples: 2,
+        clip: 0.0,
+        ..sim(5)
+    });
+    let e = gr::calibrate(&obs, &opts(Some(300.0), None))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("linearity_ppm") && e.contains("1500 distinct"),
+        "{e}"
+    );
+}

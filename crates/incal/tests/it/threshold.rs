@@ -227,3 +227,40 @@ fn a_plan_whose_steps_do_not_bracket_is_refused_naming_steps() {
     .to_string();
     assert!(e.contains("steps") && e.contains("bracket"), "{e}");
 }
+
+/// A record of many plateaus (10,001 here) reduces without a dense
+/// plateau-by-plateau matrix or a quadratic count of the inputs: before,
+/// the covariance of each step size built a 10⁴ × 10⁴ diagonal (800 MB).
+#[test]
+fn many_plateaus_reduce_in_bounded_memory() {
+    use incal::procedures::threshold::input::{Record, Sensor};
+    let mut rec = Record {
+        sensor: Sensor::Gyro,
+        command: Vec::new(),
+        output: Vec::new(),
+        time_s: None,
+        lines: Vec::new(),
+    };
+    let mut r = incal::sim::rng(5);
+    for i in 0..10_001usize {
+        // 0, Δ_1, 0, Δ_2, … with Δ growing from 1e-3 to 5e-2.
+        let u = if i % 2 == 0 {
+            0.0
+        } else {
+            1e-3 * 50f64.powf(i as f64 / 10_001.0)
+        };
+        let y = 0.01 + incal::procedures::threshold::sim::dead_band(u, 0.004);
+        for _ in 0..2 {
+            rec.command.push(u);
+            rec.output.push(y + incal::sim::normal(&mut r, 1e-5));
+            rec.lines.push(rec.lines.len() + 2);
+        }
+    }
+    let o = ThresholdOptions {
+        scale_factor: Some(1.0),
+        ..ThresholdOptions::default()
+    };
+    let res = calibrate(&rec, &o).expect("reduces");
+    let t = res.crossings[0].value.0;
+    assert!((0.007..0.009).contains(&t), "threshold {t}");
+}

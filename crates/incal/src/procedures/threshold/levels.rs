@@ -112,14 +112,17 @@ pub fn base_command(p: &[Plateau], given: Option<f64>) -> Result<Option<f64>> {
         }
         return Ok(Some(b));
     }
-    let mut counts: Vec<(f64, usize)> = Vec::new();
+    // One pass, keyed by the value's bits (a record may hold many
+    // distinct inputs).
+    let mut by_bits: std::collections::HashMap<u64, (f64, usize)> = Default::default();
     for q in p.iter().filter(|q| q.command != 0.0) {
-        match counts.iter_mut().find(|c| c.0 == q.command) {
-            Some(c) => c.1 += 1,
-            None => counts.push((q.command, 1)),
-        }
+        by_bits
+            .entry(q.command.to_bits())
+            .or_insert((q.command, 0))
+            .1 += 1;
     }
-    counts.sort_by_key(|c| std::cmp::Reverse(c.1));
+    let mut counts: Vec<(f64, usize)> = by_bits.into_values().collect();
+    counts.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.total_cmp(&b.0)));
     Ok(match counts.as_slice() {
         [(c, n), rest @ ..] if *n >= 3 && rest.first().is_none_or(|r| *n >= 2 * r.1) => Some(*c),
         _ => None,

@@ -169,8 +169,9 @@ pub struct Response {
     pub p_value: f64,
     /// Shown to reach the fraction.
     pub passes: bool,
-    /// S's coefficients over the plateau means.
-    coef: Vec<f64>,
+    /// S's weights over the plateau means (plateau, weight), each plateau
+    /// once.
+    coef: Vec<(usize, f64)>,
 }
 
 /// A level's threshold (or resolution).
@@ -344,50 +345,84 @@ fn scale_factor(p: &[Plateau], sensor: Sensor, o: &ThresholdOptions) -> Result<S
 }
 
 /// The estimates `[K1, S_1, …]` with their joint covariance: the plateau
-/// means' `s²/n` through the coefficient rows, and the given K1's u.
-fn estimates(r: &ThresholdResult, rows: &[&[f64]]) -> Result<Estimates> {
-    let np = r.plateaus.len();
-    let k_coef = r.scale.coef.clone().unwrap_or_else(|| vec![0.0; np]);
-    let mut a = DMatrix::zeros(rows.len() + 1, np);
-    a.row_mut(0)
-        .copy_from(&DVector::from_row_slice(&k_coef).transpose());
-    for (i, c) in rows.iter().enumerate() {
-        a.row_mut(i + 1)
-            .copy_from(&DVector::from_row_slice(c).transpose());
+/// means' `s²/n` through the coefficient rows (sparse: plateau, weight),
+/// and the given K1's u. `C_ij = Σ_k a_ik a_jk s²/n_k`, computed over the
+/// rows' own plateaus (no dense plateau-by-plateau matrix).
+fn estimates(r: &ThresholdResult, rows: &[&[(usize, f64)]]) -> Result<Estimates> {
+    let k_coef: Vec<(usize, f64)> = r
+        .scale
+        .coef
+        .as_ref()
+        .map(|c| {
+            c.iter()
+                .copied()
+                .enumerate()
+                .filter(|(_, w)| *w != 0.0)
+                .collect()
+        })
+        .unwrap_or_default();
+    let mut all: Vec<&[(usize, f64)]> = vec![&k_coef];
+    all.extend_from_slice(rows);
+    let m = all.len();
+    // Each row as a map plateau -> weight, for the products.
+    let maps: Vec<std::collections::HashMap<usize, f64>> = all
+        .iter()
+        .map(|row| row.iter().copied().collect())
+        .collect();
+    let v = |k: usize| r.noise.var_long / r.plateaus[k].n as f64;
+    let mut cov = DMatrix::zeros(m, m);
+    for i in 0..m {
+        for j in i..m {
+            let c: f64 = all[i]
+                .iter()
+                .filter_map(|(k, a)| maps[j].get(k).map(|b| a * b * v(*k)))
+                .sum();
+            cov[(i, j)] = c;
+            cov[(j, i)] = c;
+        }
     }
-    let v = DMatrix::from_diagonal(&DVector::from_iterator(
-        np,
-        r.plateaus.iter().map(|q| r.noise.var_long / q.n as f64),
-    ));
-    let mut cov = propagate(&v, &a);
     cov[(0, 0)] += r.scale.u_given.powi(2);
     let mut values = vec![r.scale.value];
-    values.extend(rows.iter().map(|c| dot(c, &r.plateaus)));
+    values.extend(rows.iter().map(|c| sparse_dot(c, &r.plateaus)));
     let mut names = vec!["K1".to_string()];
     names.extend((0..rows.len()).map(|i| format!("S{i}")));
     Estimates::new(names, DVector::from_vec(values), cov, r.noise.dof)
 }
 
-/// Welch–Satterthwaite: the noise's ν for the part of `u²` from the
-/// plateau means, the given K1's u counted as known (ν = ∞).
+/// `Σ a_k ȳ_k` over a sparse row.
+fn sparse_dot(a: &[(usize, f64)], p: &[Plateau]) -> f64 {
+    a.iter().map(|(k, w)| w * p[*k].mean).sum()
+}
+
+/// Welch–Satterthwaite ([`crate::procedures::gyro::welch_satterthwaite`]):
+/// the part of `u²` from the plateau means with the noise's ν, the given
+/// K1's part counted as known (ν = ∞).
 fn effective_dof(u2: f64, given_part: f64, dof: f64) -> f64 {
-    let noise = (u2 - given_part).max(0.0);
-    if noise <= 0.0 {
-        return f64::INFINITY;
-    }
-    u2 * u2 / (noise * noise / dof)
+    crate::procedures::gyro::welch_satterthwaite(&[
+        ((u2 - given_part).max(0.0).sqrt(), dof),
+        (given_part.max(0.0).sqrt(), f64::INFINITY),
+    ])
 }
 
 /// One step size's response ratio and test.
 fn response(r: &ThresholdResult, step: StepSize) -> Result<Response> {
-    let np = r.plateaus.len();
-    let mut coef = vec![0.0; np];
+    // S's weights over the plateau means: two per transition (a plateau
+    // shared by two transitions appears twice; the products add up).
     let t = step.transitions.len() as f64;
+    let mut coef: Vec<(usize, f64)> = Vec::with_capacity(2 * step.transitions.len());
     for &k in &step.transitions {
         let du = r.plateaus[k + 1].input - r.plateaus[k].input;
-        coef[k] -= 1.0 / (t * du);
-        coef[k + 1] += 1.0 / (t * du);
+        coef.push((k, -1.0 / (t * du)));
+        coef.push((k + 1, 1.0 / (t * du)));
     }
+    coef.sort_by_key(|c| c.0);
+    coef.dedup_by(|b, a| {
+        let same = a.0 == b.0;
+        if same {
+            a.1 += b.1;
+        }
+        same
+    });
     let e = estimates(r, &[&coef])?;
     let ratio = e.map_numeric(vec!["rho".into()], |x| DVector::from_vec(vec![x[1] / x[0]]))?;
     let (rho, u) = (ratio.values()[0], ratio.u_at(0));

@@ -623,6 +623,22 @@ fn in_range(
         .collect();
     let stats: Vec<PositionStats> = pos.iter().map(|p| p.2).collect();
     let rates: Vec<f64> = pos.iter().map(|p| p.0).collect();
+    // Each candidate range refits the line over the rates within it: the
+    // search is bounded by refusing records of more distinct rates than
+    // any rate-transfer test holds (a ramp logged as steady rates).
+    let mut mags: Vec<u64> = rates.iter().map(|r| r.abs().to_bits()).collect();
+    mags.sort_unstable();
+    mags.dedup();
+    if mags.len() > range::MAX_CANDIDATES {
+        return crate::options::invalid(
+            "linearity_ppm",
+            format!(
+                "the record holds {} distinct |rates|: the input range is searched over at most {} (a rate-transfer test holds each rate; is this a ramp?)",
+                mags.len(),
+                range::MAX_CANDIDATES
+            ),
+        );
+    }
     let r = range::input_range(&rates, &inputs, &stats, limit);
     let beyond: Vec<f64> = r.beyond.iter().map(|&i| pos[i].0).collect();
     match r.range_deg_s {

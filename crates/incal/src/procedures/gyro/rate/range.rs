@@ -58,6 +58,10 @@ pub fn clipped(
     crate::validity::at_rail(&n, &rail, &scatter)
 }
 
+/// Most distinct |rates| the input range is searched over (each
+/// candidate refits the rates within it).
+pub const MAX_CANDIDATES: usize = 1000;
+
 /// The input range found (module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct InputRange {
