@@ -100,6 +100,10 @@ pub enum WarningCode {
     /// The temperature moved during a test meant to run at one
     /// temperature (the warm-up): its sensitivity mixes into the result.
     TemperatureNotConstant,
+    /// Lines (tones) stand above the noise floor of a record's PSD: each
+    /// raises the Allan deviation near τ ≈ 0.37/f, and an Allan fit there
+    /// reads it as noise.
+    Tones,
 }
 
 impl WarningCode {
@@ -134,6 +138,7 @@ impl WarningCode {
             WarningCode::NoiseInconsistent => "noise-inconsistent",
             WarningCode::NotSignificant => "not-significant",
             WarningCode::TemperatureNotConstant => "temperature-not-constant",
+            WarningCode::Tones => "tones",
         }
     }
 }

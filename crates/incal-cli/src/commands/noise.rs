@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 
 use clap::ValueEnum;
-use incal::procedures::noise::sim::NoiseSim;
+use incal::procedures::noise::sim::{NoiseSim, SimTone};
 use incal::procedures::noise::spectrum::SpectrumOptions;
 use incal::procedures::noise::{
     reduce_mapped, DataKind, Format, Noise, NoiseOptions, QuantityKind,
@@ -149,6 +149,9 @@ pub struct PsdArgs {
     /// The band of the white level, Hz: LOW,HIGH (default 5 % to 25 % of the rate).
     #[arg(long, value_delimiter = ',', num_args = 2)]
     pub psd_white_band_hz: Option<Vec<f64>>,
+    /// The tone search's false-alarm rate per spectrum (default 0.01).
+    #[arg(long)]
+    pub psd_false_alarm: Option<f64>,
 }
 
 impl PsdArgs {
@@ -161,6 +164,7 @@ impl PsdArgs {
             psd_window: self.psd_window.into(),
             psd_confidence: self.psd_confidence,
             psd_white_band_hz: self.psd_white_band_hz.clone(),
+            psd_false_alarm: self.psd_false_alarm,
         }
     }
 }
@@ -323,6 +327,21 @@ pub struct SessionArgs {
     /// Random seed.
     #[arg(long)]
     pub seed: u64,
+    /// A line added to every channel: FREQ_HZ:RMS (rms amplitude in deg/s or g; repeatable).
+    #[arg(long = "tone", value_name = "FREQ_HZ:RMS", value_parser = parse_tone)]
+    pub tones: Vec<SimTone>,
+}
+
+/// `FREQ_HZ:RMS` into a simulated line.
+fn parse_tone(s: &str) -> Result<SimTone, String> {
+    let (f, a) = s
+        .split_once(':')
+        .ok_or_else(|| format!("FREQ_HZ:RMS, got '{s}'"))?;
+    let num = |v: &str| v.trim().parse::<f64>().map_err(|_| format!("FREQ_HZ:RMS, got '{s}'"));
+    Ok(SimTone {
+        frequency_hz: num(f)?,
+        amplitude_rms: num(a)?,
+    })
 }
 
 impl SessionArgs {
@@ -345,6 +364,7 @@ impl SessionArgs {
             channels: self.channels,
             seed: self.seed,
             format,
+            tones: self.tones.clone(),
         }
     }
 }

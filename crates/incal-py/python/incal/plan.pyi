@@ -190,6 +190,7 @@ def noise(
     duration_s: Union[str, float],
     channels: Optional[Union[str, float]] = 1,
     seed: Union[str, float],
+    tones: Optional[Union[str, float]] = None,
     seeds: int = 5,
     run_sheet: Optional[Union[str, float]] = None,
 ) -> Dict[str, Any]: ...

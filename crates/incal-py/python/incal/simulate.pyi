@@ -197,6 +197,7 @@ def noise(
     duration_s: float,
     channels: int = 1,
     seed: int,
+    tones: Optional[Union[Sequence[Any], str]] = None,
     format: Literal["csv", "f32le", "f64le"] = "csv",
 ) -> Tuple[Any, List[str]]: ...
 

@@ -60,6 +60,26 @@ fn curve(p: &Value, key: &str) -> Vec<Pt> {
     out
 }
 
+/// The lines of `psd.tones` as points at their frequency and the ASD
+/// of their peak bin.
+fn tone_marks(p: &Value) -> Vec<Pt> {
+    let (Some(tones), Some(g)) = (p["tones"].as_array(), p["density"].as_array()) else {
+        return Vec::new();
+    };
+    tones
+        .iter()
+        .filter_map(|t| {
+            let f = t["frequency_hz"].as_f64()?;
+            let v = g.get(usize::try_from(t["bin"].as_u64()?).ok()?)?.as_f64()?;
+            (f > 0.0 && v > 0.0).then(|| Pt {
+                x: f.log10(),
+                y: 0.5 * v.log10(),
+                bar: None,
+            })
+        })
+        .collect()
+}
+
 fn psd_plot(name: &str, c: &Value) -> Option<Plot> {
     let p = c.get("psd").filter(|p| p.is_object())?;
     let unit = c["unit"].as_str().unwrap_or("").to_string();
@@ -127,6 +147,15 @@ fn psd_plot(name: &str, c: &Value) -> Option<Plot> {
             });
         }
     }
+    let lines = tone_marks(p);
+    if !lines.is_empty() {
+        legend.push(format!("lines above the noise floor ({})", lines.len()));
+        series.push(Series {
+            key: legend.len() - 1,
+            style: Style::Dots,
+            points: lines,
+        });
+    }
     Some(Plot {
         kind: "psd",
         source: name.to_string(),
@@ -139,7 +168,7 @@ fn psd_plot(name: &str, c: &Value) -> Option<Plot> {
         legend,
         hlines: Vec::new(),
         caption: format!(
-            "One-sided amplitude spectral density by Welch's method ({} segments of {} samples, {} window), log-log, drawn at up to 400 log-spaced bins; dashed: chi-square bounds at {} % confidence with {} equivalent degrees of freedom (Percival & Walden); the flat line: the white level read over {}; the other: the IEEE Std 952 terms of the Allan fit as a one-sided PSD (Annex C), the consistency check of the two analyses.",
+            "One-sided amplitude spectral density by Welch's method ({} segments of {} samples, {} window), log-log, drawn at up to 400 log-spaced bins; dashed: chi-square bounds at {} % confidence with {} equivalent degrees of freedom (Percival & Walden); the flat line: the white level read over {}; the other: the IEEE Std 952 terms of the Allan fit as a one-sided PSD (Annex C), the consistency check of the two analyses; dots: the lines standing above the local noise floor at a false-alarm rate of {} per spectrum (table tones).",
             p["segments"].as_u64().unwrap_or(0),
             p["segment_samples"].as_u64().unwrap_or(0),
             p["window"].as_str().unwrap_or("hann"),
@@ -149,6 +178,7 @@ fn psd_plot(name: &str, c: &Value) -> Option<Plot> {
                 (Some(lo), Some(hi)) => format!("{}-{} Hz", trimmed(lo, 4), trimmed(hi, 4)),
                 _ => "no band (too few bins)".into(),
             },
+            trimmed(p["tone_search"]["false_alarm"].as_f64().unwrap_or(0.01), 3),
         ),
         log_log: true,
     })
@@ -166,5 +196,22 @@ mod tests {
             "white": {"asd": 1.0, "u_asd": 0.1, "band_hz": []}}});
         let p = psd_plot("ch1", &c).unwrap();
         assert!(p.caption.contains("no band"), "{}", p.caption);
+    }
+
+    #[test]
+    fn a_line_is_marked_at_its_peak_and_a_bad_bin_is_skipped() {
+        let c = serde_json::json!({"unit": "deg/s", "psd": {
+            "freq_hz": [0.0, 1.0, 2.0, 3.0], "density": [1.0, 1.0, 100.0, 1.0],
+            "lo": [0.5, 0.5, 0.5, 0.5], "hi": [2.0, 2.0, 2.0, 2.0],
+            "tones": [{"frequency_hz": 2.0, "bin": 2}, {"frequency_hz": 3.0, "bin": 99}]}});
+        let p = psd_plot("ch1", &c).unwrap();
+        let dots: Vec<&Series> = p.series.iter().filter(|s| s.style == Style::Dots).collect();
+        assert_eq!(dots.len(), 1);
+        assert_eq!(dots[0].points.len(), 1);
+        assert!((dots[0].points[0].y - 1.0).abs() < 1e-12);
+        assert!(p
+            .legend
+            .iter()
+            .any(|l| l.contains("lines above the noise floor (1)")));
     }
 }

@@ -204,13 +204,28 @@ impl Psd {
     /// The white level of the bins within `band_hz` (module docs); `None`
     /// when fewer than 3 independent bins lie in it.
     pub fn white(&self, band_hz: (f64, f64)) -> Option<White> {
+        self.white_without(band_hz, &[], 0)
+    }
+
+    /// As [`Psd::white`] without the bins within `half` of each bin in
+    /// `lines` (a tone's lobe is no part of the noise).
+    pub fn white_without(
+        &self,
+        band_hz: (f64, f64),
+        lines: &[usize],
+        half: usize,
+    ) -> Option<White> {
         let g: Vec<f64> = self
             .freq_hz
             .iter()
             .zip(&self.density)
             .enumerate()
             .filter(|(i, (f, _))| {
-                *i > 0 && *i + 1 < self.freq_hz.len() && **f >= band_hz.0 && **f <= band_hz.1
+                *i > 0
+                    && *i + 1 < self.freq_hz.len()
+                    && **f >= band_hz.0
+                    && **f <= band_hz.1
+                    && lines.iter().all(|k| k.abs_diff(*i) > half)
             })
             .map(|(_, (_, g))| *g)
             .collect();

@@ -196,6 +196,9 @@ pub fn document(
         if tables {
             b.table(stability_table(c, unit)?);
         }
+        if let Some(s) = c.spectrum.as_ref().filter(|s| !s.tones.is_empty()) {
+            b.table(tones_table(c, s, unit)?);
+        }
     }
     b.warnings(warnings);
     b.option("confidence", json!(confidence));
@@ -373,6 +376,26 @@ fn spectrum_coefficient(
     (units, unit): (&NoiseUnits, &str),
     warnings: &mut Vec<Warning>,
 ) -> Result<()> {
+    let lines = s.tones.len() + s.unfitted.len() + s.search.more;
+    if lines > 0 {
+        let hz: Vec<String> = s
+            .tones
+            .iter()
+            .take(4)
+            .map(|t| format!("{:.6} Hz", t.frequency_hz))
+            .collect();
+        warnings.push(Warning::new(
+            WarningCode::Tones,
+            format!(
+                "{}: {lines} line(s) stand above the PSD's noise floor ({}{}); each raises the Allan deviation near tau = 0.37/f (table tones.{}; {} not estimated)",
+                c.name,
+                hz.join(", "),
+                if lines > hz.len() { ", ..." } else { "" },
+                c.name,
+                s.unfitted.len() + s.search.more,
+            ),
+        ));
+    }
     let Some(w) = s.white else {
         warnings.push(Warning::new(
             WarningCode::ShortRecord,
@@ -439,6 +462,41 @@ fn stability_table(c: &ChannelResult, unit: &str) -> Result<Table> {
             g(st.ohdev.value[k]),
             g(st.totdev.value[k]),
             Cell::num(st.oadev.n[k] as f64),
+        ])?;
+    }
+    Ok(t)
+}
+
+/// The lines of a channel's spectrum (`tones.NAME`): frequency and rms
+/// amplitude (input unit) with their u, the coverage factor of both and
+/// the peak's ratio to its floor.
+fn tones_table(
+    c: &ChannelResult,
+    s: &super::spectrum::ChannelSpectrum,
+    unit: &str,
+) -> Result<Table> {
+    let u = Some(Unit::Other(unit.to_string()));
+    let hz = Some(Unit::Other("Hz".into()));
+    let mut t = Table::new(
+        &format!("tones.{}", c.name),
+        &format!("{}: lines above the PSD's noise floor", c.name),
+        &[
+            ("frequency_hz", hz.clone()),
+            ("u_frequency_hz", hz),
+            ("amplitude_rms", u.clone()),
+            ("u_amplitude_rms", u),
+            ("k95", None),
+            ("peak_to_floor", None),
+        ],
+    );
+    for l in &s.tones {
+        t.push(vec![
+            Cell::num(l.frequency_hz),
+            Cell::num(l.u_frequency_hz),
+            Cell::num(l.amplitude_rms * c.to_input),
+            Cell::num(l.u_amplitude_rms * c.to_input),
+            Cell::num(crate::estimation::coverage_factor(l.dof, 0.95)),
+            Cell::num(l.peak.ratio),
         ])?;
     }
     Ok(t)

@@ -13,7 +13,8 @@
 //!   deviation B filtered by `h_0 = 1`, `h_k = h_{k−1}(k − ½)/k`, so the
 //!   one-sided PSD is `B²/(πf)` at low f and `σ² = (2 ln 2/π) B²`;
 //! * rate random walk K (u/√s): `y_k = y_{k−1} + K√τ0 w_k` — `σ² ≈ K²τ/3`;
-//! * rate ramp R (u/s): `R·t` — `σ² = R²τ²/2`.
+//! * rate ramp R (u/s): `R·t` — `σ² = R²τ²/2`;
+//! * lines (tones, [`add_tones`]): `a√2 sin(2πft + φ)`, rms amplitude `a`.
 //!
 //! Each term draws from its own ChaCha8 stream, seeded from the channel's
 //! seed, so adding a term does not change the others. [`NoiseSim`] takes
@@ -191,10 +192,43 @@ pub struct NoiseSim {
     pub channels: usize,
     /// Random seed (channel c draws from `trial_seed(seed, c)`).
     pub seed: u64,
+    /// Lines added to every channel: `a√2 sin(2πft + φ)`, rms amplitude
+    /// `a` in the sample unit (deg/s or g), phase `φ` drawn from the
+    /// channel's seed.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tones: Vec<SimTone>,
     /// How the record is written: CSV (`time_s,ch1,…`) or raw
     /// interleaved little-endian floats.
     #[serde(default)]
     pub format: Format,
+}
+
+/// A simulated line.
+#[derive(
+    Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
+#[serde(deny_unknown_fields)]
+pub struct SimTone {
+    /// Frequency, Hz (below the Nyquist frequency).
+    pub frequency_hz: f64,
+    /// rms amplitude, deg/s (gyro) or g (accel).
+    pub amplitude_rms: f64,
+}
+
+/// Add `tones` to the rate samples `y` (spacing `tau0_s`), their phases
+/// drawn from `seed`.
+pub fn add_tones(y: &mut [f64], tones: &[SimTone], tau0_s: f64, seed: u64) {
+    let mut r = rng(trial_seed(seed, 5));
+    for t in tones {
+        let phase = r.random_range(0.0..std::f64::consts::TAU);
+        let (w, a) = (
+            std::f64::consts::TAU * t.frequency_hz,
+            t.amplitude_rms * 2f64.sqrt(),
+        );
+        for (i, v) in y.iter_mut().enumerate() {
+            *v += a * (w * i as f64 * tau0_s + phase).sin();
+        }
+    }
 }
 
 fn gyro() -> QuantityKind {
@@ -278,6 +312,24 @@ impl NoiseSim {
                 format!("times `rate_hz` must give between 4 and 1e9 samples, got {n}"),
             );
         }
+        for (i, t) in self.tones.iter().enumerate() {
+            if !(t.frequency_hz > 0.0 && t.frequency_hz < 0.5 * self.rate_hz) {
+                return crate::options::invalid(
+                    &format!("tones[{i}].frequency_hz"),
+                    format!(
+                        "above 0 and below half the rate ({} Hz), got {}",
+                        0.5 * self.rate_hz,
+                        t.frequency_hz
+                    ),
+                );
+            }
+            if !(t.amplitude_rms.is_finite() && t.amplitude_rms >= 0.0) {
+                return crate::options::invalid(
+                    &format!("tones[{i}].amplitude_rms"),
+                    format!("a non-negative number, got {}", t.amplitude_rms),
+                );
+            }
+        }
         if self.channels == 0 || self.channels > 64 {
             return bad("channels (1 to 64)".into(), self.channels as f64);
         }
@@ -324,7 +376,12 @@ impl NoiseSim {
         let (tau0, n) = (self.tau0_s(), self.samples());
         (0..self.channels)
             .into_par_iter()
-            .map(|c| rate_record(&truth, tau0, n, trial_seed(self.seed, c as u64)))
+            .map(|c| {
+                let seed = trial_seed(self.seed, c as u64);
+                let mut y = rate_record(&truth, tau0, n, seed);
+                add_tones(&mut y, &self.tones, tau0, seed);
+                y
+            })
             .collect()
     }
 

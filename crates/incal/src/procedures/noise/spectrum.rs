@@ -16,12 +16,22 @@
 //! identified (`terms.Q` … `terms.R`) and their sum (`total`), at
 //! `freq_hz` (the consistency check of the two analyses;
 //! [`crate::noise::terms::term_psd`]).
+//!
+//! `tones` lists the lines standing above the local floor
+//! ([`crate::spectral::tones`]), strongest first: `frequency_hz`,
+//! `u_frequency_hz`, `amplitude_rms` and `u_amplitude_rms` (input unit),
+//! `dof`, `k95` (the coverage factor of both), `peak_to_floor`,
+//! `floor_asd` (input unit/√Hz) and `bin`; `tone_search` says how they
+//! were searched: `false_alarm` (per spectrum), `threshold_ratio`, `bins`,
+//! `band_hz`, `more` (lines beyond the 16 estimated) and `unfitted_hz`.
+//! The white level leaves out the lines' lobes.
 
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 use crate::error::Result;
 use crate::spectral::psd::{psd_of_phase, Psd, White};
+use crate::spectral::tones::{self, Search, Tone};
 use crate::spectral::welch::Window;
 
 /// The PSD's options (flattened into the noise options).
@@ -48,6 +58,10 @@ pub struct SpectrumOptions {
     /// of the sampling rate).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub psd_white_band_hz: Option<Vec<f64>>,
+    /// The tone search's false-alarm rate per spectrum (default 0.01):
+    /// at most this many false lines per channel's spectrum, on average.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub psd_false_alarm: Option<f64>,
 }
 
 fn is_hann(w: &Window) -> bool {
@@ -69,6 +83,12 @@ pub struct ChannelSpectrum {
     pub note: Option<String>,
     /// The sample period (s).
     pub tau0_s: f64,
+    /// The tone search.
+    pub search: Search,
+    /// The lines found and estimated, strongest first.
+    pub tones: Vec<Tone>,
+    /// Lines found whose fit did not converge (their bins).
+    pub unfitted: Vec<usize>,
 }
 
 impl SpectrumOptions {
@@ -89,6 +109,11 @@ impl SpectrumOptions {
         if let Some(c) = self.psd_confidence {
             if !(c > 0.0 && c < 1.0) {
                 return invalid("psd_confidence", format!("between 0 and 1, got {c}"));
+            }
+        }
+        if let Some(a) = self.psd_false_alarm {
+            if !(a > 0.0 && a <= 0.5) {
+                return invalid("psd_false_alarm", format!("above 0, at most 0.5, got {a}"));
             }
         }
         if let Some(b) = &self.psd_white_band_hz {
@@ -128,13 +153,27 @@ impl SpectrumOptions {
             Some(&[lo, hi]) => (lo, hi),
             _ => (0.05 * fs, 0.25 * fs),
         };
+        let alpha = self.psd_false_alarm.unwrap_or(0.01);
+        let (search, found) = tones::search(&psd, self.psd_window, alpha);
+        let mut lines = Vec::new();
+        let mut unfitted = Vec::new();
+        for c in &found {
+            match tones::estimate(x, tau0_s, segment.0, c) {
+                Some(t) => lines.push(t),
+                None => unfitted.push(c.bin),
+            }
+        }
+        let bins: Vec<usize> = found.iter().map(|c| c.bin).collect();
         Ok(Some(ChannelSpectrum {
-            white: psd.white(band),
+            white: psd.white_without(band, &bins, tones::lobe(self.psd_window)),
             psd,
             segment,
             window: self.psd_window,
             note: None,
             tau0_s,
+            search,
+            tones: lines,
+            unfitted,
         }))
     }
 }
@@ -209,6 +248,31 @@ impl ChannelSpectrum {
             "white": white,
             "note": self.note,
             "model": self.model_json(fit, self.tau0_s, f2),
+            "tone_search": {
+                "false_alarm": self.search.false_alarm,
+                "threshold_ratio": self.search.threshold,
+                "bins": self.search.bins,
+                "band_hz": [self.search.band_hz.0, self.search.band_hz.1],
+                "more": self.search.more,
+                "unfitted_hz": self.unfitted.iter().map(|k| p.freq_hz[*k]).collect::<Vec<f64>>(),
+            },
+            "tones": self.tones.iter().map(|t| tone_json(t, f)).collect::<Vec<Value>>(),
         })
     }
+}
+
+/// One line of `psd.tones` (module docs), amplitudes times `f`.
+fn tone_json(t: &Tone, f: f64) -> Value {
+    let k = crate::estimation::coverage_factor(t.dof, 0.95);
+    json!({
+        "frequency_hz": t.frequency_hz,
+        "u_frequency_hz": t.u_frequency_hz,
+        "amplitude_rms": t.amplitude_rms * f,
+        "u_amplitude_rms": t.u_amplitude_rms * f,
+        "dof": t.dof,
+        "k95": k,
+        "peak_to_floor": t.peak.ratio,
+        "floor_asd": (t.peak.floor * f * f).sqrt(),
+        "bin": t.peak.bin,
+    })
 }
