@@ -1,6 +1,6 @@
 //! The exports for Python, on the core directly: an IMU calibration as
-//! imucal's JSON, noise terms as Kalibr's `imu.yaml` or PX4's EKF2
-//! parameters, a thermal model as PX4's or ArduPilot's parameters.
+//! imucal's JSON, noise terms as Kalibr's `imu.yaml`, PX4's EKF2
+//! parameters or VINS's, ORB-SLAM3's, OpenVINS's and Basalt's settings, a thermal model as PX4's or ArduPilot's parameters.
 
 use incal::document::ResultDocument;
 use pyo3::prelude::*;
@@ -14,6 +14,9 @@ struct ExportOptions {
     device_id: u32,
     with_offset: bool,
     imu: Option<u8>,
+    inflate: Option<f64>,
+    rate_hz: Option<f64>,
+    topic: Option<String>,
 }
 
 /// `NAME: message` of an error of the document `name`.
@@ -38,6 +41,26 @@ fn text(
             incal::procedures::noise::export::kalibr(gyro, gname, accel, aname)
                 .map(|imu| imu.to_yaml())
                 .map_err(|e| e.to_string())
+        }
+        ("vins" | "orbslam3" | "openvins" | "basalt", [(gname, gyro), (aname, accel)]) => {
+            use incal::procedures::noise::stacks::{stack_text, Stack, StackOptions};
+            let stack = match kind {
+                "vins" => Stack::Vins,
+                "orbslam3" => Stack::Orbslam3,
+                "openvins" => Stack::Openvins,
+                _ => Stack::Basalt,
+            };
+            if o.topic.is_some() && stack != Stack::Openvins {
+                return Err(format!(
+                    "topic: only export_openvins takes it, not export_{kind}"
+                ));
+            }
+            let so = StackOptions {
+                inflate: o.inflate.unwrap_or(1.0),
+                rate_hz: o.rate_hz,
+                topic: o.topic.clone(),
+            };
+            stack_text(stack, (gyro, gname), (accel, aname), &so).map_err(|e| e.to_string())
         }
         ("px4", [(gname, gyro), (aname, accel)]) => {
             let imu = incal::procedures::noise::export::kalibr(gyro, gname, accel, aname)
@@ -78,10 +101,11 @@ fn text(
 }
 
 /// `_export(kind, documents, options) -> (code, text, error)`: `kind`
-/// `imucal` (one IMU calibration), `kalibr` or `px4` (a gyro and an
-/// accelerometer noise result), `px4` or `ardupilot` (one thermal model);
+/// `imucal` (one IMU calibration), `kalibr`, `px4`, `vins`, `orbslam3`,
+/// `openvins` or `basalt` (a gyro and an accelerometer noise result), `px4` or `ardupilot` (one thermal model);
 /// `documents` a list of `(name, JSON text)`; `options` JSON
-/// (`ekf_rate_hz`, `axes`, `device_id`, `with_offset`, `imu`).
+/// (`ekf_rate_hz`, `axes`, `device_id`, `with_offset`, `imu`, `inflate`,
+/// `rate_hz`, `topic`).
 #[pyfunction]
 pub fn _export(
     kind: &str,

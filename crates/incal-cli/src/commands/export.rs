@@ -2,7 +2,9 @@
 //! JSON form another tool reads ([`incal::procedures::imu::apply::to_imucal`]);
 //! `incal export kalibr --gyro G.json --accel A.json -o imu.yaml`: noise
 //! terms as Kalibr's IMU noise model, and `incal export px4 …` as PX4's
-//! EKF2 noise parameters ([`incal::procedures::noise::export`]).
+//! EKF2 noise parameters ([`incal::procedures::noise::export`]);
+//! `incal export vins|orbslam3|openvins|basalt …` as those estimators'
+//! configuration ([`incal::procedures::noise::stacks`]).
 
 use std::path::PathBuf;
 
@@ -21,6 +23,44 @@ pub enum Command {
     Px4(Px4Args),
     /// A thermal model (incal thermal ramp or fit) as ArduPilot's IMU temperature calibration (INS_TCALn_*), NAME,VALUE lines.
     Ardupilot(ArdupilotArgs),
+    /// Gyro and accelerometer noise results as VINS-Mono / VINS-Fusion's acc_n, gyr_n, acc_w, gyr_w (discrete time per IMU sample).
+    Vins(StackArgs),
+    /// Gyro and accelerometer noise results as ORB-SLAM3's IMU.NoiseGyro, IMU.NoiseAcc, IMU.GyroWalk, IMU.AccWalk, IMU.Frequency (continuous time).
+    Orbslam3(StackArgs),
+    /// Gyro and accelerometer noise results as OpenVINS's kalibr_imu_chain.yaml (continuous time).
+    Openvins(OpenvinsArgs),
+    /// Gyro and accelerometer noise results as Basalt's calibration keys accel_noise_std, gyro_noise_std, accel_bias_std, gyro_bias_std per axis (continuous time, JSON).
+    Basalt(StackArgs),
+}
+
+/// Options of `incal export vins|orbslam3|openvins|basalt`.
+#[derive(clap::Args, Debug)]
+pub struct StackArgs {
+    /// The gyro noise result (incal noise --quantity gyro --json).
+    #[arg(long, value_name = "FILE")]
+    pub gyro: PathBuf,
+    /// The accelerometer noise result (incal noise --quantity accel --json), recorded at the same rate.
+    #[arg(long, value_name = "FILE")]
+    pub accel: PathBuf,
+    /// Every noise value times K, 1 to 1000 (stated in the file; default 1: the sensor at rest).
+    #[arg(long, value_name = "K", default_value_t = 1.0)]
+    pub inflate: f64,
+    /// The IMU rate the estimator runs at, Hz (default: the records' rate).
+    #[arg(long)]
+    pub rate_hz: Option<f64>,
+    /// Write to this file instead of standard output.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+/// Options of `incal export openvins`.
+#[derive(clap::Args, Debug)]
+pub struct OpenvinsArgs {
+    #[command(flatten)]
+    pub stack: StackArgs,
+    /// The IMU's ROS topic (rostopic; default /imu0).
+    #[arg(long)]
+    pub topic: Option<String>,
 }
 
 /// Options of `incal export px4`.
@@ -109,8 +149,32 @@ fn option_in(name: &str, e: incal::Error) -> crate::error::CliError {
     })
 }
 
+/// A stack's file from the two noise results of `a`.
+fn stack(
+    kind: incal::procedures::noise::stacks::Stack,
+    a: &StackArgs,
+    topic: Option<&str>,
+) -> CliResult<()> {
+    let (gname, _, gyro) = read_document(&a.gyro)?;
+    let (aname, _, accel) = read_document(&a.accel)?;
+    let o = incal::procedures::noise::stacks::StackOptions {
+        inflate: a.inflate,
+        rate_hz: a.rate_hz,
+        topic: topic.map(str::to_string),
+    };
+    let text =
+        incal::procedures::noise::stacks::stack_text(kind, (&gyro, &gname), (&accel, &aname), &o)
+            .map_err(crate::error::core)?;
+    write_text(a.output.as_deref(), &text)
+}
+
 pub fn run(c: &Command) -> CliResult<()> {
+    use incal::procedures::noise::stacks::Stack;
     match c {
+        Command::Vins(a) => stack(Stack::Vins, a, None),
+        Command::Orbslam3(a) => stack(Stack::Orbslam3, a, None),
+        Command::Openvins(a) => stack(Stack::Openvins, &a.stack, a.topic.as_deref()),
+        Command::Basalt(a) => stack(Stack::Basalt, a, None),
         Command::Imucal(a) => {
             let (name, _, doc) = read_document(&a.result)?;
             let cal =

@@ -22,6 +22,7 @@ mod repeatability_cli;
 mod report_cli;
 mod response_cli;
 mod result_document;
+mod stacks_cli;
 mod thermal_cli;
 mod threshold_cli;
 mod tumble_cli;

@@ -52,6 +52,10 @@ __all__ = [
     "apply",
     "export_kalibr",
     "export_px4",
+    "export_vins",
+    "export_orbslam3",
+    "export_openvins",
+    "export_basalt",
     "plan",
     "simulate",
     "batch",
@@ -790,6 +794,46 @@ def export_px4(
     times the square root of the EKF prediction rate ``ekf_rate_hz``), as a
     QGroundControl parameter file's text; written to ``path`` when given."""
     return _write(_export("px4", [gyro, accel], {"ekf_rate_hz": float(ekf_rate_hz)}), path)
+
+
+def _stack(kind: str, gyro: Any, accel: Any, path: Optional[str], inflate: float, rate_hz: Optional[float], **extra: Any) -> str:
+    options: Dict[str, Any] = {"inflate": float(inflate)}
+    if rate_hz is not None:
+        options["rate_hz"] = float(rate_hz)
+    options.update({k: v for k, v in extra.items() if v is not None})
+    return _write(_export(kind, [gyro, accel], options), path)
+
+
+def export_vins(gyro: Any, accel: Any, path: Optional[str] = None, inflate: float = 1.0, rate_hz: Optional[float] = None) -> str:
+    """``incal export vins``: the two noise results as VINS-Mono /
+    VINS-Fusion's ``acc_n``, ``gyr_n`` (continuous density times
+    sqrt(2 f)) and ``acc_w``, ``gyr_w`` (random walk times sqrt(f)):
+    discrete time per IMU sample at ``rate_hz`` (default the records'),
+    every value times ``inflate`` (stated in the file)."""
+    return _stack("vins", gyro, accel, path, inflate, rate_hz)
+
+
+def export_orbslam3(gyro: Any, accel: Any, path: Optional[str] = None, inflate: float = 1.0, rate_hz: Optional[float] = None) -> str:
+    """``incal export orbslam3``: ORB-SLAM3's ``IMU.NoiseGyro``,
+    ``IMU.NoiseAcc``, ``IMU.GyroWalk``, ``IMU.AccWalk`` (continuous time,
+    SI) and ``IMU.Frequency``."""
+    return _stack("orbslam3", gyro, accel, path, inflate, rate_hz)
+
+
+def export_openvins(
+    gyro: Any, accel: Any, path: Optional[str] = None, inflate: float = 1.0, rate_hz: Optional[float] = None, topic: Optional[str] = None
+) -> str:
+    """``incal export openvins``: OpenVINS's ``kalibr_imu_chain.yaml``
+    (continuous time, SI; ``rostopic`` ``topic``, default ``/imu0``)."""
+    return _stack("openvins", gyro, accel, path, inflate, rate_hz, topic=topic)
+
+
+def export_basalt(gyro: Any, accel: Any, path: Optional[str] = None, inflate: float = 1.0, rate_hz: Optional[float] = None) -> str:
+    """``incal export basalt``: Basalt's calibration keys
+    ``accel_noise_std``, ``gyro_noise_std``, ``accel_bias_std``,
+    ``gyro_bias_std`` per axis (continuous time, SI) and
+    ``imu_update_rate``, as JSON text (``value0``)."""
+    return _stack("basalt", gyro, accel, path, inflate, rate_hz)
 
 
 from . import batch, plan, simulate, warnings  # noqa: E402  (they use the tables above)

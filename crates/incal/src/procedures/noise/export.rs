@@ -94,8 +94,27 @@ fn largest(
     unit: &'static str,
     si: f64,
 ) -> Result<KalibrTerm> {
-    let (tname, tunit, factor) = quantity.units().terms[term].clone();
+    let (tname, ..) = quantity.units().terms[term].clone();
     let mut best: Option<KalibrTerm> = None;
+    for t in every_axis(doc, name, quantity, term, (key, unit, si))? {
+        if best.as_ref().is_none_or(|b| t.value > b.value) {
+            best = Some(t);
+        }
+    }
+    best.ok_or_else(|| bad(format!("{name}: no {tname}")))
+}
+
+/// `term` of every axis (channel, in document order) as [`largest`]
+/// reads it, each refused when missing or not positive.
+pub(crate) fn every_axis(
+    doc: &ResultDocument,
+    name: &str,
+    quantity: &Quantity,
+    term: usize,
+    (key, unit, si): (&'static str, &'static str, f64),
+) -> Result<Vec<KalibrTerm>> {
+    let (tname, tunit, factor) = quantity.units().terms[term].clone();
+    let mut all = Vec::new();
     let chans = channels(doc);
     if chans.is_empty() {
         return Err(bad(format!("{name}: the result has no channels")));
@@ -120,22 +139,19 @@ fn largest(
             )));
         }
         let k = si / factor;
-        let t = KalibrTerm {
+        all.push(KalibrTerm {
             key,
             value: c.value * k,
             u: c.u * k,
             unit,
             channel: ch.clone(),
             from: cname,
-        };
-        if best.as_ref().is_none_or(|b| t.value > b.value) {
-            best = Some(t);
-        }
+        });
     }
-    best.ok_or_else(|| bad(format!("{name}: no {tname}")))
+    Ok(all)
 }
 
-fn noise_of(doc: &ResultDocument, name: &str, want: &str) -> Result<(Quantity, f64)> {
+pub(crate) fn noise_of(doc: &ResultDocument, name: &str, want: &str) -> Result<(Quantity, f64)> {
     if doc.procedure != Procedure::Noise {
         return Err(bad(format!(
             "{name}: a {} result, not a noise result",
@@ -357,7 +373,7 @@ impl Px4Params {
 /// exactly: shortest round-trip digits, always with a `.`, and an
 /// exponent with its sign (`1.5e-05` would be a string to PyYAML without
 /// the `.`; `1.5e-5` is read as a float).
-fn yaml_float(v: f64) -> String {
+pub(crate) fn yaml_float(v: f64) -> String {
     let a = v.abs();
     if v == 0.0 || (1e-4..1e15).contains(&a) {
         let t = format!("{v:?}");

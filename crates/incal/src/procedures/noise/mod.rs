@@ -53,6 +53,7 @@ pub mod input;
 pub mod plan;
 pub mod sim;
 pub mod spectrum;
+pub mod stacks;
 
 use rayon::prelude::*;
 use schemars::JsonSchema;
