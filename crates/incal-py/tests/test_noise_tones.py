@@ -47,3 +47,13 @@ def test_a_simulated_line_is_found_within_its_u95():
     assert abs(line["frequency_hz"] - 37.0) <= line["k95"] * line["u_frequency_hz"]
     assert abs(line["amplitude_rms"] - 0.01) <= line["k95"] * line["u_amplitude_rms"]
     assert any(w["code"] == "tones" for w in r.document["warnings"])
+
+
+def test_a_gauss_markov_bias_from_python():
+    data, _ = incal.simulate.noise(rate_hz=100, duration_s=7200, arw_deg_rth=0.6, gm_sigma=0.01, gm_tau_s=100, seed=4)
+    r = incal.noise(data, quantity="gyro", gauss_markov=True, gm_filter_rate_hz=200)
+    c = r.coefficients
+    assert abs(c["ch1.gm_sigma"].value - 0.01) <= c["ch1.gm_sigma"].U95
+    assert abs(c["ch1.gm_tau_c_s"].value - 100) <= c["ch1.gm_tau_c_s"].U95
+    g = r.document["channels"]["ch1"]["gauss_markov"]
+    assert g["filter_rate_hz"] == 200 and 0 < g["phi"] < 1

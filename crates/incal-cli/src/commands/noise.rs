@@ -152,6 +152,12 @@ pub struct PsdArgs {
     /// The tone search's false-alarm rate per spectrum (default 0.01).
     #[arg(long)]
     pub psd_false_alarm: Option<f64>,
+    /// Also fit a first-order Gauss-Markov bias (sigma, correlation time, with u) to every channel's Allan variance, with its discrete-time form.
+    #[arg(long)]
+    pub gauss_markov: bool,
+    /// The filter rate of the Gauss-Markov bias's discrete-time form, Hz (default the record's rate).
+    #[arg(long)]
+    pub gm_filter_rate_hz: Option<f64>,
 }
 
 impl PsdArgs {
@@ -248,6 +254,10 @@ pub fn run(a: &Args) -> CliResult<()> {
         sort_time: a.sort_time,
         three_cornered_hat: a.three_cornered_hat,
         spectrum: a.psd.options(),
+        markov: incal::procedures::noise::gauss_markov::MarkovOptions {
+            gauss_markov: a.psd.gauss_markov,
+            gm_filter_rate_hz: a.psd.gm_filter_rate_hz,
+        },
     };
     let bars = Bars::new(a.quiet);
     let sample = match a.format {
@@ -330,6 +340,12 @@ pub struct SessionArgs {
     /// A line added to every channel: FREQ_HZ:RMS (rms amplitude in deg/s or g; repeatable).
     #[arg(long = "tone", value_name = "FREQ_HZ:RMS", value_parser = parse_tone)]
     pub tones: Vec<SimTone>,
+    /// A first-order Gauss-Markov bias: its standard deviation in the sample unit (deg/s or g).
+    #[arg(long, default_value_t = 0.0)]
+    pub gm_sigma: f64,
+    /// Its correlation time, s.
+    #[arg(long, default_value_t = 0.0)]
+    pub gm_tau_s: f64,
 }
 
 /// `FREQ_HZ:RMS` into a simulated line.
@@ -365,6 +381,8 @@ impl SessionArgs {
             seed: self.seed,
             format,
             tones: self.tones.clone(),
+            gm_sigma: self.gm_sigma,
+            gm_tau_s: self.gm_tau_s,
         }
     }
 }

@@ -318,6 +318,8 @@ def noise(
     psd_confidence: Union[float, None] = None,
     psd_white_band_hz: Union[Sequence[float], str, None] = None,
     psd_false_alarm: Union[float, None] = None,
+    gauss_markov: bool = False,
+    gm_filter_rate_hz: Union[float, None] = None,
     columns: Union[str, Sequence[str], Mapping[str, str], None] = None,
     delimiter: Optional[str] = None,
     serial: Optional[str] = None,

@@ -191,6 +191,8 @@ def noise(
     channels: Optional[Union[str, float]] = 1,
     seed: Union[str, float],
     tones: Optional[Union[str, float]] = None,
+    gm_sigma: Optional[Union[str, float]] = 0,
+    gm_tau_s: Optional[Union[str, float]] = 0,
     seeds: int = 5,
     run_sheet: Optional[Union[str, float]] = None,
 ) -> Dict[str, Any]: ...

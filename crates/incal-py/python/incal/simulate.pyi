@@ -198,6 +198,8 @@ def noise(
     channels: int = 1,
     seed: int,
     tones: Optional[Union[Sequence[Any], str]] = None,
+    gm_sigma: float = 0,
+    gm_tau_s: float = 0,
     format: Literal["csv", "f32le", "f64le"] = "csv",
 ) -> Tuple[Any, List[str]]: ...
 

@@ -79,6 +79,7 @@ pub mod edf;
 mod point;
 use point::{point, push, Point};
 pub mod id;
+pub mod markov;
 pub mod other_stats;
 pub mod terms;
 

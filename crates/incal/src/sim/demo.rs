@@ -716,6 +716,7 @@ fn noise(seed: u64) -> Result<DemoSection> {
         more: Vec::new(),
         to_input: 1.0,
         spectrum: None,
+        gauss_markov: None,
     };
     let doc = document(
         &crate::noise::Deviation::ALL,

@@ -102,6 +102,8 @@ pub struct ChannelResult {
     pub to_input: f64,
     /// The power spectral density, when asked for.
     pub spectrum: Option<super::spectrum::ChannelSpectrum>,
+    /// The Gauss–Markov bias and its filter rate (Hz), when asked for.
+    pub gauss_markov: Option<(super::gauss_markov::Fitted, f64)>,
 }
 
 /// The identified terms of a gyro or accelerometer in SI continuous-time
@@ -262,6 +264,12 @@ fn channel_json(
         let (_, n_unit, n_k) = &units.terms[1];
         o.insert("psd".into(), s.json(f, (*n_k, n_unit.as_str()), &c.fit));
     }
+    if let Some((g, rate)) = &c.gauss_markov {
+        o.insert(
+            "gauss_markov".into(),
+            super::gauss_markov::json(g, f, *rate),
+        );
+    }
     o
 }
 
@@ -348,6 +356,9 @@ fn channel_coefficients(
     }
     if let Some(s) = &c.spectrum {
         spectrum_coefficient(b, c, s, (units, unit), warnings)?;
+    }
+    if let Some((g, _)) = &c.gauss_markov {
+        markov_coefficients(b, c, g, unit, warnings)?;
     }
     for (tau, t) in &c.bias_stability {
         let full = format!("{}.bias_stability_{}", c.name, tau_label(*tau));
@@ -500,4 +511,57 @@ fn tones_table(
         ])?;
     }
     Ok(t)
+}
+
+/// The Gauss–Markov bias as `NAME.gm_sigma` (input unit) and
+/// `NAME.gm_tau_c_s` (s) when the record supports one, else a
+/// `not-significant` warning with the reason.
+fn markov_coefficients(
+    b: &mut DocumentBuilder,
+    c: &ChannelResult,
+    g: &super::gauss_markov::Fitted,
+    unit: &str,
+    warnings: &mut Vec<Warning>,
+) -> Result<()> {
+    let g = match g {
+        Ok(g) => g,
+        Err(why) => {
+            warnings.push(Warning::new(
+                WarningCode::NotSignificant,
+                format!("{}: no Gauss-Markov bias reported: {why}", c.name),
+            ));
+            return Ok(());
+        }
+    };
+    if let Some(why) = &g.unsupported {
+        warnings.push(Warning::new(
+            WarningCode::NotSignificant,
+            format!("{}: no Gauss-Markov bias reported: {why}", c.name),
+        ));
+        return Ok(());
+    }
+    let full = format!("{}.gm_sigma", c.name);
+    let f = c.to_input;
+    b.coefficient(
+        &full,
+        Coefficient::new(
+            &full,
+            g.sigma * f,
+            g.u_sigma * f,
+            Unit::Other(unit.to_string()),
+            g.dof,
+        )?,
+    )?;
+    let full = format!("{}.gm_tau_c_s", c.name);
+    b.coefficient(
+        &full,
+        Coefficient::new(
+            &full,
+            g.tau_c_s,
+            g.u_tau_c_s,
+            Unit::Other("s".into()),
+            g.dof,
+        )?,
+    )?;
+    Ok(())
 }

@@ -14,7 +14,8 @@
 //!   one-sided PSD is `B²/(πf)` at low f and `σ² = (2 ln 2/π) B²`;
 //! * rate random walk K (u/√s): `y_k = y_{k−1} + K√τ0 w_k` — `σ² ≈ K²τ/3`;
 //! * rate ramp R (u/s): `R·t` — `σ² = R²τ²/2`;
-//! * lines (tones, [`add_tones`]): `a√2 sin(2πft + φ)`, rms amplitude `a`.
+//! * lines (tones, [`add_tones`]): `a√2 sin(2πft + φ)`, rms amplitude `a`;
+//! * a first-order Gauss–Markov bias ([`add_gauss_markov`]).
 //!
 //! Each term draws from its own ChaCha8 stream, seeded from the channel's
 //! seed, so adding a term does not change the others. [`NoiseSim`] takes
@@ -197,6 +198,13 @@ pub struct NoiseSim {
     /// channel's seed.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub tones: Vec<SimTone>,
+    /// A first-order Gauss–Markov bias added to every channel: its
+    /// standard deviation in the sample unit (deg/s or g; 0 = none).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub gm_sigma: f64,
+    /// Its correlation time, s.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub gm_tau_s: f64,
     /// How the record is written: CSV (`time_s,ch1,…`) or raw
     /// interleaved little-endian floats.
     #[serde(default)]
@@ -228,6 +236,28 @@ pub fn add_tones(y: &mut [f64], tones: &[SimTone], tau0_s: f64, seed: u64) {
         for (i, v) in y.iter_mut().enumerate() {
             *v += a * (w * i as f64 * tau0_s + phase).sin();
         }
+    }
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
+/// Add a stationary first-order Gauss–Markov bias of standard deviation
+/// `sigma` and correlation time `tau_c_s` to `y` (spacing `tau0_s`):
+/// `b₀ ~ N(0, σ²)`, `b_{k+1} = φ b_k + σ√(1 − φ²) w_k`, `φ = e^{−τ0/T}`,
+/// drawn from `seed`'s own stream.
+pub fn add_gauss_markov(y: &mut [f64], sigma: f64, tau_c_s: f64, tau0_s: f64, seed: u64) {
+    if sigma <= 0.0 || tau_c_s <= 0.0 {
+        return;
+    }
+    let mut r = rng(trial_seed(seed, 6));
+    let phi = (-tau0_s / tau_c_s).exp();
+    let q = sigma * (1.0 - phi * phi).sqrt();
+    let mut b = normal(&mut r, sigma);
+    for v in y.iter_mut() {
+        *v += b;
+        b = phi * b + normal(&mut r, q);
     }
 }
 
@@ -330,6 +360,15 @@ impl NoiseSim {
                 );
             }
         }
+        if !(self.gm_sigma.is_finite() && self.gm_sigma >= 0.0) {
+            return bad("gm_sigma (a non-negative number)".into(), self.gm_sigma);
+        }
+        if self.gm_sigma > 0.0 && !(self.gm_tau_s.is_finite() && self.gm_tau_s > 0.0) {
+            return bad(
+                "gm_tau_s (a positive number of seconds with gm_sigma)".into(),
+                self.gm_tau_s,
+            );
+        }
         if self.channels == 0 || self.channels > 64 {
             return bad("channels (1 to 64)".into(), self.channels as f64);
         }
@@ -380,6 +419,7 @@ impl NoiseSim {
                 let seed = trial_seed(self.seed, c as u64);
                 let mut y = rate_record(&truth, tau0, n, seed);
                 add_tones(&mut y, &self.tones, tau0, seed);
+                add_gauss_markov(&mut y, self.gm_sigma, self.gm_tau_s, tau0, seed);
                 y
             })
             .collect()
