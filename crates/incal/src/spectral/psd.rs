@@ -190,13 +190,22 @@ impl White {
     /// estimated.
     pub fn asd(&self, f: f64) -> (f64, f64) {
         let a = (self.density * f * f).sqrt();
-        (a, a * self.u / (2.0 * self.density))
+        if self.density > 0.0 {
+            (a, a * self.u / (2.0 * self.density))
+        } else {
+            // A record without noise: a level of 0 within √u.
+            (a, (self.u * f * f).sqrt())
+        }
     }
 
     /// `(N, u(N))`, `N = √(Ḡ/2)` (module docs), in the estimate's unit·√s.
     pub fn n_equivalent(&self) -> (f64, f64) {
         let n = (self.density / 2.0).sqrt();
-        (n, n * self.u / (2.0 * self.density))
+        if self.density > 0.0 {
+            (n, n * self.u / (2.0 * self.density))
+        } else {
+            (n, (self.u / 2.0).sqrt())
+        }
     }
 }
 
@@ -284,6 +293,21 @@ mod tests {
         assert!((h.bin_correlation - (1.0 + 2.0 * (4.0 / 9.0 + 1.0 / 36.0))).abs() < 1e-9);
         let r = psd_of_phase(&x, 1.0, (256, 128), Window::Rectangular, 0.95).unwrap();
         assert!((r.bin_correlation - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_record_without_noise_has_a_finite_white_level() {
+        // The fuzz seed of a simulation with every term 0 gave u = NaN.
+        let w = White {
+            density: 0.0,
+            u: 0.0,
+            dof: 10.0,
+            band_hz: (1.0, 2.0),
+        };
+        assert_eq!(w.asd(3.0), (0.0, 0.0));
+        assert_eq!(w.n_equivalent(), (0.0, 0.0));
+        let w = White { u: 4e-6, ..w };
+        assert!((w.asd(1.0).1 - 2e-3).abs() < 1e-15);
     }
 
     #[test]

@@ -394,6 +394,16 @@ impl Procedure for Noise {
             // Sequential: the same numbers, and a fuzzer's process stays
             // on one thread.
             parallel: false,
+            // The spectrum, its tone search and the Gauss–Markov fit too, so
+            // the fuzz targets reach them.
+            spectrum: spectrum::SpectrumOptions {
+                psd: true,
+                ..spectrum::SpectrumOptions::default()
+            },
+            markov: gauss_markov::MarkovOptions {
+                gauss_markov: true,
+                gm_filter_rate_hz: None,
+            },
             ..NoiseOptions::default()
         }
     }
