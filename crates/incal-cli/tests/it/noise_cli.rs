@@ -555,28 +555,6 @@ fn kalibr_export_converts_the_terms_and_refuses_what_is_missing() {
         ok(&run(&a));
         p
     };
-    let g = sim(
-        "kal-gyro.csv",
-        &[
-            "--quantity",
-            "gyro",
-            "--arw-deg-rth",
-            "0.2",
-            "--rrw-deg-h-rth",
-            "40",
-        ],
-    );
-    let a = sim(
-        "kal-accel.csv",
-        &[
-            "--quantity",
-            "accel",
-            "--vrw-ug-rthz",
-            "60",
-            "--accel-rw-ug-rts",
-            "30",
-        ],
-    );
     let reduce = |input: &PathBuf, q: &str, name: &str| {
         let out = unique(name);
         ok(&run(&[
@@ -593,8 +571,7 @@ fn kalibr_export_converts_the_terms_and_refuses_what_is_missing() {
         ]));
         out
     };
-    let gj = reduce(&g, "gyro", "kal-gyro.json");
-    let aj = reduce(&a, "accel", "kal-accel.json");
+    let (gj, aj) = noise_pair(&workdir("kalibr"), "kal-");
     let yaml = ok(&run(&[
         "export",
         "kalibr",

@@ -11,51 +11,6 @@ use std::path::PathBuf;
 
 use serde_json::Value;
 
-/// A gyro and an accelerometer noise result of three axes (the docs'
-/// Kalibr example).
-fn results(dir: &std::path::Path) -> (PathBuf, PathBuf) {
-    let mut out = Vec::new();
-    for (q, terms) in [
-        ("gyro", ["--arw-deg-rth", "0.2", "--rrw-deg-h-rth", "40"]),
-        ("accel", ["--vrw-ug-rthz", "60", "--accel-rw-ug-rts", "30"]),
-    ] {
-        let csv = dir.join(format!("{q}.csv"));
-        let mut a = vec![
-            "simulate",
-            "noise",
-            "--quantity",
-            q,
-            "--rate-hz",
-            "100",
-            "--duration-s",
-            "3600",
-            "--channels",
-            "3",
-            "--seed",
-            "11",
-            "-o",
-            p(&csv),
-        ];
-        a.extend_from_slice(&terms);
-        ok(&run(&a));
-        let json = dir.join(format!("{q}.json"));
-        ok(&run(&[
-            "noise",
-            "--input",
-            p(&csv),
-            "--rate-hz",
-            "100",
-            "--quantity",
-            q,
-            "--json",
-            "-o",
-            p(&json),
-        ]));
-        out.push(json);
-    }
-    (out[0].clone(), out[1].clone())
-}
-
 /// `key: value` lines (comments and the `%YAML` directive skipped, keys
 /// trimmed of their indentation).
 fn yaml_values(text: &str) -> BTreeMap<String, String> {
@@ -96,7 +51,7 @@ fn close(got: f64, want: f64, what: &str) {
 #[test]
 fn every_stack_file_reads_back_as_the_documents_say() {
     let dir = workdir("stacks");
-    let (gj, aj) = results(&dir);
+    let (gj, aj) = noise_pair(&dir, "");
     let doc = |f: &PathBuf| -> Value {
         serde_json::from_str(&std::fs::read_to_string(f).unwrap()).unwrap()
     };

@@ -80,11 +80,7 @@ pub struct GaussMarkov {
 
 /// One linear fit at a fixed T: `(θ of the kept columns, kept, χ²)`.
 fn linear(obs: &[(f64, f64, f64)], w: &[f64], t: f64) -> Option<(Vec<f64>, Vec<usize>, f64)> {
-    let col = |j: usize, tau: f64| match j {
-        0 => 3.0 / (tau * tau),
-        1 => 1.0 / tau,
-        _ => gm_avar(1.0, t, tau),
-    };
+    let col = |j: usize, tau: f64| column(j, t, tau);
     let mut kept = vec![0usize, 1, 2];
     loop {
         let a = DMatrix::from_fn(obs.len(), kept.len(), |i, k| {
@@ -108,14 +104,19 @@ fn linear(obs: &[(f64, f64, f64)], w: &[f64], t: f64) -> Option<(Vec<f64>, Vec<u
 fn model(th: &[f64], kept: &[usize], t: f64, tau: f64) -> f64 {
     kept.iter()
         .zip(th)
-        .map(|(&j, v)| {
-            v * match j {
-                0 => 3.0 / (tau * tau),
-                1 => 1.0 / tau,
-                _ => gm_avar(1.0, t, tau),
-            }
-        })
+        .map(|(&j, v)| v * column(j, t, tau))
         .sum()
+}
+
+/// Column `j` of the fit at τ: Q² and N² as the IEEE term fit regresses
+/// them ([`super::terms::regressor`] 0 and 1), then σ² of the
+/// Gauss–Markov term of correlation time `t`.
+fn column(j: usize, t: f64, tau: f64) -> f64 {
+    if j < 2 {
+        super::terms::regressor(j, tau)
+    } else {
+        gm_avar(1.0, t, tau)
+    }
 }
 
 /// The best T on a log grid then by golden section: `(T, θ, kept, χ²)`.
@@ -268,10 +269,10 @@ fn fit_inner(taus: &[f64], oadev: &DevSeries, tau0: f64) -> Option<GaussMarkov> 
             .collect();
         best = profile(&obs, &w)?;
     }
-    let (t, th, kept, chi2) = best;
+    // The χ² that counts is the correlated one of [`covariance`].
+    let (t, th, kept, _) = best;
     let gm = kept.iter().position(|&j| j == 2)?;
     let sigma2 = th[gm];
-    let _ = chi2;
     let (v, dof, chi2, dof_n) = covariance(&obs, &w, (t, &th, &kept))?;
     let p = kept.len() + 1;
     let (vs, vt, vst) = (v[(gm, gm)], v[(p - 1, p - 1)], v[(gm, p - 1)]);

@@ -216,3 +216,49 @@ pub fn registry_cases() -> Vec<RegistryCase> {
         })
         .collect()
 }
+
+/// A gyro and an accelerometer noise result of three axes (the docs'
+/// Kalibr example), the CSV and JSON files in `dir` named `PREFIXgyro…`
+/// and `PREFIXaccel…`: the exports' inputs.
+pub fn noise_pair(dir: &Path, prefix: &str) -> (PathBuf, PathBuf) {
+    let mut out = Vec::new();
+    for (q, terms) in [
+        ("gyro", ["--arw-deg-rth", "0.2", "--rrw-deg-h-rth", "40"]),
+        ("accel", ["--vrw-ug-rthz", "60", "--accel-rw-ug-rts", "30"]),
+    ] {
+        let csv = dir.join(format!("{prefix}{q}.csv"));
+        let mut a = vec![
+            "simulate",
+            "noise",
+            "--quantity",
+            q,
+            "--rate-hz",
+            "100",
+            "--duration-s",
+            "3600",
+            "--channels",
+            "3",
+            "--seed",
+            "11",
+            "-o",
+            p(&csv),
+        ];
+        a.extend_from_slice(&terms);
+        ok(&run(&a));
+        let json = dir.join(format!("{prefix}{q}.json"));
+        ok(&run(&[
+            "noise",
+            "--input",
+            p(&csv),
+            "--rate-hz",
+            "100",
+            "--quantity",
+            q,
+            "--json",
+            "-o",
+            p(&json),
+        ]));
+        out.push(json);
+    }
+    (out[0].clone(), out[1].clone())
+}

@@ -523,23 +523,21 @@ fn markov_coefficients(
     unit: &str,
     warnings: &mut Vec<Warning>,
 ) -> Result<()> {
-    let g = match g {
-        Ok(g) => g,
-        Err(why) => {
-            warnings.push(Warning::new(
-                WarningCode::NotSignificant,
-                format!("{}: no Gauss-Markov bias reported: {why}", c.name),
-            ));
-            return Ok(());
-        }
+    let (g, why) = match g {
+        Ok(g) => (Some(g), g.unsupported.as_ref()),
+        Err(why) => (None, Some(why)),
     };
-    if let Some(why) = &g.unsupported {
+    let (Some(g), None) = (g, why) else {
         warnings.push(Warning::new(
             WarningCode::NotSignificant,
-            format!("{}: no Gauss-Markov bias reported: {why}", c.name),
+            format!(
+                "{}: no Gauss-Markov bias reported: {}",
+                c.name,
+                why.map_or("", String::as_str)
+            ),
         ));
         return Ok(());
-    }
+    };
     let full = format!("{}.gm_sigma", c.name);
     let f = c.to_input;
     b.coefficient(

@@ -151,7 +151,7 @@ pub(crate) fn every_axis(
     Ok(all)
 }
 
-pub(crate) fn noise_of(doc: &ResultDocument, name: &str, want: &str) -> Result<(Quantity, f64)> {
+fn noise_of(doc: &ResultDocument, name: &str, want: &str) -> Result<(Quantity, f64)> {
     if doc.procedure != Procedure::Noise {
         return Err(bad(format!(
             "{name}: a {} result, not a noise result",

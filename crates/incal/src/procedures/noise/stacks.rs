@@ -29,7 +29,8 @@
 use crate::document::ResultDocument;
 use crate::error::{Error, Result};
 
-use super::export::{every_axis, kalibr, noise_of, yaml_float, KalibrImu, KalibrTerm};
+use super::document::Quantity;
+use super::export::{every_axis, kalibr, yaml_float, KalibrImu, KalibrTerm};
 
 /// A visual-inertial estimator whose configuration incal writes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -180,8 +181,8 @@ fn basalt(
     f: f64,
     k: f64,
 ) -> Result<String> {
-    let (qg, _) = noise_of(gyro, gname, "gyro")?;
-    let (qa, _) = noise_of(accel, aname, "accel")?;
+    // [`kalibr`] has checked each result's procedure and quantity.
+    let (qg, qa) = (Quantity::Gyro, Quantity::Accel);
     let rad = std::f64::consts::PI / 180.0;
     let g0 = crate::units::STANDARD_GRAVITY_M_S2;
     let mut notes = Vec::new();
