@@ -260,7 +260,7 @@ impl KalibrImu {
             "# IMU noise model for Kalibr (continuous time, SI units), written by incal export kalibr\n",
         );
         s.push_str(&format!(
-            "# from {} (gyro) and {} (accelerometer); per sensor the largest axis\n",
+            "# gyro: {}\n# accelerometer: {}\n# per sensor the largest axis\n",
             self.sources[0], self.sources[1]
         ));
         for t in &self.terms {
@@ -348,7 +348,7 @@ impl Px4Params {
     pub fn to_params(&self) -> String {
         let mut s = String::from("# PX4 EKF2 IMU noise parameters, written by incal export px4\n");
         s.push_str(&format!(
-            "# from {} (gyro) and {} (accelerometer); per sensor the largest axis; EKF prediction rate {} Hz (value = continuous-time density x sqrt(rate))\n",
+            "# gyro: {}\n# accelerometer: {}\n# per sensor the largest axis; EKF prediction rate {} Hz (value = continuous-time density x sqrt(rate))\n",
             self.sources[0],
             self.sources[1],
             yaml_float(self.ekf_rate_hz)

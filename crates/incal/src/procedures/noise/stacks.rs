@@ -104,7 +104,7 @@ pub fn stack_text(
     let k = o.inflate;
     let head = |name: &str, time: &str| -> String {
         format!(
-            "# IMU noise for {name}, written by incal export from {gname} (gyro) and {aname} (accelerometer)\n# {time}\n# inflation factor {} (every noise value below is the sensor's at rest times {}); IMU rate {} Hz\n",
+            "# IMU noise for {name}, written by incal export\n# gyro: {gname}\n# accelerometer: {aname}\n# {time}\n# inflation factor {} (every noise value below is the sensor's at rest times {}); IMU rate {} Hz\n",
             yaml_float(k),
             yaml_float(k),
             yaml_float(f)
