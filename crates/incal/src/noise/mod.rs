@@ -80,6 +80,7 @@ mod point;
 use point::{point, push, Point};
 pub mod id;
 pub mod markov;
+pub mod minimum;
 pub mod other_stats;
 pub mod terms;
 

@@ -136,6 +136,19 @@ struct Active {
 }
 
 impl Active {
+    /// Every term of the set distinguishable from zero: its amplitude's
+    /// U95 below the amplitude (`k·u(θ)/(2√θ) < √θ`, θ the fitted
+    /// square, k the coverage factor at the fit's dof). A set with a term
+    /// the record cannot tell from zero is not a model the document may
+    /// report: its terms would be invented.
+    fn distinguishable(&self) -> bool {
+        let k = crate::estimation::coverage_factor(self.est.dof(), 0.95);
+        (0..self.active.len()).all(|i| {
+            let th = self.est.values()[i];
+            th > 0.0 && k * self.est.u_at(i) < 2.0 * th
+        })
+    }
+
     /// `χ² + PENALTY·(terms)`, the ramp counting [`RAMP_FACTOR`] terms.
     fn score(&self) -> f64 {
         let weight: f64 = self
@@ -334,7 +347,9 @@ fn names(set: &[usize]) -> String {
 /// residuals' generalized χ² is `rᵀV⁻¹r`.
 ///
 /// **Model choice**: every set of the five terms is fitted (31 sets; a set
-/// whose fit gives a negative square is not a model), and the set with the
+/// whose fit gives a negative square is not a model, nor is one in which
+/// a term's U95 reaches its value: a term the record cannot tell from
+/// zero is never reported), and the set with the
 /// least `χ² + PENALTY·p` ([`PENALTY`], p terms, the ramp counting
 /// [`RAMP_FACTOR`]) is reported: every term in
 /// it, with u from its full covariance (u of an amplitude A = √θ is
@@ -381,7 +396,9 @@ pub fn fit_terms(
     for mask in 1u32..32 {
         let set: Vec<usize> = (0..5).filter(|&j| mask >> j & 1 == 1).collect();
         if let Some(a) = fit_set(&obs, set)? {
-            cands.push(a);
+            if a.distinguishable() {
+                cands.push(a);
+            }
         }
     }
     // Least score; on a tie the fewer terms, then the lower χ².
@@ -403,11 +420,40 @@ pub fn fit_terms(
             chi2: None,
         });
     };
+    // The closest rival of no more terms, if the record cannot tell them
+    // apart.
+    let rival = cands
+        .iter()
+        .filter(|c| c.active != best.active && c.active.len() <= best.active.len())
+        .filter(|c| c.score() - best.score() < NOT_SEPARATED)
+        .min_by(|a, b| order(a, b));
+    // The terms of `from` that are (or are not) in `other`.
+    let pick = |from: &[usize], other: &[usize], inside: bool| -> Vec<usize> {
+        from.iter()
+            .copied()
+            .filter(|j| other.contains(j) == inside)
+            .collect()
+    };
+    // An alias: a rival of as many terms explaining the curve with other
+    // noises in their place (B for K, Q for N). Neither is chosen: the
+    // terms the two share are reported, the swapped ones are not. (A ramp
+    // is not a noise: its criterion already weighs it as RAMP_FACTOR
+    // terms, and the set without it is reported.)
+    let aliased: Vec<usize> = match rival {
+        Some(r)
+            if r.active.len() == best.active.len()
+                && !r.active.contains(&4)
+                && !best.active.contains(&4) =>
+        {
+            pick(&best.active, &r.active, false)
+        }
+        _ => Vec::new(),
+    };
     let mut terms = [None; 5];
     for (k, &j) in best.active.iter().enumerate() {
         let th = best.est.values()[k];
         let u = best.est.u_at(k);
-        if th > 0.0 {
+        if th > 0.0 && !aliased.contains(&j) {
             let a = th.sqrt();
             terms[j] = Some(Term {
                 value: a,
@@ -416,21 +462,7 @@ pub fn fit_terms(
             });
         }
     }
-    // The closest rival of no more terms, if the record cannot tell them
-    // apart.
-    let rival = cands
-        .iter()
-        .filter(|c| c.active != best.active && c.active.len() <= best.active.len())
-        .filter(|c| c.score() - best.score() < NOT_SEPARATED)
-        .min_by(|a, b| order(a, b));
     if let Some(r) = rival {
-        // The terms of `from` that are (or are not) in `other`.
-        let pick = |from: &[usize], other: &[usize], inside: bool| -> Vec<usize> {
-            from.iter()
-                .copied()
-                .filter(|j| other.contains(j) == inside)
-                .collect()
-        };
         let only_best = pick(&best.active, &r.active, false);
         let only_rival = pick(&r.active, &best.active, false);
         let common = pick(&best.active, &r.active, true);
@@ -439,20 +471,27 @@ pub fn fit_terms(
         } else {
             format!(" beside {}", names(&common))
         };
+        let verdict = if aliased.is_empty() {
+            format!(
+                "{} reported, {} not",
+                names(&best.active),
+                names(&only_rival)
+            )
+        } else {
+            "they alias one another: neither is reported (where the curve has a minimum, adev_min is what the record determines there)".to_string()
+        };
         warnings.push(Warning::new(
             WarningCode::NoiseTermsNotSeparated,
             format!(
-                "the Allan variance is explained about as well by {}{beside} as by {} (criterion {:.1} against {:.1}): the record does not separate them; {} reported, {} not",
+                "the Allan variance is explained about as well by {}{beside} as by {} (criterion {:.1} against {:.1}): the record does not separate them; {verdict}",
                 names(&only_rival),
                 names(&only_best),
                 r.score(),
                 best.score(),
-                names(&best.active),
-                names(&only_rival),
             ),
         ));
     }
-    for j in (0..5).filter(|j| terms[*j].is_none()) {
+    for j in (0..5).filter(|j| terms[*j].is_none() && !aliased.contains(j)) {
         warnings.push(not_identified(
             j,
             "the Allan variance is explained as well without it",

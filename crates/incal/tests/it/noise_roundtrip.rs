@@ -17,7 +17,7 @@
 use incal::estimation::coverage_factor;
 use incal::noise::{phase_from_rate, stability, terms, StabilityOptions};
 use incal::sim::monte_carlo;
-use incal::sim::noise::{rate_record, NoiseTruth};
+use incal::sim::noise::{rate_record, spectral_record, NoiseTruth};
 use incal::sim::tier::{at_least, at_most, band, trials};
 
 /// Records per coverage check: 150 in the statistical tier.
@@ -29,8 +29,12 @@ fn seeds() -> usize {
 type Found = [Option<(f64, f64)>; 5];
 
 fn one(seed: u64, truth: &NoiseTruth, n: usize) -> Found {
-    let y = rate_record(truth, 1.0, n, seed);
-    let x = phase_from_rate(&y, 1.0);
+    found_in(&rate_record(truth, 1.0, n, seed))
+}
+
+/// The terms fitted to the OADEV of rate samples `y` at τ0 = 1 s.
+fn found_in(y: &[f64]) -> Found {
+    let x = phase_from_rate(y, 1.0);
     let opts = StabilityOptions {
         parallel: false,
         ..Default::default()
@@ -149,10 +153,47 @@ const SAMPLES: usize = 1 << 16;
 /// Three terms each dominating a decade need two more octaves.
 const LONG: usize = 1 << 18;
 
-/// Run a mix; `present` are the terms in the truth that must be found.
+/// A seeded record generator: truth, τ0 (s), samples, seed.
+type Generator = fn(&NoiseTruth, f64, usize, u64) -> Vec<f64>;
+
+/// The two independent generators the selection is measured on: incal's
+/// own time-domain one and Timmer & König's frequency-domain one.
+const GENERATORS: [(&str, Generator); 2] = [
+    ("time-domain", rate_record),
+    ("frequency-domain", spectral_record),
+];
+
+/// Run a mix on both generators; `present` are the terms in the truth
+/// that must be found.
 fn mix(name: &str, seed: u64, truth: NoiseTruth, samples: usize, present: &[usize]) {
-    let n = selection_seeds();
-    let res = monte_carlo(seed, n, |s| one(s, &truth, samples));
+    let mut failed = Vec::new();
+    for (gen_name, generate) in GENERATORS {
+        let n = selection_seeds();
+        let res = monte_carlo(seed, n, |s| found_in(&generate(&truth, 1.0, samples, s)));
+        failed.extend(
+            rates(&format!("{name} ({gen_name})"), &truth, &res, present)
+                .into_iter()
+                .map(|f| format!("{gen_name}: {f}")),
+        );
+    }
+    assert!(failed.is_empty(), "{name}: {}", failed.join("; "));
+}
+
+/// Print a mix's false-inclusion, miss and coverage rates over the
+/// records `res`; the failed criteria.
+fn rates(name: &str, truth: &NoiseTruth, res: &[Found], present: &[usize]) -> Vec<String> {
+    rates_within(name, truth, res, present, (0.05, 0.05))
+}
+
+/// [`rates`] with the largest miss and false-inclusion rates asserted.
+fn rates_within(
+    name: &str,
+    truth: &NoiseTruth,
+    res: &[Found],
+    present: &[usize],
+    (miss, invent): (f64, f64),
+) -> Vec<String> {
+    let n = res.len();
     let want = [truth.q, truth.n, truth.b, truth.k, truth.r];
     let mut line = format!("{name}:");
     let mut failed = Vec::new();
@@ -161,7 +202,7 @@ fn mix(name: &str, seed: u64, truth: NoiseTruth, samples: usize, present: &[usiz
         let found = res.iter().filter(|r| r[j].is_some()).count();
         if want[j] == 0.0 {
             line += &format!(" {term} false {found}/{n};");
-            if found as f64 > at_most(n, 0.05) * n as f64 {
+            if found as f64 > at_most(n, invent) * n as f64 {
                 failed.push(format!("{term} (absent) reported in {found}/{n}"));
             }
             continue;
@@ -171,7 +212,7 @@ fn mix(name: &str, seed: u64, truth: NoiseTruth, samples: usize, present: &[usiz
             .filter(|r| r[j].is_some_and(|(v, u95)| (v - want[j]).abs() <= u95))
             .count();
         line += &format!(" {term} found {found}/{n} covered {cover}/{found};");
-        if present.contains(&j) && (found as f64) < at_least(n, 0.95) * n as f64 {
+        if present.contains(&j) && (found as f64) < at_least(n, 1.0 - miss) * n as f64 {
             failed.push(format!("{term} missed in {} of {n}", n - found));
         }
         // Never below 90 %. The target's upper end, 99 %, is not held by
@@ -182,8 +223,18 @@ fn mix(name: &str, seed: u64, truth: NoiseTruth, samples: usize, present: &[usiz
             failed.push(format!("{term} coverage {cover}/{found}"));
         }
     }
+    // No reported term's U95 reaches its value.
+    let weak = res
+        .iter()
+        .flatten()
+        .filter(|t| t.is_some_and(|(v, u95)| u95 >= v))
+        .count();
+    line += &format!(" U95 >= value in {weak};");
+    if weak > 0 {
+        failed.push(format!("{weak} reported terms with U95 >= value"));
+    }
     eprintln!("{line}");
-    assert!(failed.is_empty(), "{name}: {}", failed.join("; "));
+    failed
 }
 
 #[test]
@@ -709,4 +760,109 @@ fn theo1_bounds_cover_and_theobr_removes_the_theo1_bias() {
         .fold(0.0, f64::max);
     println!("fast vs exact TheoBR factor: worst {worst:.4}");
     assert!(worst < 0.05, "{worst}");
+}
+
+/// Where the record cannot tell bias instability from a rate random walk
+/// (white noise with a floor at the top octaves of a short record), the
+/// document reports neither, names the alias and gives the Allan
+/// deviation's floor; across the records no reported term has U95 at or
+/// above its value.
+#[test]
+fn b_and_k_that_alias_are_neither_reported_and_the_floor_is() {
+    let truth = NoiseTruth {
+        n: 1.0,
+        b: 0.05,
+        k: 2e-4,
+        ..Default::default()
+    };
+    let mut aliased = 0;
+    for seed in 0..trials(30, 100) as u64 {
+        let y = rate_record(&truth, 1.0, 1 << 13, seed);
+        let doc = noise_doc(&csv(&y, 1.0, 0..0, false), Some(1.0)).unwrap();
+        let coef = doc["coefficients"].as_object().unwrap();
+        for (name, c) in coef {
+            let (v, u95) = (c["value"].as_f64().unwrap(), c["U95"].as_f64().unwrap());
+            assert!(u95 < v.abs(), "seed {seed}: {name} = {v} with U95 {u95}");
+        }
+        let alias = doc["warnings"].as_array().unwrap().iter().any(|w| {
+            let m = w["message"].as_str().unwrap();
+            w["code"] == "noise-terms-not-separated"
+                && m.contains("alias")
+                && m.contains('B')
+                && m.contains('K')
+        });
+        if alias {
+            aliased += 1;
+            assert!(
+                !coef.contains_key("gx.B") && !coef.contains_key("gx.K"),
+                "seed {seed}: {:?}",
+                coef.keys().collect::<Vec<_>>()
+            );
+            // The floor, unless the curve still falls at its last τ.
+            let oadev: Vec<f64> = doc["channels"]["gx"]["oadev"]["value"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .filter_map(|v| v.as_f64())
+                .collect();
+            let last_is_least = oadev.last().is_some_and(|l| oadev.iter().all(|v| v >= l));
+            assert!(
+                coef.contains_key("gx.adev_min") != last_is_least,
+                "seed {seed}: adev_min {} with the curve {oadev:?}",
+                coef.contains_key("gx.adev_min")
+            );
+        }
+    }
+    eprintln!("B/K aliased in {aliased} records");
+    assert!(aliased > 0, "no record aliased B and K");
+}
+
+/// A MEMS gyro's white noise and bias instability (B = 1 °/h, N = 0.15
+/// °/√h, 2 h at 100 Hz, in °/s) from both generators. The record is too
+/// short for the 5 % targets: the flicker floor starts at 180 s and the
+/// fit's longest τ is 1311 s, so B dominates 0.85 of a decade, three
+/// octaves whose estimates have 24, 11 and 5 EDF. Measured over 100
+/// seeds: B found in 79 % (time domain) and 84 % (frequency domain), K
+/// invented in 10 % and 12 %, the rest named as a B/K alias with neither
+/// reported; asserted: B found in at least 70 %, K invented in at most
+/// 15 %, and (as everywhere) no reported term with U95 at its value.
+#[test]
+fn mems_white_and_flicker_at_100_hz() {
+    let truth = NoiseTruth {
+        n: 0.15 / 60.0,
+        b: 1.0 / 3600.0,
+        ..Default::default()
+    };
+    let n = trials(6, 100);
+    let mut failed = Vec::new();
+    for (gen_name, generate) in GENERATORS {
+        let res = monte_carlo(48, n, |s| {
+            let y = generate(&truth, 0.01, 720_000, s);
+            let x = phase_from_rate(&y, 0.01);
+            let st = stability(
+                &x,
+                &StabilityOptions {
+                    tau0_s: 0.01,
+                    parallel: false,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            let f = terms::fit_terms(&st.taus_s, &st.oadev, &st.alpha, 0.01, x.len()).unwrap();
+            f.terms
+                .map(|t| t.map(|t| (t.value, coverage_factor(t.dof, 0.95) * t.u)))
+        });
+        failed.extend(
+            rates_within(
+                &format!("MEMS white + flicker ({gen_name})"),
+                &truth,
+                &res,
+                &[1, 2],
+                (0.30, 0.15),
+            )
+            .into_iter()
+            .map(|f| format!("{gen_name}: {f}")),
+        );
+    }
+    assert!(failed.is_empty(), "{}", failed.join("; "));
 }

@@ -4,13 +4,20 @@
 //! Top-level `channels`: per channel `taus_s`, each deviation as
 //! `{taus_s, value, lo, hi, edf, n}`, `alpha` and `id_method` (`lag1`,
 //! `b1` or `rn` at each τ), the IEEE term fit's model curve and the
-//! slope-line readings. Coefficients `NAME.TERM` in engineering units
-//! (module [`NoiseUnits`]), only the identified terms.
+//! slope-line readings, and `allan_minimum` (`tau_s`, the floor's span
+//! `tau_low_s`–`tau_high_s`, `adev`, `u_adev`, `dof`, `unit`) when the
+//! curve has a minimum inside its τ range. Coefficients `NAME.TERM` in
+//! engineering units (module [`NoiseUnits`]), only the identified terms
+//! (each with U95 below its value), and `NAME.adev_min` (the bias
+//! stability unit), the Allan deviation's floor, which the record
+//! determines even where it cannot tell bias instability from a rate
+//! random walk.
 
 use serde_json::{json, Value};
 
 use crate::document::{Cell, Coefficient, DocumentBuilder, Procedure, ResultDocument, Table};
 use crate::error::Result;
+use crate::noise::minimum::allan_minimum;
 use crate::noise::terms::{Term, TermFit};
 use crate::noise::{DevSeries, Deviation, Series, Stability, Statistic};
 use crate::units::{Unit, STANDARD_GRAVITY_M_S2};
@@ -257,6 +264,21 @@ fn channel_json(
         );
     }
     o.insert("slope_readings".into(), Value::Object(slope));
+    if let Some(m) = allan_minimum(&st.taus_s, &st.oadev) {
+        let (u, k) = &units.stability;
+        o.insert(
+            "allan_minimum".into(),
+            json!({
+                "tau_s": m.tau_s,
+                "tau_low_s": m.tau_low_s,
+                "tau_high_s": m.tau_high_s,
+                "adev": m.adev * k,
+                "u_adev": m.u_adev * k,
+                "dof": m.dof,
+                "unit": u.as_str(),
+            }),
+        );
+    }
     if let Some(si) = si_terms(quantity, &c.fit) {
         o.insert("si_terms".into(), si);
     }
@@ -353,6 +375,14 @@ fn channel_coefficients(
                 Coefficient::new(&full, t.value * k, t.u * k, u.clone(), t.dof)?,
             )?;
         }
+    }
+    if let Some(m) = allan_minimum(&c.stability.taus_s, &c.stability.oadev) {
+        let full = format!("{}.adev_min", c.name);
+        let (u, k) = &units.stability;
+        b.coefficient(
+            &full,
+            Coefficient::new(&full, m.adev * k, m.u_adev * k, u.clone(), m.dof)?,
+        )?;
     }
     if let Some(s) = &c.spectrum {
         spectrum_coefficient(b, c, s, (units, unit), warnings)?;

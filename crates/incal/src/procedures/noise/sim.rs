@@ -23,6 +23,9 @@
 //! samples) and writes CSV ([`write_csv`]) or raw interleaved
 //! little-endian floats ([`write_binary`]).
 
+mod spectral;
+pub use spectral::spectral_record;
+
 use rand::RngExt;
 use rayon::prelude::*;
 
