@@ -447,6 +447,23 @@ pub(crate) fn front_html(
     if let Some(r) = record_html {
         s.push_str(&row("record", "Record", &r));
     }
+    // Data preprocessing (outliers removed, gaps filled, drift removed):
+    // what was done to the record before the results, stated up front.
+    if let Some(steps) = doc.extra.get("preprocessing").and_then(|v| v.as_array()) {
+        let lines: Vec<String> = steps
+            .iter()
+            .filter_map(|s| s.get("summary").and_then(|v| v.as_str()))
+            .map(esc)
+            .collect();
+        s.push_str(&row(
+            "preprocessing",
+            "Data preprocessing",
+            &format!(
+                "{} (row by row in the annex table “preprocessing”)",
+                lines.join("; ")
+            ),
+        ));
+    }
     s.push_str("</tbody>\n</table>\n</header>\n");
 
     s.push_str(results_html);

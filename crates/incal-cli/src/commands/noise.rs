@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 
 use clap::ValueEnum;
+use incal::procedures::noise::preprocess::{Detrend, Fill, PreprocessOptions};
 use incal::procedures::noise::sim::{NoiseSim, SimTone};
 use incal::procedures::noise::spectrum::SpectrumOptions;
 use incal::procedures::noise::{
@@ -121,11 +122,60 @@ pub struct Args {
     pub sequential: bool,
     #[command(flatten)]
     pub psd: PsdArgs,
+    #[command(flatten)]
+    pub pre: PreprocessArgs,
     /// Channels to analyse (default: every column but time_s; of a binary record every channel).
     #[command(flatten)]
     pub read: ReadArgs,
     #[command(flatten)]
     pub result: ResultArgs,
+}
+
+/// The preprocessing of `incal noise` (each step recorded in the document).
+#[derive(clap::Args, Debug)]
+pub struct PreprocessArgs {
+    /// Remove a drift from every channel before the statistics (least squares; recorded in preprocessing).
+    #[arg(long, value_enum)]
+    pub detrend: Option<DetrendArg>,
+    /// Remove outliers: mad:K, a sample farther than K MAD-based standard deviations from the median (K from 2 to 100; e.g. mad:5).
+    #[arg(long, value_name = "mad:K")]
+    pub outliers: Option<String>,
+    /// Fill missing samples and the stamps' gaps by straight lines between their neighbours (recorded, row by row).
+    #[arg(long, value_enum)]
+    pub fill: Option<FillArg>,
+}
+
+/// `--detrend`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum DetrendArg {
+    /// c + b t.
+    Linear,
+    /// c + b t + a t^2.
+    Quadratic,
+    /// c + a ln(1 + b t) (Stable32's log drift).
+    Log,
+}
+
+/// `--fill`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum FillArg {
+    /// Missing samples and the periods the stamps skip.
+    Gaps,
+}
+
+impl PreprocessArgs {
+    /// The core's options.
+    fn options(&self) -> PreprocessOptions {
+        PreprocessOptions {
+            detrend: self.detrend.map(|d| match d {
+                DetrendArg::Linear => Detrend::Linear,
+                DetrendArg::Quadratic => Detrend::Quadratic,
+                DetrendArg::Log => Detrend::Log,
+            }),
+            outliers: self.outliers.clone(),
+            fill: self.fill.map(|_| Fill::Gaps),
+        }
+    }
 }
 
 /// The power spectral density of `incal noise`.
@@ -258,6 +308,7 @@ pub fn run(a: &Args) -> CliResult<()> {
             gauss_markov: a.psd.gauss_markov,
             gm_filter_rate_hz: a.psd.gm_filter_rate_hz,
         },
+        preprocess: a.pre.options(),
     };
     let bars = Bars::new(a.quiet);
     let sample = match a.format {

@@ -53,6 +53,7 @@ mod gaps;
 pub mod gauss_markov;
 pub mod input;
 pub mod plan;
+pub mod preprocess;
 pub mod sim;
 pub mod spectrum;
 pub mod stacks;
@@ -188,6 +189,10 @@ pub struct NoiseOptions {
     /// The Gauss–Markov bias (`gauss_markov` and its filter rate).
     #[serde(flatten)]
     pub markov: gauss_markov::MarkovOptions,
+    /// Preprocessing before the statistics (`outliers`, `fill`,
+    /// `detrend`), each step recorded in `preprocessing`.
+    #[serde(flatten)]
+    pub preprocess: preprocess::PreprocessOptions,
 }
 
 fn default_taus() -> String {
@@ -228,6 +233,7 @@ impl Default for NoiseOptions {
             three_cornered_hat: false,
             spectrum: spectrum::SpectrumOptions::default(),
             markov: gauss_markov::MarkovOptions::default(),
+            preprocess: preprocess::PreprocessOptions::default(),
         }
     }
 }
@@ -443,6 +449,7 @@ impl Procedure for Noise {
         o.units()?;
         o.spectrum.validate()?;
         o.markov.validate()?;
+        o.preprocess.validate()?;
         match (o.format, o.channels) {
             (Format::Csv, Some(_)) => Err(invalid(
                 "channels",
@@ -484,6 +491,8 @@ impl Procedure for Noise {
         progress: &dyn Progress,
     ) -> Result<ResultDocument> {
         let (quantity, unit, factor) = o.units()?;
+        let (pre, audit) = preprocess::apply(input, &o.preprocess)?;
+        let input = &pre;
         let results = analyse(
             &Samples::Columns(&input.samples),
             &input.names,
@@ -521,10 +530,18 @@ impl Procedure for Noise {
             for x in &mut w {
                 if x.code == crate::WarningCode::TimeGaps {
                     x.message.push_str("; ");
-                    x.message.push_str(&gap_aware);
+                    x.message.push_str(if o.preprocess.fill.is_some() {
+                        "filled by straight lines before the statistics (preprocessing)"
+                    } else {
+                        &gap_aware
+                    });
                 }
             }
             doc.warnings.extend(w);
+        }
+        if let Some((list, table)) = audit {
+            doc.extra.insert("preprocessing".into(), list);
+            doc.tables.push(table);
         }
         if o.three_cornered_hat {
             doc.extra
@@ -567,6 +584,19 @@ pub fn reduce_mapped(
     progress: &dyn Progress,
 ) -> Result<ResultDocument> {
     Noise::validate(o)?;
+    if o.preprocess.any() {
+        let key = if o.preprocess.outliers.is_some() {
+            "outliers"
+        } else if o.preprocess.fill.is_some() {
+            "fill"
+        } else {
+            "detrend"
+        };
+        return crate::options::invalid(
+            key,
+            "preprocessing is done on a record read into memory: convert the binary record to CSV, or preprocess it before",
+        );
+    }
     let name = rec.name();
     if o.three_cornered_hat {
         return Err(Error::Unsupported(format!(
