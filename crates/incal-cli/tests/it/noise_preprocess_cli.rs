@@ -127,7 +127,10 @@ fn outliers_gaps_and_drift_are_removed_and_recorded() {
     let raw = reduce("dirty.csv", &[], "raw.json");
     assert!(raw.get("preprocessing").is_none());
     let (r, _) = arw(&raw);
-    assert!(r > a + 10.0 * ua, "ARW {r} with the spikes against {a} (u {ua})");
+    assert!(
+        r > a + 10.0 * ua,
+        "ARW {r} with the spikes against {a} (u {ua})"
+    );
     // The certificate says what was done.
     std::fs::write(
         dir.join("lab.toml"),

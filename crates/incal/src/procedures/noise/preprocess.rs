@@ -211,7 +211,7 @@ fn outliers(c: &mut Channels, k: f64) -> Step {
             Cell::text(name.clone()),
             Cell::num(idx.len() as f64),
             Cell::text(format!(
-                "median {med:e}, MAD sigma {sigma:e}, limit {:e}; rows {}",
+                "median {med:.4e}, MAD sigma {sigma:.4e}, limit {:.4e}; rows {}",
                 k * sigma,
                 show(&r)
             )),
@@ -474,7 +474,14 @@ fn detrend(c: &mut Channels, d: Detrend) -> Result<Step> {
             Cell::text(name.clone()),
             Cell::num(col.iter().filter(|v| v.is_finite()).count() as f64),
             Cell::text(format!(
-                "{name_of} drift removed: {coef}; change over the record {change:e}"
+                "{name_of} drift removed: {}; change over the record {change:.4e}",
+                coef.as_object()
+                    .map(|o| o
+                        .iter()
+                        .map(|(k, v)| format!("{k} {:.4e}", v.as_f64().unwrap_or(f64::NAN)))
+                        .collect::<Vec<_>>()
+                        .join(", "))
+                    .unwrap_or_default()
             )),
         ]);
         per.insert(
