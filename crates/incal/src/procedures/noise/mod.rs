@@ -585,17 +585,7 @@ pub fn reduce_mapped(
 ) -> Result<ResultDocument> {
     Noise::validate(o)?;
     if o.preprocess.any() {
-        let key = if o.preprocess.outliers.is_some() {
-            "outliers"
-        } else if o.preprocess.fill.is_some() {
-            "fill"
-        } else {
-            "detrend"
-        };
-        return crate::options::invalid(
-            key,
-            "preprocessing is done on a record read into memory: convert the binary record to CSV, or preprocess it before",
-        );
+        return preprocess::reduce_mapped(rec, selection, o, progress);
     }
     let name = rec.name();
     if o.three_cornered_hat {

@@ -29,7 +29,8 @@
 //! one row per step and channel, and the certificate states the summary.
 //! Removing a drift changes what the record says about rate random walk
 //! and ramp (a linear detrend removes R): the document's terms describe
-//! the preprocessed record.
+//! the preprocessed record. A binary record is read into memory whole for
+//! it ([`reduce_mapped`]).
 
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
@@ -496,6 +497,71 @@ fn detrend(c: &mut Channels, d: Detrend) -> Result<Step> {
             "a {name_of} drift fitted by least squares and removed from every channel"
         ),
     })
+}
+
+/// A binary record preprocessed: read into memory as [`Channels`] (a NaN
+/// sample is a missing one, as an empty CSV cell; an infinite one is
+/// refused naming its row and channel) and reduced as a CSV record is.
+pub(super) fn reduce_mapped(
+    rec: &incal_io::binary::MappedRecord,
+    selection: &incal_io::ColumnMap,
+    o: &super::NoiseOptions,
+    progress: &dyn super::Progress,
+) -> Result<crate::document::ResultDocument> {
+    use crate::procedures::Procedure;
+    let name = rec.name();
+    if o.three_cornered_hat {
+        return Err(crate::error::Error::Unsupported(format!(
+            "{name}: the three-cornered hat reads CSV records (give the three instruments as three columns)"
+        )));
+    }
+    let Some(rate_hz) = o.rate_hz else {
+        return Err(crate::error::Error::Unsupported(format!(
+            "{name}: a binary record has no time_s: give the sample rate (`rate_hz`)"
+        )));
+    };
+    let pick = rec.select(selection)?;
+    let rows = rec.rows();
+    let mut samples = Vec::with_capacity(pick.len());
+    for (c, ch) in &pick {
+        let col: Vec<f64> = (0..rows).map(|r| rec.get(*c, r)).collect();
+        if let Some(r) = col.iter().position(|v| v.is_infinite()) {
+            return Err(crate::error::Error::Unsupported(format!(
+                "{name}: row {}, channel {ch}: an infinite sample",
+                r + 1
+            )));
+        }
+        samples.push(col);
+    }
+    let input = Channels {
+        names: pick.into_iter().map(|p| p.1).collect(),
+        samples,
+        rows,
+        rate_hz,
+        timebase: None,
+        gaps: Vec::new(),
+        duplicates: 0,
+        sorted: 0,
+    };
+    let mut doc = super::Noise::reduce(&input, o, progress).map_err(|e| e.in_file(name))?;
+    let mut h = rec.hash(false);
+    h.update(rec.bytes(0, rows));
+    doc.inputs.insert(
+        0,
+        crate::document::InputFile {
+            role: "input".into(),
+            path: if name == incal_io::source::STDIN_NAME {
+                "-"
+            } else {
+                name
+            }
+            .into(),
+            sha256: h.finish(name)?,
+            rows: Some(rows as u64),
+        },
+    );
+    doc.options = super::options_map(&o.settled(None))?;
+    Ok(doc)
 }
 
 #[cfg(test)]
