@@ -30,7 +30,7 @@
 //! Removing a drift changes what the record says about rate random walk
 //! and ramp (a linear detrend removes R): the document's terms describe
 //! the preprocessed record. A binary record is read into memory whole for
-//! it ([`reduce_mapped`]).
+//! it (`reduce_mapped`).
 
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
