@@ -491,8 +491,12 @@ impl Procedure for Noise {
         progress: &dyn Progress,
     ) -> Result<ResultDocument> {
         let (quantity, unit, factor) = o.units()?;
-        let (pre, audit) = preprocess::apply(input, &o.preprocess)?;
-        let input = &pre;
+        // The record is copied only when a step changes it.
+        let (pre, audit) = match preprocess::apply(input, &o.preprocess)? {
+            Some((c, list, table)) => (std::borrow::Cow::Owned(c), Some((list, table))),
+            None => (std::borrow::Cow::Borrowed(input), None),
+        };
+        let input: &Channels = &pre;
         let results = analyse(
             &Samples::Columns(&input.samples),
             &input.names,
@@ -584,9 +588,6 @@ pub fn reduce_mapped(
     progress: &dyn Progress,
 ) -> Result<ResultDocument> {
     Noise::validate(o)?;
-    if o.preprocess.any() {
-        return preprocess::reduce_mapped(rec, selection, o, progress);
-    }
     let name = rec.name();
     if o.three_cornered_hat {
         return Err(Error::Unsupported(format!(
@@ -598,6 +599,9 @@ pub fn reduce_mapped(
             "{name}: a binary record has no time_s: give the sample rate (`rate_hz`)"
         ))
     })?;
+    if o.preprocess.any() {
+        return preprocess::reduce_mapped(rec, selection, rate_hz, o, progress);
+    }
     let (quantity, unit, factor) = o.units()?;
     let build = o.build(factor, rate_hz);
     let pick = rec.select(selection)?;

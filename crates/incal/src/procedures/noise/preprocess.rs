@@ -144,16 +144,13 @@ struct Step {
 }
 
 /// Apply the steps of `o` to `input` (module docs): the preprocessed
-/// record and the audit (`preprocessing` entry and table), or the input
-/// unchanged and `None` when no step is asked for.
-pub fn apply(
-    input: &Channels,
-    o: &PreprocessOptions,
-) -> Result<(Channels, Option<(Value, Table)>)> {
-    let mut c = input.clone();
+/// record and the audit (`preprocessing` entry and table), or `None` —
+/// and no copy of the record — when no step is asked for.
+pub fn apply(input: &Channels, o: &PreprocessOptions) -> Result<Option<(Channels, Value, Table)>> {
     if !o.any() {
-        return Ok((c, None));
+        return Ok(None);
     }
+    let mut c = input.clone();
     let mut steps = Vec::new();
     if let Some(k) = o.mad_k()? {
         steps.push(outliers(&mut c, k));
@@ -183,7 +180,7 @@ pub fn apply(
         j["summary"] = json!(s.summary);
         list.push(j);
     }
-    Ok((c, Some((Value::Array(list), t))))
+    Ok(Some((c, Value::Array(list), t)))
 }
 
 /// Step 1: outliers beyond `k` MAD-based standard deviations become NaN.
@@ -501,25 +498,17 @@ fn detrend(c: &mut Channels, d: Detrend) -> Result<Step> {
 
 /// A binary record preprocessed: read into memory as [`Channels`] (a NaN
 /// sample is a missing one, as an empty CSV cell; an infinite one is
-/// refused naming its row and channel) and reduced as a CSV record is.
+/// refused naming its row and channel) and reduced as a CSV record is;
+/// the caller has checked the options and the rate (`rate_hz`).
 pub(super) fn reduce_mapped(
     rec: &incal_io::binary::MappedRecord,
     selection: &incal_io::ColumnMap,
+    rate_hz: f64,
     o: &super::NoiseOptions,
     progress: &dyn super::Progress,
 ) -> Result<crate::document::ResultDocument> {
     use crate::procedures::Procedure;
     let name = rec.name();
-    if o.three_cornered_hat {
-        return Err(crate::error::Error::Unsupported(format!(
-            "{name}: the three-cornered hat reads CSV records (give the three instruments as three columns)"
-        )));
-    }
-    let Some(rate_hz) = o.rate_hz else {
-        return Err(crate::error::Error::Unsupported(format!(
-            "{name}: a binary record has no time_s: give the sample rate (`rate_hz`)"
-        )));
-    };
     let pick = rec.select(selection)?;
     let rows = rec.rows();
     let mut samples = Vec::with_capacity(pick.len());
