@@ -104,6 +104,10 @@ pub enum WarningCode {
     /// raises the Allan deviation near τ ≈ 0.37/f, and an Allan fit there
     /// reads it as noise.
     Tones,
+    /// The Allan deviation changes along the record beyond its bounds
+    /// (the dynamic Allan variance's windows disagree): the whole-record
+    /// statistics average over the change.
+    NonStationary,
 }
 
 impl WarningCode {
@@ -139,6 +143,7 @@ impl WarningCode {
             WarningCode::NotSignificant => "not-significant",
             WarningCode::TemperatureNotConstant => "temperature-not-constant",
             WarningCode::Tones => "tones",
+            WarningCode::NonStationary => "non-stationary",
         }
     }
 }

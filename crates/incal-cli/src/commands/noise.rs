@@ -117,6 +117,9 @@ pub struct Args {
     /// Three instruments recorded together (exactly three channels, e.g. --columns a,b,c): each one's OADEV by the three-cornered hat, in three_cornered_hat.
     #[arg(long)]
     pub three_cornered_hat: bool,
+    /// Dynamic Allan variance: the OADEV of every window WINDOW_S seconds long, one every STEP_S seconds (e.g. 600,60), in table davar.CHANNEL, with a non-stationary warning when the windows disagree beyond their bounds.
+    #[arg(long, value_name = "WINDOW_S,STEP_S")]
+    pub davar: Option<String>,
     /// One thread (same numbers as the parallel default, bit for bit).
     #[arg(long)]
     pub sequential: bool,
@@ -309,6 +312,9 @@ pub fn run(a: &Args) -> CliResult<()> {
             gm_filter_rate_hz: a.psd.gm_filter_rate_hz,
         },
         preprocess: a.pre.options(),
+        davar: incal::procedures::noise::davar::DavarOptions {
+            davar: a.davar.clone(),
+        },
     };
     let bars = Bars::new(a.quiet);
     let sample = match a.format {
@@ -492,7 +498,7 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
 #[derive(clap::Subcommand, Debug)]
 pub enum Reductions {
     /// Noise and stability of long static records: OADEV, MDEV, OHDEV, TDEV, TOTDEV with confidence bounds, IEEE 952 noise terms, bias stability.
-    Noise(Args),
+    Noise(Box<Args>),
 }
 
 impl crate::commands::Run for Reductions {

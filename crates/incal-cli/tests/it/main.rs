@@ -13,6 +13,7 @@ mod imu_cli;
 mod limits_cli;
 mod misalign_cli;
 mod noise_cli;
+mod noise_davar_cli;
 mod noise_preprocess_cli;
 mod noise_tones_cli;
 mod one_reader;

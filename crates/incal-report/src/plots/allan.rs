@@ -96,6 +96,7 @@ fn allan_plot(doc: &ResultDocument, name: &str, c: &Value, conf: f64) -> Option<
             trimmed(100.0 * conf, 3)
         ),
         log_log: true,
+        heat: None,
     })
 }
 

@@ -112,6 +112,7 @@ fn plot(doc: &ResultDocument, bode: &Value, which: (&str, &str, &str, &str)) -> 
             "{desc} against frequency on a log axis: the measured points with bars of 1.96 u, the fitted low-pass model with delay and its U95 band (first-order propagation of the model's covariance)."
         ),
         log_log: false,
+        heat: None,
     })
 }
 

@@ -61,6 +61,7 @@ fn coefficient_plot(
         hlines,
         caption,
         log_log: false,
+        heat: None,
     })
 }
 

@@ -98,6 +98,7 @@ pub fn history_plot(h: &HistorySeries) -> Plot {
         hlines,
         caption: history_caption(h, s, &l, &drift_note),
         log_log: false,
+        heat: None,
     }
 }
 

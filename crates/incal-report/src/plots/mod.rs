@@ -16,7 +16,8 @@
 //!   result): the Allan plot of each channel, log–log, with its bounds and
 //!   the fitted IEEE 952 lines ([`allan_plots`]), and with `psd` its
 //!   amplitude spectral density with χ² bounds and white level
-//!   ([`psd_plots`]);
+//!   ([`psd_plots`]), and with `davar` the dynamic Allan deviation as a
+//!   heat map over time and τ ([`davar_plots`]);
 //! * a top-level `bode` object (the dynamic response): gain in dB and phase
 //!   in degrees against log frequency, the measured points with U95 bars
 //!   from the table holding `gain_db`, the fitted model with its U95 band
@@ -39,6 +40,7 @@
 mod allan;
 mod bode;
 mod coefficients;
+mod davar;
 mod history;
 mod psd;
 mod rows;
@@ -52,6 +54,7 @@ use incal::units::Unit;
 pub use allan::allan_plots;
 pub use bode::bode_plots;
 pub use coefficients::{coefficient_plots, Limits};
+pub use davar::davar_plots;
 pub use history::history_plot;
 pub use psd::psd_plots;
 pub use svg::{figure_html, render_svg};
@@ -162,6 +165,36 @@ pub struct Plot {
     /// Coordinates are log10 of the values (Allan plots): ticks are
     /// labelled with the values.
     pub log_log: bool,
+    /// A heat map drawn under the series (its ordinate is log10, labelled
+    /// with the values).
+    pub heat: Option<Heat>,
+}
+
+/// A heat map: rectangles coloured by a value from −1 (blue) through 0
+/// (white) to +1 (red), what the value means said in the caption.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Heat {
+    /// Each cell as `[x0, x1, y0, y1, z]` (display units; z clipped to
+    /// [−1, 1] when drawn).
+    pub cells: Vec<[f64; 5]>,
+}
+
+/// The colour of a heat map's value `z` (clipped to [−1, 1]): white at 0,
+/// towards blue (33, 102, 172) below and red (178, 24, 43) above.
+pub fn heat_colour(z: f64) -> (u8, u8, u8) {
+    let z = if z.is_finite() {
+        z.clamp(-1.0, 1.0)
+    } else {
+        0.0
+    };
+    let to = if z < 0.0 {
+        (33.0, 102.0, 172.0)
+    } else {
+        (178.0, 24.0, 43.0)
+    };
+    let a = z.abs();
+    let mix = |c: f64| (255.0 + (c - 255.0) * a).round() as u8;
+    (mix(to.0), mix(to.1), mix(to.2))
 }
 
 /// Display scale and label for numbers of `unit` of magnitude up to

@@ -181,6 +181,7 @@ fn psd_plot(name: &str, c: &Value) -> Option<Plot> {
             trimmed(p["tone_search"]["false_alarm"].as_f64().unwrap_or(0.01), 3),
         ),
         log_log: true,
+        heat: None,
     })
 }
 

@@ -221,6 +221,7 @@ fn residual_plot(
             t.id, tx.in_panel, tx.series_text, tx.bar_text
         ),
         log_log: false,
+        heat: None,
     }
 }
 
@@ -268,6 +269,7 @@ fn fitted_plot(
             t.id, tx.in_panel, tx.series_text, tx.bar_text
         ),
         log_log: false,
+        heat: None,
     }
 }
 

@@ -6,7 +6,7 @@ use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{colour_hex, Plot, Pt, Series, Style, XAxis, PALETTE};
+use super::{colour_hex, heat_colour, Plot, Pt, Series, Style, XAxis, PALETTE};
 use crate::format::{esc, trimmed};
 use crate::ReportError;
 
@@ -72,10 +72,14 @@ pub fn render_svg(p: &Plot) -> Result<String, ReportError> {
     {
         let root = SVGBackend::with_string(&mut buf, size(p)).into_drawing_area();
         root.fill(&WHITE).map_err(plot_err)?;
+        let cells = p.heat.as_ref().map_or(&[][..], |h| h.cells.as_slice());
         let (x0, x1) = match &p.x_axis {
-            XAxis::Numeric | XAxis::Log10 => {
-                padded(p.series.iter().flat_map(|s| s.points.iter().map(|q| q.x)))
-            }
+            XAxis::Numeric | XAxis::Log10 => padded(
+                p.series
+                    .iter()
+                    .flat_map(|s| s.points.iter().map(|q| q.x))
+                    .chain(cells.iter().flat_map(|c| [c[0], c[1]])),
+            ),
             XAxis::Categories(c) => (-0.5, c.len().max(1) as f64 - 0.5),
         };
         let (y0, y1) = padded(
@@ -86,9 +90,16 @@ pub fn render_svg(p: &Plot) -> Result<String, ReportError> {
                     let b = q.bar.unwrap_or(0.0);
                     [q.y - b, q.y + b]
                 })
-                .chain(p.hlines.iter().map(|h| h.y)),
+                .chain(p.hlines.iter().map(|h| h.y))
+                .chain(cells.iter().flat_map(|c| [c[2], c[3]])),
         );
         let mut chart = chart(&root, p, (x0, x1), (y0, y1))?;
+        chart
+            .draw_series(cells.iter().map(|c| {
+                let (r, g, b) = heat_colour(c[4]);
+                Rectangle::new([(c[0], c[2]), (c[1], c[3])], RGBColor(r, g, b).filled())
+            }))
+            .map_err(plot_err)?;
         for h in &p.hlines {
             let style = if h.limit {
                 RGBColor(200, 0, 0).stroke_width(2)
@@ -153,8 +164,9 @@ fn chart<'a, 'b>(
         None if log_x => trimmed(10f64.powf(*x), 3),
         None => tick(*x, x1 - x0),
     };
+    let log_y = log_log || p.heat.is_some();
     let y_fmt = |y: &f64| {
-        if log_log {
+        if log_y {
             trimmed(10f64.powf(*y), 3)
         } else {
             tick(*y, y1 - y0)

@@ -158,6 +158,7 @@ fn model_plot(name: &str, d: &Thermal, degree: u64) -> Plot {
             d.model.id
         ),
         log_log: false,
+        heat: None,
     }
 }
 
@@ -200,5 +201,6 @@ fn residual_plot(name: &str, d: &Thermal) -> Plot {
             "What is left of {name} after the polynomial is taken off (point minus model) over the valid range, bars +-U95 of the point: the compensation's residual."
         ),
         log_log: false,
+        heat: None,
     }
 }

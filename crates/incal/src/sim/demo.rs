@@ -717,6 +717,7 @@ fn noise(seed: u64) -> Result<DemoSection> {
         to_input: 1.0,
         spectrum: None,
         gauss_markov: None,
+        davar: None,
     };
     let doc = document(
         &crate::noise::Deviation::ALL,

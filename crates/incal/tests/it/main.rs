@@ -20,6 +20,7 @@ mod imu_tedaldi_reference;
 mod imu_tk_recordings;
 mod li2012;
 mod misalign_roundtrip;
+mod noise_davar;
 mod noise_markov;
 mod noise_psd;
 mod noise_reference;

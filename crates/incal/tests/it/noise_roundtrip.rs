@@ -833,7 +833,7 @@ fn mems_white_and_flicker_at_100_hz() {
         b: 1.0 / 3600.0,
         ..Default::default()
     };
-    let n = trials(6, 100);
+    let n = trials(6, 50);
     let mut failed = Vec::new();
     for (gen_name, generate) in GENERATORS {
         let res = monte_carlo(48, n, |s| {

@@ -112,7 +112,7 @@ fn coverage_run(order: Order, seed: u64) -> Vec<Option<bool>> {
 }
 
 fn check_coverage(order: Order, seed: u64) {
-    let runs = monte_carlo(seed, trials(40, 300), |s| coverage_run(order, s));
+    let runs = monte_carlo(seed, trials(40, 200), |s| coverage_run(order, s));
     assert_coverage(&format!("broadband {order:?} order"), &NAMES, &runs, &[]);
 }
 

@@ -111,6 +111,8 @@ pub struct ChannelResult {
     pub spectrum: Option<super::spectrum::ChannelSpectrum>,
     /// The Gauss–Markov bias and its filter rate (Hz), when asked for.
     pub gauss_markov: Option<(super::gauss_markov::Fitted, f64)>,
+    /// The dynamic Allan variance, when asked for.
+    pub davar: Option<super::davar::Davar>,
 }
 
 /// The identified terms of a gyro or accelerometer in SI continuous-time
@@ -208,6 +210,10 @@ pub fn document(
         if let Some(s) = c.spectrum.as_ref().filter(|s| !s.tones.is_empty()) {
             b.table(tones_table(c, s, unit)?);
         }
+        if let Some(d) = &c.davar {
+            b.table(d.table(&c.name, c.to_input, unit)?);
+            warnings.extend(d.warning(&c.name, c.to_input, unit));
+        }
     }
     b.warnings(warnings);
     b.option("confidence", json!(confidence));
@@ -291,6 +297,9 @@ fn channel_json(
             "gauss_markov".into(),
             super::gauss_markov::json(g, f, *rate),
         );
+    }
+    if let Some(d) = &c.davar {
+        o.insert("davar".into(), d.json(f, unit));
     }
     o
 }

@@ -86,6 +86,22 @@ pub(super) fn gapped(
         }),
         None => None,
     };
+    // The dynamic Allan variance of the longest stretch (its windows need
+    // no gap).
+    let davar = match xs.iter().max_by_key(|x| x.len()) {
+        Some(x) => o
+            .davar
+            .compute(x, build.tau0, &st, o.confidence, o.parallel)?
+            .map(|mut d| {
+                d.note = Some(format!(
+                    "the longest of {} stretches between gaps ({} samples)",
+                    xs.len(),
+                    x.len().saturating_sub(1)
+                ));
+                d
+            }),
+        None => None,
+    };
     Ok(ChannelResult {
         name: name.to_string(),
         samples: n_phase - xs.len() * usize::from(build.rate),
@@ -97,6 +113,7 @@ pub(super) fn gapped(
         to_input: 1.0 / factor,
         gauss_markov,
         spectrum,
+        davar,
     })
 }
 

@@ -47,6 +47,7 @@
 //! into the phase in the same pass, then its pages are released, while the
 //! record's SHA-256 runs on a thread of its own (`input::read_mapped`).
 
+pub mod davar;
 pub mod document;
 pub mod export;
 mod gaps;
@@ -189,6 +190,9 @@ pub struct NoiseOptions {
     /// The Gauss–Markov bias (`gauss_markov` and its filter rate).
     #[serde(flatten)]
     pub markov: gauss_markov::MarkovOptions,
+    /// The dynamic Allan variance (`davar`).
+    #[serde(flatten)]
+    pub davar: davar::DavarOptions,
     /// Preprocessing before the statistics (`outliers`, `fill`,
     /// `detrend`), each step recorded in `preprocessing`.
     #[serde(flatten)]
@@ -233,6 +237,7 @@ impl Default for NoiseOptions {
             three_cornered_hat: false,
             spectrum: spectrum::SpectrumOptions::default(),
             markov: gauss_markov::MarkovOptions::default(),
+            davar: davar::DavarOptions::default(),
             preprocess: preprocess::PreprocessOptions::default(),
         }
     }
@@ -448,6 +453,7 @@ impl Procedure for Noise {
         }
         o.units()?;
         o.spectrum.validate()?;
+        o.davar.validate()?;
         o.markov.validate()?;
         o.preprocess.validate()?;
         match (o.format, o.channels) {
@@ -804,6 +810,10 @@ fn analyse(
         let more = more_statistics(x, &sel.more, &st, &opts).map_err(in_channel(k))?;
         let spectrum = o.spectrum.compute(x, tau0).map_err(in_channel(k))?;
         let gauss_markov = o.markov.compute(&st, tau0);
+        let davar = o
+            .davar
+            .compute(x, tau0, &st, o.confidence, o.parallel)
+            .map_err(in_channel(k))?;
         Ok(ChannelResult {
             name: names[k].clone(),
             samples: rows,
@@ -815,6 +825,7 @@ fn analyse(
             to_input: 1.0 / factor,
             spectrum,
             gauss_markov,
+            davar,
         })
     };
     let results = if o.parallel {
