@@ -130,14 +130,18 @@ pub fn figures(doc: &ResultDocument) -> Vec<plots::Plot> {
     let mut figures: Vec<plots::Plot> = if doc.procedure == incal::document::Procedure::Thermal {
         plots::thermal_plots(doc)
     } else {
+        // A noise result's terms against temperature are drawn as a
+        // thermal model's coefficients (below), not as tables.
         doc.tables
             .iter()
+            .filter(|t| !t.id.starts_with("noise_temperature"))
             .flat_map(|t| plots::table_plots_with(t, plots::model_curve(doc, &t.id).as_ref()))
             .collect()
     };
     figures.extend(plots::allan_plots(doc));
     figures.extend(plots::psd_plots(doc));
     figures.extend(plots::davar_plots(doc));
+    figures.extend(plots::noise_temperature_plots(doc));
     figures.extend(plots::bode_plots(doc));
     let limits = |n: &str| verdict_of(doc, Some(n)).map(|j| (j.min, j.max));
     figures.extend(plots::coefficient_plots(doc, figures.is_empty(), &limits));

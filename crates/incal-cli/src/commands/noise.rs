@@ -120,6 +120,9 @@ pub struct Args {
     /// Dynamic Allan variance: the OADEV of every window WINDOW_S seconds long, one every STEP_S seconds (e.g. 600,60), in table davar.CHANNEL, with a non-stationary warning when the windows disagree beyond their bounds.
     #[arg(long, value_name = "WINDOW_S,STEP_S")]
     pub davar: Option<String>,
+    /// Noise against temperature from one record with a temperature_c column: bins this wide (degC), the terms fitted in each, each term as a polynomial in temperature (coefficients CHANNEL.TERM.c0...).
+    #[arg(long, value_name = "DEGC")]
+    pub temperature_bin_c: Option<f64>,
     /// One thread (same numbers as the parallel default, bit for bit).
     #[arg(long)]
     pub sequential: bool,
@@ -314,6 +317,9 @@ pub fn run(a: &Args) -> CliResult<()> {
         preprocess: a.pre.options(),
         davar: incal::procedures::noise::davar::DavarOptions {
             davar: a.davar.clone(),
+        },
+        temperature: incal::procedures::noise::temperature::TemperatureOptions {
+            temperature_bin_c: a.temperature_bin_c,
         },
     };
     let bars = Bars::new(a.quiet);

@@ -15,6 +15,7 @@ mod misalign_cli;
 mod noise_cli;
 mod noise_davar_cli;
 mod noise_preprocess_cli;
+mod noise_temperature_cli;
 mod noise_tones_cli;
 mod one_reader;
 mod record_cli;

@@ -17,7 +17,9 @@
 //!   the fitted IEEE 952 lines ([`allan_plots`]), and with `psd` its
 //!   amplitude spectral density with χ² bounds and white level
 //!   ([`psd_plots`]), and with `davar` the dynamic Allan deviation as a
-//!   heat map over time and τ ([`davar_plots`]);
+//!   heat map over time and τ ([`davar_plots`]), and with `temperature`
+//!   each term against temperature with its polynomial
+//!   ([`noise_temperature_plots`]);
 //! * a top-level `bode` object (the dynamic response): gain in dB and phase
 //!   in degrees against log frequency, the measured points with U95 bars
 //!   from the table holding `gain_db`, the fitted model with its U95 band
@@ -59,7 +61,7 @@ pub use history::history_plot;
 pub use psd::psd_plots;
 pub use svg::{figure_html, render_svg};
 pub use table::{model_curve, table_plots, table_plots_with, Curve};
-pub use thermal::thermal_plots;
+pub use thermal::{noise_temperature_plots, thermal_plots};
 
 /// Colours of the series (Tableau 10), also used by the HTML legend.
 pub const PALETTE: [(u8, u8, u8); 10] = [

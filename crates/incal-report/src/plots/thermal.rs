@@ -27,6 +27,29 @@ pub fn thermal_plots(doc: &ResultDocument) -> Vec<Plot> {
     out
 }
 
+/// The noise terms against temperature of a noise result binned by
+/// temperature (`channels.NAME.temperature.models`): per term, as
+/// [`thermal_plots`] draws a coefficient, from its `noise_temperature.*`
+/// tables.
+pub fn noise_temperature_plots(doc: &ResultDocument) -> Vec<Plot> {
+    let Some(chans) = doc.extra.get("channels").and_then(|c| c.as_object()) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for (ch, c) in chans {
+        let Some(models) = c["temperature"]["models"].as_object() else {
+            continue;
+        };
+        for (term, m) in models {
+            let name = format!("{ch}.{term}");
+            if let Some(data) = Thermal::of(doc, &name) {
+                out.push(model_plot(&name, &data, m["degree"].as_u64().unwrap_or(0)));
+            }
+        }
+    }
+    out
+}
+
 /// What the plots of one coefficient or channel are drawn from.
 struct Thermal<'a> {
     /// Its points: the `plateaus.NAME` or `ramp.NAME` table.
@@ -48,8 +71,11 @@ impl<'a> Thermal<'a> {
     /// a column or every row is missing.
     fn of(doc: &'a ResultDocument, name: &str) -> Option<Thermal<'a>> {
         let find = |id: &str| doc.tables.iter().find(|t| t.id == id);
-        let pts = find(&format!("plateaus.{name}")).or_else(|| find(&format!("ramp.{name}")))?;
-        let model = find(&format!("model.{name}"))?;
+        let pts = find(&format!("plateaus.{name}"))
+            .or_else(|| find(&format!("ramp.{name}")))
+            .or_else(|| find(&format!("noise_temperature.{name}")))?;
+        let model = find(&format!("model.{name}"))
+            .or_else(|| find(&format!("noise_temperature_model.{name}")))?;
         let (pt_t, pt_u, pt_r) = (
             column(pts, "temperature_c")?,
             column(pts, "u")?,

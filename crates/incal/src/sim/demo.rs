@@ -718,6 +718,7 @@ fn noise(seed: u64) -> Result<DemoSection> {
         spectrum: None,
         gauss_markov: None,
         davar: None,
+        temperature: None,
     };
     let doc = document(
         &crate::noise::Deviation::ALL,

@@ -26,6 +26,7 @@ mod noise_psd;
 mod noise_reference;
 mod noise_roundtrip;
 mod noise_stable32;
+mod noise_temperature;
 mod noise_tones;
 mod properties;
 mod repeatability;

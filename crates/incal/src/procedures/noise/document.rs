@@ -113,6 +113,8 @@ pub struct ChannelResult {
     pub gauss_markov: Option<(super::gauss_markov::Fitted, f64)>,
     /// The dynamic Allan variance, when asked for.
     pub davar: Option<super::davar::Davar>,
+    /// The terms in temperature bins, when asked for.
+    pub temperature: Option<super::temperature::ChannelTemperature>,
 }
 
 /// The identified terms of a gyro or accelerometer in SI continuous-time
@@ -198,7 +200,10 @@ pub fn document(
     let mut chans = serde_json::Map::new();
     let mut warnings = Vec::new();
     for c in channels {
-        let o = channel_json(c, shown, quantity, &units, unit, &mut warnings);
+        let mut o = channel_json(c, shown, quantity, &units, unit, &mut warnings);
+        if let Some(t) = &c.temperature {
+            o.insert("temperature".into(), t.render(&c.name, &units, &mut b)?);
+        }
         chans.insert(c.name.clone(), Value::Object(o));
         channel_coefficients(&mut b, c, (&units, unit), &mut warnings)?;
         for w in &c.fit.warnings {

@@ -114,6 +114,7 @@ pub(super) fn gapped(
         gauss_markov,
         spectrum,
         davar,
+        temperature: None,
     })
 }
 

@@ -3,8 +3,10 @@
 //! (`read_mapped`); and the samples as the analysis reads them
 //! (`Samples`).
 //!
-//! A CSV record has a header; every column but `time_s` is a channel
-//! unless `--columns` (the input layer's [`incal_io::ColumnMap`]) selects
+//! A CSV record has a header; every column but `time_s` and the
+//! environmental ones (`temperature_c`, `humidity_pct`: summarised into the
+//! document's `environment`; `temperature_c` also kept for the temperature
+//! bins) is a channel unless `--columns` (the input layer's [`incal_io::ColumnMap`]) selects
 //! and renames them. Every sample must be a finite number within ±10¹⁵
 //! ([`MAX_ABS_VALUE`], the input layer's range), binary records too.
 
@@ -42,6 +44,9 @@ pub struct Channels {
     pub duplicates: usize,
     /// Rows moved into time order (`sort_time`; 0 when in order).
     pub sorted: usize,
+    /// The record's `temperature_c` at every row (°C; NaN where empty),
+    /// when it has that column and it is not a selected channel.
+    pub temperature_c: Option<Vec<f64>>,
 }
 
 impl Channels {
@@ -69,7 +74,10 @@ pub fn read<R: Read>(
     let h = rows.header();
     let pick: Vec<usize> = if h.selected().is_empty() {
         (0..h.width())
-            .filter(|&k| h.names()[k] != "time_s")
+            .filter(|&k| {
+                let n = h.names()[k].as_str();
+                n != "time_s" && !incal_io::CONDITION_COLUMNS.contains(&n)
+            })
             .collect()
     } else {
         h.selected().to_vec()
@@ -80,7 +88,9 @@ pub fn read<R: Read>(
             .into());
     }
     if pick.is_empty() {
-        return Err(h.error("no channel column besides time_s").into());
+        return Err(h
+            .error("no channel column besides time_s and the environment's (temperature_c, humidity_pct)")
+            .into());
     }
     let names: Vec<String> = pick.iter().map(|&k| h.names()[k].clone()).collect();
     let time = h.opt_column("time_s").filter(|c| !pick.contains(c));
@@ -90,6 +100,11 @@ pub fn read<R: Read>(
             .into());
     }
     let mut stamps = time.map(|_| Vec::new());
+    // The temperature rides along as one more column through the sorting
+    // and the repeats, and is split off at the end.
+    let temperature = h.opt_column("temperature_c").filter(|c| !pick.contains(c));
+    let mut pick = pick;
+    pick.extend(temperature);
     let mut samples = vec![Vec::new(); pick.len()];
     while let Some(row) = rows.next_row()? {
         for (d, &k) in samples.iter_mut().zip(&pick) {
@@ -145,7 +160,9 @@ pub fn read<R: Read>(
     for d in &mut samples {
         d.shrink_to_fit();
     }
+    let temperature_c = temperature.and_then(|_| samples.pop());
     Ok(Channels {
+        temperature_c,
         names,
         rows: samples[0].len(),
         samples,

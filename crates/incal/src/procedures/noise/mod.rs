@@ -58,6 +58,7 @@ pub mod preprocess;
 pub mod sim;
 pub mod spectrum;
 pub mod stacks;
+pub mod temperature;
 use gaps::gapped;
 pub(crate) use gaps::stretches;
 pub use gaps::MAX_STRETCHES;
@@ -193,6 +194,9 @@ pub struct NoiseOptions {
     /// The dynamic Allan variance (`davar`).
     #[serde(flatten)]
     pub davar: davar::DavarOptions,
+    /// Noise against temperature (`temperature_bin_c`).
+    #[serde(flatten)]
+    pub temperature: temperature::TemperatureOptions,
     /// Preprocessing before the statistics (`outliers`, `fill`,
     /// `detrend`), each step recorded in `preprocessing`.
     #[serde(flatten)]
@@ -238,6 +242,7 @@ impl Default for NoiseOptions {
             spectrum: spectrum::SpectrumOptions::default(),
             markov: gauss_markov::MarkovOptions::default(),
             davar: davar::DavarOptions::default(),
+            temperature: temperature::TemperatureOptions::default(),
             preprocess: preprocess::PreprocessOptions::default(),
         }
     }
@@ -454,6 +459,7 @@ impl Procedure for Noise {
         o.units()?;
         o.spectrum.validate()?;
         o.davar.validate()?;
+        o.temperature.validate()?;
         o.markov.validate()?;
         o.preprocess.validate()?;
         match (o.format, o.channels) {
@@ -503,7 +509,7 @@ impl Procedure for Noise {
             None => (std::borrow::Cow::Borrowed(input), None),
         };
         let input: &Channels = &pre;
-        let results = analyse(
+        let mut results = analyse(
             &Samples::Columns(&input.samples),
             &input.names,
             input.rows,
@@ -513,6 +519,10 @@ impl Procedure for Noise {
             o,
             progress,
         )?;
+        let temps = temperature::compute(input, o, o.build(factor, input.rate_hz))?;
+        for (r, t) in results.iter_mut().zip(temps) {
+            r.temperature = t;
+        }
         let mut doc = document::document(
             &o.selection()?.shown,
             &results,
@@ -605,6 +615,11 @@ pub fn reduce_mapped(
             "{name}: a binary record has no time_s: give the sample rate (`rate_hz`)"
         ))
     })?;
+    if o.temperature.temperature_bin_c.is_some() {
+        return Err(Error::Unsupported(format!(
+            "{name}: temperature bins read a CSV record's temperature_c column; a binary record has none"
+        )));
+    }
     if o.preprocess.any() {
         return preprocess::reduce_mapped(rec, selection, rate_hz, o, progress);
     }
@@ -826,6 +841,7 @@ fn analyse(
             spectrum,
             gauss_markov,
             davar,
+            temperature: None,
         })
     };
     let results = if o.parallel {

@@ -531,6 +531,7 @@ pub(super) fn reduce_mapped(
         gaps: Vec::new(),
         duplicates: 0,
         sorted: 0,
+        temperature_c: None,
     };
     let mut doc = super::Noise::reduce(&input, o, progress).map_err(|e| e.in_file(name))?;
     let mut h = rec.hash(false);

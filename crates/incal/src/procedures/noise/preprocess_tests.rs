@@ -10,6 +10,7 @@ fn chans(samples: Vec<Vec<f64>>, gaps: Vec<(usize, usize)>) -> Channels {
         gaps,
         duplicates: 0,
         sorted: 0,
+        temperature_c: None,
     }
 }
 
