@@ -142,3 +142,63 @@ fn bins_without_a_temperature_are_refused() {
         .iter()
         .all(|b| b["reason"].as_str().is_some_and(|r| r.contains("at least"))));
 }
+
+/// Several records, one per temperature: each reduced with its
+/// temperature, `incal thermal fit` of the results gives ARW as a line
+/// whose U95 covers the truth.
+#[test]
+fn results_at_several_temperatures_fit_arw_as_a_line() {
+    use incal::procedures::thermal::soak::{fit_documents, SoakInput, SoakOptions};
+    let n = trials(10, 200);
+    let temps = [-20.0, 25.0, 70.0];
+    let res = monte_carlo(82, n, |s| {
+        let inputs: Vec<SoakInput> = temps
+            .iter()
+            .enumerate()
+            .map(|(i, &t_c)| {
+                let mut r = rng(incal::sim::trial_seed(s, i as u64));
+                let arw = ARW_25 + ARW_PER_C * (t_c - 25.0);
+                let mut csv = String::from("time_s,gx\n");
+                for k in 0..20_000 {
+                    let y = normal(&mut r, arw / 60.0 * 10f64.sqrt());
+                    csv.push_str(&format!("{:.1},{y:e}\n", k as f64 / 10.0));
+                }
+                let o = NoiseOptions {
+                    parallel: false,
+                    quantity: QuantityKind::Gyro,
+                    ..Default::default()
+                };
+                let mut doc = reduce_source::<Noise, _>(
+                    "soak.csv",
+                    csv.as_bytes(),
+                    &incal_io::ReadOptions::default(),
+                    &o,
+                    &Silent,
+                )
+                .unwrap();
+                doc.instrument
+                    .meta
+                    .insert("temperature_c".into(), t_c.to_string());
+                SoakInput {
+                    name: format!("soak{t_c}.json"),
+                    sha256: String::new(),
+                    doc,
+                }
+            })
+            .collect();
+        let doc =
+            serde_json::to_value(fit_documents(&inputs, &SoakOptions::default()).unwrap()).unwrap();
+        [("gx.ARW.c0", ARW_25), ("gx.ARW.c1", ARW_PER_C)].map(|(name, want)| {
+            coefficient(&doc, name).is_some_and(|(v, u95)| (v - want).abs() <= u95)
+        })
+    });
+    let mut failed = Vec::new();
+    for (k, name) in ["c0", "c1"].iter().enumerate() {
+        let cover = res.iter().filter(|r| r[k]).count();
+        eprintln!("noise results at three temperatures: ARW.{name} covered in {cover}/{n}");
+        if (cover as f64) < at_least(n, 0.93) * n as f64 {
+            failed.push(format!("ARW.{name}: {cover}/{n}"));
+        }
+    }
+    assert!(failed.is_empty(), "{}", failed.join("; "));
+}

@@ -227,7 +227,12 @@ impl ChannelTemperature {
             let t: Vec<f64> = pts.iter().map(|p| p.0).collect();
             let y: Vec<f64> = pts.iter().map(|p| p.1).collect();
             let u: Vec<f64> = pts.iter().map(|p| p.2).collect();
-            let dof = pts.iter().map(|p| p.3).fold(f64::INFINITY, f64::min);
+            // Welch–Satterthwaite for the weighted mean (JCGM 100 G.4):
+            // ν = (Σ u⁻²)² / Σ (u⁻⁴/ν_i), the bins' dof pooled as their
+            // weights pool them (infinite when every bin's is).
+            let w: f64 = pts.iter().map(|p| p.2.powi(-2)).sum();
+            let d: f64 = pts.iter().map(|p| p.2.powi(-4) / p.3).sum();
+            let dof = if d > 0.0 { w * w / d } else { f64::INFINITY };
             let (fit, _) =
                 match fit_with_degree(&full, &t, &y, &u, &[], DEFAULT_T_REF_C, Degree::Auto, dof) {
                     Ok(f) => f,
