@@ -310,6 +310,8 @@ def noise(
     quiet: bool = False,
     sort_time: bool = False,
     three_cornered_hat: bool = False,
+    davar: Union[str, None] = None,
+    temperature_bin_c: Union[float, None] = None,
     sequential: bool = False,
     psd: bool = False,
     psd_segment_samples: Union[int, None] = None,

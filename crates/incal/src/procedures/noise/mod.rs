@@ -615,12 +615,11 @@ pub fn reduce_mapped(
             "{name}: a binary record has no time_s: give the sample rate (`rate_hz`)"
         ))
     })?;
-    if o.temperature.temperature_bin_c.is_some() {
-        return Err(Error::Unsupported(format!(
-            "{name}: temperature bins read a CSV record's temperature_c column; a binary record has none"
-        )));
-    }
-    if o.preprocess.any() {
+    let environment = rec
+        .select(selection)?
+        .iter()
+        .any(|p| incal_io::CONDITION_COLUMNS.contains(&p.1.as_str()));
+    if o.preprocess.any() || environment || o.temperature.temperature_bin_c.is_some() {
         return preprocess::reduce_mapped(rec, selection, rate_hz, o, progress);
     }
     let (quantity, unit, factor) = o.units()?;

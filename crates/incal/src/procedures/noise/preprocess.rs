@@ -496,10 +496,14 @@ fn detrend(c: &mut Channels, d: Detrend) -> Result<Step> {
     })
 }
 
-/// A binary record preprocessed: read into memory as [`Channels`] (a NaN
+/// A binary record preprocessed, binned by temperature, or with a channel
+/// named as an environmental column (`temperature_c`, `humidity_pct`, e.g.
+/// a Python keyword array): read into memory as [`Channels`] (a NaN
 /// sample is a missing one, as an empty CSV cell; an infinite one is
-/// refused naming its row and channel) and reduced as a CSV record is;
-/// the caller has checked the options and the rate (`rate_hz`).
+/// refused naming its row and channel) and reduced as a CSV record is,
+/// the environmental channels summarised in `environment` as a CSV
+/// record's columns are (`temperature_c` kept for the bins); the caller
+/// has checked the options and the rate (`rate_hz`).
 pub(super) fn reduce_mapped(
     rec: &incal_io::binary::MappedRecord,
     selection: &incal_io::ColumnMap,
@@ -522,8 +526,35 @@ pub(super) fn reduce_mapped(
         }
         samples.push(col);
     }
+    let mut names: Vec<String> = pick.into_iter().map(|p| p.1).collect();
+    let mut conditions = Vec::new();
+    let mut temperature_c = None;
+    for env in incal_io::CONDITION_COLUMNS {
+        if let Some(k) = names.iter().position(|n| n == env) {
+            names.remove(k);
+            let col = samples.remove(k);
+            let ok: Vec<f64> = col.iter().copied().filter(|v| v.is_finite()).collect();
+            if !ok.is_empty() {
+                conditions.push(incal_io::Condition {
+                    name: env.to_string(),
+                    count: ok.len(),
+                    mean: ok.iter().sum::<f64>() / ok.len() as f64,
+                    min: ok.iter().copied().fold(f64::INFINITY, f64::min),
+                    max: ok.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                });
+            }
+            if env == "temperature_c" {
+                temperature_c = Some(col);
+            }
+        }
+    }
+    if names.is_empty() {
+        return Err(crate::error::Error::Unsupported(format!(
+            "{name}: no channel besides the environment's (temperature_c, humidity_pct)"
+        )));
+    }
     let input = Channels {
-        names: pick.into_iter().map(|p| p.1).collect(),
+        names,
         samples,
         rows,
         rate_hz,
@@ -531,9 +562,10 @@ pub(super) fn reduce_mapped(
         gaps: Vec::new(),
         duplicates: 0,
         sorted: 0,
-        temperature_c: None,
+        temperature_c,
     };
     let mut doc = super::Noise::reduce(&input, o, progress).map_err(|e| e.in_file(name))?;
+    crate::procedures::record_environment(&mut doc, &conditions);
     let mut h = rec.hash(false);
     h.update(rec.bytes(0, rows));
     doc.inputs.insert(
