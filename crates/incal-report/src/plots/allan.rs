@@ -35,18 +35,12 @@ fn term_legend(doc: &ResultDocument, channel: &str, letter: &str) -> String {
 /// document): OADEV against τ on log–log axes with its confidence bounds as
 /// bars, the fitted IEEE 952 model and each identified term's line.
 pub fn allan_plots(doc: &ResultDocument) -> Vec<Plot> {
-    let Some(chans) = doc.extra.get("channels").and_then(|c| c.as_object()) else {
-        return Vec::new();
-    };
     let conf = doc
         .options
         .get("confidence")
         .and_then(|v| v.as_f64())
         .unwrap_or(0.683);
-    chans
-        .iter()
-        .filter_map(|(name, c)| allan_plot(doc, name, c, conf))
-        .collect()
+    super::channel_plots(doc, |name, c| allan_plot(doc, name, c, conf))
 }
 
 /// The Allan plot of channel `name` (`c`: its object in `channels`), with

@@ -14,13 +14,7 @@ const SCALE_DECADES: f64 = std::f64::consts::LOG10_2;
 
 /// One heat map per channel that has `davar` (none without it).
 pub fn davar_plots(doc: &ResultDocument) -> Vec<Plot> {
-    let Some(chans) = doc.extra.get("channels").and_then(|c| c.as_object()) else {
-        return Vec::new();
-    };
-    chans
-        .iter()
-        .filter_map(|(name, c)| davar_plot(name, c))
-        .collect()
+    super::channel_plots(doc, davar_plot)
 }
 
 /// The median of the finite positive values (`None` without any).

@@ -77,6 +77,19 @@ pub const PALETTE: [(u8, u8, u8); 10] = [
     (23, 190, 207),
 ];
 
+/// One plot per channel of a noise result (`extra.channels`), where
+/// `plot(name, channel)` draws one (none without `channels`).
+fn channel_plots(
+    doc: &incal::document::ResultDocument,
+    plot: impl Fn(&str, &serde_json::Value) -> Option<Plot>,
+) -> Vec<Plot> {
+    doc.extra
+        .get("channels")
+        .and_then(|c| c.as_object())
+        .map(|chans| chans.iter().filter_map(|(n, c)| plot(n, c)).collect())
+        .unwrap_or_default()
+}
+
 /// `#rrggbb` of series `k`.
 pub fn colour_hex(k: usize) -> String {
     let (r, g, b) = PALETTE[k % PALETTE.len()];

@@ -11,13 +11,7 @@ use crate::format::trimmed;
 
 /// The PSD plot of each channel holding `psd` in `channels`.
 pub fn psd_plots(doc: &ResultDocument) -> Vec<Plot> {
-    let Some(chans) = doc.extra.get("channels").and_then(|c| c.as_object()) else {
-        return Vec::new();
-    };
-    chans
-        .iter()
-        .filter_map(|(name, c)| psd_plot(name, c))
-        .collect()
+    super::channel_plots(doc, psd_plot)
 }
 
 /// Bins drawn at most: a long segment's thousands of bins are shown at

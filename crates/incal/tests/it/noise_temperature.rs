@@ -109,18 +109,25 @@ fn the_polynomial_u95_covers_the_truth() {
             coefficient(&doc, name).is_some_and(|(v, u95)| (v - want).abs() <= u95)
         })
     });
+    // Not below 93 %. Above 97 %: each bin's N carries the Allan fit's u,
+    // conservative for white noise (the noise chapter), and four bins
+    // leave the polynomial two residual dof to tell.
+    assert_covered("noise against temperature", &res);
+}
+
+/// Print how often ARW.c0 and ARW.c1 were covered over the records `res`
+/// and assert each at least 93 %.
+fn assert_covered(what: &str, res: &[[bool; 2]]) {
+    let n = res.len();
     let mut failed = Vec::new();
     for (k, name) in ["c0", "c1"].iter().enumerate() {
         let cover = res.iter().filter(|r| r[k]).count();
-        eprintln!("noise against temperature: ARW.{name} covered in {cover}/{n}");
-        // Not below 93 %. Above 97 %: each bin's N carries the Allan
-        // fit's u, conservative for white noise (the noise chapter), and
-        // four bins leave the polynomial two residual dof to tell.
+        eprintln!("{what}: ARW.{name} covered in {cover}/{n}");
         if (cover as f64) < at_least(n, 0.93) * n as f64 {
             failed.push(format!("ARW.{name}: {cover}/{n}"));
         }
     }
-    assert!(failed.is_empty(), "{}", failed.join("; "));
+    assert!(failed.is_empty(), "{what}: {}", failed.join("; "));
 }
 
 #[test]
@@ -193,15 +200,7 @@ fn results_at_several_temperatures_fit_arw_as_a_line() {
             coefficient(&doc, name).is_some_and(|(v, u95)| (v - want).abs() <= u95)
         })
     });
-    let mut failed = Vec::new();
-    for (k, name) in ["c0", "c1"].iter().enumerate() {
-        let cover = res.iter().filter(|r| r[k]).count();
-        eprintln!("noise results at three temperatures: ARW.{name} covered in {cover}/{n}");
-        if (cover as f64) < at_least(n, 0.93) * n as f64 {
-            failed.push(format!("ARW.{name}: {cover}/{n}"));
-        }
-    }
-    assert!(failed.is_empty(), "{}", failed.join("; "));
+    assert_covered("noise results at three temperatures", &res);
 }
 
 /// A temperature sensor's jitter across a bin edge (9.95 to 10.05 °C,

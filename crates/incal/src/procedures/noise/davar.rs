@@ -425,7 +425,7 @@ impl Davar {
         let g = |v: f64| {
             let v = v * f;
             let e = v.abs().log10().floor() as i32;
-            let d = (3 - e).clamp(0, 12) as usize;
+            let d = 3i32.saturating_sub(e).clamp(0, 12) as usize;
             if (-3..5).contains(&e) {
                 format!("{v:.d$}")
             } else {

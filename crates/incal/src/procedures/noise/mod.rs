@@ -509,17 +509,18 @@ impl Procedure for Noise {
             None => (std::borrow::Cow::Borrowed(input), None),
         };
         let input: &Channels = &pre;
+        let build = o.build(factor, input.rate_hz);
         let mut results = analyse(
             &Samples::Columns(&input.samples),
             &input.names,
             input.rows,
             None,
             &input.gaps,
-            o.build(factor, input.rate_hz),
+            build,
             o,
             progress,
         )?;
-        let temps = temperature::compute(input, o, o.build(factor, input.rate_hz))?;
+        let temps = temperature::compute(input, o, build)?;
         for (r, t) in results.iter_mut().zip(temps) {
             r.temperature = t;
         }
@@ -615,16 +616,15 @@ pub fn reduce_mapped(
             "{name}: a binary record has no time_s: give the sample rate (`rate_hz`)"
         ))
     })?;
-    let environment = rec
-        .select(selection)?
+    let pick = rec.select(selection)?;
+    let environment = pick
         .iter()
         .any(|p| incal_io::CONDITION_COLUMNS.contains(&p.1.as_str()));
     if o.preprocess.any() || environment || o.temperature.temperature_bin_c.is_some() {
-        return preprocess::reduce_mapped(rec, selection, rate_hz, o, progress);
+        return preprocess::reduce_mapped(rec, pick, rate_hz, o, progress);
     }
     let (quantity, unit, factor) = o.units()?;
     let build = o.build(factor, rate_hz);
-    let pick = rec.select(selection)?;
     // A record in memory is hashed on a thread of its own while it is
     // read and analysed (a file's hash thread reads the file itself).
     std::thread::scope(|s| {

@@ -503,17 +503,18 @@ fn detrend(c: &mut Channels, d: Detrend) -> Result<Step> {
 /// refused naming its row and channel) and reduced as a CSV record is,
 /// the environmental channels summarised in `environment` as a CSV
 /// record's columns are (`temperature_c` kept for the bins); the caller
-/// has checked the options and the rate (`rate_hz`).
+/// has checked the options and the rate (`rate_hz`) and selected the
+/// channels (`pick`: index and name, as
+/// [`incal_io::binary::MappedRecord::select`] gives them).
 pub(super) fn reduce_mapped(
     rec: &incal_io::binary::MappedRecord,
-    selection: &incal_io::ColumnMap,
+    pick: Vec<(usize, String)>,
     rate_hz: f64,
     o: &super::NoiseOptions,
     progress: &dyn super::Progress,
 ) -> Result<crate::document::ResultDocument> {
     use crate::procedures::Procedure;
     let name = rec.name();
-    let pick = rec.select(selection)?;
     let rows = rec.rows();
     let mut samples = Vec::with_capacity(pick.len());
     for (c, ch) in &pick {

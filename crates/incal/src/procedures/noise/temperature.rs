@@ -41,6 +41,7 @@ use crate::document::{Cell, Coefficient, DecisionCode, DocumentBuilder, Table};
 use crate::error::{Error, Result};
 use crate::noise::terms::{fit_terms, TermFit, TERMS};
 use crate::noise::StabilityOptions;
+use crate::procedures::thermal::document::polynomial_table;
 use crate::procedures::thermal::{fit_with_degree, power_unit, Degree, PolyFit, DEFAULT_T_REF_C};
 use crate::units::Unit;
 
@@ -267,7 +268,12 @@ impl ChannelTemperature {
             let m = Model { fit, t, y, u };
             add_coefficients(b, &full, unit, &m.fit)?;
             b.table(model_table(&full, unit, &m)?);
-            b.table(curve_table(&full, unit, &m.fit)?);
+            b.table(polynomial_table(
+                &format!("noise_temperature_model.{full}"),
+                &format!("{full} from its polynomial over the bins' range, with its uncertainty"),
+                unit,
+                &m.fit,
+            )?);
             models.insert(term.clone(), model_json(unit, &m));
         }
         let bins: Vec<Value> = self
@@ -324,35 +330,6 @@ fn model_json(unit: &Unit, m: &Model) -> Value {
         "unit": unit.as_str(),
         "bins": m.t.len(),
     })
-}
-
-/// The table `noise_temperature_model.NAME.TERM`: the polynomial at 11
-/// temperatures over the range, with u and U95.
-fn curve_table(full: &str, unit: &Unit, f: &PolyFit) -> Result<Table> {
-    let u = Some(unit.clone());
-    let mut tab = Table::new(
-        &format!("noise_temperature_model.{full}"),
-        &format!("{full} from its polynomial over the bins' range, with its uncertainty"),
-        &[
-            ("temperature_c", Some(Unit::Other("degC".into()))),
-            ("polynomial", u.clone()),
-            ("u", u.clone()),
-            ("U95", u),
-        ],
-    );
-    let (lo, hi) = f.t_range_c;
-    let k = crate::estimation::coverage_factor(f.fit.estimates.dof(), 0.95);
-    for i in 0..=10 {
-        let t = lo + (hi - lo) * i as f64 / 10.0;
-        let (v, s) = f.eval(t);
-        tab.push(vec![
-            Cell::num(t),
-            Cell::num(v),
-            Cell::num(s),
-            Cell::num(k * s),
-        ])?;
-    }
-    Ok(tab)
 }
 
 /// The table `noise_temperature.NAME.TERM` (module docs).

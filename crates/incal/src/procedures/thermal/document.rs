@@ -261,11 +261,23 @@ pub(crate) fn plateau_table(
 }
 
 /// The compensated value over the valid range: `y(T)` with u and U95 at
-/// eleven temperatures from `t_min` to `t_max`.
+/// eleven temperatures from `t_min` to `t_max` (table `model.NAME`).
 pub fn compensated_table(name: &str, unit: &Unit, f: &PolyFit) -> Result<Table> {
-    let mut tab = Table::new(
+    polynomial_table(
         &format!("model.{name}"),
         &format!("{name} from the polynomial over the valid range, with its uncertainty"),
+        unit,
+        f,
+    )
+}
+
+/// The table `id` titled `title`: the polynomial `y(T)` of `f` with u and
+/// U95 (its dof's coverage factor) at eleven temperatures over its range,
+/// columns `temperature_c`, `polynomial`, `u`, `U95`.
+pub fn polynomial_table(id: &str, title: &str, unit: &Unit, f: &PolyFit) -> Result<Table> {
+    let mut tab = Table::new(
+        id,
+        title,
         &[
             ("temperature_c", Some(Unit::Other("degC".into()))),
             ("polynomial", Some(unit.clone())),
