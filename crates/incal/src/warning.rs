@@ -108,6 +108,10 @@ pub enum WarningCode {
     /// (the dynamic Allan variance's windows disagree): the whole-record
     /// statistics average over the change.
     NonStationary,
+    /// A fitted property of the local field (the magnetometer's
+    /// inclination) disagrees with the value given for the site beyond
+    /// the U95 of their difference (En > 1).
+    FieldMismatch,
 }
 
 impl WarningCode {
@@ -144,6 +148,7 @@ impl WarningCode {
             WarningCode::TemperatureNotConstant => "temperature-not-constant",
             WarningCode::Tones => "tones",
             WarningCode::NonStationary => "non-stationary",
+            WarningCode::FieldMismatch => "field-mismatch",
         }
     }
 }

@@ -85,5 +85,6 @@ procedure_families!(
     response,
     warmup,
     repeatability,
-    threshold
+    threshold,
+    mag
 );

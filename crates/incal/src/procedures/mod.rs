@@ -15,6 +15,7 @@ pub mod centrifuge;
 pub mod gfimu;
 pub mod gyro;
 pub mod imu;
+pub mod mag;
 pub mod misalign;
 pub mod noise;
 pub mod registry;

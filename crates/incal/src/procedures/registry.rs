@@ -72,6 +72,10 @@ pub enum Procedure {
     /// Threshold and resolution: the smallest input step answered at zero
     /// and at a base input (IEEE Std 952 / 1431, GJB 2426A, GJB 1037A).
     Threshold,
+    /// Magnetometer calibration: hard iron, soft iron and the alignment to
+    /// the accelerometer by a constrained ellipsoid fit (IEEE Std 1431
+    /// §12.16 magnetic sensitivity; Kok & Schön 2014).
+    Mag,
 }
 
 impl Procedure {
@@ -115,6 +119,7 @@ impl Procedure {
             Procedure::Warmup => "warmup",
             Procedure::Repeatability => "repeatability",
             Procedure::Threshold => "threshold",
+            Procedure::Mag => "mag",
         }
     }
 }
@@ -789,6 +794,28 @@ pub static REGISTRY: &[Entry] = &[
         reduction: reduction::<super::threshold::Threshold>(),
         planner: planner::<super::threshold::Threshold>(),
         simulator: simulator::<super::threshold::Threshold>(),
+    },
+    Entry {
+        id: "mag",
+        document: Procedure::Mag,
+        command: &["mag"],
+        plan: Some(&["plan", "mag"]),
+        simulate: Some(&["simulate", "mag"]),
+        title: "Magnetometer calibration: hard iron, soft iron and the alignment to the accelerometer",
+        rig: None,
+        method: "Magnetometer calibration from a session turned through many orientations in a uniform field: a constrained ellipsoid fit (hard-iron offset, symmetric positive-definite soft-iron matrix) by Gauss-Newton least squares on the magnitude of the calibrated field, and with an accelerometer the constant angle between gravity and the field for the alignment and the inclination: Kok M., Schon T. B., Maximum likelihood calibration of a magnetometer using inertial sensors, IFAC Proceedings, 2014, vol. 47, no. 3, pp. 92-97; Vasconcelos J. F., Elkaim G., Silvestre C., Oliveira P., Cardeira B., Geometric approach to strapdown magnetometer calibration in sensor frame, IEEE Transactions on Aerospace and Electronic Systems, 2011, vol. 47, no. 2, pp. 1293-1306; uncertainty by JCGM 100:2008 with the residuals' autocorrelation",
+        references: &["kok2014", "vasconcelos2011", "geyer1992", "ieee1431", "jcgm100"],
+        chapter: "mag.md",
+        input: InputKind::Recording,
+        fuzz: &["mag"],
+        run_sheet: None,
+        example: Some(Example {
+            simulate: &["--seed", "27"],
+            options: &["--field-ut", "50", "--inclination-deg", "60"],
+        }),
+        reduction: reduction::<super::mag::Mag>(),
+        planner: planner::<super::mag::Mag>(),
+        simulator: simulator::<super::mag::Mag>(),
     },
 ];
 

@@ -19,6 +19,7 @@ mod imu_roundtrip;
 mod imu_tedaldi_reference;
 mod imu_tk_recordings;
 mod li2012;
+mod mag;
 mod misalign_roundtrip;
 mod noise_davar;
 mod noise_markov;
