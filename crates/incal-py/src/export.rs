@@ -17,6 +17,7 @@ struct ExportOptions {
     inflate: Option<f64>,
     rate_hz: Option<f64>,
     topic: Option<String>,
+    instance: Option<usize>,
 }
 
 /// `NAME: message` of an error of the document `name`.
@@ -93,6 +94,25 @@ fn text(
                 &params, name,
             ))
         }
+        ("mag-px4" | "mag-ardupilot", [(name, doc)]) => {
+            use incal::procedures::mag::apply::{
+                parameters, write_parameters, FlightStack, MagCalibration,
+            };
+            let stack = if kind == "mag-px4" {
+                FlightStack::Px4
+            } else {
+                FlightStack::Ardupilot
+            };
+            let cal = MagCalibration::from_document(doc).map_err(in_file(name))?;
+            let instance = o.instance.unwrap_or(0);
+            if instance > 3 {
+                return Err(format!("instance: {instance} is not 0 to 3"));
+            }
+            let params = parameters(&cal, stack, instance).map_err(in_file(name))?;
+            let mut out = Vec::new();
+            write_parameters(stack, &params, &mut out).map_err(|e| e.to_string())?;
+            String::from_utf8(out).map_err(|e| e.to_string())
+        }
         _ => Err(format!(
             "export {kind}: {} document(s) is not what it takes",
             docs.len()
@@ -102,7 +122,8 @@ fn text(
 
 /// `_export(kind, documents, options) -> (code, text, error)`: `kind`
 /// `imucal` (one IMU calibration), `kalibr`, `px4`, `vins`, `orbslam3`,
-/// `openvins` or `basalt` (a gyro and an accelerometer noise result), `px4` or `ardupilot` (one thermal model);
+/// `openvins` or `basalt` (a gyro and an accelerometer noise result), `px4` or `ardupilot` (one thermal model),
+/// `mag-px4` or `mag-ardupilot` (one magnetometer calibration, option `instance`);
 /// `documents` a list of `(name, JSON text)`; `options` JSON
 /// (`ekf_rate_hz`, `axes`, `device_id`, `with_offset`, `imu`, `inflate`,
 /// `rate_hz`, `topic`).

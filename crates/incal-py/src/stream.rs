@@ -12,8 +12,8 @@ fn fail(m: String) -> (u8, Vec<u8>, String, String) {
 
 /// `_stream(tool, model_name, model_text, name, path=None, columns=None,
 /// sort_time=False) -> (code, csv: bytes, error, warnings JSON)`: `tool`
-/// `imu-apply` (the calibration document `model_text`) or
-/// `thermal-apply` (the thermal model) applied to the rows of the file
+/// `imu-apply` (the calibration document `model_text`), `mag-apply` (a
+/// magnetometer calibration) or `thermal-apply` (the thermal model) applied to the rows of the file
 /// `path` or of `columns` (as `_reduce` takes them), written as CSV. The
 /// GIL is released while the rows stream.
 #[pyfunction]
@@ -79,6 +79,20 @@ pub fn _stream<'py>(
                 .and_then(|model| {
                     incal::procedures::thermal::apply::Compensate::stream(
                         model, &read_name, input, &read, &mut out,
+                    )
+                }),
+            "mag-apply" => incal::procedures::mag::apply::MagCalibration::from_document(&doc)
+                .map_err(|e| incal::Error::InFile {
+                    file: model_name.to_string(),
+                    source: Box::new(e),
+                })
+                .and_then(|cal| {
+                    let read = incal_io::ReadOptions {
+                        hash: false,
+                        ..read.clone()
+                    };
+                    incal::procedures::mag::apply::Apply::stream(
+                        cal, &read_name, input, &read, &mut out,
                     )
                 }),
             other => return fail(format!("no streaming tool '{other}'")),

@@ -143,6 +143,7 @@ pub fn figures(doc: &ResultDocument) -> Vec<plots::Plot> {
     figures.extend(plots::davar_plots(doc));
     figures.extend(plots::noise_temperature_plots(doc));
     figures.extend(plots::bode_plots(doc));
+    figures.extend(plots::mag_plots(doc));
     let limits = |n: &str| verdict_of(doc, Some(n)).map(|j| (j.min, j.max));
     figures.extend(plots::coefficient_plots(doc, figures.is_empty(), &limits));
     figures

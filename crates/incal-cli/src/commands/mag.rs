@@ -174,7 +174,7 @@ pub fn run(a: &MagArgs) -> CliResult<()> {
         unit: a.unit.into(),
         axes: a.axes.clone(),
         full_scale: a.full_scale,
-        alignment: !a.no_alignment,
+        no_alignment: a.no_alignment,
         static_tolerance: a.static_tolerance,
         max_rate: a.max_rate,
     };
@@ -281,7 +281,7 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
         noise_ut: s.noise_ut,
         gm_ut: s.gm_ut,
         gm_tau_s: s.gm_tau_s,
-        accelerometer: !s.no_accelerometer,
+        no_accelerometer: s.no_accelerometer,
         acc_noise: s.acc_noise,
         seed: a.seed,
     };
@@ -293,15 +293,42 @@ pub fn plan(a: &PlanArgs) -> CliResult<()> {
 pub struct SimArgs {
     #[command(flatten)]
     pub session: SessionArgs,
-    /// Hard iron x,y,z (raw units).
-    #[arg(long, default_value = "12,-8,25", allow_hyphen_values = true)]
-    pub hard_iron: String,
-    /// Soft iron xx,yy,zz,xy,xz,yz (dimensionless, symmetric positive definite).
-    #[arg(long, default_value = "1.05,0.97,1.02,0.02,-0.015,0.01", allow_hyphen_values = true)]
-    pub soft_iron: String,
-    /// Alignment to the accelerometer, rotation vector x,y,z in degrees.
-    #[arg(long, default_value = "1.5,-2,3", allow_hyphen_values = true)]
-    pub alignment_deg: String,
+    /// Hard iron, x (raw units).
+    #[arg(long, default_value_t = 12.0, allow_negative_numbers = true)]
+    pub hard_iron_x: f64,
+    /// Hard iron, y (raw units).
+    #[arg(long, default_value_t = -8.0, allow_negative_numbers = true)]
+    pub hard_iron_y: f64,
+    /// Hard iron, z (raw units).
+    #[arg(long, default_value_t = 25.0, allow_negative_numbers = true)]
+    pub hard_iron_z: f64,
+    /// Soft iron S, xx (dimensionless; S symmetric positive definite).
+    #[arg(long, default_value_t = 1.05, allow_negative_numbers = true)]
+    pub soft_iron_xx: f64,
+    /// Soft iron S, yy.
+    #[arg(long, default_value_t = 0.97, allow_negative_numbers = true)]
+    pub soft_iron_yy: f64,
+    /// Soft iron S, zz.
+    #[arg(long, default_value_t = 1.02, allow_negative_numbers = true)]
+    pub soft_iron_zz: f64,
+    /// Soft iron S, xy.
+    #[arg(long, default_value_t = 0.02, allow_negative_numbers = true)]
+    pub soft_iron_xy: f64,
+    /// Soft iron S, xz.
+    #[arg(long, default_value_t = -0.015, allow_negative_numbers = true)]
+    pub soft_iron_xz: f64,
+    /// Soft iron S, yz.
+    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
+    pub soft_iron_yz: f64,
+    /// Alignment to the accelerometer, rotation vector x, degrees.
+    #[arg(long, default_value_t = 1.5, allow_negative_numbers = true)]
+    pub alignment_x_deg: f64,
+    /// Alignment, rotation vector y, degrees.
+    #[arg(long, default_value_t = -2.0, allow_negative_numbers = true)]
+    pub alignment_y_deg: f64,
+    /// Alignment, rotation vector z, degrees.
+    #[arg(long, default_value_t = 3.0, allow_negative_numbers = true)]
+    pub alignment_z_deg: f64,
     /// The raw unit written.
     #[arg(long, value_enum, default_value = "ut")]
     pub unit: UnitArg,
@@ -316,35 +343,22 @@ pub struct SimArgs {
     pub output: Option<PathBuf>,
 }
 
-fn numbers<const N: usize>(flag: &str, s: &str) -> CliResult<[f64; N]> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| crate::error::usage(format!("{flag}: '{s}' is not {N} numbers separated by commas")))?;
-    v.try_into()
-        .map_err(|_| crate::error::usage(format!("{flag}: '{s}' is not {N} numbers separated by commas")))
-}
-
 /// `incal simulate mag`.
 pub fn simulate(a: &SimArgs) -> CliResult<()> {
     let s = &a.session;
-    let h: [f64; 3] = numbers("--hard-iron", &a.hard_iron)?;
-    let c: [f64; 6] = numbers("--soft-iron", &a.soft_iron)?;
-    let r: [f64; 3] = numbers("--alignment-deg", &a.alignment_deg)?;
     let options = MagSimOptions {
-        hard_iron_x: h[0],
-        hard_iron_y: h[1],
-        hard_iron_z: h[2],
-        soft_iron_xx: c[0],
-        soft_iron_yy: c[1],
-        soft_iron_zz: c[2],
-        soft_iron_xy: c[3],
-        soft_iron_xz: c[4],
-        soft_iron_yz: c[5],
-        alignment_x_deg: r[0],
-        alignment_y_deg: r[1],
-        alignment_z_deg: r[2],
+        hard_iron_x: a.hard_iron_x,
+        hard_iron_y: a.hard_iron_y,
+        hard_iron_z: a.hard_iron_z,
+        soft_iron_xx: a.soft_iron_xx,
+        soft_iron_yy: a.soft_iron_yy,
+        soft_iron_zz: a.soft_iron_zz,
+        soft_iron_xy: a.soft_iron_xy,
+        soft_iron_xz: a.soft_iron_xz,
+        soft_iron_yz: a.soft_iron_yz,
+        alignment_x_deg: a.alignment_x_deg,
+        alignment_y_deg: a.alignment_y_deg,
+        alignment_z_deg: a.alignment_z_deg,
         field_ut: s.field_ut,
         inclination_deg: s.inclination_deg,
         unit: a.unit.into(),
@@ -356,7 +370,7 @@ pub fn simulate(a: &SimArgs) -> CliResult<()> {
         noise_ut: s.noise_ut,
         gm_ut: s.gm_ut,
         gm_tau_s: s.gm_tau_s,
-        accelerometer: !s.no_accelerometer,
+        no_accelerometer: s.no_accelerometer,
         acc_noise: s.acc_noise,
         seed: a.seed,
     };

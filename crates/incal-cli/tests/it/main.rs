@@ -11,6 +11,7 @@ mod hardening;
 mod hardening3;
 mod imu_cli;
 mod limits_cli;
+mod mag_cli;
 mod misalign_cli;
 mod noise_cli;
 mod noise_davar_cli;

@@ -47,6 +47,8 @@ __all__ = [
     "thermal_fit",
     "thermal_apply",
     "export_thermal",
+    "mag_apply",
+    "export_mag",
     "read_result",
     "compare",
     "apply",
@@ -697,6 +699,24 @@ def _stream(tool: str, model: Any, data: Any, columns: Dict[str, Any], sort_time
         _raise(code, bytes(out), [err])
     _warn_all(json.loads(warnings))
     return _read_csv(bytes(out))
+
+
+def mag_apply(calibration: Any, data: Any = None, **columns: Any):
+    """``incal mag apply``: a magnetometer calibration (``Result`` or path)
+    applied to raw data with ``mag_x, mag_y, mag_z`` (path, DataFrame, dict
+    of arrays or arrays by keyword, read in place); a pandas DataFrame with
+    those columns calibrated and every other column copied."""
+    return _stream("mag-apply", calibration, data, columns)
+
+
+def export_mag(calibration: Any, stack: str = "px4", path: Optional[str] = None, instance: int = 0) -> str:
+    """``incal mag export --to px4|ardupilot``: a magnetometer calibration
+    (``Result`` or path) as PX4's ``CAL_MAG<n>_*`` (gauss) or ArduPilot's
+    ``COMPASS_*`` (milligauss) parameters, as that stack's parameter file
+    text; written to ``path`` when given."""
+    if stack not in ("px4", "ardupilot"):
+        raise InputError(f"stack: '{stack}' is not px4 or ardupilot")
+    return _write(_export(f"mag-{stack}", [calibration], {"instance": int(instance)}), path)
 
 
 def thermal_apply(model: Any, data: Any = None, **columns: Any):

@@ -80,6 +80,8 @@ def run(words: Sequence[str], stdin: Optional[bytes] = ...) -> Tuple[bytes, List
 def thermal_fit(results: Sequence[Union[Result, PathLike]], **options: Any) -> Result: ...
 def thermal_apply(model: Union[Result, PathLike], data: Data = ..., **columns: Any) -> Any: ...
 def export_thermal(model: Union[Result, PathLike], stack: str = ..., path: Optional[str] = ..., **options: Any) -> str: ...
+def mag_apply(calibration: Union[Result, PathLike], data: Data = ..., **columns: Any) -> Any: ...
+def export_mag(calibration: Union[Result, PathLike], stack: str = ..., path: Optional[str] = ..., instance: int = ...) -> str: ...
 def read_result(path: PathLike) -> Result: ...
 def compare(a: Union[Result, PathLike], b: Union[Result, PathLike]) -> Dict[str, Any]: ...
 def apply(calibration: Union[Result, PathLike], data: Data = ..., sort_time: bool = ..., **columns: Any) -> Any: ...
@@ -483,6 +485,30 @@ def threshold(
     rate_hz: Union[float, None] = None,
     response_fraction: float = 0.5,
     test_level: float = 0.05,
+    columns: Union[str, Sequence[str], Mapping[str, str], None] = None,
+    delimiter: Optional[str] = None,
+    serial: Optional[str] = None,
+    model: Optional[str] = None,
+    meta: Union[str, Sequence[str], Mapping[str, Any], None] = None,
+    output_unit: Optional[str] = None,
+    limits: Optional[PathLike] = None,
+    fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
+) -> Result: ...
+
+def mag(
+    data: Data = None,
+    *,
+    field_ut: Union[float, None] = None,
+    u_field_ut: float = 0,
+    inclination_deg: Union[float, None] = None,
+    u_inclination_deg: float = 0,
+    unit: Literal["ut", "nt", "gauss", "mgauss", "counts"] = "ut",
+    axes: str = "x",
+    full_scale: Union[float, None] = None,
+    no_alignment: bool = False,
+    static_tolerance: float = 0.02,
+    max_rate: Union[float, None] = None,
     columns: Union[str, Sequence[str], Mapping[str, str], None] = None,
     delimiter: Optional[str] = None,
     serial: Optional[str] = None,

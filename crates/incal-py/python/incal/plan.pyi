@@ -312,3 +312,21 @@ def threshold(
     seed: int = 1,
     run_sheet: Optional[Union[str, float]] = None,
 ) -> Dict[str, Any]: ...
+
+def mag(
+    *,
+    orientations: int = 36,
+    dwell_s: float = 2,
+    move_s: float = 1,
+    rate_hz: float = 50,
+    motion: Literal["random", "planar"] = "random",
+    field_ut: float = 50,
+    inclination_deg: float = 60,
+    noise_ut: float = 0.3,
+    gm_ut: float = 0,
+    gm_tau_s: float = 1,
+    no_accelerometer: bool = False,
+    acc_noise: float = 0.02,
+    seed: int = 1,
+    run_sheet: Optional[Union[str, float]] = None,
+) -> Dict[str, Any]: ...

@@ -20,6 +20,9 @@
 //!   heat map over time and τ ([`davar_plots`]), and with `temperature`
 //!   each term against temperature with its polynomial
 //!   ([`noise_temperature_plots`]);
+//! * a top-level `mag` object (a magnetometer calibration): the raw
+//!   readings on each plane with the fitted ellipsoid's outline, and the
+//!   calibrated magnitude along the session ([`mag_plots`]);
 //! * a top-level `bode` object (the dynamic response): gain in dB and phase
 //!   in degrees against log frequency, the measured points with U95 bars
 //!   from the table holding `gain_db`, the fitted model with its U95 band
@@ -44,6 +47,7 @@ mod bode;
 mod coefficients;
 mod davar;
 mod history;
+mod mag;
 mod psd;
 mod rows;
 mod svg;
@@ -58,6 +62,7 @@ pub use bode::bode_plots;
 pub use coefficients::{coefficient_plots, Limits};
 pub use davar::davar_plots;
 pub use history::history_plot;
+pub use mag::mag_plots;
 pub use psd::psd_plots;
 pub use svg::{figure_html, render_svg};
 pub use table::{model_curve, table_plots, table_plots_with, Curve};

@@ -43,7 +43,7 @@ impl MagResult {
             "mag_points",
             "Magnetometer readings, raw and calibrated, with the calibrated field's magnitude",
             &[
-                ("line", Some(Unit::One)),
+                ("row", Some(Unit::One)),
                 ("raw_x", raw()),
                 ("raw_y", raw()),
                 ("raw_z", raw()),
@@ -53,10 +53,10 @@ impl MagResult {
                 ("magnitude", out()),
             ],
         );
-        for (line, m) in &self.points {
+        for (row, m) in &self.points {
             let b = self.calibrated(m);
             t.push(vec![
-                Cell::num(*line as f64),
+                Cell::num(*row as f64),
                 Cell::num(m.x),
                 Cell::num(m.y),
                 Cell::num(m.z),

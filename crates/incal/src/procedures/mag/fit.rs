@@ -1,6 +1,7 @@
 //! The ellipsoid fit of a magnetometer session and its alignment to the
-//! accelerometer, on the estimation core's Gauss–Newton
-//! ([`crate::estimation::gauss_newton`]).
+//! accelerometer: damped Gauss–Newton on the normal equations, the
+//! core's fit summary at the minimum (the core's
+//! [`crate::estimation::gauss_newton::gauss_newton`]).
 //!
 //! # Model
 //! A raw reading is `m = S⁻¹ b + h + e`: `b` the field in the
@@ -568,7 +569,7 @@ fn normal_equations(
     (a, g)
 }
 
-/// Iterations of [`converge`] at most.
+/// Gauss–Newton iterations of a fit at most.
 pub const MAX_ITERATIONS: usize = 200;
 
 /// A jackknife block is at least this many times the lag where the

@@ -207,10 +207,10 @@ pub struct MagOptions {
     /// it is saturated and refused.
     #[serde(default)]
     pub full_scale: Option<f64>,
-    /// Fit the alignment to the accelerometer when the file has one
-    /// (default true).
-    #[serde(default = "yes")]
-    pub alignment: bool,
+    /// Do not fit the alignment to the accelerometer (default false: fit
+    /// it when the file has one).
+    #[serde(default)]
+    pub no_alignment: bool,
     /// A row is at rest when `|f|` is within this fraction of its median
     /// (default 0.02).
     #[serde(default = "two_percent")]
@@ -223,9 +223,6 @@ pub struct MagOptions {
 
 fn xyz() -> String {
     "x,y,z".into()
-}
-fn yes() -> bool {
-    true
 }
 fn two_percent() -> f64 {
     0.02
@@ -286,7 +283,7 @@ pub struct MagResult {
     /// Rows at rest used by the alignment.
     pub rest_rows: usize,
     /// The readings of the table (at most [`document::POINTS`], evenly
-    /// spaced) with their line.
+    /// spaced) with their row (from 0, in the session's order).
     pub points: Vec<(usize, V3)>,
     /// Warnings.
     pub warnings: Vec<Warning>,
@@ -354,7 +351,7 @@ pub fn calibrate(rec: &Record, o: &MagOptions) -> Result<MagResult> {
         rest_rows: rest.len(),
         points: (0..n)
             .step_by(n.div_ceil(document::POINTS).max(1))
-            .map(|k| (rec.lines[k], V3::from(rec.mag[k])))
+            .map(|k| (k, V3::from(rec.mag[k])))
             .collect(),
         solved,
         warnings,
@@ -395,14 +392,32 @@ fn check_design(
         x[3 + k] = c0[(*i, *j)];
     }
     let d = fit::diagnose(mag, &x)?;
-    let weak: Vec<String> = d
-        .weakest
-        .terms
-        .iter()
-        .zip(&d.weakest.coefficients)
-        .filter(|(_, c)| c.abs() > 0.2)
-        .map(|(t, _)| t.clone())
-        .collect();
+    // The terms along the axis the session was turned about (a field
+    // component that never changes cannot be told from an offset, nor
+    // its scale and couplings), then those of the design's weakest
+    // direction.
+    let mut weak: Vec<String> = Vec::new();
+    let xyz = ["x", "y", "z"];
+    for i in (0..3).filter(|&i| axis[i].abs() > 0.3) {
+        weak.push(fit::HARD[i].to_string());
+        weak.push(format!("soft_iron_{}{}", xyz[i], xyz[i]));
+        for j in (0..3).filter(|&j| j != i) {
+            let (a, b) = (i.min(j), i.max(j));
+            weak.push(format!("soft_iron_{}{}", xyz[a], xyz[b]));
+        }
+    }
+    for (t, c) in d.weakest.terms.iter().zip(&d.weakest.coefficients) {
+        if c.abs() > 0.2 && !weak.contains(t) {
+            weak.push(t.clone());
+        }
+    }
+    weak.dedup();
+    let mut seen = Vec::new();
+    weak.retain(|t| {
+        let new = !seen.contains(t);
+        seen.push(t.clone());
+        new
+    });
     let about = format!(
         "the session turned about ({:.2}, {:.2}, {:.2}) (coverage spread {spread:.3}, 1 for directions all over the sphere)",
         axis.x, axis.y, axis.z
@@ -431,7 +446,7 @@ fn at_rest(
     o: &MagOptions,
     warnings: &mut Vec<Warning>,
 ) -> Vec<(usize, V3)> {
-    let Some(acc) = rec.acc.as_ref().filter(|_| o.alignment) else {
+    let Some(acc) = rec.acc.as_ref().filter(|_| !o.no_alignment) else {
         return Vec::new();
     };
     let mut norms: Vec<f64> = rows.iter().map(|&k| V3::from(acc[k]).norm()).collect();

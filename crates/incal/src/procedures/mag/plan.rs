@@ -7,9 +7,7 @@
 
 use serde_json::json;
 
-use super::sim::{
-    acc_noise, fifty, one, seed_one, sixty, thirty_six, two, yes, MagSimOptions, Motion,
-};
+use super::sim::{acc_noise, fifty, one, seed_one, sixty, thirty_six, two, MagSimOptions, Motion};
 use super::{calibrate, MagOptions};
 use crate::document::plan::PlanDocument;
 use crate::error::{Error, Result};
@@ -50,9 +48,10 @@ pub struct MagPlanOptions {
     /// Gauss–Markov correlation time (s; default 1).
     #[serde(default = "one")]
     pub gm_tau_s: f64,
-    /// With an accelerometer (the alignment and inclination; default true).
-    #[serde(default = "yes")]
-    pub accelerometer: bool,
+    /// Without an accelerometer (no alignment or inclination; default
+    /// false).
+    #[serde(default)]
+    pub no_accelerometer: bool,
     /// Accelerometer white noise (m/s²; default 0.02).
     #[serde(default = "acc_noise")]
     pub acc_noise: f64,
@@ -82,7 +81,7 @@ pub fn plan_document(o: &MagPlanOptions) -> Result<PlanDocument> {
         noise_ut: o.noise_ut,
         gm_ut: o.gm_ut,
         gm_tau_s: o.gm_tau_s,
-        accelerometer: o.accelerometer,
+        no_accelerometer: o.no_accelerometer,
         acc_noise: o.acc_noise,
         seed,
         ..MagSimOptions::default()
@@ -109,8 +108,14 @@ pub fn plan_document(o: &MagPlanOptions) -> Result<PlanDocument> {
     let mut d = PlanDocument::new(
         crate::document::Procedure::Mag,
         format!(
-            "Magnetometer plan: {} orientations ({:?}) of {} s at {} Hz",
-            o.orientations, o.motion, o.dwell_s, o.rate_hz
+            "Magnetometer plan: {} orientations ({}) of {} s at {} Hz",
+            o.orientations,
+            match o.motion {
+                Motion::Random => "random",
+                Motion::Planar => "planar",
+            },
+            o.dwell_s,
+            o.rate_hz
         ),
     );
     d.with_options(o)?;

@@ -123,9 +123,9 @@ pub struct MagSimOptions {
     /// Gauss–Markov correlation time (s; default 1).
     #[serde(default = "one")]
     pub gm_tau_s: f64,
-    /// Write the accelerometer (default true).
-    #[serde(default = "yes")]
-    pub accelerometer: bool,
+    /// Leave the accelerometer out (default false).
+    #[serde(default)]
+    pub no_accelerometer: bool,
     /// Accelerometer white noise (m/s²; default 0.02).
     #[serde(default = "acc_noise")]
     pub acc_noise: f64,
@@ -187,9 +187,6 @@ pub(super) fn one() -> f64 {
 }
 pub(super) fn noise() -> f64 {
     0.3
-}
-pub(super) fn yes() -> bool {
-    true
 }
 pub(super) fn acc_noise() -> f64 {
     0.02
@@ -325,7 +322,7 @@ impl MagSimOptions {
         let drive = self.gm_ut * (1.0 - phi_gm * phi_gm).sqrt();
         let mut gm = V3::from_fn(|_, _| normal(&mut r, self.gm_ut));
         let mut rec = Record {
-            acc: self.accelerometer.then(|| Vec::with_capacity(n)),
+            acc: (!self.no_accelerometer).then(|| Vec::with_capacity(n)),
             time_s: Some(Vec::with_capacity(n)),
             ..Record::default()
         };
