@@ -170,6 +170,10 @@ fn every_procedure_gets_a_complete_self_contained_report() {
         } else if doc.get("bode").is_some() {
             // A frequency response: its Bode plots, gain and phase.
             assert_eq!(kinds, ["bode", "bode"], "{procedure}");
+        } else if doc.get("mag").is_some() {
+            // A magnetometer calibration: the raw field on each plane with
+            // the fitted ellipsoid, and the calibrated magnitude.
+            assert_eq!(kinds, ["mag", "mag", "mag", "mag"], "{procedure}");
         } else if with_residuals {
             assert!(kinds.contains(&"residual"), "{procedure}: {kinds:?}");
             assert!(kinds.contains(&"fitted"), "{procedure}: {kinds:?}");
