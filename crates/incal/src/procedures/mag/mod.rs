@@ -56,6 +56,9 @@ pub const ORIENTATION_DEG: f64 = 5.0;
 pub const SPREAD_REFUSED: f64 = 0.05;
 /// A coverage spread below this is warned.
 pub const SPREAD_WARNED: f64 = 0.3;
+/// A scatter of the gravity–field angle's cosine above this (about 3°)
+/// is warned: axes mapped differently, motion, or a disturbance.
+pub const ANGLE_SD_WARNED: f64 = 0.05;
 /// An equilibrated condition number above this is refused.
 pub const COND_REFUSED: f64 = 1e8;
 
@@ -325,6 +328,11 @@ pub fn calibrate(rec: &Record, o: &MagOptions) -> Result<MagResult> {
     let stride = n.div_ceil(MAX_FIT_ROWS).max(1);
     let rows: Vec<usize> = (0..n).step_by(stride).collect();
     let mag: Vec<V3> = rows.iter().map(|&k| V3::from(rec.mag[k])).collect();
+    if rec.mag.iter().all(|m| *m == rec.mag[0]) {
+        return Err(Error::Unsupported(
+            "every reading is the same: the unit was not turned (or the magnetometer does not answer)".into(),
+        ));
+    }
     let (h0, c0) = fit::algebraic(&mag);
     let orientations = fit::orientations(&mag, &h0, &c0, ORIENTATION_DEG, 1000);
     if orientations < fit::UNKNOWNS {
@@ -340,6 +348,12 @@ pub fn calibrate(rec: &Record, o: &MagOptions) -> Result<MagResult> {
     let rest = at_rest(rec, &rows, o, &mut warnings);
     let solved = fit::solve(&mag, &rest, &h0, &c0)
         .map_err(|e| Error::Unsupported(format!("the ellipsoid fit failed: {e}")))?;
+    if let Some((sd, _)) = solved.dot.filter(|d| d.0 > ANGLE_SD_WARNED) {
+        warnings.push(Warning::new(
+            WarningCode::LackOfFit,
+            format!("the angle between gravity and the calibrated field scatters by {:.1}° (sd of its cosine {sd:.3}) over the rows at rest: the magnetometer's axes may be mapped differently from the accelerometer's (axes), the unit moved in those rows, or the field is disturbed near the rig", sd.asin().to_degrees()),
+        ));
+    }
     let coefficients = outputs(&solved, o)?;
     let result = MagResult {
         options: o.clone(),
