@@ -243,3 +243,40 @@ fn an_axes_map_or_counts_are_not_exported() {
         .expect("refused");
     assert!(e.contains("counts"), "{e}");
 }
+
+/// A session turned continuously (no dwell: each orientation passed
+/// through in 2 s of slerp), magnetometer only, with Gauss–Markov noise:
+/// the jackknife's runs follow the motion.
+#[test]
+fn mag_continuous_turning_u95_covers_the_truth() {
+    let runs = monte_carlo(603, trials(40, 1000), |seed| {
+        let s = MagSimOptions {
+            dwell_s: 0.05,
+            move_s: 2.0,
+            gm_ut: 0.3,
+            gm_tau_s: 0.5,
+            no_accelerometer: true,
+            ..sim(seed)
+        };
+        let truth = s.truth_json().unwrap();
+        let r = calibrate(&s.record().unwrap(), &options(&s)).expect("reduces");
+        let e = &r.coefficients;
+        let k95 = e.coverage_factor(0.95);
+        NAMES[..11]
+            .iter()
+            .map(|name| {
+                let (v, u) = e.get(name).unwrap();
+                (v - truth[*name].as_f64().unwrap()).abs() <= k95 * u
+            })
+            .collect::<Vec<bool>>()
+    });
+    let (lo, hi) = band(runs.len(), 0.93, 0.97);
+    for (k, name) in NAMES[..11].iter().enumerate() {
+        let rate = runs.iter().filter(|r| r[k]).count() as f64 / runs.len() as f64;
+        eprintln!("mag, continuous, {name}: {rate:.3} of {}", runs.len());
+        assert!(
+            (lo..=hi).contains(&rate),
+            "{name}: {rate:.3} (band {lo:.3}..{hi:.3})"
+        );
+    }
+}
