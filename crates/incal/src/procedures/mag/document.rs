@@ -6,7 +6,7 @@
 
 use serde_json::json;
 
-use super::fit::{self, V3};
+use super::fit;
 use super::MagResult;
 use crate::document::{
     Cell, DecisionCode, DocumentBuilder, FitSummary, Procedure, ResultDocument, Table,
@@ -30,11 +30,6 @@ impl MagResult {
         })
     }
 
-    /// The calibrated field of a raw reading, `S (m − h)`.
-    pub fn calibrated(&self, m: &V3) -> V3 {
-        self.soft_iron() * (m - self.hard_iron())
-    }
-
     /// The `mag_points` table.
     fn table(&self) -> Result<Table> {
         let raw = || Some(Unit::Other(self.options.unit.as_str().into()));
@@ -53,8 +48,9 @@ impl MagResult {
                 ("magnitude", out()),
             ],
         );
+        let (soft, hard) = (self.soft_iron(), self.hard_iron());
         for (row, m) in &self.points {
-            let b = self.calibrated(m);
+            let b = soft * (m - hard);
             t.push(vec![
                 Cell::num(*row as f64),
                 Cell::num(m.x),

@@ -93,6 +93,21 @@ pub fn sym(c: &[f64]) -> M3 {
     m
 }
 
+/// The ellipsoid's parameters `[h; c_xx … c_yz]` of `h` and `C`.
+pub fn pack(h: &V3, c: &M3) -> DVector<f64> {
+    let mut x = DVector::zeros(UNKNOWNS);
+    x.as_mut_slice()[..3].copy_from_slice(h.as_slice());
+    for (k, (i, j)) in PAIRS.iter().enumerate() {
+        x[3 + k] = c[(*i, *j)];
+    }
+    x
+}
+
+/// `h` and `C` of the parameters (the first [`UNKNOWNS`] of `x`).
+pub fn unpack(x: &DVector<f64>) -> (V3, M3) {
+    (V3::new(x[0], x[1], x[2]), sym(&x.as_slice()[3..UNKNOWNS]))
+}
+
 /// `[v]×`, the cross-product matrix.
 pub fn skew(v: &V3) -> M3 {
     M3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
@@ -240,10 +255,6 @@ impl Model<'_> {
     fn aligned(&self) -> bool {
         !self.rest.is_empty()
     }
-
-    fn parts(x: &DVector<f64>) -> (V3, M3) {
-        (V3::new(x[0], x[1], x[2]), sym(&x.as_slice()[3..UNKNOWNS]))
-    }
 }
 
 /// The fit's parameter names: [`HARD`], [`SOFT`], then [`ALIGN`] and
@@ -267,7 +278,7 @@ impl NonlinearModel for Model<'_> {
     }
 
     fn predict(&self, x: &DVector<f64>) -> DVector<f64> {
-        let (h, c) = Self::parts(x);
+        let (h, c) = unpack(x);
         let n = self.mag.len();
         let mut out = DVector::zeros(n + self.rest.len());
         for (k, m) in self.mag.iter().enumerate() {
@@ -285,7 +296,7 @@ impl NonlinearModel for Model<'_> {
     }
 
     fn jacobian(&self, x: &DVector<f64>) -> DMatrix<f64> {
-        let (h, c) = Self::parts(x);
+        let (h, c) = unpack(x);
         let n = self.mag.len();
         let p = x.len();
         let mut j = DMatrix::zeros(n + self.rest.len(), p);
@@ -425,11 +436,7 @@ pub fn diagnose(mag: &[V3], x: &DVector<f64>) -> Result<Diagnostics> {
 /// alignment too when `rest` has rows.
 pub fn solve(mag: &[V3], rest: &AtRest, h0: &V3, c0: &M3) -> Result<Solved> {
     let n = mag.len();
-    let mut x = DVector::zeros(UNKNOWNS);
-    x.as_mut_slice()[..3].copy_from_slice(h0.as_slice());
-    for (k, (i, j)) in PAIRS.iter().enumerate() {
-        x[3 + k] = c0[(*i, *j)];
-    }
+    let x = pack(h0, c0);
     let ellipsoid = Model { mag, rest: &[] };
     let ones = DVector::from_element(n, 1.0);
     // Unit target, then the noise's bias removed (module docs).
@@ -442,7 +449,7 @@ pub fn solve(mag: &[V3], rest: &AtRest, h0: &V3, c0: &M3) -> Result<Solved> {
         return finish(&ellipsoid, x2, target, s2m, k, None);
     }
     // The alignment's start: no rotation, the mean inclination.
-    let (h, c) = Model::parts(&x2);
+    let (h, c) = unpack(&x2);
     let dots: Vec<f64> = rest
         .iter()
         .map(|(row, f)| f.dot(&(c * (mag[*row] - h)).normalize()))
@@ -552,21 +559,23 @@ fn normal_equations(
     let p = j.ncols();
     let mut a = DMatrix::zeros(p, p);
     let mut g = DVector::zeros(p);
-    let mut ji = vec![0.0; p];
     for i in 0..j.nrows() {
-        for (k, v) in ji.iter_mut().enumerate() {
-            *v = j[(i, k)];
-        }
-        for k in 0..p {
-            let wk = w[i] * ji[k];
-            g[k] += wk * r[i];
-            for l in k..p {
-                a[(k, l)] += wk * ji[l];
-            }
-        }
+        add_row(&mut a, &mut g, j, i, w[i], r[i]);
     }
     a.fill_lower_triangle_with_upper_triangle();
     (a, g)
+}
+
+/// Add row `i` of `J` with weight `w` and residual `r` to `JᵀWJ` (its
+/// upper triangle) and `JᵀWr`.
+fn add_row(a: &mut DMatrix<f64>, g: &mut DVector<f64>, j: &DMatrix<f64>, i: usize, w: f64, r: f64) {
+    for k in 0..j.ncols() {
+        let wk = w * j[(i, k)];
+        g[k] += wk * r;
+        for l in k..j.ncols() {
+            a[(k, l)] += wk * j[(i, l)];
+        }
+    }
 }
 
 /// Gauss–Newton iterations of a fit at most.
@@ -658,20 +667,12 @@ fn jackknife(
     };
     let mut a = vec![DMatrix::<f64>::zeros(p, p); blocks];
     let mut g = vec![DVector::<f64>::zeros(p); blocks];
-    let mut ji = vec![0.0; p];
     for i in 0..j.nrows() {
         let b = block(i);
-        for (k, v) in ji.iter_mut().enumerate() {
-            *v = j[(i, k)];
-        }
-        let (ab, gb) = (&mut a[b], &mut g[b]);
-        for k in 0..p {
-            let wk = w[i] * ji[k];
-            gb[k] += wk * r[i];
-            for l in 0..p {
-                ab[(k, l)] += wk * ji[l];
-            }
-        }
+        add_row(&mut a[b], &mut g[b], &j, i, w[i], r[i]);
+    }
+    for m in &mut a {
+        m.fill_lower_triangle_with_upper_triangle();
     }
     let total = a.iter().fold(DMatrix::zeros(p, p), |s, m| s + m);
     let mut thetas: Vec<DVector<f64>> = Vec::with_capacity(blocks);

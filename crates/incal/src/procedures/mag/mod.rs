@@ -400,38 +400,31 @@ fn check_design(
     (spread, axis): (f64, V3),
     warnings: &mut Vec<Warning>,
 ) -> Result<f64> {
-    let mut x = DVector::zeros(fit::UNKNOWNS);
-    x.as_mut_slice()[..3].copy_from_slice(h0.as_slice());
-    for (k, (i, j)) in fit::PAIRS.iter().enumerate() {
-        x[3 + k] = c0[(*i, *j)];
-    }
-    let d = fit::diagnose(mag, &x)?;
+    let d = fit::diagnose(mag, &fit::pack(h0, c0))?;
     // The terms along the axis the session was turned about (a field
     // component that never changes cannot be told from an offset, nor
     // its scale and couplings), then those of the design's weakest
     // direction.
     let mut weak: Vec<String> = Vec::new();
+    let mut add = |t: String| {
+        if !weak.contains(&t) {
+            weak.push(t);
+        }
+    };
     let xyz = ["x", "y", "z"];
     for i in (0..3).filter(|&i| axis[i].abs() > 0.3) {
-        weak.push(fit::HARD[i].to_string());
-        weak.push(format!("soft_iron_{}{}", xyz[i], xyz[i]));
+        add(fit::HARD[i].to_string());
+        add(format!("soft_iron_{}{}", xyz[i], xyz[i]));
         for j in (0..3).filter(|&j| j != i) {
             let (a, b) = (i.min(j), i.max(j));
-            weak.push(format!("soft_iron_{}{}", xyz[a], xyz[b]));
+            add(format!("soft_iron_{}{}", xyz[a], xyz[b]));
         }
     }
     for (t, c) in d.weakest.terms.iter().zip(&d.weakest.coefficients) {
-        if c.abs() > 0.2 && !weak.contains(t) {
-            weak.push(t.clone());
+        if c.abs() > 0.2 {
+            add(t.clone());
         }
     }
-    weak.dedup();
-    let mut seen = Vec::new();
-    weak.retain(|t| {
-        let new = !seen.contains(t);
-        seen.push(t.clone());
-        new
-    });
     let about = format!(
         "the session turned about ({:.2}, {:.2}, {:.2}) (coverage spread {spread:.3}, 1 for directions all over the sphere)",
         axis.x, axis.y, axis.z
@@ -535,9 +528,7 @@ fn saturated(rec: &Record, axes: &Axes, rows: &[usize], h0: &V3, c0: &M3) -> Res
     let Ok(s) = fit::solve(&kept, &[], h0, c0) else {
         return Ok(());
     };
-    let x = s.fit.estimates.values();
-    let h = V3::new(x[0], x[1], x[2]);
-    let c = fit::sym(&x.as_slice()[3..fit::UNKNOWNS]);
+    let (h, c) = fit::unpack(s.fit.estimates.values());
     let sd = s.magnitude.0.max(f64::MIN_POSITIVE);
     for (a, edge, at) in held {
         let missed = at
