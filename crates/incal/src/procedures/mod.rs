@@ -21,6 +21,7 @@ pub mod noise;
 pub mod registry;
 pub mod repeatability;
 pub mod response;
+pub mod sensitivity;
 pub mod sim_plan;
 pub mod stream;
 pub mod thermal;

@@ -76,6 +76,10 @@ pub enum Procedure {
     /// the accelerometer by a constrained ellipsoid fit (IEEE Std 1431
     /// §12.16 magnetic sensitivity; Kok & Schön 2014).
     Mag,
+    /// Environmental sensitivities: vibration rectification and
+    /// vibropendulous error, magnetic sensitivity, shift across a shock
+    /// (IEEE Std 1293 / 952 / 1431).
+    Sensitivity,
 }
 
 impl Procedure {
@@ -120,6 +124,7 @@ impl Procedure {
             Procedure::Repeatability => "repeatability",
             Procedure::Threshold => "threshold",
             Procedure::Mag => "mag",
+            Procedure::Sensitivity => "sensitivity",
         }
     }
 }

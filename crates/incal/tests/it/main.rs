@@ -37,6 +37,7 @@ mod response_found;
 mod response_roundtrip;
 mod response_step;
 mod schema_file;
+mod sensitivity;
 mod sim_plan;
 mod thermal_roundtrip;
 mod threshold;
