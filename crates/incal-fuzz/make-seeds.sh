@@ -29,6 +29,7 @@ $INCAL simulate response-step --duration-s 0.2 --step-s 0.05 --rate-hz 500 --cor
 $INCAL simulate warmup --duration-s 240 --rate-hz 1 --tau-s 40 --seed 3 -o "$D/warmup"
 $INCAL simulate threshold --dwell-s 2 --rate-hz 5 --seed 3 -o "$D/threshold"
 $INCAL simulate mag --orientations 12 --dwell-s 0.2 --move-s 0.1 --rate-hz 20 --seed 3 -o "$D/mag"
+$INCAL simulate sensitivity --levels 0,4,8 --run-s 1 --gap-s 0.5 --rate-hz 20 --seed 3 -o "$D/sensitivity"
 $INCAL simulate repeatability --seed 3 -o "$D/repeatability"
 $INCAL simulate thermal --seed 3 --t-low-c 20 --t-high-c 40 --ramp-c-per-min 20 --hold-s 30 --lag-s 5 --rate-hz 1 -o "$D/thermal-ramp"
 $INCAL tumble --mount pendulum --input "$D/tumble" --json --meta temperature_c=25 -o "$D/thermal-fit"

@@ -82,12 +82,14 @@ pub struct Standard {
 }
 
 /// The rigs a standard may belong to.
-pub const RIGS: [&str; 6] = [
+pub const RIGS: [&str; 8] = [
     "dividing-head",
     "centrifuge",
     "rate-table",
     "shaker",
     "thermal-chamber",
+    "helmholtz-coil",
+    "shock-machine",
     "reference",
 ];
 

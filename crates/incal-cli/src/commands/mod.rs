@@ -86,5 +86,6 @@ procedure_families!(
     warmup,
     repeatability,
     threshold,
-    mag
+    mag,
+    sensitivity
 );

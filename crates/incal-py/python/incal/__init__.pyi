@@ -519,3 +519,25 @@ def mag(
     fail_on: Optional[Literal["fail", "conditional"]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
+
+def sensitivity(
+    data: Data = None,
+    *,
+    kind: Literal["auto", "vibration", "magnetic", "shock"] = "auto",
+    sensor: Literal["accel", "gyro"] = "accel",
+    output_columns: str = "output",
+    unit: Union[str, None] = None,
+    level: Literal["rms", "peak"] = "rms",
+    rate_hz: Union[float, None] = None,
+    settle_s: float = 0,
+    rig: Union[str, None] = None,
+    columns: Union[str, Sequence[str], Mapping[str, str], None] = None,
+    delimiter: Optional[str] = None,
+    serial: Optional[str] = None,
+    model: Optional[str] = None,
+    meta: Union[str, Sequence[str], Mapping[str, Any], None] = None,
+    output_unit: Optional[str] = None,
+    limits: Optional[PathLike] = None,
+    fail_on: Optional[Literal["fail", "conditional"]] = None,
+    progress: Union[bool, Callable[[str, int, int], object], None] = None,
+) -> Result: ...

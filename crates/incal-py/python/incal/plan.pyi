@@ -330,3 +330,23 @@ def mag(
     seed: int = 1,
     run_sheet: Optional[Union[str, float]] = None,
 ) -> Dict[str, Any]: ...
+
+def sensitivity(
+    *,
+    kind: Literal["auto", "vibration", "magnetic", "shock"] = "vibration",
+    sensor: Literal["accel", "gyro"] = "accel",
+    levels: Union[str, None] = None,
+    angles_deg: str = 0,
+    field_axes: str = "x",
+    outputs: int = 3,
+    interleave: bool = False,
+    repeats: int = 1,
+    inputs: Union[str, None] = None,
+    noise: Union[float, None] = None,
+    flicker: Union[float, None] = None,
+    random_walk: float = 0,
+    run_s: float = 30,
+    gap_s: float = 10,
+    rate_hz: float = 100,
+    run_sheet: Optional[Union[str, float]] = None,
+) -> Dict[str, Any]: ...

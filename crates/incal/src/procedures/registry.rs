@@ -822,6 +822,28 @@ pub static REGISTRY: &[Entry] = &[
         planner: planner::<super::mag::Mag>(),
         simulator: simulator::<super::mag::Mag>(),
     },
+    Entry {
+        id: "sensitivity",
+        document: Procedure::Sensitivity,
+        command: &["sensitivity"],
+        plan: Some(&["plan", "sensitivity"]),
+        simulate: Some(&["simulate", "sensitivity"]),
+        title: "Environmental sensitivities: vibration rectification and vibropendulous error, magnetic sensitivity, shift across a shock",
+        rig: Some("shaker"),
+        method: "Sensitivity of the bias (and the scale factor) to vibration, magnetic field and shock from runs at several levels of the stimulus: IEEE Std 1293-2018, IEEE Standard Specification Format Guide and Test Procedure for Linear Single-Axis, Nongyroscopic Accelerometers (vibration rectification and vibropendulous error); IEEE Std 952-2020 and IEEE Std 1431-2004 (magnetic sensitivity and vibration sensitivity of gyros); the run means weighted by their joint covariance from the output's white, flicker and random-walk noise (Allan variance, NIST SP 1065), generalized least squares with the lack-of-fit rule choosing the order; uncertainty by JCGM 100:2008 with Welch-Satterthwaite degrees of freedom",
+        references: &["ieee1293", "ieee952", "ieee1431", "nist1065", "jcgm100"],
+        chapter: "sensitivity.md",
+        input: InputKind::Recording,
+        fuzz: &["sensitivity"],
+        run_sheet: None,
+        example: Some(Example {
+            simulate: &["--seed", "28", "--run-s", "10", "--rate-hz", "20"],
+            options: &[],
+        }),
+        reduction: reduction::<super::sensitivity::Sensitivity>(),
+        planner: planner::<super::sensitivity::Sensitivity>(),
+        simulator: simulator::<super::sensitivity::Sensitivity>(),
+    },
 ];
 
 #[cfg(test)]

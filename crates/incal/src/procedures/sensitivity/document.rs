@@ -185,13 +185,14 @@ impl SensitivityResult {
             .columns
             .iter()
             .flat_map(|c| {
+                let k = c.coefficients.coverage_factor(0.95);
                 c.coefficients
                     .names()
                     .iter()
                     .take(3)
                     .map(|n| {
                         let (v, u) = c.coefficients.get(n).unwrap_or((0.0, 0.0));
-                        format!("{n} = {v:.4} ± {:.2}", 2.0 * u)
+                        format!("{n} = {v:.4} ± {:.2} (U95)", k * u)
                     })
                     .collect::<Vec<_>>()
             })

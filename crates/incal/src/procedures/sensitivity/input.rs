@@ -1,7 +1,7 @@
 //! Reading a sensitivity session: one row per sample, the runs labelled.
 //!
 //! Columns: `run` (a label per run; the rows of one run are
-//! consecutive), the output columns (option `columns`, default `output`,
+//! consecutive), the output columns (option `output_columns`, default `output`,
 //! in the unit of the option `unit`), `time_s` (s; or the option
 //! `rate_hz`), optional `input` (the applied acceleration in g or rate
 //! in °/s, constant within a run: the scale factor and its sensitivity

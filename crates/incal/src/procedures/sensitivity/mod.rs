@@ -149,7 +149,7 @@ pub struct SensitivityOptions {
     /// several, every coefficient is named with the column's axis
     /// (`gyro_x` → `_x`).
     #[serde(default = "output")]
-    pub columns: String,
+    pub output_columns: String,
     /// The output columns' unit: accel `g` (default), `mg`, `ug`,
     /// `m_s2`; gyro `deg_s` (default), `deg_h`, `rad_s`.
     #[serde(default)]
@@ -206,16 +206,16 @@ impl SensitivityOptions {
     /// The output columns.
     pub fn column_names(&self) -> Result<Vec<String>> {
         let v: Vec<String> = self
-            .columns
+            .output_columns
             .split(',')
             .map(|s| s.trim().to_string())
             .collect();
         if v.iter().any(String::is_empty) {
-            return invalid("columns", "an empty column name");
+            return invalid("output_columns", "an empty column name");
         }
         for (i, c) in v.iter().enumerate() {
             if v[..i].contains(c) {
-                return invalid("columns", format!("'{}' twice", incal_io::clip(c)));
+                return invalid("output_columns", format!("'{}' twice", incal_io::clip(c)));
             }
         }
         Ok(v)

@@ -146,7 +146,7 @@ fn five() -> f64 {
     5.0
 }
 fn matrix() -> String {
-    "0.5,0.05,-0.03,0.02,0.4,0.06,-0.04,0.01,0.6".into()
+    "5,0.5,-0.3,0.2,4,0.6,-0.4,0.1,6".into()
 }
 fn shifts() -> String {
     "20,-35".into()
@@ -227,7 +227,7 @@ impl SensitivitySimOptions {
         SensitivityOptions {
             sensor: self.sensor,
             unit: self.unit.clone(),
-            columns: self.column_names().join(","),
+            output_columns: self.column_names().join(","),
             ..SensitivityOptions::default()
         }
     }
