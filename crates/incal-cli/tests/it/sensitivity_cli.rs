@@ -180,3 +180,50 @@ fn the_plan_names_what_the_runs_cannot_separate() {
         &["vrc", "vrc_pendulous"],
     );
 }
+
+#[test]
+fn the_certificate_traces_the_rig_of_the_kind() {
+    let d = workdir("sensitivity_cli_rig");
+    std::fs::write(
+        d.join("lab.toml"),
+        "[lab]\nname = \"L\"\naddress = \"A\"\naccreditation = \"C\"\ncertificate_prefix = \"X-\"\n\n[[signatory]]\nname = \"S\"\nrole = \"R\"\n\n[[standard]]\nrig = \"helmholtz-coil\"\nid = \"Coil HC-3 and magnetometer FG-1\"\ncertificate = \"NIM-7\"\ndue = \"2030-01-01\"\n\n[[standard]]\nrig = \"shaker\"\nid = \"Reference accelerometer RA-9\"\ncertificate = \"NIM-1\"\ndue = \"2030-01-01\"\n",
+    )
+    .unwrap();
+    ok(&run_in(
+        &d,
+        &[
+            "simulate",
+            "sensitivity",
+            "--kind",
+            "magnetic",
+            "--outputs",
+            "1",
+            "--run-s",
+            "5",
+            "--rate-hz",
+            "20",
+            "-o",
+            "m.csv",
+        ],
+    ));
+    ok(&run_in(
+        &d,
+        &[
+            "sensitivity",
+            "--input",
+            "m.csv",
+            "--json",
+            "-o",
+            "m.json",
+            "--serial",
+            "SN-1",
+        ],
+    ));
+    assert_eq!(read(&d, "m.json")["options"]["rig"], "helmholtz-coil");
+    ok(&run_in(
+        &d,
+        &["report", "m.json", "--lab", "lab.toml", "-o", "c.html"],
+    ));
+    let h = std::fs::read_to_string(d.join("c.html")).unwrap();
+    assert!(h.contains("HC-3") && !h.contains("RA-9"), "the coil traced");
+}

@@ -15,7 +15,10 @@
 //! variance) and the run means' joint covariance follows from it
 //! ([`noise`]): a run's u is the Allan deviation at its own length, and
 //! runs far apart in time are allowed to have drifted apart by what the
-//! flicker and random walk give.
+//! flicker and random walk give. The flicker and walk are chosen with the
+//! run means' own evidence ([`noise::NoiseModel::profile`]), in two
+//! passes where a drift and a term of the order rule look alike
+//! ([`fit_column`]).
 //!
 //! # Sensitivities
 //! The run means are fitted by generalized least squares against the
@@ -366,13 +369,12 @@ pub fn reduce(rec: &Record, o: &SensitivityOptions) -> Result<SensitivityResult>
             .iter()
             .map(|s| s.iter().sum::<f64>() / s.len() as f64)
             .collect();
-        let (nm, cov) = choose_noise(&points, &spans, &model, &y)
-            .map_err(|e| Error::Unsupported(format!("column '{column}': {e}")))?;
-        let nm = noise::NoiseModel {
-            dof: satterthwaite(&nm, &spans, &model.base)?,
-            ..nm
-        };
-        let f = fit::fit_output(&model, &y, &cov, nm.dof)?;
+        let (nm, f) =
+            fit_column(&points, &spans, &model, &y).map_err(|e| match rec.columns.len() {
+                1 => e,
+                _ => Error::Unsupported(format!("column '{column}': {e}")),
+            })?;
+        let cov = nm.run_covariance(&spans)?;
         let label = labels[j].clone();
         let coefficients = reported(&f, label.as_deref())?;
         flag(&coefficients, &mut warnings);
@@ -398,22 +400,90 @@ pub fn reduce(rec: &Record, o: &SensitivityOptions) -> Result<SensitivityResult>
     })
 }
 
-/// The noise model of one column ([`noise::NoiseModel::profile`]): the
-/// within-run Allan variances say what the noise is at short τ, the run
-/// means under the base model (their restricted `−2ℓ`, [`fit::reml`])
-/// how far runs drift apart.
-fn choose_noise(
+/// The noise model and the fit of one column, in two passes: the noise
+/// ([`choose_noise`]) under the richest model of the order rule that
+/// leaves the run means a residual (so that a missing term is not taken
+/// for drift), the order rule with it; then the noise again under the
+/// terms the rule chose (their residuals tell the drift best) and the
+/// fit of those terms with it, the first pass's steps kept.
+fn fit_column(
     points: &[noise::AvarPoint],
     spans: &[noise::Span],
     model: &fit::Model,
     y: &[f64],
-) -> Result<(noise::NoiseModel, DMatrix<f64>)> {
-    let nm = noise::NoiseModel::profile(points, |m| {
-        let cov = m.run_covariance(spans).ok()?;
-        fit::reml(&model.base, y, &cov)
-    })?;
+) -> Result<(noise::NoiseModel, fit::OutputFit)> {
+    let mut richest = model.base.clone();
+    for t in &model.extras {
+        if richest.len() + 2 > y.len() {
+            break;
+        }
+        richest.push(t.clone());
+    }
+    let first = choose_noise(points, spans, &richest, y)?;
+    let first = noise::NoiseModel {
+        dof: satterthwaite(&first, spans, &model.base)?,
+        ..first
+    };
+    let f1 = fit::fit_output(model, y, &first.run_covariance(spans)?, first.dof)?;
+    // The noise under the chosen terms, and under the base terms alone:
+    // where the runs cannot tell a drift from a term of the order rule
+    // the two differ, and the one giving the larger u is kept.
+    let mut nm = choose_noise(points, spans, &f1.terms, y)?;
+    if f1.terms.len() > model.base.len() {
+        let other = choose_noise(points, spans, &model.base, y)?;
+        if reported_variance(&other, spans, &f1.terms)? > reported_variance(&nm, spans, &f1.terms)?
+        {
+            nm = other;
+        }
+    }
+    let nm = noise::NoiseModel {
+        dof: satterthwaite(&nm, spans, &f1.terms)?,
+        ..nm
+    };
+    let chosen = fit::Model {
+        base: f1.terms.clone(),
+        extras: Vec::new(),
+    };
+    let mut f = fit::fit_output(&chosen, y, &nm.run_covariance(spans)?, nm.dof)?;
+    f.trials = f1.trials;
+    Ok((nm, f))
+}
+
+/// The sum of the reported terms' variances under noise `nm`.
+fn reported_variance(
+    nm: &noise::NoiseModel,
+    spans: &[noise::Span],
+    terms: &[fit::Term],
+) -> Result<f64> {
     let cov = nm.run_covariance(spans)?;
-    Ok((nm, cov))
+    let n = spans.len();
+    let a = DMatrix::from_fn(n, terms.len(), |i, j| terms[j].column[i]);
+    let inv = cov
+        .try_inverse()
+        .ok_or_else(|| Error::Unsupported("singular covariance of the run means".into()))?;
+    let c = (a.transpose() * inv * &a)
+        .try_inverse()
+        .ok_or_else(|| Error::Unsupported("the runs cannot separate the sensitivities".into()))?;
+    Ok((0..terms.len())
+        .filter(|&k| terms[k].reported)
+        .map(|k| c[(k, k)])
+        .sum())
+}
+
+/// The noise model of one column ([`noise::NoiseModel::profile`]): the
+/// within-run Allan variances say what the noise is at short τ, the run
+/// means under `terms` (their restricted `−2ℓ`, [`fit::reml`]) how far
+/// runs drift apart.
+fn choose_noise(
+    points: &[noise::AvarPoint],
+    spans: &[noise::Span],
+    terms: &[fit::Term],
+    y: &[f64],
+) -> Result<noise::NoiseModel> {
+    noise::NoiseModel::profile(points, |m| {
+        let cov = m.run_covariance(spans).ok()?;
+        fit::reml(terms, y, &cov)
+    })
 }
 
 /// The degrees of freedom of the sensitivities' u (Welch–Satterthwaite,

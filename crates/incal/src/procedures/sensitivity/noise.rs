@@ -226,7 +226,7 @@ impl NoiseModel {
             let g = (5f64.sqrt() - 1.0) / 2.0;
             let (mut x1, mut x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
             let (mut f1, mut f2) = (f(x1), f(x2));
-            for _ in 0..60 {
+            for _ in 0..40 {
                 if f1 <= f2 {
                     hi = x2;
                     (x2, f2) = (x1, f1);
@@ -385,7 +385,7 @@ fn eval(p: &[f64; 3], tau: f64) -> f64 {
 
 /// Walks tried by [`NoiseModel::profile`] besides none and the Allan
 /// fit's.
-pub const WALK_GRID: usize = 13;
+pub const WALK_GRID: usize = 9;
 
 /// Penalty of each noise term (white, flicker, random walk) in the model
 /// choice: a random walk is kept only when it lowers χ² by more than
