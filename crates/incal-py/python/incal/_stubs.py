@@ -105,13 +105,17 @@ def argument_type(arg: Dict[str, Any]) -> str:
     return base if arg["required"] else f"Optional[{base}]"
 
 
-def _default(arg: Dict[str, Any]) -> str:
+def _default(arg: Dict[str, Any], text: bool = False) -> str:
+    """The default of an argument; `text`: the option is a string (a
+    comma list such as ``"x,y,z"`` stays whole)."""
     if arg["required"]:
         return ""
     if arg["flag_only"]:
         return " = False"
     if not arg["default"]:
         return " = None"
+    if text and not arg["multiple"]:
+        return " = " + json.dumps(",".join(arg["default"]))
     texts = [x for t in arg["default"] for x in t.split(",")]
 
     def one(t: str) -> str:
@@ -146,7 +150,7 @@ def parameters(args: List[Dict[str, Any]], schema: Optional[Dict[str, Any]], com
             t = argument_type(a)
         if name == "fail_on" and a["values"]:
             t = f"Optional[{_literal(a['values'])}]"
-        out.append(f"{keyword(name)}: {t}{_default(a)}")
+        out.append(f"{keyword(name)}: {t}{_default(a, t == 'str')}")
         seen.add(name)
     return out
 
