@@ -431,8 +431,10 @@ fn fit_column(
     let mut nm = choose_noise(points, spans, &f1.terms, y)?;
     if f1.terms.len() > model.base.len() {
         let other = choose_noise(points, spans, &model.base, y)?;
-        if reported_variance(&other, spans, &f1.terms)? > reported_variance(&nm, spans, &f1.terms)?
-        {
+        let sum = |m: &noise::NoiseModel| -> Result<f64> {
+            Ok(reported_variances(m, spans, &f1.terms)?.iter().sum())
+        };
+        if sum(&other)? > sum(&nm)? {
             nm = other;
         }
     }
@@ -449,25 +451,32 @@ fn fit_column(
     Ok((nm, f))
 }
 
-/// The sum of the reported terms' variances under noise `nm`.
-fn reported_variance(
+/// The covariance `(AᵀΣ⁻¹A)⁻¹` of `terms` fitted to run means of
+/// covariance `cov` (the fit's, when the runs scatter as the noise says;
+/// also the plan's prediction).
+pub fn terms_covariance(terms: &[fit::Term], cov: &DMatrix<f64>) -> Result<DMatrix<f64>> {
+    let n = cov.nrows();
+    let a = DMatrix::from_fn(n, terms.len(), |i, j| terms[j].column[i]);
+    let inv = cov
+        .clone()
+        .try_inverse()
+        .ok_or_else(|| Error::Unsupported("singular covariance of the run means".into()))?;
+    (a.transpose() * inv * &a)
+        .try_inverse()
+        .ok_or_else(|| Error::Unsupported("the runs cannot separate the sensitivities".into()))
+}
+
+/// The reported terms' variances under noise `nm`.
+fn reported_variances(
     nm: &noise::NoiseModel,
     spans: &[noise::Span],
     terms: &[fit::Term],
-) -> Result<f64> {
-    let cov = nm.run_covariance(spans)?;
-    let n = spans.len();
-    let a = DMatrix::from_fn(n, terms.len(), |i, j| terms[j].column[i]);
-    let inv = cov
-        .try_inverse()
-        .ok_or_else(|| Error::Unsupported("singular covariance of the run means".into()))?;
-    let c = (a.transpose() * inv * &a)
-        .try_inverse()
-        .ok_or_else(|| Error::Unsupported("the runs cannot separate the sensitivities".into()))?;
+) -> Result<Vec<f64>> {
+    let c = terms_covariance(terms, &nm.run_covariance(spans)?)?;
     Ok((0..terms.len())
         .filter(|&k| terms[k].reported)
         .map(|k| c[(k, k)])
-        .sum())
+        .collect())
 }
 
 /// The noise model of one column ([`noise::NoiseModel::profile`]): the
@@ -497,21 +506,7 @@ fn satterthwaite(
     spans: &[noise::Span],
     terms: &[fit::Term],
 ) -> Result<f64> {
-    let u2 = |m: &noise::NoiseModel| -> Result<Vec<f64>> {
-        let cov = m.run_covariance(spans)?;
-        let n = spans.len();
-        let a = DMatrix::from_fn(n, terms.len(), |i, j| terms[j].column[i]);
-        let inv = cov
-            .try_inverse()
-            .ok_or_else(|| Error::Unsupported("singular covariance of the run means".into()))?;
-        let c = (a.transpose() * inv * &a).try_inverse().ok_or_else(|| {
-            Error::Unsupported("the runs cannot separate the sensitivities".into())
-        })?;
-        Ok((0..terms.len())
-            .filter(|&k| terms[k].reported)
-            .map(|k| c[(k, k)])
-            .collect())
-    };
+    let u2 = |m: &noise::NoiseModel| reported_variances(m, spans, terms);
     let base = u2(nm)?;
     let ct = nm.terms_covariance();
     let theta = [nm.white, nm.flicker, nm.walk];

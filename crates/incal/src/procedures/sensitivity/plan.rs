@@ -124,13 +124,7 @@ fn predict(terms: &[Term], cov: &DMatrix<f64>) -> Result<DMatrix<f64>> {
             names.join("; ")
         )));
     }
-    let inv = cov
-        .clone()
-        .try_inverse()
-        .ok_or_else(|| Error::Unsupported("singular covariance of the run means".into()))?;
-    (a.transpose() * inv * &a)
-        .try_inverse()
-        .ok_or_else(|| Error::Unsupported("the runs cannot separate the sensitivities".into()))
+    super::terms_covariance(terms, cov)
 }
 
 /// The plan document (module docs).
