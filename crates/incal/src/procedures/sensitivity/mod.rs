@@ -18,7 +18,7 @@
 //! flicker and random walk give. The flicker and walk are chosen with the
 //! run means' own evidence ([`noise::NoiseModel::profile`]), in two
 //! passes where a drift and a term of the order rule look alike
-//! ([`fit_column`]).
+//! (`fit_column`).
 //!
 //! # Sensitivities
 //! The run means are fitted by generalized least squares against the
