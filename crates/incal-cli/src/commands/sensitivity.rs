@@ -301,7 +301,7 @@ impl crate::commands::Run for Reductions {
 /// This file's plans (`incal plan …`).
 #[derive(Subcommand, Debug)]
 pub enum Plans {
-    /// Sensitivity plan: the predicted u of every sensitivity for the runs, levels and noise, exactly; refuses runs that cannot separate a term, naming it.
+    /// Sensitivity plan: the predicted u of every sensitivity for the runs, levels and noise (the design and the noise's covariance); refuses runs that cannot separate a term, naming it.
     Sensitivity(PlanArgs),
 }
 

@@ -227,3 +227,90 @@ fn the_certificate_traces_the_rig_of_the_kind() {
     let h = std::fs::read_to_string(d.join("c.html")).unwrap();
     assert!(h.contains("HC-3") && !h.contains("RA-9"), "the coil traced");
 }
+
+#[test]
+fn unusual_sessions_are_reduced_or_refused_by_name() {
+    let d = workdir("sensitivity_cli_unusual");
+    // Runs along the input and the pendulous axes only: no vibropendulous
+    // term (cos 90° is not zero in floating point, but no term).
+    ok(&run_in(
+        &d,
+        &[
+            "simulate",
+            "sensitivity",
+            "--angles-deg",
+            "0,90",
+            "--run-s",
+            "5",
+            "--rate-hz",
+            "20",
+            "-o",
+            "a.csv",
+            "--truth-out",
+            "t.json",
+        ],
+    ));
+    let doc = json_of(&run_in(&d, &["sensitivity", "--input", "a.csv", "--json"]));
+    assert!(doc["coefficients"]["vrc"].is_object());
+    assert!(doc["coefficients"]["vrc_pendulous"].is_object());
+    assert!(doc["coefficients"]["vibropendulous"].is_null());
+    // A negative level, a rate that disagrees with time_s, a run sampled
+    // at another rate.
+    std::fs::write(
+        d.join("neg.csv"),
+        "time_s,run,vib_g,output\n0,a,0,1\n0.1,a,0,1.1\n0.2,b,-2,1.2\n",
+    )
+    .unwrap();
+    refused(
+        &run_in(&d, &["sensitivity", "--input", "neg.csv"]),
+        &["neg.csv:4", "vib_g = -2"],
+    );
+    refused(
+        &run_in(&d, &["sensitivity", "--input", "a.csv", "--rate-hz", "50"]),
+        &["rate-hz", "50 Hz disagrees with time_s"],
+    );
+    let mut text = String::from("time_s,run,vib_g,output\n");
+    for k in 0..60 {
+        text.push_str(&format!(
+            "{},a,0,{}\n",
+            k as f64 * 0.1,
+            1.0 + 0.01 * (k % 3) as f64
+        ));
+    }
+    for k in 0..40 {
+        text.push_str(&format!(
+            "{},b,4,{}\n",
+            10.0 + k as f64 * 0.2,
+            1.0 + 0.01 * (k % 3) as f64
+        ));
+    }
+    std::fs::write(d.join("rates.csv"), text).unwrap();
+    refused(
+        &run_in(&d, &["sensitivity", "--input", "rates.csv"]),
+        &["rates.csv", "run 'b'", "one rate for every run"],
+    );
+    // A plan without noise, two shocks in a row at one level.
+    refused(
+        &run_in(
+            &d,
+            &["plan", "sensitivity", "--noise", "0", "--flicker", "0"],
+        ),
+        &["noise", "all 0"],
+    );
+    refused(
+        &run_in(
+            &d,
+            &[
+                "simulate",
+                "sensitivity",
+                "--kind",
+                "shock",
+                "--levels",
+                "100,100",
+                "--shifts",
+                "1,2",
+            ],
+        ),
+        &["levels", "two shocks in a row"],
+    );
+}

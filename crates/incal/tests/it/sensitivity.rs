@@ -276,3 +276,32 @@ fn the_noise_model_flicker_false_inclusion_and_miss_rates() {
         "strong: {strong}"
     );
 }
+
+#[test]
+fn an_empty_session_and_a_scale_factor_of_zero_are_refused_not_panicking() {
+    let s = SensitivitySimOptions::default();
+    let mut rec = s.record().unwrap();
+    rec.runs.clear();
+    assert!(reduce(&rec, &s.reduction()).is_err());
+    // An input column that does not drive the output: the scale factor is
+    // zero within its u and the ppm terms are refused.
+    let s = SensitivitySimOptions {
+        kind: Kind::Shock,
+        inputs: Some("-1,1".into()),
+        run_s: 5.0,
+        rate_hz: 20.0,
+        ..SensitivitySimOptions::default()
+    };
+    let mut rec = s.record().unwrap();
+    for r in &mut rec.runs {
+        let k0 = 1e6 * r.input.unwrap();
+        for v in &mut r.samples[0] {
+            *v -= k0;
+        }
+    }
+    refused(
+        &rec,
+        &s.reduction(),
+        &["scale factor", "not distinguishable from zero"],
+    );
+}

@@ -131,16 +131,16 @@ impl SensitivityResult {
         if self.record.kind != Kind::Shock {
             return Ok(None);
         }
-        let out = || Some(Unit::Other(self.options.report_unit().into()));
         let mut t = Table::new(
             "shock",
-            "The change across each shock against the runs before it: En = |shift| / U95 (above 1: the shock moved it)",
+            "The change across each shock against the runs before it, in the row's unit (the bias's, or ppm of the scale factor): En = |shift| / U95 (above 1: the shock moved it)",
             &[
                 ("coefficient", None),
                 ("shock_g", Some(Unit::Other("g".into()))),
-                ("shift", out()),
-                ("u", out()),
-                ("U95", out()),
+                ("shift", None),
+                ("u", None),
+                ("U95", None),
+                ("unit", None),
                 ("En", Some(Unit::One)),
             ],
         );
@@ -165,12 +165,18 @@ impl SensitivityResult {
                     .and_then(|s| s.parse().ok())
                     .unwrap_or(0);
                 let big = k * u;
+                let unit = if n.ends_with("_sf") {
+                    "ppm"
+                } else {
+                    self.options.report_unit()
+                };
                 t.push(vec![
                     Cell::text(n),
                     Cell::num(levels.get(p).copied().unwrap_or(0.0)),
                     Cell::num(v),
                     Cell::num(u),
                     Cell::num(big),
+                    Cell::text(unit),
                     Cell::num(if big > 0.0 { v.abs() / big } else { 0.0 }),
                 ])?;
             }

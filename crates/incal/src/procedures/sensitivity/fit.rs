@@ -134,9 +134,41 @@ pub fn model(rec: &Record) -> Result<Model> {
     } else {
         Vec::new()
     };
+    if stimulus.is_empty() {
+        return Err(Error::Unsupported(
+            "no run excites a sensitivity: every stimulus is zero".into(),
+        ));
+    }
     base.extend(stimulus);
     base.extend(interactions);
     Ok(Model { base, extras })
+}
+
+/// True when the runs can separate every one of `terms`.
+pub fn separable(terms: &[Term]) -> bool {
+    terms_design(terms).is_ok_and(|d| {
+        d.diagnose(None, crate::estimation::linear::DEFAULT_COND_LIMIT)
+            .is_separable()
+    })
+}
+
+fn terms_design(terms: &[Term]) -> Result<Design> {
+    let n = terms.first().map_or(0, |t| t.column.len());
+    let a = DMatrix::from_fn(n, terms.len(), |i, j| terms[j].column[i]);
+    Design::new(terms.iter().map(|t| t.name.clone()).collect(), a)
+}
+
+/// Refuse, naming them, terms the runs cannot separate.
+pub fn require_separable(terms: &[Term]) -> Result<()> {
+    let d = terms_design(terms)?.diagnose(None, crate::estimation::linear::DEFAULT_COND_LIMIT);
+    if d.is_separable() {
+        return Ok(());
+    }
+    let names: Vec<String> = d.aliases.iter().map(|a| a.combination()).collect();
+    Err(Error::Unsupported(format!(
+        "these runs cannot separate {}: add runs at other levels or directions",
+        names.join("; ")
+    )))
 }
 
 fn vibration(runs: &[Run], extras: &mut Vec<Term>) -> Result<Vec<Term>> {
@@ -169,9 +201,12 @@ fn vibration(runs: &[Run], extras: &mut Vec<Term>) -> Result<Vec<Term>> {
         let col = |k: &dyn Fn(f64) -> f64| -> Vec<f64> {
             runs.iter()
                 .map(|r| {
-                    if in_group(r) {
+                    // A direction's share below 1e-12 is zero (cos 90° is
+                    // 6e-17 in floating point, not a term).
+                    let share = k(r.stimulus.vib_angle_deg.to_radians());
+                    if in_group(r) && share.abs() >= 1e-12 {
                         let g = r.stimulus.vib_g_rms;
-                        g * g * k(r.stimulus.vib_angle_deg.to_radians())
+                        g * g * share
                     } else {
                         0.0
                     }
@@ -187,9 +222,7 @@ fn vibration(runs: &[Run], extras: &mut Vec<Term>) -> Result<Vec<Term>> {
                 ("vrc_pendulous", &|t: f64| t.sin().powi(2)),
             ] {
                 let c = col(k);
-                if c.iter().any(|v| {
-                    v.abs() > 1e-9 * c.iter().fold(0.0_f64, |m, x| m.max(x.abs())).max(1e-300)
-                }) {
+                if c.iter().any(|v| *v != 0.0) {
                     terms.push(Term::new(format!("{name}{suffix}"), c, "g^2"));
                 }
             }

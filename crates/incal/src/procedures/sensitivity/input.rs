@@ -25,6 +25,7 @@ use std::io::Read;
 
 use super::{Kind, SensitivityOptions};
 use crate::error::{Error, Result};
+use crate::options::invalid;
 
 /// The vibration stimulus columns.
 pub const VIB: [&str; 3] = ["vib_g", "vib_freq_hz", "vib_angle_deg"];
@@ -212,11 +213,29 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &SensitivityOptions) -> 
                     )
                     .into());
             };
+            let bad = match *name {
+                "vib_g" | "shock_g" => v < 0.0,
+                "vib_freq_hz" => v <= 0.0,
+                _ => false,
+            };
+            if bad {
+                return Err(row
+                    .cell_error(
+                        *col,
+                        format!("{name} = {v}: a level is not negative (a frequency positive)"),
+                    )
+                    .into());
+            }
             set_stimulus(&mut st, name, v, peak);
         }
         let input = c.input.map(|ci| row.f64(ci)).transpose()?;
         let new_run = runs.last().is_none_or(|(r, _)| r.label != label);
         if new_run {
+            if runs.len() >= super::MAX_RUNS {
+                return Err(row
+                    .cell_error(c.run, format!("more than {} runs: the run means' covariance grows with their square; reduce a part of the session at a time", super::MAX_RUNS))
+                    .into());
+            }
             if !seen.insert(label.clone()) {
                 return Err(row
                     .cell_error(c.run, format!("run '{}' again after other runs: the rows of a run must be consecutive", incal_io::clip(&label)))
@@ -238,11 +257,12 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &SensitivityOptions) -> 
         }
         let (run, times) = runs.last_mut().expect("pushed above");
         if run.stimulus != st || run.input != input {
-            let col = if run.input != input {
-                c.input.unwrap_or(c.run)
-            } else {
-                c.stim[0].0
-            };
+            // The first column whose value differs from the run's.
+            let col = c
+                .stim
+                .iter()
+                .find(|(_, name)| field(&st, name) != field(&run.stimulus, name))
+                .map_or(c.input.unwrap_or(c.run), |(ci, _)| *ci);
             return Err(row
                 .cell_error(col, format!("the stimulus or input changes within run '{}' (from line {}): give each level its own run label", incal_io::clip(&run.label), run.line))
                 .into());
@@ -252,7 +272,21 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &SensitivityOptions) -> 
         }
         times.push(t);
     }
-    settle(kind, names, field_axes, runs, o)
+    settle(kind, names, field_axes, runs, c.time.is_some(), o)
+}
+
+/// The stimulus's value of a column (its unit as stored).
+fn field(st: &Stimulus, name: &str) -> Option<f64> {
+    match name {
+        "vib_g" => Some(st.vib_g_rms),
+        "vib_freq_hz" => st.vib_freq_hz,
+        "vib_angle_deg" => Some(st.vib_angle_deg),
+        "shock_g" => Some(st.shock_g),
+        _ => FIELD
+            .iter()
+            .position(|f| *f == name)
+            .map(|k| st.field_mt[k]),
+    }
 }
 
 /// Put a stimulus cell into the run's stimulus.
@@ -276,6 +310,7 @@ fn settle(
     columns: Vec<String>,
     field_axes: [bool; 3],
     runs: Vec<(Run, Vec<f64>)>,
+    has_time: bool,
     o: &SensitivityOptions,
 ) -> Result<Record> {
     let mut steps: Vec<f64> = runs
@@ -289,8 +324,33 @@ fn settle(
     }
     steps.sort_by(f64::total_cmp);
     let dt_s = steps[steps.len() / 2];
+    if !(1e-7..=1e5).contains(&dt_s) {
+        return Err(Error::Unsupported(format!(
+            "the samples are {dt_s} s apart: time_s is not in seconds?"
+        )));
+    }
+    if let (Some(r), true) = (o.rate_hz, has_time) {
+        if ((dt_s * r) - 1.0).abs() > 0.01 {
+            return invalid(
+                "rate_hz",
+                format!("{r} Hz disagrees with time_s, whose samples are {dt_s:.6} s apart"),
+            );
+        }
+    }
     let mut out = Vec::with_capacity(runs.len());
     for (mut run, t) in runs {
+        if t.len() > 2 {
+            let mut own: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+            own.sort_by(f64::total_cmp);
+            let step = own[own.len() / 2];
+            if (step / dt_s - 1.0).abs() > 0.01 {
+                return Err(Error::Unsupported(format!(
+                    "line {}: run '{}' is sampled every {step} s, the session every {dt_s} s: one rate for every run",
+                    run.line,
+                    incal_io::clip(&run.label)
+                )));
+            }
+        }
         let keep = t.iter().position(|&x| x - t[0] >= o.settle_s - 1e-9 * dt_s);
         let first = keep.unwrap_or(t.len());
         let n = t.len() - first;

@@ -49,6 +49,9 @@ use input::Record;
 
 /// Samples a run keeps at least.
 pub const MIN_RUN_SAMPLES: usize = 16;
+/// Runs a session holds at most (the run means' covariance is runs ×
+/// runs, factored many times).
+pub const MAX_RUNS: usize = 500;
 
 /// The stimulus.
 #[derive(
@@ -344,7 +347,11 @@ pub fn coefficient_name(term: &str, label: Option<&str>) -> String {
 /// Reduce a session (module docs).
 pub fn reduce(rec: &Record, o: &SensitivityOptions) -> Result<SensitivityResult> {
     o.validate()?;
+    if rec.runs.is_empty() {
+        return Err(Error::Unsupported("no runs".into()));
+    }
     let model = fit::model(rec)?;
+    fit::require_separable(&model.base)?;
     if rec.runs.len() < 2 {
         return Err(Error::Unsupported(format!(
             "{} run: a sensitivity needs runs at two levels of the stimulus or more",
@@ -414,10 +421,12 @@ fn fit_column(
 ) -> Result<(noise::NoiseModel, fit::OutputFit)> {
     let mut richest = model.base.clone();
     for t in &model.extras {
-        if richest.len() + 2 > y.len() {
+        let mut more = richest.clone();
+        more.push(t.clone());
+        if more.len() + 1 > y.len() || !fit::separable(&more) {
             break;
         }
-        richest.push(t.clone());
+        richest = more;
     }
     let first = choose_noise(points, spans, &richest, y)?;
     let first = noise::NoiseModel {
@@ -548,6 +557,14 @@ fn reported(f: &fit::OutputFit, label: Option<&str>) -> Result<Estimates> {
         .iter()
         .map(|(k, _)| coefficient_name(&f.terms[*k].name, label))
         .collect();
+    if let (Some(k), true) = (sf, picks.iter().any(|p| p.1)) {
+        let (v, u) = (e.values()[k], e.u_at(k));
+        if v.abs() <= e.coverage_factor(0.95) * u {
+            return Err(Error::Unsupported(format!(
+                "the scale factor from the input column is {v:.4e} ± {u:.2e}: not distinguishable from zero, so its sensitivity in ppm means nothing; is input the drive of this output?"
+            )));
+        }
+    }
     let picks2 = picks.clone();
     e.map_numeric(names, move |x| {
         nalgebra::DVector::from_iterator(

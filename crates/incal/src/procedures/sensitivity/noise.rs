@@ -27,7 +27,8 @@
 //! and every fit here has an intercept):
 //!
 //! `K(τ) = a δ(τ) − h₋₁ ln|τ| − (q/2)|τ|`,
-//! `Σ_rs = δ_rs a/T_r + (1/(T_r T_s)) ∫_r∫_s K(t − t′) dt dt′`,
+//! `Σ_rs = (1/(T_r T_s)) ∫_r∫_s K(t − t′) dt dt′`
+//! (the white term gives `δ_rs a/T_r`),
 //!
 //! in closed form through `G(x) = x²/2 ln|x| − 3x²/4` (ln) and
 //! `|x|³/6` (|·|). A constant added to every element (`c 11ᵀ`, which the
@@ -67,8 +68,9 @@ pub struct NoiseModel {
     pub flicker: f64,
     /// Random walk `c` (unit²/s).
     pub walk: f64,
-    /// Degrees of freedom of the run means' u: the equivalent degrees of
-    /// freedom of the pooled Allan variance at the longest τ.
+    /// Degrees of freedom of the sensitivities' u: at first the
+    /// equivalent degrees of freedom of the pooled Allan variance at the
+    /// longest τ; the reduction replaces it by Welch–Satterthwaite's.
     pub dof: f64,
     /// The pooled Allan variances fitted.
     pub points: Vec<AvarPoint>,
@@ -177,12 +179,13 @@ impl NoiseModel {
         let w: Vec<f64> = points
             .iter()
             .zip(&model_var)
-            .map(|(p, m)| p.edf / (2.0 * m.max(f64::MIN_POSITIVE).powi(2)))
+            .map(|(p, m)| p.edf / (2.0 * m.powi(2).max(f64::MIN_POSITIVE)))
             .collect();
         let top = points.iter().map(|p| p.avar).fold(0.0_f64, f64::max);
         let b_max = 4.0 * cands.iter().map(|c| c.0.flicker).fold(0.0_f64, f64::max)
             + points.last().map_or(top, |p| p.avar);
-        // The walk: none, the Allan fit's, or one of a geometric grid up
+        // The walk: none, that of the first Allan candidate with one, or
+        // one of a geometric grid up
         // to what would double the longest τ's variance (a walk too slow
         // to show within a run can still move runs far apart).
         let mut walks: Vec<f64> = vec![0.0];
@@ -267,7 +270,7 @@ impl NoiseModel {
         let basis = |p: &AvarPoint| [1.0 / p.tau_s, 1.0, p.tau_s];
         let mut info = DMatrix::zeros(idx.len(), idx.len());
         for p in &self.points {
-            let w = p.edf / (2.0 * self.avar(p.tau_s).max(f64::MIN_POSITIVE).powi(2));
+            let w = p.edf / (2.0 * self.avar(p.tau_s).powi(2).max(f64::MIN_POSITIVE));
             let b = basis(p);
             for (i, ki) in idx.iter().enumerate() {
                 for (j, kj) in idx.iter().enumerate() {
@@ -318,6 +321,9 @@ impl NoiseModel {
     /// The covariance of the run means (module docs), positive definite.
     pub fn run_covariance(&self, spans: &[Span]) -> Result<DMatrix<f64>> {
         let r = spans.len();
+        if r == 0 {
+            return Err(Error::Unsupported("no runs".into()));
+        }
         let scale = {
             let mut l: Vec<f64> = spans.iter().map(|s| s.length_s).collect();
             l.sort_by(f64::total_cmp);
@@ -405,7 +411,7 @@ fn candidates(points: &[AvarPoint]) -> Vec<([f64; 3], f64)> {
     let basis = |p: &AvarPoint| [1.0 / p.tau_s, 1.0, p.tau_s];
     let solve = |idx: &[usize], sigma2: &dyn Fn(usize) -> f64| -> Option<([f64; 3], f64)> {
         let w: Vec<f64> = (0..points.len())
-            .map(|i| points[i].edf / (2.0 * sigma2(i).max(f64::MIN_POSITIVE).powi(2)))
+            .map(|i| points[i].edf / (2.0 * sigma2(i).powi(2).max(f64::MIN_POSITIVE)))
             .collect();
         let a = DMatrix::from_fn(points.len(), idx.len(), |i, j| {
             basis(&points[i])[idx[j]] * w[i].sqrt()

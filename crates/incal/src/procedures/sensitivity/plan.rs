@@ -1,9 +1,10 @@
 //! Sensitivity plans: for runs (levels, directions, inputs, run length,
 //! gaps, order) and the expected noise (white per sample, bias
-//! instability, random walk), the predicted u of every sensitivity,
-//! exactly: the run means' covariance of the noise ([`super::noise`])
-//! and the model's design give `(Aᵀ Σ⁻¹ A)⁻¹`, the covariance the
-//! reduction will report when the runs scatter as the noise says. A plan
+//! instability, random walk), the predicted u of every sensitivity: the
+//! run means' covariance of that noise ([`super::noise`]) and the
+//! model's design give `(Aᵀ Σ⁻¹ A)⁻¹`, the covariance the reduction
+//! reports when it finds that noise (its own estimate of the noise
+//! scatters about it). A plan
 //! that cannot separate a term is refused naming it; a single level is
 //! refused as the reduction refuses it.
 
@@ -16,8 +17,7 @@ use super::noise::{NoiseModel, Span};
 use super::sim::{hundred, one, seed_one, ten, thirty, three, xyz, SensitivitySimOptions};
 use super::{coefficient_name, Kind, Sensor};
 use crate::document::plan::PlanDocument;
-use crate::error::{Error, Result};
-use crate::estimation::linear::Design;
+use crate::error::Result;
 
 /// Options of `incal plan sensitivity`.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
@@ -112,18 +112,7 @@ impl crate::procedures::Plan for super::Sensitivity {
 
 /// The predicted covariance of `terms` (module docs).
 fn predict(terms: &[Term], cov: &DMatrix<f64>) -> Result<DMatrix<f64>> {
-    let n = cov.nrows();
-    let a = DMatrix::from_fn(n, terms.len(), |i, j| terms[j].column[i]);
-    // The design check names what the runs cannot separate.
-    let design = Design::new(terms.iter().map(|t| t.name.clone()).collect(), a.clone())?;
-    let d = design.diagnose(None, crate::estimation::linear::DEFAULT_COND_LIMIT);
-    if !d.is_separable() {
-        let names: Vec<String> = d.aliases.iter().map(|a| a.combination()).collect();
-        return Err(Error::Unsupported(format!(
-            "these runs cannot separate {}: add runs at other levels or directions",
-            names.join("; ")
-        )));
-    }
+    fit::require_separable(terms)?;
     super::terms_covariance(terms, cov)
 }
 
@@ -168,6 +157,12 @@ pub fn plan_document(o: &SensitivityPlanOptions) -> Result<PlanDocument> {
     };
     let model = fit::model(&rec)?;
     let (w, fl) = sim.noise_terms();
+    if w == 0.0 && fl == 0.0 && o.random_walk == 0.0 {
+        return crate::options::invalid(
+            "noise",
+            "noise, flicker and random_walk are all 0: nothing to predict a u from",
+        );
+    }
     let nm = NoiseModel {
         white: w * w * dt,
         flicker: (0.664 * fl).powi(2),
@@ -219,7 +214,7 @@ pub fn plan_document(o: &SensitivityPlanOptions) -> Result<PlanDocument> {
         }
     }
     d.note(format!(
-        "predicted exactly from the run means' covariance of this noise (white {w} per sample, bias instability {fl}, random walk {} per √s) and the runs' design; run_u is a run's u (the Allan deviation at its length); a scale-factor term's ppm is of a unit scale factor",
+        "predicted from the run means' covariance of this noise (white {w} per sample, bias instability {fl}, random walk {} per √s) and the runs' design; run_u is a run's u (the Allan deviation at its length); a scale-factor term's ppm is of a unit scale factor",
         o.random_walk
     ));
     Ok(d)

@@ -309,6 +309,12 @@ impl SensitivitySimOptions {
             }
             Kind::Shock => {
                 stims.push((Stimulus::default(), 0));
+                if levels.windows(2).any(|w| w[0] == w[1]) {
+                    return invalid(
+                        "levels",
+                        "two shocks in a row at one level: the reduction tells shocks apart by shock_g changing",
+                    );
+                }
                 for (p, &l) in levels.iter().enumerate() {
                     check_range("levels", l, 1e-9, 1e7, "g")?;
                     stims.push((
@@ -348,6 +354,16 @@ impl SensitivitySimOptions {
                 .chain([(zero, 0)])
                 .collect();
         }
+        let count = stims.len() * self.repeats * inputs.len();
+        if count > super::MAX_RUNS || count as f64 * n as f64 > 5e7 {
+            return invalid(
+                "levels",
+                format!(
+                    "{count} runs of {n} samples: at most {} runs and 5e7 samples in all",
+                    super::MAX_RUNS
+                ),
+            );
+        }
         let step = self.gap_s + n as f64 / self.rate_hz;
         let mut out = Vec::new();
         for (s, phase) in stims {
@@ -364,12 +380,6 @@ impl SensitivitySimOptions {
                     });
                 }
             }
-        }
-        if out.len() > 10_000 || out.len() as f64 * n as f64 > 5e7 {
-            return invalid(
-                "levels",
-                "more than 5e7 samples in all: fewer runs or shorter runs",
-            );
         }
         Ok(out)
     }
