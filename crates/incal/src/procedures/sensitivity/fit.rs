@@ -152,10 +152,31 @@ pub fn separable(terms: &[Term]) -> bool {
     })
 }
 
-fn terms_design(terms: &[Term]) -> Result<Design> {
+/// The design matrix of `terms`: a row per run, a column per term.
+pub fn design_matrix(terms: &[Term]) -> DMatrix<f64> {
     let n = terms.first().map_or(0, |t| t.column.len());
-    let a = DMatrix::from_fn(n, terms.len(), |i, j| terms[j].column[i]);
-    Design::new(terms.iter().map(|t| t.name.clone()).collect(), a)
+    DMatrix::from_fn(n, terms.len(), |i, j| terms[j].column[i])
+}
+
+fn terms_design(terms: &[Term]) -> Result<Design> {
+    Design::new(
+        terms.iter().map(|t| t.name.clone()).collect(),
+        design_matrix(terms),
+    )
+}
+
+/// The design and the run means whitened by the Cholesky factor `L` of
+/// their covariance (`L⁻¹A`, `L⁻¹y`), with `L`; `None` when the
+/// covariance is not positive definite.
+fn whiten(
+    terms: &[Term],
+    y: &[f64],
+    cov: &DMatrix<f64>,
+) -> Option<(DMatrix<f64>, DMatrix<f64>, DVector<f64>)> {
+    let l = cov.clone().cholesky()?.l();
+    let aw = l.solve_lower_triangular(&design_matrix(terms))?;
+    let yw = l.solve_lower_triangular(&DVector::from_column_slice(y))?;
+    Some((l, aw, yw))
 }
 
 /// Refuse, naming them, terms the runs cannot separate.
@@ -343,20 +364,9 @@ pub struct OutputFit {
 /// (module docs).
 pub fn gls(terms: &[Term], y: &[f64], cov: &DMatrix<f64>, dof: f64) -> Result<Fit> {
     let n = y.len();
-    let l = cov
-        .clone()
-        .cholesky()
-        .ok_or_else(|| {
-            Error::Unsupported("the run means' covariance is not positive definite".into())
-        })?
-        .l();
-    let a = DMatrix::from_fn(n, terms.len(), |i, j| terms[j].column[i]);
-    let aw = l
-        .solve_lower_triangular(&a)
-        .ok_or_else(|| Error::Unsupported("singular covariance of the run means".into()))?;
-    let yw = l
-        .solve_lower_triangular(&DVector::from_column_slice(y))
-        .ok_or_else(|| Error::Unsupported("singular covariance of the run means".into()))?;
+    let (_, aw, yw) = whiten(terms, y, cov).ok_or_else(|| {
+        Error::Unsupported("the run means' covariance is not positive definite".into())
+    })?;
     let design = Design::new(terms.iter().map(|t| t.name.clone()).collect(), aw)?;
     fit(
         &design,
@@ -375,12 +385,7 @@ pub fn gls(terms: &[Term], y: &[f64], cov: &DMatrix<f64>, dof: f64) -> Result<Fi
 /// `Σ + c11ᵀ` whenever the terms hold the intercept. The evidence of the
 /// run means for a noise model.
 pub fn reml(terms: &[Term], y: &[f64], cov: &DMatrix<f64>) -> Option<f64> {
-    let n = y.len();
-    let chol = cov.clone().cholesky()?;
-    let l = chol.l();
-    let a = DMatrix::from_fn(n, terms.len(), |i, j| terms[j].column[i]);
-    let aw = l.solve_lower_triangular(&a)?;
-    let yw = l.solve_lower_triangular(&DVector::from_column_slice(y))?;
+    let (l, aw, yw) = whiten(terms, y, cov)?;
     let ata = aw.transpose() * &aw;
     let det_a = ata.clone().cholesky()?.l().diagonal().map(|v| v.ln()).sum() * 2.0;
     let x = ata.cholesky()?.solve(&(aw.transpose() * &yw));

@@ -120,6 +120,17 @@ pub enum Sensor {
     Gyro,
 }
 
+impl Sensor {
+    /// Reporting units per input unit of a unit scale factor: 10⁶ µg per
+    /// g, 3600 °/h per °/s (the simulator's scale factor; the plan's ppm).
+    pub fn unit_scale_factor(self) -> f64 {
+        match self {
+            Sensor::Accel => 1e6,
+            Sensor::Gyro => 3600.0,
+        }
+    }
+}
+
 /// How `vib_g` states the level.
 #[derive(
     Debug,
@@ -464,8 +475,7 @@ fn fit_column(
 /// covariance `cov` (the fit's, when the runs scatter as the noise says;
 /// also the plan's prediction).
 pub fn terms_covariance(terms: &[fit::Term], cov: &DMatrix<f64>) -> Result<DMatrix<f64>> {
-    let n = cov.nrows();
-    let a = DMatrix::from_fn(n, terms.len(), |i, j| terms[j].column[i]);
+    let a = fit::design_matrix(terms);
     let inv = cov
         .clone()
         .try_inverse()

@@ -126,20 +126,7 @@ pub fn plan_document(o: &SensitivityPlanOptions) -> Result<PlanDocument> {
     let rec = Record {
         kind: sim.kind(),
         columns: red.column_names()?,
-        field_axes: {
-            let mut a = [false; 3];
-            if sim.kind() == Kind::Magnetic {
-                for p in o.field_axes.split(',') {
-                    match p.trim() {
-                        "x" => a[0] = true,
-                        "y" => a[1] = true,
-                        "z" => a[2] = true,
-                        _ => {}
-                    }
-                }
-            }
-            a
-        },
+        field_axes: sim.field_flags()?,
         dt_s: dt,
         runs: planned
             .iter()
@@ -180,10 +167,7 @@ pub fn plan_document(o: &SensitivityPlanOptions) -> Result<PlanDocument> {
         .collect();
     let cov = nm.run_covariance(&spans)?;
     let c = predict(&model.base, &cov)?;
-    let k0 = match o.sensor {
-        Sensor::Accel => 1e6,
-        Sensor::Gyro => 3600.0,
-    };
+    let k0 = o.sensor.unit_scale_factor();
     let mut d = PlanDocument::new(
         crate::document::Procedure::Sensitivity,
         format!(

@@ -267,6 +267,16 @@ impl SensitivitySimOptions {
         Ok(out)
     }
 
+    /// Which field axes the session's records carry (none unless
+    /// magnetic).
+    pub fn field_flags(&self) -> Result<[bool; 3]> {
+        let mut flags = [false; 3];
+        for j in self.field_axes()? {
+            flags[j] = self.kind() == Kind::Magnetic;
+        }
+        Ok(flags)
+    }
+
     /// Every range check; the planned runs.
     pub fn plan_runs(&self) -> Result<Vec<Planned>> {
         check_range("rate_hz", self.rate_hz, 1e-3, 1e6, "Hz")?;
@@ -440,10 +450,7 @@ impl SensitivitySimOptions {
     /// them).
     pub fn record(&self) -> Result<Record> {
         let planned = self.plan_runs()?;
-        let k0 = match self.sensor {
-            Sensor::Accel => 1e6,
-            Sensor::Gyro => 3600.0,
-        };
+        let k0 = self.sensor.unit_scale_factor();
         let dt = 1.0 / self.rate_hz;
         let cols = self.column_names();
         let last = planned.last().map_or(0.0, |p| p.start_s + p.n as f64 * dt);
@@ -488,14 +495,10 @@ impl SensitivitySimOptions {
                 samples,
             });
         }
-        let mut field_axes = [false; 3];
-        for j in self.field_axes()? {
-            field_axes[j] = self.kind() == Kind::Magnetic;
-        }
         Ok(Record {
             kind: self.kind(),
             columns: cols,
-            field_axes,
+            field_axes: self.field_flags()?,
             dt_s: dt,
             runs,
         })
