@@ -21,6 +21,9 @@ pub struct ReadArgs {
     /// Delimiter of the input CSV: ',', ';' or tab (default: detected from the header row).
     #[arg(long, value_name = "CHAR")]
     pub delimiter: Option<String>,
+    /// File line of the header row (1-based), for a file whose logger writes lines before it (default: found, the lines before it recorded as the document's preamble).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    pub header_line: Option<u64>,
 }
 
 impl ReadArgs {
@@ -38,6 +41,7 @@ impl ReadArgs {
         Ok(ReadOptions {
             delimiter,
             columns,
+            header_line: self.header_line.map(|n| n as usize),
             ..ReadOptions::default()
         })
     }

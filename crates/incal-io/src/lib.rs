@@ -32,8 +32,8 @@ pub use columns::{ColumnEntry, ColumnMap};
 pub use digest::{hex, sha256_hex};
 pub use error::{clip, clip_to, InputError, Result};
 pub use reader::{
-    parse_delimiter, parse_f64, Condition, Header, ReadOptions, Reader, Row, Summary,
-    CONDITION_COLUMNS, MAX_ABS_VALUE, MAX_LINE_BYTES,
+    parse_delimiter, parse_f64, stated_rate_hz, Condition, Header, PreambleLine, ReadOptions,
+    Reader, Row, Summary, CONDITION_COLUMNS, MAX_ABS_VALUE, MAX_LINE_BYTES,
 };
 pub use source::{
     display_name, is_dash, open, read_hashed, read_table, stream, stream_table, MAX_DOCUMENT_BYTES,

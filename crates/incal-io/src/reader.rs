@@ -28,6 +28,9 @@ use std::collections::HashMap;
 use std::io::Read;
 
 mod frames;
+mod preamble;
+
+pub use preamble::{stated_rate_hz, PreambleLine, FOLLOWING, SCAN_BYTES, SCAN_RECORDS};
 
 use sha2::Digest;
 
@@ -61,6 +64,9 @@ pub struct ReadOptions {
     /// The source is columns in memory in their canonical byte form
     /// ([`crate::frames`]), not CSV text.
     pub frames: bool,
+    /// File line of the header row (`--header-line`, 1-based); `None`
+    /// finds it after any preamble ([`preamble`]).
+    pub header_line: Option<usize>,
 }
 
 impl Default for ReadOptions {
@@ -71,6 +77,7 @@ impl Default for ReadOptions {
             max_line_bytes: MAX_LINE_BYTES,
             hash: true,
             frames: false,
+            header_line: None,
         }
     }
 }
@@ -201,6 +208,8 @@ pub struct Summary {
     /// The environmental columns of the file ([`CONDITION_COLUMNS`]) that
     /// it has, summarised over its rows.
     pub conditions: Vec<Condition>,
+    /// The lines before the header ([`preamble`]).
+    pub preamble: Vec<PreambleLine>,
 }
 
 /// Columns summarised as the environment of a recording, whatever the
@@ -252,6 +261,9 @@ pub struct Reader<R> {
     rows: usize,
     conditions: Vec<(usize, Condition)>,
     frames: bool,
+    /// Start of bytes the buffer keeps while the header is looked for.
+    hold: Option<usize>,
+    preamble: Vec<PreambleLine>,
 }
 
 /// One data row; cells are trimmed text of the file.
@@ -296,6 +308,8 @@ impl<R: Read> Reader<R> {
             rows: 0,
             conditions: Vec::new(),
             frames: opts.frames,
+            hold: None,
+            preamble: Vec::new(),
         };
         if opts.frames {
             r.read_frame_header(opts)?;
@@ -325,6 +339,11 @@ impl<R: Read> Reader<R> {
     /// The header.
     pub fn header(&self) -> &Header {
         &self.header
+    }
+
+    /// The lines before the header ([`preamble`]).
+    pub fn preamble(&self) -> &[PreambleLine] {
+        &self.preamble
     }
 
     /// Data rows handed out so far.
@@ -410,6 +429,7 @@ impl<R: Read> Reader<R> {
                 .map(|(_, c)| c)
                 .filter(|c| c.count > 0)
                 .collect(),
+            preamble: self.preamble,
         })
     }
 
@@ -423,10 +443,14 @@ impl<R: Read> Reader<R> {
     /// Read more bytes into the buffer, moving or growing it as needed.
     /// Returns the number of bytes read (0 at the end of the source).
     fn fill(&mut self) -> Result<usize> {
-        if self.pos > 0 && (self.end == self.buf.len() || self.pos >= self.buf.len() / 2) {
-            self.buf.copy_within(self.pos..self.end, 0);
-            self.end -= self.pos;
-            self.pos = 0;
+        let base = self.hold.unwrap_or(self.pos);
+        if base > 0 && (self.end == self.buf.len() || base >= self.buf.len() / 2) {
+            self.buf.copy_within(base..self.end, 0);
+            self.end -= base;
+            self.pos -= base;
+            if self.hold.is_some() {
+                self.hold = Some(0);
+            }
         }
         if self.end == self.buf.len() {
             let grown = (self.buf.len() * 2).min(self.max_line + 2 * CHUNK);
@@ -657,34 +681,7 @@ impl<R: Read> Reader<R> {
     }
 
     fn read_header(&mut self, opts: &ReadOptions) -> Result<()> {
-        // The delimiter must be known before the header is split: look at
-        // the first record's raw line.
-        let (a, b) = loop {
-            let Some((a, b)) = self.next_line()? else {
-                return Err(InputError::file(
-                    &self.file,
-                    "empty file (expected a header row)",
-                ));
-            };
-            let first = self.buf[a..b].iter().position(|&c| c != b' ' && c != b'\t');
-            match first {
-                None => continue,
-                Some(k) if self.buf[a + k] == b'#' => continue,
-                Some(_) => break (a, b),
-            }
-        };
-        self.header.delimiter = opts
-            .delimiter
-            .unwrap_or_else(|| detect_delimiter(&self.buf[a..b]));
-        // Split it as a record (rewind to its start).
-        self.pos = a;
-        self.line -= 1;
-        if !self.next_record()? {
-            return Err(InputError::file(
-                &self.file,
-                "empty file (expected a header row)",
-            ));
-        }
+        self.preamble = self.find_header(opts)?;
         let line = self.row_line;
         let data = self.cell_bytes();
         let mut names: Vec<String> = Vec::with_capacity(self.fields.len());

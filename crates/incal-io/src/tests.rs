@@ -263,6 +263,121 @@ fn sha256_hex_is_sha256sum() {
     assert_eq!(hex(&[0x00, 0x0f, 0xa0, 0xff]), "000fa0ff");
 }
 
+/// An MPU-6050 logger's file: a preamble of `key,value` lines, then the
+/// header and the data.
+const LOGGER: &[u8] = b"Device,MPU6050\nFs,100\nLogging Type,0\nComment,\"bench, slot 3\"\n\
+ax,ay,az,gx,gy,gz\n1,2,3,4,5,6\n7,8,9,10,11,12\n";
+
+#[test]
+fn a_preamble_is_found_kept_and_read_past() {
+    for chunk in [1, 3, 7, 4096] {
+        let mut r = Reader::new(
+            "log.csv",
+            Trickle {
+                data: LOGGER,
+                n: chunk,
+            },
+            &ReadOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(r.header().names(), ["ax", "ay", "az", "gx", "gy", "gz"]);
+        assert_eq!(r.header().line(), 5);
+        let keys: Vec<(usize, &str, &str)> = r
+            .preamble()
+            .iter()
+            .map(|p| (p.line, p.key.as_str(), p.value.as_str()))
+            .collect();
+        assert_eq!(
+            keys,
+            [
+                (1, "Device", "MPU6050"),
+                (2, "Fs", "100"),
+                (3, "Logging Type", "0"),
+                (4, "Comment", "bench, slot 3")
+            ]
+        );
+        let mut seen = Vec::new();
+        while let Some(row) = r.next_row().unwrap() {
+            seen.push((row.line(), row.f64(0).unwrap()));
+        }
+        assert_eq!(seen, [(6, 1.0), (7, 7.0)]);
+        let s = r.finish().unwrap();
+        assert_eq!(s.sha256, sha256_hex(LOGGER));
+        assert_eq!(stated_rate_hz(&s.preamble), Some((100.0, 2)));
+    }
+}
+
+#[test]
+fn a_file_without_preamble_reads_as_before() {
+    let plain = b"angle_deg,output\n0,1.5\n30,2.5\n";
+    let t = table(plain).unwrap();
+    assert_eq!(t.header().line(), 1);
+    assert_eq!(cells(&t), [["0", "1.5"], ["30", "2.5"]]);
+    // No header at all: the first line is taken, and the column asked for
+    // is missing from it, as before.
+    let t = table(b"1,2\n3,4\n").unwrap();
+    let e = t.header().column("x").unwrap_err().to_string();
+    assert!(e.contains("missing column 'x' (columns: 1, 2)"), "{e}");
+    // A header and a ragged row: the ragged row is the error, as before.
+    let e = table(b"a,b\n1,2\n3\n").unwrap_err().to_string();
+    assert!(e.contains("f.csv:3: 1 fields, but the header has 2"), "{e}");
+}
+
+#[test]
+fn the_header_line_can_be_given_and_columns_steer_the_search() {
+    let opts = ReadOptions {
+        header_line: Some(5),
+        ..ReadOptions::default()
+    };
+    let t = Table::from_bytes("log.csv", LOGGER, &opts).unwrap();
+    assert_eq!(t.header().names()[0], "ax");
+    for (n, why) in [
+        (1, "log.csv:5: 6 fields, but the header has 2"),
+        (
+            3,
+            "log.csv:3: --header-line 3: this line holds '0', not a column name",
+        ),
+        (9, "--header-line 9: no record starts on line 9"),
+    ] {
+        let opts = ReadOptions {
+            header_line: Some(n),
+            ..ReadOptions::default()
+        };
+        let e = Table::from_bytes("log.csv", LOGGER, &opts).unwrap_err();
+        assert!(e.to_string().contains(why), "{e}");
+    }
+    // Two text-only records of one width before the data: --columns says
+    // which is the header.
+    let two = b"Model,Serial\nax,ay\n1,2\n";
+    assert_eq!(table(two).unwrap().header().names(), ["Model", "Serial"]);
+    let opts = ReadOptions::with_columns(ColumnMap::parse("acc_x=ax,acc_y=ay").unwrap());
+    let t = Table::from_bytes("f.csv", two, &opts).unwrap();
+    assert_eq!(t.header().names(), ["acc_x", "acc_y"]);
+    // A tab-separated table after a comma preamble.
+    let t = table(b"Fs,100\nax\tay\n1\t2\n").unwrap();
+    assert_eq!(cells(&t), [["1", "2"]]);
+}
+
+#[test]
+fn a_stated_rate_is_recognised_in_its_usual_spellings() {
+    let line = |k: &str, v: &str| PreambleLine {
+        line: 1,
+        key: k.into(),
+        value: v.into(),
+    };
+    for (k, v, want) in [
+        ("Fs", "100", Some(100.0)),
+        ("Sample Rate (Hz)", "200", Some(200.0)),
+        ("sampling_frequency", "400 Hz", Some(400.0)),
+        ("ODR", "1.6e3", Some(1600.0)),
+        ("Fs", "fast", None),
+        ("Fs", "-5", None),
+        ("Frames", "100", None),
+    ] {
+        assert_eq!(stated_rate_hz(&[line(k, v)]).map(|r| r.0), want, "{k},{v}");
+    }
+}
+
 proptest! {
     /// Whatever a table holds, writing it and reading it back in chunks of
     /// any size gives the same cells, numbers bit for bit.

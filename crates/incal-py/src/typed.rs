@@ -165,13 +165,14 @@ impl incal::procedures::Progress for PyProgress {
     }
 }
 
-/// The read options a Python call gives: `columns` (`NAME=HEADER,…`)
-/// and `delimiter`.
+/// The read options a Python call gives: `columns` (`NAME=HEADER,…`),
+/// `delimiter` and `header_line`.
 #[derive(serde::Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
 struct ReadSpec {
     columns: Option<String>,
     delimiter: Option<String>,
+    header_line: Option<String>,
 }
 
 fn read_options(spec: &str) -> Result<incal_io::ReadOptions, Outcome> {
@@ -189,6 +190,20 @@ fn read_options(spec: &str) -> Result<incal_io::ReadOptions, Outcome> {
     }
     if let Some(d) = &spec.delimiter {
         read.delimiter = Some(incal_io::parse_delimiter(d).map_err(|m| bad("delimiter", m))?);
+    }
+    if let Some(n) = &spec.header_line {
+        let line = n
+            .trim()
+            .parse::<usize>()
+            .ok()
+            .filter(|&n| n >= 1)
+            .ok_or_else(|| {
+                bad(
+                    "header_line",
+                    format!("'{}' is not a line number (1, 2, ...)", incal_io::clip(n)),
+                )
+            })?;
+        read.header_line = Some(line);
     }
     Ok(read)
 }

@@ -34,9 +34,9 @@ pub struct FerrarisArgs {
     /// Session CSV: part,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z (other columns ignored); part is one of x_p, x_a, y_p, y_a, z_p, z_a, x_rot, y_rot, z_rot, or empty for rows between sections; - reads standard input.
     #[arg(long)]
     pub input: PathBuf,
-    /// Sample rate (Hz): integrates the rotations.
+    /// Sample rate (Hz): integrates the rotations (default: the rate of the time_s stamps; needed without them).
     #[arg(long)]
-    pub rate_hz: f64,
+    pub rate_hz: Option<f64>,
     /// Gravity magnitude (m/s^2, > 0); its sign is --convention's.
     #[arg(long, default_value_t = incal::units::STANDARD_GRAVITY_M_S2, allow_hyphen_values = true)]
     pub gravity_m_s2: f64,
@@ -94,9 +94,9 @@ pub struct AutocalArgs {
     /// Record CSV: time_s (optional),acc_x,acc_y,acc_z[,gyr_x,gyr_y,gyr_z], raw counts or physical units; starts still; - reads standard input.
     #[arg(long)]
     pub input: PathBuf,
-    /// Sample rate (Hz); the time_s column, when present, gives the time steps instead.
+    /// Sample rate (Hz); the time_s column, when present, gives the time steps instead (default: the stamps' rate; needed without them).
     #[arg(long)]
-    pub rate_hz: f64,
+    pub rate_hz: Option<f64>,
     /// Gravity magnitude (m/s^2): the calibrated accelerometer output is in this unit.
     #[arg(long, default_value_t = incal::units::STANDARD_GRAVITY_M_S2)]
     pub gravity_m_s2: f64,
@@ -159,7 +159,7 @@ pub fn run_autocal(a: &AutocalArgs) -> CliResult<()> {
             gyro_scale: triple("--init-gyro-scale", &a.init_gyro_scale)?,
         },
         sort_time: a.sort_time,
-        ..AutocalSessionOptions::new(a.rate_hz, Method::Incal)
+        ..AutocalSessionOptions::new(100.0, Method::Incal)
     };
     crate::run::reduce::<Autocal>(&a.input, &a.read, &options, &a.result, &Silent)
 }
@@ -365,9 +365,9 @@ pub struct MultiposArgs {
     /// Session CSV: position (a label: x_p, x_a, … or 2-3 of them joined by '+'; x_rot, y_rot, z_rot for rotations; empty between positions) and/or fx,fy,fz (unit up direction in the IMU frame), optional nx,ny,nz (north), acc_x,acc_y,acc_z[,gyr_x,gyr_y,gyr_z]; consecutive rows of one position are its samples; - reads standard input.
     #[arg(long)]
     pub input: PathBuf,
-    /// Sample rate (Hz): times the rotations.
+    /// Sample rate (Hz): times the rotations (default: the rate of the time_s stamps; needed without them).
     #[arg(long)]
-    pub rate_hz: f64,
+    pub rate_hz: Option<f64>,
     /// Gravity (m/s^2).
     #[arg(long, default_value_t = incal::units::STANDARD_GRAVITY_M_S2)]
     pub gravity_m_s2: f64,

@@ -63,9 +63,9 @@ pub struct RampArgs {
     /// Recording: CSV with temperature_c (the sensor's temperature, degC), optional chamber_c and time_s, and the channels (every other column, or --columns).
     #[arg(long, value_name = "FILE")]
     pub input: PathBuf,
-    /// Sample rate, Hz (the time base when there is no time_s column; the block length in rows).
+    /// Sample rate, Hz (the time base when there is no time_s column; the block length in rows). Default: the rate of the time_s stamps, the blocks cut by time; needed without them.
     #[arg(long)]
-    pub rate_hz: f64,
+    pub rate_hz: Option<f64>,
     /// What the channels measure: their unit (gyro deg/s, accel g, generic 1).
     #[arg(long, value_enum, default_value = "generic")]
     pub quantity: QuantityArg,

@@ -26,6 +26,7 @@ mod repeatability_cli;
 mod report_cli;
 mod response_cli;
 mod result_document;
+mod rig_logs_cli;
 mod sensitivity_cli;
 mod stacks_cli;
 mod thermal_cli;

@@ -19,8 +19,8 @@ from typing import Any, Dict, List, Optional, Tuple
 from ._incal import _reduce, _reduce_record
 
 #: Keywords of the input layer: ``columns`` (``NAME=HEADER,…``, a dict
-#: ``{name: header}`` or a list of names) and ``delimiter``.
-READ = ("columns", "delimiter")
+#: ``{name: header}`` or a list of names), ``delimiter`` and ``header_line``.
+READ = ("columns", "delimiter", "header_line")
 #: Keywords added to the document by the core after the reduction.
 FINISH = ("serial", "model", "meta", "output_unit", "limits", "fail_on")
 

@@ -191,6 +191,8 @@ pub fn reduce_source<P: Procedure, R: Read>(
         crate::options::check_magnitudes(&v)?;
     }
     let mut rows = incal_io::Reader::new(name, src, read)?;
+    let stated = stated_rate::<P>(name, rows.preamble(), options)?;
+    let options = stated.as_ref().unwrap_or(options);
     let input = P::read(&mut rows, options).map_err(|e| e.in_file(name))?;
     let summary = rows.finish()?;
     let mut doc = P::reduce(&input, options, progress).map_err(|e| e.in_file(name))?;
@@ -215,7 +217,73 @@ pub fn reduce_source<P: Procedure, R: Read>(
         crate::options::check_magnitudes_at(value, key)?;
     }
     record_environment(&mut doc, &summary.conditions);
+    record_preamble(&mut doc, &summary.preamble);
     Ok(doc)
+}
+
+/// A sample rate the recording's preamble states
+/// ([`incal_io::stated_rate_hz`], e.g. `Fs,100`) against the options'
+/// `rate_hz`: refused naming the line when they differ by more than
+/// [`crate::timebase::RATE_TOLERANCE`]; the options with `rate_hz` set to
+/// it when the option was not given (`None` when nothing changes: no rate
+/// stated, or no `rate_hz` option).
+fn stated_rate<P: Procedure>(
+    name: &str,
+    preamble: &[incal_io::PreambleLine],
+    options: &P::Options,
+) -> Result<Option<P::Options>> {
+    let Some((stated, line)) = incal_io::stated_rate_hz(preamble) else {
+        return Ok(None);
+    };
+    let Ok(serde_json::Value::Object(m)) = serde_json::to_value(options) else {
+        return Ok(None);
+    };
+    let settle = |mut m: serde_json::Map<String, serde_json::Value>| {
+        m.insert("rate_hz".into(), serde_json::json!(stated));
+        let settled: P::Options = crate::options::from_json(&serde_json::Value::Object(m))?;
+        P::validate(&settled)?;
+        Ok(Some(settled))
+    };
+    match m.get("rate_hz") {
+        Some(serde_json::Value::Number(r)) => {
+            let r = r.as_f64().unwrap_or(f64::NAN);
+            if (r - stated).abs() <= crate::timebase::RATE_TOLERANCE * stated {
+                return Ok(None);
+            }
+            Err(incal_io::InputError::at(
+                name,
+                line,
+                format!(
+                    "the preamble states a sample rate of {stated} Hz, but rate_hz is {r} Hz \
+                     (they differ by more than {} %)",
+                    crate::timebase::RATE_TOLERANCE * 100.0
+                ),
+            )
+            .into())
+        }
+        Some(serde_json::Value::Null) => settle(m),
+        None if crate::options::schema_of::<P::Options>()
+            .pointer("/properties/rate_hz")
+            .is_some() =>
+        {
+            settle(m)
+        }
+        _ => Ok(None),
+    }
+}
+/// Record the lines before a recording's header (its logger's preamble,
+/// [`incal_io::PreambleLine`]) as the document's `preamble`: `[{line, key,
+/// value}]` in file order.
+pub fn record_preamble(doc: &mut ResultDocument, preamble: &[incal_io::PreambleLine]) {
+    if preamble.is_empty() {
+        return;
+    }
+    let lines = preamble
+        .iter()
+        .map(|p| serde_json::json!({"line": p.line, "key": p.key, "value": p.value}))
+        .collect();
+    doc.extra
+        .insert("preamble".into(), serde_json::Value::Array(lines));
 }
 
 /// Record the environmental columns a recording had (its `temperature_c`

@@ -98,7 +98,7 @@ fn calib(file: &str, triad: &str) -> BTreeMap<String, f64> {
 /// The T265 fork's `apps/test_imu_calib.cpp` settings.
 fn t265_options(method: Method) -> AutocalSessionOptions {
     AutocalSessionOptions {
-        rate_hz: 200.0,
+        rate_hz: Some(200.0),
         method,
         gravity_m_s2: 9.8016,
         init_static_s: 50.0,
@@ -115,7 +115,7 @@ fn t265_options(method: Method) -> AutocalSessionOptions {
 /// 1/6258 rad/s per count).
 fn xsens_options(method: Method, imu_tk_init: bool) -> AutocalSessionOptions {
     AutocalSessionOptions {
-        rate_hz: 100.0,
+        rate_hz: Some(100.0),
         method,
         gravity_m_s2: 9.81744,
         init_static_s: 50.0,

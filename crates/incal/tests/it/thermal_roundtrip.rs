@@ -181,7 +181,7 @@ fn reduce_ramp(cfg: &RampSim) -> ResultDocument {
     let mut csv = Vec::new();
     cfg.write(&mut csv).unwrap();
     let o = ramp::RampOptions {
-        rate_hz: cfg.rate_hz,
+        rate_hz: Some(cfg.rate_hz),
         quantity: incal::procedures::noise::QuantityKind::Gyro,
         ..Default::default()
     };
@@ -400,7 +400,7 @@ fn the_ramp_plan_predicts_the_monte_carlo_scatter() {
         let mut csv = Vec::new();
         c.write(&mut csv).unwrap();
         let o = ramp::RampOptions {
-            rate_hz: c.rate_hz,
+            rate_hz: Some(c.rate_hz),
             degree: Degree::Fixed(2),
             ..Default::default()
         };

@@ -109,8 +109,11 @@ fn imucal_rotation_deg() -> f64 {
     Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
 )]
 pub struct FerrarisOptions {
-    /// Sample rate F_s (Hz).
-    pub rate_hz: f64,
+    /// Sample rate F_s (Hz). `None`: the rate of the session's `time_s`
+    /// stamps (a session without them is then refused); given, it must
+    /// agree with them.
+    #[serde(default)]
+    pub rate_hz: Option<f64>,
     /// Gravity magnitude g (m/s², > 0; default the standard 9.80665,
     /// imucal uses 9.81). The sign convention is [`FerrarisOptions::convention`].
     #[serde(default = "standard_gravity")]
@@ -130,11 +133,20 @@ impl FerrarisOptions {
     /// imucal's defaults at a sample rate.
     pub fn imucal(rate_hz: f64) -> Self {
         Self {
-            rate_hz,
+            rate_hz: Some(rate_hz),
             gravity_m_s2: 9.81,
             convention: Convention::Standard,
             rotation_deg: -360.0,
             u_rotation_deg: 0.0,
+        }
+    }
+
+    /// These options with the rate of the session's stamps where no rate
+    /// was given.
+    pub fn at_stamps_rate(&self, timebase: Option<&crate::timebase::TimeBase>) -> Self {
+        Self {
+            rate_hz: self.rate_hz.or(timebase.map(|tb| tb.rate_hz)),
+            ..*self
         }
     }
 
@@ -153,7 +165,9 @@ impl FerrarisOptions {
     /// angle that is zero or beyond ±36 000 deg, a rotation-angle
     /// uncertainty outside [0, 360] deg.
     pub fn validate(&self) -> Result<()> {
-        check_rate_hz(self.rate_hz)?;
+        if let Some(r) = self.rate_hz {
+            check_rate_hz(r)?;
+        }
         check_gravity_magnitude(self.gravity_m_s2)?;
         check_rotation_deg(self.rotation_deg)?;
         crate::options::check_range("u_rotation_deg", self.u_rotation_deg, 0.0, 360.0, "deg")
@@ -176,7 +190,7 @@ impl crate::procedures::Procedure for Ferraris {
 
     fn example() -> FerrarisOptions {
         FerrarisOptions {
-            rate_hz: 100.0,
+            rate_hz: Some(100.0),
             gravity_m_s2: 9.81,
             convention: Default::default(),
             rotation_deg: -360.0,
@@ -192,7 +206,14 @@ impl crate::procedures::Procedure for Ferraris {
         rows: &mut incal_io::Reader<R>,
         o: &FerrarisOptions,
     ) -> Result<Self::Input> {
-        super::input::read_ferraris(rows, Some(o.rate_hz))
+        super::input::read_ferraris(rows, o.rate_hz)
+    }
+
+    fn recorded(
+        input: &Self::Input,
+        o: &FerrarisOptions,
+    ) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
+        crate::procedures::options_map(&o.at_stamps_rate(input.1.as_ref()))
     }
 
     fn reduce(
@@ -200,7 +221,7 @@ impl crate::procedures::Procedure for Ferraris {
         o: &FerrarisOptions,
         _: &dyn crate::procedures::Progress,
     ) -> Result<crate::document::ResultDocument> {
-        let mut doc = ferraris(&input.0, o)?.document()?;
+        let mut doc = ferraris(&input.0, &o.at_stamps_rate(input.1.as_ref()))?.document()?;
         if let Some(tb) = &input.1 {
             doc.warnings.extend(tb.warnings());
         }
@@ -344,7 +365,8 @@ fn map(x: &[f64], counts: &[usize; 9], opts: &FerrarisOptions) -> Option<Ferrari
         let s = 6 + r;
         let n = counts[s] as f64;
         let a_cal = acc_cal * (acc(s) - b_a);
-        let col = (gyr(s) - n * (b_g + k_ga * a_cal)) / opts.rate_hz;
+        // `ferraris` refuses options without a rate before any map.
+        let col = (gyr(s) - n * (b_g + k_ga * a_cal)) / opts.rate_hz.unwrap_or(f64::NAN);
         w.set_column(r, &col);
     }
     let angle = x[N_IN - 1];
@@ -577,6 +599,12 @@ fn sign_warnings(matrices: &FerrarisMatrices, opts: &FerrarisOptions) -> Vec<War
 /// of the rotation integrals).
 pub fn ferraris(sections: &[Vec<[f64; 6]>; 9], opts: &FerrarisOptions) -> Result<FerrarisResult> {
     opts.validate()?;
+    if opts.rate_hz.is_none() {
+        return crate::options::invalid(
+            "rate_hz",
+            "the sample rate is needed to integrate the rotations",
+        );
+    }
     let (stats, mut warnings) = section_stats(sections)?;
     let counts: [usize; 9] = std::array::from_fn(|k| stats[k].n);
     let (x, c) = inputs(&stats, opts);
@@ -694,7 +722,14 @@ mod tests {
         });
         assert_eq!(key, "gravity_m_s2");
         assert!(message.contains("--convention imucal"), "{message}");
-        assert_eq!(invalid(FerrarisOptions { rate_hz: 0.0, ..o }).0, "rate_hz");
+        assert_eq!(
+            invalid(FerrarisOptions {
+                rate_hz: Some(0.0),
+                ..o
+            })
+            .0,
+            "rate_hz"
+        );
         assert_eq!(
             invalid(FerrarisOptions {
                 rotation_deg: 0.0,

@@ -318,6 +318,9 @@ pub fn read_ferraris<R: Read>(
         )));
     }
     let tb = session.timebase(rows.header().file(), rate_hz)?;
+    if tb.is_none() && rate_hz.is_none() {
+        return Err(no_rate(rows.header()));
+    }
     check_rotation_gaps(rows.header().file(), tb.as_ref(), &runs)?;
     for axis in 0..3 {
         check_rotation_alive(
@@ -344,6 +347,9 @@ pub struct MultiposInput {
     /// What the input checks found: spikes left out of the static
     /// positions' means ([`super::screen`]), saturated channels.
     pub warnings: Vec<crate::warning::Warning>,
+    /// The sample rate (Hz): as given, or the stamps'; `None` for a
+    /// session without rotations and without either.
+    pub rate_hz: Option<f64>,
 }
 
 /// What a row of a multi-position session is.
@@ -503,7 +509,9 @@ struct Block {
 /// the same up direction) are one position; a position needs at least 2
 /// samples, a rotation the gyro columns.
 ///
-/// The nominal `rate_hz`, when given, is checked against `time_s`.
+/// The nominal `rate_hz`, when given, is checked against `time_s`; without
+/// it the stamps give the rate, and a session with rotations but without
+/// `time_s` is refused.
 pub fn read_multipos<R: Read>(
     rows: &mut Reader<R>,
     latitude: bool,
@@ -520,6 +528,7 @@ pub fn read_multipos<R: Read>(
         gyro,
         timebase: None,
         warnings: Vec::new(),
+        rate_hz: None,
     };
     let mut spikes = Vec::new();
     let mut still_scales = Vec::new();
@@ -604,6 +613,10 @@ pub fn read_multipos<R: Read>(
         });
     }
     input.timebase = session.timebase(&file, rate_hz)?;
+    input.rate_hz = rate_hz.or(input.timebase.as_ref().map(|tb| tb.rate_hz));
+    if input.rate_hz.is_none() && !input.rotations.is_empty() {
+        return Err(no_rate(rows.header()));
+    }
     check_rotation_gaps(&file, input.timebase.as_ref(), &runs)?;
     channels.finish(&super::screen::session_channels(gyro), &mut input.warnings)?;
     input.warnings.extend(super::screen::spikes_warning(
@@ -636,14 +649,23 @@ pub struct AutocalInput {
     pub gyr: Option<Vec<[f64; 3]>>,
     /// Rows moved into time order (`--sort-time`; 0 when in order).
     pub sorted: usize,
+    /// The sample rate (Hz): as given, or the stamps'.
+    pub rate_hz: f64,
+}
+
+/// A record without `time_s` and without a rate: refused on its header.
+pub(crate) fn no_rate(header: &incal_io::Header) -> Error {
+    header
+        .error("no time_s column and no rate_hz: give the sample rate (--rate-hz)")
+        .into()
 }
 
 /// Read an autocalibration record: the accelerometer triad is required,
-/// the gyro's optional; without `time_s` the time is `k / rate_hz`, with it
-/// `rate_hz` must agree with the stamps.
+/// the gyro's optional; without `time_s` the time is `k / rate_hz` (then
+/// required), with it `rate_hz`, when given, must agree with the stamps.
 pub fn read_autocal<R: Read>(
     rows: &mut Reader<R>,
-    rate_hz: f64,
+    rate_hz: Option<f64>,
     sort_time: bool,
 ) -> Result<AutocalInput> {
     let cols = SessionColumns::of(rows.header(), true, false)?;
@@ -667,10 +689,11 @@ pub fn read_autocal<R: Read>(
         }
         sorted = moved;
     }
-    let timebase = session.timebase(rows.header().file(), Some(rate_hz))?;
-    let time = match &timebase {
-        Some(tb) => tb.times.clone(),
-        None => (0..acc.len()).map(|k| k as f64 / rate_hz).collect(),
+    let timebase = session.timebase(rows.header().file(), rate_hz)?;
+    let (time, rate_hz) = match (&timebase, rate_hz) {
+        (Some(tb), r) => (tb.times.clone(), r.unwrap_or(tb.rate_hz)),
+        (None, Some(r)) => ((0..acc.len()).map(|k| k as f64 / r).collect(), r),
+        (None, None) => return Err(no_rate(rows.header())),
     };
     let stamps = timebase.as_ref().map(|_| session.stamps);
     Ok(AutocalInput {
@@ -680,6 +703,7 @@ pub fn read_autocal<R: Read>(
         acc,
         gyr,
         sorted,
+        rate_hz,
     })
 }
 
@@ -792,7 +816,9 @@ mod tests {
     #[test]
     fn time_must_not_decrease_and_may_repeat() {
         let mut r = reader("time_s,acc_x,acc_y,acc_z\n0.01,1,2,3\n0,1,2,3\n");
-        let e = read_autocal(&mut r, 100.0, false).unwrap_err().to_string();
+        let e = read_autocal(&mut r, Some(100.0), false)
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("s.csv:3") && e.contains("must not decrease"),
             "{e}"
@@ -802,7 +828,7 @@ mod tests {
         for k in 0..40 {
             text.push_str(&format!("{:.2},1,2,3\n", (k / 2) as f64 * 0.01));
         }
-        let a = read_autocal(&mut reader(&text), 200.0, false).unwrap();
+        let a = read_autocal(&mut reader(&text), Some(200.0), false).unwrap();
         let tb = a.timebase.as_ref().unwrap();
         assert_eq!(tb.repeats, 20);
         assert!(tb.regularised);
@@ -813,8 +839,18 @@ mod tests {
             &a.time[..3]
         );
         assert_eq!(a.stamps.as_ref().unwrap()[1], 0.0);
+        // Without a rate the stamps give it; without stamps it is needed.
+        let b = read_autocal(&mut reader(&text), None, false).unwrap();
+        assert_eq!((b.time.clone(), b.rate_hz), (a.time.clone(), tb.rate_hz));
+        let e = read_autocal(&mut reader("acc_x,acc_y,acc_z\n1,2,3\n"), None, false)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("s.csv:1: no time_s column and no rate_hz"),
+            "{e}"
+        );
         // The same file announced at 100 Hz is refused naming both rates.
-        let e = read_autocal(&mut reader(&text), 100.0, false)
+        let e = read_autocal(&mut reader(&text), Some(100.0), false)
             .unwrap_err()
             .to_string();
         assert!(e.contains("100 Hz") && e.contains("200.3759 Hz"), "{e}");

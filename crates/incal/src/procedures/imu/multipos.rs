@@ -119,8 +119,11 @@ pub struct MultiposSessionOptions {
     /// Accelerometer matrix convention.
     #[serde(default)]
     pub matrix: MatrixForm,
-    /// Sample rate (Hz): times the rotations.
-    pub rate_hz: f64,
+    /// Sample rate (Hz): times the rotations. `None`: the rate of the
+    /// session's `time_s` stamps (a session without them is then refused);
+    /// given, it must agree with them.
+    #[serde(default)]
+    pub rate_hz: Option<f64>,
     /// Latitude φ (deg) for the Earth rate (the session then needs the
     /// north direction, `nx, ny, nz`).
     #[serde(default)]
@@ -145,7 +148,9 @@ impl MultiposSessionOptions {
     /// (0, 1e6] Hz, a latitude beyond ±90 deg, a rotation angle that is
     /// zero or beyond ±36 000 deg.
     pub fn validate(&self) -> Result<()> {
-        super::check_rate_hz(self.rate_hz)?;
+        if let Some(r) = self.rate_hz {
+            super::check_rate_hz(r)?;
+        }
         super::check_gravity_magnitude(self.gravity_m_s2)?;
         super::check_rotation_deg(self.rotation_deg)?;
         if let Some(lat) = self.latitude_deg {
@@ -155,12 +160,14 @@ impl MultiposSessionOptions {
     }
 
     /// The options of [`multipos`] for a session with (`gyro`) or without
-    /// gyro columns.
-    pub fn model(&self, gyro: bool) -> MultiposOptions {
+    /// gyro columns, at the session's sample rate `rate_hz` (Hz; `None`
+    /// for a session without rotations, which need no rate: NaN, refused by
+    /// [`multipos`] only where rotations are timed).
+    pub fn model(&self, gyro: bool, rate_hz: Option<f64>) -> MultiposOptions {
         MultiposOptions {
             gravity: self.gravity_m_s2,
             matrix: self.matrix,
-            rate_hz: self.rate_hz,
+            rate_hz: rate_hz.unwrap_or(f64::NAN),
             latitude_deg: self.latitude_deg,
             rotation_deg: self.rotation_deg,
             gyro,
@@ -183,7 +190,7 @@ impl crate::procedures::Procedure for Multipos {
         MultiposSessionOptions {
             gravity_m_s2: 9.81,
             matrix: MatrixForm::Full,
-            rate_hz: 100.0,
+            rate_hz: Some(100.0),
             latitude_deg: None,
             rotation_deg: -360.0,
         }
@@ -197,7 +204,17 @@ impl crate::procedures::Procedure for Multipos {
         rows: &mut incal_io::Reader<R>,
         o: &MultiposSessionOptions,
     ) -> Result<Self::Input> {
-        super::input::read_multipos(rows, o.latitude_deg.is_some(), Some(o.rate_hz))
+        super::input::read_multipos(rows, o.latitude_deg.is_some(), o.rate_hz)
+    }
+
+    fn recorded(
+        input: &Self::Input,
+        o: &MultiposSessionOptions,
+    ) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
+        crate::procedures::options_map(&MultiposSessionOptions {
+            rate_hz: input.rate_hz,
+            ..*o
+        })
     }
 
     fn reduce(
@@ -205,8 +222,12 @@ impl crate::procedures::Procedure for Multipos {
         o: &MultiposSessionOptions,
         _: &dyn crate::procedures::Progress,
     ) -> Result<crate::document::ResultDocument> {
-        let mut doc =
-            multipos(&input.statics, &input.rotations, &o.model(input.gyro))?.document()?;
+        let mut doc = multipos(
+            &input.statics,
+            &input.rotations,
+            &o.model(input.gyro, input.rate_hz),
+        )?
+        .document()?;
         if let Some(tb) = &input.timebase {
             doc.warnings.extend(tb.warnings());
         }
@@ -495,7 +516,10 @@ pub fn multipos(
     opts: &MultiposOptions,
 ) -> Result<MultiposResult> {
     check_gravity_magnitude(opts.gravity)?;
-    check_rate_hz(opts.rate_hz)?;
+    // Only the rotations are timed.
+    if !rotations.is_empty() {
+        check_rate_hz(opts.rate_hz)?;
+    }
     check_positions(statics)?;
     let mut warnings = Vec::new();
     // Accelerometer, one fit per axis.
@@ -557,7 +581,13 @@ mod tests {
         let bad = |v| key_of(from_json::<MultiposSessionOptions>(&v).unwrap_err());
         assert_eq!(bad(json!({"rate_hz": 100, "matrix": "lower"})), "matrix");
         assert_eq!(bad(json!({"rate_hz": 100, "latitude": 45})), "latitude");
-        assert_eq!(bad(json!({"matrix": "full"})), "rate_hz");
+        // Without a rate: the stamps' (refused later without them).
+        assert_eq!(
+            from_json::<MultiposSessionOptions>(&json!({"matrix": "full"}))
+                .unwrap()
+                .rate_hz,
+            None
+        );
         let invalid = |o: MultiposSessionOptions| key_of(o.validate().unwrap_err());
         assert_eq!(
             invalid(MultiposSessionOptions {

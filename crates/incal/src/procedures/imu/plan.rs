@@ -28,7 +28,7 @@ impl Planned<ImuSimulator> for super::ferraris::Ferraris {
 
     fn reduce_options(s: &ImuSimOptions) -> super::ferraris::FerrarisOptions {
         super::ferraris::FerrarisOptions {
-            rate_hz: s.rate_hz,
+            rate_hz: Some(s.rate_hz),
             gravity_m_s2: s.gravity_m_s2,
             rotation_deg: s.rotation_deg,
             ..Self::example()
@@ -47,7 +47,7 @@ impl Planned<ImuSimulator> for super::multipos::Multipos {
 
     fn reduce_options(s: &ImuSimOptions) -> super::multipos::MultiposSessionOptions {
         super::multipos::MultiposSessionOptions {
-            rate_hz: s.rate_hz,
+            rate_hz: Some(s.rate_hz),
             gravity_m_s2: s.gravity_m_s2,
             latitude_deg: s.latitude_deg,
             rotation_deg: s.rotation_deg,
@@ -67,7 +67,7 @@ impl Planned<ImuSimulator> for super::autocal::Autocal {
 
     fn reduce_options(s: &ImuSimOptions) -> super::autocal::AutocalSessionOptions {
         super::autocal::AutocalSessionOptions {
-            rate_hz: s.rate_hz,
+            rate_hz: Some(s.rate_hz),
             gravity_m_s2: s.gravity_m_s2,
             init_static_s: s.init_static_s,
             ..Self::example()

@@ -54,6 +54,9 @@ pub struct RampInput {
     pub has_chamber: bool,
     /// Per channel, the empty or NaN cells left out as missing samples.
     pub missing: Vec<usize>,
+    /// The sample rate (Hz): as given, or the stamps' (rows − 1 over
+    /// their span).
+    pub rate_hz: f64,
 }
 
 /// `rate_hz` as given against the rate of the `time_s` stamps (rows − 1
@@ -73,9 +76,9 @@ fn check_rate(rate_hz: f64, stamps_hz: f64) -> Result<()> {
     Ok(())
 }
 
-/// Rows per block.
-fn block_rows(o: &RampOptions) -> usize {
-    ((o.block_s * o.rate_hz).round() as usize).max(2)
+/// Rows per block at `rate_hz`.
+fn block_rows(block_s: f64, rate_hz: f64) -> usize {
+    ((block_s * rate_hz).round() as usize).max(2)
 }
 
 /// Read a ramp recording (module docs).
@@ -101,7 +104,14 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &RampOptions) -> Result<
             .into());
     }
     let names: Vec<String> = pick.iter().map(|&k| h.names()[k].clone()).collect();
-    let per = block_rows(o);
+    // Blocks of a row count at a given rate; by time (block k holds the
+    // stamps in [t0 + k block_s, t0 + (k+1) block_s)) when the stamps give it.
+    let per = o.rate_hz.map(|r| block_rows(o.block_s, r));
+    if per.is_none() && time.is_none() {
+        return Err(crate::procedures::imu::input::no_rate(h));
+    }
+    let mut block_index = 0u64;
+    let mut longest = 0usize;
     let mut blocks = Vec::new();
     let empty = Block {
         time: Acc::default(),
@@ -130,8 +140,17 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &RampOptions) -> Result<
                 }
                 t
             }
-            None => index as f64 / o.rate_hz,
+            None => index as f64 / o.rate_hz.unwrap_or(f64::NAN),
         };
+        if per.is_none() {
+            let k = ((t - first_t) / o.block_s + 1e-9).floor() as u64;
+            if k != block_index && in_block > 0 {
+                longest = longest.max(in_block);
+                blocks.push(std::mem::replace(&mut cur, empty.clone()));
+                in_block = 0;
+            }
+            block_index = k;
+        }
         index += 1;
         let tc = row.f64(temp)?;
         if !(-273.15..=1000.0).contains(&tc) {
@@ -151,21 +170,39 @@ pub fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &RampOptions) -> Result<
             }
         }
         in_block += 1;
-        if in_block == per {
+        if Some(in_block) == per {
             blocks.push(std::mem::replace(&mut cur, empty.clone()));
             in_block = 0;
         }
     }
-    if in_block * 2 >= per {
+    // A last block of at least half a block's rows is kept.
+    let full = per.unwrap_or(longest.max(in_block));
+    if in_block * 2 >= full {
         blocks.push(cur);
     }
-    if time.is_some() && index > 1 {
-        check_rate(o.rate_hz, (index - 1) as f64 / (last_t - first_t))?;
-    }
+    let stamps_hz = (time.is_some() && index > 1).then(|| (index - 1) as f64 / (last_t - first_t));
+    let rate_hz = match (o.rate_hz, stamps_hz) {
+        (Some(r), Some(s)) => {
+            check_rate(r, s)?;
+            r
+        }
+        (Some(r), None) => r,
+        (None, Some(s)) => {
+            super::ramp::check_block(o.block_s, s)?;
+            s
+        }
+        (None, None) => {
+            return Err(rows
+                .header()
+                .error("one row cannot give a sample rate: give --rate-hz")
+                .into())
+        }
+    };
     Ok(RampInput {
         names,
         blocks,
         has_chamber: chamber.is_some(),
         missing,
+        rate_hz,
     })
 }

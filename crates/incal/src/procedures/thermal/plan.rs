@@ -95,7 +95,7 @@ pub fn predict_ramp(p: &RampPlan) -> Result<(Vec<f64>, Option<f64>, usize)> {
     }
     prof.validate()?;
     let o = super::ramp::RampOptions {
-        rate_hz: prof.rate_hz,
+        rate_hz: Some(prof.rate_hz),
         block_s: p.block_s,
         degree: super::Degree::Fixed(p.degree),
         ..Default::default()

@@ -56,8 +56,12 @@ use crate::units::Unit;
 /// `t_ref_c`, `degree` (`"auto"` or 0…3), `block_s`, `rate_term`.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct RampOptions {
-    /// Sample rate, Hz (the time base when there is no `time_s`).
-    pub rate_hz: f64,
+    /// Sample rate, Hz (the time base when there is no `time_s`). `None`:
+    /// the rate of the `time_s` stamps, the blocks then cut by time (a
+    /// recording without `time_s` is refused); given with `time_s`, it
+    /// must agree with the stamps.
+    #[serde(default)]
+    pub rate_hz: Option<f64>,
     /// What the channels measure: their unit (deg/s, g, or 1).
     #[serde(default)]
     pub quantity: QuantityKind,
@@ -88,7 +92,7 @@ fn default_block_s() -> f64 {
 impl Default for RampOptions {
     fn default() -> Self {
         Self {
-            rate_hz: 1.0,
+            rate_hz: Some(1.0),
             quantity: QuantityKind::Generic,
             t_ref_c: DEFAULT_T_REF_C,
             degree: Degree::Auto,
@@ -100,6 +104,21 @@ impl Default for RampOptions {
 
 /// `T_ref` a temperature ([`crate::units::check_temperature_c`]: not
 /// below absolute zero), or [`Error::InvalidOption`] naming `t_ref_c`.
+/// A block of `block_s` must hold two samples at `rate_hz`.
+pub(crate) fn check_block(block_s: f64, rate_hz: f64) -> Result<()> {
+    if block_s * rate_hz < 2.0 {
+        return crate::options::invalid(
+            "block_s",
+            format!(
+                "{} s holds fewer than two samples at {} Hz",
+                crate::error::short_number(&block_s.to_string()),
+                crate::error::short_number(&rate_hz.to_string())
+            ),
+        );
+    }
+    Ok(())
+}
+
 pub(crate) fn check_t_ref_c(t_ref_c: f64) -> Result<()> {
     crate::units::check_temperature_c("t_ref_c", t_ref_c)
 }
@@ -119,12 +138,11 @@ impl ProcedureShape for Ramp {
 
     fn validate(o: &RampOptions) -> Result<()> {
         use crate::options::{check_positive, invalid};
-        check_positive("rate_hz", o.rate_hz)?;
-        if o.rate_hz > 1e7 {
-            return invalid(
-                "rate_hz",
-                format!("must be at most 1e7 Hz, got {}", o.rate_hz),
-            );
+        if let Some(rate) = o.rate_hz {
+            check_positive("rate_hz", rate)?;
+            if rate > 1e7 {
+                return invalid("rate_hz", format!("must be at most 1e7 Hz, got {rate}"));
+            }
         }
         check_positive("block_s", o.block_s)?;
         if o.block_s > 86400.0 {
@@ -133,17 +151,20 @@ impl ProcedureShape for Ramp {
                 format!("must be at most 86400 s, got {}", o.block_s),
             );
         }
-        if o.block_s * o.rate_hz < 2.0 {
-            return invalid(
-                "block_s",
-                format!(
-                    "{} s holds fewer than two samples at {} Hz",
-                    crate::error::short_number(&o.block_s.to_string()),
-                    crate::error::short_number(&o.rate_hz.to_string())
-                ),
-            );
+        if let Some(rate) = o.rate_hz {
+            check_block(o.block_s, rate)?;
         }
         check_t_ref_c(o.t_ref_c)
+    }
+
+    fn recorded(
+        input: &RampInput,
+        o: &RampOptions,
+    ) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
+        crate::procedures::options_map(&RampOptions {
+            rate_hz: Some(input.rate_hz),
+            ..o.clone()
+        })
     }
 
     fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &RampOptions) -> Result<RampInput> {

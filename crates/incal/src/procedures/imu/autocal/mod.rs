@@ -221,8 +221,10 @@ impl AutocalOptions {
 )]
 pub struct AutocalSessionOptions {
     /// Sample rate (Hz); the record's `time_s`, when present, gives the
-    /// time steps instead.
-    pub rate_hz: f64,
+    /// time steps instead (and the rate when this is `None`; given, it
+    /// must agree with them). Needed without `time_s`.
+    #[serde(default)]
+    pub rate_hz: Option<f64>,
     /// Method.
     #[serde(default)]
     pub method: Method,
@@ -277,7 +279,7 @@ impl AutocalSessionOptions {
     /// The defaults (type docs) at a sample rate, with a method.
     pub fn new(rate_hz: f64, method: Method) -> Self {
         Self {
-            rate_hz,
+            rate_hz: Some(rate_hz),
             method,
             gravity_m_s2: standard_gravity(),
             init_static_s: default_init_static_s(),
@@ -296,7 +298,9 @@ impl AutocalSessionOptions {
     /// samples, intervals of fewer than 3 or more than 1e9 samples, a
     /// non-finite initial value or a zero initial scale.
     pub fn validate(&self) -> Result<()> {
-        super::check_rate_hz(self.rate_hz)?;
+        if let Some(r) = self.rate_hz {
+            super::check_rate_hz(r)?;
+        }
         super::check_gravity_magnitude(self.gravity_m_s2)?;
         crate::options::check_positive("init_static_s", self.init_static_s)?;
         crate::options::check_range("init_static_s", self.init_static_s, 0.0, 1e6, "s")?;
@@ -349,7 +353,7 @@ impl crate::procedures::Procedure for Autocal {
 
     fn example() -> AutocalSessionOptions {
         AutocalSessionOptions {
-            rate_hz: 100.0,
+            rate_hz: Some(100.0),
             method: Method::Incal,
             gravity_m_s2: 9.81,
             init_static_s: 3.0,
@@ -366,10 +370,12 @@ impl crate::procedures::Procedure for Autocal {
     }
 
     fn recorded(
-        _: &Self::Input,
+        input: &Self::Input,
         o: &AutocalSessionOptions,
     ) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
-        crate::procedures::options_map(&o.settled())
+        let mut o = o.settled();
+        o.rate_hz = Some(input.rate_hz);
+        crate::procedures::options_map(&o)
     }
 
     fn read<R: std::io::Read>(

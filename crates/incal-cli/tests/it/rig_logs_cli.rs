@@ -1,0 +1,274 @@
+//! Recordings as rigs and loggers write them (docs/src/recordings.md):
+//! a logger's preamble before the header is found, recorded and its
+//! stated sample rate used or cross-checked; `--header-line` names the
+//! header; `--rate-hz` is optional wherever `time_s` gives the times.
+
+use crate::common;
+use common::*;
+use serde_json::Value;
+
+/// The coefficients of a result document, by name: value and U95.
+fn coefficients(doc: &Value) -> Vec<(String, f64, f64)> {
+    doc["coefficients"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .map(|(k, c)| {
+            (
+                k.clone(),
+                c["value"].as_f64().unwrap(),
+                c["U95"].as_f64().unwrap_or(0.0),
+            )
+        })
+        .collect()
+}
+
+/// A 60 s, 100 Hz gyro record without `time_s`, and the same record
+/// after an MPU-6050 logger's preamble.
+fn logger_pair(dir: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    let sim = dir.join("sim.csv");
+    ok(&run(&[
+        "simulate",
+        "noise",
+        "--arw-deg-rth",
+        "0.1",
+        "--duration-s",
+        "60",
+        "--rate-hz",
+        "100",
+        "--seed",
+        "7",
+        "-o",
+        p(&sim),
+    ]));
+    let text = std::fs::read_to_string(&sim).unwrap();
+    let mut plain = String::new();
+    for line in text.lines().filter(|l| !l.starts_with('#')) {
+        plain.push_str(line.split_once(',').unwrap().1);
+        plain.push('\n');
+    }
+    let bare = dir.join("bare.csv");
+    std::fs::write(&bare, &plain).unwrap();
+    let log = dir.join("log.csv");
+    std::fs::write(
+        &log,
+        format!("Device,MPU6050\nFs,100\nLogging Type,0\n{plain}"),
+    )
+    .unwrap();
+    (bare, log)
+}
+
+#[test]
+fn a_logger_preamble_is_read_past_recorded_and_its_rate_used() {
+    let dir = workdir("rig_logs_preamble");
+    let (bare, log) = logger_pair(&dir);
+    let want = json_of(&run(&[
+        "noise",
+        "--input",
+        p(&bare),
+        "--rate-hz",
+        "100",
+        "--json",
+    ]));
+    let got = json_of(&run(&["noise", "--input", p(&log), "--json"]));
+    assert_eq!(coefficients(&got), coefficients(&want));
+    assert_eq!(got["options"]["rate_hz"], 100.0);
+    let pre = got["preamble"].as_array().unwrap();
+    let lines: Vec<(u64, &str, &str)> = pre
+        .iter()
+        .map(|l| {
+            (
+                l["line"].as_u64().unwrap(),
+                l["key"].as_str().unwrap(),
+                l["value"].as_str().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        lines,
+        [
+            (1, "Device", "MPU6050"),
+            (2, "Fs", "100"),
+            (3, "Logging Type", "0")
+        ]
+    );
+    // Given anyway, the rate is cross-checked with the preamble's.
+    let same = json_of(&run(&[
+        "noise",
+        "--input",
+        p(&log),
+        "--rate-hz",
+        "100.5",
+        "--json",
+    ]));
+    assert_eq!(same["options"]["rate_hz"], 100.5);
+    refused(
+        &run(&["noise", "--input", p(&log), "--rate-hz", "200"]),
+        &[
+            "log.csv:2:",
+            "preamble states a sample rate of 100 Hz",
+            "rate_hz is 200 Hz",
+        ],
+    );
+    // The header line named; a wrong one is what the file has there.
+    let named = json_of(&run(&[
+        "noise",
+        "--input",
+        p(&log),
+        "--header-line",
+        "4",
+        "--json",
+    ]));
+    assert_eq!(coefficients(&named), coefficients(&want));
+    refused(
+        &run(&["noise", "--input", p(&log), "--header-line", "9"]),
+        &["log.csv:9: --header-line 9: this line holds '"],
+    );
+    refused(
+        &run(&["noise", "--input", p(&log), "--header-line", "7000"]),
+        &[
+            "log.csv",
+            "--header-line 7000: no record starts on line 7000",
+        ],
+    );
+    refused(
+        &run(&["noise", "--input", p(&log), "--header-line", "0"]),
+        &["--header-line"],
+    );
+}
+
+/// The document without what names the run (inputs' paths, the software
+/// block's time): coefficients, options, warnings and tables.
+fn numbers(doc: &Value) -> Value {
+    serde_json::json!({
+        "coefficients": doc["coefficients"],
+        "options": doc["options"],
+        "warnings": doc["warnings"],
+        "tables": doc["tables"],
+    })
+}
+
+#[test]
+fn the_stamps_give_the_rate_wherever_time_s_is_there() {
+    let dir = workdir("rig_logs_rate");
+    let sim = |args: &[&str], name: &str| {
+        let f = dir.join(name);
+        let mut a = args.to_vec();
+        a.extend(["--seed", "5", "-o", p(&f)]);
+        ok(&run(&a));
+        f
+    };
+    let random = [
+        "--orientations",
+        "14",
+        "--init-static-s",
+        "3",
+        "--static-s",
+        "2",
+        "--move-s",
+        "1.5",
+    ];
+    let cases: Vec<(Vec<&str>, std::path::PathBuf, &str)> = vec![
+        (
+            vec!["imu", "ferraris"],
+            sim(
+                &["simulate", "imu", "--sequence", "ferraris"],
+                "ferraris.csv",
+            ),
+            "100",
+        ),
+        (
+            vec!["imu", "multipos"],
+            sim(
+                &["simulate", "imu", "--sequence", "positions"],
+                "positions.csv",
+            ),
+            "100",
+        ),
+        (
+            vec!["imu", "autocal", "--init-static-s", "3"],
+            sim(
+                &[&["simulate", "imu", "--sequence", "random"][..], &random].concat(),
+                "random.csv",
+            ),
+            "100",
+        ),
+        (
+            vec!["thermal", "ramp", "--quantity", "gyro"],
+            sim(
+                &[
+                    "simulate",
+                    "thermal",
+                    "--rate-hz",
+                    "1",
+                    "--hold-s",
+                    "600",
+                    "--ramp-c-per-min",
+                    "2",
+                ],
+                "ramp.csv",
+            ),
+            "1",
+        ),
+    ];
+    for (cmd, file, rate) in &cases {
+        let with = |extra: &[&str]| {
+            let mut a = cmd.clone();
+            a.extend(["--input", p(file), "--json"]);
+            a.extend_from_slice(extra);
+            json_of(&run(&a))
+        };
+        let given = with(&["--rate-hz", rate]);
+        let stamped = with(&[]);
+        let r: f64 = rate.parse().unwrap();
+        let settled = stamped["options"]["rate_hz"].as_f64().unwrap();
+        assert!((settled / r - 1.0).abs() < 1e-9, "{cmd:?}: {settled}");
+        // The same reduction, but for the rate recorded (the stamps' to
+        // rounding instead of the round number given).
+        let mut a = numbers(&given);
+        let mut b = numbers(&stamped);
+        a["options"]["rate_hz"] = Value::Null;
+        b["options"]["rate_hz"] = Value::Null;
+        if a != b {
+            for (name, c) in a["coefficients"].as_object().unwrap() {
+                let d = &b["coefficients"][name];
+                let (x, y) = (c["value"].as_f64().unwrap(), d["value"].as_f64().unwrap());
+                let u = c["U95"].as_f64().unwrap_or(0.0);
+                assert!(
+                    (x - y).abs() <= 1e-6 * u.max(x.abs()),
+                    "{cmd:?} {name}: {x} vs {y}"
+                );
+            }
+        }
+        // Without time_s the rate is still needed, and said so.
+        let text = std::fs::read_to_string(file).unwrap();
+        let mut bare = String::new();
+        for line in text.lines().filter(|l| !l.starts_with('#')) {
+            let cells: Vec<&str> = line.split(',').collect();
+            let keep: Vec<&str> = cells[1..].to_vec();
+            bare.push_str(&keep.join(","));
+            bare.push('\n');
+        }
+        assert!(text
+            .lines()
+            .find(|l| !l.starts_with('#'))
+            .unwrap()
+            .starts_with("time_s,"));
+        let nostamps = dir.join(format!(
+            "bare_{}",
+            file.file_name().unwrap().to_str().unwrap()
+        ));
+        std::fs::write(&nostamps, bare).unwrap();
+        let mut a = cmd.clone();
+        a.extend(["--input", p(&nostamps)]);
+        if cmd[1] == "multipos" {
+            // Positions without rotations: nothing is timed, nothing needed.
+            a.push("--json");
+            let v = json_of(&run(&a));
+            assert_eq!(v["coefficients"], given["coefficients"]);
+            assert_eq!(v["options"]["rate_hz"], Value::Null);
+        } else {
+            refused(&run(&a), &["no time_s column and no rate_hz", "--rate-hz"]);
+        }
+    }
+}

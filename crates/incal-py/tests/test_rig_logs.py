@@ -1,0 +1,51 @@
+"""Recordings as loggers write them: a preamble before the header is read
+past and recorded (``header_line`` names the header), its stated rate is
+used, and ``rate_hz`` is optional wherever ``time_s`` gives the times."""
+
+import numpy as np
+import pytest
+
+import incal
+
+
+def logger_file(tmp_path):
+    """A 60 s, 100 Hz white-noise record after an MPU-6050 logger's
+    preamble, without ``time_s``; and the samples."""
+    rng = np.random.default_rng(3)
+    x = 0.01 * rng.standard_normal(6000)
+    lines = ["Device,MPU6050", "Fs,100", "Logging Type,0", "gx"] + [repr(float(v)) for v in x]
+    path = tmp_path / "log.csv"
+    path.write_text("\n".join(lines) + "\n")
+    return path, x
+
+
+def test_a_preamble_is_recorded_and_its_rate_used(tmp_path):
+    path, x = logger_file(tmp_path)
+    r = incal.noise(str(path), deviations="oadev")
+    assert r.document["options"]["rate_hz"] == 100.0
+    assert [(p["line"], p["key"], p["value"]) for p in r.document["preamble"]] == [
+        (1, "Device", "MPU6050"),
+        (2, "Fs", "100"),
+        (3, "Logging Type", "0"),
+    ]
+    # The same samples in memory, at the rate given: the same numbers.
+    m = incal.noise(x, rate_hz=100, deviations="oadev")
+    n = r.coefficients["gx.N"]
+    assert n.value == pytest.approx(m.coefficients[next(k for k in m.coefficients if k.endswith(".N"))].value, rel=1e-12)
+    named = incal.noise(str(path), header_line=4, deviations="oadev")
+    assert named.coefficients["gx.N"].value == n.value
+    with pytest.raises(incal.InputError, match="preamble states a sample rate of 100 Hz"):
+        incal.noise(str(path), rate_hz=200)
+    with pytest.raises(incal.InputError, match="header_line"):
+        incal.noise(str(path), header_line="first")
+
+
+def test_the_stamps_give_the_autocalibration_its_rate(tmp_path):
+    data, _ = incal.simulate.imu(
+        sequence="random", orientations=14, init_static_s=3, static_s=2, move_s=1.5, seed=5
+    )
+    given = incal.imu_autocal(data, rate_hz=100, init_static_s=3)
+    stamped = incal.imu_autocal(data, init_static_s=3)
+    assert stamped.document["options"]["rate_hz"] == pytest.approx(100.0, rel=1e-9)
+    for k, c in given.coefficients.items():
+        assert stamped.coefficients[k].value == pytest.approx(c.value, rel=1e-9, abs=1e-12)
