@@ -28,7 +28,7 @@ use std::collections::HashMap;
 use std::io::Read;
 
 mod frames;
-mod preamble;
+pub mod preamble;
 
 pub use preamble::{stated_rate_hz, PreambleLine, FOLLOWING, SCAN_BYTES, SCAN_RECORDS};
 
