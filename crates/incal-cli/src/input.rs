@@ -24,6 +24,26 @@ pub struct ReadArgs {
     /// File line of the header row (1-based), for a file whose logger writes lines before it (default: found, the lines before it recorded as the document's preamble).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     pub header_line: Option<u64>,
+    /// Cut a continuous rig log into plateaus of this column (an encoder's angle_deg, a table's rate_deg_s, a centrifuge's omega_rad_s, a chamber's temperature_c) before the reduction: moves and each plateau's settling dropped, the column set to the plateau's nominal value (needs time_s; see docs: Recordings as they come).
+    #[arg(long, value_name = "COLUMN")]
+    pub segment_by: Option<String>,
+    /// Largest deviation of a plateau's rows from its mean, in the column's unit (default per column: angle_deg 0.01, rate_deg_s 0.01 + 0.1 %, omega_rad_s 2e-4 + 0.1 %, temperature_c 0.5).
+    #[arg(long, value_name = "X")]
+    pub segment_tolerance: Option<f64>,
+    /// Time dropped at the start of each plateau, s (default per column: 1 s for angles, 2 s for rates, 600 s for temperature).
+    #[arg(long, value_name = "S")]
+    pub segment_settle_s: Option<f64>,
+    /// Shortest plateau kept after the settle time, s (default 1 s; 60 s for temperature).
+    #[arg(long, value_name = "S")]
+    pub segment_min_s: Option<f64>,
+    /// The plan's nominal values in the order the log visits them, comma separated (default: each plateau's mean); a missing or extra plateau is refused naming its time.
+    #[arg(
+        long,
+        value_name = "LIST",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    pub segment_values: Vec<f64>,
 }
 
 impl ReadArgs {
@@ -42,6 +62,14 @@ impl ReadArgs {
             delimiter,
             columns,
             header_line: self.header_line.map(|n| n as usize),
+            segment: incal_io::SegmentSpec::from_options(
+                self.segment_by.as_deref(),
+                self.segment_tolerance,
+                self.segment_settle_s,
+                self.segment_min_s,
+                &self.segment_values,
+            )
+            .map_err(CliError::Input)?,
             ..ReadOptions::default()
         })
     }

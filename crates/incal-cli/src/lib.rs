@@ -49,7 +49,7 @@ enum Command {
     Demo(commands::demo::Args),
     /// The procedures (each family's file in `commands/`, listed once in `commands/mod.rs`).
     #[command(flatten)]
-    Procedure(commands::Reductions),
+    Procedure(Box<commands::Reductions>),
     /// Design a test plan and predict the uncertainty of every coefficient before the test.
     #[command(subcommand)]
     Plan(commands::Plans),

@@ -74,6 +74,11 @@ pub fn stream<S: incal::procedures::stream::Stream>(
     read: &incal_io::ReadOptions,
     output: Option<&std::path::Path>,
 ) -> CliResult<incal::procedures::stream::Streamed> {
+    if read.segment.is_some() {
+        return Err(crate::error::CliError::Input(
+            "--segment-by: a streaming tool writes every row it reads; segment the log in a reduction".into(),
+        ));
+    }
     let src = incal_io::open(input)?;
     let mut out = crate::io::open_output(output)?;
     let out_name = crate::io::output_name(output);

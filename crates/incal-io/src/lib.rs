@@ -24,6 +24,7 @@ pub mod digest;
 pub mod error;
 pub mod frames;
 pub mod reader;
+pub mod segments;
 pub mod source;
 pub mod table;
 pub mod writer;
@@ -35,6 +36,7 @@ pub use reader::{
     parse_delimiter, parse_f64, stated_rate_hz, Condition, Header, PreambleLine, ReadOptions,
     Reader, Row, Summary, CONDITION_COLUMNS, MAX_ABS_VALUE, MAX_LINE_BYTES,
 };
+pub use segments::{Segment, SegmentSpec, Segmented};
 pub use source::{
     display_name, is_dash, open, read_hashed, read_table, stream, stream_table, MAX_DOCUMENT_BYTES,
 };

@@ -67,6 +67,9 @@ pub struct ReadOptions {
     /// File line of the header row (`--header-line`, 1-based); `None`
     /// finds it after any preamble ([`preamble`]).
     pub header_line: Option<usize>,
+    /// Cut a continuous log into plateaus of a rig channel first
+    /// ([`crate::segments`]; reductions only, a stream refuses it).
+    pub segment: Option<crate::segments::SegmentSpec>,
 }
 
 impl Default for ReadOptions {
@@ -78,6 +81,7 @@ impl Default for ReadOptions {
             hash: true,
             frames: false,
             header_line: None,
+            segment: None,
         }
     }
 }

@@ -346,10 +346,13 @@ fn the_header_line_can_be_given_and_columns_steer_the_search() {
         let e = Table::from_bytes("log.csv", LOGGER, &opts).unwrap_err();
         assert!(e.to_string().contains(why), "{e}");
     }
-    // Two text-only records of one width before the data: --columns says
-    // which is the header.
+    // Two text-only records of one width before the data: the one the
+    // data follows; --columns naming the first makes it the header.
     let two = b"Model,Serial\nax,ay\n1,2\n";
-    assert_eq!(table(two).unwrap().header().names(), ["Model", "Serial"]);
+    assert_eq!(table(two).unwrap().header().names(), ["ax", "ay"]);
+    let opts = ReadOptions::with_columns(ColumnMap::parse("m=Model").unwrap());
+    let t = Table::from_bytes("f.csv", two, &opts).unwrap();
+    assert_eq!(t.header().names(), ["m", "Serial"]);
     let opts = ReadOptions::with_columns(ColumnMap::parse("acc_x=ax,acc_y=ay").unwrap());
     let t = Table::from_bytes("f.csv", two, &opts).unwrap();
     assert_eq!(t.header().names(), ["acc_x", "acc_y"]);
@@ -376,6 +379,91 @@ fn a_stated_rate_is_recognised_in_its_usual_spellings() {
     ] {
         assert_eq!(stated_rate_hz(&[line(k, v)]).map(|r| r.0), want, "{k},{v}");
     }
+}
+
+/// A log at 10 Hz: (angle, rows) plateaus with 5 moving rows before each.
+fn head_log(plateaus: &[(f64, usize)]) -> String {
+    let mut out = String::from("# a rig log\ntime_s,angle_deg,output\n");
+    let mut k = 0;
+    for &(a, n) in plateaus {
+        for m in 0..5 {
+            out.push_str(&format!(
+                "{},{},9\n",
+                k as f64 / 10.0,
+                a + 3.0 * (m + 1) as f64
+            ));
+            k += 1;
+        }
+        for j in 0..n {
+            let jitter = [0.0, 2e-4, -2e-4][j % 3];
+            out.push_str(&format!("{},{},{}\n", k as f64 / 10.0, a + jitter, a));
+            k += 1;
+        }
+    }
+    out
+}
+
+#[test]
+fn a_log_is_cut_into_plateaus_on_its_own_lines() {
+    let text = head_log(&[(0.0, 30), (90.0, 30), (180.0, 30)]);
+    let t = Table::from_bytes("head.csv", text.as_bytes(), &ReadOptions::default()).unwrap();
+    let spec = SegmentSpec {
+        column: "angle_deg".into(),
+        values: vec![0.0, 90.0, 180.0],
+        ..SegmentSpec::default()
+    };
+    let s = crate::segments::segment(&t, &spec).unwrap();
+    assert_eq!(s.segments.len(), 3);
+    assert_eq!(s.moving_rows, 15);
+    // 1 s settles: 10 rows dropped, 20 kept, each on its own file line.
+    assert!(s
+        .segments
+        .iter()
+        .all(|g| (g.rows_kept, g.rows_dropped) == (20, 10)));
+    let out = String::from_utf8(s.text).unwrap();
+    let lines: Vec<&str> = out.lines().collect();
+    let orig: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[1], "time_s,angle_deg,output");
+    let first = s.segments[1].lines.0;
+    assert_eq!(lines[first - 1].split(',').nth(1), Some("90"));
+    assert_eq!(
+        lines[first - 1].split(',').next(),
+        orig[first - 1].split(',').next()
+    );
+    assert!(lines[first - 2].starts_with('#'));
+    // Means instead of a plan: the jitter's mean, 0 at rest.
+    let means = crate::segments::segment(
+        &t,
+        &SegmentSpec {
+            values: vec![],
+            ..spec.clone()
+        },
+    )
+    .unwrap();
+    assert_eq!(means.segments[0].value, 0.0);
+    assert!((means.segments[1].value - 90.0).abs() < 1e-4);
+    // A plateau the plan lacks, and a planned one the log lacks.
+    let extra = SegmentSpec {
+        values: vec![0.0, 180.0],
+        ..spec.clone()
+    };
+    let e = crate::segments::segment(&t, &extra)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("head.csv:53: a plateau at t = 4 s (mean 90")
+            && e.contains("next planned value 180"),
+        "{e}"
+    );
+    let more = SegmentSpec {
+        values: vec![0.0, 90.0, 180.0, 270.0],
+        ..spec
+    };
+    let e = crate::segments::segment(&t, &more).unwrap_err().to_string();
+    assert!(
+        e.contains("plateau at 270 is missing: the log ends at t = 10.4 s after 3 of 4"),
+        "{e}"
+    );
 }
 
 proptest! {

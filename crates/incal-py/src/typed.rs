@@ -166,13 +166,26 @@ impl incal::procedures::Progress for PyProgress {
 }
 
 /// The read options a Python call gives: `columns` (`NAME=HEADER,…`),
-/// `delimiter` and `header_line`.
+/// `delimiter`, `header_line` and the segmentation (`segment_by`,
+/// `segment_tolerance`, `segment_settle_s`, `segment_min_s`,
+/// `segment_values`).
 #[derive(serde::Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
 struct ReadSpec {
     columns: Option<String>,
     delimiter: Option<String>,
     header_line: Option<String>,
+    segment_by: Option<String>,
+    segment_tolerance: Option<String>,
+    segment_settle_s: Option<String>,
+    segment_min_s: Option<String>,
+    segment_values: Option<String>,
+}
+
+/// A number of a read option (`key`), or the option named.
+fn read_number(key: &str, text: &str) -> Result<f64, String> {
+    incal_io::parse_f64(text.trim().as_bytes())
+        .ok_or_else(|| format!("{key}: '{}' is not a number", incal_io::clip(text)))
 }
 
 fn read_options(spec: &str) -> Result<incal_io::ReadOptions, Outcome> {
@@ -205,6 +218,29 @@ fn read_options(spec: &str) -> Result<incal_io::ReadOptions, Outcome> {
             })?;
         read.header_line = Some(line);
     }
+    let number = |key: &str, v: &Option<String>| -> Result<Option<f64>, Outcome> {
+        v.as_deref()
+            .map(|t| read_number(key, t))
+            .transpose()
+            .map_err(|m| bad(key, m))
+    };
+    let values: Vec<f64> = match &spec.segment_values {
+        None => Vec::new(),
+        Some(t) => t
+            .split(',')
+            .filter(|c| !c.trim().is_empty())
+            .map(|c| read_number("segment_values", c))
+            .collect::<Result<_, _>>()
+            .map_err(|m| bad("segment_values", m))?,
+    };
+    read.segment = incal_io::SegmentSpec::from_options(
+        spec.segment_by.as_deref(),
+        number("segment_tolerance", &spec.segment_tolerance)?,
+        number("segment_settle_s", &spec.segment_settle_s)?,
+        number("segment_min_s", &spec.segment_min_s)?,
+        &values,
+    )
+    .map_err(|m| bad("segment_by", m))?;
     Ok(read)
 }
 

@@ -49,3 +49,37 @@ def test_the_stamps_give_the_autocalibration_its_rate(tmp_path):
     assert stamped.document["options"]["rate_hz"] == pytest.approx(100.0, rel=1e-9)
     for k, c in given.coefficients.items():
         assert stamped.coefficients[k].value == pytest.approx(c.value, rel=1e-9, abs=1e-12)
+
+
+def test_a_rig_log_is_segmented_as_the_cli_does(tmp_path):
+    """A dividing head's log (encoder jitter, moves, settling with the
+    output off): segmented with the plan's angles it gives the labelled
+    rows' coefficients exactly."""
+    labelled, _ = incal.simulate.tumble(samples=30, noise=3e-4, seed=4)
+    angles = labelled["angle_deg"].to_numpy()
+    out = labelled["output"].to_numpy()
+    rng = np.random.default_rng(1)
+    rows, plan = [], []
+    starts = [0] + [i for i in range(1, len(angles)) if angles[i] != angles[i - 1]] + [len(angles)]
+    for a, b in zip(starts, starts[1:]):
+        v = float(angles[a])
+        plan.append(v)
+        # 1 s moving, 1 s settling (output off by 1), then the labelled rows.
+        moving = [(v + 5.0 * (m + 1), 9.0) for m in range(10)]
+        settling = [(v + 5e-4 * rng.uniform(-1, 1), float(out[a]) + 1.0) for _ in range(10)]
+        at_rest = [(v + 5e-4 * rng.uniform(-1, 1), float(out[i])) for i in range(a, b)]
+        for x, y in moving + settling + at_rest:
+            rows.append((len(rows) * 0.1, x, y))
+    log = tmp_path / "head.csv"
+    log.write_text("time_s,angle_deg,output\n" + "".join(f"{t!r},{x!r},{y!r}\n" for t, x, y in rows))
+    got = incal.tumble(
+        str(log), mount="pendulum", segment_by="angle_deg", segment_settle_s=1, segment_values=plan
+    )
+    want = incal.tumble(labelled, mount="pendulum")
+    for name, c in want.coefficients.items():
+        assert got.coefficients[name].value == pytest.approx(c.value, rel=1e-12, abs=1e-15)
+    segs = got.table("segments")
+    assert len(segs) == len(plan)
+    assert got.document["segmentation"]["column"] == "angle_deg"
+    with pytest.raises(incal.InputError, match="segment_tolerance"):
+        incal.tumble(str(log), mount="pendulum", segment_by="angle_deg", segment_tolerance="wide")

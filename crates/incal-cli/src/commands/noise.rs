@@ -332,8 +332,14 @@ pub fn run(a: &Args) -> CliResult<()> {
     };
     // Options first (a bad option is named before the file is opened).
     <Noise as incal::procedures::Procedure>::validate(&options).map_err(core)?;
+    let read = a.read.options()?;
+    if read.segment.is_some() || read.header_line.is_some() {
+        return Err(crate::error::CliError::Input(
+            "--segment-by and --header-line read CSV text, not a binary record (--format)".into(),
+        ));
+    }
     let rec = MappedRecord::open(&a.input, a.channels.unwrap_or(0), sample)?;
-    let doc = reduce_mapped(&rec, &a.read.options()?.columns, &options, &bars).map_err(core)?;
+    let doc = reduce_mapped(&rec, &read.columns, &options, &bars).map_err(core)?;
     a.result.emit(doc)
 }
 

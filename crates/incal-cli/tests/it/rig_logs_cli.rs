@@ -7,22 +7,6 @@ use crate::common;
 use common::*;
 use serde_json::Value;
 
-/// The coefficients of a result document, by name: value and U95.
-fn coefficients(doc: &Value) -> Vec<(String, f64, f64)> {
-    doc["coefficients"]
-        .as_object()
-        .unwrap()
-        .iter()
-        .map(|(k, c)| {
-            (
-                k.clone(),
-                c["value"].as_f64().unwrap(),
-                c["U95"].as_f64().unwrap_or(0.0),
-            )
-        })
-        .collect()
-}
-
 /// A 60 s, 100 Hz gyro record without `time_s`, and the same record
 /// after an MPU-6050 logger's preamble.
 fn logger_pair(dir: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf) {
@@ -71,7 +55,7 @@ fn a_logger_preamble_is_read_past_recorded_and_its_rate_used() {
         "--json",
     ]));
     let got = json_of(&run(&["noise", "--input", p(&log), "--json"]));
-    assert_eq!(coefficients(&got), coefficients(&want));
+    assert_eq!(coefficient_values(&got), coefficient_values(&want));
     assert_eq!(got["options"]["rate_hz"], 100.0);
     let pre = got["preamble"].as_array().unwrap();
     let lines: Vec<(u64, &str, &str)> = pre
@@ -119,7 +103,7 @@ fn a_logger_preamble_is_read_past_recorded_and_its_rate_used() {
         "4",
         "--json",
     ]));
-    assert_eq!(coefficients(&named), coefficients(&want));
+    assert_eq!(coefficient_values(&named), coefficient_values(&want));
     refused(
         &run(&["noise", "--input", p(&log), "--header-line", "9"]),
         &["log.csv:9: --header-line 9: this line holds '"],

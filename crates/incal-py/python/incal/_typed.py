@@ -19,8 +19,19 @@ from typing import Any, Dict, List, Optional, Tuple
 from ._incal import _reduce, _reduce_record
 
 #: Keywords of the input layer: ``columns`` (``NAME=HEADER,…``, a dict
-#: ``{name: header}`` or a list of names), ``delimiter`` and ``header_line``.
-READ = ("columns", "delimiter", "header_line")
+#: ``{name: header}`` or a list of names), ``delimiter``, ``header_line``
+#: and the segmentation of a rig log (``segment_by``, ``segment_tolerance``,
+#: ``segment_settle_s``, ``segment_min_s``, ``segment_values``).
+READ = (
+    "columns",
+    "delimiter",
+    "header_line",
+    "segment_by",
+    "segment_tolerance",
+    "segment_settle_s",
+    "segment_min_s",
+    "segment_values",
+)
 #: Keywords added to the document by the core after the reduction.
 FINISH = ("serial", "model", "meta", "output_unit", "limits", "fail_on")
 
@@ -107,11 +118,12 @@ def _document(value: Any) -> Dict[str, Any]:
 
 
 def _read_value(key: str, value: Any) -> str:
-    if key == "columns":
-        if isinstance(value, dict):
-            return ",".join(f"{k}={v}" for k, v in value.items())
-        if isinstance(value, (list, tuple)):
-            return ",".join(str(v) for v in value)
+    if key == "columns" and isinstance(value, dict):
+        return ",".join(f"{k}={v}" for k, v in value.items())
+    if hasattr(value, "tolist") and not isinstance(value, (str, bytes)):
+        value = value.tolist()
+    if key in ("columns", "segment_values") and isinstance(value, (list, tuple)):
+        return ",".join(repr(float(v)) if key == "segment_values" else str(v) for v in value)
     return str(value)
 
 

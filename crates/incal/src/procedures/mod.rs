@@ -21,6 +21,7 @@ pub mod noise;
 pub mod registry;
 pub mod repeatability;
 pub mod response;
+pub mod segmented;
 pub mod sensitivity;
 pub mod sim_plan;
 pub mod stream;
@@ -190,12 +191,28 @@ pub fn reduce_source<P: Procedure, R: Read>(
     if let Ok(v) = serde_json::to_value(options) {
         crate::options::check_magnitudes(&v)?;
     }
-    let mut rows = incal_io::Reader::new(name, src, read)?;
-    let stated = stated_rate::<P>(name, rows.preamble(), options)?;
+    let (mut rows, original) = segmented::open(name, src, read)?;
+    let preamble = match &original {
+        Some(o) => o.summary.preamble.clone(),
+        None => rows.preamble().to_vec(),
+    };
+    let stated = stated_rate::<P>(name, &preamble, options)?;
     let options = stated.as_ref().unwrap_or(options);
+    let carried = match &original {
+        Some(o) => segmented::carry::<P>(options, o)?,
+        None => None,
+    };
+    let options = carried.as_ref().map_or(options, |c| &c.0);
     let input = P::read(&mut rows, options).map_err(|e| e.in_file(name))?;
-    let summary = rows.finish()?;
+    let mut summary = rows.finish()?;
+    if let Some(o) = &original {
+        summary.sha256 = o.summary.sha256.clone();
+        summary.rows = o.summary.rows;
+    }
     let mut doc = P::reduce(&input, options, progress).map_err(|e| e.in_file(name))?;
+    if let Some(o) = &original {
+        segmented::record(&mut doc, o, carried.as_ref().map(|c| (c.1, c.2)))?;
+    }
     let path = if name == incal_io::source::STDIN_NAME {
         "-"
     } else {
@@ -217,7 +234,7 @@ pub fn reduce_source<P: Procedure, R: Read>(
         crate::options::check_magnitudes_at(value, key)?;
     }
     record_environment(&mut doc, &summary.conditions);
-    record_preamble(&mut doc, &summary.preamble);
+    record_preamble(&mut doc, &preamble);
     Ok(doc)
 }
 

@@ -156,6 +156,23 @@ pub fn refused(o: &Output, needles: &[&str]) {
     }
 }
 
+/// The coefficients of result document `doc`, in its order: name, value
+/// and U95 (0 where it has none).
+pub fn coefficient_values(doc: &Value) -> Vec<(String, f64, f64)> {
+    doc["coefficients"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .map(|(k, c)| {
+            (
+                k.clone(),
+                c["value"].as_f64().unwrap(),
+                c["U95"].as_f64().unwrap_or(0.0),
+            )
+        })
+        .collect()
+}
+
 /// The messages of the warnings of result document `v` with `code`.
 pub fn warnings_with<'a>(v: &'a Value, code: &str) -> Vec<&'a str> {
     v["warnings"]
