@@ -44,6 +44,9 @@ pub struct ReadArgs {
         allow_hyphen_values = true
     )]
     pub segment_values: Vec<f64>,
+    /// A converter's full scale in the columns' own unit: two or more samples in a row at or beyond it are named as clipped (a `clipped` warning with their lines); integer converters' ends (-32768, 32767, 65535, ...) always are. `mag` refuses a magnetometer reading at or beyond it (saturated).
+    #[arg(long, value_name = "X")]
+    pub full_scale: Option<f64>,
 }
 
 impl ReadArgs {
@@ -70,6 +73,14 @@ impl ReadArgs {
                 &self.segment_values,
             )
             .map_err(CliError::Input)?,
+            full_scale: match self.full_scale {
+                Some(x) if !(x.is_finite() && x > 0.0) => {
+                    return Err(CliError::Input(format!(
+                        "--full-scale: {x} is not a positive full scale"
+                    )))
+                }
+                x => x,
+            },
             ..ReadOptions::default()
         })
     }

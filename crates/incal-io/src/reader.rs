@@ -29,8 +29,10 @@ use std::io::Read;
 
 mod frames;
 pub mod preamble;
+pub mod rails;
 
 pub use preamble::{stated_rate_hz, PreambleLine, FOLLOWING, SCAN_BYTES, SCAN_RECORDS};
+pub use rails::{at_rail, Clipped};
 
 use sha2::Digest;
 
@@ -70,6 +72,10 @@ pub struct ReadOptions {
     /// Cut a continuous log into plateaus of a rig channel first
     /// ([`crate::segments`]; reductions only, a stream refuses it).
     pub segment: Option<crate::segments::SegmentSpec>,
+    /// A converter's full scale (`--full-scale`, in the columns' own
+    /// unit): a value of at least this magnitude is at a rail
+    /// ([`rails`]); the integer converters' ends always are.
+    pub full_scale: Option<f64>,
 }
 
 impl Default for ReadOptions {
@@ -82,6 +88,7 @@ impl Default for ReadOptions {
             frames: false,
             header_line: None,
             segment: None,
+            full_scale: None,
         }
     }
 }
@@ -214,6 +221,9 @@ pub struct Summary {
     pub conditions: Vec<Condition>,
     /// The lines before the header ([`preamble`]).
     pub preamble: Vec<PreambleLine>,
+    /// Columns that sat at a converter's rail for two rows or more
+    /// ([`rails`]).
+    pub clipped: Vec<Clipped>,
 }
 
 /// Columns summarised as the environment of a recording, whatever the
@@ -268,6 +278,8 @@ pub struct Reader<R> {
     /// Start of bytes the buffer keeps while the header is looked for.
     hold: Option<usize>,
     preamble: Vec<PreambleLine>,
+    rails: Vec<rails::Watch>,
+    full_scale: Option<f64>,
 }
 
 /// One data row; cells are trimmed text of the file.
@@ -314,12 +326,15 @@ impl<R: Read> Reader<R> {
             frames: opts.frames,
             hold: None,
             preamble: Vec::new(),
+            rails: Vec::new(),
+            full_scale: opts.full_scale,
         };
         if opts.frames {
             r.read_frame_header(opts)?;
         } else {
             r.read_header(opts)?;
         }
+        r.rails = rails::Watch::columns(&r.header);
         r.conditions = CONDITION_COLUMNS
             .iter()
             .filter_map(|n| {
@@ -397,6 +412,20 @@ impl<R: Read> Reader<R> {
                     c.max = c.max.max(v);
                 }
             }
+            let data = match self.cells {
+                Cells::Buffer => &self.buf,
+                Cells::Scratch => &self.scratch,
+            };
+            for w in &mut self.rails {
+                let k = w.col();
+                let (a, b) = self.fields[k];
+                w.push(
+                    &data[a as usize..b as usize],
+                    self.header.is_numeric(k),
+                    self.row_line,
+                    self.full_scale,
+                );
+            }
             return Ok(Some(Row {
                 header: &self.header,
                 data: match self.cells {
@@ -434,6 +463,13 @@ impl<R: Read> Reader<R> {
                 .filter(|c| c.count > 0)
                 .collect(),
             preamble: self.preamble,
+            clipped: {
+                let (header, fs) = (&self.header, self.full_scale);
+                self.rails
+                    .into_iter()
+                    .flat_map(|w| w.finish(header, fs))
+                    .collect()
+            },
         })
     }
 

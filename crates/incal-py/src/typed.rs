@@ -180,6 +180,7 @@ struct ReadSpec {
     segment_settle_s: Option<String>,
     segment_min_s: Option<String>,
     segment_values: Option<String>,
+    full_scale: Option<String>,
 }
 
 /// A number of a read option (`key`), or the option named.
@@ -241,6 +242,15 @@ fn read_options(spec: &str) -> Result<incal_io::ReadOptions, Outcome> {
         &values,
     )
     .map_err(|m| bad("segment_by", m))?;
+    read.full_scale = number("full_scale", &spec.full_scale)?;
+    if let Some(x) = read.full_scale {
+        if !(x.is_finite() && x > 0.0) {
+            return Err(bad(
+                "full_scale",
+                format!("{x} is not a positive full scale"),
+            ));
+        }
+    }
     Ok(read)
 }
 

@@ -83,3 +83,22 @@ def test_a_rig_log_is_segmented_as_the_cli_does(tmp_path):
     assert got.document["segmentation"]["column"] == "angle_deg"
     with pytest.raises(incal.InputError, match="segment_tolerance"):
         incal.tumble(str(log), mount="pendulum", segment_by="angle_deg", segment_tolerance="wide")
+
+
+def test_clipped_samples_are_named(tmp_path):
+    """A 16-bit channel pinned at -32768 for 16 rows is named with its
+    lines; with ``full_scale`` a run at it is too."""
+    rows = ["time_s,gx"]
+    for k in range(2000):
+        v = -32768 if 100 <= k <= 115 else (30 if 800 <= k <= 803 else (k * 7919) % 61 - 30)
+        rows.append(f"{k / 100!r},{v}")
+    path = tmp_path / "counts.csv"
+    path.write_text("\n".join(rows) + "\n")
+    r = incal.noise(str(path), deviations="oadev")
+    clipped = [w["message"] for w in r.document["warnings"] if w["code"] == "clipped"]
+    assert clipped == [
+        "gx sits at the rail -32768 in 16 samples (1 run: lines 102-117): "
+        "clipped, they are not what the sensor sensed"
+    ]
+    r = incal.noise(str(path), deviations="oadev", full_scale=29.5)
+    assert any("rail 30 in 4 samples" in w["message"] for w in r.document["warnings"])

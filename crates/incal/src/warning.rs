@@ -75,6 +75,10 @@ pub enum WarningCode {
     /// A channel sits at its extreme value in many rows (a converter at
     /// full scale).
     Saturated,
+    /// Samples at a converter's rail (an integer converter's end or
+    /// `--full-scale`) for two rows or more: named with their rows
+    /// ([`incal_io::reader::rails`]).
+    Clipped,
     /// Rows out of time order were put in order (`--sort-time`).
     TimeSorted,
     /// The data's magnitudes contradict the unit given (an accelerometer
@@ -138,6 +142,7 @@ impl WarningCode {
             WarningCode::TimeGaps => "time-gaps",
             WarningCode::Spikes => "spikes",
             WarningCode::Saturated => "saturated",
+            WarningCode::Clipped => "clipped",
             WarningCode::TimeSorted => "time-sorted",
             WarningCode::UnitSuspect => "unit-suspect",
             WarningCode::MissingSamples => "missing-samples",

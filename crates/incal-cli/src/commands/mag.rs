@@ -84,9 +84,6 @@ pub struct MagArgs {
     /// The magnetometer's axes from the file's columns, e.g. y,x,-z (an AK8963 beside its MPU-9250's accelerometer).
     #[arg(long, default_value = "x,y,z", allow_hyphen_values = true)]
     pub axes: String,
-    /// The magnetometer's full scale (raw units): a reading at or beyond it is saturated and refused.
-    #[arg(long)]
-    pub full_scale: Option<f64>,
     /// Do not fit the alignment to the accelerometer.
     #[arg(long)]
     pub no_alignment: bool,
@@ -173,7 +170,9 @@ pub fn run(a: &MagArgs) -> CliResult<()> {
         u_inclination_deg: a.u_inclination_deg,
         unit: a.unit.into(),
         axes: a.axes.clone(),
-        full_scale: a.full_scale,
+        // The input layer's --full-scale: for mag, a reading at or beyond
+        // it is saturated and refused.
+        full_scale: a.read.full_scale,
         no_alignment: a.no_alignment,
         static_tolerance: a.static_tolerance,
         max_rate: a.max_rate,

@@ -256,3 +256,70 @@ fn the_stamps_give_the_rate_wherever_time_s_is_there() {
         }
     }
 }
+
+#[test]
+fn samples_at_a_rail_are_named_with_their_lines() {
+    let dir = workdir("rig_logs_clipped");
+    // A 16-bit gyro record pinned at -32768 for 16 samples (lines 102-117)
+    // and at 32767 for one sample (not a run).
+    // gy: an unsigned 16-bit channel near mid-scale, at 32767 twice in a
+    // row but with values above it: not a rail.
+    let mut text = String::from("time_s,gx,gy\n");
+    for k in 0..2000 {
+        let v = match k {
+            100..=115 => -32768.0,
+            500 => 32767.0,
+            800..=803 => 30.0,
+            _ => (((k * 7919) % 61) as f64) - 30.0,
+        };
+        let gy = if (300..302).contains(&k) {
+            32767
+        } else {
+            32760 + (k * 13) % 17
+        };
+        text.push_str(&format!("{},{v},{gy}\n", k as f64 / 100.0));
+    }
+    let f = dir.join("counts.csv");
+    std::fs::write(&f, &text).unwrap();
+    let v = json_of(&run(&["noise", "--input", p(&f), "--json"]));
+    let clipped = warnings_with(&v, "clipped");
+    assert_eq!(clipped.len(), 1, "{}", v["warnings"]);
+    assert!(
+        clipped[0].contains("gx sits at the rail -32768 in 16 samples (1 run: lines 102-117)"),
+        "{}",
+        clipped[0]
+    );
+    // A full scale given: 4 samples at or beyond 29.5 in a row are clipped
+    // too; angles of 255 deg (an 8-bit end) are not.
+    let v = json_of(&run(&[
+        "noise",
+        "--input",
+        p(&f),
+        "--full-scale",
+        "29.5",
+        "--json",
+    ]));
+    assert!(warnings_with(&v, "clipped").len() >= 2, "{}", v["warnings"]);
+    let t = dir.join("tumble.csv");
+    let mut tt = String::from("angle_deg,output\n");
+    for a in [0, 45, 90, 135, 180, 225, 255, 270, 315] {
+        for k in 0..4 {
+            let x = (a as f64).to_radians();
+            tt.push_str(&format!("{a},{}\n", 0.1 + x.sin() + 1e-6 * k as f64));
+        }
+    }
+    std::fs::write(&t, tt).unwrap();
+    let v = json_of(&run(&[
+        "tumble",
+        "--mount",
+        "pendulum",
+        "--input",
+        p(&t),
+        "--json",
+    ]));
+    assert!(warnings_with(&v, "clipped").is_empty(), "{}", v["warnings"]);
+    refused(
+        &run(&["noise", "--input", p(&f), "--full-scale", "0"]),
+        &["--full-scale: 0 is not a positive full scale"],
+    );
+}

@@ -31,6 +31,7 @@ COMMON = {
     "segment_settle_s": "Optional[float]",
     "segment_min_s": "Optional[float]",
     "segment_values": "Union[str, Sequence[float], None]",
+    "full_scale": "Optional[float]",
     "serial": "Optional[str]",
     "model": "Optional[str]",
     "meta": "Union[str, Sequence[str], Mapping[str, Any], None]",

@@ -21,7 +21,8 @@ from ._incal import _reduce, _reduce_record
 #: Keywords of the input layer: ``columns`` (``NAME=HEADER,…``, a dict
 #: ``{name: header}`` or a list of names), ``delimiter``, ``header_line``
 #: and the segmentation of a rig log (``segment_by``, ``segment_tolerance``,
-#: ``segment_settle_s``, ``segment_min_s``, ``segment_values``).
+#: ``segment_settle_s``, ``segment_min_s``, ``segment_values``) and
+#: ``full_scale``.
 READ = (
     "columns",
     "delimiter",
@@ -31,6 +32,7 @@ READ = (
     "segment_settle_s",
     "segment_min_s",
     "segment_values",
+    "full_scale",
 )
 #: Keywords added to the document by the core after the reduction.
 FINISH = ("serial", "model", "meta", "output_unit", "limits", "fail_on")

@@ -235,6 +235,7 @@ pub fn reduce_source<P: Procedure, R: Read>(
     }
     record_environment(&mut doc, &summary.conditions);
     record_preamble(&mut doc, &preamble);
+    doc.warnings.extend(clipped_warnings(&summary.clipped));
     Ok(doc)
 }
 
@@ -288,6 +289,30 @@ fn stated_rate<P: Procedure>(
         _ => Ok(None),
     }
 }
+/// The `clipped` warnings of a recording's columns that sat at a
+/// converter's rail ([`incal_io::Clipped`]), one per column and rail.
+pub fn clipped_warnings(clipped: &[incal_io::Clipped]) -> Vec<crate::warning::Warning> {
+    clipped
+        .iter()
+        .map(|c| {
+            let lines: Vec<String> = c.lines.iter().map(|(a, b)| format!("{a}-{b}")).collect();
+            let more = if c.runs > c.lines.len() { ", ..." } else { "" };
+            crate::warning::Warning::new(
+                crate::warning::WarningCode::Clipped,
+                format!(
+                    "{} sits at the rail {} in {} samples ({} run{}: lines {}{more}): clipped, they are not what the sensor sensed",
+                    incal_io::clip(&c.column),
+                    c.value,
+                    c.samples,
+                    c.runs,
+                    if c.runs == 1 { "" } else { "s" },
+                    lines.join(", ")
+                ),
+            )
+        })
+        .collect()
+}
+
 /// Record the lines before a recording's header (its logger's preamble,
 /// [`incal_io::PreambleLine`]) as the document's `preamble`: `[{line, key,
 /// value}]` in file order.

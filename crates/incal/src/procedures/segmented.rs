@@ -50,6 +50,7 @@ pub fn open<'a, R: Read + 'a>(
         header_line: None,
         segment: None,
         max_line_bytes: read.max_line_bytes,
+        full_scale: read.full_scale,
     };
     let text: Box<dyn Read + 'a> = Box::new(std::io::Cursor::new(segmented.text.clone()));
     let rows = incal_io::Reader::new(name, text, &again)?;
