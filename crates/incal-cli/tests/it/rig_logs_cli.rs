@@ -323,3 +323,97 @@ fn samples_at_a_rail_are_named_with_their_lines() {
         &["--full-scale: 0 is not a positive full scale"],
     );
 }
+
+/// An autocalibration session whose gyro is scaled by `gain` and, when
+/// `clip`, held within a 16-bit converter's range.
+fn gyro_counts(text: &str, gain: f64, clip: bool) -> String {
+    let mut out = String::new();
+    for (i, line) in text.lines().filter(|l| !l.starts_with('#')).enumerate() {
+        if i == 0 {
+            out.push_str(line);
+        } else {
+            let mut cells: Vec<String> = line.split(',').map(str::to_string).collect();
+            for c in &mut cells[4..7] {
+                let v = c.parse::<f64>().unwrap() * gain;
+                *c = if clip {
+                    format!("{}", v.round().clamp(-32768.0, 32767.0))
+                } else {
+                    format!("{v}")
+                };
+            }
+            out.push_str(&cells.join(","));
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// The gyro gain: peaks of about 50 000 counts, clipped at 32 767.
+const GAIN: f64 = 24.0;
+
+#[test]
+fn clipped_rotations_are_left_out_of_the_autocalibration() {
+    let dir = workdir("rig_logs_clipped_autocal");
+    let sim = dir.join("session.csv");
+    ok(&run(&[
+        "simulate",
+        "imu",
+        "--sequence",
+        "random",
+        "--orientations",
+        "14",
+        "--init-static-s",
+        "3",
+        "--static-s",
+        "2",
+        "--move-s",
+        "1.5",
+        "--seed",
+        "5",
+        "-o",
+        p(&sim),
+    ]));
+    let text = std::fs::read_to_string(&sim).unwrap();
+    let (clean, clipped) = (dir.join("clean.csv"), dir.join("clipped.csv"));
+    std::fs::write(&clean, gyro_counts(&text, GAIN, false)).unwrap();
+    std::fs::write(&clipped, gyro_counts(&text, GAIN, true)).unwrap();
+    let reduce = |f: &std::path::Path| {
+        json_of(&run(&[
+            "imu",
+            "autocal",
+            "--input",
+            p(f),
+            "--init-static-s",
+            "3",
+            "--json",
+        ]))
+    };
+    let (a, b) = (reduce(&clean), reduce(&clipped));
+    assert!(warnings_with(&a, "clipped").is_empty(), "{}", a["warnings"]);
+    let named = warnings_with(&b, "clipped");
+    assert!(
+        named.iter().any(|w| w.contains("sits at the rail")),
+        "{named:?}"
+    );
+    let left_out = named
+        .iter()
+        .find(|w| w.contains("motions between still intervals hold gyro samples"))
+        .unwrap_or_else(|| panic!("{named:?}"));
+    println!("{left_out}");
+    // Integrated, the clipped rotations would fail the fit (the real
+    // MPU-6050 session's chi-square p = 0, blamed on motion or the model).
+    assert!(
+        warnings_with(&b, "lack-of-fit").is_empty(),
+        "{}",
+        b["warnings"]
+    );
+    // Fewer rotations, the same gyro calibration within its U95.
+    for (name, x, _) in coefficient_values(&a)
+        .into_iter()
+        .filter(|c| c.0.starts_with("gyr."))
+    {
+        let c = &b["coefficients"][&name];
+        let (y, u) = (c["value"].as_f64().unwrap(), c["U95"].as_f64().unwrap());
+        assert!((x - y).abs() <= u, "{name}: {x} vs {y} (U95 {u})");
+    }
+}

@@ -131,7 +131,8 @@ fn fit_warnings(best: &Candidate, acc_fit: &Fit, gyro: Option<&GyroFit>) -> Vec<
 }
 
 /// The warnings of the record: spikes mended, left out or reported, the
-/// motions left out across time gaps, and too few distinct orientations.
+/// motions left out across time gaps or for clipped gyro samples, and too
+/// few distinct orientations.
 fn record_warnings(
     s: &Session,
     intervals: &[Interval],
@@ -162,6 +163,30 @@ fn record_warnings(
             format!(
                 "{across} of {} motions between still intervals span a time gap and are left out of the gyro fit (a rotation cannot be integrated across missing samples)",
                 intervals.len() - 1
+            ),
+        ));
+    }
+    let clipped: &[usize] = gyro.map_or(&[], |g| &g.clipped);
+    if !clipped.is_empty() {
+        let at: Vec<String> = clipped
+            .iter()
+            .take(5)
+            .map(|&k| {
+                format!(
+                    "{:.3}-{:.3} s",
+                    s.time[intervals[k].end],
+                    s.time[intervals[k + 1].start - 1]
+                )
+            })
+            .collect();
+        warnings.push(Warning::new(
+            WarningCode::Clipped,
+            format!(
+                "{} of {} motions between still intervals hold gyro samples at a converter's rail ({}{}) and are left out of the gyro fit (a clipped rotation integrates to the wrong angle)",
+                clipped.len(),
+                intervals.len() - 1,
+                at.join(", "),
+                if clipped.len() > 5 { ", ..." } else { "" }
             ),
         ));
     }

@@ -172,19 +172,63 @@ fn gravity_direction(s: &Session, xa: &DVector<f64>, iv: &Interval) -> V3 {
     p.apply(&V3::from(m)).normalize()
 }
 
+/// Gyro samples at a converter's rail: an axis two or more samples in a
+/// row at its own extreme when that extreme is an integer converter's end
+/// ([`incal_io::at_rail`]; the input layer's `clipped` rule).
+pub(super) fn clipped_samples(gy: &[[f64; 3]]) -> Vec<bool> {
+    let mut out = vec![false; gy.len()];
+    for k in 0..3 {
+        let (lo, hi) = gy
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), g| {
+                (a.min(g[k]), b.max(g[k]))
+            });
+        for rail in [lo, hi] {
+            if !incal_io::at_rail(rail, None) {
+                continue;
+            }
+            for i in 0..gy.len() {
+                let here = gy[i][k] == rail;
+                let next = gy.get(i + 1).is_some_and(|g| g[k] == rail);
+                let prev = i > 0 && gy[i - 1][k] == rail;
+                if here && (next || prev) {
+                    out[i] = true;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The motions (index among the intervals' gaps) that hold a clipped gyro
+/// sample ([`clipped_samples`]).
+pub(super) fn clipped_motions(gy: &[[f64; 3]], intervals: &[Interval]) -> Vec<usize> {
+    let clipped = clipped_samples(gy);
+    if !clipped.contains(&true) {
+        return Vec::new();
+    }
+    intervals
+        .windows(2)
+        .enumerate()
+        .filter(|(_, w)| clipped[w[0].end..w[1].start].contains(&true))
+        .map(|(k, _)| k)
+        .collect()
+}
+
 /// The motions between consecutive still intervals, with gravity
 /// directions under the accelerometer parameters `xa`; a motion across a
-/// time gap is left out.
+/// time gap, or holding a clipped gyro sample, is left out.
 pub(super) fn motions(
     s: &Session,
     gy: &[[f64; 3]],
     intervals: &[Interval],
     xa: &DVector<f64>,
 ) -> Vec<Motion> {
+    let clipped = clipped_motions(gy, intervals);
     intervals
         .windows(2)
         .enumerate()
-        .filter(|(_, w)| !s.spans_gap(w[0].end, w[1].start))
+        .filter(|(k, w)| !s.spans_gap(w[0].end, w[1].start) && !clipped.contains(k))
         .map(|(from, w)| {
             let (i0, i1) = (w[0].end, w[1].start - 1);
             let g0 = gravity_direction(s, xa, &w[0]);
@@ -235,6 +279,8 @@ pub(super) struct GyroFit {
     pub start_spikes: usize,
     /// Gyro samples standing out between the still intervals (incal).
     pub in_motion: usize,
+    /// Motions left out for clipped gyro samples ([`clipped_motions`]).
+    pub clipped: Vec<usize>,
 }
 
 /// The gyro fit (module docs) on the kept still `intervals`, with the
@@ -250,6 +296,13 @@ pub(super) fn gyro_fit(
     let start = start_bias(s, gy);
     let bias = V3::from(start.mean);
     let motions = motions(s, gy, intervals, x_acc);
+    if motions.len() < 3 {
+        return Err(crate::Error::Unsupported(format!(
+            "{} of {} motions between still intervals can be integrated (the others span a time gap or hold gyro samples at a converter's rail): the gyro needs at least 3",
+            motions.len(),
+            intervals.len().saturating_sub(1)
+        )));
+    }
     let project = s.opts.method == Method::Incal;
     let sg = scale_start(&motions, &bias);
     let s0 = s.opts.init.gyro_scale.unwrap_or([sg; 3]);
@@ -302,5 +355,6 @@ pub(super) fn gyro_fit(
         cov: c,
         start_spikes: start.dropped,
         in_motion,
+        clipped: clipped_motions(gy, intervals),
     })
 }
