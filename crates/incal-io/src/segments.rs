@@ -20,7 +20,8 @@
 //!   values (`--segment-values`) in order, or, without a list, the mean of
 //!   its kept rows, pooled with every other plateau whose mean agrees
 //!   within the tolerance (a position or speed visited again gets one
-//!   value); a value within the tolerance of zero is zero (at rest). A plateau matches a planned value within half the
+//!   value); a value within the tolerance of zero is zero (at rest; not
+//!   for `temperature_c`). A plateau matches a planned value within half the
 //!   smallest step between planned values (at least ten tolerances);
 //!   a planned value with no plateau, or a plateau that matches no planned
 //!   value, is refused naming its time.
@@ -93,11 +94,19 @@ impl SegmentSpec {
                 ));
             }
         }
-        for (name, v) in [("--segment-settle-s", settle_s), ("--segment-min-s", min_s)] {
-            if let Some(v) = v {
-                if !(v.is_finite() && (0.0..=1e7).contains(&v)) {
-                    return Err(format!("{name}: {v} is not a time in s (0 to 1e7)"));
-                }
+        if let Some(v) = settle_s {
+            if !(v.is_finite() && (0.0..=1e7).contains(&v)) {
+                return Err(format!(
+                    "--segment-settle-s: {v} is not a time in s (0 to 1e7)"
+                ));
+            }
+        }
+        if let Some(v) = min_s {
+            // Zero would make every moving row a plateau of its own.
+            if !(v.is_finite() && v > 0.0 && v <= 1e7) {
+                return Err(format!(
+                    "--segment-min-s: {v} is not a time in s (above 0, at most 1e7)"
+                ));
             }
         }
         if let Some(v) = values.iter().find(|v| !(v.is_finite() && v.abs() <= 1e15)) {
@@ -320,7 +329,7 @@ fn build(
         ));
     }
     if spec.values.is_empty() {
-        pool(&mut segments, tol);
+        pool(&mut segments, tol, spec.column != "temperature_c");
     } else {
         assign(file, &spec.values, &mut segments, tol)?;
     }
@@ -343,7 +352,7 @@ fn build(
 /// Without a plan: plateaus whose means agree within the tolerance (a
 /// position visited again, a speed set again) share one value, the mean
 /// of their rows; every other plateau keeps its own mean.
-fn pool(segments: &mut [Segment], tol: &dyn Fn(f64) -> f64) {
+fn pool(segments: &mut [Segment], tol: &dyn Fn(f64) -> f64, rests_at_zero: bool) {
     let mut groups: Vec<(f64, f64, Vec<usize>)> = Vec::new(); // (sum, rows, members)
     for (k, s) in segments.iter().enumerate() {
         let n = s.rows_kept as f64;
@@ -361,7 +370,7 @@ fn pool(segments: &mut [Segment], tol: &dyn Fn(f64) -> f64) {
     }
     for (sum, rows, members) in groups {
         // At rest: a stopped table or centrifuge reads zero.
-        let value = if (sum / rows).abs() <= tol(0.0) {
+        let value = if rests_at_zero && (sum / rows).abs() <= tol(0.0) {
             0.0
         } else {
             sum / rows
@@ -386,7 +395,14 @@ fn assign(
             step = step.min((w[1] - w[0]).abs());
         }
     }
-    let window = |v: f64| (step / 2.0).max(10.0 * tol(v));
+    // One planned value (or one repeated): ten tolerances.
+    let window = |v: f64| {
+        if step.is_finite() {
+            (step / 2.0).max(10.0 * tol(v))
+        } else {
+            10.0 * tol(v)
+        }
+    };
     let mut j = 0;
     for (k, s) in segments.iter_mut().enumerate() {
         let near = |v: f64| (s.mean - v).abs() < window(v);
@@ -452,9 +468,11 @@ fn rewrite(
     };
     pad(&mut out, &mut line, h.line());
     let names: Vec<String> = h.names().iter().map(|n| csv_text(n).into_owned()).collect();
-    out.extend_from_slice(names.join(",").as_bytes());
+    let text = names.join(",");
+    // A quoted cell may hold line breaks: the lines count on by them.
+    line += 1 + text.matches('\n').count();
+    out.extend_from_slice(text.as_bytes());
     out.push(b'\n');
-    line += 1;
     for (r, v) in value_of.iter().enumerate() {
         let Some(v) = v else { continue };
         pad(&mut out, &mut line, table.line(r));
@@ -467,9 +485,10 @@ fn rewrite(
                 }
             })
             .collect();
-        out.extend_from_slice(cells.join(",").as_bytes());
+        let text = cells.join(",");
+        line += 1 + text.matches('\n').count();
+        out.extend_from_slice(text.as_bytes());
         out.push(b'\n');
-        line += 1;
     }
     out
 }

@@ -466,6 +466,59 @@ fn a_log_is_cut_into_plateaus_on_its_own_lines() {
     );
 }
 
+#[test]
+fn the_header_search_keeps_old_files_readable() {
+    // Over 128 KiB of comments before the header: read as before.
+    let mut text = "# a long note\n".repeat(20_000);
+    text.push_str("x,y\n1,2\n");
+    let t = table(text.as_bytes()).unwrap();
+    assert_eq!((t.header().line(), t.row_count()), (20_001, 1));
+    // A later row that its own delimiter cannot split ends the search.
+    let t = table(b"label;x\na,\"b\";1\n").unwrap();
+    assert_eq!(cells(&t), [["a,\"b\"", "1"]]);
+}
+
+#[test]
+fn clipped_runs_need_a_rail_that_is_the_columns_extreme() {
+    let mut text = String::from("time_s,gx,status,gy\n");
+    for k in 0..50 {
+        let gx = if (10..13).contains(&k) {
+            "+32767".to_string()
+        } else {
+            format!("{}", k % 7)
+        };
+        let gy = if k < 2 { "-32768" } else { "-32769" };
+        text.push_str(&format!("{k},{gx},65535,{gy}\n"));
+    }
+    let mut r = Reader::new("f.csv", text.as_bytes(), &ReadOptions::default()).unwrap();
+    while r.next_row().unwrap().is_some() {}
+    let s = r.finish().unwrap();
+    // gx: 3 rows at +32767; status always 65535 (a status word); gy below
+    // -32768 elsewhere (not its extreme).
+    assert_eq!(s.clipped.len(), 1, "{:?}", s.clipped);
+    assert_eq!(
+        (s.clipped[0].column.as_str(), s.clipped[0].samples),
+        ("gx", 3)
+    );
+    assert_eq!(s.clipped[0].lines, [(12, 14)]);
+}
+
+#[test]
+fn a_plan_of_one_value_matches_within_ten_tolerances() {
+    let text = head_log(&[(50.0, 30)]);
+    let t = Table::from_bytes("head.csv", text.as_bytes(), &ReadOptions::default()).unwrap();
+    let spec = SegmentSpec {
+        column: "angle_deg".into(),
+        values: vec![100.0],
+        ..SegmentSpec::default()
+    };
+    let e = crate::segments::segment(&t, &spec).unwrap_err().to_string();
+    assert!(
+        e.contains("a plateau at t = 0.5 s (mean 50") && e.contains("next planned value 100"),
+        "{e}"
+    );
+}
+
 proptest! {
     /// Whatever a table holds, writing it and reading it back in chunks of
     /// any size gives the same cells, numbers bit for bit.

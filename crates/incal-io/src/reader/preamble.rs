@@ -50,20 +50,18 @@ pub struct PreambleLine {
 /// The sample rate (Hz) a preamble states, with the line that states it:
 /// a key that is, ignoring case, spaces and punctuation, one of `fs`,
 /// `fs hz`, `sample rate`, `sampling rate`, `sampling frequency`,
-/// `sample frequency`, `rate hz`, `odr`, `output data rate` (each with an
-/// optional `hz` suffix), whose value is a positive finite number
+/// `sample frequency`, `odr`, `output data rate` (each with an optional
+/// `hz` suffix), whose value is a positive finite number
 /// (optionally followed by `Hz`).
 pub fn stated_rate_hz(preamble: &[PreambleLine]) -> Option<(f64, usize)> {
-    const KEYS: [&str; 9] = [
+    const KEYS: [&str; 7] = [
         "fs",
         "samplerate",
         "samplingrate",
         "samplingfrequency",
         "samplefrequency",
-        "rate",
         "odr",
         "outputdatarate",
-        "samplerateshz",
     ];
     preamble.iter().find_map(|p| {
         let key: String = p
@@ -86,6 +84,16 @@ pub fn stated_rate_hz(preamble: &[PreambleLine]) -> Option<(f64, usize)> {
             .filter(|r| r.is_finite() && *r > 0.0 && *r <= 1e9)
             .map(|r| (r, p.line))
     })
+}
+
+/// What the scan meets next.
+enum Peek {
+    /// A record's first line (buffer positions).
+    Line(usize, usize),
+    /// The end of the file.
+    End,
+    /// [`SCAN_BYTES`] held without reaching a record.
+    Limit,
 }
 
 /// A record scanned while looking for the header.
@@ -180,9 +188,14 @@ impl<R: Read> Reader<R> {
                 }
                 _ => {}
             }
-            let Some((a, b)) = self.peek_record_start()? else {
-                complete = true;
-                break;
+            let (a, b) = match self.peek_record_start(true)? {
+                Peek::Line(a, b) => (a, b),
+                Peek::End => {
+                    complete = true;
+                    break;
+                }
+                Peek::Limit if records.is_empty() => return self.first_record_as_header(opts),
+                Peek::Limit => break,
             };
             let raw = String::from_utf8_lossy(&self.buf[a..b]).into_owned();
             let delimiter = opts
@@ -193,9 +206,16 @@ impl<R: Read> Reader<R> {
             self.line -= 1;
             let line_before = self.line;
             self.header.delimiter = delimiter;
-            if !self.next_record()? {
-                complete = true;
-                break;
+            match self.next_record() {
+                Ok(true) => {}
+                Ok(false) => {
+                    complete = true;
+                    break;
+                }
+                // A later record that cannot be split on its own terms
+                // (its own delimiter): the scan ends before it.
+                Err(_) if !records.is_empty() => break,
+                Err(e) => return Err(e),
             }
             let data = self.cell_bytes();
             let cells = self
@@ -271,18 +291,47 @@ impl<R: Read> Reader<R> {
     }
 
     /// Skip blank and comment lines; the next record's first line as
-    /// buffer positions, the reader left after it (`None` at the end).
-    fn peek_record_start(&mut self) -> Result<Option<(usize, usize)>> {
+    /// buffer positions, the reader left after it. With `limit`, the scan
+    /// stops once [`SCAN_BYTES`] are held.
+    fn peek_record_start(&mut self, limit: bool) -> Result<Peek> {
         loop {
+            if limit && self.hold.is_some_and(|h| self.pos - h > SCAN_BYTES) {
+                return Ok(Peek::Limit);
+            }
             let Some((a, b)) = self.next_line()? else {
-                return Ok(None);
+                return Ok(Peek::End);
             };
             let first = self.buf[a..b].iter().position(|&c| c != b' ' && c != b'\t');
             match first {
                 None => continue,
                 Some(k) if self.buf[a + k] == b'#' => continue,
-                Some(_) => return Ok(Some((a, b))),
+                Some(_) => return Ok(Peek::Line(a, b)),
             }
         }
+    }
+
+    /// More than [`SCAN_BYTES`] of comments before any record: no preamble
+    /// is looked for, the first record is the header (the reader as it was
+    /// before preambles), the buffer no longer held.
+    fn first_record_as_header(&mut self, opts: &ReadOptions) -> Result<Vec<PreambleLine>> {
+        self.hold = None;
+        let Peek::Line(a, b) = self.peek_record_start(false)? else {
+            return Err(InputError::file(
+                &self.file,
+                "empty file (expected a header row)",
+            ));
+        };
+        self.header.delimiter = opts
+            .delimiter
+            .unwrap_or_else(|| detect_delimiter(&self.buf[a..b]));
+        self.pos = a;
+        self.line -= 1;
+        if !self.next_record()? {
+            return Err(InputError::file(
+                &self.file,
+                "empty file (expected a header row)",
+            ));
+        }
+        Ok(Vec::new())
     }
 }

@@ -14,8 +14,11 @@
 //! ([`crate::ReadOptions::full_scale`]), when `|value| ≥ X`. Two or more
 //! consecutive rows of one column at the same rail are clipped, when the
 //! rail is also the column's extreme (a 16-bit unsigned channel near its
-//! mid-scale 32767 with values above it is not at a rail). `time_s` and
-//! the environmental columns are not watched. Narrower ends (255,
+//! mid-scale 32767 with values above it is not at a rail), and when the
+//! column holds another value too (a column always at 65535 is a status
+//! word). Beyond `--full-scale` a run is at the rail of its sign (`±X`),
+//! whatever values it prints. `time_s` and the environmental columns are
+//! not watched. Narrower ends (255,
 //! 1023) are not rails here: they are ordinary angles and counts.
 
 use super::{parse_f64, Header};
@@ -59,7 +62,10 @@ pub fn at_rail(v: f64, full_scale: Option<f64>) -> bool {
 /// Could the text be a rail's value? A cheap test before parsing: an
 /// integer part of at least four digits (rails are ≥ 2047 in magnitude).
 fn may_be_rail(bytes: &[u8]) -> bool {
-    let digits = bytes.strip_prefix(b"-").unwrap_or(bytes);
+    let digits = bytes
+        .strip_prefix(b"-")
+        .or_else(|| bytes.strip_prefix(b"+"))
+        .unwrap_or(bytes);
     let int = digits.iter().take_while(|c| c.is_ascii_digit()).count();
     int >= 4 && !digits.iter().any(|&c| c == b'e' || c == b'E')
 }
@@ -73,6 +79,9 @@ pub(super) struct Watch {
     /// Extremes of the values parsed (every value of magnitude ≥ 1000).
     min: f64,
     max: f64,
+    /// A value not at a rail was seen (a column always at one rail is a
+    /// status word or a dead channel, not a clipped one).
+    other: bool,
 }
 
 impl Watch {
@@ -106,7 +115,16 @@ impl Watch {
             self.min = self.min.min(v);
             self.max = self.max.max(v);
         }
-        match value.filter(|v| at_rail(*v, fs)) {
+        // Beyond a full scale given, a run is at the rail of its sign
+        // (±full scale), whatever value the converter printed.
+        let rail = value.filter(|v| at_rail(*v, fs)).map(|v| match fs {
+            Some(fs) if v.abs() >= fs => fs.copysign(v),
+            _ => v,
+        });
+        if rail.is_none() && !bytes.is_empty() {
+            self.other = true;
+        }
+        match rail {
             Some(v) => match &mut self.current {
                 Some((w, _, last, n)) if *w == v => {
                     *last = line;
@@ -155,13 +173,15 @@ impl Watch {
     pub(super) fn finish(mut self, header: &Header, fs: Option<f64>) -> Vec<Clipped> {
         self.close();
         let name = &header.names()[self.col];
-        let (min, max) = (self.min, self.max);
+        let (min, max, other) = (self.min, self.max, self.other);
         self.found
             .into_iter()
             .filter(|c| {
-                fs.is_some_and(|fs| c.value.abs() >= fs)
-                    || (c.value > 0.0 && c.value >= max)
-                    || (c.value < 0.0 && c.value <= min)
+                let varies = other || min < max;
+                varies
+                    && (fs.is_some_and(|fs| c.value.abs() >= fs)
+                        || (c.value > 0.0 && c.value >= max)
+                        || (c.value < 0.0 && c.value <= min))
             })
             .map(|mut c| {
                 c.column = name.clone();

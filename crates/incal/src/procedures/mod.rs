@@ -198,17 +198,22 @@ pub fn reduce_source<P: Procedure, R: Read>(
     };
     let stated = stated_rate::<P>(name, &preamble, options)?;
     let options = stated.as_ref().unwrap_or(options);
+    // The options as given (and as the preamble settled them) are recorded;
+    // a plateau's u carried into a type-B input is in `segmentation`.
+    let given = options;
     let carried = match &original {
         Some(o) => segmented::carry::<P>(options, o)?,
         None => None,
     };
     let options = carried.as_ref().map_or(options, |c| &c.0);
     let input = P::read(&mut rows, options).map_err(|e| e.in_file(name))?;
-    let mut summary = rows.finish()?;
-    if let Some(o) = &original {
-        summary.sha256 = o.summary.sha256.clone();
-        summary.rows = o.summary.rows;
-    }
+    let read_back = rows.finish()?;
+    // A segmented log: the file's own hash, rows, environment and clipped
+    // runs, not those of the plateaus' text.
+    let summary = match &original {
+        Some(o) => o.summary.clone(),
+        None => read_back,
+    };
     let mut doc = P::reduce(&input, options, progress).map_err(|e| e.in_file(name))?;
     if let Some(o) = &original {
         segmented::record(&mut doc, o, carried.as_ref().map(|c| (c.1, c.2)))?;
@@ -227,7 +232,7 @@ pub fn reduce_source<P: Procedure, R: Read>(
             rows: Some(summary.rows as u64),
         },
     );
-    doc.options = P::recorded(&input, options)?;
+    doc.options = P::recorded(&input, given)?;
     // What the document echoes (some options are recorded apart from the
     // options' own form, such as a K1 and its source).
     for (key, value) in &doc.options {

@@ -157,16 +157,6 @@ impl ProcedureShape for Ramp {
         check_t_ref_c(o.t_ref_c)
     }
 
-    fn recorded(
-        input: &RampInput,
-        o: &RampOptions,
-    ) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
-        crate::procedures::options_map(&RampOptions {
-            rate_hz: Some(input.rate_hz),
-            ..o.clone()
-        })
-    }
-
     fn read<R: Read>(rows: &mut incal_io::Reader<R>, o: &RampOptions) -> Result<RampInput> {
         read(rows, o)
     }
