@@ -39,7 +39,7 @@ pub fn open<'a, R: Read + 'a>(
         ..read.clone()
     };
     let table = incal_io::Table::read(name, src, &whole, 0)?;
-    let segmented = incal_io::segments::segment(&table, spec)?;
+    let mut segmented = incal_io::segments::segment(&table, spec)?;
     let columns = incal_io::ColumnMap::from_entries(&segmented.selected)
         .map_err(|m| crate::Error::Unsupported(format!("--columns: {m}")))?;
     let again = incal_io::ReadOptions {
@@ -52,7 +52,9 @@ pub fn open<'a, R: Read + 'a>(
         max_line_bytes: read.max_line_bytes,
         full_scale: read.full_scale,
     };
-    let text: Box<dyn Read + 'a> = Box::new(std::io::Cursor::new(segmented.text.clone()));
+    // The text moves to the reader; the document needs only the plateaus.
+    let text: Box<dyn Read + 'a> =
+        Box::new(std::io::Cursor::new(std::mem::take(&mut segmented.text)));
     let rows = incal_io::Reader::new(name, text, &again)?;
     Ok((
         rows,
