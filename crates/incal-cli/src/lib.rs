@@ -58,6 +58,8 @@ enum Command {
     Simulate(commands::Simulations),
     /// Compare the coefficients of two result files: difference, per mille and En.
     Compare(commands::compare::Args),
+    /// Write a robot log's topic (PX4 ULog, ROS 1 bag, MCAP) as incal's CSV: the text every reducing command reads from it.
+    Convert(commands::convert::Args),
     /// Export a result in another tool's format: imucal's calibration JSON, Kalibr's imu.yaml, PX4 and ArduPilot parameters.
     #[command(subcommand)]
     Export(commands::export::Command),
@@ -82,6 +84,7 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Plan(c) => c.run(),
         Command::Simulate(c) => c.run(),
         Command::Compare(a) => commands::compare::run(&a),
+        Command::Convert(a) => commands::convert::run(&a),
         Command::Export(c) => commands::export::run(&c),
         Command::Schema(a) => commands::schema::run(&a),
         Command::Procedures(a) => commands::procedures::run(&a),

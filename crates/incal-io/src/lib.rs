@@ -23,6 +23,7 @@ pub mod columns;
 pub mod digest;
 pub mod error;
 pub mod frames;
+pub mod logs;
 pub mod reader;
 pub mod segments;
 pub mod source;

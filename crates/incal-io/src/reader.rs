@@ -30,6 +30,7 @@ use std::io::Read;
 mod frames;
 pub mod preamble;
 pub mod rails;
+mod robot;
 
 pub use preamble::{stated_rate_hz, PreambleLine, FOLLOWING, SCAN_BYTES, SCAN_RECORDS};
 pub use rails::{at_rail, Clipped};
@@ -76,6 +77,9 @@ pub struct ReadOptions {
     /// unit): a value of at least this magnitude is at a rail
     /// ([`rails`]); the integer converters' ends always are.
     pub full_scale: Option<f64>,
+    /// A robot log's topics and stamps (`--topic`, `--stamps`;
+    /// [`crate::logs`]).
+    pub log: crate::logs::LogOptions,
 }
 
 impl Default for ReadOptions {
@@ -89,6 +93,7 @@ impl Default for ReadOptions {
             header_line: None,
             segment: None,
             full_scale: None,
+            log: crate::logs::LogOptions::default(),
         }
     }
 }
@@ -257,7 +262,7 @@ enum Cells {
 /// then [`Reader::next_row`] hands out one data row at a time.
 pub struct Reader<R> {
     file: String,
-    src: R,
+    src: robot::Source<R>,
     buf: Vec<u8>,
     pos: usize,
     end: usize,
@@ -280,6 +285,8 @@ pub struct Reader<R> {
     preamble: Vec<PreambleLine>,
     rails: Vec<rails::Watch>,
     full_scale: Option<f64>,
+    /// SHA-256 of a robot log's own bytes (its CSV is not hashed).
+    log_sha256: Option<String>,
 }
 
 /// One data row; cells are trimmed text of the file.
@@ -298,7 +305,7 @@ impl<R: Read> Reader<R> {
     pub fn new(file: &str, src: R, opts: &ReadOptions) -> Result<Self> {
         let mut r = Reader {
             file: file.to_string(),
-            src,
+            src: robot::Source::Given(src),
             buf: vec![0; CHUNK],
             pos: 0,
             end: 0,
@@ -328,11 +335,15 @@ impl<R: Read> Reader<R> {
             preamble: Vec::new(),
             rails: Vec::new(),
             full_scale: opts.full_scale,
+            log_sha256: None,
         };
         if opts.frames {
             r.read_frame_header(opts)?;
         } else {
-            r.read_header(opts)?;
+            match r.robot_log(opts)? {
+                Some(decoded) => r.read_header(&decoded)?,
+                None => r.read_header(opts)?,
+            }
         }
         r.rails = rails::Watch::columns(&r.header);
         r.conditions = CONDITION_COLUMNS
@@ -453,7 +464,10 @@ impl<R: Read> Reader<R> {
         }
         Ok(Summary {
             file: self.file,
-            sha256: self.hasher.map(|h| hex(&h.finalize())).unwrap_or_default(),
+            sha256: match self.log_sha256 {
+                Some(s) => s,
+                None => self.hasher.map(|h| hex(&h.finalize())).unwrap_or_default(),
+            },
             rows: self.rows,
             bytes: self.bytes,
             conditions: self

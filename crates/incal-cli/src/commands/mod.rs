@@ -10,6 +10,7 @@
 
 pub mod batch;
 pub mod compare;
+pub mod convert;
 pub mod demo;
 pub mod export;
 pub mod procedures;

@@ -51,6 +51,7 @@ pub fn open<'a, R: Read + 'a>(
         segment: None,
         max_line_bytes: read.max_line_bytes,
         full_scale: read.full_scale,
+        log: incal_io::logs::LogOptions::default(),
     };
     // The text moves to the reader; the document needs only the plateaus.
     let text: Box<dyn Read + 'a> =
