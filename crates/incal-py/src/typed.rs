@@ -168,7 +168,8 @@ impl incal::procedures::Progress for PyProgress {
 /// The read options a Python call gives: `columns` (`NAME=HEADER,…`),
 /// `delimiter`, `header_line` and the segmentation (`segment_by`,
 /// `segment_tolerance`, `segment_settle_s`, `segment_min_s`,
-/// `segment_values`).
+/// `segment_values`), `full_scale`, and a robot log's `topic` (comma
+/// separated) and `stamps`.
 #[derive(serde::Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
 struct ReadSpec {
@@ -181,6 +182,8 @@ struct ReadSpec {
     segment_min_s: Option<String>,
     segment_values: Option<String>,
     full_scale: Option<String>,
+    topic: Option<String>,
+    stamps: Option<String>,
 }
 
 /// A number of a read option (`key`), or the option named.
@@ -250,6 +253,16 @@ fn read_options(spec: &str) -> Result<incal_io::ReadOptions, Outcome> {
                 format!("{x} is not a positive full scale"),
             ));
         }
+    }
+    if let Some(t) = &spec.topic {
+        read.log.topics = t
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+            .collect();
+    }
+    if let Some(s) = &spec.stamps {
+        read.log.stamps = incal_io::logs::Stamps::parse(s).map_err(|m| bad("stamps", m))?;
     }
     Ok(read)
 }

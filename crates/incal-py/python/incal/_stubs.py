@@ -32,6 +32,8 @@ COMMON = {
     "segment_min_s": "Optional[float]",
     "segment_values": "Union[str, Sequence[float], None]",
     "full_scale": "Optional[float]",
+    "topic": "Union[str, Sequence[str], None]",
+    "stamps": "Optional[str]",
     "serial": "Optional[str]",
     "model": "Optional[str]",
     "meta": "Union[str, Sequence[str], Mapping[str, Any], None]",

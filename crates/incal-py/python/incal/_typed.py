@@ -21,8 +21,8 @@ from ._incal import _reduce, _reduce_record
 #: Keywords of the input layer: ``columns`` (``NAME=HEADER,…``, a dict
 #: ``{name: header}`` or a list of names), ``delimiter``, ``header_line``
 #: and the segmentation of a rig log (``segment_by``, ``segment_tolerance``,
-#: ``segment_settle_s``, ``segment_min_s``, ``segment_values``) and
-#: ``full_scale``.
+#: ``segment_settle_s``, ``segment_min_s``, ``segment_values``),
+#: ``full_scale`` and a robot log's ``topic`` and ``stamps``.
 READ = (
     "columns",
     "delimiter",
@@ -33,6 +33,8 @@ READ = (
     "segment_min_s",
     "segment_values",
     "full_scale",
+    "topic",
+    "stamps",
 )
 #: Keywords added to the document by the core after the reduction.
 FINISH = ("serial", "model", "meta", "output_unit", "limits", "fail_on")
@@ -124,7 +126,7 @@ def _read_value(key: str, value: Any) -> str:
         return ",".join(f"{k}={v}" for k, v in value.items())
     if hasattr(value, "tolist") and not isinstance(value, (str, bytes)):
         value = value.tolist()
-    if key in ("columns", "segment_values") and isinstance(value, (list, tuple)):
+    if key in ("columns", "segment_values", "topic") and isinstance(value, (list, tuple)):
         return ",".join(repr(float(v)) if key == "segment_values" else str(v) for v in value)
     return str(value)
 
