@@ -27,6 +27,7 @@ mod report_cli;
 mod response_cli;
 mod result_document;
 mod rig_logs_cli;
+mod robot_logs_cli;
 mod segments_cli;
 mod sensitivity_cli;
 mod stacks_cli;

@@ -163,21 +163,31 @@ struct Offered {
 /// Pick the topics to read: the ones named (each must be offered), or the
 /// log's only one.
 fn choose(file: &str, format: Format, offered: &[Offered], opts: &LogOptions) -> Result<Vec<String>> {
+    // ULog instances of one topic are listed together: `sensor_gyro
+    // (instances 0, 1, 2)`; a ROS topic with its type.
     let list = || {
-        let names: Vec<String> = offered
-            .iter()
-            .map(|o| {
-                if o.name == o.kind {
-                    o.name.clone()
-                } else {
-                    format!("{} ({})", o.name, o.kind)
-                }
+        let mut names: Vec<(String, Vec<String>)> = Vec::new();
+        for o in offered {
+            match o.name.strip_prefix(&o.kind).and_then(|r| r.strip_prefix(':')) {
+                Some(n) => match names.iter_mut().find(|(k, _)| k == &o.kind) {
+                    Some((_, v)) => v.push(n.to_string()),
+                    None => names.push((o.kind.clone(), vec![n.to_string()])),
+                },
+                None if o.name == o.kind => names.push((o.name.clone(), vec!["0".into()])),
+                None => names.push((format!("{} ({})", o.name, o.kind), Vec::new())),
+            }
+        }
+        let text: Vec<String> = names
+            .into_iter()
+            .map(|(k, v)| match v.len() {
+                0 | 1 => k,
+                _ => format!("{k} (instances {})", v.join(", ")),
             })
             .collect();
-        if names.is_empty() {
+        if text.is_empty() {
             "none".to_string()
         } else {
-            names.join(", ")
+            crate::clip_to(&text.join(", "), 240)
         }
     };
     if opts.topics.is_empty() {
