@@ -147,6 +147,8 @@ def joined(body):
 
 def check_examples(path, text):
     tmp = tempfile.mkdtemp(prefix="incal-docs-")
+    # Examples name the repository's fixtures as from its root.
+    os.symlink(os.path.join(ROOT, "crates"), os.path.join(tmp, "crates"))
     try:
         bl = blocks(text)
         last = None
