@@ -47,6 +47,14 @@ pub struct ReadArgs {
     /// A converter's full scale in the columns' own unit: two or more samples in a row at or beyond it are named as clipped (a `clipped` warning with their lines); integer converters' ends (-32768, 32767, 65535, ...) always are. `mag` refuses a magnetometer reading at or beyond it (saturated).
     #[arg(long, value_name = "X")]
     pub full_scale: Option<f64>,
+    /// A robot log's topic and stamps.
+    #[command(flatten)]
+    pub log: Box<LogArgs>,
+}
+
+/// How a robot log is read (`--topic`, `--stamps`).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct LogArgs {
     /// A robot log's topic (a PX4 ULog, ROS 1 bag or MCAP file, recognised by its first bytes): sensor_combined, sensor_gyro[:N], sensor_accel[:N], sensor_mag[:N], vehicle_imu[:N] (ULog); a sensor_msgs/Imu topic (bag, MCAP), then any sensor_msgs/Temperature topic joined to it, comma separated (default: the log's one such topic; see docs: Recordings as they come).
     #[arg(long, value_name = "NAME", value_delimiter = ',')]
     pub topic: Vec<String>,
@@ -88,8 +96,8 @@ impl ReadArgs {
                 x => x,
             },
             log: incal_io::logs::LogOptions {
-                topics: self.topic.clone(),
-                stamps: match &self.stamps {
+                topics: self.log.topic.clone(),
+                stamps: match &self.log.stamps {
                     None => incal_io::logs::Stamps::default(),
                     Some(s) => incal_io::logs::Stamps::parse(s)
                         .map_err(|e| CliError::Input(format!("--stamps: {e}")))?,

@@ -285,8 +285,9 @@ pub struct Reader<R> {
     preamble: Vec<PreambleLine>,
     rails: Vec<rails::Watch>,
     full_scale: Option<f64>,
-    /// SHA-256 of a robot log's own bytes (its CSV is not hashed).
-    log_sha256: Option<String>,
+    /// SHA-256 and length of a robot log's own bytes (its CSV is neither
+    /// hashed nor counted).
+    log: Option<(String, u64)>,
 }
 
 /// One data row; cells are trimmed text of the file.
@@ -335,7 +336,7 @@ impl<R: Read> Reader<R> {
             preamble: Vec::new(),
             rails: Vec::new(),
             full_scale: opts.full_scale,
-            log_sha256: None,
+            log: None,
         };
         if opts.frames {
             r.read_frame_header(opts)?;
@@ -464,12 +465,12 @@ impl<R: Read> Reader<R> {
         }
         Ok(Summary {
             file: self.file,
-            sha256: match self.log_sha256 {
-                Some(s) => s,
+            sha256: match &self.log {
+                Some((s, _)) => s.clone(),
                 None => self.hasher.map(|h| hex(&h.finalize())).unwrap_or_default(),
             },
             rows: self.rows,
-            bytes: self.bytes,
+            bytes: self.log.as_ref().map_or(self.bytes, |l| l.1),
             conditions: self
                 .conditions
                 .into_iter()

@@ -56,7 +56,18 @@ fn gyro_row(t_us: u64, w_rad_s: [f64; 3], temp_c: f64) -> Vec<u8> {
 #[test]
 fn a_real_flight_log_runs_noise_end_to_end() {
     let log = fixture("pyulog_sample_appended_multiple.ulg");
-    let o = run(&["noise", "--input", p(&log), "--topic", "sensor_combined", "--columns", "gyr_x,gyr_y,gyr_z", "--quantity", "gyro", "--json"]);
+    let o = run(&[
+        "noise",
+        "--input",
+        p(&log),
+        "--topic",
+        "sensor_combined",
+        "--columns",
+        "gyr_x,gyr_y,gyr_z",
+        "--quantity",
+        "gyro",
+        "--json",
+    ]);
     let doc = json_of(&o);
     let sha = incal_io::sha256_hex(&std::fs::read(&log).unwrap());
     assert_eq!(doc["inputs"][0]["sha256"], sha.as_str());
@@ -68,10 +79,20 @@ fn a_real_flight_log_runs_noise_end_to_end() {
         .as_array()
         .unwrap()
         .iter()
-        .map(|l| format!("{}={}", l["key"].as_str().unwrap(), l["value"].as_str().unwrap()))
+        .map(|l| {
+            format!(
+                "{}={}",
+                l["key"].as_str().unwrap(),
+                l["value"].as_str().unwrap()
+            )
+        })
         .collect();
     assert!(pre.contains(&"format=PX4 ULog".to_string()), "{pre:?}");
-    assert!(pre.iter().any(|l| l.starts_with("units=gyro_rad: rad/s x 180/pi -> gyr deg/s")), "{pre:?}");
+    assert!(
+        pre.iter()
+            .any(|l| l.starts_with("units=gyro_rad: rad/s x 180/pi -> gyr deg/s")),
+        "{pre:?}"
+    );
     assert!(!coefficient_values(&doc).is_empty());
 }
 
@@ -80,7 +101,14 @@ fn a_bag_and_its_mcap_give_the_same_result() {
     let bag = fixture("husky_rl_test1.bag");
     let mcap = fixture("husky_rl_test1_imu_zstd.mcap");
     let args = |f: &PathBuf| {
-        let o = run(&["noise", "--input", p(f), "--columns", "gyr_z,acc_z", "--json"]);
+        let o = run(&[
+            "noise",
+            "--input",
+            p(f),
+            "--columns",
+            "gyr_z,acc_z",
+            "--json",
+        ]);
         coefficient_values(&json_of(&o))
     };
     let (a, b) = (args(&bag), args(&mcap));
@@ -92,12 +120,27 @@ fn a_bag_and_its_mcap_give_the_same_result() {
 fn a_chamber_ramp_logged_by_px4_reduces_as_its_csv() {
     let dir = workdir("robot_logs_thermal");
     let csv = dir.join("ramp.csv");
-    ok(&run(&["simulate", "thermal", "--seed", "5", "--hold-s", "600", "--output", p(&csv)]));
+    ok(&run(&[
+        "simulate",
+        "thermal",
+        "--seed",
+        "5",
+        "--hold-s",
+        "600",
+        "--output",
+        p(&csv),
+    ]));
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines().filter(|l| !l.starts_with('#'));
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
-    let (t, tc, gx, gy, gz) = (col("time_s"), col("temperature_c"), col("gx"), col("gy"), col("gz"));
+    let (t, tc, gx, gy, gz) = (
+        col("time_s"),
+        col("temperature_c"),
+        col("gx"),
+        col("gy"),
+        col("gz"),
+    );
     let mut rows = Vec::new();
     let mut plain = String::from("time_s,gyr_x,gyr_y,gyr_z,temperature_c\n");
     for l in lines {
@@ -121,7 +164,15 @@ fn a_chamber_ramp_logged_by_px4_reduces_as_its_csv() {
     let flat = dir.join("thermal_f32.csv");
     std::fs::write(&flat, plain).unwrap();
     let reduce = |f: &PathBuf, topic: &[&str]| {
-        let mut a = vec!["thermal", "ramp", "--input", p(f), "--quantity", "gyro", "--json"];
+        let mut a = vec![
+            "thermal",
+            "ramp",
+            "--input",
+            p(f),
+            "--quantity",
+            "gyro",
+            "--json",
+        ];
         a.extend(topic);
         json_of(&run(&a))
     };
@@ -131,7 +182,10 @@ fn a_chamber_ramp_logged_by_px4_reduces_as_its_csv() {
     assert!(a.len() >= 6, "{a:?}");
     for ((na, va, ua), (nb, vb, _)) in a.iter().zip(&b) {
         assert_eq!(na, nb);
-        assert!((va - vb).abs() <= 1e-9 * va.abs().max(*ua), "{na}: {va} vs {vb}");
+        assert!(
+            (va - vb).abs() <= 1e-9 * va.abs().max(*ua),
+            "{na}: {va} vs {vb}"
+        );
     }
     assert_eq!(
         from_log["environment"]["temperature_c"]["count"],
@@ -142,17 +196,46 @@ fn a_chamber_ramp_logged_by_px4_reduces_as_its_csv() {
 #[test]
 fn convert_writes_what_the_reductions_read() {
     let log = fixture("pyulog_sample_log_small.ulg");
-    let text = ok(&run(&["convert", "--input", p(&log), "--topic", "sensor_gyro:2"]));
+    let text = ok(&run(&[
+        "convert",
+        "--input",
+        p(&log),
+        "--topic",
+        "sensor_gyro:2",
+    ]));
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines[0], "format,PX4 ULog");
-    assert!(lines.contains(&"time_s,gyr_x,gyr_y,gyr_z,temperature_c"), "{text}");
+    assert!(
+        lines.contains(&"time_s,gyr_x,gyr_y,gyr_z,temperature_c"),
+        "{text}"
+    );
     let out = workdir("robot_logs_convert").join("gyro2.csv");
-    ok(&run(&["convert", "--input", p(&log), "--topic", "sensor_gyro:2", "-o", p(&out)]));
+    ok(&run(&[
+        "convert",
+        "--input",
+        p(&log),
+        "--topic",
+        "sensor_gyro:2",
+        "-o",
+        p(&out),
+    ]));
     assert_eq!(std::fs::read_to_string(&out).unwrap(), text);
     // `:0` names the first instance, as the bare name does.
     assert_eq!(
-        ok(&run(&["convert", "--input", p(&log), "--topic", "sensor_accel:0"])),
-        ok(&run(&["convert", "--input", p(&log), "--topic", "sensor_accel"]))
+        ok(&run(&[
+            "convert",
+            "--input",
+            p(&log),
+            "--topic",
+            "sensor_accel:0"
+        ])),
+        ok(&run(&[
+            "convert",
+            "--input",
+            p(&log),
+            "--topic",
+            "sensor_accel"
+        ]))
     );
 }
 
@@ -182,23 +265,39 @@ fn robot_logs_are_refused_naming_the_problem() {
         &run(&["noise", "--input", p(&csv), "--topic", "/imu"]),
         &["plain.csv: --topic '/imu': not a PX4 ULog, a ROS 1 bag or an MCAP file"],
     );
-    refused(&run(&["convert", "--input", p(&csv)]), &["plain.csv: not a PX4 ULog"]);
+    refused(
+        &run(&["convert", "--input", p(&csv)]),
+        &["plain.csv: not a PX4 ULog"],
+    );
     // A bag cut in the middle of a record.
     let bag = std::fs::read(fixture("husky_rl_test1.bag")).unwrap();
     let cut = dir.join("cut.bag");
     std::fs::write(&cut, &bag[..bag.len() / 2]).unwrap();
-    refused(&run(&["noise", "--input", p(&cut)]), &["cut.bag: a ROS 1 bag: a broken record at byte"]);
+    refused(
+        &run(&["noise", "--input", p(&cut)]),
+        &["cut.bag: a ROS 1 bag: a broken record at byte"],
+    );
     // A ULog cut mid-message ends there (as a logger's power cut leaves it).
-    let rows: Vec<Vec<u8>> = (0..50).map(|k| gyro_row(k * 10_000, [0.01, 0.02, 0.03], 30.0)).collect();
+    let rows: Vec<Vec<u8>> = (0..50)
+        .map(|k| gyro_row(k * 10_000, [0.01, 0.02, 0.03], 30.0))
+        .collect();
     let mut bytes = ulog(SENSOR_GYRO, &rows);
     bytes.truncate(bytes.len() - 5);
     let cut = dir.join("cut.ulg");
     std::fs::write(&cut, &bytes).unwrap();
     let text = ok(&run(&["convert", "--input", p(&cut)]));
-    assert_eq!(text.lines().filter(|l| l.starts_with(|c: char| c.is_ascii_digit())).count(), 49);
+    assert_eq!(
+        text.lines()
+            .filter(|l| l.starts_with(|c: char| c.is_ascii_digit()))
+            .count(),
+        49
+    );
     // An MCAP cut in its header.
     let mcap = std::fs::read(fixture("husky_rl_test1_imu_zstd.mcap")).unwrap();
     let cut = dir.join("cut.mcap");
     std::fs::write(&cut, &mcap[..20]).unwrap();
-    refused(&run(&["noise", "--input", p(&cut)]), &["cut.mcap: an MCAP file:"]);
+    refused(
+        &run(&["noise", "--input", p(&cut)]),
+        &["cut.mcap: an MCAP file:"],
+    );
 }

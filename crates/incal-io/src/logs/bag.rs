@@ -64,7 +64,12 @@ fn u32_of(f: &BTreeMap<&str, &[u8]>, key: &str) -> Option<u32> {
 fn inflate(file: &str, f: &BTreeMap<&str, &[u8]>, data: &[u8]) -> Result<Vec<u8>> {
     let compression = f.get("compression").copied().unwrap_or(b"none");
     let size = u32_of(f, "size").unwrap_or(0) as usize;
-    let bad = |e: std::io::Error| InputError::file(file, format!("a ROS 1 bag: a chunk cannot be inflated: {e}"));
+    let bad = |e: std::io::Error| {
+        InputError::file(
+            file,
+            format!("a ROS 1 bag: a chunk cannot be inflated: {e}"),
+        )
+    };
     let mut out = Vec::with_capacity(size.min(MAX_CHUNK_BYTES));
     let limit = (MAX_CHUNK_BYTES + 1) as u64;
     match compression {
@@ -89,7 +94,10 @@ fn inflate(file: &str, f: &BTreeMap<&str, &[u8]>, data: &[u8]) -> Result<Vec<u8>
         }
     };
     if out.len() > MAX_CHUNK_BYTES {
-        return Err(InputError::file(file, "a ROS 1 bag: a chunk inflates beyond 1 GiB"));
+        return Err(InputError::file(
+            file,
+            "a ROS 1 bag: a chunk inflates beyond 1 GiB",
+        ));
     }
     Ok(out)
 }
@@ -118,7 +126,8 @@ fn connection(f: &BTreeMap<&str, &[u8]>, data: &[u8]) -> Option<(u32, Connection
 
 /// The series of the topics chosen (module [`super`]).
 pub(super) fn read(file: &str, bytes: &[u8], opts: &LogOptions) -> Result<Vec<Series>> {
-    let broken = |at: usize| InputError::file(file, format!("a ROS 1 bag: a broken record at byte {at}"));
+    let broken =
+        |at: usize| InputError::file(file, format!("a ROS 1 bag: a broken record at byte {at}"));
     let top = records(bytes, MAGIC).map_err(broken)?;
     let mut conns: BTreeMap<u32, Connection> = BTreeMap::new();
     // (conn, record time ns, data) of every message, in file order.
@@ -133,7 +142,10 @@ pub(super) fn read(file: &str, bytes: &[u8], opts: &LogOptions) -> Result<Vec<Se
     let mut messages: Vec<(u32, i128, &[u8])> = Vec::new();
     for c in &chunks {
         let inner = records(c, 0).map_err(|at| {
-            InputError::file(file, format!("a ROS 1 bag: a broken record at byte {at} of a chunk"))
+            InputError::file(
+                file,
+                format!("a ROS 1 bag: a broken record at byte {at} of a chunk"),
+            )
         })?;
         for (f, d) in inner {
             match op(&f) {
@@ -178,7 +190,10 @@ pub(super) fn read(file: &str, bytes: &[u8], opts: &LogOptions) -> Result<Vec<Se
                 .enumerate()
             {
                 let d = ros::ros1(kind, data).ok_or_else(|| {
-                    InputError::file(file, format!("topic {t}: message {} too short for its type", n + 1))
+                    InputError::file(
+                        file,
+                        format!("topic {t}: message {} too short for its type", n + 1),
+                    )
                 })?;
                 samples.push(Sample {
                     log_ns: *log_ns,
@@ -191,7 +206,11 @@ pub(super) fn read(file: &str, bytes: &[u8], opts: &LogOptions) -> Result<Vec<Se
             }
             Ok(Series {
                 topic: t.clone(),
-                kind: offered.iter().find(|o| &o.name == t).map(|o| o.kind.clone()).unwrap_or_default(),
+                kind: offered
+                    .iter()
+                    .find(|o| &o.name == t)
+                    .map(|o| o.kind.clone())
+                    .unwrap_or_default(),
                 columns: kind.columns(),
                 units: kind.units(),
                 stamp_name: match opts.stamps {

@@ -36,10 +36,21 @@ pub(super) fn read(file: &str, bytes: &[u8], opts: &LogOptions) -> Result<Vec<Se
         if !offered.iter().any(|o| o.name == m.channel.topic) {
             offered.push(Offered {
                 name: m.channel.topic.clone(),
-                kind: m.channel.schema.as_ref().map(|s| s.name.clone()).unwrap_or_default(),
+                kind: m
+                    .channel
+                    .schema
+                    .as_ref()
+                    .map(|s| s.name.clone())
+                    .unwrap_or_default(),
             });
         }
-        messages.push((m.channel.topic.clone(), kind, cdr, m.log_time as i128, m.data.into_owned()));
+        messages.push((
+            m.channel.topic.clone(),
+            kind,
+            cdr,
+            m.log_time as i128,
+            m.data.into_owned(),
+        ));
     }
     let topics = choose(file, Format::Mcap, &offered, opts)?;
     topics
@@ -59,7 +70,10 @@ pub(super) fn read(file: &str, bytes: &[u8], opts: &LogOptions) -> Result<Vec<Se
                 .ok_or_else(|| {
                     InputError::file(
                         file,
-                        format!("topic {t}: message {} too short for its type or not plain CDR", n + 1),
+                        format!(
+                            "topic {t}: message {} too short for its type or not plain CDR",
+                            n + 1
+                        ),
                     )
                 })?;
                 samples.push(Sample {
@@ -73,7 +87,11 @@ pub(super) fn read(file: &str, bytes: &[u8], opts: &LogOptions) -> Result<Vec<Se
             }
             Ok(Series {
                 topic: t.clone(),
-                kind: offered.iter().find(|o| &o.name == t).map(|o| o.kind.clone()).unwrap_or_default(),
+                kind: offered
+                    .iter()
+                    .find(|o| &o.name == t)
+                    .map(|o| o.kind.clone())
+                    .unwrap_or_default(),
                 columns: kind.columns(),
                 units: kind.units(),
                 stamp_name: match opts.stamps {

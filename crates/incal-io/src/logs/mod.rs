@@ -2,7 +2,7 @@
 //! read by the same [`crate::Reader`] as CSV.
 //!
 //! A log is recognised by its first bytes ([`Format::detect`]), whatever
-//! its name. One topic (`--topic`, [`LogOptions::topic`]) is decoded into
+//! its name. One topic (`--topic`, [`LogOptions::topics`]) is decoded into
 //! incal's CSV — the text `incal convert` writes — and read from there:
 //! every procedure, front end and check (stamps, gaps, clipped samples,
 //! segments, environment) sees a log exactly as it sees that CSV, and a
@@ -106,10 +106,7 @@ impl Stamps {
         match s {
             "header" => Ok(Self::Header),
             "log" => Ok(Self::Log),
-            _ => Err(format!(
-                "'{}': expected header or log",
-                crate::clip(s)
-            )),
+            _ => Err(format!("'{}': expected header or log", crate::clip(s))),
         }
     }
 
@@ -162,13 +159,22 @@ struct Offered {
 
 /// Pick the topics to read: the ones named (each must be offered), or the
 /// log's only one.
-fn choose(file: &str, format: Format, offered: &[Offered], opts: &LogOptions) -> Result<Vec<String>> {
+fn choose(
+    file: &str,
+    format: Format,
+    offered: &[Offered],
+    opts: &LogOptions,
+) -> Result<Vec<String>> {
     // ULog instances of one topic are listed together: `sensor_gyro
     // (instances 0, 1, 2)`; a ROS topic with its type.
     let list = || {
         let mut names: Vec<(String, Vec<String>)> = Vec::new();
         for o in offered {
-            match o.name.strip_prefix(&o.kind).and_then(|r| r.strip_prefix(':')) {
+            match o
+                .name
+                .strip_prefix(&o.kind)
+                .and_then(|r| r.strip_prefix(':'))
+            {
                 Some(n) => match names.iter_mut().find(|(k, _)| k == &o.kind) {
                     Some((_, v)) => v.push(n.to_string()),
                     None => names.push((o.kind.clone(), vec![n.to_string()])),
@@ -279,7 +285,10 @@ fn write_csv(
         let mut kept = Vec::new();
         for (j, c) in s.columns.iter().enumerate() {
             if header.contains(c) {
-                pre.push(("left_out".into(), format!("{c} of {} (given before)", s.topic)));
+                pre.push((
+                    "left_out".into(),
+                    format!("{c} of {} (given before)", s.topic),
+                ));
             } else {
                 header.push(c);
                 kept.push(j);
@@ -289,7 +298,11 @@ fn write_csv(
     }
     pre.push((
         "stamps".into(),
-        format!("{} ({}), s from the first row's", stamps.name(), first.stamp_name),
+        format!(
+            "{} ({}), s from the first row's",
+            stamps.name(),
+            first.stamp_name
+        ),
     ));
     let mut rows: Vec<String> = Vec::with_capacity(first.samples.len());
     let mut cursor = vec![0usize; series.len()];
@@ -355,7 +368,10 @@ fn write_csv(
 /// Nanoseconds as exact decimal seconds (`3.003325`, `-0.5`, `0`).
 fn seconds_text(ns: i128) -> String {
     let sign = if ns < 0 { "-" } else { "" };
-    let (s, frac) = (ns.unsigned_abs() / 1_000_000_000, ns.unsigned_abs() % 1_000_000_000);
+    let (s, frac) = (
+        ns.unsigned_abs() / 1_000_000_000,
+        ns.unsigned_abs() % 1_000_000_000,
+    );
     if frac == 0 {
         return format!("{sign}{s}");
     }

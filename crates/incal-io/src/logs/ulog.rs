@@ -151,18 +151,20 @@ fn flatten(raw: &HashMap<String, String>, name: &str, depth: usize) -> Option<Fl
 struct Recipe {
     columns: Vec<&'static str>,
     units: &'static str,
-    /// (field, scale, divisor field in µs).
-    sources: Vec<(String, f64, Option<&'static str>)>,
+    sources: Vec<Source>,
 }
+
+/// A column's field, its scale and the field (µs) it is divided by.
+type Source = (String, f64, Option<&'static str>);
 
 fn triad(
     cols: [&'static str; 3],
     fields: [&str; 3],
     scale: f64,
     dt: Option<&'static str>,
-) -> Vec<(Vec<&'static str>, (String, f64, Option<&'static str>))> {
+) -> Vec<(&'static str, Source)> {
     (0..3)
-        .map(|i| (vec![cols[i]], (fields[i].to_string(), scale, dt)))
+        .map(|i| (cols[i], (fields[i].to_string(), scale, dt)))
         .collect()
 }
 
@@ -177,10 +179,19 @@ fn recipe(topic: &str, flat: &Flat) -> Option<Recipe> {
     let g = 1.0 / G0_M_S2;
     let (mut parts, units) = match topic {
         "sensor_combined" => {
-            let mut p = triad(GYR, ["gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]"], DEG_PER_RAD, None);
+            let mut p = triad(
+                GYR,
+                ["gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]"],
+                DEG_PER_RAD,
+                None,
+            );
             p.extend(triad(
                 ACC,
-                ["accelerometer_m_s2[0]", "accelerometer_m_s2[1]", "accelerometer_m_s2[2]"],
+                [
+                    "accelerometer_m_s2[0]",
+                    "accelerometer_m_s2[1]",
+                    "accelerometer_m_s2[2]",
+                ],
                 g,
                 None,
             ));
@@ -207,7 +218,11 @@ fn recipe(topic: &str, flat: &Flat) -> Option<Recipe> {
             );
             p.extend(triad(
                 ACC,
-                ["delta_velocity[0]", "delta_velocity[1]", "delta_velocity[2]"],
+                [
+                    "delta_velocity[0]",
+                    "delta_velocity[1]",
+                    "delta_velocity[2]",
+                ],
                 g,
                 Some("delta_velocity_dt"),
             ));
@@ -216,7 +231,7 @@ fn recipe(topic: &str, flat: &Flat) -> Option<Recipe> {
         _ => return None,
     };
     if topic != "sensor_combined" && topic != "vehicle_imu" && has("temperature") {
-        parts.push((vec!["temperature_c"], ("temperature".into(), 1.0, None)));
+        parts.push(("temperature_c", ("temperature".into(), 1.0, None)));
     }
     if !parts
         .iter()
@@ -225,7 +240,7 @@ fn recipe(topic: &str, flat: &Flat) -> Option<Recipe> {
         return None;
     }
     Some(Recipe {
-        columns: parts.iter().flat_map(|(c, _)| c.clone()).collect(),
+        columns: parts.iter().map(|(c, _)| *c).collect(),
         units,
         sources: parts.into_iter().map(|(_, s)| s).collect(),
     })
@@ -270,7 +285,9 @@ fn parse<'a>(file: &str, bytes: &'a [u8]) -> Result<Parsed<'a>> {
             }
             b'A' => {
                 if let (Some(instance), Some(id)) = (m.u8(0), m.u16(1)) {
-                    let name = String::from_utf8_lossy(&body[3..]).trim_end_matches('\0').to_string();
+                    let name = String::from_utf8_lossy(&body[3..])
+                        .trim_end_matches('\0')
+                        .to_string();
                     p.subs.insert(
                         id,
                         Subscription {
@@ -340,7 +357,15 @@ pub(super) fn read(file: &str, bytes: &[u8], opts: &LogOptions) -> Result<Vec<Se
         let (id, _) = offered.iter().find(|(_, o)| o.name == t).expect("chosen");
         let s = &p.subs[id];
         let flat = flats[&s.format].as_ref().expect("offered");
-        out.push(series(file, &t, &s.format, flat, *id, &p.data, opts.stamps)?);
+        out.push(series(
+            file,
+            &t,
+            &s.format,
+            flat,
+            *id,
+            &p.data,
+            opts.stamps,
+        )?);
     }
     Ok(out)
 }
@@ -357,9 +382,8 @@ fn series(
 ) -> Result<Series> {
     let r = recipe(format, flat).expect("offered");
     let field = |name: &str| flat.fields.get(name).copied();
-    let log_field = field("timestamp").ok_or_else(|| {
-        InputError::file(file, format!("topic {topic}: no timestamp field"))
-    })?;
+    let log_field = field("timestamp")
+        .ok_or_else(|| InputError::file(file, format!("topic {topic}: no timestamp field")))?;
     let (stamp_field, stamp_name) = match (stamps, field("timestamp_sample")) {
         (Stamps::Header, Some(f)) => (f, "timestamp_sample, us"),
         _ => (log_field, "timestamp, us"),
@@ -370,14 +394,19 @@ fn series(
         .map(|(f, scale, dt)| (field(f).expect("recipe"), *scale, dt.and_then(field)))
         .collect();
     let read = |f: Field, msg: &[u8]| -> Option<f64> {
-        msg.get(f.offset..f.offset + f.kind.size()).map(|b| f.kind.value(b))
+        msg.get(f.offset..f.offset + f.kind.size())
+            .map(|b| f.kind.value(b))
     };
     let mut samples = Vec::new();
     for (n, (_, msg)) in data.iter().filter(|(i, _)| *i == id).enumerate() {
         let short = || {
             InputError::file(
                 file,
-                format!("topic {topic}: data message {} shorter than its format ({} bytes)", n + 1, flat.size),
+                format!(
+                    "topic {topic}: data message {} shorter than its format ({} bytes)",
+                    n + 1,
+                    flat.size
+                ),
             )
         };
         let log = read(log_field, msg).ok_or_else(short)?;

@@ -56,9 +56,8 @@ impl<R: Read> Reader<R> {
         self.pos = 0;
         self.end = 0;
         self.eof = false;
-        self.bytes = bytes.len() as u64;
         self.hasher = None;
-        self.log_sha256 = Some(c.sha256);
+        self.log = Some((c.sha256, bytes.len() as u64));
         let mut o = opts.clone();
         o.header_line = Some(c.header_line);
         Ok(Some(o))
