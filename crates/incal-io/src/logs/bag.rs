@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use std::io::Read;
 
 use super::ros::{self, Kind};
-use super::{choose, Bytes, Format, LogOptions, Offered, Sample, Series, Stamps};
+use super::{choose, Bytes, Format, LogOptions, Offered, Series};
 use crate::error::{InputError, Result};
 
 /// Magic line of a bag 2.0.
@@ -182,43 +182,20 @@ pub(super) fn read(file: &str, bytes: &[u8], opts: &LogOptions) -> Result<Vec<Se
                 .filter(|(_, c)| &c.topic == t)
                 .filter_map(|(id, c)| c.kind.map(|k| (*id, k)))
                 .collect();
-            let kind = ids[0].1;
-            let mut samples = Vec::new();
-            for (n, (_, log_ns, data)) in messages
+            let type_name = offered
                 .iter()
-                .filter(|(c, _, _)| ids.iter().any(|(i, _)| i == c))
-                .enumerate()
-            {
-                let d = ros::ros1(kind, data).ok_or_else(|| {
-                    InputError::file(
-                        file,
-                        format!("topic {t}: message {} too short for its type", n + 1),
-                    )
-                })?;
-                samples.push(Sample {
+                .find(|o| &o.name == t)
+                .map_or("", |o| &o.kind);
+            let of_topic = messages.iter().filter_map(|(c, log_ns, data)| {
+                let (_, kind) = ids.iter().find(|(i, _)| i == c)?;
+                Some(ros::Message {
+                    kind: *kind,
+                    cdr: false,
                     log_ns: *log_ns,
-                    stamp_ns: match opts.stamps {
-                        Stamps::Header => d.stamp_ns,
-                        Stamps::Log => *log_ns,
-                    },
-                    values: d.values,
-                });
-            }
-            Ok(Series {
-                topic: t.clone(),
-                kind: offered
-                    .iter()
-                    .find(|o| &o.name == t)
-                    .map(|o| o.kind.clone())
-                    .unwrap_or_default(),
-                columns: kind.columns(),
-                units: kind.units(),
-                stamp_name: match opts.stamps {
-                    Stamps::Header => "header.stamp",
-                    Stamps::Log => "record time",
-                },
-                samples,
-            })
+                    data,
+                })
+            });
+            ros::series(file, t, type_name, of_topic, opts.stamps, "record time")
         })
         .collect()
 }

@@ -4,7 +4,7 @@
 //! `cdr` (ROS 2) or `ros1` encoding; `log_time` is the log's time.
 
 use super::ros::{self, Kind};
-use super::{choose, Format, LogOptions, Offered, Sample, Series, Stamps};
+use super::{choose, Format, LogOptions, Offered, Series};
 use crate::error::{InputError, Result};
 
 /// A channel incal reads: its type and whether its messages are CDR.
@@ -56,50 +56,19 @@ pub(super) fn read(file: &str, bytes: &[u8], opts: &LogOptions) -> Result<Vec<Se
     topics
         .iter()
         .map(|t| {
-            let mut samples = Vec::new();
-            let mut kind = Kind::Imu;
-            for (n, (_, k, cdr, log_ns, data)) in
-                messages.iter().filter(|(topic, ..)| topic == t).enumerate()
-            {
-                kind = *k;
-                let d = if *cdr {
-                    ros::cdr(*k, data)
-                } else {
-                    ros::ros1(*k, data)
-                }
-                .ok_or_else(|| {
-                    InputError::file(
-                        file,
-                        format!(
-                            "topic {t}: message {} too short for its type or not plain CDR",
-                            n + 1
-                        ),
-                    )
-                })?;
-                samples.push(Sample {
+            let type_name = offered
+                .iter()
+                .find(|o| &o.name == t)
+                .map_or("", |o| &o.kind);
+            let of_topic = messages.iter().filter(|(topic, ..)| topic == t).map(
+                |(_, kind, cdr, log_ns, data)| ros::Message {
+                    kind: *kind,
+                    cdr: *cdr,
                     log_ns: *log_ns,
-                    stamp_ns: match opts.stamps {
-                        Stamps::Header => d.stamp_ns,
-                        Stamps::Log => *log_ns,
-                    },
-                    values: d.values,
-                });
-            }
-            Ok(Series {
-                topic: t.clone(),
-                kind: offered
-                    .iter()
-                    .find(|o| &o.name == t)
-                    .map(|o| o.kind.clone())
-                    .unwrap_or_default(),
-                columns: kind.columns(),
-                units: kind.units(),
-                stamp_name: match opts.stamps {
-                    Stamps::Header => "header.stamp",
-                    Stamps::Log => "log_time",
+                    data,
                 },
-                samples,
-            })
+            );
+            ros::series(file, t, type_name, of_topic, opts.stamps, "log_time")
         })
         .collect()
 }

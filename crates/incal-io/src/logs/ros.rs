@@ -8,7 +8,8 @@
 //! (3, m/s²), its covariance (9). `sensor_msgs/Temperature`: header,
 //! temperature (float64, °C), variance.
 
-use super::{Bytes, DEG_PER_RAD, G0_M_S2};
+use super::{Bytes, Sample, Series, Stamps, DEG_PER_RAD, G0_M_S2};
+use crate::error::{InputError, Result};
 
 /// A message type incal reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -124,5 +125,69 @@ pub(super) fn cdr(kind: Kind, data: &[u8]) -> Option<Decoded> {
     Some(Decoded {
         stamp_ns: sec as i128 * 1_000_000_000 + nsec as i128,
         values: kind.values(&d),
+    })
+}
+
+/// One message of a ROS topic as a log holds it.
+pub(super) struct Message<'a> {
+    /// Its type.
+    pub kind: Kind,
+    /// CDR (ROS 2) rather than ROS 1.
+    pub cdr: bool,
+    /// The log's time of it, ns.
+    pub log_ns: i128,
+    /// Its bytes.
+    pub data: &'a [u8],
+}
+
+/// A ROS topic's messages decoded into a series; `log_name` names the
+/// log's time (`record time`, `log_time`). A message too short for its
+/// type is refused, naming its number.
+pub(super) fn series<'a>(
+    file: &str,
+    topic: &str,
+    type_name: &str,
+    messages: impl Iterator<Item = Message<'a>>,
+    stamps: Stamps,
+    log_name: &'static str,
+) -> Result<Series> {
+    let mut samples = Vec::new();
+    let mut kind = Kind::of(type_name).unwrap_or(Kind::Imu);
+    for (n, m) in messages.enumerate() {
+        kind = m.kind;
+        let d = if m.cdr {
+            cdr(m.kind, m.data)
+        } else {
+            ros1(m.kind, m.data)
+        }
+        .ok_or_else(|| {
+            InputError::file(
+                file,
+                format!(
+                    "topic {topic}: message {} too short for its type{}",
+                    n + 1,
+                    if m.cdr { " or not plain CDR" } else { "" }
+                ),
+            )
+        })?;
+        samples.push(Sample {
+            log_ns: m.log_ns,
+            stamp_ns: match stamps {
+                Stamps::Header => d.stamp_ns,
+                Stamps::Log => m.log_ns,
+            },
+            values: d.values,
+        });
+    }
+    Ok(Series {
+        topic: topic.to_string(),
+        kind: type_name.to_string(),
+        columns: kind.columns(),
+        units: kind.units(),
+        stamp_name: match stamps {
+            Stamps::Header => "header.stamp",
+            Stamps::Log => log_name,
+        },
+        samples,
     })
 }
