@@ -558,3 +558,17 @@ proptest! {
         }
     }
 }
+
+/// A file whose rows are all names (a mapping file of serials and
+/// columns): the first row is the header, every other row data.
+#[test]
+fn rows_of_names_are_data_after_the_first() {
+    let t = crate::Table::from_bytes(
+        "m.csv",
+        b"serial,columns\nA-7,out_1\nB-2,out_2\n",
+        &crate::ReadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(t.row_count(), 2);
+    assert_eq!(t.text(1, 1), "out_2");
+}

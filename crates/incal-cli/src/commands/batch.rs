@@ -26,6 +26,7 @@ use incal::procedures::registry;
 use serde::Serialize;
 use serde_json::value::RawValue;
 
+use super::units::{self, Unit};
 use crate::embed::{run_embedded, Embedded};
 use crate::error::{CliError, CliResult};
 use crate::output::write_text;
@@ -58,6 +59,12 @@ pub struct Args {
     /// Write the summary to this file instead of standard output.
     #[arg(long, short = 'o', value_name = "FILE")]
     pub output: Option<PathBuf>,
+    /// Several units on one fixture, each its own result: a list of output columns (out_1,out_2 or SERIAL=out_1,…; a column's name is then the serial), or a mapping file (CSV: serial, columns, optional slot and options); see docs: Many recordings at once.
+    #[arg(long, value_name = "LIST|FILE", conflicts_with = "serial_from_stem")]
+    pub units: Option<String>,
+    /// With --units: the procedure's column that a unit's bare column is read as (default output).
+    #[arg(long, value_name = "NAME", requires = "units")]
+    pub unit_column: Option<String>,
     /// The procedure's options, after '--', as for the one-file command (e.g. -- --mount pendulum).
     #[arg(last = true, value_name = "OPTIONS")]
     pub options: Vec<String>,
@@ -67,6 +74,9 @@ pub struct Args {
 #[derive(Serialize)]
 struct Item {
     input: String,
+    /// The unit's serial (`--units`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    unit: Option<String>,
     ok: bool,
     #[serde(skip_serializing_if = "Option::is_none")]
     code: Option<u8>,
@@ -97,9 +107,35 @@ struct Summary<'a> {
     results: &'a [Item],
 }
 
-/// What became of one recording.
-struct Outcome {
+/// One reduction of the batch: a recording, or one unit of a fixture's
+/// recording.
+#[derive(Debug, Clone)]
+struct Job {
     input: PathBuf,
+    unit: Option<Unit>,
+}
+
+impl Job {
+    /// As the summary names it: `runs/fix.csv [SN-1]`.
+    fn label(&self) -> String {
+        match &self.unit {
+            Some(u) => format!("{} [{}]", self.input.display(), u.serial),
+            None => self.input.display().to_string(),
+        }
+    }
+
+    /// Its result's file name in `--out-dir`, without `.json`.
+    fn stem(&self) -> String {
+        match &self.unit {
+            Some(u) => format!("{}.{}", stem(&self.input), u.serial),
+            None => stem(&self.input),
+        }
+    }
+}
+
+/// What became of one reduction.
+struct Outcome {
+    job: Job,
     run: Embedded,
 }
 
@@ -189,11 +225,12 @@ fn stem(p: &Path) -> String {
 /// reduced: options the batch sets itself, `--jobs`, the procedure's own
 /// options (a usage error is the batch's, not every recording's) and
 /// `--out-dir` names that would collide (the directory is created).
-fn checked_inputs(a: &Args, words: &[String]) -> CliResult<Vec<PathBuf>> {
+fn checked_inputs(a: &Args, words: &[String]) -> CliResult<Vec<Job>> {
     for o in &a.options {
         let flag = o.split('=').next().unwrap_or_default();
         if matches!(flag, "--input" | "--json" | "-o" | "--output")
-            || (a.serial_from_stem && flag == "--serial")
+            || ((a.serial_from_stem || a.units.is_some()) && flag == "--serial")
+            || (a.units.is_some() && flag == "--columns")
         {
             return Err(CliError::Input(format!(
                 "batch: {flag} is set by the batch for each recording; leave it out of the options"
@@ -203,7 +240,26 @@ fn checked_inputs(a: &Args, words: &[String]) -> CliResult<Vec<PathBuf>> {
     if a.jobs == Some(0) {
         return Err(CliError::Input("--jobs: must be at least 1".into()));
     }
-    let inputs = recordings(a)?;
+    let units = match &a.units {
+        Some(v) => Some(units::parse(
+            v,
+            a.unit_column.as_deref().unwrap_or("output"),
+        )?),
+        None => None,
+    };
+    let inputs: Vec<Job> = recordings(a)?
+        .into_iter()
+        .flat_map(|input| match &units {
+            Some(us) => us
+                .iter()
+                .map(|u| Job {
+                    input: input.clone(),
+                    unit: Some(u.clone()),
+                })
+                .collect(),
+            None => vec![Job { input, unit: None }],
+        })
+        .collect();
     // The procedure's options are checked once: a usage error is the
     // batch's, not every recording's.
     if let Some(message) = crate::usage_error(&argv(a, words, &inputs[0])) {
@@ -211,13 +267,13 @@ fn checked_inputs(a: &Args, words: &[String]) -> CliResult<Vec<PathBuf>> {
     }
     if let Some(dir) = &a.out_dir {
         let mut seen = std::collections::HashMap::new();
-        for p in &inputs {
-            if let Some(other) = seen.insert(stem(p), p) {
+        for j in &inputs {
+            if let Some(other) = seen.insert(j.stem(), j.label()) {
                 return Err(CliError::Input(format!(
                     "--out-dir: {} and {} would both write {}.json",
-                    other.display(),
-                    p.display(),
-                    stem(p)
+                    other,
+                    j.label(),
+                    j.stem()
                 )));
             }
         }
@@ -229,7 +285,7 @@ fn checked_inputs(a: &Args, words: &[String]) -> CliResult<Vec<PathBuf>> {
 }
 
 /// The summary for people: one line per recording, then the count.
-fn text_summary(items: &[Item], failed: usize) -> String {
+fn text_summary(items: &[Item], failed: usize, noun: &str) -> String {
     let n = items.len();
     let mut s = String::new();
     for it in items {
@@ -253,7 +309,7 @@ fn text_summary(items: &[Item], failed: usize) -> String {
         s.push('\n');
     }
     s.push_str(&format!(
-        "{} of {n} recordings reduced, {failed} failed\n",
+        "{} of {n} {noun} reduced, {failed} failed\n",
         n - failed
     ));
     s
@@ -263,14 +319,16 @@ fn text_summary(items: &[Item], failed: usize) -> String {
 /// procedure refuses (its one line names the option, `--key: …`) would be
 /// refused for every recording, so it is said once, as bad usage (exit 2),
 /// and nothing else is reduced.
-fn first_then_rest(a: &Args, words: &[String], inputs: &[PathBuf]) -> CliResult<Vec<Outcome>> {
+fn first_then_rest(a: &Args, words: &[String], inputs: &[Job]) -> CliResult<Vec<Outcome>> {
     let Some((first, rest)) = inputs.split_first() else {
         return Ok(Vec::new());
     };
     let mut outcomes = reduce_all(a, words, std::slice::from_ref(first));
     if let Some(o) = outcomes.first() {
         let line = o.run.stderr.last().map(String::as_str).unwrap_or_default();
-        if o.run.code == 2 && line.starts_with("--") {
+        // A unit's own options are its own: their refusal is that unit's.
+        let own = first.unit.as_ref().is_some_and(|u| !u.options.is_empty());
+        if o.run.code == 2 && line.starts_with("--") && !own {
             return Err(CliError::Input(format!(
                 "{line} (the options of every recording; nothing reduced)"
             )));
@@ -293,7 +351,8 @@ pub fn run(a: &Args) -> CliResult<()> {
     let mut items = Vec::with_capacity(outcomes.len());
     let (mut failed_input, mut failed_other, mut stopped) = (0usize, 0usize, 0usize);
     for o in outcomes {
-        let input = o.input.display().to_string();
+        let input = o.job.label();
+        let unit = o.job.unit.as_ref().map(|u| u.serial.clone());
         // Exit 3 with a document: a verdict that stops the line (the
         // result itself is whole).
         let stop = (o.run.code == 3 && !o.run.stdout.is_empty())
@@ -305,6 +364,10 @@ pub fn run(a: &Args) -> CliResult<()> {
                 .last()
                 .cloned()
                 .unwrap_or_else(|| format!("{input}: failed (exit {})", o.run.code));
+            let message = match &unit {
+                Some(u) => format!("{message} (unit {u})"),
+                None => message,
+            };
             crate::embed::stderr_line(&message);
             if o.run.code == 2 {
                 failed_input += 1;
@@ -313,6 +376,7 @@ pub fn run(a: &Args) -> CliResult<()> {
             }
             items.push(Item {
                 input,
+                unit,
                 ok: false,
                 code: Some(o.run.code),
                 error: Some(message),
@@ -339,6 +403,7 @@ pub fn run(a: &Args) -> CliResult<()> {
         let text = String::from_utf8_lossy(&o.run.stdout).into_owned();
         let mut item = Item {
             input,
+            unit,
             ok: true,
             code: None,
             error: None,
@@ -349,7 +414,7 @@ pub fn run(a: &Args) -> CliResult<()> {
             result: None,
         };
         if let Some(dir) = &a.out_dir {
-            let path = dir.join(format!("{}.json", stem(&o.input)));
+            let path = dir.join(format!("{}.json", o.job.stem()));
             std::fs::write(&path, &text).map_err(|e| {
                 CliError::Failure(anyhow::anyhow!("{}: cannot write: {e}", path.display()))
             })?;
@@ -375,6 +440,11 @@ pub fn run(a: &Args) -> CliResult<()> {
     }
     let n = items.len();
     let failed = failed_input + failed_other;
+    let noun = if a.units.is_some() {
+        "units"
+    } else {
+        "recordings"
+    };
     let summary = if a.json {
         let summary = Summary {
             procedure: procedure.id.to_string(),
@@ -387,7 +457,7 @@ pub fn run(a: &Args) -> CliResult<()> {
             .map_err(|e| CliError::Failure(anyhow::anyhow!("cannot print the summary: {e}")))?;
         format!("{text}\n")
     } else {
-        text_summary(&items, failed)
+        text_summary(&items, failed, noun)
     };
     write_text(a.output.as_deref(), &summary)?;
     match (failed_input, failed_other) {
@@ -396,10 +466,10 @@ pub fn run(a: &Args) -> CliResult<()> {
         ))),
         (0, 0) => Ok(()),
         (_, 0) => Err(CliError::Input(format!(
-            "batch: {failed} of {n} recordings refused (named above)"
+            "batch: {failed} of {n} {noun} refused (named above)"
         ))),
         _ => Err(CliError::Failure(anyhow::anyhow!(
-            "batch: {failed} of {n} recordings failed (named above)"
+            "batch: {failed} of {n} {noun} failed (named above)"
         ))),
     }
 }
@@ -408,25 +478,36 @@ fn store_error(db: &Path, e: incal_records::Error) -> CliError {
     crate::options::store_error(&crate::options::store_name(db), e)
 }
 
-/// The command line that reduces one recording.
-fn argv(a: &Args, words: &[String], input: &Path) -> Vec<OsString> {
+/// The command line that reduces one recording (or one unit of it: its
+/// serial, columns and slot, the batch's options, then its own).
+fn argv(a: &Args, words: &[String], job: &Job) -> Vec<OsString> {
     let mut argv: Vec<OsString> = vec!["incal".into()];
     argv.extend(words.iter().map(OsString::from));
     argv.push("--input".into());
-    argv.push(input.as_os_str().to_owned());
+    argv.push(job.input.as_os_str().to_owned());
     argv.push("--json".into());
     if a.serial_from_stem {
         argv.push("--serial".into());
-        argv.push(stem(input).into());
+        argv.push(stem(&job.input).into());
     }
+    let (unit, own) = match &job.unit {
+        Some(u) => {
+            let mut args = u.args();
+            let own = args.split_off(args.len() - u.options.len());
+            (args, own)
+        }
+        None => (Vec::new(), Vec::new()),
+    };
+    argv.extend(unit.iter().map(OsString::from));
     argv.extend(a.options.iter().map(OsString::from));
+    argv.extend(own.iter().map(OsString::from));
     argv
 }
 
 /// Every recording reduced, on `--jobs` threads pulling the next one in
 /// turn; the outcomes in the order of the recordings (a recording's
 /// result does not depend on the thread that reduced it).
-fn reduce_all(a: &Args, words: &[String], inputs: &[PathBuf]) -> Vec<Outcome> {
+fn reduce_all(a: &Args, words: &[String], inputs: &[Job]) -> Vec<Outcome> {
     let jobs = a
         .jobs
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
@@ -463,12 +544,12 @@ fn reduce_all(a: &Args, words: &[String], inputs: &[PathBuf]) -> Vec<Outcome> {
     inputs
         .iter()
         .zip(slots)
-        .map(|(input, slot)| Outcome {
-            input: input.clone(),
+        .map(|(job, slot)| Outcome {
+            job: job.clone(),
             run: slot.into_inner().ok().flatten().unwrap_or(Embedded {
                 code: 1,
                 stdout: Vec::new(),
-                stderr: vec![format!("{}: not reduced", input.display())],
+                stderr: vec![format!("{}: not reduced", job.label())],
             }),
         })
         .collect()

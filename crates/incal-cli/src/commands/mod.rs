@@ -17,6 +17,7 @@ pub mod procedures;
 pub mod record;
 pub mod report;
 pub mod schema;
+pub mod units;
 
 use crate::error::CliResult;
 

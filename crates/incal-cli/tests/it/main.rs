@@ -5,6 +5,7 @@
 mod centrifuge_cli;
 mod cli_manners;
 mod common;
+mod fixture_units_cli;
 mod gfimu_cli;
 mod gyro_cli;
 mod hardening;

@@ -135,9 +135,8 @@ fn is_name(c: &str) -> bool {
     !c.is_empty() && parse_f64(c.as_bytes()).is_none()
 }
 
-/// The header's index among `records` under the module's rule (`complete`:
-/// the scan reached the end of the file).
-fn choose(records: &[Scanned], opts: &ReadOptions, complete: bool) -> Option<usize> {
+/// The header's index among `records` under the module's rule.
+fn choose(records: &[Scanned], opts: &ReadOptions) -> Option<usize> {
     let wanted: Vec<&str> = opts.columns.entries().iter().map(|e| e.source()).collect();
     for (i, r) in records.iter().enumerate() {
         if !names(r) {
@@ -146,8 +145,10 @@ fn choose(records: &[Scanned], opts: &ReadOptions, complete: bool) -> Option<usi
         if !wanted.iter().all(|w| r.cells.iter().any(|c| c == w)) {
             continue;
         }
+        // A candidate needs a record after it: the last record of a file
+        // whose rows are all names is no header (the first row is).
         let after = &records[i + 1..];
-        if after.is_empty() && !complete {
+        if after.is_empty() {
             continue;
         }
         if after
@@ -169,7 +170,6 @@ impl<R: Read> Reader<R> {
         // Hold the buffer from the start on, so the scan can rewind.
         self.hold = Some(self.pos);
         let mut records: Vec<Scanned> = Vec::new();
-        let mut complete = false;
         let want_line = opts.header_line;
         loop {
             let held = self.pos - self.hold.unwrap_or(0);
@@ -181,8 +181,7 @@ impl<R: Read> Reader<R> {
                 // Without a preamble to look for, the first record and the
                 // records that must follow it are enough.
                 (None, _)
-                    if choose(&records, opts, false)
-                        .is_some_and(|i| records.len() > i + FOLLOWING) =>
+                    if choose(&records, opts).is_some_and(|i| records.len() > i + FOLLOWING) =>
                 {
                     break
                 }
@@ -190,10 +189,7 @@ impl<R: Read> Reader<R> {
             }
             let (a, b) = match self.peek_record_start(true)? {
                 Peek::Line(a, b) => (a, b),
-                Peek::End => {
-                    complete = true;
-                    break;
-                }
+                Peek::End => break,
                 Peek::Limit if records.is_empty() => return self.first_record_as_header(opts),
                 Peek::Limit => break,
             };
@@ -208,10 +204,7 @@ impl<R: Read> Reader<R> {
             self.header.delimiter = delimiter;
             match self.next_record() {
                 Ok(true) => {}
-                Ok(false) => {
-                    complete = true;
-                    break;
-                }
+                Ok(false) => break,
                 // A later record that cannot be split on its own terms
                 // (its own delimiter): the scan ends before it.
                 Err(_) if !records.is_empty() => break,
@@ -250,7 +243,7 @@ impl<R: Read> Reader<R> {
                         "empty file (expected a header row)",
                     ));
                 }
-                choose(&records, opts, complete).unwrap_or(0)
+                choose(&records, opts).unwrap_or(0)
             }
         };
         let h = &records[index];
