@@ -146,3 +146,44 @@ def test_a_fail_on_verdict_keeps_and_records_the_result(recordings, tmp_path):
     assert sorted(b.stopped) == sorted(recordings[:2])
     assert all("stopped by fail_on='fail'" in m for m in b.stopped.values())
     assert b.record_ids == [1, 2]
+
+
+def test_units_of_one_fixture_equal_the_cli_and_the_one_unit_files(recordings, tmp_path):
+    """Three units in one file (recordings 0, 1 and 7, the last corrupt in
+    its own column): each its own result, the bad one its own error, as
+    `incal batch --units` gives them."""
+    import csv
+
+    cols = []
+    for k in (0, 1, 2):
+        with open(recordings[k]) as f:
+            rows = [r for r in csv.reader(l for l in f if not l.startswith("#"))]
+        cols.append(rows)
+    fixture = tmp_path / "fixture.csv"
+    with open(fixture, "w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["angle_deg", "out_1", "out_2", "out_3"])
+        for k, r in enumerate(cols[0][1:]):
+            w.writerow([r[0], r[1], cols[1][k + 1][1], "oops" if k == 4 else cols[2][k + 1][1]])
+    units = {"SN-A": "out_1", "SN-B": "out_2", "SN-C": "out_3"}
+    b = incal.batch.reduce([fixture], "tumble", units=units, mount="pendulum", progress=False)
+    assert b.paths == [f"{fixture} [SN-A]", f"{fixture} [SN-B]", f"{fixture} [SN-C]"]
+    for r, k in zip(b[:2], (0, 1)):
+        alone = incal.tumble(recordings[k], mount="pendulum").document
+        assert r.document["coefficients"] == alone["coefficients"]
+    assert [r.document["instrument"]["serial"] for r in b[:2]] == ["SN-A", "SN-B"]
+    err = b[2]
+    assert isinstance(err, incal.batch.FileError) and err.code == 2
+    assert err.message.endswith("(unit SN-C)") and "fixture.csv:6" in err.message
+    summary = tmp_path / "units.json"
+    with pytest.raises(incal.InputError, match="1 of 3 units refused"):
+        incal.run(["batch", "tumble", fixture, "--units", "SN-A=out_1,SN-B=out_2,SN-C=out_3", "--json",
+                   "-o", summary, "--", "--mount", "pendulum"])
+    cli = json.loads(summary.read_text())
+    for item, r in zip(cli["results"], b):
+        if item["ok"]:
+            assert item["result"] == r.document
+        else:
+            assert item["error"] == r.message
+    with pytest.raises(incal.InputError, match="serial 'X' given twice"):
+        incal.batch.reduce([fixture], "tumble", units="X=out_1,X=out_2", progress=False)

@@ -3,6 +3,16 @@
 >>> b = incal.batch.reduce(paths, "tumble", mount="pendulum")
 >>> b.results          # {path: Result} of the recordings reduced
 >>> b.errors           # {path: FileError} of the others, each one line
+>>> incal.batch.reduce(["fixture.csv"], "tumble", units=["out_1", "out_2"], mount="pendulum")
+
+``units`` reduces several units recorded in one file (a fixture), each as
+its own result with its own serial, as ``incal batch --units`` does: a
+list of output columns (each column's name its serial), a dict
+``{serial: column}`` (or ``{serial: "acc_x=u1_ax,…"}``), or the path of a
+mapping file (CSV: ``serial``, ``columns``, optional ``slot`` and
+``options``, the unit's own options as ``--flag value`` words, given as
+keywords ``flag=value``). A bare column is read as ``unit_column``
+(default ``output``); results are keyed ``"PATH [SERIAL]"``.
 
 Each task runs ``incal.<procedure>(path, **options)`` on a worker, so every
 result equals the one-file run. With no ``client`` a ``LocalCluster`` of
@@ -94,6 +104,70 @@ class Batch(list):
         return f"<incal.batch.Batch {len(self)} recordings: {len(self.results)} reduced, {len(self.errors)} failed>"
 
 
+def _columns_of(cell: str, target: str) -> str:
+    return cell if "=" in cell else f"{target}={cell}"
+
+
+def _flags(words: str) -> Dict[str, Any]:
+    """A unit's own options, ``--mount gate --axes x,-y,z``, as keywords."""
+    out: Dict[str, Any] = {}
+    tokens = words.split()
+    k = 0
+    while k < len(tokens):
+        t = tokens[k]
+        if not t.startswith("--"):
+            from . import InputError
+
+            raise InputError(f"units: '{t}': a unit's options are --flag value words")
+        key = t[2:].replace("-", "_")
+        if k + 1 < len(tokens) and not tokens[k + 1].startswith("--"):
+            out[key], k = tokens[k + 1], k + 2
+        else:
+            out[key], k = True, k + 1
+    return out
+
+
+def _units(units: Any, target: str) -> List[Dict[str, Any]]:
+    """Each unit's keywords: ``serial``, ``columns``, ``meta`` (its slot)
+    and its own options."""
+    import csv
+
+    from . import InputError
+
+    if isinstance(units, (str, os.PathLike)) and os.path.isfile(units):
+        with open(units, newline="", encoding="utf-8-sig") as f:
+            rows = list(csv.DictReader(l for l in f if l.strip() and not l.startswith("#")))
+        out = []
+        for line, r in enumerate(rows, start=2):
+            serial, cols = (r.get("serial") or "").strip(), (r.get("columns") or "").strip()
+            if not serial or not cols:
+                raise InputError(f"{os.fspath(units)}:{line}: a unit needs its serial and its columns")
+            u: Dict[str, Any] = {"serial": serial, "columns": _columns_of(cols, target)}
+            if (r.get("slot") or "").strip():
+                u["meta"] = {"slot": r["slot"].strip()}
+            u.update(_flags(r.get("options") or ""))
+            out.append(u)
+    elif isinstance(units, dict):
+        out = [{"serial": str(k), "columns": _columns_of(str(v), target)} for k, v in units.items()]
+    else:
+        entries = units.split(",") if isinstance(units, str) else list(units)
+        out = []
+        for e in entries:
+            serial, _, col = str(e).strip().partition("=")
+            col = col or serial
+            if not serial.strip() or not col.strip():
+                raise InputError(f"units: '{e}': give COLUMN or SERIAL=COLUMN (or a mapping file that exists)")
+            out.append({"serial": serial.strip(), "columns": _columns_of(col.strip(), target)})
+    seen = set()
+    for u in out:
+        if u["serial"] in seen:
+            raise InputError(f"units: serial '{u['serial']}' given twice")
+        seen.add(u["serial"])
+    if not out:
+        raise InputError("units: no units")
+    return out
+
+
 def _function(procedure: str) -> str:
     pid = procedure.replace("_", "-")
     pid = _BY_DOCUMENT.get(pid, pid)
@@ -130,6 +204,8 @@ def reduce(
     records: Optional[Any] = None,
     serial_from_stem: bool = False,
     progress: bool = True,
+    units: Any = None,
+    unit_column: str = "output",
     **options: Any,
 ) -> Batch:
     """Reduce every recording of ``paths`` with ``procedure`` (``"tumble"``,
@@ -137,7 +213,9 @@ def reduce(
     on Dask: one task per recording; the outcomes in the order of
     ``paths``. One bad recording never stops the batch: it is a
     :class:`FileError` in its place. ``serial_from_stem`` gives each file's
-    stem as the instrument serial. Progress goes to standard error."""
+    stem as the instrument serial; ``units`` reduces each unit of a
+    fixture's file as its own result (module docs). Progress goes to
+    standard error."""
     import json
 
     from distributed import Client, LocalCluster, as_completed
@@ -150,6 +228,15 @@ def reduce(
         from . import InputError
 
         raise InputError("batch: give serial or serial_from_stem, not both")
+    jobs: List[Any] = [(p, p, options) for p in paths]
+    if units is not None:
+        if serial_from_stem or "serial" in options or "columns" in options:
+            from . import InputError
+
+            raise InputError("batch: units give each unit's serial and columns: leave out serial, columns and serial_from_stem")
+        each = _units(units, unit_column)
+        jobs = [(f"{p} [{u['serial']}]", p, {**options, **u}) for p in paths for u in each]
+    paths = [j[0] for j in jobs]
     if not paths:
         return Batch([], [], [] if records is not None else None)
     own = None
@@ -160,8 +247,8 @@ def reduce(
         client = own[1]
     try:
         futures = [
-            client.submit(_task, p, function, options, serial_from_stem, key=f"incal-{function}-{k}", pure=False)
-            for k, p in enumerate(paths)
+            client.submit(_task, path, function, opts, serial_from_stem, key=f"incal-{function}-{k}", pure=False)
+            for k, (_, path, opts) in enumerate(jobs)
         ]
         index = {f.key: k for k, f in enumerate(futures)}
         outcomes: List[Any] = [None] * len(paths)
@@ -184,13 +271,14 @@ def reduce(
             own[0].close()
     items: List[Any] = []
     stopped: Dict[str, str] = {}
-    for p, o in zip(paths, outcomes):
+    for (p, _, opts), o in zip(jobs, outcomes):
         if o[0] == "ok":
             items.append(Result(json.loads(o[1]), text=o[1]))
             if o[2] is not None:
                 stopped[p] = o[2]
         else:
-            items.append(FileError(p, o[2], o[1]))
+            message = o[2] if units is None else f"{o[2]} (unit {opts['serial']})"
+            items.append(FileError(p, message, o[1]))
     ids = None
     if records is not None:
         from .records import Records

@@ -32,5 +32,7 @@ def reduce(
     records: Optional[Union[str, "os.PathLike[str]", Records]] = ...,
     serial_from_stem: bool = ...,
     progress: bool = ...,
+    units: Optional[Union[str, "os.PathLike[str]", Iterable[str], Dict[str, str]]] = ...,
+    unit_column: str = ...,
     **options: Any,
 ) -> Batch: ...
