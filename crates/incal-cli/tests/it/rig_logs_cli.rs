@@ -332,13 +332,18 @@ fn samples_at_a_rail_are_named_with_their_lines() {
 /// An autocalibration session whose gyro is scaled by `gain` and, when
 /// `clip`, held within a 16-bit converter's range.
 fn gyro_counts(text: &str, gain: f64, clip: bool) -> String {
+    gyro_counts_at(text, 4, gain, clip)
+}
+
+/// As [`gyro_counts`], the gyro from column `first` (0-based).
+fn gyro_counts_at(text: &str, first: usize, gain: f64, clip: bool) -> String {
     let mut out = String::new();
     for (i, line) in text.lines().filter(|l| !l.starts_with('#')).enumerate() {
         if i == 0 {
             out.push_str(line);
         } else {
             let mut cells: Vec<String> = line.split(',').map(str::to_string).collect();
-            for c in &mut cells[4..7] {
+            for c in &mut cells[first..first + 3] {
                 let v = c.parse::<f64>().unwrap() * gain;
                 *c = if clip {
                     format!("{}", v.round().clamp(-32768.0, 32767.0))
@@ -419,6 +424,166 @@ fn clipped_rotations_are_left_out_of_the_autocalibration() {
     {
         let c = &b["coefficients"][&name];
         let (y, u) = (c["value"].as_f64().unwrap(), c["U95"].as_f64().unwrap());
+        assert!((x - y).abs() <= u, "{name}: {x} vs {y} (U95 {u})");
+    }
+}
+
+#[test]
+fn a_clipped_ferraris_rotation_is_refused_and_a_multipos_one_too_when_none_is_left() {
+    let dir = workdir("rig_logs_clipped_ferraris");
+    for (sequence, extra, reduce) in [
+        ("ferraris", vec![], vec!["imu", "ferraris"]),
+        ("positions", vec!["--rotations"], vec!["imu", "multipos"]),
+    ] {
+        let sim = dir.join(format!("{sequence}.csv"));
+        let mut args = vec![
+            "simulate",
+            "imu",
+            "--sequence",
+            sequence,
+            "--seed",
+            "3",
+            "-o",
+            p(&sim),
+        ];
+        args.extend(&extra);
+        ok(&run(&args));
+        let text = std::fs::read_to_string(&sim).unwrap();
+        let first = text
+            .lines()
+            .next()
+            .unwrap()
+            .split(',')
+            .position(|h| h == "gyr_x")
+            .unwrap();
+        let peak = text
+            .lines()
+            .skip(1)
+            .flat_map(|l| {
+                l.split(',')
+                    .skip(first)
+                    .map(|c| c.parse::<f64>().unwrap().abs())
+            })
+            .fold(0.0, f64::max);
+        let (clean, clipped) = (
+            dir.join(format!("{sequence}_clean.csv")),
+            dir.join(format!("{sequence}_clipped.csv")),
+        );
+        // Counts: peaks at 0.75 and at 1.5 times the 16-bit range.
+        std::fs::write(
+            &clean,
+            gyro_counts_at(&text, first, 0.75 * 32767.0 / peak, false),
+        )
+        .unwrap();
+        std::fs::write(
+            &clipped,
+            gyro_counts_at(&text, first, 1.5 * 32767.0 / peak, true),
+        )
+        .unwrap();
+        let with = |f: &std::path::Path| {
+            let mut a = reduce.clone();
+            a.extend(["--input", p(f), "--json"]);
+            run(&a)
+        };
+        let doc = json_of(&with(&clean));
+        assert!(
+            warnings_with(&doc, "clipped").is_empty(),
+            "{}",
+            doc["warnings"]
+        );
+        let o = with(&clipped);
+        if sequence == "ferraris" {
+            refused(
+                &o,
+                &[
+                    "gyro samples at a converter's rail in x_rot (gyr_x at",
+                    "y_rot (gyr_y at",
+                    "z_rot (gyr_z at",
+                    "the Ferraris method has no other rotation about that axis",
+                ],
+            );
+        } else {
+            refused(
+                &o,
+                &[
+                    "gyro samples at a converter's rail in every rotation about x (x_rot;",
+                    "none about that axis is left",
+                ],
+            );
+        }
+    }
+}
+
+#[test]
+fn a_clipped_dwell_is_left_out_of_the_response() {
+    let dir = workdir("rig_logs_clipped_response");
+    let sim = dir.join("sine.csv");
+    ok(&run(&[
+        "simulate",
+        "response-sine",
+        "--order",
+        "second",
+        "--zeta",
+        "0.2",
+        "--seed",
+        "4",
+        "-o",
+        p(&sim),
+    ]));
+    let text = std::fs::read_to_string(&sim).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let o = header.iter().position(|h| *h == "output").unwrap();
+    let peak = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(o).unwrap().parse::<f64>().unwrap().abs())
+        .fold(0.0, f64::max);
+    // Output counts: the resonance's peak at 0.75 and at 1.3 times the 16-bit range.
+    let counts = |gain: f64| {
+        let mut out = String::from(text.lines().next().unwrap());
+        out.push('\n');
+        for l in text.lines().skip(1) {
+            let mut c: Vec<String> = l.split(',').map(String::from).collect();
+            let v = (c[o].parse::<f64>().unwrap() * gain * 32767.0 / peak).round();
+            c[o] = v.clamp(-32768.0, 32767.0).to_string();
+            out.push_str(&c.join(","));
+            out.push('\n');
+        }
+        out
+    };
+    let (clean, clipped) = (dir.join("clean.csv"), dir.join("clipped.csv"));
+    std::fs::write(&clean, counts(0.75)).unwrap();
+    std::fs::write(&clipped, counts(1.3)).unwrap();
+    let reduce = |f: &std::path::Path| {
+        json_of(&run(&[
+            "response",
+            "sine",
+            "--input",
+            p(f),
+            "--order",
+            "second",
+            "--json",
+        ]))
+    };
+    let (a, b) = (reduce(&clean), reduce(&clipped));
+    assert!(warnings_with(&a, "clipped").is_empty(), "{}", a["warnings"]);
+    let named = warnings_with(&b, "clipped");
+    assert!(
+        named.iter().any(|w| w.contains("of 12 dwells hold samples at a converter's rail and are left out")),
+        "{named:?}"
+    );
+    // Without the clipped dwell the model fits (kept in, p = 0).
+    assert!(
+        warnings_with(&b, "lack-of-fit").is_empty(),
+        "{}",
+        b["warnings"]
+    );
+    // The same sensor (its gain aside) within the two results' U95.
+    for name in ["fn_hz", "zeta", "delay_s", "bandwidth_hz"] {
+        let (x, y) = (&a["coefficients"][name], &b["coefficients"][name]);
+        let v = |c: &serde_json::Value, k: &str| c[k].as_f64().unwrap();
+        let u = v(x, "U95").hypot(v(y, "U95"));
+        let (x, y) = (v(x, "value"), v(y, "value"));
         assert!((x - y).abs() <= u, "{name}: {x} vs {y} (U95 {u})");
     }
 }

@@ -27,6 +27,7 @@ use super::sim::{ImuSample, Layout};
 use super::{SectionStats, V3};
 use crate::error::{Error, Result};
 use crate::timebase::TimeBase;
+use crate::warning::{Warning, WarningCode};
 
 /// Accelerometer columns of a session.
 pub const ACC: [&str; 3] = ["acc_x", "acc_y", "acc_z"];
@@ -317,6 +318,7 @@ pub fn read_ferraris<R: Read>(
             missing.join(", ")
         )));
     }
+    refuse_clipped_rotations(&secs)?;
     let tb = session.timebase(rows.header().file(), rate_hz)?;
     if tb.is_none() && rate_hz.is_none() {
         return Err(no_rate(rows.header()));
@@ -602,6 +604,7 @@ pub fn read_multipos<R: Read>(
     some_rows(rows)?;
     let scale = super::screen::median_scale(&still_scales);
     let mut replaced = Vec::new();
+    let pending = without_clipped_rotations(pending, &mut input.warnings)?;
     for (label, axis, samples) in pending {
         check_rotation_alive(&file, &label, axis, &samples)?;
         let n = super::screen::rotation_spikes(&samples, scale);
@@ -628,6 +631,80 @@ pub fn read_multipos<R: Read>(
         super::screen::NOT_CHANGED,
     ));
     Ok(input)
+}
+
+/// `gyr_x at -32768 (12 samples)`: where a section is clipped.
+fn clipped_text(n: usize, first: Option<(usize, f64)>) -> String {
+    match first {
+        Some((k, rail)) => format!("{} at {rail} ({n} samples)", CHANNELS[3 + k]),
+        None => format!("{n} samples"),
+    }
+}
+
+/// Ferraris: a rotation holding gyro samples at a converter's rail
+/// ([`super::screen::GyroRails`]) integrates to the wrong angle, and the
+/// method has no other rotation about its axis: refused, naming each.
+fn refuse_clipped_rotations(secs: &FerrarisSections) -> Result<()> {
+    let rails = super::screen::GyroRails::of(secs.iter().flatten().map(|s| [s[3], s[4], s[5]]));
+    let clipped: Vec<String> = (6..9)
+        .filter_map(|k| {
+            let (n, first) = rails.count(&secs[k]);
+            (n > 0).then(|| format!("{} ({})", SECTIONS[k], clipped_text(n, first)))
+        })
+        .collect();
+    if clipped.is_empty() {
+        return Ok(());
+    }
+    Err(Error::Unsupported(format!(
+        "gyro samples at a converter's rail in {}: a clipped rotation integrates to the wrong angle, and the Ferraris method has no other rotation about that axis (record it again within the gyro's range)",
+        clipped.join(", ")
+    )))
+}
+
+/// Multi-position: rotations holding gyro samples at a converter's rail
+/// are left out with a `clipped` warning naming them; refused when an axis
+/// that had a rotation has none left.
+#[allow(clippy::type_complexity)]
+fn without_clipped_rotations(
+    pending: Vec<(String, usize, Vec<[f64; 6]>)>,
+    warnings: &mut Vec<Warning>,
+) -> Result<Vec<(String, usize, Vec<[f64; 6]>)>> {
+    let rails = super::screen::GyroRails::of(
+        pending
+            .iter()
+            .flat_map(|(_, _, s)| s.iter().map(|x| [x[3], x[4], x[5]])),
+    );
+    let (mut kept, mut left) = (Vec::new(), Vec::new());
+    for (label, axis, samples) in pending {
+        match rails.count(&samples) {
+            (0, _) => kept.push((label, axis, samples)),
+            (n, first) => left.push((label, axis, clipped_text(n, first))),
+        }
+    }
+    if left.is_empty() {
+        return Ok(kept);
+    }
+    let names: Vec<String> = left.iter().map(|(l, _, t)| format!("{l}: {t}")).collect();
+    if let Some((label, axis, _)) = left
+        .iter()
+        .find(|(_, a, _)| !kept.iter().any(|(_, k, _)| k == a))
+    {
+        return Err(Error::Unsupported(format!(
+            "gyro samples at a converter's rail in every rotation about {} ({label}; {}): a clipped rotation integrates to the wrong angle, and none about that axis is left (record one again within the gyro's range)",
+            ["x", "y", "z"][*axis],
+            names.join(", ")
+        )));
+    }
+    warnings.push(Warning::new(
+        WarningCode::Clipped,
+        format!(
+            "{} of {} rotations hold gyro samples at a converter's rail ({}) and are left out of the gyro fit (a clipped rotation integrates to the wrong angle)",
+            left.len(),
+            left.len() + kept.len(),
+            names.join(", ")
+        ),
+    ));
+    Ok(kept)
 }
 
 /// The record of an autocalibration: time (s; from `time_s` under the
@@ -854,5 +931,58 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("100 Hz") && e.contains("200.3759 Hz"), "{e}");
+    }
+
+    /// A rotation of `n` gyro samples about `axis`, its peak `peak`.
+    fn rotation(axis: usize, n: usize, peak: f64) -> Vec<[f64; 6]> {
+        (0..n)
+            .map(|i| {
+                let mut s = [0.0, 0.0, 1000.0, 3.0, -2.0, 1.0];
+                s[3 + axis] = (peak * (std::f64::consts::PI * i as f64 / n as f64).sin()).round();
+                s
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_clipped_rotation_is_left_out_when_another_turns_about_its_axis() {
+        let clip = |mut r: Vec<[f64; 6]>, axis: usize| {
+            r.iter_mut()
+                .for_each(|s| s[3 + axis] = s[3 + axis].min(32767.0));
+            r
+        };
+        let pending = vec![
+            ("x_rot".to_string(), 0, clip(rotation(0, 200, 40_000.0), 0)),
+            ("x_rot".to_string(), 0, rotation(0, 600, 13_000.0)),
+            ("y_rot".to_string(), 1, rotation(1, 600, 13_000.0)),
+        ];
+        let mut warnings = Vec::new();
+        let kept = without_clipped_rotations(pending.clone(), &mut warnings).unwrap();
+        assert_eq!(kept, pending[1..].to_vec());
+        assert_eq!(warnings.len(), 1);
+        assert!(
+            warnings[0].message.starts_with(
+                "1 of 3 rotations hold gyro samples at a converter's rail (x_rot: gyr_x at 32767 ("
+            ),
+            "{}",
+            warnings[0].message
+        );
+        // Without the slow x rotation, nothing about x is left: refused.
+        let e =
+            without_clipped_rotations(vec![pending[0].clone(), pending[2].clone()], &mut warnings)
+                .unwrap_err()
+                .to_string();
+        assert!(
+            e.contains("in every rotation about x (x_rot; x_rot: gyr_x at 32767"),
+            "{e}"
+        );
+        // The same peak below the rail: nothing left out.
+        let mut none = Vec::new();
+        let all = vec![("x_rot".to_string(), 0, rotation(0, 200, 30_000.0))];
+        assert_eq!(
+            without_clipped_rotations(all.clone(), &mut none).unwrap(),
+            all
+        );
+        assert!(none.is_empty());
     }
 }

@@ -18,6 +18,14 @@
 //! axis) is refused naming its column; a channel that sits at its extreme
 //! value in many rows (a converter at full scale) gets a `saturated`
 //! warning naming the column, the value and the count.
+//!
+//! # Clipped gyro samples in motion
+//! [`GyroRails`]: a gyro axis two or more samples in a row at its own
+//! extreme over the session, when that extreme is an integer converter's
+//! end ([`incal_io::at_rail`]; the input layer's `clipped` rule). A
+//! rotation holding such samples integrates to the wrong angle: it is left
+//! out where the session has another (multipos, autocal) and refused where
+//! it has none (Ferraris).
 
 use crate::error::{Error, Result};
 use crate::warning::{Warning, WarningCode};
@@ -452,5 +460,60 @@ mod tests {
         let mut w = Vec::new();
         check(&s, [Some("a"), Some("b")], &mut w).unwrap();
         assert!(w.is_empty(), "{w:?}");
+    }
+}
+
+/// The rails of a session's gyro axes: per axis, its extremes over the
+/// session that are integer converters' ends (module docs).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GyroRails {
+    rails: [Vec<f64>; 3],
+}
+
+impl GyroRails {
+    /// The rails of the gyro samples `gy` (°/s or raw, any unit).
+    pub fn of(gy: impl Iterator<Item = [f64; 3]>) -> Self {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for g in gy {
+            for k in 0..3 {
+                lo[k] = lo[k].min(g[k]);
+                hi[k] = hi[k].max(g[k]);
+            }
+        }
+        let rails = std::array::from_fn(|k| {
+            [lo[k], hi[k]]
+                .into_iter()
+                .filter(|&r| incal_io::at_rail(r, None))
+                .collect()
+        });
+        Self { rails }
+    }
+
+    /// The samples of `gy` at a rail in runs of two or more (one flag a
+    /// sample), and the first (axis, rail) found.
+    pub fn flags(&self, gy: &[[f64; 3]]) -> (Vec<bool>, Option<(usize, f64)>) {
+        let mut out = vec![false; gy.len()];
+        let mut first = None;
+        for (k, rails) in self.rails.iter().enumerate() {
+            for &rail in rails {
+                for i in 0..gy.len() {
+                    let at = |j: usize| gy.get(j).is_some_and(|g| g[k] == rail);
+                    if at(i) && (at(i + 1) || (i > 0 && at(i - 1))) {
+                        out[i] = true;
+                        first.get_or_insert((k, rail));
+                    }
+                }
+            }
+        }
+        (out, first)
+    }
+
+    /// The clipped samples of a section of six channels (gyro 3..6): their
+    /// number and the first (axis, rail).
+    pub fn count(&self, section: &[[f64; 6]]) -> (usize, Option<(usize, f64)>) {
+        let gy: Vec<[f64; 3]> = section.iter().map(|s| [s[3], s[4], s[5]]).collect();
+        let (flags, first) = self.flags(&gy);
+        (flags.iter().filter(|&&f| f).count(), first)
     }
 }

@@ -12,7 +12,8 @@
 
 use std::io::Read;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
+use crate::warning::{Warning, WarningCode};
 
 /// The samples of one dwell.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -140,16 +141,86 @@ pub fn read<R: Read>(
     if dwells.is_empty() {
         return Err(rows.header().error("no data rows").into());
     }
-    if cf.is_some() {
-        return Ok(Recorded {
-            dwells,
-            warnings: Vec::new(),
-        });
-    }
-    // Without freq_hz every row went into one dwell (frequency 0).
-    whole.samples = dwells.pop().unwrap_or_default();
-    let (dwells, warnings) = super::find::find(&whole, window_s)?;
+    let (dwells, mut warnings) = if cf.is_some() {
+        (dwells, Vec::new())
+    } else {
+        // Without freq_hz every row went into one dwell (frequency 0).
+        whole.samples = dwells.pop().unwrap_or_default();
+        super::find::find(&whole, window_s)?
+    };
+    let dwells = without_clipped(dwells, &mut warnings)?;
     Ok(Recorded { dwells, warnings })
+}
+
+/// The samples of `x` at a rail of `rails` in runs of two or more.
+fn clipped_count(x: &[f64], rails: &[f64]) -> usize {
+    let at = |j: usize| x.get(j).is_some_and(|v| rails.contains(v));
+    (0..x.len())
+        .filter(|&i| at(i) && (at(i + 1) || (i > 0 && at(i - 1))))
+        .count()
+}
+
+/// A channel's rails: its extremes over every dwell that are integer
+/// converters' ends ([`incal_io::at_rail`]; the input layer's `clipped`
+/// rule).
+fn rails<'a>(x: impl Iterator<Item = &'a [f64]>) -> Vec<f64> {
+    let (lo, hi) = x
+        .flatten()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    [lo, hi]
+        .into_iter()
+        .filter(|&r| incal_io::at_rail(r, None))
+        .collect()
+}
+
+/// Dwells whose output or reference holds samples at a converter's rail
+/// (their sine fit would see a flattened wave) are left out with a
+/// `clipped` warning naming them; refused when fewer than two are left.
+fn without_clipped(dwells: Vec<Dwell>, warnings: &mut Vec<Warning>) -> Result<Vec<Dwell>> {
+    let out_rails = rails(dwells.iter().map(|d| &d.output[..]));
+    let ref_rails = rails(dwells.iter().map(|d| &d.reference[..]));
+    if out_rails.is_empty() && ref_rails.is_empty() {
+        return Ok(dwells);
+    }
+    let n = dwells.len();
+    let (mut kept, mut left) = (Vec::new(), Vec::new());
+    for (k, d) in dwells.into_iter().enumerate() {
+        let (a, b) = (
+            clipped_count(&d.output, &out_rails),
+            clipped_count(&d.reference, &ref_rails),
+        );
+        if a + b == 0 {
+            kept.push(d);
+        } else {
+            let what = match (a, b) {
+                (0, b) => format!("reference {b} samples"),
+                (a, 0) => format!("output {a} samples"),
+                (a, b) => format!("output {a}, reference {b} samples"),
+            };
+            left.push(format!("{}: {what}", d.label(k)));
+        }
+    }
+    if left.is_empty() {
+        return Ok(kept);
+    }
+    if kept.len() < 2 {
+        return Err(Error::Unsupported(format!(
+            "samples at a converter's rail in {} of {n} dwells ({}): a clipped sine has the wrong amplitude and phase, and fewer than 2 dwells are left",
+            left.len(),
+            left.join("; ")
+        )));
+    }
+    warnings.push(Warning::new(
+        WarningCode::Clipped,
+        format!(
+            "{} of {n} dwells hold samples at a converter's rail and are left out (a clipped sine has the wrong amplitude and phase): {}",
+            left.len(),
+            left.join("; ")
+        ),
+    ));
+    Ok(kept)
 }
 
 /// The column `time_ref_s` (the reference's own clock) when the header
@@ -256,5 +327,65 @@ fn push(
         }
         d.reference.push(r);
         d.output.push(y);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A dwell of a sine of `amplitude` counts, clamped to the 16-bit range.
+    fn dwell(k: usize, amplitude: f64) -> Dwell {
+        let x: Vec<f64> = (0..400)
+            .map(|i| {
+                (amplitude * (0.1 * i as f64).sin())
+                    .round()
+                    .clamp(-32768.0, 32767.0)
+            })
+            .collect();
+        Dwell {
+            freq_hz: (k + 1) as f64,
+            first_line: 2 + 400 * k,
+            last_line: 401 + 400 * k,
+            time_s: (0..400).map(|i| i as f64 * 0.01).collect(),
+            time_ref_s: Vec::new(),
+            reference: x.iter().map(|v| v / 1000.0).collect(),
+            output: x,
+            found: false,
+        }
+    }
+
+    #[test]
+    fn clipped_dwells_are_left_out_or_refused_when_two_are_not_left() {
+        let mut w = Vec::new();
+        let all = vec![dwell(0, 20_000.0), dwell(1, 50_000.0), dwell(2, 10_000.0)];
+        let kept = without_clipped(all.clone(), &mut w).unwrap();
+        assert_eq!(kept, vec![all[0].clone(), all[2].clone()]);
+        assert!(
+            w[0].message
+                .contains("1 of 3 dwells hold samples at a converter's rail and are left out")
+                && w[0]
+                    .message
+                    .contains("dwell 2 (2 Hz, lines 402-801): output"),
+            "{}",
+            w[0].message
+        );
+        // Below the rail: untouched.
+        let mut none = Vec::new();
+        let fine = vec![dwell(0, 20_000.0), dwell(1, 30_000.0)];
+        assert_eq!(without_clipped(fine.clone(), &mut none).unwrap(), fine);
+        assert!(none.is_empty());
+        // Two of three clipped: one is not enough.
+        let e = without_clipped(
+            vec![dwell(0, 40_000.0), dwell(1, 50_000.0), dwell(2, 10_000.0)],
+            &mut w,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("in 2 of 3 dwells (dwell 1 (1 Hz, lines 2-401): output"),
+            "{e}"
+        );
+        assert!(e.contains("fewer than 2 dwells are left"), "{e}");
     }
 }

@@ -172,32 +172,11 @@ fn gravity_direction(s: &Session, xa: &DVector<f64>, iv: &Interval) -> V3 {
     p.apply(&V3::from(m)).normalize()
 }
 
-/// Gyro samples at a converter's rail: an axis two or more samples in a
-/// row at its own extreme when that extreme is an integer converter's end
-/// ([`incal_io::at_rail`]; the input layer's `clipped` rule).
+/// Gyro samples at a converter's rail ([`super::super::screen::GyroRails`]).
 pub(super) fn clipped_samples(gy: &[[f64; 3]]) -> Vec<bool> {
-    let mut out = vec![false; gy.len()];
-    for k in 0..3 {
-        let (lo, hi) = gy
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), g| {
-                (a.min(g[k]), b.max(g[k]))
-            });
-        for rail in [lo, hi] {
-            if !incal_io::at_rail(rail, None) {
-                continue;
-            }
-            for i in 0..gy.len() {
-                let here = gy[i][k] == rail;
-                let next = gy.get(i + 1).is_some_and(|g| g[k] == rail);
-                let prev = i > 0 && gy[i - 1][k] == rail;
-                if here && (next || prev) {
-                    out[i] = true;
-                }
-            }
-        }
-    }
-    out
+    super::super::screen::GyroRails::of(gy.iter().copied())
+        .flags(gy)
+        .0
 }
 
 /// The motions (index among the intervals' gaps) that hold a clipped gyro
