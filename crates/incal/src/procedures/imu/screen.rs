@@ -497,10 +497,10 @@ impl GyroRails {
         let mut first = None;
         for (k, rails) in self.rails.iter().enumerate() {
             for &rail in rails {
-                for i in 0..gy.len() {
-                    let at = |j: usize| gy.get(j).is_some_and(|g| g[k] == rail);
+                let at = |j: usize| gy.get(j).is_some_and(|g| g[k] == rail);
+                for (i, flag) in out.iter_mut().enumerate() {
                     if at(i) && (at(i + 1) || (i > 0 && at(i - 1))) {
-                        out[i] = true;
+                        *flag = true;
                         first.get_or_insert((k, rail));
                     }
                 }
