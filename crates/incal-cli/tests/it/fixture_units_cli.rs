@@ -58,21 +58,22 @@ fn each_unit_is_its_own_result_equal_to_its_own_file() {
     let (fix, singles) = fixture(&dir, None);
     let out = dir.join("res");
     let db = dir.join("line.db");
-    let o = run(&[
-        "batch",
-        "tumble",
-        p(&fix),
-        "--units",
-        "SN-1=out_1,SN-2=out_2,SN-3=out_3",
-        "--db",
-        p(&db),
-        "--out-dir",
-        p(&out),
-        "--json",
-        "--",
-        "--mount",
-        "pendulum",
-    ]);
+    let batch = |extra: &[&str]| {
+        let mut args = vec![
+            "batch",
+            "tumble",
+            p(&fix),
+            "--units",
+            "SN-1=out_1,SN-2=out_2,SN-3=out_3",
+            "--db",
+            p(&db),
+            "--json",
+        ];
+        args.extend(extra);
+        args.extend(["--", "--mount", "pendulum"]);
+        run(&args)
+    };
+    let o = batch(&["--out-dir", p(&out)]);
     let summary = json_of(&o);
     assert_eq!(summary["ok"], 3);
     for (k, single) in singles.iter().enumerate() {
@@ -118,19 +119,7 @@ fn each_unit_is_its_own_result_equal_to_its_own_file() {
         "{values:?}"
     );
     // Run twice: nothing stored twice.
-    let again = json_of(&run(&[
-        "batch",
-        "tumble",
-        p(&fix),
-        "--units",
-        "SN-1=out_1,SN-2=out_2,SN-3=out_3",
-        "--db",
-        p(&db),
-        "--json",
-        "--",
-        "--mount",
-        "pendulum",
-    ]));
+    let again = json_of(&batch(&[]));
     assert!((0..3).all(|k| again["results"][k]["already_stored"] == true));
 }
 
@@ -194,40 +183,24 @@ fn a_mapping_file_gives_serials_slots_and_a_units_own_options() {
     // Unit A-7 is read with its own mount.
     assert_eq!(summary["results"][0]["result"]["options"]["mount"], "gate");
     // Refusals before anything runs.
+    let units = |units: &str, rest: &[&str]| {
+        let mut args = vec!["batch", "tumble", p(&fix), "--units", units];
+        args.extend(rest);
+        run(&args)
+    };
     std::fs::write(&map, "serial,columns\nA-7,out_1\nA-7,out_2\n").unwrap();
-    refused(
-        &run(&["batch", "tumble", p(&fix), "--units", p(&map)]),
-        &["--units: serial 'A-7' given twice"],
-    );
+    refused(&units(p(&map), &[]), &["--units: serial 'A-7' given twice"]);
     std::fs::write(&map, "serial,columns\nA-7,\n").unwrap();
     refused(
-        &run(&["batch", "tumble", p(&fix), "--units", p(&map)]),
+        &units(p(&map), &[]),
         &["units.csv:2: a unit needs its serial and its columns"],
     );
     refused(
-        &run(&[
-            "batch",
-            "tumble",
-            p(&fix),
-            "--units",
-            "out_1,",
-            "--",
-            "--mount",
-            "pendulum",
-        ]),
+        &units("out_1,", &["--", "--mount", "pendulum"]),
         &["--units: '': give COLUMN or SERIAL=COLUMN"],
     );
     refused(
-        &run(&[
-            "batch",
-            "tumble",
-            p(&fix),
-            "--units",
-            "out_1",
-            "--",
-            "--serial",
-            "X",
-        ]),
+        &units("out_1", &["--", "--serial", "X"]),
         &["batch: --serial is set by the batch"],
     );
 }
