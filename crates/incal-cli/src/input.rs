@@ -96,7 +96,12 @@ impl ReadArgs {
                 x => x,
             },
             log: incal_io::logs::LogOptions {
-                topics: self.log.topic.clone(),
+                topics: self
+                    .log
+                    .topic
+                    .iter()
+                    .map(|t| t.trim().to_string())
+                    .collect(),
                 stamps: match &self.log.stamps {
                     None => incal_io::logs::Stamps::default(),
                     Some(s) => incal_io::logs::Stamps::parse(s)

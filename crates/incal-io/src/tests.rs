@@ -572,3 +572,17 @@ fn rows_of_names_are_data_after_the_first() {
     assert_eq!(t.row_count(), 2);
     assert_eq!(t.text(1, 1), "out_2");
 }
+
+/// A preamble and a header without data rows: refused for that, not read
+/// from the preamble.
+#[test]
+fn a_preamble_and_a_header_without_rows_has_no_data_rows() {
+    let e = crate::Table::from_bytes(
+        "p.csv",
+        b"Fs,100\nLogging Type,0\nax,ay,az\n",
+        &crate::ReadOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("no data rows after the header"), "{e}");
+}

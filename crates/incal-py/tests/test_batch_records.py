@@ -187,3 +187,23 @@ def test_units_of_one_fixture_equal_the_cli_and_the_one_unit_files(recordings, t
             assert item["error"] == r.message
     with pytest.raises(incal.InputError, match="serial 'X' given twice"):
         incal.batch.reduce([fixture], "tumble", units="X=out_1,X=out_2", progress=False)
+
+
+def test_a_units_slot_joins_the_batchs_meta(recordings, tmp_path):
+    fixture = tmp_path / "pair.csv"
+    a = [l for l in open(recordings[0]) if not l.startswith("#")]
+    b = [l for l in open(recordings[1]) if not l.startswith("#")]
+    with open(fixture, "w") as f:
+        f.write("angle_deg,out_1,out_2\n")
+        for x, y in zip(a[1:], b[1:]):
+            f.write(f"{x.strip()},{y.strip().split(',')[1]}\n")
+    mapping = tmp_path / "units.csv"
+    mapping.write_text("serial;columns;slot\nU1;out_1;4\nU2;out_2;5\n")
+    got = incal.batch.reduce([fixture], "tumble", units=mapping, meta={"operator": "lee"}, mount="pendulum", progress=False)
+    assert [r.document["instrument"]["slot"] for r in got] == ["4", "5"]
+    assert [r.document["instrument"]["operator"] for r in got] == ["lee", "lee"]
+    with pytest.raises(incal.InputError, match="no such mapping file"):
+        incal.batch.reduce([fixture], "tumble", units=tmp_path / "missing.csv", progress=False)
+    mapping.write_text("serial,columns,options\nU1,out_1,--mount=gate\n")
+    with pytest.raises(incal.InputError, match="unit U1: mount is given by the batch too"):
+        incal.batch.reduce([fixture], "tumble", units=mapping, mount="pendulum", progress=False)

@@ -261,14 +261,29 @@ fn checked_inputs(a: &Args, words: &[String]) -> CliResult<Vec<Job>> {
         })
         .collect();
     // The procedure's options are checked once: a usage error is the
-    // batch's, not every recording's.
-    if let Some(message) = crate::usage_error(&argv(a, words, &inputs[0])) {
-        return Err(CliError::Input(message));
+    // batch's, not every recording's. With units, each unit's command
+    // line: an error every unit has is the batch's, one that some have is
+    // those units' (named).
+    let lines = units.as_ref().map_or(1, Vec::len);
+    let errors: Vec<(Option<String>, &Job)> = inputs
+        .iter()
+        .take(lines)
+        .map(|j| (crate::usage_error(&argv(a, words, j)), j))
+        .collect();
+    if let (Some(first), true) = (&errors[0].0, errors.iter().all(|e| e.0 == errors[0].0)) {
+        return Err(CliError::Input(first.clone()));
+    }
+    if let Some((Some(message), j)) = errors.iter().find(|e| e.0.is_some()) {
+        let serial = j.unit.as_ref().map_or("", |u| u.serial.as_str());
+        return Err(CliError::Input(format!(
+            "--units: unit {serial}: {message}"
+        )));
     }
     if let Some(dir) = &a.out_dir {
         let mut seen = std::collections::HashMap::new();
         for j in &inputs {
-            if let Some(other) = seen.insert(j.stem(), j.label()) {
+            // Case apart, two names are one file on some systems.
+            if let Some(other) = seen.insert(j.stem().to_lowercase(), j.label()) {
                 return Err(CliError::Input(format!(
                     "--out-dir: {} and {} would both write {}.json",
                     other,

@@ -44,7 +44,7 @@ pub fn run(a: &Args) -> CliResult<()> {
         )));
     };
     let opts = LogOptions {
-        topics: a.topic.clone(),
+        topics: a.topic.iter().map(|t| t.trim().to_string()).collect(),
         stamps,
     };
     let c = logs::convert(&o.name, format, &bytes, &opts)?;

@@ -31,15 +31,13 @@ pub struct Unit {
 impl Unit {
     /// The options that make a one-file command line reduce this unit.
     pub fn args(&self) -> Vec<String> {
+        // `--flag=value`: a serial such as `-001` is a value, not a flag.
         let mut a = vec![
-            "--serial".to_string(),
-            self.serial.clone(),
-            "--columns".to_string(),
-            self.columns.clone(),
+            format!("--serial={}", self.serial),
+            format!("--columns={}", self.columns),
         ];
         if let Some(s) = &self.slot {
-            a.push("--meta".into());
-            a.push(format!("slot={s}"));
+            a.push(format!("--meta=slot={s}"));
         }
         a.extend(self.options.iter().cloned());
         a
@@ -64,13 +62,36 @@ pub fn parse(value: &str, target: &str) -> CliResult<Vec<Unit>> {
     } else {
         from_list(value, target)?
     };
+    // Serials name result files: no path separators or control
+    // characters, and unique whatever their case.
     let mut seen = std::collections::HashSet::new();
     for u in &units {
-        if !seen.insert(u.serial.as_str()) {
+        if u.serial
+            .chars()
+            .any(|c| c.is_control() || "/\\:".contains(c))
+        {
+            return Err(CliError::Input(format!(
+                "--units: serial '{}' holds '/', '\\', ':' or a control character (it names the unit's result file)",
+                incal_io::clip(&u.serial)
+            )));
+        }
+        if !seen.insert(u.serial.to_lowercase()) {
             return Err(CliError::Input(format!(
                 "--units: serial '{}' given twice",
                 incal_io::clip(&u.serial)
             )));
+        }
+        for o in &u.options {
+            let flag = o.split('=').next().unwrap_or_default();
+            if matches!(
+                flag,
+                "--input" | "--json" | "-o" | "--output" | "--serial" | "--columns"
+            ) {
+                return Err(CliError::Input(format!(
+                    "--units: unit {}: {flag} is set by the batch; leave it out of the unit's options",
+                    u.serial
+                )));
+            }
         }
     }
     if units.is_empty() {

@@ -203,4 +203,27 @@ fn a_mapping_file_gives_serials_slots_and_a_units_own_options() {
         &units("out_1", &["--", "--serial", "X"]),
         &["batch: --serial is set by the batch"],
     );
+    refused(
+        &units("a/b=out_1", &["--", "--mount", "pendulum"]),
+        &["--units: serial 'a/b' holds '/'"],
+    );
+    refused(
+        &units("SN-a=out_1,sn-A=out_2", &["--", "--mount", "pendulum"]),
+        &["--units: serial 'sn-A' given twice"],
+    );
+    // A unit's own options that the command refuses: named before any run.
+    std::fs::write(
+        &map,
+        "serial,columns,options\nA-7,out_1,--mount pendulum\nB-9,out_2,--mount sideways\n",
+    )
+    .unwrap();
+    refused(
+        &units(p(&map), &[]),
+        &["--units: unit B-9: invalid value 'sideways' for '--mount"],
+    );
+    std::fs::write(&map, "serial,columns,options\nA-7,out_1,--serial X\n").unwrap();
+    refused(
+        &units(p(&map), &[]),
+        &["--units: unit A-7: --serial is set by the batch"],
+    );
 }

@@ -241,13 +241,16 @@ fn convert_writes_what_the_reductions_read() {
 
 #[test]
 fn robot_logs_are_refused_naming_the_problem() {
-    let small = fixture("pyulog_sample_log_small.ulg");
+    // In the scratch directory: messages are measured without its path.
+    let dir = workdir("robot_logs_refused");
+    let small = dir.join("pyulog_sample_log_small.ulg");
+    std::fs::copy(fixture("pyulog_sample_log_small.ulg"), &small).unwrap();
     // Several topics: the message lists them.
     refused(
         &run(&["noise", "--input", p(&small)]),
         &[
             "pyulog_sample_log_small.ulg: a PX4 ULog: give --topic",
-            "sensor_combined, sensor_accel (instances 0, 1, 2), sensor_gyro (instances 0, 1, 2)",
+            "sensor_accel (instances 0, 1, 2), sensor_combined, sensor_gyro (instances 0, 1, 2)",
         ],
     );
     refused(
@@ -255,10 +258,21 @@ fn robot_logs_are_refused_naming_the_problem() {
         &["--topic 'sensor_baro': not in this PX4 ULog"],
     );
     refused(
+        &run(&[
+            "noise",
+            "--input",
+            p(&small),
+            "--topic",
+            "sensor_combined",
+            "--header-line",
+            "3",
+        ]),
+        &["--header-line 3: a PX4 ULog has no header line to name"],
+    );
+    refused(
         &run(&["convert", "--input", p(&small), "--stamps", "gps"]),
         &["--stamps: 'gps': expected header or log"],
     );
-    let dir = workdir("robot_logs_refused");
     let csv = dir.join("plain.csv");
     std::fs::write(&csv, "time_s,gyr_x\n0,1\n0.01,2\n").unwrap();
     refused(

@@ -8,14 +8,15 @@
 use std::collections::BTreeMap;
 use std::io::Read;
 
-use super::ros::{self, Kind};
-use super::{choose, Bytes, Format, LogOptions, Offered, Series};
+use super::ros::{Kind, Topics};
+use super::{choose, Bytes, Format, LogOptions, Series};
 use crate::error::{InputError, Result};
 
 /// Magic line of a bag 2.0.
 const MAGIC: usize = 13;
-/// Largest chunk inflated (bytes): a bag's are a few MB.
-const MAX_CHUNK_BYTES: usize = 1 << 30;
+/// Largest chunk inflated (bytes): a bag's are a few MB (rosbag's
+/// default is 768 KiB).
+const MAX_CHUNK_BYTES: usize = 1 << 28;
 
 /// A record's header fields.
 fn fields(h: &[u8]) -> Option<BTreeMap<&str, &[u8]>> {
@@ -70,7 +71,7 @@ fn inflate(file: &str, f: &BTreeMap<&str, &[u8]>, data: &[u8]) -> Result<Vec<u8>
             format!("a ROS 1 bag: a chunk cannot be inflated: {e}"),
         )
     };
-    let mut out = Vec::with_capacity(size.min(MAX_CHUNK_BYTES));
+    let mut out = Vec::with_capacity(size.min(1 << 26));
     let limit = (MAX_CHUNK_BYTES + 1) as u64;
     match compression {
         b"none" => return Ok(data.to_vec()),
@@ -96,7 +97,7 @@ fn inflate(file: &str, f: &BTreeMap<&str, &[u8]>, data: &[u8]) -> Result<Vec<u8>
     if out.len() > MAX_CHUNK_BYTES {
         return Err(InputError::file(
             file,
-            "a ROS 1 bag: a chunk inflates beyond 1 GiB",
+            "a ROS 1 bag: a chunk inflates beyond 256 MiB",
         ));
     }
     Ok(out)
@@ -124,78 +125,78 @@ fn connection(f: &BTreeMap<&str, &[u8]>, data: &[u8]) -> Option<(u32, Connection
     ))
 }
 
-/// The series of the topics chosen (module [`super`]).
+/// The records of one chunk (inflated), read into `conns` and `topics`.
+fn chunk(
+    file: &str,
+    data: &[u8],
+    conns: &mut BTreeMap<u32, Connection>,
+    topics: &mut Topics,
+) -> Result<()> {
+    let inner = records(data, 0).map_err(|at| {
+        InputError::file(
+            file,
+            format!("a ROS 1 bag: a broken record at byte {at} of a chunk"),
+        )
+    })?;
+    for (f, d) in inner {
+        match op(&f) {
+            Some(0x07) => add_connection(&f, d, conns, topics),
+            Some(0x02) => {
+                let time = f.get("time").map(|t| Bytes { data: t });
+                let (Some(conn), Some((s, ns))) = (
+                    u32_of(&f, "conn"),
+                    time.and_then(|t| Some((t.u32(0)?, t.u32(4)?))),
+                ) else {
+                    return Err(InputError::file(
+                        file,
+                        "a ROS 1 bag: a message record without its conn or time field",
+                    ));
+                };
+                let Some(c) = conns.get(&conn) else {
+                    return Err(InputError::file(
+                        file,
+                        format!("a ROS 1 bag: a message of connection {conn} before that connection's record"),
+                    ));
+                };
+                if let Some(kind) = c.kind {
+                    let log_ns = s as i128 * 1_000_000_000 + ns as i128;
+                    topics.message(&c.topic, kind, false, log_ns, d);
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+fn add_connection(
+    f: &BTreeMap<&str, &[u8]>,
+    d: &[u8],
+    conns: &mut BTreeMap<u32, Connection>,
+    topics: &mut Topics,
+) {
+    if let Some((id, c)) = connection(f, d) {
+        topics.connection(&c.topic, &c.type_name);
+        conns.insert(id, c);
+    }
+}
+
+/// The series of the topics chosen (module [`super`]): each chunk is
+/// inflated, read and dropped in turn, so only the decoded samples are
+/// kept.
 pub(super) fn read(file: &str, bytes: &[u8], opts: &LogOptions) -> Result<Vec<Series>> {
     let broken =
         |at: usize| InputError::file(file, format!("a ROS 1 bag: a broken record at byte {at}"));
     let top = records(bytes, MAGIC).map_err(broken)?;
     let mut conns: BTreeMap<u32, Connection> = BTreeMap::new();
-    // (conn, record time ns, data) of every message, in file order.
-    let mut chunks: Vec<Vec<u8>> = Vec::new();
+    let mut topics = Topics::default();
     for (f, d) in &top {
         match op(f) {
-            Some(0x07) => conns.extend(connection(f, d)),
-            Some(0x05) => chunks.push(inflate(file, f, d)?),
+            Some(0x07) => add_connection(f, d, &mut conns, &mut topics),
+            Some(0x05) => chunk(file, &inflate(file, f, d)?, &mut conns, &mut topics)?,
             _ => {}
         }
     }
-    let mut messages: Vec<(u32, i128, &[u8])> = Vec::new();
-    for c in &chunks {
-        let inner = records(c, 0).map_err(|at| {
-            InputError::file(
-                file,
-                format!("a ROS 1 bag: a broken record at byte {at} of a chunk"),
-            )
-        })?;
-        for (f, d) in inner {
-            match op(&f) {
-                Some(0x07) => conns.extend(connection(&f, d)),
-                Some(0x02) => {
-                    let (Some(conn), Some(t)) = (u32_of(&f, "conn"), f.get("time")) else {
-                        return Err(broken(0));
-                    };
-                    let t = Bytes { data: t };
-                    let (Some(s), Some(ns)) = (t.u32(0), t.u32(4)) else {
-                        return Err(broken(0));
-                    };
-                    messages.push((conn, s as i128 * 1_000_000_000 + ns as i128, d));
-                }
-                _ => {}
-            }
-        }
-    }
-    let mut offered: Vec<Offered> = Vec::new();
-    for c in conns.values() {
-        if c.kind.is_some() && !offered.iter().any(|o| o.name == c.topic) {
-            offered.push(Offered {
-                name: c.topic.clone(),
-                kind: c.type_name.clone(),
-            });
-        }
-    }
-    let topics = choose(file, Format::Bag, &offered, opts)?;
-    topics
-        .iter()
-        .map(|t| {
-            let ids: Vec<(u32, Kind)> = conns
-                .iter()
-                .filter(|(_, c)| &c.topic == t)
-                .filter_map(|(id, c)| c.kind.map(|k| (*id, k)))
-                .collect();
-            let type_name = offered
-                .iter()
-                .find(|o| &o.name == t)
-                .map_or("", |o| &o.kind);
-            let of_topic = messages.iter().filter_map(|(c, log_ns, data)| {
-                let (_, kind) = ids.iter().find(|(i, _)| i == c)?;
-                Some(ros::Message {
-                    kind: *kind,
-                    cdr: false,
-                    log_ns: *log_ns,
-                    data,
-                })
-            });
-            ros::series(file, t, type_name, of_topic, opts.stamps, "record time")
-        })
-        .collect()
+    let chosen = choose(file, Format::Bag, &topics.offered(), opts)?;
+    topics.series(file, &chosen, opts.stamps, "record time")
 }

@@ -185,8 +185,10 @@ fn choose(
         }
         let text: Vec<String> = names
             .into_iter()
-            .map(|(k, v)| match v.len() {
-                0 | 1 => k,
+            .map(|(k, v)| match v.as_slice() {
+                [] => k,
+                [n] if n == "0" => k,
+                [n] => format!("{k}:{n}"),
                 _ => format!("{k} (instances {})", v.join(", ")),
             })
             .collect();
@@ -209,7 +211,13 @@ fn choose(
             )),
         };
     }
-    for t in &opts.topics {
+    for (k, t) in opts.topics.iter().enumerate() {
+        if opts.topics[..k].contains(t) {
+            return Err(InputError::file(
+                file,
+                format!("--topic '{}' given twice", crate::clip(t)),
+            ));
+        }
         if !offered.iter().any(|o| &o.name == t) {
             return Err(InputError::file(
                 file,
@@ -349,11 +357,21 @@ fn write_csv(
             format!("{skipped} (before the first sample of a joined topic)"),
         ));
     }
+    // One line each: a name's control characters (a newline in a topic)
+    // are shown as '?'.
+    let line = |v: &str| -> String {
+        crate::csv_text(
+            &v.chars()
+                .map(|c| if c.is_control() { '?' } else { c })
+                .collect::<String>(),
+        )
+        .into_owned()
+    };
     let mut text = String::new();
     for (k, v) in &pre {
-        text.push_str(&crate::csv_text(k));
+        text.push_str(&line(k));
         text.push(',');
-        text.push_str(&crate::csv_text(v));
+        text.push_str(&line(v));
         text.push('\n');
     }
     text.push_str(&header.join(","));

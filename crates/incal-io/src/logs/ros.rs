@@ -8,7 +8,7 @@
 //! (3, m/s²), its covariance (9). `sensor_msgs/Temperature`: header,
 //! temperature (float64, °C), variance.
 
-use super::{Bytes, Sample, Series, Stamps, DEG_PER_RAD, G0_M_S2};
+use super::{Bytes, Offered, Sample, Series, Stamps, DEG_PER_RAD, G0_M_S2};
 use crate::error::{InputError, Result};
 
 /// A message type incal reads.
@@ -50,21 +50,30 @@ impl Kind {
     /// Float64 values after the header up to the last one read.
     fn doubles(self) -> usize {
         match self {
-            // orientation 4 + cov 9 + angular_velocity 3 + cov 9 + linear_acceleration 3
-            Self::Imu => 28,
+            // orientation 4 + cov 9 + angular_velocity 3 + cov 9
+            // + linear_acceleration 3 + the first of its cov
+            Self::Imu => 29,
             Self::Temperature => 1,
         }
     }
 
-    /// The CSV values from the float64s after the header.
-    fn values(self, d: &[f64]) -> Vec<f64> {
+    /// The CSV values from the float64s after the header; refused when
+    /// the message says a quantity is not provided (`sensor_msgs/Imu`: the
+    /// first element of its covariance is −1).
+    fn values(self, d: &[f64]) -> std::result::Result<Vec<f64>, &'static str> {
         match self {
             Self::Imu => {
+                if d[16] == -1.0 {
+                    return Err("says its angular_velocity is not provided (angular_velocity_covariance[0] = -1)");
+                }
+                if d[28] == -1.0 {
+                    return Err("says its linear_acceleration is not provided (linear_acceleration_covariance[0] = -1)");
+                }
                 let mut v: Vec<f64> = d[13..16].iter().map(|x| x * DEG_PER_RAD).collect();
                 v.extend(d[25..28].iter().map(|x| x / G0_M_S2));
-                v
+                Ok(v)
             }
-            Self::Temperature => vec![d[0]],
+            Self::Temperature => Ok(vec![d[0]]),
         }
     }
 }
@@ -75,34 +84,43 @@ pub(super) struct Decoded {
     pub values: Vec<f64>,
 }
 
+/// Why a message is not read.
+const SHORT: &str = "is too short for its type";
+
 /// A ROS 1 message: `seq` (u32), stamp (u32 s, u32 ns), `frame_id`
-/// (u32 length, bytes), then the float64s. `None`: too short.
-pub(super) fn ros1(kind: Kind, data: &[u8]) -> Option<Decoded> {
+/// (u32 length, bytes), then the float64s; `Err`: why not.
+pub(super) fn ros1(kind: Kind, data: &[u8]) -> std::result::Result<Decoded, &'static str> {
     let b = Bytes { data };
-    let sec = b.u32(4)?;
-    let nsec = b.u32(8)?;
-    let len = b.u32(12)? as usize;
-    let start = 16usize.checked_add(len)?;
+    let head = || -> Option<(u32, u32, usize)> {
+        Some((
+            b.u32(4)?,
+            b.u32(8)?,
+            16usize.checked_add(b.u32(12)? as usize)?,
+        ))
+    };
+    let (sec, nsec, start) = head().ok_or(SHORT)?;
     let d: Vec<f64> = (0..kind.doubles())
         .map(|i| b.f64(start + 8 * i))
-        .collect::<Option<_>>()?;
-    Some(Decoded {
+        .collect::<Option<_>>()
+        .ok_or(SHORT)?;
+    Ok(Decoded {
         stamp_ns: sec as i128 * 1_000_000_000 + nsec as i128,
-        values: kind.values(&d),
+        values: kind.values(&d)?,
     })
 }
 
 /// A ROS 2 CDR message: the 4-byte encapsulation (`00 01` little-endian,
 /// `00 00` big-endian), stamp (i32 s, u32 ns), `frame_id` (u32 length with
 /// its NUL, bytes), then the float64s aligned to 8 from the body's start.
-/// `None`: too short or an encapsulation other than plain CDR.
-pub(super) fn cdr(kind: Kind, data: &[u8]) -> Option<Decoded> {
-    let little = match data.get(..2)? {
-        [0, 1] => true,
-        [0, 0] => false,
-        _ => return None,
+/// `Err`: too short, or an encapsulation other than plain CDR.
+pub(super) fn cdr(kind: Kind, data: &[u8]) -> std::result::Result<Decoded, &'static str> {
+    let little = match data.get(..2) {
+        Some([0, 1]) => true,
+        Some([0, 0]) => false,
+        Some(_) => return Err("is not plain CDR (its encapsulation is another)"),
+        None => return Err(SHORT),
     };
-    let body = data.get(4..)?;
+    let body = data.get(4..).ok_or(SHORT)?;
     let word = |at: usize, n: usize| -> Option<u64> {
         let s = body.get(at..at.checked_add(n)?)?;
         let mut x = [0u8; 8];
@@ -114,80 +132,147 @@ pub(super) fn cdr(kind: Kind, data: &[u8]) -> Option<Decoded> {
             Some(u64::from_be_bytes(x))
         }
     };
-    let sec = word(0, 4)? as u32 as i32;
-    let nsec = word(4, 4)? as u32;
-    let len = word(8, 4)? as usize;
-    let end = 12usize.checked_add(len)?;
-    let start = end.checked_add(7)? / 8 * 8;
+    let head = || -> Option<(i32, u32, usize)> {
+        let end = 12usize.checked_add(word(8, 4)? as usize)?;
+        Some((
+            word(0, 4)? as u32 as i32,
+            word(4, 4)? as u32,
+            end.checked_add(7)? / 8 * 8,
+        ))
+    };
+    let (sec, nsec, start) = head().ok_or(SHORT)?;
     let d: Vec<f64> = (0..kind.doubles())
         .map(|i| word(start + 8 * i, 8).map(f64::from_bits))
-        .collect::<Option<_>>()?;
-    Some(Decoded {
+        .collect::<Option<_>>()
+        .ok_or(SHORT)?;
+    Ok(Decoded {
         stamp_ns: sec as i128 * 1_000_000_000 + nsec as i128,
-        values: kind.values(&d),
+        values: kind.values(&d)?,
     })
 }
 
-/// One message of a ROS topic as a log holds it.
-pub(super) struct Message<'a> {
-    /// Its type.
-    pub kind: Kind,
-    /// CDR (ROS 2) rather than ROS 1.
-    pub cdr: bool,
-    /// The log's time of it, ns.
-    pub log_ns: i128,
-    /// Its bytes.
-    pub data: &'a [u8],
+/// The ROS topics of a log as it is read, in the order they first
+/// appear: each message decoded as it comes (the log's bytes are not
+/// kept), and every type a topic was published with.
+#[derive(Default)]
+pub(super) struct Topics {
+    topics: Vec<Topic>,
 }
 
-/// A ROS topic's messages decoded into a series; `log_name` names the
-/// log's time (`record time`, `log_time`). A message too short for its
-/// type is refused, naming its number.
-pub(super) fn series<'a>(
-    file: &str,
-    topic: &str,
-    type_name: &str,
-    messages: impl Iterator<Item = Message<'a>>,
-    stamps: Stamps,
-    log_name: &'static str,
-) -> Result<Series> {
-    let mut samples = Vec::new();
-    let mut kind = Kind::of(type_name).unwrap_or(Kind::Imu);
-    for (n, m) in messages.enumerate() {
-        kind = m.kind;
-        let d = if m.cdr {
-            cdr(m.kind, m.data)
-        } else {
-            ros1(m.kind, m.data)
-        }
-        .ok_or_else(|| {
-            InputError::file(
-                file,
-                format!(
-                    "topic {topic}: message {} too short for its type{}",
-                    n + 1,
-                    if m.cdr { " or not plain CDR" } else { "" }
-                ),
-            )
-        })?;
-        samples.push(Sample {
-            log_ns: m.log_ns,
-            stamp_ns: match stamps {
-                Stamps::Header => d.stamp_ns,
-                Stamps::Log => m.log_ns,
-            },
-            values: d.values,
-        });
+/// One topic: its types and its messages (log time ns, decoded or why
+/// not).
+struct Topic {
+    name: String,
+    types: Vec<String>,
+    kind: Option<Kind>,
+    messages: Vec<(i128, std::result::Result<Decoded, &'static str>)>,
+}
+
+impl Topics {
+    fn entry(&mut self, topic: &str) -> &mut Topic {
+        let k = match self.topics.iter().position(|t| t.name == topic) {
+            Some(k) => k,
+            None => {
+                self.topics.push(Topic {
+                    name: topic.to_string(),
+                    types: Vec::new(),
+                    kind: None,
+                    messages: Vec::new(),
+                });
+                self.topics.len() - 1
+            }
+        };
+        &mut self.topics[k]
     }
-    Ok(Series {
-        topic: topic.to_string(),
-        kind: type_name.to_string(),
-        columns: kind.columns(),
-        units: kind.units(),
-        stamp_name: match stamps {
-            Stamps::Header => "header.stamp",
-            Stamps::Log => log_name,
-        },
-        samples,
-    })
+
+    /// A connection or channel of `topic` with `type_name`.
+    pub fn connection(&mut self, topic: &str, type_name: &str) {
+        let t = self.entry(topic);
+        if !t.types.iter().any(|x| x == type_name) {
+            t.types.push(type_name.to_string());
+        }
+        if t.kind.is_none() {
+            t.kind = Kind::of(type_name);
+        }
+    }
+
+    /// A message of `topic` of type `kind`, CDR or ROS 1, logged at
+    /// `log_ns`.
+    pub fn message(&mut self, topic: &str, kind: Kind, cdr_bytes: bool, log_ns: i128, data: &[u8]) {
+        let d = if cdr_bytes {
+            cdr(kind, data)
+        } else {
+            ros1(kind, data)
+        };
+        self.entry(topic).messages.push((log_ns, d));
+    }
+
+    /// The topics incal reads here (those of a known type).
+    pub fn offered(&self) -> Vec<Offered> {
+        self.topics
+            .iter()
+            .filter(|t| t.kind.is_some())
+            .map(|t| Offered {
+                name: t.name.clone(),
+                kind: t.types.join(" and "),
+            })
+            .collect()
+    }
+
+    /// The chosen topics' series; `log_name` names the log's time. A topic
+    /// published with two types, or a message that cannot be read, is
+    /// refused, naming it.
+    pub fn series(
+        mut self,
+        file: &str,
+        chosen: &[String],
+        stamps: Stamps,
+        log_name: &'static str,
+    ) -> Result<Vec<Series>> {
+        let mut out = Vec::with_capacity(chosen.len());
+        for name in chosen {
+            let t = std::mem::replace(
+                self.entry(name),
+                Topic {
+                    name: String::new(),
+                    types: Vec::new(),
+                    kind: None,
+                    messages: Vec::new(),
+                },
+            );
+            let Some(kind) = t.kind else { continue };
+            if t.types.len() > 1 {
+                return Err(InputError::file(
+                    file,
+                    format!("topic {name} is published with {} types ({}): incal reads a topic of one type", t.types.len(), t.types.join(", ")),
+                ));
+            }
+            let mut samples = Vec::with_capacity(t.messages.len());
+            for (n, (log_ns, d)) in t.messages.into_iter().enumerate() {
+                let d = d.map_err(|why| {
+                    InputError::file(file, format!("topic {name}: message {} {why}", n + 1))
+                })?;
+                samples.push(Sample {
+                    log_ns,
+                    stamp_ns: match stamps {
+                        Stamps::Header => d.stamp_ns,
+                        Stamps::Log => log_ns,
+                    },
+                    values: d.values,
+                });
+            }
+            out.push(Series {
+                topic: name.clone(),
+                kind: t.types.join(""),
+                columns: kind.columns(),
+                units: kind.units(),
+                stamp_name: match stamps {
+                    Stamps::Header => "header.stamp",
+                    Stamps::Log => log_name,
+                },
+                samples,
+            });
+        }
+        Ok(out)
+    }
 }

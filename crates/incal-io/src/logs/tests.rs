@@ -201,7 +201,7 @@ fn cdr_reads_either_byte_order() {
         push(&mut b, &4u32.to_le_bytes());
         b.extend(b"imu\0");
         // 12 + 4 = 16: already aligned to 8 from the body's start.
-        let mut d = vec![0.0f64; 28];
+        let mut d = vec![0.0f64; 37];
         d[13..16].copy_from_slice(&w);
         d[25..28].copy_from_slice(&a);
         for x in d {
@@ -215,8 +215,14 @@ fn cdr_reads_either_byte_order() {
     assert_eq!(le.values, be.values);
     assert_eq!(le.values[2], 3.0f64.to_degrees());
     assert_eq!(le.values[5], -0.125 / G0_M_S2);
-    assert!(ros::cdr(ros::Kind::Imu, &body(false)[..60]).is_none());
-    assert!(ros::cdr(ros::Kind::Imu, &[0, 7, 0, 0, 1, 2]).is_none());
+    assert_eq!(
+        ros::cdr(ros::Kind::Imu, &body(false)[..60]).err(),
+        Some("is too short for its type")
+    );
+    assert!(ros::cdr(ros::Kind::Imu, &[0, 7, 0, 0, 1, 2])
+        .err()
+        .unwrap()
+        .contains("not plain CDR"));
 }
 
 /// A reader that hands out at most `n` bytes a call.
@@ -277,4 +283,271 @@ fn the_reader_reads_a_real_ulog_in_pieces_and_hashes_its_bytes() {
         e.starts_with("a.csv: --topic 'sensor_combined': not a PX4 ULog"),
         "{e}"
     );
+}
+
+/// A small PX4 ULog of `sensor_gyro` (nested and array fields, padding).
+fn ulog_bytes(rows: usize) -> Vec<u8> {
+    let mut out = b"ULog\x01\x12\x35\x01".to_vec();
+    out.extend(0u64.to_le_bytes());
+    let mut msg = |kind: u8, body: &[u8]| {
+        out.extend((body.len() as u16).to_le_bytes());
+        out.push(kind);
+        out.extend(body);
+    };
+    msg(b'F', b"clip:uint8_t[3] counter;");
+    msg(b'F', b"sensor_gyro:uint64_t timestamp;uint64_t timestamp_sample;float x;float y;float z;float temperature;clip c;uint8_t[1] _padding0;");
+    let mut add = vec![1u8];
+    add.extend(3u16.to_le_bytes());
+    add.extend(b"sensor_gyro");
+    msg(b'A', &add);
+    for k in 0..rows as u64 {
+        let mut d = 3u16.to_le_bytes().to_vec();
+        d.extend((k * 4000 + 100).to_le_bytes());
+        d.extend((k * 4000).to_le_bytes());
+        for v in [0.01f32, -0.02, 0.5, 35.5] {
+            d.extend(v.to_le_bytes());
+        }
+        d.extend([0u8; 4]);
+        msg(b'D', &d);
+    }
+    out
+}
+
+#[test]
+fn a_ulog_topic_with_nested_fields_reads_by_its_instance() {
+    let bytes = ulog_bytes(5);
+    let text = csv(&bytes, &["sensor_gyro:1"], Stamps::Header).unwrap();
+    let rows: Vec<&str> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("time_s"))
+        .collect();
+    assert_eq!(rows[0], "time_s,gyr_x,gyr_y,gyr_z,temperature_c");
+    assert_eq!(rows.len(), 6);
+    assert!(rows[2].starts_with("0.004,"), "{}", rows[2]);
+    assert!(rows[1].ends_with(",35.5"), "{}", rows[1]);
+    let log = csv(&bytes, &[], Stamps::Log).unwrap();
+    assert!(
+        log.contains("stamps,\"log (timestamp, us), s from the first row's\""),
+        "{log}"
+    );
+    let e = csv(&bytes, &["sensor_gyro"], Stamps::Header)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(
+            "--topic 'sensor_gyro': not in this PX4 ULog (topics incal reads here: sensor_gyro:1)"
+        ),
+        "{e}"
+    );
+    // A format as large as a message cannot be is nobody's.
+    let mut big = b"ULog\x01\x12\x35\x01".to_vec();
+    big.extend(0u64.to_le_bytes());
+    let f = b"sensor_gyro:uint64_t timestamp;float[1000000000] x;";
+    big.extend((f.len() as u16).to_le_bytes());
+    big.push(b'F');
+    big.extend(f);
+    let mut add = vec![0u8];
+    add.extend(3u16.to_le_bytes());
+    add.extend(b"sensor_gyro");
+    big.extend((add.len() as u16).to_le_bytes());
+    big.push(b'A');
+    big.extend(add);
+    let e = csv(&big, &[], Stamps::Header).unwrap_err().to_string();
+    assert!(
+        e.contains("give --topic, one of the topics incal reads here: none"),
+        "{e}"
+    );
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+
+    /// A log damaged anywhere (bytes changed, the end cut) is read or
+    /// refused: never a panic.
+    #[test]
+    fn a_damaged_log_is_read_or_refused(
+        which in 0usize..3,
+        edits in proptest::collection::vec((0usize..1 << 20, proptest::prelude::any::<u8>()), 0..6),
+        cut in 0usize..1 << 20,
+    ) {
+        let mut bytes = match which {
+            0 => ulog_bytes(20),
+            1 => bag("none"),
+            _ => bag("lz4"),
+        };
+        for (at, v) in edits {
+            let n = bytes.len();
+            bytes[at % n] = v;
+        }
+        let keep = Format::MAGIC_BYTES + cut % bytes.len();
+        bytes.truncate(keep);
+        if let Some(format) = Format::detect(&bytes) {
+            let _ = convert("f", format, &bytes, &LogOptions::default());
+            let _ = convert("f", format, &bytes, &LogOptions { topics: vec!["/imu".into(), "/temp".into()], stamps: Stamps::Log });
+        }
+    }
+}
+
+#[test]
+fn a_damaged_mcap_is_read_or_refused() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../incal/tests/fixtures/robot_logs/husky_rl_test1_imu_zstd.mcap"
+    );
+    let good = std::fs::read(path).unwrap();
+    // Deterministic damage: a byte changed every 97 KiB, then the end cut.
+    for step in [97 * 1024, 331 * 1024] {
+        let mut bytes = good.clone();
+        for at in (4096..bytes.len()).step_by(step) {
+            bytes[at] ^= 0x5a;
+        }
+        let _ = convert("f.mcap", Format::Mcap, &bytes, &LogOptions::default());
+        bytes.truncate(bytes.len() / 3);
+        let _ = convert("f.mcap", Format::Mcap, &bytes, &LogOptions::default());
+    }
+}
+
+/// ULog messages: size, type, body.
+fn msg(kind: u8, body: &[u8]) -> Vec<u8> {
+    let mut m = (body.len() as u16).to_le_bytes().to_vec();
+    m.push(kind);
+    m.extend(body);
+    m
+}
+
+/// A `sensor_accel` data message (subscription 5) at `t_us`.
+fn accel_row(t_us: u64, z: f32) -> Vec<u8> {
+    let mut d = 5u16.to_le_bytes().to_vec();
+    d.extend(t_us.to_le_bytes());
+    for v in [0.0f32, 0.0, z, 30.0] {
+        d.extend(v.to_le_bytes());
+    }
+    msg(b'D', &d)
+}
+
+/// The header, flag bits (`incompat[0]`, appended offset), the
+/// `sensor_accel` format (with a `float[0]` field) and its subscription.
+fn accel_head(incompat: u8, appended: u64) -> Vec<u8> {
+    let mut out = b"ULog\x01\x12\x35\x01".to_vec();
+    out.extend(0u64.to_le_bytes());
+    let mut flags = vec![0u8; 16];
+    flags[8] = incompat;
+    flags.extend(appended.to_le_bytes());
+    flags.extend([0u8; 16]);
+    out.extend(msg(b'B', &flags));
+    out.extend(msg(
+        b'F',
+        b"sensor_accel:uint64_t timestamp;float[0] none;float x;float y;float z;float temperature;",
+    ));
+    let mut add = vec![0u8];
+    add.extend(5u16.to_le_bytes());
+    add.extend(b"sensor_accel");
+    out.extend(msg(b'A', &add));
+    out
+}
+
+#[test]
+fn ulog_data_appended_after_a_crash_is_read_from_its_offset() {
+    // Two rows, then a third cut by the crash, then the appended data at
+    // the offset the flag bits give.
+    let mut bytes = accel_head(1, 0);
+    bytes.extend(accel_row(1000, -9.80665));
+    bytes.extend(accel_row(2000, -9.80665));
+    let cut = accel_row(3000, 1.0);
+    bytes.extend(&cut[..10]);
+    let offset = bytes.len() as u64;
+    bytes.extend(accel_row(4000, 2.0 * -9.80665));
+    // The offset into the flag bits: after the file header (16 bytes),
+    // the message header (3), compat (8) and incompat (8) flags.
+    bytes[35..43].copy_from_slice(&offset.to_le_bytes());
+    let text = csv(&bytes, &[], Stamps::Header).unwrap();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("time_s"))
+        .skip(1)
+        .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+        .collect();
+    let times: Vec<f64> = rows.iter().map(|r| r[0]).collect();
+    assert_eq!(times, [0.0, 0.001, 0.003], "{text}");
+    assert!((rows[2][3] + 2.0).abs() < 1e-6, "{text}");
+    // Flags this reader does not know: refused.
+    let e = csv(&accel_head(2, 0), &[], Stamps::Header)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("incompatible flags this reader does not know"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_ulog_topic_with_fractional_stamps_is_refused() {
+    let mut out = b"ULog\x01\x12\x35\x01".to_vec();
+    out.extend(0u64.to_le_bytes());
+    out.extend(msg(
+        b'F',
+        b"sensor_accel:double timestamp;float x;float y;float z;",
+    ));
+    let mut add = vec![0u8];
+    add.extend(5u16.to_le_bytes());
+    add.extend(b"sensor_accel");
+    out.extend(msg(b'A', &add));
+    let mut d = 5u16.to_le_bytes().to_vec();
+    d.extend(1e300f64.to_le_bytes());
+    d.extend([0u8; 12]);
+    out.extend(msg(b'D', &d));
+    let e = csv(&out, &[], Stamps::Header).unwrap_err().to_string();
+    assert!(
+        e.contains("topic sensor_accel: its time stamps are not integers"),
+        "{e}"
+    );
+}
+
+#[test]
+fn ros_topics_of_two_types_and_unprovided_quantities_are_refused() {
+    // /imu also published as Temperature.
+    let mut inner = connection(0, "/imu", "sensor_msgs/Imu");
+    inner.extend(connection(1, "/imu", "sensor_msgs/Temperature"));
+    inner.extend(message(0, 1, &imu_ros1(1, 0, [0.0; 3], [0.0; 3])));
+    inner.extend(message(1, 2, &temperature_ros1(2, 20.0)));
+    let mut b = b"#ROSBAG V2.0\n".to_vec();
+    b.extend(record(
+        &[
+            ("op", &[5]),
+            ("compression", b"none"),
+            ("size", &(inner.len() as u32).to_le_bytes()),
+        ],
+        &inner,
+    ));
+    let e = csv(&b, &["/imu"], Stamps::Header).unwrap_err().to_string();
+    assert!(
+        e.contains(
+            "topic /imu is published with 2 types (sensor_msgs/Imu, sensor_msgs/Temperature)"
+        ),
+        "{e}"
+    );
+    // angular_velocity_covariance[0] = -1: no gyro in this message.
+    let mut m = imu_ros1(1, 0, [0.0; 3], [0.0; 3]);
+    let at = 20 + 8 * 16;
+    m[at..at + 8].copy_from_slice(&(-1.0f64).to_le_bytes());
+    let mut inner = connection(0, "/imu", "sensor_msgs/Imu");
+    inner.extend(message(0, 1, &m));
+    let mut b = b"#ROSBAG V2.0\n".to_vec();
+    b.extend(record(
+        &[
+            ("op", &[5]),
+            ("compression", b"none"),
+            ("size", &(inner.len() as u32).to_le_bytes()),
+        ],
+        &inner,
+    ));
+    let e = csv(&b, &[], Stamps::Header).unwrap_err().to_string();
+    assert!(
+        e.contains("topic /imu: message 1 says its angular_velocity is not provided"),
+        "{e}"
+    );
+    let e = csv(&bag("none"), &["/imu", "/imu"], Stamps::Header)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("--topic '/imu' given twice"), "{e}");
 }

@@ -18,6 +18,16 @@ use crate::error::{InputError, Result};
 const HEADER_BYTES: usize = 16;
 /// Nesting of formats allowed (PX4's are at most 3 deep).
 const MAX_DEPTH: usize = 8;
+/// Largest message (its size is a `u16`): no format flattens beyond it.
+const MAX_MESSAGE_BYTES: usize = u16::MAX as usize;
+/// The topics incal reads (module [`super`]); no other format is flattened.
+const TOPICS: [&str; 5] = [
+    "sensor_combined",
+    "sensor_gyro",
+    "sensor_accel",
+    "sensor_mag",
+    "vehicle_imu",
+];
 
 /// A flattened field: offset in the message, scalar type.
 #[derive(Debug, Clone, Copy)]
@@ -108,19 +118,25 @@ fn flatten(raw: &HashMap<String, String>, name: &str, depth: usize) -> Option<Fl
     let mut flat = Flat::default();
     for item in body.split(';').map(str::trim).filter(|s| !s.is_empty()) {
         let (ty, field) = item.split_once(' ')?;
-        let (base, count) = match ty.split_once('[') {
-            Some((b, n)) => (b, n.strip_suffix(']')?.parse::<usize>().ok()?),
-            None => (ty, 0),
+        // `type[n]` is an array of n (`type[0]` of none), `type` one.
+        let (base, array) = match ty.split_once('[') {
+            Some((b, n)) => (b, Some(n.strip_suffix(']')?.parse::<usize>().ok()?)),
+            None => (ty, None),
         };
-        let n = count.max(1);
-        let name_at = |i: usize| {
-            if count == 0 {
-                field.to_string()
-            } else {
-                format!("{field}[{i}]")
-            }
+        let n = array.unwrap_or(1);
+        if n > MAX_MESSAGE_BYTES {
+            return None;
+        }
+        let name_at = |i: usize| match array {
+            None => field.to_string(),
+            Some(_) => format!("{field}[{i}]"),
         };
         if let Some(s) = Scalar::parse(base) {
+            // Sizes are checked before any field is made: a format larger
+            // than a message can be is not a message's.
+            if flat.size.checked_add(n.checked_mul(s.size())?)? > MAX_MESSAGE_BYTES {
+                return None;
+            }
             for i in 0..n {
                 let offset = flat.size.checked_add(i.checked_mul(s.size())?)?;
                 flat.fields.insert(name_at(i), Field { offset, kind: s });
@@ -128,6 +144,9 @@ fn flatten(raw: &HashMap<String, String>, name: &str, depth: usize) -> Option<Fl
             flat.size = flat.size.checked_add(n.checked_mul(s.size())?)?;
         } else {
             let inner = flatten(raw, base, depth + 1)?;
+            if flat.size.checked_add(n.checked_mul(inner.size)?)? > MAX_MESSAGE_BYTES {
+                return None;
+            }
             for i in 0..n {
                 let at = flat.size.checked_add(i.checked_mul(inner.size)?)?;
                 for (k, f) in &inner.fields {
@@ -252,14 +271,40 @@ struct Subscription {
     instance: u8,
 }
 
-/// The definitions and subscriptions of a log, and where its data starts.
+/// The definitions and subscriptions of a log, and its data messages.
 struct Parsed<'a> {
     formats: HashMap<String, String>,
-    subs: HashMap<u16, Subscription>,
-    data: Vec<(u16, &'a [u8])>,
+    /// One per topic and instance, however often subscribed.
+    subs: Vec<Subscription>,
+    /// Data messages: the subscription (index into `subs`) and the body.
+    data: Vec<(usize, &'a [u8])>,
 }
 
-/// Every message of the log (definitions and data), in order.
+/// The flag bits (`B`): where data appended after a crash starts.
+/// Refuses incompatible flags this reader does not know.
+fn flag_bits(file: &str, body: &[u8]) -> Result<Vec<usize>> {
+    let m = Bytes { data: body };
+    let incompat = m.get(8, 8).unwrap_or(&[0; 8]);
+    if incompat[0] & !1 != 0 || incompat[1..].iter().any(|&x| x != 0) {
+        return Err(InputError::file(
+            file,
+            format!(
+                "a PX4 ULog with incompatible flags this reader does not know ({incompat:02x?})"
+            ),
+        ));
+    }
+    let mut offsets: Vec<usize> = (0..3)
+        .filter_map(|k| m.get(16 + 8 * k, 8))
+        .map(|x| u64::from_le_bytes(x.try_into().unwrap_or([0; 8])) as usize)
+        .filter(|&o| o > 0 && incompat[0] & 1 == 1)
+        .collect();
+    offsets.sort_unstable();
+    Ok(offsets)
+}
+
+/// Every message of the log (definitions and data), in order. Data
+/// appended after a crash starts at the offsets the flag bits give: the
+/// message before each (often cut) ends where it starts.
 fn parse<'a>(file: &str, bytes: &'a [u8]) -> Result<Parsed<'a>> {
     if bytes.len() < HEADER_BYTES {
         return Err(InputError::file(file, "a PX4 ULog shorter than its header"));
@@ -267,16 +312,34 @@ fn parse<'a>(file: &str, bytes: &'a [u8]) -> Result<Parsed<'a>> {
     let b = Bytes { data: bytes };
     let mut p = Parsed {
         formats: HashMap::new(),
-        subs: HashMap::new(),
+        subs: Vec::new(),
         data: Vec::new(),
     };
+    let mut ids: HashMap<u16, usize> = HashMap::new();
+    let mut appended: Vec<usize> = Vec::new();
     let mut at = HEADER_BYTES;
     while let (Some(size), Some(kind)) = (b.u16(at), b.u8(at + 2)) {
+        let end = at + 3 + size as usize;
+        if let Some(&next) = appended.first() {
+            if end > next || at >= next {
+                appended.remove(0);
+                if next > at {
+                    at = next;
+                    continue;
+                }
+            }
+        }
         let Some(body) = b.get(at + 3, size as usize) else {
             break; // cut by the end of the file: the log ends here
         };
         let m = Bytes { data: body };
         match kind {
+            b'B' => {
+                appended = flag_bits(file, body)?
+                    .into_iter()
+                    .filter(|&o| o > at)
+                    .collect()
+            }
             b'F' => {
                 let text = String::from_utf8_lossy(body);
                 if let Some((name, fields)) = text.split_once(':') {
@@ -285,26 +348,36 @@ fn parse<'a>(file: &str, bytes: &'a [u8]) -> Result<Parsed<'a>> {
             }
             b'A' => {
                 if let (Some(instance), Some(id)) = (m.u8(0), m.u16(1)) {
-                    let name = String::from_utf8_lossy(&body[3..])
+                    let format = String::from_utf8_lossy(&body[3..])
                         .trim_end_matches('\0')
                         .to_string();
-                    p.subs.insert(
-                        id,
-                        Subscription {
-                            format: name,
-                            instance,
-                        },
-                    );
+                    let k = match p
+                        .subs
+                        .iter()
+                        .position(|s| s.format == format && s.instance == instance)
+                    {
+                        Some(k) => k,
+                        None => {
+                            p.subs.push(Subscription { format, instance });
+                            p.subs.len() - 1
+                        }
+                    };
+                    ids.insert(id, k);
+                }
+            }
+            b'R' => {
+                if let Some(id) = m.u16(0) {
+                    ids.remove(&id);
                 }
             }
             b'D' => {
-                if let Some(id) = m.u16(0) {
-                    p.data.push((id, &body[2..]));
+                if let Some(k) = m.u16(0).and_then(|id| ids.get(&id)) {
+                    p.data.push((*k, &body[2..]));
                 }
             }
             _ => {}
         }
-        at += 3 + size as usize;
+        at = end;
     }
     Ok(p)
 }
@@ -323,17 +396,20 @@ fn user_name(s: &Subscription) -> String {
 pub(super) fn read(file: &str, bytes: &[u8], opts: &LogOptions) -> Result<Vec<Series>> {
     let p = parse(file, bytes)?;
     let mut flats: HashMap<String, Option<Flat>> = HashMap::new();
-    let mut offered: Vec<(u16, Offered)> = Vec::new();
-    let mut ids: Vec<&u16> = p.subs.keys().collect();
-    ids.sort();
-    for id in ids {
+    let mut offered: Vec<(usize, Offered)> = Vec::new();
+    let mut order: Vec<usize> = (0..p.subs.len()).collect();
+    order.sort_by_key(|&k| (p.subs[k].format.clone(), p.subs[k].instance));
+    for id in order {
         let s = &p.subs[id];
+        if !TOPICS.contains(&s.format.as_str()) {
+            continue;
+        }
         let flat = flats
             .entry(s.format.clone())
             .or_insert_with(|| flatten(&p.formats, &s.format, 0));
         if flat.as_ref().and_then(|f| recipe(&s.format, f)).is_some() {
             offered.push((
-                *id,
+                id,
                 Offered {
                     name: user_name(s),
                     kind: s.format.clone(),
@@ -355,7 +431,7 @@ pub(super) fn read(file: &str, bytes: &[u8], opts: &LogOptions) -> Result<Vec<Se
     let mut out = Vec::new();
     for t in topics {
         let (id, _) = offered.iter().find(|(_, o)| o.name == t).expect("chosen");
-        let s = &p.subs[id];
+        let s = &p.subs[*id];
         let flat = flats[&s.format].as_ref().expect("offered");
         out.push(series(
             file,
@@ -376,8 +452,8 @@ fn series(
     topic: &str,
     format: &str,
     flat: &Flat,
-    id: u16,
-    data: &[(u16, &[u8])],
+    id: usize,
+    data: &[(usize, &[u8])],
     stamps: Stamps,
 ) -> Result<Series> {
     let r = recipe(format, flat).expect("offered");
@@ -388,6 +464,19 @@ fn series(
         (Stamps::Header, Some(f)) => (f, "timestamp_sample, us"),
         _ => (log_field, "timestamp, us"),
     };
+    // Stamps are whole microseconds: a format that declares them otherwise
+    // is no PX4 topic's.
+    for f in [log_field, stamp_field] {
+        if !matches!(
+            f.kind,
+            Scalar::U64 | Scalar::I64 | Scalar::U32 | Scalar::I32
+        ) {
+            return Err(InputError::file(
+                file,
+                format!("topic {topic}: its time stamps are not integers (microseconds)"),
+            ));
+        }
+    }
     let sources: Vec<(Field, f64, Option<Field>)> = r
         .sources
         .iter()

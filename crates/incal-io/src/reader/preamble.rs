@@ -162,6 +162,15 @@ fn choose(records: &[Scanned], opts: &ReadOptions) -> Option<usize> {
     None
 }
 
+/// A whole file's last record as its header: when it is all names and a
+/// record before it holds a number (a logger's preamble, then a header
+/// with no data rows after it: the file is refused as having no data rows,
+/// not read from its preamble). A file of names only keeps its first row.
+fn last_names(records: &[Scanned]) -> Option<usize> {
+    let (last, before) = records.split_last()?;
+    (names(last) && before.iter().any(|r| !names(r))).then(|| records.len() - 1)
+}
+
 impl<R: Read> Reader<R> {
     /// Read up to the header row (module docs), leaving the reader on it,
     /// split into `self.fields` with its delimiter set; returns the
@@ -171,6 +180,7 @@ impl<R: Read> Reader<R> {
         self.hold = Some(self.pos);
         let mut records: Vec<Scanned> = Vec::new();
         let want_line = opts.header_line;
+        let mut complete = false;
         loop {
             let held = self.pos - self.hold.unwrap_or(0);
             if records.len() >= SCAN_RECORDS || held > SCAN_BYTES {
@@ -189,7 +199,10 @@ impl<R: Read> Reader<R> {
             }
             let (a, b) = match self.peek_record_start(true)? {
                 Peek::Line(a, b) => (a, b),
-                Peek::End => break,
+                Peek::End => {
+                    complete = true;
+                    break;
+                }
                 Peek::Limit if records.is_empty() => return self.first_record_as_header(opts),
                 Peek::Limit => break,
             };
@@ -204,7 +217,10 @@ impl<R: Read> Reader<R> {
             self.header.delimiter = delimiter;
             match self.next_record() {
                 Ok(true) => {}
-                Ok(false) => break,
+                Ok(false) => {
+                    complete = true;
+                    break;
+                }
                 // A later record that cannot be split on its own terms
                 // (its own delimiter): the scan ends before it.
                 Err(_) if !records.is_empty() => break,
@@ -243,7 +259,9 @@ impl<R: Read> Reader<R> {
                         "empty file (expected a header row)",
                     ));
                 }
-                choose(&records, opts).unwrap_or(0)
+                choose(&records, opts)
+                    .or_else(|| complete.then(|| last_names(&records)).flatten())
+                    .unwrap_or(0)
             }
         };
         let h = &records[index];

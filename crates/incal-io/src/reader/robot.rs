@@ -58,8 +58,15 @@ impl<R: Read> Reader<R> {
         self.eof = false;
         self.hasher = None;
         self.log = Some((c.sha256, bytes.len() as u64));
+        if let Some(n) = opts.header_line {
+            return Err(InputError::file(
+                &self.file,
+                format!("--header-line {n}: a {} has no header line to name (its topic's columns are incal's)", format.name()),
+            ));
+        }
         let mut o = opts.clone();
         o.header_line = Some(c.header_line);
+        o.delimiter = Some(b',');
         Ok(Some(o))
     }
 }

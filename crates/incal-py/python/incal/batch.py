@@ -120,7 +120,10 @@ def _flags(words: str) -> Dict[str, Any]:
 
             raise InputError(f"units: '{t}': a unit's options are --flag value words")
         key = t[2:].replace("-", "_")
-        if k + 1 < len(tokens) and not tokens[k + 1].startswith("--"):
+        if "=" in key:
+            key, value = key.split("=", 1)
+            out[key.replace("-", "_")], k = value, k + 1
+        elif k + 1 < len(tokens) and not tokens[k + 1].startswith("--"):
             out[key], k = tokens[k + 1], k + 2
         else:
             out[key], k = True, k + 1
@@ -134,12 +137,25 @@ def _units(units: Any, target: str) -> List[Dict[str, Any]]:
 
     from . import InputError
 
+    if isinstance(units, os.PathLike) and not os.path.isfile(units):
+        raise InputError(f"units: {os.fspath(units)}: no such mapping file")
     if isinstance(units, (str, os.PathLike)) and os.path.isfile(units):
+        name = os.fspath(units)
         with open(units, newline="", encoding="utf-8-sig") as f:
-            rows = list(csv.DictReader(l for l in f if l.strip() and not l.startswith("#")))
+            lines = [(n, l) for n, l in enumerate(f, start=1) if l.strip() and not l.lstrip().startswith("#")]
+        if not lines:
+            raise InputError(f"{name}: no header row")
+        head = lines[0][1]
+        delimiter = max(",;\t", key=head.count)
+        header = [h.strip() for h in next(csv.reader([head], delimiter=delimiter))]
+        for need in ("serial", "columns"):
+            if need not in header:
+                raise InputError(f"{name}:{lines[0][0]}: no column '{need}' (columns: {', '.join(header)})")
         out = []
-        for line, r in enumerate(rows, start=2):
-            serial, cols = (r.get("serial") or "").strip(), (r.get("columns") or "").strip()
+        for line, text in lines[1:]:
+            cells = [c.strip() for c in next(csv.reader([text], delimiter=delimiter))]
+            r = dict(zip(header, cells))
+            serial, cols = r.get("serial", ""), r.get("columns", "")
             if not serial or not cols:
                 raise InputError(f"{os.fspath(units)}:{line}: a unit needs its serial and its columns")
             u: Dict[str, Any] = {"serial": serial, "columns": _columns_of(cols, target)}
@@ -165,6 +181,30 @@ def _units(units: Any, target: str) -> List[Dict[str, Any]]:
         seen.add(u["serial"])
     if not out:
         raise InputError("units: no units")
+    return out
+
+
+def _with_unit(options: Dict[str, Any], unit: Dict[str, Any]) -> Dict[str, Any]:
+    """The batch's options and a unit's: its slot added to the batch's
+    ``meta``; a unit's own option that repeats the batch's is refused, as
+    the command line refuses it."""
+    from . import InputError
+
+    out = dict(options)
+    for k, v in unit.items():
+        if k == "meta":
+            meta = out.get("meta")
+            if meta is None:
+                out["meta"] = v
+            elif isinstance(meta, dict):
+                out["meta"] = {**meta, **v}
+            else:
+                words = [meta] if isinstance(meta, str) else list(meta)
+                out["meta"] = words + [f"{a}={b}" for a, b in v.items()]
+        elif k in out:
+            raise InputError(f"units: unit {unit['serial']}: {k} is given by the batch too")
+        else:
+            out[k] = v
     return out
 
 
@@ -235,7 +275,7 @@ def reduce(
 
             raise InputError("batch: units give each unit's serial and columns: leave out serial, columns and serial_from_stem")
         each = _units(units, unit_column)
-        jobs = [(f"{p} [{u['serial']}]", p, {**options, **u}) for p in paths for u in each]
+        jobs = [(f"{p} [{u['serial']}]", p, _with_unit(options, u)) for p in paths for u in each]
     paths = [j[0] for j in jobs]
     if not paths:
         return Batch([], [], [] if records is not None else None)

@@ -177,7 +177,7 @@ fn rails<'a>(x: impl Iterator<Item = &'a [f64]>) -> Vec<f64> {
 
 /// Dwells whose output or reference holds samples at a converter's rail
 /// (their sine fit would see a flattened wave) are left out with a
-/// `clipped` warning naming them; refused when fewer than two are left.
+/// `clipped` warning naming them; refused when none is left.
 fn without_clipped(dwells: Vec<Dwell>, warnings: &mut Vec<Warning>) -> Result<Vec<Dwell>> {
     let out_rails = rails(dwells.iter().map(|d| &d.output[..]));
     let ref_rails = rails(dwells.iter().map(|d| &d.reference[..]));
@@ -205,9 +205,9 @@ fn without_clipped(dwells: Vec<Dwell>, warnings: &mut Vec<Warning>) -> Result<Ve
     if left.is_empty() {
         return Ok(kept);
     }
-    if kept.len() < 2 {
+    if kept.is_empty() {
         return Err(Error::Unsupported(format!(
-            "samples at a converter's rail in {} of {n} dwells ({}): a clipped sine has the wrong amplitude and phase, and fewer than 2 dwells are left",
+            "samples at a converter's rail in {} of {n} dwells ({}): a clipped sine has the wrong amplitude and phase, and no dwell is left",
             left.len(),
             left.join("; ")
         )));
@@ -375,17 +375,14 @@ mod tests {
         let fine = vec![dwell(0, 20_000.0), dwell(1, 30_000.0)];
         assert_eq!(without_clipped(fine.clone(), &mut none).unwrap(), fine);
         assert!(none.is_empty());
-        // Two of three clipped: one is not enough.
-        let e = without_clipped(
-            vec![dwell(0, 40_000.0), dwell(1, 50_000.0), dwell(2, 10_000.0)],
-            &mut w,
-        )
-        .unwrap_err()
-        .to_string();
+        // Every dwell clipped: nothing is left.
+        let e = without_clipped(vec![dwell(0, 40_000.0), dwell(1, 50_000.0)], &mut w)
+            .unwrap_err()
+            .to_string();
         assert!(
-            e.contains("in 2 of 3 dwells (dwell 1 (1 Hz, lines 2-401): output"),
+            e.contains("in 2 of 2 dwells (dwell 1 (1 Hz, lines 2-401): output"),
             "{e}"
         );
-        assert!(e.contains("fewer than 2 dwells are left"), "{e}");
+        assert!(e.contains("no dwell is left"), "{e}");
     }
 }
