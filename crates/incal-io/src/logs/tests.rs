@@ -77,6 +77,17 @@ fn message(conn: u32, s: u32, data: &[u8]) -> Vec<u8> {
     )
 }
 
+/// A bag of one uncompressed chunk holding `inner`'s records.
+fn bag_of(inner: &[u8]) -> Vec<u8> {
+    let mut b = b"#ROSBAG V2.0\n".to_vec();
+    let size = (inner.len() as u32).to_le_bytes();
+    b.extend(record(
+        &[("op", &[5]), ("compression", b"none"), ("size", &size)],
+        inner,
+    ));
+    b
+}
+
 /// A bag of 20 Imu messages at 100 Hz and 3 temperatures, in one chunk
 /// compressed as `compression` says.
 fn bag(compression: &str) -> Vec<u8> {
@@ -285,21 +296,27 @@ fn the_reader_reads_a_real_ulog_in_pieces_and_hashes_its_bytes() {
     );
 }
 
-/// A small PX4 ULog of `sensor_gyro` (nested and array fields, padding).
-fn ulog_bytes(rows: usize) -> Vec<u8> {
+/// A ULog's file header (version 1, start time 0).
+fn ulog_start() -> Vec<u8> {
     let mut out = b"ULog\x01\x12\x35\x01".to_vec();
     out.extend(0u64.to_le_bytes());
-    let mut msg = |kind: u8, body: &[u8]| {
-        out.extend((body.len() as u16).to_le_bytes());
-        out.push(kind);
-        out.extend(body);
-    };
-    msg(b'F', b"clip:uint8_t[3] counter;");
-    msg(b'F', b"sensor_gyro:uint64_t timestamp;uint64_t timestamp_sample;float x;float y;float z;float temperature;clip c;uint8_t[1] _padding0;");
-    let mut add = vec![1u8];
-    add.extend(3u16.to_le_bytes());
-    add.extend(b"sensor_gyro");
-    msg(b'A', &add);
+    out
+}
+
+/// An `A` message: subscription `id` of `topic`'s `instance`.
+fn subscribe(instance: u8, id: u16, topic: &str) -> Vec<u8> {
+    let mut add = vec![instance];
+    add.extend(id.to_le_bytes());
+    add.extend(topic.as_bytes());
+    msg(b'A', &add)
+}
+
+/// A small PX4 ULog of `sensor_gyro` (nested and array fields, padding).
+fn ulog_bytes(rows: usize) -> Vec<u8> {
+    let mut out = ulog_start();
+    out.extend(msg(b'F', b"clip:uint8_t[3] counter;"));
+    out.extend(msg(b'F', b"sensor_gyro:uint64_t timestamp;uint64_t timestamp_sample;float x;float y;float z;float temperature;clip c;uint8_t[1] _padding0;"));
+    out.extend(subscribe(1, 3, "sensor_gyro"));
     for k in 0..rows as u64 {
         let mut d = 3u16.to_le_bytes().to_vec();
         d.extend((k * 4000 + 100).to_le_bytes());
@@ -308,7 +325,7 @@ fn ulog_bytes(rows: usize) -> Vec<u8> {
             d.extend(v.to_le_bytes());
         }
         d.extend([0u8; 4]);
-        msg(b'D', &d);
+        out.extend(msg(b'D', &d));
     }
     out
 }
@@ -340,18 +357,12 @@ fn a_ulog_topic_with_nested_fields_reads_by_its_instance() {
         "{e}"
     );
     // A format as large as a message cannot be is nobody's.
-    let mut big = b"ULog\x01\x12\x35\x01".to_vec();
-    big.extend(0u64.to_le_bytes());
-    let f = b"sensor_gyro:uint64_t timestamp;float[1000000000] x;";
-    big.extend((f.len() as u16).to_le_bytes());
-    big.push(b'F');
-    big.extend(f);
-    let mut add = vec![0u8];
-    add.extend(3u16.to_le_bytes());
-    add.extend(b"sensor_gyro");
-    big.extend((add.len() as u16).to_le_bytes());
-    big.push(b'A');
-    big.extend(add);
+    let mut big = ulog_start();
+    big.extend(msg(
+        b'F',
+        b"sensor_gyro:uint64_t timestamp;float[1000000000] x;",
+    ));
+    big.extend(subscribe(0, 3, "sensor_gyro"));
     let e = csv(&big, &[], Stamps::Header).unwrap_err().to_string();
     assert!(
         e.contains("give --topic, one of the topics incal reads here: none"),
@@ -428,8 +439,7 @@ fn accel_row(t_us: u64, z: f32) -> Vec<u8> {
 /// The header, flag bits (`incompat[0]`, appended offset), the
 /// `sensor_accel` format (with a `float[0]` field) and its subscription.
 fn accel_head(incompat: u8, appended: u64) -> Vec<u8> {
-    let mut out = b"ULog\x01\x12\x35\x01".to_vec();
-    out.extend(0u64.to_le_bytes());
+    let mut out = ulog_start();
     let mut flags = vec![0u8; 16];
     flags[8] = incompat;
     flags.extend(appended.to_le_bytes());
@@ -439,10 +449,7 @@ fn accel_head(incompat: u8, appended: u64) -> Vec<u8> {
         b'F',
         b"sensor_accel:uint64_t timestamp;float[0] none;float x;float y;float z;float temperature;",
     ));
-    let mut add = vec![0u8];
-    add.extend(5u16.to_le_bytes());
-    add.extend(b"sensor_accel");
-    out.extend(msg(b'A', &add));
+    out.extend(subscribe(0, 5, "sensor_accel"));
     out
 }
 
@@ -482,16 +489,12 @@ fn ulog_data_appended_after_a_crash_is_read_from_its_offset() {
 
 #[test]
 fn a_ulog_topic_with_fractional_stamps_is_refused() {
-    let mut out = b"ULog\x01\x12\x35\x01".to_vec();
-    out.extend(0u64.to_le_bytes());
+    let mut out = ulog_start();
     out.extend(msg(
         b'F',
         b"sensor_accel:double timestamp;float x;float y;float z;",
     ));
-    let mut add = vec![0u8];
-    add.extend(5u16.to_le_bytes());
-    add.extend(b"sensor_accel");
-    out.extend(msg(b'A', &add));
+    out.extend(subscribe(0, 5, "sensor_accel"));
     let mut d = 5u16.to_le_bytes().to_vec();
     d.extend(1e300f64.to_le_bytes());
     d.extend([0u8; 12]);
@@ -510,15 +513,7 @@ fn ros_topics_of_two_types_and_unprovided_quantities_are_refused() {
     inner.extend(connection(1, "/imu", "sensor_msgs/Temperature"));
     inner.extend(message(0, 1, &imu_ros1(1, 0, [0.0; 3], [0.0; 3])));
     inner.extend(message(1, 2, &temperature_ros1(2, 20.0)));
-    let mut b = b"#ROSBAG V2.0\n".to_vec();
-    b.extend(record(
-        &[
-            ("op", &[5]),
-            ("compression", b"none"),
-            ("size", &(inner.len() as u32).to_le_bytes()),
-        ],
-        &inner,
-    ));
+    let b = bag_of(&inner);
     let e = csv(&b, &["/imu"], Stamps::Header).unwrap_err().to_string();
     assert!(
         e.contains(
@@ -532,15 +527,7 @@ fn ros_topics_of_two_types_and_unprovided_quantities_are_refused() {
     m[at..at + 8].copy_from_slice(&(-1.0f64).to_le_bytes());
     let mut inner = connection(0, "/imu", "sensor_msgs/Imu");
     inner.extend(message(0, 1, &m));
-    let mut b = b"#ROSBAG V2.0\n".to_vec();
-    b.extend(record(
-        &[
-            ("op", &[5]),
-            ("compression", b"none"),
-            ("size", &(inner.len() as u32).to_le_bytes()),
-        ],
-        &inner,
-    ));
+    let b = bag_of(&inner);
     let e = csv(&b, &[], Stamps::Header).unwrap_err().to_string();
     assert!(
         e.contains("topic /imu: message 1 says its angular_velocity is not provided"),
