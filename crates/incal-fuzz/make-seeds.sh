@@ -34,7 +34,8 @@ $INCAL simulate repeatability --seed 3 -o "$D/repeatability"
 $INCAL simulate thermal --seed 3 --t-low-c 20 --t-high-c 40 --ramp-c-per-min 20 --hold-s 30 --lag-s 5 --rate-hz 1 -o "$D/thermal-ramp"
 $INCAL tumble --mount pendulum --input "$D/tumble" --json --meta temperature_c=25 -o "$D/thermal-fit"
 $INCAL thermal ramp --input "$D/thermal-ramp" --rate-hz 1 --quantity gyro --json -o "$D/thermal-model"
-# lab-profile is written by hand; record-import is the export of a store
+# ulog, ros-bag and mcap: make-robot-seeds.py (Python, rosbags and
+# mcap-ros2-support). lab-profile is written by hand; record-import is the export of a store
 # holding the result seed.
 STORE=$(mktemp -d)/seed.db
 $INCAL record add "$D/result" --serial SN-1 --db "$STORE" --created-utc 2026-01-01T00:00:00Z > /dev/null

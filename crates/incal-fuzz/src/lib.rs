@@ -51,6 +51,9 @@ pub const EXTRA: &[(&str, &str)] = &[
     ),
     ("lab-profile", "laboratory profile TOML (report --lab)"),
     ("record-import", "records export JSON lines (record import)"),
+    ("ulog", "PX4 ULog (noise)"),
+    ("ros-bag", "ROS 1 bag (noise)"),
+    ("mcap", "MCAP (noise)"),
 ];
 
 /// Every target: `(name, what the fuzzed bytes are)`: those of the
@@ -267,6 +270,9 @@ pub fn run(target: &str, data: &[u8]) -> Outcome {
         "thermal-model" => thermal_model(data),
         "lab-profile" => lab_profile(data),
         "record-import" => record_import(data),
+        // A robot log as a recording: the noise procedure reads it through
+        // the input layer's decoding (incal_io::logs).
+        "ulog" | "ros-bag" | "mcap" => reduce("noise", data).expect("noise is a registry target"),
         t if REGISTRY
             .iter()
             .any(|e| e.input == InputKind::Results && e.fuzz.contains(&t)) =>

@@ -24,8 +24,24 @@ struct Channel {
     encoding: String,
 }
 
-/// The series of the topics chosen (module [`super`]).
+/// The series of the topics chosen (module [`super`]). The crate's reader
+/// can fail an internal check on a record that runs past its chunk (an
+/// arithmetic overflow, a panic where those are checked): that is the
+/// file's inconsistency, refused as such.
 pub(super) fn read(file: &str, bytes: &[u8], opts: &LogOptions) -> Result<Vec<Series>> {
+    let read = std::panic::AssertUnwindSafe(|| topics(file, bytes));
+    let topics = std::panic::catch_unwind(read).map_err(|_| {
+        InputError::file(
+            file,
+            "an MCAP file: its records are inconsistent (a record runs past its chunk)",
+        )
+    })??;
+    let chosen = choose(file, Format::Mcap, &topics.offered(), opts)?;
+    topics.series(file, &chosen, opts.stamps, "log_time")
+}
+
+/// Every record of the file, read into topics.
+fn topics(file: &str, bytes: &[u8]) -> Result<Topics> {
     let bad = |e: ::mcap::McapError| InputError::file(file, format!("an MCAP file: {e}"));
     let mut reader = LinearReader::new_with_options(
         LinearReaderOptions::default()
@@ -89,6 +105,5 @@ pub(super) fn read(file: &str, bytes: &[u8], opts: &LogOptions) -> Result<Vec<Se
             }
         }
     }
-    let chosen = choose(file, Format::Mcap, &topics.offered(), opts)?;
-    topics.series(file, &chosen, opts.stamps, "log_time")
+    Ok(topics)
 }
