@@ -34,8 +34,9 @@ pub use columns::{ColumnEntry, ColumnMap};
 pub use digest::{hex, sha256_hex};
 pub use error::{clip, clip_to, InputError, Result};
 pub use reader::{
-    at_rail, parse_delimiter, parse_f64, stated_rate_hz, Clipped, Condition, Header, PreambleLine,
-    ReadOptions, Reader, Row, Summary, CONDITION_COLUMNS, MAX_ABS_VALUE, MAX_LINE_BYTES,
+    at_rail, extreme_rails, parse_delimiter, parse_f64, rail_runs, stated_rate_hz, Clipped,
+    Condition, Header, PreambleLine, ReadOptions, Reader, Row, Summary, CONDITION_COLUMNS,
+    MAX_ABS_VALUE, MAX_LINE_BYTES,
 };
 pub use segments::{Segment, SegmentSpec, Segmented};
 pub use source::{

@@ -33,7 +33,7 @@ pub mod rails;
 mod robot;
 
 pub use preamble::{stated_rate_hz, PreambleLine, FOLLOWING, SCAN_BYTES, SCAN_RECORDS};
-pub use rails::{at_rail, Clipped};
+pub use rails::{at_rail, extreme_rails, rail_runs, Clipped};
 
 use sha2::Digest;
 

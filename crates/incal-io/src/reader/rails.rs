@@ -59,6 +59,25 @@ pub fn at_rail(v: f64, full_scale: Option<f64>) -> bool {
     })
 }
 
+/// The rails of one channel held in memory: its smallest and largest
+/// values that are at a rail ([`at_rail`], no full scale) — the extremes
+/// a clipped channel piles up at.
+pub fn extreme_rails(x: impl Iterator<Item = f64>) -> Vec<f64> {
+    let (lo, hi) = x.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+        (a.min(v), b.max(v))
+    });
+    [lo, hi].into_iter().filter(|&r| at_rail(r, None)).collect()
+}
+
+/// The samples of `x` that sit at one of `rails` in a run of two or more
+/// (the input layer's `clipped` rule, for a channel held in memory).
+pub fn rail_runs(x: &[f64], rails: &[f64]) -> Vec<bool> {
+    let at = |j: usize| x.get(j).is_some_and(|v| rails.contains(v));
+    (0..x.len())
+        .map(|i| at(i) && (at(i + 1) || (i > 0 && at(i - 1))))
+        .collect()
+}
+
 /// Could the text be a rail's value? A cheap test before parsing: an
 /// integer part of at least four digits (rails are ≥ 2047 in magnitude).
 fn may_be_rail(bytes: &[u8]) -> bool {

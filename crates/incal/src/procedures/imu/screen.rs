@@ -472,22 +472,10 @@ pub struct GyroRails {
 
 impl GyroRails {
     /// The rails of the gyro samples `gy` (°/s or raw, any unit).
-    pub fn of(gy: impl Iterator<Item = [f64; 3]>) -> Self {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for g in gy {
-            for k in 0..3 {
-                lo[k] = lo[k].min(g[k]);
-                hi[k] = hi[k].max(g[k]);
-            }
+    pub fn of(gy: impl Iterator<Item = [f64; 3]> + Clone) -> Self {
+        Self {
+            rails: std::array::from_fn(|k| incal_io::extreme_rails(gy.clone().map(|g| g[k]))),
         }
-        let rails = std::array::from_fn(|k| {
-            [lo[k], hi[k]]
-                .into_iter()
-                .filter(|&r| incal_io::at_rail(r, None))
-                .collect()
-        });
-        Self { rails }
     }
 
     /// The samples of `gy` at a rail in runs of two or more (one flag a
@@ -496,11 +484,11 @@ impl GyroRails {
         let mut out = vec![false; gy.len()];
         let mut first = None;
         for (k, rails) in self.rails.iter().enumerate() {
+            let axis: Vec<f64> = gy.iter().map(|g| g[k]).collect();
             for &rail in rails {
-                let at = |j: usize| gy.get(j).is_some_and(|g| g[k] == rail);
-                for (i, flag) in out.iter_mut().enumerate() {
-                    if at(i) && (at(i + 1) || (i > 0 && at(i - 1))) {
-                        *flag = true;
+                for (i, hit) in incal_io::rail_runs(&axis, &[rail]).into_iter().enumerate() {
+                    if hit {
+                        out[i] = true;
                         first.get_or_insert((k, rail));
                     }
                 }

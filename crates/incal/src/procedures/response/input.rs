@@ -154,25 +154,12 @@ pub fn read<R: Read>(
 
 /// The samples of `x` at a rail of `rails` in runs of two or more.
 fn clipped_count(x: &[f64], rails: &[f64]) -> usize {
-    let at = |j: usize| x.get(j).is_some_and(|v| rails.contains(v));
-    (0..x.len())
-        .filter(|&i| at(i) && (at(i + 1) || (i > 0 && at(i - 1))))
-        .count()
+    incal_io::rail_runs(x, rails).iter().filter(|&&f| f).count()
 }
 
-/// A channel's rails: its extremes over every dwell that are integer
-/// converters' ends ([`incal_io::at_rail`]; the input layer's `clipped`
-/// rule).
+/// A channel's rails over every dwell ([`incal_io::extreme_rails`]).
 fn rails<'a>(x: impl Iterator<Item = &'a [f64]>) -> Vec<f64> {
-    let (lo, hi) = x
-        .flatten()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
-    [lo, hi]
-        .into_iter()
-        .filter(|&r| incal_io::at_rail(r, None))
-        .collect()
+    incal_io::extreme_rails(x.flatten().copied())
 }
 
 /// Dwells whose output or reference holds samples at a converter's rail
