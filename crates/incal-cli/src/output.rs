@@ -37,6 +37,31 @@ pub struct ResultArgs {
     /// With --limits: exit 3 after writing the result when the overall verdict is fail, conditional-fail or not-determined (fail), or any but pass (conditional).
     #[arg(long, value_enum, value_name = "WHEN", requires = "limits")]
     pub fail_on: Option<crate::options::FailOn>,
+    /// Monte Carlo propagation of distributions (JCGM 101, GUM Supplement 1): M trials (100 to 1000000) or auto (batches of 10000 until stable); synthetic recordings from the fitted model and the input distributions, each reduced; the document's monte_carlo section validates (or not) every GUM interval.
+    #[arg(long, value_name = "M|auto")]
+    pub monte_carlo: Option<incal::montecarlo::Trials>,
+    /// With --monte-carlo: the seed every trial's stream derives from (same seed, same result on any number of threads) [default: 1].
+    #[arg(long, value_name = "N", requires = "monte_carlo")]
+    pub seed: Option<u64>,
+    /// With --monte-carlo: significant digits of a standard uncertainty that set the numerical tolerance of the validation (1 to 3) [default: 1].
+    #[arg(long, value_name = "D", requires = "monte_carlo")]
+    pub mc_digits: Option<u32>,
+}
+
+impl ResultArgs {
+    /// The Monte Carlo asked for, if any.
+    pub fn monte_carlo(&self) -> Option<incal::montecarlo::MonteCarloOptions> {
+        self.monte_carlo.map(|t| {
+            let mut o = incal::montecarlo::MonteCarloOptions::new(t);
+            if let Some(s) = self.seed {
+                o.seed = s;
+            }
+            if let Some(d) = self.mc_digits {
+                o.digits = d;
+            }
+            o
+        })
+    }
 }
 
 /// Judge `doc` against the limits file `path` (its hash joins the inputs).
@@ -63,6 +88,11 @@ impl ResultArgs {
     /// Put the instrument identity into `doc`, render it (JSON or text)
     /// and write it to `--output` or standard output.
     pub fn emit(&self, mut doc: ResultDocument) -> CliResult<()> {
+        if self.monte_carlo.is_some() && doc.monte_carlo.is_none() {
+            return Err(crate::error::usage(
+                "--monte-carlo: this command reduces no recording it can draw again (give it to the reductions whose results it reads)",
+            ));
+        }
         let limits = match &self.limits {
             Some(path) => {
                 let (name, text) = crate::io::read_text(path)?;

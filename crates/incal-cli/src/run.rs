@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use incal::procedures::{reduce_source, Procedure, Progress};
+use incal::procedures::{reduce_source_with, Procedure, Progress};
 
 use crate::error::{core, CliResult};
 use crate::input::ReadArgs;
@@ -21,8 +21,10 @@ pub fn reduce<P: Procedure>(
 ) -> CliResult<()> {
     let read = read.options()?;
     let src = incal_io::open(input)?;
+    let mc = result.monte_carlo();
     let doc =
-        reduce_source::<P, _>(&src.name, src.reader, &read, options, progress).map_err(core)?;
+        reduce_source_with::<P, _>(&src.name, src.reader, &read, options, progress, mc.as_ref())
+            .map_err(core)?;
     result.emit(doc)
 }
 

@@ -220,7 +220,7 @@ fn reduce_document(target: &str, data: &[u8]) -> Option<Result<ResultDocument, S
     let options = (typed.example?)();
     let read = incal_io::ReadOptions::default();
     let mut src = data;
-    Some((typed.run)(NAME, &mut src, &read, &options, &Silent).map_err(|e| e.to_string()))
+    Some((typed.run)(NAME, &mut src, &read, &options, &Silent, None).map_err(|e| e.to_string()))
 }
 
 fn document(data: &[u8]) -> Result<ResultDocument, String> {

@@ -69,13 +69,60 @@ fn typed_options<T: serde::de::DeserializeOwned + schemars::JsonSchema>(
 
 /// The identity, unit and limits to apply, from JSON text.
 fn finish_of(finish: &str) -> Result<incal::document::finish::Finish, Outcome> {
-    serde_json::from_str(finish).map_err(|e| {
+    match finish_mc(finish)? {
+        (f, None) => Ok(f),
+        (_, Some(_)) => Err(Outcome::failed(
+            2,
+            "monte_carlo: this function reduces no recording it can draw again".into(),
+            serde_json::json!({ "option": "monte_carlo" }),
+        )),
+    }
+}
+
+/// The `finish` JSON with the Monte Carlo keywords (`monte_carlo`, `seed`,
+/// `mc_digits`) taken out as [`incal::montecarlo::MonteCarloOptions`].
+fn finish_mc(
+    finish: &str,
+) -> Result<
+    (
+        incal::document::finish::Finish,
+        Option<incal::montecarlo::MonteCarloOptions>,
+    ),
+    Outcome,
+> {
+    let bad = |key: &str, m: String| {
         Outcome::failed(
             2,
-            format!("identity and limits: {e}"),
-            serde_json::json!({}),
+            format!("{key}: {m}"),
+            serde_json::json!({ "option": key }),
         )
-    })
+    };
+    let mut v: serde_json::Value =
+        serde_json::from_str(finish).map_err(|e| bad("identity and limits", e.to_string()))?;
+    let mut mc = serde_json::Map::new();
+    if let Some(m) = v.as_object_mut() {
+        for (key, to) in [
+            ("monte_carlo", "trials"),
+            ("seed", "seed"),
+            ("mc_digits", "digits"),
+        ] {
+            if let Some(x) = m.remove(key) {
+                mc.insert(to.into(), x);
+            }
+        }
+    }
+    let mc = if mc.is_empty() {
+        None
+    } else if !mc.contains_key("trials") {
+        return Err(bad("seed", "give it with monte_carlo".into()));
+    } else {
+        let o: incal::montecarlo::MonteCarloOptions =
+            serde_json::from_value(serde_json::Value::Object(mc))
+                .map_err(|e| bad("monte_carlo", e.to_string()))?;
+        Some(o)
+    };
+    let f = serde_json::from_value(v).map_err(|e| bad("identity and limits", e.to_string()))?;
+    Ok((f, mc))
 }
 
 /// Where a core error is: the option it names, or the file, line and
@@ -299,13 +346,14 @@ fn reduce(
         Ok(r) => r,
         Err(o) => return o,
     };
-    let finish = match finish_of(finish) {
+    let (finish, mc) = match finish_mc(finish) {
         Ok(f) => f,
         Err(o) => return o,
     };
+    let mc = mc.as_ref();
     let reduced = match data {
         Data::Path(p) => match incal_io::open(&p) {
-            Ok(mut src) => (red.run)(&src.name, &mut src.reader, &read, &options, progress),
+            Ok(mut src) => (red.run)(&src.name, &mut src.reader, &read, &options, progress, mc),
             Err(e) => Err(incal::Error::Input(e)),
         },
         Data::Columns(c) => {
@@ -316,7 +364,7 @@ fn reduce(
             std::thread::scope(|s| {
                 let hash = s.spawn(|| c.sha256());
                 let mut view = c.view();
-                let mut doc = (red.run)(name, &mut view, &read, &options, progress)?;
+                let mut doc = (red.run)(name, &mut view, &read, &options, progress, mc)?;
                 let sha256 = hash.join().map_err(|_| {
                     incal::Error::Unsupported(format!("{name}: input hash: its thread failed"))
                 })?;

@@ -105,6 +105,7 @@ fn real(id: &str) -> ResultDocument {
         &read,
         &example,
         &incal::procedures::Silent,
+        None,
     )
     .unwrap();
     doc.instrument.serial = Some("SN-1".into());

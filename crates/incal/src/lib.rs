@@ -31,6 +31,7 @@ pub mod warning;
 pub use error::{Alias, Error, Result};
 pub use warning::{Warning, WarningCode};
 pub mod models;
+pub mod montecarlo;
 pub mod noise;
 pub mod options;
 pub mod procedures;

@@ -116,6 +116,14 @@ pub enum WarningCode {
     /// inclination) disagrees with the value given for the site beyond
     /// the U95 of their difference (En > 1).
     FieldMismatch,
+    /// The GUM interval y ± U95 of a coefficient differs from the Monte
+    /// Carlo coverage interval by more than the numerical tolerance
+    /// (JCGM 101:2008 §8): the first-order uncertainty is not validated,
+    /// the Monte Carlo interval is the one to use.
+    GumNotValidated,
+    /// More than 1 % of the Monte Carlo trials were refused by the
+    /// reduction (the reason most of them failed is named).
+    TrialsFailed,
 }
 
 impl WarningCode {
@@ -154,6 +162,8 @@ impl WarningCode {
             WarningCode::Tones => "tones",
             WarningCode::NonStationary => "non-stationary",
             WarningCode::FieldMismatch => "field-mismatch",
+            WarningCode::GumNotValidated => "gum-not-validated",
+            WarningCode::TrialsFailed => "trials-failed",
         }
     }
 }

@@ -79,6 +79,7 @@ fn every_typed_reduction_equals_the_command_line() {
             &incal_io::ReadOptions::default(),
             &options,
             &incal::procedures::Silent,
+            None,
         )
         .unwrap_or_else(|e| panic!("{}: typed reduction with {options}: {e}", case.id));
         // Through text, as the CLI's document was read (same float parsing).
@@ -100,6 +101,7 @@ fn every_typed_reduction_equals_the_command_line() {
             &incal_io::ReadOptions::default(),
             &Value::Object(bad),
             &incal::procedures::Silent,
+            None,
         ) {
             Err(incal::Error::InvalidOption { key, .. }) => {
                 assert_eq!(key, "no_such_option_hz", "{}", case.id)

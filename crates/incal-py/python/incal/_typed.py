@@ -36,8 +36,9 @@ READ = (
     "topic",
     "stamps",
 )
-#: Keywords added to the document by the core after the reduction.
-FINISH = ("serial", "model", "meta", "output_unit", "limits", "fail_on")
+#: Keywords added to the document by the core after the reduction (the
+#: Monte Carlo's ``monte_carlo``, ``seed`` and ``mc_digits`` among them).
+FINISH = ("serial", "model", "meta", "output_unit", "limits", "fail_on", "monte_carlo", "seed", "mc_digits")
 
 
 def _resolve(prop: Dict[str, Any], schema: Dict[str, Any]) -> Dict[str, Any]:
@@ -142,6 +143,15 @@ def _finish_value(key: str, value: Any) -> Any:
         path = os.fspath(value)
         with open(path, "r", encoding="utf-8") as f:
             return {"name": path, "text": f.read()}
+    if key in ("monte_carlo", "seed", "mc_digits"):
+        # A number of trials, a seed or digits as the integer the core
+        # reads ("auto" stays a word; a bool is not a number).
+        if isinstance(value, bool):
+            return str(value)
+        if isinstance(value, int):
+            return value
+        text = str(value)
+        return int(text) if text.isdigit() else text
     return str(value)
 
 

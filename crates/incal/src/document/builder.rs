@@ -34,6 +34,7 @@ impl DocumentBuilder {
                 verdicts: None,
                 verdict: None,
                 decision_rule: None,
+                monte_carlo: None,
                 extra: BTreeMap::new(),
             },
             blocks: Vec::new(),

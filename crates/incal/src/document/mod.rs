@@ -370,6 +370,10 @@ pub struct ResultDocument {
     /// The decision rule behind the verdicts.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub decision_rule: Option<limits::DecisionRule>,
+    /// The Monte Carlo propagation of distributions (JCGM 101), with
+    /// `--monte-carlo` ([`crate::montecarlo`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub monte_carlo: Option<crate::montecarlo::MonteCarlo>,
     /// Procedure-specific top-level objects kept for their established
     /// contracts (`radius`, `alignment` of the centrifuge, `angles` of the
     /// misalignment tests, `accelerometers` of the gyro-free unit, …).
@@ -401,7 +405,8 @@ impl ResultDocument {
             } else {
                 format!("$.{path}")
             };
-            format!("{path}: not a valid {SCHEMA} document: {}", e.inner())
+            let why = short_serde_message(&e.inner().to_string());
+            format!("{path}: not a valid {SCHEMA} document: {why}")
         })?;
         doc.check()?;
         Ok(doc)
@@ -604,6 +609,26 @@ pub fn json_schema() -> Value {
     serde_json::to_value(s).unwrap_or(Value::Null)
 }
 
+/// serde's message with a long list of expected names cut to its first
+/// few: an unknown `procedure` would otherwise list every procedure and
+/// the message outgrow one line.
+fn short_serde_message(m: &str) -> String {
+    const SHOWN: usize = 6;
+    let Some(at) = m.find("expected one of ") else {
+        return m.to_string();
+    };
+    let (head, list) = m.split_at(at + "expected one of ".len());
+    let names: Vec<&str> = list.split(", ").collect();
+    if names.len() <= SHOWN {
+        return m.to_string();
+    }
+    format!(
+        "{head}{}, … ({} in all)",
+        names[..SHOWN].join(", "),
+        names.len()
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -706,5 +731,9 @@ mod tests {
         let e = edit(&|w| w["coefficients"]["K0"]["u"] = Value::from("x")).unwrap_err();
         assert!(e.starts_with("$.coefficients.K0.u: "), "{e}");
         assert!(edit(&|w| w["radius"] = Value::from(1.0)).is_ok());
+        // An unknown procedure: serde's list of every name is cut short.
+        let e = edit(&|w| w["procedure"] = Value::from("\u{feff}thermal")).unwrap_err();
+        assert!(e.starts_with("$.procedure: "), "{e}");
+        assert!(e.contains("in all)") && e.chars().count() < 300, "{e}");
     }
 }

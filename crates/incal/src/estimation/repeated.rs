@@ -170,6 +170,32 @@ pub fn fit_means(
     Ok((fit(design, &y, &opts)?, weights))
 }
 
+/// `Σ w_i r_i²` of the weighted least-squares fit of `y` on `design`
+/// (Householder QR of `√W A`, residual `√W y − Q Qᵀ √W y`); `None` when the
+/// weighted design is not of full column rank or a value is not finite
+/// (the caller then runs the full fit, which says why).
+fn weighted_rss(design: &Design, y: &DVector<f64>, w: &DVector<f64>) -> Option<f64> {
+    let a = design.matrix();
+    let (n, p) = (a.nrows(), a.ncols());
+    if n < p || w.len() != n || y.len() != n {
+        return None;
+    }
+    let sw = w.map(f64::sqrt);
+    let aw = nalgebra::DMatrix::from_fn(n, p, |i, j| a[(i, j)] * sw[i]);
+    let yw = y.component_mul(&sw);
+    let qr = aw.qr();
+    let r = qr.r();
+    let scale = r.diagonal().amax();
+    if !(scale > 0.0 && scale.is_finite()) || r.diagonal().iter().any(|d| d.abs() <= 1e-12 * scale)
+    {
+        return None;
+    }
+    let q = qr.q();
+    let resid = &yw - &q * (q.transpose() * &yw);
+    let out = resid.norm_squared();
+    out.is_finite().then_some(out)
+}
+
 /// A fit of position means with an estimated excess variance.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExcessFit {
@@ -241,14 +267,24 @@ pub fn fit_means_excess(
         // χ²(τ²) decreases with τ²: bracket, then bisect on log scale.
         let b_max = base.max();
         let cap = 1e8 * b_max / g2_max;
+        // The bracket and the bisection need χ² only: a QR solve each
+        // (the full fit, with its decomposition and diagnostics, once at
+        // the end).
+        let rss = |tau2: f64| -> Result<f64> {
+            let w = DVector::from_fn(n, |i, _| 1.0 / (base[i] + tau2 * g2[i]));
+            match weighted_rss(design, &y, &w) {
+                Some(r) => Ok(r),
+                None => Ok(run(tau2, known)?.0.weighted_rss),
+            }
+        };
         let mut hi = b_max / g2_max;
-        while hi < cap && run(hi, known)?.0.weighted_rss > dof {
+        while hi < cap && rss(hi)? > dof {
             hi *= 4.0;
         }
         let mut lo = 0.0;
         for _ in 0..200 {
             let mid = if lo > 0.0 { (lo * hi).sqrt() } else { hi / 1e6 };
-            if run(mid, known)?.0.weighted_rss > dof {
+            if rss(mid)? > dof {
                 lo = mid;
             } else {
                 hi = mid;

@@ -59,7 +59,7 @@ pub trait Procedure {
     /// The options of the reduction, validated by [`Procedure::validate`]
     /// and serialised (snake_case keys) into the document's `options`;
     /// read from JSON and published as a JSON Schema (`crate::options`).
-    type Options: serde::Serialize + serde::de::DeserializeOwned + schemars::JsonSchema;
+    type Options: serde::Serialize + serde::de::DeserializeOwned + schemars::JsonSchema + Sync;
     /// Observations as the input layer reads them from a recording.
     type Input;
 
@@ -107,6 +107,20 @@ pub trait Procedure {
         let _ = input;
         options_map(options)
     }
+
+    /// The recipe of synthetic inputs for the Monte Carlo propagation
+    /// (`--monte-carlo`, [`crate::montecarlo`]): the fitted model of the
+    /// reduction `doc` of `input`, the sample noise as estimated and every
+    /// type-B input with its distribution. `None` (the default) for a
+    /// procedure that draws none yet: `--monte-carlo` is then refused.
+    fn synthesis(
+        input: &Self::Input,
+        options: &Self::Options,
+        doc: &ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Self::Input>>> {
+        let _ = (input, options, doc);
+        Ok(None)
+    }
 }
 
 /// The test plan of a procedure: its options (engineering units, the keys
@@ -151,9 +165,10 @@ pub fn reduce_json<P: Procedure>(
     read: &incal_io::ReadOptions,
     options: &serde_json::Value,
     progress: &dyn Progress,
+    monte_carlo: Option<&crate::montecarlo::MonteCarloOptions>,
 ) -> Result<ResultDocument> {
     let options: P::Options = crate::options::from_json(options)?;
-    reduce_source::<P, _>(name, src, read, &options, progress)
+    reduce_source_with::<P, _>(name, src, read, &options, progress, monte_carlo)
 }
 
 /// [`Plan::plan`] with the options as JSON.
@@ -187,6 +202,23 @@ pub fn reduce_source<P: Procedure, R: Read>(
     options: &P::Options,
     progress: &dyn Progress,
 ) -> Result<ResultDocument> {
+    reduce_source_with::<P, R>(name, src, read, options, progress, None)
+}
+
+/// [`reduce_source`], then with `monte_carlo` the Monte Carlo propagation
+/// of distributions ([`crate::montecarlo::run`]) on what was reduced: the
+/// document's `monte_carlo` section and its warnings.
+pub fn reduce_source_with<P: Procedure, R: Read>(
+    name: &str,
+    src: R,
+    read: &incal_io::ReadOptions,
+    options: &P::Options,
+    progress: &dyn Progress,
+    monte_carlo: Option<&crate::montecarlo::MonteCarloOptions>,
+) -> Result<ResultDocument> {
+    if let Some(mc) = monte_carlo {
+        mc.validate()?;
+    }
     P::validate(options)?;
     if let Ok(v) = serde_json::to_value(options) {
         crate::options::check_magnitudes(&v)?;
@@ -215,6 +247,11 @@ pub fn reduce_source<P: Procedure, R: Read>(
         None => read_back,
     };
     let mut doc = P::reduce(&input, options, progress).map_err(|e| e.in_file(name))?;
+    if let Some(mc) = monte_carlo {
+        let (section, warnings) = crate::montecarlo::run::<P>(&input, options, &doc, mc, progress)?;
+        doc.monte_carlo = Some(section);
+        doc.warnings.extend(warnings);
+    }
     if let Some(o) = &original {
         segmented::record(&mut doc, o, carried.as_ref().map(|c| (c.1, c.2)))?;
     }

@@ -209,6 +209,7 @@ pub type ReduceFn = fn(
     &incal_io::ReadOptions,
     &serde_json::Value,
     &dyn super::Progress,
+    Option<&crate::montecarlo::MonteCarloOptions>,
 ) -> crate::Result<crate::document::ResultDocument>;
 
 /// A plan with options as JSON ([`super::plan_json`]).

@@ -62,7 +62,7 @@ fn every_reduction_gives_the_same_document_from_columns_as_from_csv() {
         (sim.run)(&simulate_options(words), &mut csv)
             .unwrap_or_else(|err| panic!("{}: simulate with defaults: {err}", e.id));
         let read = ReadOptions::default();
-        let from_csv = (red.run)("sim.csv", &mut &csv[..], &read, &example, &Silent)
+        let from_csv = (red.run)("sim.csv", &mut &csv[..], &read, &example, &Silent, None)
             .unwrap_or_else(|err| panic!("{}: reduce the CSV: {err}", e.id));
         let table = Table::from_bytes("sim.csv", &csv, &read).unwrap();
         let mut cols = Columns::new();
@@ -73,7 +73,7 @@ fn every_reduction_gives_the_same_document_from_columns_as_from_csv() {
             frames: true,
             ..ReadOptions::default()
         };
-        let from_cols = (red.run)("<DataFrame>", &mut cols, &frames, &example, &Silent)
+        let from_cols = (red.run)("<DataFrame>", &mut cols, &frames, &example, &Silent, None)
             .unwrap_or_else(|err| panic!("{}: reduce the columns: {err}", e.id));
         let mut a = serde_json::to_value(&from_csv).unwrap();
         let mut b = serde_json::to_value(&from_cols).unwrap();

@@ -36,6 +36,7 @@
 
 pub mod document;
 pub mod input;
+mod montecarlo;
 pub mod plan;
 pub mod sim;
 
@@ -172,6 +173,14 @@ impl super::Procedure for Tumble {
         o: &TumbleOptions,
     ) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
         super::options_map(&o.settled())
+    }
+
+    fn synthesis(
+        obs: &Vec<Observation>,
+        o: &TumbleOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Vec<Observation>>>> {
+        montecarlo::synthesis(obs, o).map(Some)
     }
 }
 
@@ -500,6 +509,15 @@ fn position_differences(
                 })
         })
         .collect()
+}
+
+/// The coefficients [`calibrate`] reports, without the absorbed terms,
+/// the pass comparisons and the warnings (the Monte Carlo's trials).
+pub(crate) fn coefficients(obs: &[Observation], opts: &TumbleOptions) -> Result<Estimates> {
+    crate::validity::require_varying(obs.iter().map(|o| o.output), "output")?;
+    let c = fit_observations(obs, opts)?.coefficients;
+    crate::validity::require_scale_factor(&c, "K1")?;
+    Ok(c)
 }
 
 /// Calibrate from tumble observations (see module docs).

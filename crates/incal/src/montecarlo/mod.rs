@@ -1,0 +1,401 @@
+//! Monte Carlo propagation of distributions (JCGM 101:2008, "Evaluation of
+//! measurement data — Supplement 1 to the GUM: Propagation of
+//! distributions using a Monte Carlo method", BIPM, 2008).
+//!
+//! # Method
+//! A reduction gives `y` (the coefficients) with the GUM's first-order
+//! uncertainty (JCGM 100:2008). Its procedure says how its recording arose
+//! ([`Synthesis`]): the fitted model, the sample noise as estimated (with
+//! its degrees of freedom: a scaled inverse χ² draw of the variance, so the
+//! trials carry the Student t of JCGM 101 §6.4.9) and every type-B input of
+//! the rig with its distribution. Trial `r` draws one synthetic recording
+//! from a ChaCha8 stream seeded with [`crate::sim::trial_seed`]`(seed, r)`
+//! and reduces it with the same options; the trials' coefficients give the
+//! Monte Carlo estimate, standard deviation, the probabilistically
+//! symmetric and the shortest 95 % coverage intervals and the correlation
+//! matrix ([`stats`]). The GUM interval `y ± U95` is then validated against
+//! the Monte Carlo one at the numerical tolerance `δ` of the GUM `u` stated
+//! to `digits` significant digits (§8.2).
+//!
+//! # Adaptive number of trials
+//! [`Trials::Auto`] runs batches of [`BATCH`] trials (§7.9.4: `M =
+//! max(100/(1 − p), 10⁴)`) until, for every coefficient, twice the standard
+//! deviation of the batch means of the estimate, the standard deviation and
+//! both interval ends is at most the tolerance of the Monte Carlo `u`
+//! (§7.9.4 d–e), or [`MAX_TRIALS`] is reached (stated as not stabilised).
+//!
+//! # Reproducibility
+//! Trials run in parallel; each draws from its own seed and the results are
+//! kept in trial order, so the document is the same bits on one thread or
+//! many.
+
+pub mod stats;
+
+use std::collections::BTreeMap;
+
+use rand::rngs::ChaCha8Rng;
+use rayon::prelude::*;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use crate::document::ResultDocument;
+use crate::error::Result;
+use crate::warning::{Warning, WarningCode};
+
+/// Coverage probability of every interval.
+pub const COVERAGE: f64 = 0.95;
+/// Trials in one batch of the adaptive procedure (JCGM 101 §7.9.4).
+pub const BATCH: u64 = 10_000;
+/// Most trials a run draws (a fixed `M` above it is refused; the adaptive
+/// procedure stops there, not stabilised).
+pub const MAX_TRIALS: u64 = 1_000_000;
+/// Fewest trials a fixed `M` may ask for.
+pub const MIN_TRIALS: u64 = 100;
+/// Largest `M × coefficients` kept in memory (8 bytes each).
+const MAX_VALUES: u64 = 50_000_000;
+/// Share of failed trials above which a warning is given.
+pub const FAILED_WARN: f64 = 0.01;
+
+/// The number of trials: a fixed `M` or adaptive (`"auto"`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(try_from = "TrialsText", into = "TrialsText")]
+#[schemars(with = "TrialsText")]
+pub enum Trials {
+    /// Exactly `M` trials.
+    Fixed(u64),
+    /// Batches until the results are stable (JCGM 101 §7.9).
+    Auto,
+}
+
+/// [`Trials`] as written: an integer, or the word `auto`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum TrialsText {
+    /// A fixed number of trials.
+    Count(u64),
+    /// `"auto"`.
+    Word(String),
+}
+
+impl TryFrom<TrialsText> for Trials {
+    type Error = String;
+    fn try_from(t: TrialsText) -> std::result::Result<Self, String> {
+        match t {
+            TrialsText::Count(m) => Ok(Trials::Fixed(m)),
+            TrialsText::Word(w) if w == "auto" => Ok(Trials::Auto),
+            TrialsText::Word(w) => Err(format!(
+                "'{}' is neither a number of trials nor 'auto'",
+                incal_io::clip(&w)
+            )),
+        }
+    }
+}
+
+impl From<Trials> for TrialsText {
+    fn from(t: Trials) -> Self {
+        match t {
+            Trials::Fixed(m) => TrialsText::Count(m),
+            Trials::Auto => TrialsText::Word("auto".into()),
+        }
+    }
+}
+
+impl std::str::FromStr for Trials {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        if s == "auto" {
+            return Ok(Trials::Auto);
+        }
+        s.parse::<u64>()
+            .map(Trials::Fixed)
+            .map_err(|_| format!("'{s}' is neither a number of trials nor 'auto'"))
+    }
+}
+
+/// What a reduction's Monte Carlo run is asked for (`--monte-carlo M|auto
+/// --seed N --mc-digits D`; Python `monte_carlo=`, `seed=`, `mc_digits=`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MonteCarloOptions {
+    /// Trials: a number (at least 100, at most 10⁶) or `auto`.
+    pub trials: Trials,
+    /// Seed of the first trial's stream (every trial's seed derives from it).
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Significant digits of a standard uncertainty that set the numerical
+    /// tolerance δ (1 to 3; JCGM 101 §7.9.2).
+    #[serde(default = "default_digits")]
+    pub digits: u32,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+fn default_digits() -> u32 {
+    1
+}
+
+impl MonteCarloOptions {
+    /// `trials` with the default seed (1) and digits (1).
+    pub fn new(trials: Trials) -> Self {
+        Self {
+            trials,
+            seed: default_seed(),
+            digits: default_digits(),
+        }
+    }
+
+    /// Refuse a number of trials outside [`MIN_TRIALS`]…[`MAX_TRIALS`] and
+    /// digits outside 1…3 (the key named as the front ends spell it).
+    pub fn validate(&self) -> Result<()> {
+        if let Trials::Fixed(m) = self.trials {
+            if !(MIN_TRIALS..=MAX_TRIALS).contains(&m) {
+                return crate::options::invalid(
+                    "monte_carlo",
+                    format!("{m} trials: give {MIN_TRIALS} to {MAX_TRIALS}, or auto"),
+                );
+            }
+        }
+        if !(1..=3).contains(&self.digits) {
+            return crate::options::invalid(
+                "mc_digits",
+                format!("{}: give 1, 2 or 3 significant digits", self.digits),
+            );
+        }
+        Ok(())
+    }
+}
+
+/// One input a procedure's trials draw, for the document's table: what it
+/// is, its distribution and where its parameters come from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Drawn {
+    /// The input quantity (`sample noise at each position`).
+    pub input: String,
+    /// Its distribution (`normal`, `rectangular`, `scaled inverse χ², ν = 6`).
+    pub distribution: String,
+    /// Its parameters as drawn, with units (`σ = 2.1e-6 output`).
+    pub parameters: String,
+    /// Where they come from (`each position's scatter`, `--u-angle-deg`).
+    pub source: String,
+}
+
+impl Drawn {
+    /// A row of the table.
+    pub fn new(input: &str, distribution: &str, parameters: String, source: &str) -> Self {
+        Self {
+            input: input.into(),
+            distribution: distribution.into(),
+            parameters,
+            source: source.into(),
+        }
+    }
+}
+
+/// A procedure's recipe for synthetic recordings: one draw per trial from
+/// the fitted model and the input distributions, and the table of what it
+/// draws ([`crate::procedures::Procedure::synthesis`]).
+pub struct Synthesis<I> {
+    /// One synthetic input from the trial's stream.
+    pub draw: DrawFn<I>,
+    /// What is drawn.
+    pub drawn: Vec<Drawn>,
+    /// The coefficients of one synthetic input by name, without the
+    /// document around them: a procedure's faster path to exactly the
+    /// values its reduction reports (a test checks they are equal);
+    /// `None`: the reduction itself runs.
+    pub values: Option<ValuesFn<I>>,
+}
+
+/// [`Synthesis::draw`]: one synthetic input from a trial's stream.
+pub type DrawFn<I> = Box<dyn Fn(&mut ChaCha8Rng) -> Result<I> + Send + Sync>;
+
+/// [`Synthesis::values`]: an input's coefficients as `(name, value)`.
+pub type ValuesFn<I> = Box<dyn Fn(&I) -> Result<Vec<(String, f64)>> + Send + Sync>;
+
+/// A variance `s²` estimated with `dof` degrees of freedom as one trial
+/// draws it: `s² ν / χ²_ν` (the scaled inverse χ² whose normal mixture is
+/// the scaled and shifted t of JCGM 101 §6.4.9); `s²` itself for an
+/// infinite `dof` or one above 10⁶, 0 for a non-positive `s²`.
+pub fn scaled_variance(rng: &mut ChaCha8Rng, s2: f64, dof: f64) -> f64 {
+    use rand_distr::Distribution;
+    if !(s2 > 0.0 && s2.is_finite()) {
+        return 0.0;
+    }
+    if !(dof.is_finite() && dof <= 1e6) {
+        return s2;
+    }
+    match rand_distr::ChiSquared::new(dof) {
+        Ok(c) => {
+            let x: f64 = c.sample(rng);
+            if x > 0.0 {
+                s2 * dof / x
+            } else {
+                s2
+            }
+        }
+        Err(_) => s2,
+    }
+}
+
+mod section;
+pub use section::{McCoefficient, McCorrelation, McFailures, MonteCarlo};
+
+/// The outcome of one trial: the coefficients in the base document's
+/// order, or the reason the reduction refused the synthetic recording.
+type Trial = std::result::Result<Vec<f64>, String>;
+
+/// Run the Monte Carlo of procedure `P` on the reduction `doc` of `input`
+/// with `options`: the document's `monte_carlo` section and its warnings
+/// (module docs). Refused when the procedure has no synthesis, or when
+/// fewer than two trials succeed (naming the commonest reason).
+pub fn run<P: crate::procedures::Procedure>(
+    input: &P::Input,
+    options: &P::Options,
+    doc: &ResultDocument,
+    mc: &MonteCarloOptions,
+    progress: &dyn crate::procedures::Progress,
+) -> Result<(MonteCarlo, Vec<Warning>)> {
+    mc.validate()?;
+    let Some(synthesis) = P::synthesis(input, options, doc)? else {
+        return crate::options::invalid(
+            "monte_carlo",
+            format!(
+                "{} draws no synthetic recordings yet: no Monte Carlo for it",
+                P::ID
+            ),
+        );
+    };
+    let names = doc.coefficients.names();
+    if names.is_empty() {
+        return crate::options::invalid("monte_carlo", "the result has no coefficients");
+    }
+    let cap = (MAX_VALUES / names.len() as u64).min(MAX_TRIALS);
+    let one = |k: u64| -> Trial {
+        let mut rng = crate::sim::rng(crate::sim::trial_seed(mc.seed, k));
+        let x = (synthesis.draw)(&mut rng).map_err(|e| e.to_string())?;
+        let got: Vec<(String, f64)> = match &synthesis.values {
+            Some(f) => f(&x).map_err(|e| e.to_string())?,
+            None => P::reduce(&x, options, &crate::procedures::Silent)
+                .map_err(|e| e.to_string())?
+                .coefficients
+                .iter()
+                .map(|(n, c)| (n.to_string(), c.value))
+                .collect(),
+        };
+        names
+            .iter()
+            .map(|n| match got.iter().find(|g| g.0 == *n) {
+                Some(g) if g.1.is_finite() => Ok(g.1),
+                Some(_) => Err(format!("{n} is not finite")),
+                None => Err(format!("{n} is not reported")),
+            })
+            .collect()
+    };
+    let batch = |from: u64, len: u64| -> Vec<Trial> {
+        let out = (from..from + len).into_par_iter().map(one).collect();
+        progress.advance(len);
+        out
+    };
+    let mut trials: Vec<Trial> = Vec::new();
+    let mut stabilised = None;
+    match mc.trials {
+        Trials::Fixed(m) => {
+            if m > cap {
+                return crate::options::invalid(
+                    "monte_carlo",
+                    format!("{m} trials of {} coefficients: at most {cap}", names.len()),
+                );
+            }
+            progress.start("Monte Carlo trials", m);
+            trials = batch(0, m);
+        }
+        Trials::Auto => {
+            progress.start("Monte Carlo trials (adaptive)", cap);
+            let mut reached = false;
+            while (trials.len() as u64) + BATCH <= cap {
+                let from = trials.len() as u64;
+                trials.extend(batch(from, BATCH));
+                if trials.len() as u64 >= 2 * BATCH && section::stable(&trials, names.len(), mc) {
+                    reached = true;
+                    break;
+                }
+            }
+            stabilised = Some(reached);
+        }
+    }
+    progress.finish();
+    section::summarise(doc, &names, &trials, mc, stabilised, synthesis.drawn)
+}
+
+/// The reason of a failed trial with its numbers replaced by `#`, so trials
+/// refused for the same reason count together.
+fn reason_key(message: &str) -> String {
+    let mut out = String::new();
+    let mut in_number = false;
+    for ch in message.chars() {
+        if ch.is_ascii_digit() {
+            if !in_number {
+                out.push('#');
+            }
+            in_number = true;
+        } else if in_number && (ch == '.' || ch == 'e' || ch == '-') {
+            continue;
+        } else {
+            in_number = false;
+            out.push(ch);
+        }
+    }
+    incal_io::clip_to(&out, 200)
+}
+
+/// Failed trials grouped by reason, commonest first (ties by reason).
+fn failures(trials: &[Trial]) -> Vec<(String, u64)> {
+    let mut count: BTreeMap<String, u64> = BTreeMap::new();
+    for t in trials {
+        if let Err(e) = t {
+            *count.entry(reason_key(e)).or_default() += 1;
+        }
+    }
+    let mut v: Vec<(String, u64)> = count.into_iter().collect();
+    v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    v
+}
+
+/// The warnings of a run: a coefficient whose GUM interval is not
+/// validated, and failed trials above [`FAILED_WARN`].
+fn warnings(mc: &MonteCarlo) -> Vec<Warning> {
+    let mut out = Vec::new();
+    let not: Vec<&str> = mc
+        .coefficients
+        .iter()
+        .filter(|(_, c)| !c.validated)
+        .map(|(n, _)| n.as_str())
+        .collect();
+    if !not.is_empty() {
+        out.push(Warning::new(
+            WarningCode::GumNotValidated,
+            format!(
+                "the GUM interval y ± U95 of {} differs from the Monte Carlo interval by more than δ (JCGM 101 §8): use the Monte Carlo interval",
+                not.join(", ")
+            ),
+        ));
+    }
+    let total = mc.trials + mc.failed.count;
+    if total > 0 && mc.failed.count as f64 > FAILED_WARN * total as f64 {
+        let why = mc.failed.reasons.first().map_or("", |r| r.reason.as_str());
+        out.push(Warning::new(
+            WarningCode::TrialsFailed,
+            format!(
+                "{} of {total} Monte Carlo trials were refused by the reduction (most: {why}): the intervals describe the trials that succeeded",
+                mc.failed.count
+            ),
+        ));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests;
