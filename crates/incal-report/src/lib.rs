@@ -28,6 +28,7 @@
 
 pub mod certificate;
 pub mod format;
+pub mod montecarlo;
 pub mod pdf;
 pub mod plots;
 pub mod records;
@@ -244,7 +245,7 @@ footer { margin-top: 2em; font-size: 0.8em; color: #555; border-top: 1px solid #
 "#;
 
 /// A table of strings: header cells and rows of `(class, html)` cells.
-fn html_table(class: &str, header: &[String], rows: &[Vec<(bool, String)>]) -> String {
+pub(crate) fn html_table(class: &str, header: &[String], rows: &[Vec<(bool, String)>]) -> String {
     let wide = if header.len() > 8 { " wide" } else { "" };
     let mut s = format!("<table class=\"{class}{wide}\">\n<thead><tr>");
     for h in header {
@@ -701,6 +702,7 @@ pub fn render_html_with(
             s.push_str(&coefficients_html(doc));
         }
     }
+    s.push_str(&montecarlo::html(doc));
     s.push_str(&fits_html(doc));
     s.push_str(&notes_html(doc));
 

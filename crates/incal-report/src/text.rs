@@ -127,6 +127,7 @@ pub fn render(doc: &ResultDocument) -> String {
         "u: standard uncertainty; U95 = k95 u covers the value with 95 % probability (k95: Student t for dof; inf: known variance)\n",
     );
     s.push_str(&thermal_text(doc));
+    s.push_str(&crate::montecarlo::text(doc));
     if let (Some(v), Some(rule)) = (doc.verdict, doc.decision_rule) {
         let rule = match rule {
             incal::document::limits::DecisionRule::Simple => {

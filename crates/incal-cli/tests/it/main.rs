@@ -14,6 +14,7 @@ mod imu_cli;
 mod limits_cli;
 mod mag_cli;
 mod misalign_cli;
+mod monte_carlo_cli;
 mod noise_cli;
 mod noise_davar_cli;
 mod noise_preprocess_cli;

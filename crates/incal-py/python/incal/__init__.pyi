@@ -117,6 +117,9 @@ def tumble(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -154,6 +157,9 @@ def centrifuge(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -181,6 +187,9 @@ def misalign_gyro(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -206,6 +215,9 @@ def misalign_accel(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -236,6 +248,9 @@ def gyro_rate(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -268,6 +283,9 @@ def gyro_positions(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -296,6 +314,9 @@ def imu_ferraris(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -324,6 +345,9 @@ def imu_multipos(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -356,6 +380,9 @@ def imu_autocal(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -383,6 +410,9 @@ def gfimu_calibrate(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -434,6 +464,9 @@ def noise(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -463,6 +496,9 @@ def thermal_ramp(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -500,6 +536,9 @@ def response_sine(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -539,6 +578,9 @@ def response_broadband(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -565,6 +607,9 @@ def response_step(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -598,6 +643,9 @@ def warmup(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -625,6 +673,9 @@ def repeatability(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -655,6 +706,9 @@ def threshold(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -687,6 +741,9 @@ def mag(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...
 
@@ -718,5 +775,8 @@ def sensitivity(
     output_unit: Optional[str] = None,
     limits: Optional[PathLike] = None,
     fail_on: Optional[Literal["fail", "conditional"]] = None,
+    monte_carlo: Optional[Union[str, float]] = None,
+    seed: Optional[Union[str, float]] = None,
+    mc_digits: Optional[Union[str, float]] = None,
     progress: Union[bool, Callable[[str, int, int], object], None] = None,
 ) -> Result: ...

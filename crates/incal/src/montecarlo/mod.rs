@@ -335,18 +335,22 @@ pub fn run<P: crate::procedures::Procedure>(
 fn reason_key(message: &str) -> String {
     let mut out = String::new();
     let mut in_number = false;
+    // A digit right after a letter or `_` is part of a name (K1, U95).
+    let mut in_word = false;
     for ch in message.chars() {
-        if ch.is_ascii_digit() {
+        if ch.is_ascii_digit() && !in_word {
             if !in_number {
                 out.push('#');
             }
             in_number = true;
-        } else if in_number && (ch == '.' || ch == 'e' || ch == '-') {
             continue;
-        } else {
-            in_number = false;
-            out.push(ch);
         }
+        if in_number && (ch == '.' || ch == 'e' || ch == '-' || ch.is_ascii_digit()) {
+            continue;
+        }
+        in_number = false;
+        in_word = ch.is_alphanumeric() || ch == '_';
+        out.push(ch);
     }
     incal_io::clip_to(&out, 200)
 }

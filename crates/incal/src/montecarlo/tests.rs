@@ -188,7 +188,10 @@ fn refusals_name_the_option() {
 
 #[test]
 fn failed_trials_are_grouped_by_reason() {
-    assert_eq!(reason_key("K1 = 1.5e-3 at line 12"), "K# = # at line #");
+    assert_eq!(
+        reason_key("K1 = 1.5e-3 at line 12, U95 -2"),
+        "K1 = # at line #, U95 -#"
+    );
     let t: Vec<Trial> = vec![
         Err("x = 1".into()),
         Err("x = 2".into()),

@@ -1,0 +1,140 @@
+//! `--monte-carlo` on the command line: the document's section and its
+//! warnings, the same bytes for the same seed, the text report, and the
+//! refusals (exit 2, one line naming the option).
+
+use crate::common;
+use common::*;
+
+/// A tumble recording whose K0 is a ratio with a poor denominator (K1
+/// known to about 15 %): the GUM interval of K0 is not validated.
+fn noisy_tumble(name: &str) -> std::path::PathBuf {
+    let o = run(&[
+        "simulate",
+        "tumble",
+        "--k1",
+        "1",
+        "--k0",
+        "5",
+        "--k2",
+        "0",
+        "--k3",
+        "0",
+        "--delta-o-arcsec",
+        "0",
+        "--k-ip",
+        "0",
+        "--noise",
+        "0.8",
+        "--samples",
+        "4",
+        "--index-error-arcsec",
+        "0",
+        "--seed",
+        "3",
+    ]);
+    write_unique(name, &ok(&o))
+}
+
+#[test]
+fn the_section_validates_or_not_and_repeats_with_its_seed() {
+    let f = noisy_tumble("mc.csv");
+    let args = [
+        "tumble",
+        "--mount",
+        "pendulum",
+        "--terms",
+        "K0,K1",
+        "--input",
+        p(&f),
+        "--json",
+        "--monte-carlo",
+        "1000",
+        "--seed",
+        "4",
+    ];
+    let a = run(&args);
+    let doc = json_of(&a);
+    let mc = &doc["monte_carlo"];
+    // A trial whose K1 the reduction finds not observable is counted as
+    // failed, with its reason; the rest are the statistics' trials.
+    let failed = mc["failed"]["count"].as_u64().unwrap();
+    assert_eq!(mc["trials"].as_u64().unwrap() + failed, 1000);
+    assert!(failed < 10, "{}", mc["failed"]);
+    assert_eq!(mc["requested"], 1000);
+    assert_eq!(mc["seed"], 4);
+    let k0 = &mc["coefficients"]["K0"];
+    assert_eq!(k0["validated"], false, "{k0}");
+    for key in ["mean", "std", "d_low", "d_high", "delta"] {
+        assert!(k0[key].is_f64(), "{key}: {k0}");
+    }
+    assert!(k0["symmetric"][0].as_f64() < k0["symmetric"][1].as_f64());
+    assert_eq!(mc["correlation"]["names"], serde_json::json!(["K0", "K1"]));
+    assert!(!warnings_with(&doc, "gum-not-validated").is_empty());
+    assert!(mc["drawn"][0]["input"].as_str().unwrap().contains("noise"));
+    // Same seed, same document; another seed, other numbers.
+    assert_eq!(ok(&run(&args)), ok(&a));
+    let mut other = args.to_vec();
+    let last = other.len() - 1;
+    other[last] = "5";
+    let b = json_of(&run(&other));
+    assert_ne!(b["monte_carlo"]["coefficients"]["K0"]["mean"], k0["mean"]);
+    // The text report shows the section.
+    let text = ok(&run(&args[..args.len() - 5]
+        .iter()
+        .chain(&["--monte-carlo", "200"])
+        .copied()
+        .collect::<Vec<_>>()));
+    assert!(text.contains("Monte Carlo (JCGM 101"), "{text}");
+    assert!(
+        text.contains("not validated: use the Monte Carlo interval"),
+        "{text}"
+    );
+}
+
+#[test]
+fn refusals_name_the_option() {
+    let f = noisy_tumble("mc-bad.csv");
+    let base = [
+        "tumble",
+        "--mount",
+        "pendulum",
+        "--terms",
+        "K0,K1",
+        "--input",
+        p(&f),
+    ];
+    let with = |extra: &[&str]| {
+        let mut v = base.to_vec();
+        v.extend_from_slice(extra);
+        run(&v)
+    };
+    refused(
+        &with(&["--monte-carlo", "10"]),
+        &["--monte-carlo", "100 to 1000000"],
+    );
+    refused(
+        &with(&["--monte-carlo", "many"]),
+        &["--monte-carlo", "'many'"],
+    );
+    refused(&with(&["--seed", "3"]), &["--monte-carlo"]);
+    refused(
+        &with(&["--monte-carlo", "200", "--mc-digits", "5"]),
+        &["--mc-digits"],
+    );
+    // A procedure that draws no synthetic recordings yet says so.
+    let sim = ok(&run(&["simulate", "gyro-rate"]));
+    let g = write_unique("mc-gyro.csv", &sim);
+    refused(
+        &run(&[
+            "gyro",
+            "rate",
+            "--input",
+            p(&g),
+            "--latitude-deg",
+            "30",
+            "--monte-carlo",
+            "200",
+        ]),
+        &["--monte-carlo", "gyro-rate", "no Monte Carlo"],
+    );
+}
