@@ -122,19 +122,51 @@ fn refusals_name_the_option() {
         &["--mc-digits"],
     );
     // A procedure that draws no synthetic recordings yet says so.
-    let sim = ok(&run(&["simulate", "gyro-rate"]));
-    let g = write_unique("mc-gyro.csv", &sim);
+    let sim = ok(&run(&["simulate", "response-step", "--seed", "23"]));
+    let g = write_unique("mc-step.csv", &sim);
     refused(
-        &run(&[
-            "gyro",
-            "rate",
-            "--input",
-            p(&g),
-            "--latitude-deg",
-            "30",
-            "--monte-carlo",
-            "200",
-        ]),
-        &["--monte-carlo", "gyro-rate", "no Monte Carlo"],
+        &run(&["response", "step", "--input", p(&g), "--monte-carlo", "200"]),
+        &["--monte-carlo", "response-step", "no Monte Carlo"],
     );
+}
+
+/// The rate-transfer test draws the table's rate error once per trial:
+/// its K1's Monte Carlo u is the GUM u (the ppm dominates), validated.
+#[test]
+fn gyro_rate_draws_the_table_rate_error() {
+    let sim = ok(&run(&[
+        "simulate",
+        "gyro-rate",
+        "--samples",
+        "4",
+        "--seed",
+        "16",
+    ]));
+    let g = write_unique("mc-gyro.csv", &sim);
+    let doc = json_of(&run(&[
+        "gyro",
+        "rate",
+        "--input",
+        p(&g),
+        "--latitude-deg",
+        "45",
+        "--rate-uncertainty-ppm",
+        "20",
+        "--json",
+        "--monte-carlo",
+        "auto",
+    ]));
+    let mc = &doc["monte_carlo"];
+    assert_eq!(mc["stabilised"], true, "{mc}");
+    assert!(mc["drawn"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|d| d["source"] == "rate_uncertainty_ppm"));
+    for (name, c) in mc["coefficients"].as_object().unwrap() {
+        assert_eq!(c["validated"], true, "{name}: {c}");
+        let u = doc["coefficients"][name]["u"].as_f64().unwrap();
+        let s = c["std"].as_f64().unwrap();
+        assert!((s / u - 1.0).abs() < 0.05, "{name}: {s} vs {u}");
+    }
 }

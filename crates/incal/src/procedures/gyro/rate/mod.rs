@@ -42,6 +42,7 @@
 
 pub mod document;
 pub mod input;
+mod montecarlo;
 pub mod plan;
 pub mod range;
 pub mod sim;
@@ -303,6 +304,14 @@ impl crate::procedures::Procedure for GyroRate {
         _: &dyn crate::procedures::Progress,
     ) -> Result<crate::document::ResultDocument> {
         calibrate(obs, o)?.document(o.noise.sigma().is_some(), o.rate_uncertainty_ppm)
+    }
+
+    fn synthesis(
+        obs: &Vec<RateObservation>,
+        o: &GyroRateOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Vec<RateObservation>>>> {
+        montecarlo::synthesis(obs, o).map(Some)
     }
 }
 
