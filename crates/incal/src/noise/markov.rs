@@ -87,7 +87,9 @@ fn linear(obs: &[(f64, f64, f64)], w: &[f64], t: f64) -> Option<(Vec<f64>, Vec<u
             col(kept[k], obs[i].0) * w[i].sqrt()
         });
         let b = DVector::from_fn(obs.len(), |i, _| obs[i].1 * w[i].sqrt());
-        let th = a.clone().svd(true, true).solve(&b, 1e-14).ok()?;
+        let th = crate::estimation::bounded_svd(a.clone(), true, true)?
+            .solve(&b, 1e-14)
+            .ok()?;
         if let Some(k) = (0..kept.len()).find(|&k| th[k] < 0.0) {
             if kept[k] == 2 {
                 return None;

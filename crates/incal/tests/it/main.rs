@@ -21,6 +21,7 @@ mod imu_tk_recordings;
 mod li2012;
 mod mag;
 mod misalign_roundtrip;
+mod montecarlo;
 mod noise_davar;
 mod noise_markov;
 mod noise_psd;

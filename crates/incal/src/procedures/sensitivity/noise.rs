@@ -417,7 +417,9 @@ fn candidates(points: &[AvarPoint]) -> Vec<([f64; 3], f64)> {
             basis(&points[i])[idx[j]] * w[i].sqrt()
         });
         let y = nalgebra::DVector::from_fn(points.len(), |i, _| points[i].avar * w[i].sqrt());
-        let x = a.clone().svd(true, true).solve(&y, 1e-14).ok()?;
+        let x = crate::estimation::bounded_svd(a.clone(), true, true)?
+            .solve(&y, 1e-14)
+            .ok()?;
         if x.iter().any(|v| *v < 0.0 || !v.is_finite()) {
             return None;
         }
