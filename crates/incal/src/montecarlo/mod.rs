@@ -240,6 +240,46 @@ pub fn scaled_variance(rng: &mut ChaCha8Rng, s2: f64, dof: f64) -> f64 {
     }
 }
 
+/// The sample noise a procedure's trials draw, from what its reduction
+/// used: the known σ (`known`, infinite dof), else the pooled scatter of
+/// the settings (`stats`, `Σ(n − 1)` dof), else the fit's residual σ
+/// (`fit_sigma` with `fit_dof`, one sample per setting); `setting` names
+/// a setting in the table (`position`, `rate`). Returns `(s², ν)` for
+/// [`scaled_variance`] and the row of the table of what is drawn.
+pub fn sample_noise(
+    known: Option<f64>,
+    stats: &[crate::estimation::PositionStats],
+    fit_sigma: f64,
+    fit_dof: f64,
+    setting: &str,
+) -> (f64, f64, Drawn) {
+    let (s2, dof, source) = match known {
+        Some(s) => (s * s, f64::INFINITY, "the known σ (noise)".to_string()),
+        None => match crate::estimation::pooled_variance(stats) {
+            (s2, dof) if dof > 0 && s2 > 0.0 => {
+                (s2, dof as f64, format!("the {setting}s' pooled scatter"))
+            }
+            _ => (
+                fit_sigma.powi(2),
+                fit_dof,
+                format!("the residuals (one sample per {setting})"),
+            ),
+        },
+    };
+    let distribution = if dof.is_finite() {
+        format!("normal, variance scaled inverse χ² (ν = {dof})")
+    } else {
+        "normal, σ known".into()
+    };
+    let row = Drawn {
+        input: "output noise of each sample".into(),
+        distribution,
+        parameters: format!("σ = {:.3e} output", s2.sqrt()),
+        source,
+    };
+    (s2, dof, row)
+}
+
 mod section;
 pub use section::{McCoefficient, McCorrelation, McFailures, MonteCarlo};
 

@@ -14,8 +14,8 @@
 //!   drawn as `σ*² = s² ν / χ²_ν`.
 
 use crate::error::Result;
-use crate::estimation::{pooled_variance, PositionStats};
-use crate::montecarlo::{scaled_variance, Drawn, Synthesis};
+use crate::estimation::PositionStats;
+use crate::montecarlo::{sample_noise, scaled_variance, Drawn, Synthesis};
 use crate::sim::normal;
 
 use super::{angle_key, calibrate, coefficients, Observation, TumbleOptions};
@@ -44,32 +44,14 @@ pub(super) fn synthesis(
     let angles: Vec<f64> = r.positions.iter().map(|q| q.angle_rad).collect();
     let stats: Vec<PositionStats> = r.positions.iter().map(|q| q.stats).collect();
     let fit_dof = r.fit.dof as f64;
-    let (noise_s2, noise_dof, noise_source) = match o.noise.sigma() {
-        Some(s) => (s * s, f64::INFINITY, "the known σ (noise)"),
-        None => {
-            let (s2, dof) = pooled_variance(&stats);
-            if dof > 0 && s2 > 0.0 {
-                (s2, dof as f64, "the positions' pooled scatter")
-            } else {
-                (
-                    r.fit.sigma.powi(2),
-                    fit_dof,
-                    "the residuals (one sample per position)",
-                )
-            }
-        }
-    };
+    let (noise_s2, noise_dof, noise) =
+        sample_noise(o.noise.sigma(), &stats, r.fit.sigma, fit_dof, "position");
     let index = r.index_error_rad.filter(|t| *t > 0.0 && fit_dof > 0.0);
-    let mut drawn = vec![Drawn::new(
-        "output noise of each sample",
-        &nu_text("normal, variance scaled inverse χ²", noise_dof),
-        format!("σ = {:.3e} output", noise_s2.sqrt()),
-        noise_source,
-    )];
+    let mut drawn = vec![noise];
     if let Some(t) = index {
         drawn.push(Drawn::new(
             "index-angle error of the head at each position",
-            &nu_text("normal, variance scaled inverse χ²", fit_dof),
+            &format!("normal, variance scaled inverse χ² (ν = {fit_dof})"),
             format!("τ = {:.3e} rad", t),
             "the residuals beyond the noise (Paule–Mandel)",
         ));
@@ -115,13 +97,4 @@ pub(super) fn synthesis(
         drawn,
         values: Some(Box::new(values)),
     })
-}
-
-/// `what (ν = N)`, or `what` alone for an infinite ν (a known value).
-fn nu_text(what: &str, dof: f64) -> String {
-    if dof.is_finite() {
-        format!("{what} (ν = {dof})")
-    } else {
-        "normal, σ known".into()
-    }
 }

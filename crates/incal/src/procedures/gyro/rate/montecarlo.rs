@@ -13,8 +13,7 @@
 //!   residual σ with `n − p`, each drawn as `σ*² = s² ν / χ²_ν`.
 
 use crate::error::Result;
-use crate::estimation::pooled_variance;
-use crate::montecarlo::{scaled_variance, Drawn, Synthesis};
+use crate::montecarlo::{sample_noise, scaled_variance, Drawn, Synthesis};
 use crate::sim::normal;
 
 use super::{
@@ -39,32 +38,9 @@ pub(super) fn synthesis(
     let template: Vec<RateObservation> = obs.iter().filter(|x| kept(x)).cloned().collect();
     let stats: Vec<_> = r.positions.iter().map(|p| p.stats).collect();
     let fit_dof = r.fit.dof as f64;
-    let (s2, dof, source) = match o.noise.sigma() {
-        Some(s) => (s * s, f64::INFINITY, "the known σ (noise)"),
-        None => {
-            let (s2, dof) = pooled_variance(&stats);
-            if dof > 0 && s2 > 0.0 {
-                (s2, dof as f64, "the rates' pooled scatter")
-            } else {
-                (
-                    r.fit.sigma.powi(2),
-                    fit_dof,
-                    "the residuals (one sample per rate)",
-                )
-            }
-        }
-    };
+    let (s2, dof, noise) = sample_noise(o.noise.sigma(), &stats, r.fit.sigma, fit_dof, "rate");
     let u_rate = o.rate_uncertainty_ppm * 1e-6;
-    let mut drawn = vec![Drawn::new(
-        "output noise of each sample",
-        &if dof.is_finite() {
-            format!("normal, variance scaled inverse χ² (ν = {dof})")
-        } else {
-            "normal, σ known".into()
-        },
-        format!("σ = {:.3e} output", s2.sqrt()),
-        source,
-    )];
+    let mut drawn = vec![noise];
     if u_rate > 0.0 {
         drawn.push(Drawn::new(
             "relative error of the table's rate (one per trial)",
