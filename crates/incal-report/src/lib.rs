@@ -125,8 +125,8 @@ pub struct RecordStamp {
 }
 
 /// The plots of `doc`'s certificate, in its order: the tables' (or the
-/// thermal model's), the deviations', then the coefficients' with their
-/// limits.
+/// thermal model's), the deviations', the coefficients' with their
+/// limits, then the Monte Carlo's distributions.
 pub fn figures(doc: &ResultDocument) -> Vec<plots::Plot> {
     let mut figures: Vec<plots::Plot> = if doc.procedure == incal::document::Procedure::Thermal {
         plots::thermal_plots(doc)
@@ -147,6 +147,7 @@ pub fn figures(doc: &ResultDocument) -> Vec<plots::Plot> {
     figures.extend(plots::mag_plots(doc));
     let limits = |n: &str| verdict_of(doc, Some(n)).map(|j| (j.min, j.max));
     figures.extend(plots::coefficient_plots(doc, figures.is_empty(), &limits));
+    figures.extend(plots::monte_carlo_plots(doc));
     figures
 }
 

@@ -26,7 +26,10 @@
 //! * a top-level `bode` object (the dynamic response): gain in dB and phase
 //!   in degrees against log frequency, the measured points with U95 bars
 //!   from the table holding `gain_db`, the fitted model with its U95 band
-//!   ([`bode_plots`]).
+//!   ([`bode_plots`]);
+//! * a `monte_carlo` section: per coefficient the trials' histogram with
+//!   both Monte Carlo intervals and the GUM interval
+//!   ([`monte_carlo_plots`]).
 //!
 //! The abscissa of a table is its numeric column, before the statistics
 //! columns (`n`, `mean`, `std`, `residual`, …), with the most distinct
@@ -48,6 +51,7 @@ mod coefficients;
 mod davar;
 mod history;
 mod mag;
+mod montecarlo;
 mod psd;
 mod rows;
 mod svg;
@@ -63,6 +67,7 @@ pub use coefficients::{coefficient_plots, Limits};
 pub use davar::davar_plots;
 pub use history::history_plot;
 pub use mag::mag_plots;
+pub use montecarlo::monte_carlo_plots;
 pub use psd::psd_plots;
 pub use svg::{figure_html, render_svg};
 pub use table::{model_curve, table_plots, table_plots_with, Curve};

@@ -281,7 +281,9 @@ pub fn sample_noise(
 }
 
 mod section;
-pub use section::{McCoefficient, McCorrelation, McFailures, MonteCarlo};
+pub use section::{
+    McCoefficient, McCorrelation, McFailures, McHistogram, McReason, MonteCarlo, HISTOGRAM_BINS,
+};
 
 /// The outcome of one trial: the coefficients in the base document's
 /// order, or the reason the reduction refused the synthetic recording.
@@ -350,7 +352,12 @@ pub fn run<P: crate::procedures::Procedure>(
                 );
             }
             progress.start("Monte Carlo trials", m);
-            trials = batch(0, m);
+            // In batches, so progress is shown as they finish (each trial
+            // keeps its own seed: the batches change nothing else).
+            while (trials.len() as u64) < m {
+                let from = trials.len() as u64;
+                trials.extend(batch(from, BATCH.min(m - from)));
+            }
         }
         Trials::Auto => {
             progress.start("Monte Carlo trials (adaptive)", cap);

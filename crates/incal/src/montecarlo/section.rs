@@ -36,6 +36,49 @@ pub struct McCoefficient {
     pub validated: bool,
     /// `GUM validated`, or `not validated: use the Monte Carlo interval`.
     pub decision: String,
+    /// The trials binned, for the plot of the distribution.
+    pub histogram: McHistogram,
+}
+
+/// The trials of one coefficient in [`HISTOGRAM_BINS`] equal bins from
+/// `low` to `high` (the 0.05 % and 99.95 % points of the trials, widened to
+/// hold the GUM interval); trials beyond are not counted.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct McHistogram {
+    /// Lower edge of the first bin.
+    pub low: f64,
+    /// Upper edge of the last bin.
+    pub high: f64,
+    /// Trials per bin.
+    pub counts: Vec<u64>,
+}
+
+/// Bins of [`McHistogram`].
+pub const HISTOGRAM_BINS: usize = 40;
+
+/// The histogram of `sorted` (ascending) over the central 99.9 % of the
+/// trials and the interval `gum`.
+fn histogram(sorted: &[f64], gum: [f64; 2]) -> McHistogram {
+    let m = sorted.len();
+    let at = |p: f64| sorted[((p * m as f64) as usize).min(m - 1)];
+    let mut low = at(0.0005).min(gum[0]);
+    let mut high = at(0.9995).max(gum[1]);
+    if high <= low {
+        // Every trial equal: one bin's width around the value.
+        let w = low.abs().max(f64::MIN_POSITIVE) * 1e-9;
+        low -= w;
+        high += w;
+    }
+    let width = (high - low) / HISTOGRAM_BINS as f64;
+    let mut counts = vec![0u64; HISTOGRAM_BINS];
+    for &x in sorted {
+        if x >= low && x <= high {
+            let k = (((x - low) / width) as usize).min(HISTOGRAM_BINS - 1);
+            counts[k] += 1;
+        }
+    }
+    McHistogram { low, high, counts }
 }
 
 /// The trials the reduction refused.
@@ -208,6 +251,7 @@ pub(super) fn summarise(
                 } else {
                     "not validated: use the Monte Carlo interval".into()
                 },
+                histogram: histogram(&x, [c.value - c.u95, c.value + c.u95]),
             },
         );
     }

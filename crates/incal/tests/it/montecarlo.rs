@@ -84,8 +84,8 @@ fn a_ratio_is_covered_by_the_monte_carlo_interval_not_the_gum_one() {
 
 /// The linear procedures: with adaptive trials the GUM interval of every
 /// coefficient is validated (JCGM 101 §8, δ from u to one significant
-/// digit) in at least 95 % of the seeds for the rate-transfer test (a
-/// 20 ppm table), and in at least 85 % for the tumble test (default terms,
+/// digit) at a rate of 95 % for the rate-transfer test (a 20 ppm table),
+/// and of 85 % for the tumble test (default terms,
 /// noise from the positions' scatter): where its test for an index-angle
 /// error fires by chance (5 % of seeds) the tumble gives every coefficient
 /// that estimate's n − p degrees of freedom, a conservative interval the
@@ -137,13 +137,17 @@ fn linear_procedures_are_validated() {
         let (s, _) = run::<GyroRate>(&robs, &ro, &rdoc, &auto(seed), &Silent).unwrap();
         rate_ok += usize::from(s.coefficients.values().all(|c| c.validated));
     }
-    let min = tier::at_least(seeds as usize, 0.95) * seeds as f64;
+    // Three binomial standard deviations below the rate (20 seeds cannot
+    // tell 95 % from 90 %; the chapter's figures are over 100 seeds, by
+    // scripts/monte-carlo-study.sh).
+    let n = seeds as f64;
+    let at_least = |p: f64| ((p - 3.0 * (p * (1.0 - p) / n).sqrt()) * n + 1e-9).floor();
     assert!(
-        tumble_ok as f64 >= min.floor(),
+        tumble_ok as f64 >= at_least(0.85),
         "tumble {tumble_ok} of {seeds}"
     );
     assert!(
-        rate_ok as f64 >= min.floor(),
+        rate_ok as f64 >= at_least(0.95),
         "gyro rate {rate_ok} of {seeds}"
     );
 }
