@@ -342,7 +342,7 @@ pub fn run<P: crate::procedures::Procedure>(
         out
     };
     let mut trials: Vec<Trial> = Vec::new();
-    let mut stabilised = None;
+    let mut adaptive = None;
     match mc.trials {
         Trials::Fixed(m) => {
             if m > cap {
@@ -361,20 +361,23 @@ pub fn run<P: crate::procedures::Procedure>(
         }
         Trials::Auto => {
             progress.start("Monte Carlo trials (adaptive)", cap);
-            let mut reached = false;
+            // The ratio of the last batch is the section's: computed once.
+            let mut worst = f64::INFINITY;
             while (trials.len() as u64) + BATCH <= cap {
                 let from = trials.len() as u64;
                 trials.extend(batch(from, BATCH));
-                if trials.len() as u64 >= 2 * BATCH && section::stable(&trials, names.len(), mc) {
-                    reached = true;
-                    break;
+                if trials.len() as u64 >= 2 * BATCH {
+                    worst = section::ratio(&trials, names.len(), mc);
+                    if worst <= 1.0 {
+                        break;
+                    }
                 }
             }
-            stabilised = Some(reached);
+            adaptive = Some((worst <= 1.0, worst));
         }
     }
     progress.finish();
-    section::summarise(doc, &names, &trials, mc, stabilised, synthesis.drawn)
+    section::summarise(doc, &names, &trials, mc, adaptive, synthesis.drawn)
 }
 
 /// The reason of a failed trial with its numbers replaced by `#`, so trials

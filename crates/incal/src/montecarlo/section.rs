@@ -7,7 +7,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::stats::{correlation, mean_std, shortest, symmetric, tolerance, validate};
-use super::{failures, warnings, Drawn, MonteCarloOptions, Trial, Trials, BATCH, COVERAGE};
+use super::{failures, warnings, Drawn, MonteCarloOptions, Trial, BATCH, COVERAGE};
 use crate::document::ResultDocument;
 use crate::error::Result;
 use crate::warning::Warning;
@@ -194,19 +194,15 @@ pub(super) fn ratio(trials: &[Trial], n: usize, mc: &MonteCarloOptions) -> f64 {
     worst
 }
 
-/// [`ratio`] at most 1: every result stable to its tolerance.
-pub(super) fn stable(trials: &[Trial], n: usize, mc: &MonteCarloOptions) -> bool {
-    ratio(trials, n, mc) <= 1.0
-}
-
 /// The section from the trials: statistics per coefficient, validation of
-/// `doc`'s GUM intervals, correlation, failures; and its warnings.
+/// `doc`'s GUM intervals, correlation, failures (`adaptive`: whether an
+/// adaptive run stabilised, and its last tolerance ratio); and its warnings.
 pub(super) fn summarise(
     doc: &ResultDocument,
     names: &[String],
     trials: &[Trial],
     mc: &MonteCarloOptions,
-    stabilised: Option<bool>,
+    adaptive: Option<(bool, f64)>,
     drawn: Vec<Drawn>,
 ) -> Result<(MonteCarlo, Vec<Warning>)> {
     let ok: Vec<Vec<f64>> = trials.iter().filter_map(|t| t.clone().ok()).collect();
@@ -262,11 +258,8 @@ pub(super) fn summarise(
         seed: mc.seed,
         coverage: COVERAGE,
         digits: mc.digits,
-        stabilised,
-        tolerance_ratio: match mc.trials {
-            Trials::Auto => Some(finite_or_max(ratio(trials, names.len(), mc))),
-            Trials::Fixed(_) => None,
-        },
+        stabilised: adaptive.map(|a| a.0),
+        tolerance_ratio: adaptive.map(|a| finite_or_max(a.1)),
         failed: McFailures {
             count: (trials.len() - ok.len()) as u64,
             reasons: failed

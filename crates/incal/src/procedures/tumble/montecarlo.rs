@@ -58,7 +58,6 @@ pub(super) fn synthesis(
     }
     let mount = o.mount;
     let terms = o.terms.clone();
-    let o = o.clone();
     let template: Vec<Observation> = obs.to_vec();
     let draw = move |rng: &mut rand::rngs::ChaCha8Rng| -> Result<Vec<Observation>> {
         let sigma = scaled_variance(rng, noise_s2, noise_dof).sqrt();
