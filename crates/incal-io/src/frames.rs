@@ -213,10 +213,38 @@ impl Read for Columns<'_> {
 /// anything else in the shortest form that reads back the same value
 /// (`0.1`, `-2.25e-7`).
 pub fn number_text(v: f64) -> String {
-    if v.fract() == 0.0 && v.abs() < 1e15 {
-        format!("{}", v as i64)
+    let mut s = String::new();
+    push_number(&mut s, v);
+    s
+}
+
+/// Append [`number_text`]`(v)` to `out` without allocating: integers by
+/// `itoa`, other finite values by `ryu` (the same shortest digits as Rust's
+/// `{:?}`, and the same notation: plain in [10⁻⁴, 10¹⁶), `1.5e-7` below
+/// 10⁻⁴, where ryu's plain `0.0000dd` of [10⁻⁵, 10⁻⁴) is rewritten as
+/// `d.de-5`), the rest (plain digits from 10¹⁶) by `{:?}`.
+pub fn push_number(out: &mut String, v: f64) {
+    let a = v.abs();
+    if v.fract() == 0.0 && a < 1e15 {
+        out.push_str(itoa::Buffer::new().format(v as i64));
+    } else if a < 1e-5 || (1e-4..1e16).contains(&a) {
+        out.push_str(ryu::Buffer::new().format_finite(v));
+    } else if (1e-5..1e-4).contains(&a) {
+        let mut b = ryu::Buffer::new();
+        let text = b.format_finite(a);
+        let digits = text.strip_prefix("0.0000").unwrap_or(text);
+        if v < 0.0 {
+            out.push('-');
+        }
+        out.push_str(&digits[..1]);
+        if digits.len() > 1 {
+            out.push('.');
+            out.push_str(&digits[1..]);
+        }
+        out.push_str("e-5");
     } else {
-        format!("{v:?}")
+        use std::fmt::Write;
+        let _ = write!(out, "{v:?}");
     }
 }
 
@@ -360,7 +388,46 @@ mod tests {
         assert!(e.contains("0 columns"), "{e}");
     }
 
+    #[test]
+    fn number_text_is_the_debug_notation() {
+        let cases = [
+            0.0, -0.0, 3.0, -2.5, 0.1, 1e-4, 9.99e-5, -1.25e-5, 1e-5, 2.25e-7, 5e-324, 1e15,
+        ];
+        let wide = [
+            1e16,
+            1.5e16,
+            123456789.123,
+            f64::NAN,
+            f64::INFINITY,
+            -f64::INFINITY,
+        ];
+        for v in cases.into_iter().chain(wide) {
+            let want = if v.fract() == 0.0 && v.abs() < 1e15 {
+                format!("{}", v as i64)
+            } else {
+                format!("{v:?}")
+            };
+            assert_eq!(number_text(v), want, "{v:e}");
+        }
+    }
+
     proptest::proptest! {
+        /// Any finite f64 reads as Rust's `{:?}` would write it (the fast
+        /// path changes no text).
+        #[test]
+        fn number_text_matches_debug_for_any_bits(bits in proptest::prelude::any::<u64>()) {
+            let v = f64::from_bits(bits);
+            proptest::prop_assume!(v.fract() != 0.0 || v.abs() >= 1e15);
+            proptest::prop_assert_eq!(number_text(v), format!("{v:?}"));
+        }
+
+        /// The rewritten decade [10⁻⁵, 10⁻⁴) too.
+        #[test]
+        fn number_text_matches_debug_near_1e_5(v in 1e-5f64..1e-4, negative in proptest::prelude::any::<bool>()) {
+            let v = if negative { -v } else { v };
+            proptest::prop_assert_eq!(number_text(v), format!("{v:?}"));
+        }
+
         /// Any bytes after the magic give rows or one error: never a panic.
         #[test]
         fn any_bytes_are_read_or_refused(tail in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..400)) {

@@ -41,7 +41,7 @@ mod ros;
 mod ulog;
 
 use crate::error::{InputError, Result};
-use crate::frames::number_text;
+use crate::frames::push_number;
 
 /// Degrees per radian.
 const DEG_PER_RAD: f64 = 180.0 / std::f64::consts::PI;
@@ -312,17 +312,22 @@ fn write_csv(
             first.stamp_name
         ),
     ));
-    let mut rows: Vec<String> = Vec::with_capacity(first.samples.len());
+    // Rows written straight into one buffer (no text per row or value).
+    let width = header.len();
+    // The preamble is put in front at the end, in the room kept for it.
+    const PREAMBLE_ROOM: usize = 1 << 14;
+    let mut body = String::with_capacity(PREAMBLE_ROOM + first.samples.len() * (8 + 20 * width));
+    let mut rows = 0usize;
     let mut cursor = vec![0usize; series.len()];
     let mut origin: Option<i128> = None;
     let mut skipped = 0usize;
     'rows: for m in &first.samples {
-        let mut line = String::new();
+        let start = body.len();
         let t0 = *origin.get_or_insert(m.stamp_ns);
-        line.push_str(&seconds_text(m.stamp_ns - t0));
+        push_seconds(&mut body, m.stamp_ns - t0);
         for v in &m.values {
-            line.push(',');
-            line.push_str(&number_text(*v));
+            body.push(',');
+            push_number(&mut body, *v);
         }
         for (k, s) in series.iter().enumerate().skip(1) {
             while cursor[k] < s.samples.len() && s.samples[cursor[k]].log_ns <= m.log_ns {
@@ -330,19 +335,21 @@ fn write_csv(
             }
             let Some(j) = cursor[k].checked_sub(1) else {
                 skipped += 1;
-                if rows.is_empty() {
+                body.truncate(start);
+                if rows == 0 {
                     origin = None;
                 }
                 continue 'rows;
             };
             for &c in &keep[k] {
-                line.push(',');
-                line.push_str(&number_text(s.samples[j].values[c]));
+                body.push(',');
+                push_number(&mut body, s.samples[j].values[c]);
             }
         }
-        rows.push(line);
+        body.push('\n');
+        rows += 1;
     }
-    if rows.is_empty() {
+    if rows == 0 {
         return Err(InputError::file(
             file,
             "no row of the first topic has a sample of every other topic at or before it",
@@ -367,7 +374,7 @@ fn write_csv(
         )
         .into_owned()
     };
-    let mut text = String::new();
+    let mut text = String::with_capacity(PREAMBLE_ROOM);
     for (k, v) in &pre {
         text.push_str(&line(k));
         text.push(',');
@@ -376,25 +383,40 @@ fn write_csv(
     }
     text.push_str(&header.join(","));
     text.push('\n');
-    for r in rows {
-        text.push_str(&r);
-        text.push('\n');
-    }
-    Ok((text, pre.len() + 1))
+    body.insert_str(0, &text);
+    Ok((body, pre.len() + 1))
 }
 
 /// Nanoseconds as exact decimal seconds (`3.003325`, `-0.5`, `0`).
 fn seconds_text(ns: i128) -> String {
-    let sign = if ns < 0 { "-" } else { "" };
+    let mut s = String::new();
+    push_seconds(&mut s, ns);
+    s
+}
+
+/// Append [`seconds_text`]`(ns)` to `out` without allocating.
+fn push_seconds(out: &mut String, ns: i128) {
+    if ns < 0 {
+        out.push('-');
+    }
     let (s, frac) = (
         ns.unsigned_abs() / 1_000_000_000,
-        ns.unsigned_abs() % 1_000_000_000,
+        (ns.unsigned_abs() % 1_000_000_000) as u32,
     );
+    out.push_str(itoa::Buffer::new().format(s));
     if frac == 0 {
-        return format!("{sign}{s}");
+        return;
     }
-    let f = format!("{frac:09}");
-    format!("{sign}{s}.{}", f.trim_end_matches('0'))
+    // Nine digits, trailing zeros dropped.
+    let mut digits = [b'0'; 9];
+    let mut f = frac;
+    for d in digits.iter_mut().rev() {
+        *d = b'0' + (f % 10) as u8;
+        f /= 10;
+    }
+    let end = 9 - digits.iter().rev().take_while(|&&d| d == b'0').count();
+    out.push('.');
+    out.extend(digits[..end].iter().map(|&d| d as char));
 }
 
 /// Bounds-checked little-endian reads over a message's bytes.
