@@ -170,3 +170,60 @@ fn gyro_rate_draws_the_table_rate_error() {
         assert!((s / u - 1.0).abs() < 0.05, "{name}: {s} vs {u}");
     }
 }
+
+/// The accelerometer misalignment: with γ far above its u every GUM
+/// interval is validated; with γ below its u (a weakly excited unit) the
+/// GUM's symmetric interval of γ, which reaches below zero, is not.
+#[test]
+fn misalignment_gamma_is_validated_only_when_well_excited() {
+    let mc = |extra: &[&str], name: &str| {
+        let mut sim = vec!["simulate", "misalign", "accel", "--seed", "2"];
+        sim.extend_from_slice(extra);
+        let f = write_unique(name, &ok(&run(&sim)));
+        let args = [
+            "misalign",
+            "accel",
+            "--input",
+            p(&f),
+            "--scale-factor",
+            "1.299",
+            "--json",
+            "--monte-carlo",
+            "2000",
+            "--seed",
+            "7",
+        ];
+        json_of(&run(&args))
+    };
+    let strong = mc(&[], "mis-strong.csv");
+    let m = &strong["monte_carlo"];
+    assert_eq!(m["failed"]["count"], 0, "{m}");
+    for (name, c) in m["coefficients"].as_object().unwrap() {
+        if name != "azimuth" {
+            assert_eq!(c["validated"], true, "{name}: {c}");
+        }
+    }
+    // MC std of a linear angle within 10 % of its u (M = 2000: ±3 %).
+    let dz = &m["coefficients"]["dtheta_z2"];
+    let u = strong["coefficients"]["dtheta_z2"]["u"].as_f64().unwrap();
+    let ratio = dz["std"].as_f64().unwrap() / u;
+    assert!((ratio - 1.0).abs() < 0.1, "{ratio}");
+    let weak = mc(
+        &[
+            "--dtheta-y2-arcsec",
+            "1",
+            "--dtheta-z2-arcsec",
+            "1",
+            "--noise",
+            "1e-4",
+            "--samples",
+            "4",
+        ],
+        "mis-weak.csv",
+    );
+    let g = &weak["monte_carlo"]["coefficients"]["gamma"];
+    assert_eq!(g["validated"], false, "{g}");
+    assert!(!warnings_with(&weak, "gum-not-validated").is_empty());
+    // γ ≥ 0 in every trial: the Monte Carlo interval stays above zero.
+    assert!(g["symmetric"][0].as_f64().unwrap() >= 0.0, "{g}");
+}

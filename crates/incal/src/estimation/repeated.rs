@@ -196,6 +196,51 @@ fn weighted_rss(design: &Design, y: &DVector<f64>, w: &DVector<f64>) -> Option<f
     out.is_finite().then_some(out)
 }
 
+/// The effective degrees of freedom of a fit whose position variances are
+/// `b_i + τ² g_i²`, `b` with `ν_b` and `τ²` with `ν_τ` degrees of freedom
+/// (JCGM 100:2008 G.4.1, Welch–Satterthwaite): with `H = C AᵀW` (`C` the
+/// fit's unit covariance), coefficient `k`'s variance splits into
+/// `V_b = Σ H_ki² b_i` and `V_τ = τ² Σ H_ki² g_i²`, and
+/// `ν_k = (V_b + V_τ)² / (V_b²/ν_b + V_τ²/ν_τ)`; the least `ν_k` is
+/// returned (one dof serves every coefficient; at least the smaller of
+/// `ν_b` and `ν_τ`), truncated to an integer as G.4.1 says.
+#[allow(clippy::too_many_arguments)]
+fn welch_satterthwaite_dof(
+    design: &Design,
+    fit: &Fit,
+    w: &DVector<f64>,
+    base: &DVector<f64>,
+    base_dof: f64,
+    tau2: f64,
+    g2: &DVector<f64>,
+    tau_dof: f64,
+) -> f64 {
+    let a = design.matrix();
+    let c = fit.estimates.covariance();
+    let mut least = f64::INFINITY;
+    for k in 0..a.ncols() {
+        let (mut vb, mut vt) = (0.0, 0.0);
+        for i in 0..a.nrows() {
+            let h: f64 = (0..a.ncols()).map(|j| c[(k, j)] * a[(i, j)]).sum::<f64>() * w[i];
+            vb += h * h * base[i];
+            vt += h * h * tau2 * g2[i];
+        }
+        let denom = vb * vb / base_dof + vt * vt / tau_dof;
+        if denom > 0.0 {
+            least = least.min((vb + vt).powi(2) / denom);
+        }
+    }
+    // JCGM 100 G.4.1: a fractional ν_eff is truncated to the next lower
+    // integer.
+    if least.is_nan() {
+        tau_dof
+    } else if least.is_finite() {
+        least.floor().max(1.0)
+    } else {
+        least
+    }
+}
+
 /// A fit of position means with an estimated excess variance.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExcessFit {
@@ -295,9 +340,16 @@ pub fn fit_means_excess(
         }
         tau2 = hi;
     }
-    // τ² estimated from the between-position residuals: n − p degrees of
-    // freedom; AtLeast keeps any excess the shape does not explain.
-    let final_dof = if tau2 > 0.0 { dof } else { base_dof };
+    // τ² estimated from the between-position residuals has n − p degrees
+    // of freedom, the noise its own: each coefficient's variance combines
+    // the two by Welch–Satterthwaite, the least over the coefficients
+    // kept (AtLeast keeps any excess the shape does not explain).
+    let final_dof = if tau2 > 0.0 {
+        let (f, w) = run(tau2, known)?;
+        welch_satterthwaite_dof(design, &f, &w, &base, base_dof, tau2, &g2, dof)
+    } else {
+        base_dof
+    };
     let (fit, weights) = run(tau2, Variance::AtLeast { dof: final_dof })?;
     Ok(ExcessFit {
         fit,

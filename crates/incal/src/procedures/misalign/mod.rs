@@ -26,6 +26,7 @@ pub mod averaging;
 pub mod document;
 pub mod gyro;
 pub mod input;
+mod montecarlo;
 pub mod plan;
 pub mod sim;
 pub mod sim_options;
@@ -261,6 +262,14 @@ impl super::Procedure for MisalignAccel {
         _: &dyn super::Progress,
     ) -> Result<crate::document::ResultDocument> {
         accel::calibrate(obs, o)?.document(o)
+    }
+
+    fn synthesis(
+        obs: &Vec<accel::AccelObservation>,
+        o: &accel::AccelOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Vec<accel::AccelObservation>>>> {
+        montecarlo::accel_synthesis(obs, o).map(Some)
     }
 }
 
