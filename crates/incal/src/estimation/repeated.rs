@@ -401,4 +401,31 @@ mod tests {
             "the sweep must cross χ² = n − p below the 5 % level"
         );
     }
+
+    /// The fit's dof after an excess: about `n − p` when the excess
+    /// dominates, the noise's own (`Σ(n_j − 1)`, large) when it is a small
+    /// share, and in between otherwise (JCGM 100 G.4.1).
+    #[test]
+    fn excess_dof_combines_the_two_components() {
+        let rows: Vec<Vec<f64>> = (0..12).map(|k| vec![1.0, k as f64]).collect();
+        let d = Design::from_rows(vec!["a".into(), "b".into()], &rows).unwrap();
+        let shape = DVector::from_element(12, 1.0);
+        let dof_at = |e: f64| {
+            // 20 samples per position with scatter 1: noise dof 228.
+            let positions: Vec<PositionStats> = (0..12)
+                .map(|k| PositionStats {
+                    n: 20,
+                    mean: 0.5 * k as f64 + if k % 2 == 0 { e } else { -e },
+                    std: 1.0,
+                })
+                .collect();
+            let ex = fit_means_excess(&d, &positions, Noise::Auto, &shape).unwrap();
+            assert!(ex.excess_variance.unwrap() > 0.0, "e = {e}");
+            ex.fit.estimates.dof()
+        };
+        let (small, large) = (dof_at(0.3), dof_at(5.0));
+        assert!((10.0..=11.0).contains(&large), "{large}");
+        assert!(small > 20.0 && small < 228.0, "{small}");
+        assert_eq!(small, small.floor());
+    }
 }
