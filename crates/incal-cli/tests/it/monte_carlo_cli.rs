@@ -227,3 +227,73 @@ fn misalignment_gamma_is_validated_only_when_well_excited() {
     // γ ≥ 0 in every trial: the Monte Carlo interval stays above zero.
     assert!(g["symmetric"][0].as_f64().unwrap() >= 0.0, "{g}");
 }
+
+/// The multi-position test draws the gyro's K1 once per trial from
+/// `--u-k1` (the reduction divides by the stated K1): the Monte Carlo u of
+/// a drift term agrees with the GUM's, which holds the same share, and a
+/// K1 known to 2 % widens the bias' interval accordingly.
+#[test]
+fn gyro_positions_draw_the_scale_factor_once_per_trial() {
+    let f = write_unique(
+        "mc-pos.csv",
+        &ok(&run(&[
+            "simulate",
+            "gyro-positions",
+            "--latitude-deg",
+            "45",
+            "--azimuths-deg",
+            "90",
+            "--b-deg-h",
+            "20",
+            "--seed",
+            "7",
+        ])),
+    );
+    let mc = |u: &str| {
+        json_of(&run(&[
+            "gyro",
+            "positions",
+            "--input",
+            p(&f),
+            "--latitude-deg",
+            "45",
+            "--azimuth-deg",
+            "90",
+            "--axial",
+            "sa",
+            "--k1",
+            "0.02",
+            "--u-k1",
+            u,
+            "--json",
+            "--monte-carlo",
+            "4000",
+            "--seed",
+            "3",
+        ]))
+    };
+    for u in ["1e-6", "4e-4"] {
+        let doc = mc(u);
+        let m = &doc["monte_carlo"];
+        assert_eq!(m["failed"]["count"], 0, "{m}");
+        let drawn = m["drawn"].to_string();
+        assert!(drawn.contains("scale factor K1"), "{drawn}");
+        for (name, c) in m["coefficients"].as_object().unwrap() {
+            let gum = doc["coefficients"][name]["u"].as_f64().unwrap();
+            let ratio = c["std"].as_f64().unwrap() / gum;
+            // M = 4000: the std's own sampling error is about 1.1 %.
+            assert!((ratio - 1.0).abs() < 0.06, "u_k1 {u}, {name}: {ratio}");
+        }
+    }
+    let (tight, loose) = (mc("1e-6"), mc("4e-4"));
+    let width = |d: &serde_json::Value| {
+        let s = &d["monte_carlo"]["coefficients"]["B"]["symmetric"];
+        s[1].as_f64().unwrap() - s[0].as_f64().unwrap()
+    };
+    assert!(
+        width(&loose) > 1.2 * width(&tight),
+        "{} {}",
+        width(&loose),
+        width(&tight)
+    );
+}

@@ -40,6 +40,7 @@
 
 pub mod document;
 pub mod input;
+mod montecarlo;
 pub mod plan;
 pub mod sim;
 
@@ -612,6 +613,14 @@ impl crate::procedures::Procedure for GyroPositions {
         o: &GyroPositionsOptions,
     ) -> Result<std::collections::BTreeMap<String, serde_json::Value>> {
         crate::procedures::options_map(&o.settled())
+    }
+
+    fn synthesis(
+        obs: &Vec<PositionObservation>,
+        o: &GyroPositionsOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Vec<PositionObservation>>>> {
+        montecarlo::synthesis(obs, o).map(Some)
     }
 }
 
