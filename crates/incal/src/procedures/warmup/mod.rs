@@ -41,6 +41,7 @@
 pub mod document;
 pub mod fit;
 pub mod input;
+mod montecarlo;
 pub mod plan;
 pub mod sim;
 
@@ -659,5 +660,13 @@ impl crate::procedures::Procedure for Warmup {
         _: &dyn crate::procedures::Progress,
     ) -> Result<crate::document::ResultDocument> {
         calibrate(rec, o)?.document()
+    }
+
+    fn synthesis(
+        rec: &Record,
+        o: &WarmupOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Record>>> {
+        montecarlo::synthesis(rec, o).map(Some)
     }
 }
