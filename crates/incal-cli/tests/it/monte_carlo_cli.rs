@@ -224,8 +224,16 @@ fn misalignment_gamma_is_validated_only_when_well_excited() {
     let g = &weak["monte_carlo"]["coefficients"]["gamma"];
     assert_eq!(g["validated"], false, "{g}");
     assert!(!warnings_with(&weak, "gum-not-validated").is_empty());
-    // γ ≥ 0 in every trial: the Monte Carlo interval stays above zero.
-    assert!(g["symmetric"][0].as_f64().unwrap() >= 0.0, "{g}");
+    // The angles stay linear: their Monte Carlo std is their u with the t
+    // of the noise's 12 dof (×1.10), while γ's GUM interval reaches below
+    // zero and its Monte Carlo mean lies well above the estimate.
+    let dy = &weak["monte_carlo"]["coefficients"]["dtheta_y2"];
+    let u = weak["coefficients"]["dtheta_y2"]["u"].as_f64().unwrap();
+    let ratio = dy["std"].as_f64().unwrap() / u;
+    assert!((1.0..1.2).contains(&ratio), "{ratio}");
+    assert!(g["gum"][0].as_f64().unwrap() < 0.0, "{g}");
+    let est = weak["coefficients"]["gamma"]["value"].as_f64().unwrap();
+    assert!(g["mean"].as_f64().unwrap() > 1.5 * est, "{g} {est}");
 }
 
 /// The multi-position test draws the gyro's K1 once per trial from
@@ -272,8 +280,8 @@ fn gyro_positions_draw_the_scale_factor_once_per_trial() {
             "3",
         ]))
     };
-    for u in ["1e-6", "4e-4"] {
-        let doc = mc(u);
+    let (tight, loose) = (mc("1e-6"), mc("4e-4"));
+    for (u, doc) in [("1e-6", &tight), ("4e-4", &loose)] {
         let m = &doc["monte_carlo"];
         assert_eq!(m["failed"]["count"], 0, "{m}");
         let drawn = m["drawn"].to_string();
@@ -285,7 +293,6 @@ fn gyro_positions_draw_the_scale_factor_once_per_trial() {
             assert!((ratio - 1.0).abs() < 0.06, "u_k1 {u}, {name}: {ratio}");
         }
     }
-    let (tight, loose) = (mc("1e-6"), mc("4e-4"));
     let width = |d: &serde_json::Value| {
         let s = &d["monte_carlo"]["coefficients"]["B"]["symmetric"];
         s[1].as_f64().unwrap() - s[0].as_f64().unwrap()
@@ -296,4 +303,58 @@ fn gyro_positions_draw_the_scale_factor_once_per_trial() {
         width(&loose),
         width(&tight)
     );
+}
+
+/// The gyro misalignment test on a rate table, a bias per configuration:
+/// the five angles are linear in the outputs, so their Monte Carlo std is
+/// their u (with the t of the noise's dof) and every bias is drawn.
+#[test]
+fn gyro_misalignment_angles_propagate_linearly() {
+    let f = write_unique(
+        "mc-mis-gyro.csv",
+        &ok(&run(&[
+            "simulate",
+            "misalign",
+            "gyro",
+            "--seed",
+            "3",
+            "--bias-shift",
+            "2e-3",
+        ])),
+    );
+    let doc = json_of(&run(&[
+        "misalign",
+        "gyro",
+        "--input",
+        p(&f),
+        "--scale-factor",
+        "-2.9222",
+        "--per-config-bias",
+        "--json",
+        "--monte-carlo",
+        "2000",
+        "--seed",
+        "5",
+    ]));
+    let m = &doc["monte_carlo"];
+    assert_eq!(m["failed"]["count"], 0, "{m}");
+    for name in [
+        "dtheta_y0",
+        "dtheta_x0",
+        "dtheta_y1",
+        "dtheta_y2",
+        "dtheta_z2",
+    ] {
+        let c = &m["coefficients"][name];
+        let u = doc["coefficients"][name]["u"].as_f64().unwrap();
+        let ratio = c["std"].as_f64().unwrap() / u;
+        assert!((0.95..1.25).contains(&ratio), "{name}: {ratio}");
+    }
+    let biases = m["coefficients"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .filter(|k| k.starts_with("bias("))
+        .count();
+    assert_eq!(biases, 5, "{}", m["coefficients"]);
 }

@@ -538,3 +538,17 @@ fn ros_topics_of_two_types_and_unprovided_quantities_are_refused() {
         .to_string();
     assert!(e.contains("--topic '/imu' given twice"), "{e}");
 }
+
+#[test]
+fn seconds_are_exact_decimals() {
+    for (ns, text) in [
+        (0, "0"),
+        (1_000_000_000, "1"),
+        (-500_000_000, "-0.5"),
+        (3_003_325_000, "3.003325"),
+        (1, "0.000000001"),
+        (-1_234_000_000_001, "-1234.000000001"),
+    ] {
+        assert_eq!(super::seconds_text(ns), text);
+    }
+}

@@ -226,15 +226,17 @@ fn welch_satterthwaite_dof(
             vt += h * h * tau2 * g2[i];
         }
         let denom = vb * vb / base_dof + vt * vt / tau_dof;
+        let nu = (vb + vt).powi(2) / denom;
+        if nu.is_nan() {
+            return tau_dof;
+        }
         if denom > 0.0 {
-            least = least.min((vb + vt).powi(2) / denom);
+            least = least.min(nu);
         }
     }
     // JCGM 100 G.4.1: a fractional ν_eff is truncated to the next lower
     // integer.
-    if least.is_nan() {
-        tau_dof
-    } else if least.is_finite() {
+    if least.is_finite() {
         least.floor().max(1.0)
     } else {
         least

@@ -280,6 +280,35 @@ pub fn sample_noise(
     (s2, dof, row)
 }
 
+/// The sample noise `(s², ν, row)` of [`sample_noise`] as the GUM's u
+/// used it: where the fit failed its lack-of-fit test and took its
+/// variance from the residuals (`fit.variance_source` = residuals with a
+/// χ² test, [`crate::estimation::Variance::AtLeast`]), the variance is
+/// scaled by that factor `χ²/(n − p)` and has the fit's `n − p` degrees of
+/// freedom, so the trials' position means scatter as the reduction said
+/// they do; otherwise unchanged.
+pub fn with_lack_of_fit(
+    (s2, dof, mut row): (f64, f64, Drawn),
+    fit: &crate::estimation::Fit,
+) -> (f64, f64, Drawn) {
+    let scaled = fit.chi2_p_value.is_some()
+        && fit.variance_source == crate::estimation::linear::VarianceSource::Residuals
+        && fit.variance_factor > 1.0
+        && fit.variance_factor.is_finite()
+        && fit.dof > 0;
+    if !scaled {
+        return (s2, dof, row);
+    }
+    let (s2, dof) = (s2 * fit.variance_factor, fit.dof as f64);
+    row.distribution = format!("normal, variance scaled inverse χ² (ν = {dof})");
+    row.parameters = format!("σ = {:.3e} output", s2.sqrt());
+    row.source = format!(
+        "{}, scaled by the fit's lack of fit χ²/(n − p) = {:.3}",
+        row.source, fit.variance_factor
+    );
+    (s2, dof, row)
+}
+
 mod section;
 pub use section::{
     McCoefficient, McCorrelation, McFailures, McHistogram, McReason, MonteCarlo, HISTOGRAM_BINS,

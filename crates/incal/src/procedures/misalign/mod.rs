@@ -228,6 +228,14 @@ impl super::Procedure for MisalignGyro {
     ) -> Result<crate::document::ResultDocument> {
         gyro::calibrate(&i.observations, o)?.document(o, &i.records)
     }
+
+    fn synthesis(
+        i: &input::GyroInput,
+        o: &gyro::GyroOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<input::GyroInput>>> {
+        montecarlo::gyro_synthesis(i, o).map(Some)
+    }
 }
 
 /// `incal misalign accel`: an accelerometer on a vertical face ([`accel`]);

@@ -1,9 +1,10 @@
 //! Synthetic warm-up records for the Monte Carlo propagation
 //! ([`crate::montecarlo`]).
 //!
-//! Each trial keeps the record's rows, its invalid rows as they are (so
-//! the turn-on row is the same) and draws every valid row after turn-on
-//! from the fitted curve (module [`super`]):
+//! Each trial keeps the record's rows, each row's validity (carried as a
+//! status column, the trials reduced without the output limits, so the
+//! turn-on row is the same) and draws every valid row after turn-on from
+//! the fitted curve (module [`super`]):
 //! `y_k = B(t_k + δ − t_on) + σ* z_k`, where
 //! * `B` is the fitted curve, of the shape the reduction chose; each
 //!   trial is reduced with that shape (the measurement model the GUM's u
@@ -13,7 +14,9 @@
 //!   the interval the turn-on is known within: the turn-on time's
 //!   rectangular type-B uncertainty, `u = s/√12`;
 //! * `σ*² = σ²_LR ν/χ²_ν` is the long-run variance of one sample the
-//!   reduction estimated (batch means, `ν = 20 − p`), drawn per trial; the
+//!   reduction estimated (batch means, `ν = 20 − p`; scaled by the lack of
+//!   fit where no shape passed, [`crate::montecarlo::with_lack_of_fit`]),
+//!   drawn per trial; the
 //!   trials' noise is white with that variance, which gives block means
 //!   the variance the reduction assigned them (a sensor's correlated noise
 //!   at the batch scale is in `σ²_LR`, not in its shape).
@@ -24,7 +27,7 @@ use super::fit::curve;
 use super::input::Record;
 use super::{calibrate, valid, CurveChoice, WarmupOptions};
 use crate::error::Result;
-use crate::montecarlo::{scaled_variance, Drawn, Synthesis};
+use crate::montecarlo::{scaled_variance, with_lack_of_fit, Drawn, Synthesis};
 use crate::sim::normal;
 
 /// The recipe of synthetic warm-up records for `rec` reduced with `o`.
@@ -32,21 +35,38 @@ pub(super) fn synthesis(rec: &Record, o: &WarmupOptions) -> Result<Synthesis<Rec
     let r = calibrate(rec, o)?;
     let shape = r.shape;
     let p: Vec<f64> = r.fit.estimates.values().iter().copied().collect();
-    let (s2, nu) = r.var_lr;
+    let (s2, nu, noise) = with_lack_of_fit(
+        (
+            r.var_lr.0,
+            r.var_lr.1,
+            Drawn::new(
+                "output noise of each valid sample",
+                &format!("normal, variance scaled inverse χ² (ν = {})", r.var_lr.1),
+                format!("σ_LR = {:.3e} output", r.var_lr.0.sqrt()),
+                "the long-run variance of the fit's residuals (batch means)",
+            ),
+        ),
+        &r.fit,
+    );
     let step = r.turn_on.u_s * 12f64.sqrt();
     let from = r.turn_on.row;
-    let fitted: Vec<bool> = (0..rec.output.len())
-        .map(|k| k >= from && valid(rec, o, k))
+    // Each row's validity is the recording's, carried as a status column
+    // (the trials are reduced without the output limits): a drawn value
+    // near a limit changes no row's validity nor the turn-on row.
+    let status: Vec<f64> = (0..rec.output.len())
+        .map(|k| f64::from(u8::from(valid(rec, o, k))))
         .collect();
-    let template = rec.clone();
+    let fitted: Vec<bool> = status
+        .iter()
+        .enumerate()
+        .map(|(k, v)| k >= from && *v != 0.0)
+        .collect();
+    let mut template = rec.clone();
+    template.status = Some(status);
     let power_on = o.power_on_s;
+    let half_step = step / 2.0;
     let drawn = vec![
-        Drawn::new(
-            "output noise of each valid sample",
-            &format!("normal, variance scaled inverse χ² (ν = {nu})"),
-            format!("σ_LR = {:.3e} output", s2.sqrt()),
-            "the long-run variance of the fit's residuals (batch means)",
-        ),
+        noise,
         Drawn::new(
             "the record's clock against power-on (the turn-on time)",
             "rectangular",
@@ -56,24 +76,31 @@ pub(super) fn synthesis(rec: &Record, o: &WarmupOptions) -> Result<Synthesis<Rec
     ];
     let draw = move |rng: &mut rand::rngs::ChaCha8Rng| -> Result<Record> {
         let sigma = scaled_variance(rng, s2, nu).sqrt();
-        let delta = if step > 0.0 {
-            rng.random_range(-step / 2.0..step / 2.0)
+        let half = step / 2.0;
+        let delta = if half > 0.0 {
+            rng.random_range(-half..half)
         } else {
             0.0
         };
         let mut x = template.clone();
-        for (k, t) in x.time_s.iter_mut().enumerate() {
+        for ((t, y), fit) in x.time_s.iter_mut().zip(x.output.iter_mut()).zip(&fitted) {
             *t += delta;
-            if fitted[k] {
-                x.output[k] = Some(curve(shape, &p, *t - power_on) + normal(rng, sigma));
+            if *fit {
+                *y = Some(curve(shape, &p, *t - power_on) + normal(rng, sigma));
             }
         }
         Ok(x)
     };
     let fixed = WarmupOptions {
         curve: choice_of(shape),
+        valid_min: None,
+        valid_max: None,
         ..o.clone()
     };
+    // The turn-on time of a trial is its first valid row's time less half
+    // the recording's interval: the trial's own interval would be the
+    // shifted first row's time where the output is valid from the first
+    // row after power-on, half the spread.
     let values = move |x: &Record| -> Result<Vec<(String, f64)>> {
         let r = calibrate(x, &fixed)?;
         let c = &r.coefficients;
@@ -83,7 +110,7 @@ pub(super) fn synthesis(rec: &Record, o: &WarmupOptions) -> Result<Synthesis<Rec
             .cloned()
             .zip(c.values().iter().copied())
             .collect();
-        out.push(("turn_on_time_s".into(), r.turn_on.time_s));
+        out.push(("turn_on_time_s".into(), r.turn_on.first_valid_s - half_step));
         Ok(out)
     };
     Ok(Synthesis {
@@ -144,16 +171,35 @@ mod tests {
     fn the_turn_on_is_rectangular() {
         let (rec, o) = (record(), WarmupOptions::default());
         let doc = Warmup::reduce(&rec, &o, &Silent).unwrap();
-        let mc = MonteCarloOptions::new(Trials::Fixed(300));
+        let mc = MonteCarloOptions::new(Trials::Fixed(200));
         let (m, _) = crate::montecarlo::run::<Warmup>(&rec, &o, &doc, &mc, &Silent).unwrap();
         assert_eq!(m.failed.count, 0);
         let on = &m.coefficients["turn_on_time_s"];
         let u = doc.coefficients.get("turn_on_time_s").unwrap().u;
-        // M = 300: a uniform's std is known to 2.6 %.
-        assert!((on.std / u - 1.0).abs() < 0.1, "{} {u}", on.std);
+        // M = 200: a uniform's std is known to 3.2 %.
+        assert!((on.std / u - 1.0).abs() < 0.12, "{} {u}", on.std);
         assert!(!on.validated, "{on:?}");
         let b = &m.coefficients["bias_settled"];
         let ub = doc.coefficients.get("bias_settled").unwrap().u;
         assert!((0.9..1.3).contains(&(b.std / ub)), "{} {ub}", b.std);
+    }
+
+    /// Valid from the first row after power-on (power-on 0.5 s before
+    /// it): the turn-on lies anywhere in [0, 0.5] s, u = 0.5/√12, and the
+    /// trials spread over that whole interval, not half of it.
+    #[test]
+    fn a_record_valid_from_power_on_spreads_over_the_interval() {
+        let rec = record();
+        let o = WarmupOptions {
+            power_on_s: 9.5,
+            ..WarmupOptions::default()
+        };
+        let doc = Warmup::reduce(&rec, &o, &Silent).unwrap();
+        let u = doc.coefficients.get("turn_on_time_s").unwrap().u;
+        assert!((u - 0.5 / 12f64.sqrt()).abs() < 1e-9, "{u}");
+        let mc = MonteCarloOptions::new(Trials::Fixed(200));
+        let (m, _) = crate::montecarlo::run::<Warmup>(&rec, &o, &doc, &mc, &Silent).unwrap();
+        let on = &m.coefficients["turn_on_time_s"];
+        assert!((on.std / u - 1.0).abs() < 0.12, "{} {u}", on.std);
     }
 }

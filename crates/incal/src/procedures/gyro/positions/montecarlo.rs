@@ -12,14 +12,16 @@
 //!   K1 — the type-B input of the reduction; with K1 fitted, the fitted
 //!   K1 (it is estimated from these outputs);
 //! * `σ*` the sample noise as the reduction used it
-//!   ([`crate::montecarlo::sample_noise`]), drawn per trial.
+//!   ([`crate::montecarlo::sample_noise`], scaled by the lack of fit where
+//!   the fit failed its test, [`crate::montecarlo::with_lack_of_fit`]),
+//!   drawn per trial.
 
 use super::{
     calibrate, earth_rate_ia_deg_h, specific_force, GyroPositionsOptions, PositionObservation,
     ScaleFactor,
 };
 use crate::error::Result;
-use crate::montecarlo::{sample_noise, scaled_variance, Drawn, Synthesis};
+use crate::montecarlo::{sample_noise, scaled_variance, with_lack_of_fit, Drawn, Synthesis};
 use crate::sim::normal;
 
 /// The recipe of synthetic multi-position recordings for `obs` reduced
@@ -60,12 +62,15 @@ pub(super) fn synthesis(
         ScaleFactor::Fit => r.fit.sigma,
     };
     let stats: Vec<_> = r.positions.iter().map(|p| p.stats).collect();
-    let (s2, nu, noise) = sample_noise(
-        o.noise.sigma(),
-        &stats,
-        fit_sigma,
-        r.fit.dof as f64,
-        "position",
+    let (s2, nu, noise) = with_lack_of_fit(
+        sample_noise(
+            o.noise.sigma(),
+            &stats,
+            fit_sigma,
+            r.fit.dof as f64,
+            "position",
+        ),
+        &r.fit,
     );
     let mut drawn = vec![noise];
     if let Some((u, dof)) = k1_draw {
