@@ -314,7 +314,8 @@ fn write_csv(
     ));
     // Rows written straight into one buffer (no text per row or value).
     let width = header.len();
-    // The preamble is put in front at the end, in the room kept for it.
+    // The preamble is put in front at the end (`insert_str` moves the
+    // rows once; the spare capacity only spares a reallocation).
     const PREAMBLE_ROOM: usize = 1 << 14;
     let mut body = String::with_capacity(PREAMBLE_ROOM + first.samples.len() * (8 + 20 * width));
     let mut rows = 0usize;
