@@ -309,6 +309,21 @@ pub fn with_lack_of_fit(
     (s2, dof, row)
 }
 
+/// The sample noise of a fit of setting means in output units, as its u
+/// used it: [`sample_noise`] with the fit's residual σ and `n − p`, then
+/// [`with_lack_of_fit`].
+pub fn fit_noise(
+    known: Option<f64>,
+    stats: &[crate::estimation::PositionStats],
+    fit: &crate::estimation::Fit,
+    setting: &str,
+) -> (f64, f64, Drawn) {
+    with_lack_of_fit(
+        sample_noise(known, stats, fit.sigma, fit.dof as f64, setting),
+        fit,
+    )
+}
+
 mod section;
 pub use section::{
     McCoefficient, McCorrelation, McFailures, McHistogram, McReason, MonteCarlo, HISTOGRAM_BINS,

@@ -28,7 +28,7 @@ use super::gyro::{self, GyroConfig, GyroObservation, GyroOptions, GYRO_ANGLES};
 use super::input::GyroInput;
 use super::{angle_key, key_angle};
 use crate::error::Result;
-use crate::montecarlo::{sample_noise, scaled_variance, with_lack_of_fit, Synthesis};
+use crate::montecarlo::{fit_noise, scaled_variance, Synthesis};
 use crate::rigs::rate_table::face_factors;
 use crate::sim::normal;
 
@@ -45,16 +45,7 @@ pub(super) fn accel_synthesis(
         r.angles.value(ACCEL_ANGLES[1]).unwrap_or(0.0),
     );
     let stats: Vec<_> = r.positions.iter().map(|p| p.stats).collect();
-    let (s2, dof, noise) = with_lack_of_fit(
-        sample_noise(
-            o.noise.sigma(),
-            &stats,
-            r.fit.sigma,
-            r.fit.dof as f64,
-            "angle",
-        ),
-        &r.fit,
-    );
+    let (s2, dof, noise) = fit_noise(o.noise.sigma(), &stats, &r.fit, "angle");
     let k = o.scale_factor;
     let expected = move |beta: f64| {
         let f = face_factors(beta);
@@ -115,16 +106,7 @@ pub(super) fn gyro_synthesis(i: &GyroInput, o: &GyroOptions) -> Result<Synthesis
         })
         .collect();
     let stats: Vec<_> = r.positions.iter().map(|p| p.stats).collect();
-    let (s2, dof, noise) = with_lack_of_fit(
-        sample_noise(
-            o.noise.sigma(),
-            &stats,
-            r.fit.sigma,
-            r.fit.dof as f64,
-            "position",
-        ),
-        &r.fit,
-    );
+    let (s2, dof, noise) = fit_noise(o.noise.sigma(), &stats, &r.fit, "position");
     let records = i.records.clone();
     let draw = move |rng: &mut rand::rngs::ChaCha8Rng| -> Result<GyroInput> {
         let sigma = scaled_variance(rng, s2, dof).sqrt();
