@@ -358,3 +358,152 @@ fn gyro_misalignment_angles_propagate_linearly() {
         .count();
     assert_eq!(biases, 5, "{}", m["coefficients"]);
 }
+
+/// The centrifuge: the radii and coefficients come through the nonlinear
+/// radius regression and ECM geometry. The Monte Carlo u of each agrees
+/// with the GUM u, the type-B inputs (K0, K1, the fixture angle) are
+/// drawn, and the trials' mean of K_ip moves from the estimate by the
+/// reduction's own bias: what a noise-free recording of the same rig
+/// gives (the second-order ECM alignment error the GUM budget holds as a
+/// rectangular Δc2), 0.5 u at this noise.
+#[test]
+fn centrifuge_radii_and_coefficients_propagate() {
+    let sim = |noise: &str| {
+        ok(&run(&[
+            "simulate",
+            "centrifuge",
+            "--seed",
+            "5",
+            "--noise",
+            noise,
+        ]))
+    };
+    let reduce = |f: &std::path::Path, extra: &[&str]| {
+        let mut a = vec![
+            "centrifuge",
+            "--input",
+            p(f),
+            "--k0",
+            "1.2e-4",
+            "--k1",
+            "1.3",
+            "--radius-m",
+            "0.71",
+            "--latitude-deg",
+            "39.9",
+            "--json",
+        ];
+        a.extend_from_slice(extra);
+        json_of(&run(&a))
+    };
+    let clean = reduce(
+        &write_unique("mc-centrifuge0.csv", &sim("0")),
+        &["--noise", "1e-9"],
+    );
+    let bias = clean["coefficients"]["K_ip"]["value"].as_f64().unwrap() - 7e-6;
+    let f = write_unique("mc-centrifuge.csv", &sim("5e-7"));
+    let mc_args = [
+        "--u-k0",
+        "2e-6",
+        "--u-k1",
+        "1.3e-4",
+        "--alignment-tolerance-deg",
+        "0.01",
+        "--monte-carlo",
+        "1000",
+        "--seed",
+        "2",
+    ];
+    let doc = reduce(&f, &mc_args);
+    let mc = &doc["monte_carlo"];
+    assert_eq!(mc["failed"]["count"], 0, "{}", mc["failed"]);
+    let sources: Vec<&str> = mc["drawn"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d["source"].as_str().unwrap())
+        .collect();
+    assert!(sources.iter().any(|s| s.starts_with("u_k0")), "{sources:?}");
+    assert!(sources.contains(&"alignment_tolerance_deg"), "{sources:?}");
+    // M = 1000: the std of a std is about 2 %, of a mean 3 % of u.
+    let at = |name: &str| {
+        let c = &doc["coefficients"][name];
+        let m = &mc["coefficients"][name];
+        let u = c["u"].as_f64().unwrap();
+        let s = m["std"].as_f64().unwrap();
+        assert!((s / u - 1.0).abs() < 0.15, "{name}: MC {s} vs GUM {u}");
+        (
+            m["mean"].as_f64().unwrap() - c["value"].as_f64().unwrap(),
+            u,
+        )
+    };
+    for name in ["K2", "R_plus_m", "R_minus_m", "tilt_rad"] {
+        let (shift, u) = at(name);
+        assert!(
+            shift.abs() < 0.15 * u,
+            "{name}: MC mean off by {shift} (u {u})"
+        );
+    }
+    let (shift, u) = at("K_ip");
+    assert!(bias.abs() > 0.4 * u, "bias {bias}, u {u}");
+    assert!(
+        (shift - bias).abs() < 0.15 * u,
+        "K_ip: MC shift {shift}, bias {bias} (u {u})"
+    );
+}
+
+/// The stepped sine: every dwell goes through its sine fits and the model
+/// fit again; the reference's type-B terms are drawn per dwell, and the
+/// Monte Carlo u of the gain and the corner agree with the GUM u where
+/// the model is close to linear (the corner inside the dwells).
+#[test]
+fn response_sine_draws_each_dwell_and_the_reference() {
+    let sim = ok(&run(&[
+        "simulate",
+        "response-sine",
+        "--dwells-hz",
+        "2,5,10,20",
+        "--seconds-per-dwell",
+        "1",
+        "--rate-hz",
+        "200",
+        "--order",
+        "first",
+        "--corner-hz",
+        "8",
+        "--seed",
+        "5",
+    ]));
+    let f = write_unique("mc-sine.csv", &sim);
+    let doc = json_of(&run(&[
+        "response",
+        "sine",
+        "--input",
+        p(&f),
+        "--order",
+        "first",
+        "--u-reference-pct",
+        "0.5",
+        "--json",
+        "--monte-carlo",
+        "400",
+    ]));
+    let mc = &doc["monte_carlo"];
+    assert_eq!(mc["failed"]["count"], 0, "{}", mc["failed"]);
+    assert!(mc["drawn"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|d| d["source"] == "u_reference_pct, u_reference_phase_deg"));
+    assert!(mc["drawn"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|d| d["input"].as_str().unwrap().contains("interpolation error")));
+    for name in ["k_dc", "fc_hz", "bandwidth_hz", "bandwidth_interp_hz"] {
+        let c = &mc["coefficients"][name];
+        let u = doc["coefficients"][name]["u"].as_f64().unwrap();
+        let s = c["std"].as_f64().unwrap();
+        assert!((s / u - 1.0).abs() < 0.25, "{name}: MC {s} vs GUM {u}");
+    }
+}

@@ -207,6 +207,20 @@ pub struct Synthesis<I> {
     /// values its reduction reports (a test checks they are equal);
     /// `None`: the reduction itself runs.
     pub values: Option<ValuesFn<I>>,
+    /// Errors of the method itself, not of the recording (an
+    /// interpolation's error the GUM budget holds as a type-B term): each
+    /// is drawn once per trial and added to its coefficient's value.
+    pub method: Vec<MethodError>,
+}
+
+/// A method error of [`Synthesis::method`]: `N(0, u²)` added to the
+/// coefficient `coefficient` of every trial (units of the coefficient).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MethodError {
+    /// The coefficient's name in the document.
+    pub coefficient: String,
+    /// Its standard uncertainty as the GUM budget took it.
+    pub u: f64,
 }
 
 /// [`Synthesis::draw`]: one synthetic input from a trial's stream.
@@ -362,7 +376,7 @@ pub fn run<P: crate::procedures::Procedure>(
     let one = |k: u64| -> Trial {
         let mut rng = crate::sim::rng(crate::sim::trial_seed(mc.seed, k));
         let x = (synthesis.draw)(&mut rng).map_err(|e| e.to_string())?;
-        let got: Vec<(String, f64)> = match &synthesis.values {
+        let mut got: Vec<(String, f64)> = match &synthesis.values {
             Some(f) => f(&x).map_err(|e| e.to_string())?,
             None => P::reduce(&x, options, &crate::procedures::Silent)
                 .map_err(|e| e.to_string())?
@@ -371,6 +385,12 @@ pub fn run<P: crate::procedures::Procedure>(
                 .map(|(n, c)| (n.to_string(), c.value))
                 .collect(),
         };
+        for m in &synthesis.method {
+            let e = crate::sim::normal(&mut rng, m.u);
+            if let Some(g) = got.iter_mut().find(|g| g.0 == m.coefficient) {
+                g.1 += e;
+            }
+        }
         names
             .iter()
             .map(|n| match got.iter().find(|g| g.0 == *n) {

@@ -66,6 +66,7 @@ mod estimate;
 mod ia_station;
 pub mod input;
 mod joint_radius;
+mod montecarlo;
 mod options;
 pub mod plan;
 pub mod radius;
@@ -170,6 +171,16 @@ impl super::Procedure for CentrifugeTest {
         }
         doc.warnings.splice(0..0, warnings);
         Ok(doc)
+    }
+
+    /// Synthetic recordings from the reported coefficients and radii
+    /// ([`montecarlo`]'s module docs).
+    fn synthesis(
+        obs: &Vec<Observation>,
+        o: &CentrifugeOptions,
+        _: &ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Vec<Observation>>>> {
+        montecarlo::synthesis(obs, o).map(Some)
     }
 
     /// The options as used: K0, K1, their u and covariance as resolved.

@@ -76,6 +76,7 @@ pub(super) fn accel_synthesis(
         draw: Box::new(draw),
         drawn: vec![noise],
         values: None,
+        method: Vec::new(),
     })
 }
 
@@ -125,5 +126,6 @@ pub(super) fn gyro_synthesis(i: &GyroInput, o: &GyroOptions) -> Result<Synthesis
         draw: Box::new(draw),
         drawn: vec![noise],
         values: None,
+        method: Vec::new(),
     })
 }

@@ -111,6 +111,9 @@ pub struct ModelPart {
     pub scale: (f64, f64, &'static str),
     /// Model-free bandwidth `(value, u)` (Hz), or why there is none.
     pub interpolated: std::result::Result<(f64, f64), String>,
+    /// The interpolation's own error in that u (Hz, a method error; the
+    /// Monte Carlo draws it), 0 without a model-free bandwidth.
+    pub interpolation_u_hz: f64,
     /// Gain flatness `(max |dB|, u, at Hz, band Hz)`, if a point is in the band.
     pub flatness: Option<(f64, f64, f64, f64)>,
     /// Which bandwidth is the headline.
@@ -139,7 +142,9 @@ impl ModelPart {
         };
         let u_scale_db = 20.0 / std::f64::consts::LN_10 * scale.1 / scale.0.abs();
         let levels = levels_db(points, scale.0);
-        let interpolated = interpolated_bandwidth(&levels, u_scale_db);
+        let parts = interpolated_parts(&levels, u_scale_db);
+        let interpolation_u_hz = parts.as_ref().map_or(0.0, |p| p.2);
+        let interpolated = parts.map(|p| (p.0, p.1));
         if c.bandwidth == BandwidthMethod::Interpolated {
             if let Err(gap) = &interpolated {
                 return Err(Error::Unsupported(format!(
@@ -163,6 +168,7 @@ impl ModelPart {
             coefficients,
             scale,
             interpolated,
+            interpolation_u_hz,
             flatness,
             bandwidth: c.bandwidth,
             range_hz,
@@ -329,6 +335,15 @@ pub fn interpolated_bandwidth(
     levels: &[(f64, f64, f64)],
     u_scale_db: f64,
 ) -> std::result::Result<(f64, f64), String> {
+    interpolated_parts(levels, u_scale_db).map(|p| (p.0, p.1))
+}
+
+/// [`interpolated_bandwidth`] with the interpolation's own error `|Δ|`
+/// (Hz) apart: `(f, u, |Δ|)`.
+fn interpolated_parts(
+    levels: &[(f64, f64, f64)],
+    u_scale_db: f64,
+) -> std::result::Result<(f64, f64, f64), String> {
     let l = HALF_POWER_DB;
     let (Some(lo), Some(hi)) = (levels.first(), levels.last()) else {
         return Err("no dwells".into());
@@ -366,7 +381,7 @@ pub fn interpolated_bandwidth(
         + ((g0 + g1) * u_scale_db).powi(2)
         + u_interp.powi(2))
     .sqrt();
-    Ok((f, u))
+    Ok((f, u, u_interp))
 }
 
 /// The frequency between the first two points where the parabola in

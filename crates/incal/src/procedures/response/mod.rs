@@ -38,6 +38,7 @@ pub mod find;
 pub mod fit;
 pub mod input;
 pub mod model;
+mod montecarlo;
 pub mod plan;
 pub mod sim;
 pub mod sine;
@@ -469,5 +470,15 @@ impl super::Procedure for ResponseSine {
         let mut r = calibrate(&rec.dwells, o)?;
         r.warnings.extend(rec.warnings.iter().cloned());
         r.document()
+    }
+
+    /// Synthetic dwells from each dwell's fitted sines ([`montecarlo`]'s
+    /// module docs).
+    fn synthesis(
+        rec: &input::Recorded,
+        o: &ResponseOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<input::Recorded>>> {
+        montecarlo::synthesis(rec, o).map(Some)
     }
 }

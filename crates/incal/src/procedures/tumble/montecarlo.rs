@@ -95,5 +95,6 @@ pub(super) fn synthesis(
         draw: Box::new(draw),
         drawn,
         values: Some(Box::new(values)),
+        method: Vec::new(),
     })
 }

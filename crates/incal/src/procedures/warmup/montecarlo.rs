@@ -117,6 +117,7 @@ pub(super) fn synthesis(rec: &Record, o: &WarmupOptions) -> Result<Synthesis<Rec
         draw: Box::new(draw),
         drawn,
         values: Some(Box::new(values)),
+        method: Vec::new(),
     })
 }
 

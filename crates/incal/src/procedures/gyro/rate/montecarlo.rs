@@ -72,5 +72,6 @@ pub(super) fn synthesis(
         draw: Box::new(draw),
         drawn,
         values: None,
+        method: Vec::new(),
     })
 }
