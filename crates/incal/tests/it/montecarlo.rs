@@ -53,7 +53,7 @@ fn a_ratio_is_covered_by_the_monte_carlo_interval_not_the_gum_one() {
             continue; // K1 not observable: no result to judge
         };
         let mc = MonteCarloOptions {
-            trials: Trials::Fixed(2000),
+            trials: Trials::Fixed(1000),
             seed,
             digits: 1,
         };
