@@ -174,7 +174,7 @@ impl super::Procedure for CentrifugeTest {
     }
 
     /// Synthetic recordings from the reported coefficients and radii
-    /// ([`montecarlo`]'s module docs).
+    /// (this folder's `montecarlo.rs`).
     fn synthesis(
         obs: &Vec<Observation>,
         o: &CentrifugeOptions,

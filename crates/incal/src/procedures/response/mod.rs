@@ -472,8 +472,8 @@ impl super::Procedure for ResponseSine {
         r.document()
     }
 
-    /// Synthetic dwells from each dwell's fitted sines ([`montecarlo`]'s
-    /// module docs).
+    /// Synthetic dwells from each dwell's fitted sines (this folder's
+    /// `montecarlo.rs`).
     fn synthesis(
         rec: &input::Recorded,
         o: &ResponseOptions,
