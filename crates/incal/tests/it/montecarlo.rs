@@ -92,7 +92,7 @@ fn a_ratio_is_covered_by_the_monte_carlo_interval_not_the_gum_one() {
 /// Monte Carlo does not validate (docs/src/monte-carlo.md: 92 of 100).
 #[test]
 fn linear_procedures_are_validated() {
-    let seeds = tier::trials(3, 20) as u64;
+    let seeds = tier::trials(3, 10) as u64;
     let auto = |seed| MonteCarloOptions {
         trials: Trials::Auto,
         seed,
@@ -137,7 +137,7 @@ fn linear_procedures_are_validated() {
         let (s, _) = run::<GyroRate>(&robs, &ro, &rdoc, &auto(seed), &Silent).unwrap();
         rate_ok += usize::from(s.coefficients.values().all(|c| c.validated));
     }
-    // Three binomial standard deviations below the rate (20 seeds cannot
+    // Three binomial standard deviations below the rate (10 seeds cannot
     // tell 95 % from 90 %; the chapter's figures are over 100 seeds, by
     // scripts/monte-carlo-study.sh).
     let n = seeds as f64;

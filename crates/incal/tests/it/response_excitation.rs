@@ -52,7 +52,14 @@ fn check(
     window: Window,
     (seed, conservative): (u64, bool),
 ) {
-    let runs = monte_carlo(seed, trials(24, 300), |k| {
+    // A conservative u is only asserted from below: 100 seeds put a
+    // broken one (about 68 %) many binomial spreads under the band's 93 %.
+    let n = if conservative {
+        trials(24, 100)
+    } else {
+        trials(24, 300)
+    };
+    let runs = monte_carlo(seed, n, |k| {
         let s = s(k);
         let truth = s.truth_json().unwrap();
         let r = calibrate(&s.record().unwrap(), &options(window)).expect("reduces");
