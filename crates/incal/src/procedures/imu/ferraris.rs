@@ -227,6 +227,14 @@ impl crate::procedures::Procedure for Ferraris {
         }
         Ok(doc)
     }
+
+    fn synthesis(
+        input: &Self::Input,
+        o: &FerrarisOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Self::Input>>> {
+        super::montecarlo::ferraris_synthesis(input, o).map(Some)
+    }
 }
 
 /// The calibration in imucal's definitions.

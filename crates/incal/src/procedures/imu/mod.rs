@@ -31,6 +31,7 @@ pub mod detect;
 pub mod document;
 pub mod ferraris;
 pub mod input;
+mod montecarlo;
 pub mod multipos;
 pub mod plan;
 pub mod screen;

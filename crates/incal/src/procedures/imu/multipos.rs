@@ -234,6 +234,14 @@ impl crate::procedures::Procedure for Multipos {
         doc.warnings.extend(input.warnings.iter().cloned());
         Ok(doc)
     }
+
+    fn synthesis(
+        input: &Self::Input,
+        o: &MultiposSessionOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Self::Input>>> {
+        super::montecarlo::multipos_synthesis(input, o).map(Some)
+    }
 }
 
 /// Result of [`multipos`].
