@@ -211,6 +211,23 @@ pub struct Synthesis<I> {
     /// interpolation's error the GUM budget holds as a type-B term): each
     /// is drawn once per trial and added to its coefficient's value.
     pub method: Vec<MethodError>,
+    /// Type-B inputs that multiply coefficients after the reduction (a
+    /// stated reference the reduction scales by: the local field of a
+    /// magnetometer): each is drawn once per trial, after the method
+    /// errors, and multiplies its coefficients.
+    pub factors: Vec<Factor>,
+}
+
+/// A factor of [`Synthesis::factors`]: `1 + N(0, u_rel²)` multiplying
+/// every coefficient of `coefficients` in a trial (the reduction's output
+/// `y = F · c` with the reference `F` stated, its relative standard
+/// uncertainty `u_rel`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Factor {
+    /// The coefficients' names in the document.
+    pub coefficients: Vec<String>,
+    /// The reference's relative standard uncertainty.
+    pub u_rel: f64,
 }
 
 /// A method error of [`Synthesis::method`]: `N(0, u²)` added to the
@@ -389,6 +406,12 @@ pub fn run<P: crate::procedures::Procedure>(
             let e = crate::sim::normal(&mut rng, m.u);
             if let Some(g) = got.iter_mut().find(|g| g.0 == m.coefficient) {
                 g.1 += e;
+            }
+        }
+        for f in &synthesis.factors {
+            let k = 1.0 + crate::sim::normal(&mut rng, f.u_rel);
+            for g in got.iter_mut().filter(|g| f.coefficients.contains(&g.0)) {
+                g.1 *= k;
             }
         }
         names

@@ -167,6 +167,7 @@ pub(super) fn synthesis(
         drawn,
         values: None,
         method: Vec::new(),
+        factors: Vec::new(),
     })
 }
 

@@ -35,6 +35,7 @@ pub mod apply;
 pub mod document;
 pub mod fit;
 pub mod input;
+mod montecarlo;
 pub mod plan;
 pub mod sim;
 
@@ -662,5 +663,13 @@ impl crate::procedures::Procedure for Mag {
         _: &dyn crate::procedures::Progress,
     ) -> Result<crate::document::ResultDocument> {
         calibrate(rec, o)?.document()
+    }
+
+    fn synthesis(
+        rec: &Record,
+        o: &MagOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Record>>> {
+        montecarlo::synthesis(rec, o).map(Some)
     }
 }

@@ -77,6 +77,7 @@ pub(super) fn accel_synthesis(
         drawn: vec![noise],
         values: None,
         method: Vec::new(),
+        factors: Vec::new(),
     })
 }
 
@@ -127,5 +128,6 @@ pub(super) fn gyro_synthesis(i: &GyroInput, o: &GyroOptions) -> Result<Synthesis
         drawn: vec![noise],
         values: None,
         method: Vec::new(),
+        factors: Vec::new(),
     })
 }

@@ -155,5 +155,6 @@ pub(super) fn synthesis(rec: &Recorded, o: &ResponseOptions) -> Result<Synthesis
         drawn,
         values: None,
         method,
+        factors: Vec::new(),
     })
 }

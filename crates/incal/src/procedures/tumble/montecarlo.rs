@@ -96,5 +96,6 @@ pub(super) fn synthesis(
         drawn,
         values: Some(Box::new(values)),
         method: Vec::new(),
+        factors: Vec::new(),
     })
 }

@@ -118,6 +118,7 @@ pub(super) fn synthesis(rec: &Record, o: &WarmupOptions) -> Result<Synthesis<Rec
         drawn,
         values: Some(Box::new(values)),
         method: Vec::new(),
+        factors: Vec::new(),
     })
 }
 

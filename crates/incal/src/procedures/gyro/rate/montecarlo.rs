@@ -73,5 +73,6 @@ pub(super) fn synthesis(
         drawn,
         values: None,
         method: Vec::new(),
+        factors: Vec::new(),
     })
 }

@@ -126,5 +126,6 @@ pub(in crate::procedures::imu) fn ferraris_synthesis(
         drawn,
         values: None,
         method: Vec::new(),
+        factors: Vec::new(),
     })
 }

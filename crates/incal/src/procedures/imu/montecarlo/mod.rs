@@ -145,6 +145,7 @@ pub(super) fn multipos_synthesis(
         drawn,
         values: None,
         method: Vec::new(),
+        factors: Vec::new(),
     })
 }
 
