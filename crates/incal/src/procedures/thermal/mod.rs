@@ -40,6 +40,7 @@ pub mod apply;
 pub mod document;
 pub mod export;
 pub mod input;
+mod montecarlo;
 pub mod plan;
 pub mod ramp;
 pub mod sim;

@@ -164,6 +164,14 @@ impl ProcedureShape for Ramp {
     fn reduce(input: &RampInput, o: &RampOptions, _p: &dyn Progress) -> Result<ResultDocument> {
         reduce(input, o)
     }
+
+    fn synthesis(
+        input: &RampInput,
+        o: &RampOptions,
+        _: &ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<RampInput>>> {
+        super::montecarlo::synthesis(input, o).map(Some)
+    }
 }
 
 /// The blocks as the fit sees them, computed once for the reduction and
@@ -395,13 +403,15 @@ pub(crate) struct ChannelBlocks {
     pub(crate) extra: Vec<(String, Vec<f64>)>,
     /// Degrees of freedom of the pooled within-block variance.
     pub(crate) pooled_dof: usize,
+    /// The within-block variance pooled over the blocks.
+    pub(crate) variance: f64,
 }
 
 impl ChannelBlocks {
     /// Channel `c` (named `name`) of the blocks, with the blocks'
     /// temperatures `temp` and extra regressors `extra`; an error when
     /// the blocks show no scatter to weight the means.
-    fn of(
+    pub(crate) fn of(
         blocks: &[Block],
         c: usize,
         name: &str,
@@ -440,6 +450,7 @@ impl ChannelBlocks {
             t,
             extra,
             pooled_dof,
+            variance: var,
         })
     }
 }
