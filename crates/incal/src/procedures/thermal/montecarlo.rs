@@ -32,9 +32,12 @@ use crate::error::Result;
 use crate::montecarlo::{scaled_variance, with_lack_of_fit, Drawn, Synthesis, ValuesFn};
 use crate::sim::normal;
 
-/// The recording's extra regressors (hysteresis, `dT/dt`) as the
-/// reduction builds them.
-fn extras(input: &RampInput, o: &RampOptions) -> Result<(Vec<f64>, Vec<(String, Vec<f64>)>)> {
+/// Named regressor columns (the fit's extra terms).
+type Columns = Vec<(String, Vec<f64>)>;
+
+/// The blocks' temperatures and the recording's extra regressors
+/// (hysteresis, `dT/dt`) as the reduction builds them.
+fn extras(input: &RampInput, o: &RampOptions) -> Result<(Vec<f64>, Columns)> {
     let d = block_design(input, o.block_s)?;
     let mut extra = Vec::new();
     if both_branches(&d.temp_c, &d.branch) {
@@ -139,7 +142,7 @@ pub(super) fn synthesis(input: &RampInput, o: &RampOptions) -> Result<Synthesis<
 fn values(
     o: &RampOptions,
     temp: Vec<f64>,
-    extra: Vec<(String, Vec<f64>)>,
+    extra: Columns,
     degrees: Vec<usize>,
 ) -> ValuesFn<RampInput> {
     let t_ref_c = o.t_ref_c;
