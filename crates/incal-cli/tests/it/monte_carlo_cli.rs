@@ -122,11 +122,18 @@ fn refusals_name_the_option() {
         &["--mc-digits"],
     );
     // A procedure that draws no synthetic recordings yet says so.
-    let sim = ok(&run(&["simulate", "response-step", "--seed", "23"]));
-    let g = write_unique("mc-step.csv", &sim);
+    let sim = ok(&run(&["simulate", "response-broadband", "--seed", "23"]));
+    let g = write_unique("mc-broadband.csv", &sim);
     refused(
-        &run(&["response", "step", "--input", p(&g), "--monte-carlo", "200"]),
-        &["--monte-carlo", "response-step", "no Monte Carlo"],
+        &run(&[
+            "response",
+            "broadband",
+            "--input",
+            p(&g),
+            "--monte-carlo",
+            "200",
+        ]),
+        &["--monte-carlo", "response-broadband", "no Monte Carlo"],
     );
 }
 

@@ -34,6 +34,7 @@
 
 pub mod document;
 pub mod input;
+mod montecarlo;
 pub mod plan;
 pub mod sim;
 
@@ -438,5 +439,13 @@ impl crate::procedures::Procedure for ResponseStep {
         _: &dyn crate::procedures::Progress,
     ) -> Result<crate::document::ResultDocument> {
         calibrate(rec, o)?.document()
+    }
+
+    fn synthesis(
+        rec: &Record,
+        o: &StepOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Record>>> {
+        montecarlo::synthesis(rec, o).map(Some)
     }
 }
