@@ -192,7 +192,7 @@ pub fn six_position(e: [f64; 6], sensing_axis: usize) -> Result<SixPosition> {
 }
 
 /// Grouping key of a specific force (1e-9 g resolution).
-fn key(f: &Vector3<f64>) -> [i64; 3] {
+pub(super) fn key(f: &Vector3<f64>) -> [i64; 3] {
     [0, 1, 2].map(|k| (f[k] * 1e9).round() as i64)
 }
 

@@ -31,6 +31,7 @@
 pub mod calibrate;
 pub mod document;
 pub mod input;
+mod montecarlo;
 pub mod plan;
 pub mod sim;
 pub mod sim_options;
@@ -116,6 +117,14 @@ impl super::Procedure for GfimuCalibrate {
         let mut m = super::options_map(o)?;
         m.insert("geometry".into(), o.array.label().into());
         Ok(m)
+    }
+
+    fn synthesis(
+        samples: &Vec<StaticSample>,
+        o: &GfimuCalibrateOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Vec<StaticSample>>>> {
+        montecarlo::synthesis(samples, o).map(Some)
     }
 }
 
