@@ -355,6 +355,28 @@ pub fn fit_noise(
     )
 }
 
+/// A lower factor `L` with `L Lᵀ = c` for a symmetric positive
+/// semi-definite `c` (Cholesky, else the eigen-decomposition with negative
+/// eigenvalues clamped to 0): the factor [`correlated`] draws with.
+pub fn factor(c: &nalgebra::DMatrix<f64>) -> nalgebra::DMatrix<f64> {
+    if let Some(l) = c.clone().cholesky() {
+        return l.l();
+    }
+    let e = c.clone().symmetric_eigen();
+    let d = nalgebra::DMatrix::from_diagonal(&e.eigenvalues.map(|v| v.max(0.0).sqrt()));
+    &e.eigenvectors * d
+}
+
+/// One draw of `N(0, L Lᵀ)`: `L z` with `z ~ N(0, I)` (`l` from
+/// [`factor`]).
+pub fn correlated(rng: &mut ChaCha8Rng, l: &nalgebra::DMatrix<f64>) -> nalgebra::DVector<f64> {
+    let z = nalgebra::DVector::from_iterator(
+        l.ncols(),
+        (0..l.ncols()).map(|_| crate::sim::normal(rng, 1.0)),
+    );
+    l * z
+}
+
 mod section;
 pub use section::{
     McCoefficient, McCorrelation, McFailures, McHistogram, McReason, MonteCarlo, HISTOGRAM_BINS,

@@ -35,6 +35,7 @@
 pub mod document;
 pub mod fit;
 pub mod input;
+mod montecarlo;
 pub mod noise;
 pub mod plan;
 pub mod sim;
@@ -357,6 +358,17 @@ pub fn coefficient_name(term: &str, label: Option<&str>) -> String {
 
 /// Reduce a session (module docs).
 pub fn reduce(rec: &Record, o: &SensitivityOptions) -> Result<SensitivityResult> {
+    reduce_terms(rec, o, None)
+}
+
+/// [`reduce`], with each output column's terms fixed to those named in
+/// `terms` (in column order; the Monte Carlo's trials keep the terms the
+/// order rule chose for the recording) instead of the order rule.
+pub(crate) fn reduce_terms(
+    rec: &Record,
+    o: &SensitivityOptions,
+    terms: Option<&[Vec<String>]>,
+) -> Result<SensitivityResult> {
     o.validate()?;
     if rec.runs.is_empty() {
         return Err(Error::Unsupported("no runs".into()));
@@ -387,11 +399,13 @@ pub fn reduce(rec: &Record, o: &SensitivityOptions) -> Result<SensitivityResult>
             .iter()
             .map(|s| s.iter().sum::<f64>() / s.len() as f64)
             .collect();
-        let (nm, f) =
-            fit_column(&points, &spans, &model, &y).map_err(|e| match rec.columns.len() {
+        let fixed = terms.map(|t| t[j].as_slice());
+        let (nm, f) = fit_column(&points, &spans, &model, &y, fixed).map_err(|e| {
+            match rec.columns.len() {
                 1 => e,
                 _ => Error::Unsupported(format!("column '{column}': {e}")),
-            })?;
+            }
+        })?;
         let cov = nm.run_covariance(&spans)?;
         let label = labels[j].clone();
         let coefficients = reported(&f, label.as_deref())?;
@@ -423,12 +437,15 @@ pub fn reduce(rec: &Record, o: &SensitivityOptions) -> Result<SensitivityResult>
 /// leaves the run means a residual (so that a missing term is not taken
 /// for drift), the order rule with it; then the noise again under the
 /// terms the rule chose (their residuals tell the drift best) and the
-/// fit of those terms with it, the first pass's steps kept.
+/// fit of those terms with it, the first pass's steps kept. `fixed`:
+/// the terms named there instead of the order rule's (the noise chosen
+/// as for the rule's).
 fn fit_column(
     points: &[noise::AvarPoint],
     spans: &[noise::Span],
     model: &fit::Model,
     y: &[f64],
+    fixed: Option<&[String]>,
 ) -> Result<(noise::NoiseModel, fit::OutputFit)> {
     let mut richest = model.base.clone();
     for t in &model.extras {
@@ -444,7 +461,22 @@ fn fit_column(
         dof: satterthwaite(&first, spans, &model.base)?,
         ..first
     };
-    let f1 = fit::fit_output(model, y, &first.run_covariance(spans)?, first.dof)?;
+    let forced = fixed.map(|names| fit::Model {
+        base: model
+            .base
+            .iter()
+            .chain(&model.extras)
+            .filter(|t| names.contains(&t.name))
+            .cloned()
+            .collect(),
+        extras: Vec::new(),
+    });
+    let f1 = fit::fit_output(
+        forced.as_ref().unwrap_or(model),
+        y,
+        &first.run_covariance(spans)?,
+        first.dof,
+    )?;
     // The noise under the chosen terms, and under the base terms alone:
     // where the runs cannot tell a drift from a term of the order rule
     // the two differ, and the one giving the larger u is kept.
@@ -651,5 +683,13 @@ impl crate::procedures::Procedure for Sensitivity {
             .rig
             .get_or_insert_with(|| rec.kind.rig().to_string());
         crate::procedures::options_map(&settled)
+    }
+
+    fn synthesis(
+        rec: &Record,
+        o: &SensitivityOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Record>>> {
+        montecarlo::synthesis(rec, o).map(Some)
     }
 }

@@ -7,9 +7,8 @@ use rand::rngs::ChaCha8Rng;
 use super::super::ferraris::{ferraris, FerrarisOptions};
 use super::super::input::FerrarisSections;
 use super::super::{M3, V3};
-use super::{correlated, factor};
 use crate::error::Result;
-use crate::montecarlo::{Drawn, Synthesis};
+use crate::montecarlo::{correlated, factor, Drawn, Synthesis};
 use crate::sim::normal;
 use crate::timebase::TimeBase;
 

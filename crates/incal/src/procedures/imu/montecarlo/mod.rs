@@ -33,7 +33,6 @@
 //! static bias and g-sensitivity the reduction estimated) is scaled by
 //! `1 + ε` while the reduction still takes `A`.
 
-use nalgebra::{DMatrix, DVector};
 use rand::rngs::ChaCha8Rng;
 
 use super::input::MultiposInput;
@@ -171,24 +170,6 @@ fn redraw_channel(
         }
         st.cov[ch][ch] = sample_variance(rng, s2, n - 1.0);
     }
-}
-
-/// A lower factor `L` with `L Lᵀ = c` for a symmetric positive
-/// semi-definite `c` (Cholesky, else the eigen-decomposition with negative
-/// eigenvalues clamped to 0).
-fn factor(c: &DMatrix<f64>) -> DMatrix<f64> {
-    if let Some(l) = c.clone().cholesky() {
-        return l.l();
-    }
-    let e = c.clone().symmetric_eigen();
-    let d = DMatrix::from_diagonal(&e.eigenvalues.map(|v| v.max(0.0).sqrt()));
-    &e.eigenvectors * d
-}
-
-/// `L z` with `z ~ N(0, I)`.
-fn correlated(rng: &mut ChaCha8Rng, l: &DMatrix<f64>) -> DVector<f64> {
-    let z = DVector::from_iterator(l.ncols(), (0..l.ncols()).map(|_| normal(rng, 1.0)));
-    l * z
 }
 
 mod ferraris;
