@@ -146,6 +146,15 @@ impl MonteCarloOptions {
         }
     }
 
+    /// `trials` trials exactly, seeded from `seed`, default digits (1).
+    pub fn fixed(trials: u64, seed: u64) -> Self {
+        Self {
+            trials: Trials::Fixed(trials),
+            seed,
+            digits: default_digits(),
+        }
+    }
+
     /// Refuse a number of trials outside [`MIN_TRIALS`]…[`MAX_TRIALS`] and
     /// digits outside 1…3 (the key named as the front ends spell it).
     pub fn validate(&self) -> Result<()> {

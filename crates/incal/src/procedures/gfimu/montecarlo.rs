@@ -93,7 +93,7 @@ pub(super) fn synthesis(
 #[cfg(test)]
 mod tests {
     use super::super::GfimuCalibrate;
-    use crate::montecarlo::{run, MonteCarloOptions, Trials};
+    use crate::montecarlo::{run, MonteCarloOptions};
     use crate::procedures::gfimu::sim::{simulate_static, six_positions, GfimuTruth};
     use crate::procedures::{Procedure, Silent};
 
@@ -108,11 +108,7 @@ mod tests {
         let t = GfimuTruth::typical(&g, 1.5);
         let data = simulate_static(&g, &t, &six_positions(), 10, 2e-4, 5).unwrap();
         let doc = GfimuCalibrate::reduce(&data, &o, &Silent).unwrap();
-        let mc = MonteCarloOptions {
-            trials: Trials::Fixed(800),
-            seed: 4,
-            digits: 1,
-        };
+        let mc = MonteCarloOptions::fixed(800, 4);
         let (section, _) = run::<GfimuCalibrate>(&data, &o, &doc, &mc, &Silent).unwrap();
         assert_eq!(section.failed.count, 0);
         assert_eq!(section.drawn.len(), g.len());

@@ -212,18 +212,14 @@ fn drawn_rows(s_m: f64, dof: f64, rho_m: f64, u_rel: f64, acc: Option<(f64, f64)
 mod tests {
     use super::super::sim::MagSimOptions;
     use super::super::{Mag, MagOptions};
-    use crate::montecarlo::{run, MonteCarloOptions, Trials};
+    use crate::montecarlo::{run, MonteCarloOptions};
     use crate::procedures::{Procedure, Silent};
 
     /// `std / u` of every coefficient over `m` trials of one session.
     fn ratios(s: &MagSimOptions, o: &MagOptions, m: u64) -> Vec<(String, f64)> {
         let rec = s.record().unwrap();
         let doc = Mag::reduce(&rec, o, &Silent).unwrap();
-        let mc = MonteCarloOptions {
-            trials: Trials::Fixed(m),
-            seed: 3,
-            digits: 1,
-        };
+        let mc = MonteCarloOptions::fixed(m, 3);
         let (section, _) = run::<Mag>(&rec, o, &doc, &mc, &Silent).unwrap();
         assert_eq!(section.failed.count, 0, "{:?}", section.failed);
         doc.coefficients

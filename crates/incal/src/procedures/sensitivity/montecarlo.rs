@@ -181,7 +181,7 @@ pub(super) fn synthesis(rec: &Record, o: &SensitivityOptions) -> Result<Synthesi
 mod tests {
     use super::super::sim::SensitivitySimOptions;
     use super::super::Sensitivity;
-    use crate::montecarlo::{run, MonteCarloOptions, Trials};
+    use crate::montecarlo::{run, MonteCarloOptions};
     use crate::procedures::{Procedure, Silent};
 
     /// A vibration session under flicker (the run means correlated): the
@@ -205,11 +205,7 @@ mod tests {
         let rec = s.record().unwrap();
         let o = s.reduction();
         let doc = Sensitivity::reduce(&rec, &o, &Silent).unwrap();
-        let mc = MonteCarloOptions {
-            trials: Trials::Fixed(1000),
-            seed: 8,
-            digits: 1,
-        };
+        let mc = MonteCarloOptions::fixed(1000, 8);
         let (section, _) = run::<Sensitivity>(&rec, &o, &doc, &mc, &Silent).unwrap();
         assert_eq!(section.failed.count, 0, "{:?}", section.failed);
         for (name, c) in doc.coefficients.iter() {

@@ -27,7 +27,7 @@ use rand::rngs::ChaCha8Rng;
 
 use super::input::RampInput;
 use super::ramp::{block_design, both_branches, ChannelBlocks, RampOptions};
-use super::{fit_with_degree, Degree};
+use super::Degree;
 use crate::error::Result;
 use crate::montecarlo::{scaled_variance, with_lack_of_fit, Drawn, Synthesis, ValuesFn};
 use crate::sim::normal;
@@ -81,16 +81,7 @@ pub(super) fn synthesis(input: &RampInput, o: &RampOptions) -> Result<Synthesis<
     let mut drawn = Vec::new();
     for (c, name) in input.names.iter().enumerate() {
         let d = ChannelBlocks::of(&input.blocks, c, name, &temp, &extra)?;
-        let (f, _) = fit_with_degree(
-            name,
-            &d.t,
-            &d.y,
-            &d.u,
-            &d.extra,
-            o.t_ref_c,
-            o.degree,
-            d.pooled_dof as f64,
-        )?;
+        let (f, _) = d.fit(name, o.t_ref_c, o.degree)?;
         let within = d.variance;
         let row = Drawn::new(
             &format!("{name}: noise of each sample"),
@@ -150,16 +141,7 @@ fn values(
         let mut out = Vec::new();
         for (c, name) in x.names.iter().enumerate() {
             let d = ChannelBlocks::of(&x.blocks, c, name, &temp, &extra)?;
-            let (f, _) = fit_with_degree(
-                name,
-                &d.t,
-                &d.y,
-                &d.u,
-                &d.extra,
-                t_ref_c,
-                Degree::Fixed(degrees[c]),
-                d.pooled_dof as f64,
-            )?;
+            let (f, _) = d.fit(name, t_ref_c, Degree::Fixed(degrees[c]))?;
             out.extend((0..=f.degree).map(|k| (format!("{name}.c{k}"), f.values[k])));
         }
         Ok(out)
@@ -171,7 +153,7 @@ mod tests {
     use super::super::ramp::{Ramp, RampOptions};
     use super::super::sim::{ChannelTruth, RampSim};
     use super::super::Degree;
-    use crate::montecarlo::{run, MonteCarloOptions, Trials};
+    use crate::montecarlo::{run, MonteCarloOptions};
     use crate::procedures::noise::QuantityKind;
     use crate::procedures::{Procedure, Silent};
 
@@ -214,11 +196,7 @@ mod tests {
     fn polynomial_coefficients_propagate_linearly_and_the_fast_path_agrees() {
         let (input, o) = ramp(3);
         let doc = Ramp::reduce(&input, &o, &Silent).unwrap();
-        let mc = MonteCarloOptions {
-            trials: Trials::Fixed(800),
-            seed: 2,
-            digits: 1,
-        };
+        let mc = MonteCarloOptions::fixed(800, 2);
         let (section, _) = run::<Ramp>(&input, &o, &doc, &mc, &Silent).unwrap();
         assert_eq!(section.failed.count, 0);
         assert!(doc.coefficients.names().len() >= 2);

@@ -333,16 +333,7 @@ pub fn reduce(input: &RampInput, o: &RampOptions) -> Result<ResultDocument> {
     let mut selection = serde_json::Map::new();
     for (c, name) in input.names.iter().enumerate() {
         let d = ChannelBlocks::of(blocks, c, name, &temp, &extra)?;
-        let (f, trials) = fit_with_degree(
-            name,
-            &d.t,
-            &d.y,
-            &d.u,
-            &d.extra,
-            o.t_ref_c,
-            o.degree,
-            d.pooled_dof as f64,
-        )?;
+        let (f, trials) = d.fit(name, o.t_ref_c, o.degree)?;
         b.decision(
             DecisionCode::ModelDegree,
             super::document::degree_reason(name, &f, o.degree, &trials),
@@ -408,6 +399,26 @@ pub(crate) struct ChannelBlocks {
 }
 
 impl ChannelBlocks {
+    /// The polynomial of `degree` (or the degree rule) through these
+    /// points ([`fit_with_degree`], the pooled variance's dof as prior).
+    pub(crate) fn fit(
+        &self,
+        name: &str,
+        t_ref_c: f64,
+        degree: Degree,
+    ) -> Result<(super::PolyFit, Vec<super::DegreeTrial>)> {
+        fit_with_degree(
+            name,
+            &self.t,
+            &self.y,
+            &self.u,
+            &self.extra,
+            t_ref_c,
+            degree,
+            self.pooled_dof as f64,
+        )
+    }
+
     /// Channel `c` (named `name`) of the blocks, with the blocks'
     /// temperatures `temp` and extra regressors `extra`; an error when
     /// the blocks show no scatter to weight the means.

@@ -4,7 +4,7 @@
 
 use serde_json::json;
 
-use crate::montecarlo::{run, MonteCarloOptions, Trials};
+use crate::montecarlo::{run, MonteCarloOptions};
 use crate::procedures::imu::ferraris::Ferraris;
 use crate::procedures::imu::multipos::Multipos;
 use crate::procedures::imu::sim::ImuSimulator;
@@ -20,14 +20,6 @@ fn session<P: Procedure>(sim: serde_json::Value, o: &P::Options) -> P::Input {
     P::read(&mut rows, o).unwrap()
 }
 
-fn mc(trials: u64, seed: u64) -> MonteCarloOptions {
-    MonteCarloOptions {
-        trials: Trials::Fixed(trials),
-        seed,
-        digits: 1,
-    }
-}
-
 /// `std / u` of every coefficient named.
 fn ratios<P: Procedure>(
     input: &P::Input,
@@ -36,7 +28,7 @@ fn ratios<P: Procedure>(
     names: &[&str],
 ) -> Vec<(String, f64)> {
     let doc = P::reduce(input, o, &Silent).unwrap();
-    let (section, _) = run::<P>(input, o, &doc, &mc(m, 5), &Silent).unwrap();
+    let (section, _) = run::<P>(input, o, &doc, &MonteCarloOptions::fixed(m, 5), &Silent).unwrap();
     assert_eq!(section.failed.count, 0, "{:?}", section.failed);
     names
         .iter()

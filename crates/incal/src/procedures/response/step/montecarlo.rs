@@ -99,7 +99,7 @@ pub(super) fn synthesis(rec: &Record, o: &StepOptions) -> Result<Synthesis<Recor
 mod tests {
     use super::super::sim::StepSimOptions;
     use super::super::{ResponseStep, StepOptions};
-    use crate::montecarlo::{run, MonteCarloOptions, Trials};
+    use crate::montecarlo::{run, MonteCarloOptions};
     use crate::procedures::response::OrderChoice;
     use crate::procedures::{Procedure, Silent};
 
@@ -118,11 +118,7 @@ mod tests {
         let rec = s.record().unwrap().0;
         let o = StepOptions::default();
         let doc = ResponseStep::reduce(&rec, &o, &Silent).unwrap();
-        let mc = MonteCarloOptions {
-            trials: Trials::Fixed(400),
-            seed: 7,
-            digits: 1,
-        };
+        let mc = MonteCarloOptions::fixed(400, 7);
         let (section, _) = run::<ResponseStep>(&rec, &o, &doc, &mc, &Silent).unwrap();
         assert!(section.failed.count <= 4, "{:?}", section.failed);
         for (name, c) in doc.coefficients.iter() {
