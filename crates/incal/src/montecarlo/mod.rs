@@ -280,6 +280,23 @@ pub fn scaled_variance(rng: &mut ChaCha8Rng, s2: f64, dof: f64) -> f64 {
     }
 }
 
+/// `σ² χ²_ν / ν`: the sample variance of `ν + 1` white normal samples of
+/// variance `σ² = s2` (`s2` itself, at least 0, for `ν ≤ 0` or `s2 ≤
+/// 0`): a synthetic section's scatter drawn without its samples.
+pub fn sample_variance(rng: &mut ChaCha8Rng, s2: f64, nu: f64) -> f64 {
+    use rand_distr::Distribution;
+    if nu.is_nan() || nu <= 0.0 || s2 <= 0.0 {
+        return s2.max(0.0);
+    }
+    match rand_distr::ChiSquared::new(nu) {
+        Ok(c) => {
+            let x: f64 = c.sample(rng);
+            s2 * x / nu
+        }
+        Err(_) => s2,
+    }
+}
+
 /// The sample noise a procedure's trials draw, from what its reduction
 /// used: the known σ (`known`, infinite dof), else the pooled scatter of
 /// the settings (`stats`, `Σ(n − 1)` dof), else the fit's residual σ

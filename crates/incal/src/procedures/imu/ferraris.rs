@@ -440,7 +440,7 @@ fn section_stats(sections: &[Vec<[f64; 6]>; 9]) -> Result<(Vec<SectionStats>, Ve
 
 /// The gyro covariance pooled within the six static sections (raw
 /// units², weights n − 1).
-fn pooled_static_gyro(stats: &[SectionStats]) -> [[f64; 3]; 3] {
+pub(super) fn pooled_static_gyro(stats: &[SectionStats]) -> [[f64; 3]; 3] {
     let mut pooled = [[0.0; 3]; 3];
     let mut pooled_dof = 0.0;
     for st in &stats[..6] {

@@ -264,7 +264,9 @@ pub struct MultiposResult {
     pub options: MultiposOptions,
 }
 
-fn pooled(statics: &[StaticPosition], ch: usize) -> (f64, f64) {
+/// Channel `ch`'s variance pooled within the static positions and its
+/// degrees of freedom `Σ(n − 1)` (0 when there are none).
+pub(super) fn pooled(statics: &[StaticPosition], ch: usize) -> (f64, f64) {
     let mut s = 0.0;
     let mut d = 0.0;
     for p in statics {

@@ -356,6 +356,17 @@ pub fn coefficient_name(term: &str, label: Option<&str>) -> String {
     }
 }
 
+/// Each run's kept span, for the noise model's run covariance.
+pub(crate) fn spans(rec: &Record) -> Vec<noise::Span> {
+    rec.runs
+        .iter()
+        .map(|r| noise::Span {
+            start_s: r.start_s,
+            length_s: r.duration_s,
+        })
+        .collect()
+}
+
 /// Reduce a session (module docs).
 pub fn reduce(rec: &Record, o: &SensitivityOptions) -> Result<SensitivityResult> {
     reduce_terms(rec, o, None)
@@ -382,14 +393,7 @@ pub(crate) fn reduce_terms(
         )));
     }
     let labels = o.labels()?;
-    let spans: Vec<noise::Span> = rec
-        .runs
-        .iter()
-        .map(|r| noise::Span {
-            start_s: r.start_s,
-            length_s: r.duration_s,
-        })
-        .collect();
+    let spans = spans(rec);
     let mut columns = Vec::new();
     let mut warnings = Vec::new();
     for (j, column) in rec.columns.iter().enumerate() {

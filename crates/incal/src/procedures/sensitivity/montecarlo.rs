@@ -31,7 +31,7 @@ use nalgebra::DMatrix;
 use rand::rngs::ChaCha8Rng;
 
 use super::input::Record;
-use super::noise::{NoiseModel, Span};
+use super::noise::NoiseModel;
 use super::{reduce, reduce_terms, SensitivityOptions};
 use crate::error::Result;
 use crate::estimation::linear::VarianceSource;
@@ -137,14 +137,7 @@ pub(super) fn synthesis(rec: &Record, o: &SensitivityOptions) -> Result<Synthesi
             })
             .collect())
     };
-    let spans: Vec<Span> = rec
-        .runs
-        .iter()
-        .map(|r| Span {
-            start_s: r.start_s,
-            length_s: r.duration_s,
-        })
-        .collect();
+    let spans = super::spans(rec);
     let template = rec.clone();
     let draw = move |rng: &mut ChaCha8Rng| -> Result<Record> {
         let mut x = template.clone();

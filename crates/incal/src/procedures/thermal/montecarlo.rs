@@ -29,7 +29,9 @@ use super::input::RampInput;
 use super::ramp::{block_design, both_branches, ChannelBlocks, RampOptions};
 use super::Degree;
 use crate::error::Result;
-use crate::montecarlo::{scaled_variance, with_lack_of_fit, Drawn, Synthesis, ValuesFn};
+use crate::montecarlo::{
+    sample_variance, scaled_variance, with_lack_of_fit, Drawn, Synthesis, ValuesFn,
+};
 use crate::sim::normal;
 
 /// Named regressor columns (the fit's extra terms).
@@ -58,18 +60,6 @@ struct Channel {
     predicted: Vec<f64>,
     within: f64,
     means: (f64, f64),
-}
-
-/// `σ² χ²_ν`: a sum of squared deviations of `ν + 1` white samples.
-fn sum_of_squares(rng: &mut ChaCha8Rng, s2: f64, nu: usize) -> f64 {
-    use rand_distr::Distribution;
-    match rand_distr::ChiSquared::new(nu as f64) {
-        Ok(c) if nu > 0 => {
-            let x: f64 = c.sample(rng);
-            s2 * x
-        }
-        _ => 0.0,
-    }
 }
 
 /// The recipe of synthetic ramps for `input` reduced with `o` (module
@@ -114,7 +104,9 @@ pub(super) fn synthesis(input: &RampInput, o: &RampOptions) -> Result<Synthesis<
                 let a = &mut x.blocks[i].channels[c];
                 let n = a.n as f64;
                 a.mean = mean + normal(rng, (s2 / n).sqrt());
-                a.m2 = sum_of_squares(rng, ch.within * ratio, a.n - 1);
+                // The sum of squared deviations: ν times a sample variance.
+                let nu = (a.n - 1) as f64;
+                a.m2 = nu * sample_variance(rng, ch.within * ratio, nu);
             }
         }
         Ok(x)

@@ -4,7 +4,7 @@
 use nalgebra::DMatrix;
 use rand::rngs::ChaCha8Rng;
 
-use super::super::ferraris::{ferraris, FerrarisOptions};
+use super::super::ferraris::{ferraris, pooled_static_gyro, FerrarisOptions};
 use super::super::input::FerrarisSections;
 use super::super::{M3, V3};
 use crate::error::Result;
@@ -32,19 +32,7 @@ pub(in crate::procedures::imu) fn ferraris_synthesis(
     let r = ferraris(&input.0, &opts)?;
     let m = &r.matrices;
     let acc_cal = (m.k_a * m.r_a).try_inverse().unwrap_or_else(M3::zeros);
-    // The gyro covariance pooled within the static sections.
-    let mut pooled = DMatrix::<f64>::zeros(3, 3);
-    let mut dof = 0.0;
-    for st in &r.sections[..6] {
-        let w = (st.n - 1) as f64;
-        for j in 0..3 {
-            for k in 0..3 {
-                pooled[(j, k)] += w * st.cov[3 + j][3 + k];
-            }
-        }
-        dof += w;
-    }
-    pooled /= dof.max(1.0);
+    let pooled = pooled_static_gyro(&r.sections);
     let sections: Vec<Section> = r
         .sections
         .iter()
@@ -67,7 +55,7 @@ pub(in crate::procedures::imu) fn ferraris_synthesis(
                     for k in 0..3 {
                         c[(j, k)] = st.cov[j][k] / n;
                         // The integral's n S_g, per sample: S_g / n.
-                        c[(3 + j, 3 + k)] = pooled[(j, k)] / n;
+                        c[(3 + j, 3 + k)] = pooled[j][k] / n;
                     }
                 }
                 let a_cal = acc_cal * (st.acc() - m.b_a);

@@ -36,27 +36,11 @@
 use rand::rngs::ChaCha8Rng;
 
 use super::input::MultiposInput;
-use super::multipos::{multipos, MultiposSessionOptions};
+use super::multipos::{multipos, pooled, MultiposSessionOptions};
 use super::SectionStats;
 use crate::error::Result;
-use crate::montecarlo::{scaled_variance, with_lack_of_fit, Drawn, Synthesis};
+use crate::montecarlo::{sample_variance, scaled_variance, with_lack_of_fit, Drawn, Synthesis};
 use crate::sim::normal;
-
-/// `σ² χ²_ν / ν`: a sample variance of `ν + 1` white normal samples of
-/// variance `σ²` (`σ²` itself for `ν` ≤ 0).
-fn sample_variance(rng: &mut ChaCha8Rng, s2: f64, nu: f64) -> f64 {
-    use rand_distr::Distribution;
-    if nu.is_nan() || nu <= 0.0 || s2 <= 0.0 {
-        return s2.max(0.0);
-    }
-    match rand_distr::ChiSquared::new(nu) {
-        Ok(c) => {
-            let x: f64 = c.sample(rng);
-            s2 * x / nu
-        }
-        Err(_) => s2,
-    }
-}
 
 /// One channel's noise as the multi-position reduction used it: `(s², ν)`
 /// and the row of the table.
@@ -66,14 +50,9 @@ fn channel_noise(
     ch: usize,
     name: &str,
 ) -> (f64, f64, Drawn) {
-    let (mut s, mut d) = (0.0, 0.0);
-    for p in &input.statics {
-        let w = (p.stats.n - 1) as f64;
-        s += w * p.stats.cov[ch][ch];
-        d += w;
-    }
-    let (s2, dof, source) = if s > 0.0 && d > 0.0 {
-        (s / d, d, "the positions' pooled scatter".to_string())
+    let (pooled, d) = pooled(&input.statics, ch);
+    let (s2, dof, source) = if pooled > 0.0 && d > 0.0 {
+        (pooled, d, "the positions' pooled scatter".to_string())
     } else {
         (
             fit.sigma.powi(2),
