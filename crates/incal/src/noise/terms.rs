@@ -368,30 +368,7 @@ pub fn fit_terms(
     tau0: f64,
     n_phase: usize,
 ) -> Result<TermFit> {
-    let mut obs: Vec<Obs> = Vec::new();
-    for (i, &t) in taus.iter().enumerate() {
-        let (Some(s), Some(e)) = (oadev.value[i], oadev.edf[i]) else {
-            continue;
-        };
-        // τ below 4τ0 is left out: sampling distorts the noise there (the
-        // sampled flicker's Allan variance is 1.44× its continuous level at
-        // τ0, 1.15× at 2τ0, 1.05× at 4τ0; anti-alias filters do the same).
-        if t < 4.0 * tau0 - 1e-9 * tau0
-            || !(s > 0.0 && e > 0.0)
-            || obs.last().is_some_and(|o| t < 1.9 * o.tau)
-        {
-            continue;
-        }
-        let m = (t / tau0).round().max(1.0) as usize;
-        obs.push(Obs {
-            tau: t,
-            sigma: s,
-            edf: e,
-            alpha: alpha.get(i).copied().flatten(),
-            term_edf: TERM_ALPHA
-                .map(|a| super::edf::greenhall(a, 2, m, n_phase, true, false).filter(|v| *v > 0.0)),
-        });
-    }
+    let obs = observations(taus, oadev, alpha, tau0, n_phase);
     let mut cands: Vec<Active> = Vec::new();
     for mask in 1u32..32 {
         let set: Vec<usize> = (0..5).filter(|&j| mask >> j & 1 == 1).collect();
@@ -505,6 +482,83 @@ pub fn fit_terms(
     })
 }
 
+/// The terms `set` (indices into [`TERMS`]) fitted to an OADEV series as
+/// [`fit_terms`] fits each candidate set, without the choice among sets:
+/// every term of the set with its u (a Monte Carlo trial keeps the terms
+/// the record's own reduction chose). Refused when the set does not fit
+/// (a square at or below zero, fewer averaging times than terms).
+pub fn fit_terms_fixed(
+    taus: &[f64],
+    oadev: &DevSeries,
+    alpha: &[Option<i32>],
+    tau0: f64,
+    n_phase: usize,
+    set: &[usize],
+) -> Result<TermFit> {
+    let obs = observations(taus, oadev, alpha, tau0, n_phase);
+    let Some(a) = fit_set(&obs, set.to_vec())? else {
+        return Err(crate::error::Error::Unsupported(format!(
+            "the terms {} do not fit the Allan variance ({} averaging times)",
+            names(set),
+            obs.len()
+        )));
+    };
+    let mut terms = [None; 5];
+    for (k, &j) in a.active.iter().enumerate() {
+        let th = a.est.values()[k];
+        if th > 0.0 {
+            let v = th.sqrt();
+            terms[j] = Some(Term {
+                value: v,
+                u: a.est.u_at(k) / (2.0 * v),
+                dof: a.est.dof(),
+            });
+        }
+    }
+    Ok(TermFit {
+        terms,
+        squares: Some(a.est.clone()),
+        warnings: Vec::new(),
+        chi2: Some((a.chi2, a.dof)),
+    })
+}
+
+/// The observations of [`fit_terms`]: σ̂²(τ) about an octave apart from
+/// 4τ0 on, each with its EDF and the Greenhall EDF of every term's noise.
+fn observations(
+    taus: &[f64],
+    oadev: &DevSeries,
+    alpha: &[Option<i32>],
+    tau0: f64,
+    n_phase: usize,
+) -> Vec<Obs> {
+    let mut obs: Vec<Obs> = Vec::new();
+    for (i, &t) in taus.iter().enumerate() {
+        let (Some(s), Some(e)) = (oadev.value[i], oadev.edf[i]) else {
+            continue;
+        };
+        // τ below 4τ0 is left out: sampling distorts the noise there (the
+        // sampled flicker's Allan variance is 1.44× its continuous level at
+        // τ0, 1.15× at 2τ0, 1.05× at 4τ0; anti-alias filters do the same).
+        if t < 4.0 * tau0 - 1e-9 * tau0
+            || !(s > 0.0 && e > 0.0)
+            || obs.last().is_some_and(|o| t < 1.9 * o.tau)
+        {
+            continue;
+        }
+        let m = (t / tau0).round().max(1.0) as usize;
+        obs.push(Obs {
+            tau: t,
+            sigma: s,
+            edf: e,
+            alpha: alpha.get(i).copied().flatten(),
+            term_edf: TERM_ALPHA
+                .map(|a| super::edf::greenhall(a, 2, m, n_phase, true, false).filter(|v| *v > 0.0)),
+        });
+    }
+    obs
+}
+
 fn not_identified(j: usize, why: &str) -> Warning {
     let name = [
         "quantization Q",
@@ -579,6 +633,74 @@ pub fn bias_stability_segments(segs: &[&[f64]], tau0: f64, tau: f64) -> Option<T
         u: s / (2.0 * (n - 1) as f64).sqrt(),
         dof: (n - 1) as f64,
     })
+}
+
+/// A bias stability of [`bias_stability`] with the degrees of freedom its
+/// windows have under the fitted noise model `fit` (τ in s, `tau0` the
+/// sample period): window means of flicker or random-walk noise are
+/// correlated, so their sample variance is known with fewer than `n − 1`
+/// degrees of freedom. The means' covariance (generalized, for noises
+/// whose variance grows without bound) is
+/// `C(h) = [D((h+1)τ) + D(|h−1|τ) − 2D(hτ)]/(2τ²)` from the phase
+/// structure function of the identified terms, `D(t) = 2Q² (t > 0) + N²t
+/// − (B²/π) t² ln t − K²t³/6` (each term's `D` reproduces its Allan
+/// variance `4D(τ) − D(2τ) = 2τ²σ²(τ)` of IEEE Std 952 C.15 ff.; the
+/// ramp is deterministic and left out); `s² = yᵀAy/(n − 1)` with
+/// `A = I − 11ᵀ/n` has `ν = tr(AC)²/tr((AC)²)` (Satterthwaite on the
+/// quadratic form's exact moments, computed in O(n) on the Toeplitz `C`),
+/// and `u = s/√(2ν)`. White noise alone gives `n − 1`. The term unchanged
+/// when the model has no term or `ν` is not finite.
+pub fn with_model_dof(t: Term, fit: &TermFit, tau0: f64, tau: f64) -> Term {
+    let v = |j: usize| fit.terms[j].map_or(0.0, |t| t.value * t.value);
+    let (q2, n2, b2, k2) = (v(0), v(1), v(2), v(3));
+    if q2 + n2 + b2 + k2 <= 0.0 {
+        return t;
+    }
+    let tau = (tau / tau0).round().max(1.0) * tau0;
+    let d = |x: f64| -> f64 {
+        if x <= 0.0 {
+            return 0.0;
+        }
+        2.0 * q2 + n2 * x - b2 / std::f64::consts::PI * x * x * x.ln() - k2 * x.powi(3) / 6.0
+    };
+    let n = (t.dof + 1.0).round() as usize;
+    if n < 2 {
+        return t;
+    }
+    let g: Vec<f64> = (0..n)
+        .map(|h| {
+            let h = h as f64;
+            (d((h + 1.0) * tau) + d((h - 1.0).abs() * tau) - 2.0 * d(h * tau)) / (2.0 * tau * tau)
+        })
+        .collect();
+    let m = n as f64;
+    // Prefix sums P(k) = Σ_{h ≤ k} C(h); row sums C1_i = P(i) + P(n−1−i) − C(0).
+    let mut p = Vec::with_capacity(n);
+    let mut acc = 0.0;
+    for &x in &g {
+        acc += x;
+        p.push(acc);
+    }
+    let row = |i: usize| p[i] + p[n - 1 - i] - g[0];
+    let (mut tr_cc, mut one) = (m * g[0] * g[0], m * g[0]);
+    for (h, &x) in g.iter().enumerate().skip(1) {
+        let w = 2.0 * (m - h as f64);
+        tr_cc += w * x * x;
+        one += w * x;
+    }
+    let norm2: f64 = (0..n).map(|i| row(i).powi(2)).sum();
+    let tr_ac = m * g[0] - one / m;
+    let tr_acac = tr_cc - 2.0 * norm2 / m + one * one / (m * m);
+    let nu = tr_ac * tr_ac / tr_acac;
+    if !(nu.is_finite() && nu > 0.0 && tr_ac > 0.0) {
+        return t;
+    }
+    let nu = nu.min(t.dof);
+    Term {
+        value: t.value,
+        u: t.value / (2.0 * nu).sqrt(),
+        dof: nu,
+    }
 }
 
 /// The Allan deviation of the fitted model minus the data, relative, at

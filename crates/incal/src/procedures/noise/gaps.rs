@@ -71,7 +71,10 @@ pub(super) fn gapped(
     let bias_stability = o
         .stability_tau_s
         .iter()
-        .map(|&t| (t, terms::bias_stability_segments(&parts, build.tau0, t)))
+        .map(|&t| {
+            let b = terms::bias_stability_segments(&parts, build.tau0, t);
+            (t, b.map(|b| terms::with_model_dof(b, &fit, build.tau0, t)))
+        })
         .collect();
     let gauss_markov = o.markov.compute(&st, build.tau0);
     // The spectrum of the longest stretch (Welch's segments need no gap).

@@ -53,6 +53,7 @@ pub mod export;
 mod gaps;
 pub mod gauss_markov;
 pub mod input;
+mod montecarlo;
 pub mod plan;
 pub mod preprocess;
 pub mod sim;
@@ -591,6 +592,14 @@ impl Procedure for Noise {
         }
         Ok(doc)
     }
+
+    fn synthesis(
+        input: &Channels,
+        o: &NoiseOptions,
+        _: &ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Channels>>> {
+        montecarlo::synthesis(input, o).map(Some)
+    }
 }
 
 /// Reduce a mapped binary record: validate the options, select the
@@ -819,7 +828,10 @@ fn analyse(
         let bias_stability = o
             .stability_tau_s
             .iter()
-            .map(|&t| (t, terms::bias_stability(x, tau0, t)))
+            .map(|&t| {
+                let b = terms::bias_stability(x, tau0, t);
+                (t, b.map(|b| terms::with_model_dof(b, &fit, tau0, t)))
+            })
             .collect();
         let more = more_statistics(x, &sel.more, &st, &opts).map_err(in_channel(k))?;
         let spectrum = o.spectrum.compute(x, tau0).map_err(in_channel(k))?;

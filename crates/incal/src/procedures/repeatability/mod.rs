@@ -29,10 +29,13 @@
 //! information; equal u give the line above).
 //! A component estimated at or below zero is reported as 0 and flagged.
 //! Beside them the standards' simple formula over all runs,
-//! `B_r = √(Σ (x − x̄)²/(N − 1))`, with `N − 1` degrees of freedom.
+//! `B_r = √(Σ (x − x̄)²/(N − 1))`, its degrees of freedom those of the
+//! quadratic form under the fitted components ([`simple_dof`]: `N − 1`
+//! for independent runs, fewer where runs share a day).
 
 pub mod document;
 pub mod input;
+mod montecarlo;
 pub mod plan;
 pub mod sim;
 
@@ -256,7 +259,6 @@ pub fn analyse(runs: &[Run], o: &RepeatabilityOptions) -> Result<RepeatResult> {
     let x: Vec<f64> = runs.iter().map(|r| r.value).collect();
     let mean_all = x.iter().sum::<f64>() / n;
     let ss_all: f64 = x.iter().map(|v| (v - mean_all).powi(2)).sum();
-    let simple = Component::of(ss_all / (n - 1.0), n - 1.0, 0.0);
     let (turn_on, day, anova, mean) = match method {
         Method::Anova => {
             // E[MS_on] = σ²_on + Σ (1 − 1/T_d) u²_dt / (N − D): a day's
@@ -277,6 +279,15 @@ pub fn analyse(runs: &[Run], o: &RepeatabilityOptions) -> Result<RepeatResult> {
         }
         Method::Weighted => weighted(&x, &u2, &days, u2_mean, dated),
     };
+    // The simple formula's ν from the fitted components: the runs of a
+    // day share its effect, so they are not N independent values.
+    let on2 = turn_on.map_or(0.0, |c| c.sd * c.sd);
+    let day2 = day.map_or(0.0, |c| c.sd * c.sd);
+    let groups: Vec<Vec<f64>> = days
+        .iter()
+        .map(|(_, ix)| ix.iter().map(|&k| on2 + u2[k]).collect())
+        .collect();
+    let simple = Component::of(ss_all / (n - 1.0), simple_dof(&groups, day2), 0.0);
     Ok(RepeatResult {
         runs: runs.to_vec(),
         days,
@@ -290,6 +301,41 @@ pub fn analyse(runs: &[Run], o: &RepeatabilityOptions) -> Result<RepeatResult> {
         anova,
         options: o.clone(),
     })
+}
+
+/// The degrees of freedom of the simple formula's `s² = Σ (x − x̄)²/(N −
+/// 1)` when the runs of a day share a day effect of variance `day_var`
+/// and run `i` has its own variance `D_i` (`groups`: each day's `D_i`,
+/// the turn-on component plus the run's u²): `s²` is the quadratic form
+/// `xᵀAx/(N − 1)`, `A = I − 11ᵀ/N`, of normal runs with covariance
+/// `Σ = diag(D) + day_var·B` (`B` ones within a day), so `ν = 2E²/Var =
+/// tr(AΣ)²/tr((AΣ)²)` (Satterthwaite, JCGM 100 G.4, on the quadratic
+/// form's exact mean and variance). Computed in O(N) from
+/// `tr(AΣ) = tr Σ − 1ᵀΣ1/N` and
+/// `tr((AΣ)²) = tr(Σ²) − 2|Σ1|²/N + (1ᵀΣ1)²/N²`. Independent runs of
+/// equal variance give `N − 1`.
+pub fn simple_dof(groups: &[Vec<f64>], day_var: f64) -> f64 {
+    let n: f64 = groups.iter().map(|g| g.len() as f64).sum();
+    let (mut tr, mut tr2, mut one, mut norm2) = (0.0, 0.0, 0.0, 0.0);
+    for g in groups {
+        let t = g.len() as f64;
+        for &d in g {
+            tr += d + day_var;
+            tr2 += d * d + 2.0 * day_var * d;
+            let s = d + day_var * t;
+            norm2 += s * s;
+            one += d;
+        }
+        tr2 += day_var * day_var * t * t;
+        one += day_var * t * t;
+    }
+    let a = tr - one / n;
+    let b = tr2 - 2.0 * norm2 / n + one * one / (n * n);
+    if a > 0.0 && b > 0.0 {
+        a * a / b
+    } else {
+        n - 1.0
+    }
 }
 
 type Parts = (
@@ -517,5 +563,13 @@ impl crate::procedures::Procedure for Repeatability {
         _: &dyn crate::procedures::Progress,
     ) -> Result<crate::document::ResultDocument> {
         analyse(runs, o)?.document()
+    }
+
+    fn synthesis(
+        runs: &Vec<Run>,
+        o: &RepeatabilityOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Vec<Run>>>> {
+        montecarlo::synthesis(runs, o).map(Some)
     }
 }

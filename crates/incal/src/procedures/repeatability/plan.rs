@@ -104,7 +104,13 @@ pub fn plan_document(o: &RepeatPlanOptions) -> Result<PlanDocument> {
     doc.predict("day_repeatability", u_sd(v, nu), "output")?;
     doc.predict(
         "repeatability_simple",
-        u_sd(o.day_sd.powi(2) + ms_on, n - 1.0),
+        u_sd(
+            o.day_sd.powi(2) + ms_on,
+            super::simple_dof(
+                &vec![vec![ms_on; o.turn_ons_per_day]; o.days],
+                o.day_sd.powi(2),
+            ),
+        ),
         "output",
     )?;
     doc.note("predicted from the expected mean squares of the nested analysis of variance: u(s) = s/sqrt(2 nu), nu by Satterthwaite");

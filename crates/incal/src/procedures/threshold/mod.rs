@@ -55,6 +55,7 @@
 pub mod document;
 pub mod input;
 pub mod levels;
+mod montecarlo;
 pub mod plan;
 pub mod sim;
 
@@ -654,6 +655,14 @@ impl crate::procedures::Procedure for Threshold {
         _: &dyn crate::procedures::Progress,
     ) -> Result<crate::document::ResultDocument> {
         calibrate(rec, o)?.document()
+    }
+
+    fn synthesis(
+        rec: &Record,
+        o: &ThresholdOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Record>>> {
+        montecarlo::synthesis(rec, o).map(Some)
     }
 }
 
