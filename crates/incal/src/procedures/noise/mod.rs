@@ -596,9 +596,9 @@ impl Procedure for Noise {
     fn synthesis(
         input: &Channels,
         o: &NoiseOptions,
-        _: &ResultDocument,
+        doc: &ResultDocument,
     ) -> Result<Option<crate::montecarlo::Synthesis<Channels>>> {
-        montecarlo::synthesis(input, o).map(Some)
+        montecarlo::synthesis(input, o, doc).map(Some)
     }
 }
 

@@ -40,7 +40,11 @@ struct Model {
 
 /// The recipe of synthetic noise records for `input` reduced with `o`
 /// (module docs).
-pub(super) fn synthesis(input: &Channels, o: &NoiseOptions) -> Result<Synthesis<Channels>> {
+pub(super) fn synthesis(
+    input: &Channels,
+    o: &NoiseOptions,
+    doc: &crate::document::ResultDocument,
+) -> Result<Synthesis<Channels>> {
     let (quantity, unit, factor) = o.units()?;
     let pre = match preprocess::apply(input, &o.preprocess)? {
         Some((c, _, _)) => c,
@@ -126,7 +130,7 @@ pub(super) fn synthesis(input: &Channels, o: &NoiseOptions) -> Result<Synthesis<
     Ok(Synthesis {
         draw: Box::new(draw),
         drawn,
-        values: Some(values(o, sets)?),
+        values: Some(values(o, sets, doc)?),
         method: Vec::new(),
         factors: Vec::new(),
     })
@@ -134,8 +138,14 @@ pub(super) fn synthesis(input: &Channels, o: &NoiseOptions) -> Result<Synthesis<
 
 /// A trial's coefficients: the reduction without preprocessing, OADEV
 /// only, each channel's terms fitted as the set `sets` (module docs).
-fn values(o: &NoiseOptions, sets: Vec<Vec<usize>>) -> Result<ValuesFn<Channels>> {
+fn values(
+    o: &NoiseOptions,
+    sets: Vec<Vec<usize>>,
+    doc: &crate::document::ResultDocument,
+) -> Result<ValuesFn<Channels>> {
     let (quantity, unit, factor) = o.units()?;
+    let to_stability = quantity.units().stability.1;
+    let names: Vec<String> = doc.coefficients.names();
     let shown = o.selection()?.shown;
     let o = NoiseOptions {
         deviations: "oadev".into(),
@@ -172,11 +182,31 @@ fn values(o: &NoiseOptions, sets: Vec<Vec<usize>>) -> Result<ValuesFn<Channels>>
             };
         }
         let doc = document::document(&shown, &results, &quantity, &unit, o.confidence, false)?;
-        Ok(doc
+        let mut got: Vec<(String, f64)> = doc
             .coefficients
             .iter()
             .map(|(n, c)| (n.to_string(), c.value))
-            .collect())
+            .collect();
+        // The curve's minimum where the recording's had one inside the
+        // grid: a trial whose minimum falls at an end reports that end.
+        for r in &results {
+            let name = format!("{}.adev_min", r.name);
+            if names.contains(&name) && !got.iter().any(|g| g.0 == name) {
+                let low = r
+                    .stability
+                    .oadev
+                    .value
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .filter(|v| v.is_finite() && *v > 0.0)
+                    .reduce(f64::min);
+                if let Some(v) = low {
+                    got.push((name, v * to_stability));
+                }
+            }
+        }
+        Ok(got)
     }))
 }
 
@@ -222,7 +252,7 @@ mod tests {
     fn the_values_are_the_reduction_s_on_the_recording() {
         let (x, o) = record(4);
         let doc = Noise::reduce(&x, &o, &Silent).unwrap();
-        let s = super::synthesis(&x, &o).unwrap();
+        let s = super::synthesis(&x, &o, &doc).unwrap();
         let got = (s.values.unwrap())(&x).unwrap();
         assert_eq!(got.len(), doc.coefficients.len());
         for (n, v) in got {

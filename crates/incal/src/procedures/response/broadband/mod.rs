@@ -29,6 +29,7 @@
 
 pub mod document;
 pub mod input;
+mod montecarlo;
 pub mod plan;
 pub mod sim;
 pub use crate::spectral::welch;
@@ -469,5 +470,13 @@ impl crate::procedures::Procedure for ResponseBroadband {
         _: &dyn crate::procedures::Progress,
     ) -> Result<crate::document::ResultDocument> {
         calibrate(rec, o)?.document()
+    }
+
+    fn synthesis(
+        rec: &Record,
+        o: &BroadbandOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Record>>> {
+        montecarlo::synthesis(rec, o).map(Some)
     }
 }
