@@ -122,18 +122,32 @@ fn refusals_name_the_option() {
         &["--mc-digits"],
     );
     // A procedure that draws no synthetic recordings yet says so.
-    let sim = ok(&run(&["simulate", "response-broadband", "--seed", "23"]));
-    let g = write_unique("mc-broadband.csv", &sim);
+    let sim = ok(&run(&[
+        "simulate",
+        "imu",
+        "--sequence",
+        "random",
+        "--orientations",
+        "24",
+        "--init-static-s",
+        "10",
+        "--no-g-sensitivity",
+    ]));
+    let g = write_unique("mc-autocal.csv", &sim);
     refused(
         &run(&[
-            "response",
-            "broadband",
+            "imu",
+            "autocal",
             "--input",
             p(&g),
+            "--rate-hz",
+            "100",
+            "--init-static-s",
+            "10",
             "--monte-carlo",
             "200",
         ]),
-        &["--monte-carlo", "response-broadband", "no Monte Carlo"],
+        &["--monte-carlo", "imu-autocal", "no Monte Carlo"],
     );
 }
 

@@ -72,52 +72,14 @@ pub(super) fn synthesis(rec: &Recorded, o: &ResponseOptions) -> Result<Synthesis
         "σ = the dwell fit's residual σ".into(),
         "each dwell's sine fits",
     )];
-    let m = &o.model;
-    let (pct, phase) = (
-        m.u_reference_pct / 100.0,
-        m.u_reference_phase_deg.to_radians(),
-    );
-    if pct > 0.0 || phase > 0.0 {
-        drawn.push(Drawn::new(
-            "reference amplitude and phase at each dwell",
-            "normal",
-            format!(
-                "u = {} %, {} deg",
-                m.u_reference_pct, m.u_reference_phase_deg
-            ),
-            "u_reference_pct, u_reference_phase_deg",
-        ));
-    }
-    let k1_rel = match (m.k1, m.u_k1) {
-        (Some(k), Some(u)) if k != 0.0 && u > 0.0 => u / k.abs(),
-        _ => 0.0,
-    };
-    if k1_rel > 0.0 {
-        drawn.push(Drawn::new(
-            "scale factor k1 (one per trial; the gains are normalised by the stated k1)",
-            "normal",
-            format!("u = {:.3e} relative", k1_rel),
-            "u_k1",
-        ));
-    }
-    // The model-free bandwidth's interpolation error (a method error).
-    let mut method = Vec::new();
-    if r.part.interpolated.is_ok() && r.part.interpolation_u_hz > 0.0 {
-        let name = match m.bandwidth {
-            super::BandwidthMethod::Interpolated => "bandwidth_hz",
-            super::BandwidthMethod::Model => "bandwidth_interp_hz",
-        };
-        method.push(MethodError {
-            coefficient: name.into(),
-            u: r.part.interpolation_u_hz,
-        });
-        drawn.push(Drawn::new(
-            "the model-free bandwidth's interpolation error (one per trial, added to it)",
-            "normal",
-            format!("u = {:.3e} Hz", r.part.interpolation_u_hz),
-            "the curvature of the dwells around −3 dB (the GUM's type B)",
-        ));
-    }
+    let TypeB {
+        pct,
+        phase,
+        k1_rel,
+        drawn: more,
+        method,
+    } = type_b(&o.model, &r.part, "at each dwell", "the dwells");
+    drawn.extend(more);
     let warnings = rec.warnings.clone();
     let draw = move |rng: &mut rand::rngs::ChaCha8Rng| -> Result<Recorded> {
         let scale = 1.0 + normal(rng, k1_rel);
@@ -157,4 +119,79 @@ pub(super) fn synthesis(rec: &Recorded, o: &ResponseOptions) -> Result<Synthesis
         method,
         factors: Vec::new(),
     })
+}
+
+/// The type-B inputs the stepped sine and the broadband record share: the
+/// reference's relative amplitude and phase (radians) u, a stated `k1`'s
+/// relative u, their rows of the table (`per`: how often the reference's
+/// error is drawn; `around`: what the interpolation's curvature is read
+/// from) and the model-free bandwidth's interpolation error as a method
+/// error.
+pub(super) struct TypeB {
+    pub pct: f64,
+    pub phase: f64,
+    pub k1_rel: f64,
+    pub drawn: Vec<Drawn>,
+    pub method: Vec<MethodError>,
+}
+
+/// [`TypeB`] of the model options `m` and the model part `part`.
+pub(super) fn type_b(
+    m: &super::fit::ModelOptions,
+    part: &super::fit::ModelPart,
+    per: &str,
+    around: &str,
+) -> TypeB {
+    let mut drawn = Vec::new();
+    let (pct, phase) = (
+        m.u_reference_pct / 100.0,
+        m.u_reference_phase_deg.to_radians(),
+    );
+    if pct > 0.0 || phase > 0.0 {
+        drawn.push(Drawn::new(
+            &format!("reference amplitude and phase {per}"),
+            "normal",
+            format!(
+                "u = {} %, {} deg",
+                m.u_reference_pct, m.u_reference_phase_deg
+            ),
+            "u_reference_pct, u_reference_phase_deg",
+        ));
+    }
+    let k1_rel = match (m.k1, m.u_k1) {
+        (Some(k), Some(u)) if k != 0.0 && u > 0.0 => u / k.abs(),
+        _ => 0.0,
+    };
+    if k1_rel > 0.0 {
+        drawn.push(Drawn::new(
+            "scale factor k1 (one per trial; the gains are normalised by the stated k1)",
+            "normal",
+            format!("u = {:.3e} relative", k1_rel),
+            "u_k1",
+        ));
+    }
+    let mut method = Vec::new();
+    if part.interpolated.is_ok() && part.interpolation_u_hz > 0.0 {
+        let name = match m.bandwidth {
+            super::BandwidthMethod::Interpolated => "bandwidth_hz",
+            super::BandwidthMethod::Model => "bandwidth_interp_hz",
+        };
+        method.push(MethodError {
+            coefficient: name.into(),
+            u: part.interpolation_u_hz,
+        });
+        drawn.push(Drawn::new(
+            "the model-free bandwidth's interpolation error (one per trial, added to it)",
+            "normal",
+            format!("u = {:.3e} Hz", part.interpolation_u_hz),
+            &format!("the curvature of {around} around −3 dB (the GUM's type B)"),
+        ));
+    }
+    TypeB {
+        pct,
+        phase,
+        k1_rel,
+        drawn,
+        method,
+    }
 }

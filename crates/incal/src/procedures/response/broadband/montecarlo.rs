@@ -32,10 +32,11 @@ use realfft::num_complex::Complex64;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 
 use super::super::model;
+use super::super::montecarlo::{type_b, TypeB};
 use super::input::Record;
 use super::{calibrate, BroadbandOptions};
 use crate::error::{Error, Result};
-use crate::montecarlo::{Drawn, MethodError, Synthesis};
+use crate::montecarlo::{Drawn, Synthesis};
 use crate::sim::normal;
 
 /// What a trial needs, computed once.
@@ -110,27 +111,15 @@ pub(super) fn synthesis(rec: &Record, o: &BroadbandOptions) -> Result<Synthesis<
     let shape: Vec<f64> = (0..clean.len())
         .map(|k| (interpolate(&s.freq_hz, pnn, k as f64 * df) * rec.rate_hz / 2.0).sqrt())
         .collect();
-    let m = &o.model;
-    let (pct, phase) = (
-        m.u_reference_pct / 100.0,
-        m.u_reference_phase_deg.to_radians(),
-    );
-    let k1_rel = match (m.k1, m.u_k1) {
-        (Some(k), Some(u)) if k != 0.0 && u > 0.0 => u / k.abs(),
-        _ => 0.0,
-    };
-    let drawn = drawn(&r, m, pct, phase, k1_rel);
-    let mut method = Vec::new();
-    if r.part.interpolated.is_ok() && r.part.interpolation_u_hz > 0.0 {
-        let name = match m.bandwidth {
-            super::super::BandwidthMethod::Interpolated => "bandwidth_hz",
-            super::super::BandwidthMethod::Model => "bandwidth_interp_hz",
-        };
-        method.push(MethodError {
-            coefficient: name.into(),
-            u: r.part.interpolation_u_hz,
-        });
-    }
+    let TypeB {
+        pct,
+        phase,
+        k1_rel,
+        drawn: more,
+        method,
+    } = type_b(&o.model, &r.part, "(one per trial)", "the bins");
+    let mut drawn = drawn(&r);
+    drawn.extend(more);
     let recipe = Recipe {
         clean,
         shape,
@@ -208,15 +197,9 @@ fn interpolate(xs: &[f64], ys: &[f64], f: f64) -> f64 {
     ys[k - 1] + t * (ys[k] - ys[k - 1])
 }
 
-/// The table of what is drawn.
-fn drawn(
-    r: &super::BroadbandResult,
-    m: &super::super::fit::ModelOptions,
-    pct: f64,
-    phase: f64,
-    k1_rel: f64,
-) -> Vec<Drawn> {
-    let mut drawn = vec![
+/// The rows of the table of what is drawn for the output itself.
+fn drawn(r: &super::BroadbandResult) -> Vec<Drawn> {
+    vec![
         Drawn::new(
             "the output at every sample",
             "the fitted model applied to the recorded reference",
@@ -233,35 +216,7 @@ fn drawn(
             format!("{} bins", r.spectra.freq_hz.len()),
             "the recording's residual from the model",
         ),
-    ];
-    if pct > 0.0 || phase > 0.0 {
-        drawn.push(Drawn::new(
-            "reference amplitude and phase (one per trial)",
-            "normal",
-            format!(
-                "u = {} %, {} deg",
-                m.u_reference_pct, m.u_reference_phase_deg
-            ),
-            "u_reference_pct, u_reference_phase_deg",
-        ));
-    }
-    if k1_rel > 0.0 {
-        drawn.push(Drawn::new(
-            "scale factor k1 (one per trial; the gains are normalised by the stated k1)",
-            "normal",
-            format!("u = {k1_rel:.3e} relative"),
-            "u_k1",
-        ));
-    }
-    if r.part.interpolated.is_ok() && r.part.interpolation_u_hz > 0.0 {
-        drawn.push(Drawn::new(
-            "the model-free bandwidth's interpolation error (one per trial, added to it)",
-            "normal",
-            format!("u = {:.3e} Hz", r.part.interpolation_u_hz),
-            "the curvature of the bins around −3 dB (the GUM's type B)",
-        ));
-    }
-    drawn
+    ]
 }
 
 #[cfg(test)]
