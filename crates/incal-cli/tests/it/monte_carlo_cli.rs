@@ -121,34 +121,6 @@ fn refusals_name_the_option() {
         &with(&["--monte-carlo", "200", "--mc-digits", "5"]),
         &["--mc-digits"],
     );
-    // A procedure that draws no synthetic recordings yet says so.
-    let sim = ok(&run(&[
-        "simulate",
-        "imu",
-        "--sequence",
-        "random",
-        "--orientations",
-        "24",
-        "--init-static-s",
-        "10",
-        "--no-g-sensitivity",
-    ]));
-    let g = write_unique("mc-autocal.csv", &sim);
-    refused(
-        &run(&[
-            "imu",
-            "autocal",
-            "--input",
-            p(&g),
-            "--rate-hz",
-            "100",
-            "--init-static-s",
-            "10",
-            "--monte-carlo",
-            "200",
-        ]),
-        &["--monte-carlo", "imu-autocal", "no Monte Carlo"],
-    );
 }
 
 /// The rate-transfer test draws the table's rate error once per trial:

@@ -408,6 +408,14 @@ impl crate::procedures::Procedure for Autocal {
         }
         Ok(doc)
     }
+
+    fn synthesis(
+        input: &Self::Input,
+        o: &AutocalSessionOptions,
+        _: &crate::document::ResultDocument,
+    ) -> Result<Option<crate::montecarlo::Synthesis<Self::Input>>> {
+        super::montecarlo::autocal_synthesis(input, o).map(Some)
+    }
 }
 
 /// Names of the accelerometer parameters.

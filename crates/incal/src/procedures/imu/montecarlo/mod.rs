@@ -151,7 +151,9 @@ fn redraw_channel(
     }
 }
 
+mod autocal;
 mod ferraris;
+pub(super) use autocal::autocal_synthesis;
 pub(super) use ferraris::ferraris_synthesis;
 
 #[cfg(test)]
