@@ -332,6 +332,12 @@ pub fn run(a: &Args) -> CliResult<()> {
     };
     // Options first (a bad option is named before the file is opened).
     <Noise as incal::procedures::Procedure>::validate(&options).map_err(core)?;
+    if a.result.monte_carlo.is_some() {
+        return Err(core(incal::Error::InvalidOption {
+            key: "monte_carlo".into(),
+            message: "a binary record is analysed mapped, in place: the Monte Carlo draws from a CSV record (export the channels to CSV, or analyse a stretch of it)".into(),
+        }));
+    }
     let read = a.read.options()?;
     if read.segment.is_some() || read.header_line.is_some() {
         return Err(crate::error::CliError::Input(

@@ -84,6 +84,14 @@ pub fn run(a: &RepeatArgs) -> CliResult<()> {
         options.unit = u;
     }
     let mut doc = analyse(&runs, &options).map_err(core)?.document().map_err(core)?;
+    if let Some(mc) = a.result.monte_carlo() {
+        // The runs read from the documents are the input the trials draw.
+        let (section, warnings) =
+            incal::montecarlo::run::<Repeatability>(&runs, &options, &doc, &mc, &Silent)
+                .map_err(core)?;
+        doc.monte_carlo = Some(section);
+        doc.warnings.extend(warnings);
+    }
     doc.inputs = inputs;
     doc.options = incal::procedures::options_map(&options).map_err(core)?;
     a.result.emit(doc)

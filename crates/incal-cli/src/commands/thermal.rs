@@ -121,6 +121,13 @@ pub fn run(c: &Command) -> CliResult<()> {
 }
 
 fn run_fit(a: &FitArgs) -> CliResult<()> {
+    if a.result.monte_carlo.is_some() {
+        // Refused before any input is read, never ignored.
+        return Err(core(incal::Error::InvalidOption {
+            key: "monte_carlo".into(),
+            message: "thermal fit reduces result documents, not a recording: it draws no synthetic recordings (a Monte Carlo runs on each plateau's reduction)".into(),
+        }));
+    }
     let mut inputs = Vec::with_capacity(a.results.len());
     for p in &a.results {
         let (name, sha256, doc) = read_document(p)?;

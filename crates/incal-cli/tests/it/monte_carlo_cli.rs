@@ -121,6 +121,12 @@ fn refusals_name_the_option() {
         &with(&["--monte-carlo", "200", "--mc-digits", "5"]),
         &["--mc-digits"],
     );
+    // The soak fit over result documents draws nothing: refused, not
+    // ignored.
+    refused(
+        &run(&["thermal", "fit", p(&f), "--monte-carlo", "200"]),
+        &["--monte-carlo", "thermal fit", "result documents"],
+    );
 }
 
 /// The rate-transfer test draws the table's rate error once per trial:

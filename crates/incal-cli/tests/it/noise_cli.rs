@@ -103,6 +103,24 @@ fn contract_keys_units_and_truth() {
 fn parallel_equals_sequential_and_binary_equals_csv() {
     let csv = simulate("p.csv", "csv", &["--channels", "3"]);
     let bin = simulate("p.f64", "f64le", &["--channels", "3"]);
+    // A mapped binary record is not drawn again: the Monte Carlo is
+    // refused, never ignored.
+    refused(
+        &common::run(&[
+            "noise",
+            "--input",
+            bin.to_str().unwrap(),
+            "--format",
+            "f64le",
+            "--channels",
+            "3",
+            "--rate-hz",
+            "10",
+            "--monte-carlo",
+            "100",
+        ]),
+        &["--monte-carlo", "binary record"],
+    );
     let run = |extra: &[&str], input: &PathBuf| {
         let mut a = vec![
             "noise",

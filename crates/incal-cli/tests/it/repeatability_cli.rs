@@ -84,6 +84,23 @@ fn documents_and_the_store_give_the_same_components() {
     }
     assert_eq!(b["repeatability"]["days"].as_array().unwrap().len(), 3);
     assert_eq!(b["inputs"].as_array().unwrap().len(), 6);
+    // The runs read from documents are drawn again by the Monte Carlo.
+    let mut args = vec![
+        "repeatability",
+        "--coefficient",
+        "B",
+        "--json",
+        "--monte-carlo",
+        "200",
+        "--seed",
+        "4",
+    ];
+    args.extend(files.iter().map(|f| p(f)));
+    let m = json_of(&run(&args));
+    let mc = &m["monte_carlo"];
+    assert_eq!(mc["trials"], 200);
+    assert!(mc["coefficients"]["mean"]["std"].as_f64().unwrap() > 0.0);
+    assert_eq!(m["coefficients"]["mean"], a["coefficients"]["mean"]);
 }
 
 #[test]
