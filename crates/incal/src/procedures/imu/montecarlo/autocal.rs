@@ -24,26 +24,28 @@ use rand::rngs::ChaCha8Rng;
 use super::super::autocal::{autocal, AutocalSessionOptions, Method};
 use super::super::input::AutocalInput;
 use crate::error::Result;
+use crate::estimation::{pooled_variance, PositionStats};
 use crate::montecarlo::{scaled_variance, Drawn, Synthesis};
 use crate::sim::normal;
 
-/// Pooled variance of three channels over sample ranges of `data`:
-/// `(s² per axis, Σ(n − 1))`.
-fn pooled(data: &[[f64; 3]], ranges: &[(usize, usize)]) -> ([f64; 3], f64) {
-    let (mut ss, mut dof) = ([0.0; 3], 0.0);
-    for &(a, b) in ranges {
-        let part = &data[a..=b];
-        let n = part.len() as f64;
-        if n < 2.0 {
-            continue;
-        }
-        for (k, s) in ss.iter_mut().enumerate() {
-            let m = part.iter().map(|x| x[k]).sum::<f64>() / n;
-            *s += part.iter().map(|x| (x[k] - m).powi(2)).sum::<f64>();
-        }
-        dof += n - 1.0;
+/// Pooled variance of each of three channels over sample ranges of
+/// `data` ([`crate::estimation::pooled_variance`]): `(s² per axis (0
+/// without a degree of freedom), Σ(n − 1))`.
+fn pooled(data: &[[f64; 3]], ranges: &[(usize, usize)]) -> Result<([f64; 3], f64)> {
+    let (mut s2, mut dof) = ([0.0; 3], 0.0);
+    for (k, v) in s2.iter_mut().enumerate() {
+        let stats = ranges
+            .iter()
+            .map(|&(a, b)| {
+                let axis: Vec<f64> = data[a..=b].iter().map(|x| x[k]).collect();
+                PositionStats::of(&axis)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let (s, d) = pooled_variance(&stats);
+        *v = s.max(0.0);
+        dof = d as f64;
     }
-    (ss.map(|s| s / dof.max(1.0)), dof)
+    Ok((s2, dof))
 }
 
 /// Each channel of `data` over `a..=b` replaced by its mean plus noise
@@ -92,8 +94,11 @@ pub(in crate::procedures::imu) fn autocal_synthesis(
         }
     }
     let still = merged;
-    let (acc_s2, acc_dof) = pooled(&input.acc, &still);
-    let gyr = input.gyr.as_ref().map(|g| pooled(g, &[init]));
+    let (acc_s2, acc_dof) = pooled(&input.acc, &still)?;
+    let gyr = match &input.gyr {
+        Some(g) => Some(pooled(g, &[init])?),
+        None => None,
+    };
     let mut drawn = vec![Drawn::new(
         "accelerometer noise of each sample in a still interval (around its mean)",
         &format!("normal, variance scaled inverse χ² (ν = {acc_dof})"),

@@ -84,18 +84,11 @@ pub(super) fn synthesis(rec: &Record, o: &BroadbandOptions) -> Result<Synthesis<
     // padded bin. (The incoherent part `P_yy(1 − γ²)` would also hold the
     // Hann window's smoothing where the phase turns fast, ten times the
     // noise near the corner.)
-    let mut spec = clean.clone();
-    let last = spec.len() - 1;
-    spec[0].im = 0.0;
-    spec[last].im = 0.0;
-    let mut fitted = inverse.make_output_vec();
-    inverse
-        .process(&mut spec, &mut fitted)
-        .map_err(|e| Error::Unsupported(format!("the model's output: {e}")))?;
+    let fitted = real_inverse(&inverse, clean.clone(), n, "the model's output")?;
     let residual: Vec<f64> = rec.output[..n]
         .iter()
         .zip(&fitted)
-        .map(|(y, f)| y - f / len as f64)
+        .map(|(y, f)| y - f)
         .collect();
     let w = super::welch::welch(
         &residual,
@@ -162,24 +155,40 @@ impl Recipe {
         self.forward
             .process(&mut white, &mut noise)
             .map_err(|e| Error::Unsupported(format!("the noise's transform: {e}")))?;
-        let mut spec: Vec<Complex64> = self
+        let spec: Vec<Complex64> = self
             .clean
             .iter()
             .zip(&noise)
             .zip(&self.shape)
             .map(|((c, w), s)| c * turn + w * *s)
             .collect();
-        // The inverse of a real signal: DC and Nyquist are real.
-        let last = spec.len() - 1;
-        spec[0].im = 0.0;
-        spec[last].im = 0.0;
-        let mut out = self.inverse.make_output_vec();
-        self.inverse
-            .process(&mut spec, &mut out)
-            .map_err(|e| Error::Unsupported(format!("the output's inverse transform: {e}")))?;
-        let scale = 1.0 / out.len() as f64;
-        Ok(out[..self.n].iter().map(|v| v * scale).collect())
+        real_inverse(
+            &self.inverse,
+            spec,
+            self.n,
+            "the output's inverse transform",
+        )
     }
+}
+
+/// The first `n` samples of the real signal whose transform is `spec`
+/// (DC and Nyquist made real, as a real signal's are; scaled by the
+/// transform's length); `what` names it in an error.
+fn real_inverse(
+    inverse: &Arc<dyn ComplexToReal<f64>>,
+    mut spec: Vec<Complex64>,
+    n: usize,
+    what: &str,
+) -> Result<Vec<f64>> {
+    let last = spec.len() - 1;
+    spec[0].im = 0.0;
+    spec[last].im = 0.0;
+    let mut out = inverse.make_output_vec();
+    inverse
+        .process(&mut spec, &mut out)
+        .map_err(|e| Error::Unsupported(format!("{what}: {e}")))?;
+    let scale = 1.0 / out.len() as f64;
+    Ok(out[..n].iter().map(|v| v * scale).collect())
 }
 
 /// `y` at `f`, linear between the points `(xs, ys)` (`xs` rising), the end
