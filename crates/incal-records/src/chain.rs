@@ -72,7 +72,8 @@ pub struct ChainFields<'a> {
     pub reason: Option<&'a str>,
 }
 
-fn field(out: &mut Vec<u8>, f: Option<&str>) {
+/// One field of a canonical form: `LEN:TEXT\n`, or `-\n` for null.
+pub(crate) fn field(out: &mut Vec<u8>, f: Option<&str>) {
     match f {
         Some(t) => {
             out.extend_from_slice(t.len().to_string().as_bytes());

@@ -8,6 +8,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::db::{Conn, DbError, Mode, P};
 use crate::error::db_err;
+use crate::events::Event;
+use crate::verify::{check_event, Entry, ScannedEvent};
+use crate::workflow::write_event;
 use crate::write::{chain_head, instrument_of, new_instrument, write_record};
 use crate::{sha256_hex, time, ChainFields, Error, InputHash, Result, Store, Verified};
 use crate::{GENESIS, MAX_DOCUMENT_BYTES};
@@ -86,6 +89,19 @@ impl ExportedRecord {
     }
 }
 
+/// One event as `incal record export` writes it, in its place among the
+/// records: the event with every field its hash covers, and the password
+/// hash it sets (`user.add`, `user.passwd`), so a store restored from its
+/// export keeps its accounts. An export is as confidential as the store.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExportedEvent {
+    /// The event.
+    pub event: Event,
+    /// The Argon2id password hash it sets.
+    pub password_hash: Option<String>,
+}
+
 /// Remove an SQLite store file and the files SQLite keeps beside it
 /// (`-wal`, `-shm`, `-journal`), whichever exist: a store this process
 /// created and must not leave behind.
@@ -104,12 +120,30 @@ impl Store {
         let io = |e: std::io::Error| Error::Output(e.to_string());
         let mut n = 0i64;
         let mut head = GENESIS.to_string();
-        self.scan(|r| {
-            // Only the records verified above: a record appended since
-            // belongs to the next export.
-            if r.id > chain.records {
+        let last = chain.records + chain.events;
+        let mut events = 0i64;
+        self.scan(|entry| {
+            // Only the entries verified above: one appended since belongs
+            // to the next export.
+            if entry.id() > last {
                 return Ok(());
             }
+            let r = match entry {
+                Entry::Record(r) => r,
+                Entry::Event(ev) => {
+                    let line = ExportedEvent {
+                        event: ev.event,
+                        password_hash: ev.password,
+                    };
+                    let text =
+                        serde_json::to_string(&line).map_err(|e| Error::Output(e.to_string()))?;
+                    out.write_all(text.as_bytes()).map_err(io)?;
+                    out.write_all(b"\n").map_err(io)?;
+                    head = line.event.event_hash;
+                    events += 1;
+                    return Ok(());
+                }
+            };
             let document = String::from_utf8(r.document).map_err(|_| Error::Tampered {
                 id: r.id,
                 problem: "the stored document is not UTF-8 text".into(),
@@ -140,7 +174,11 @@ impl Store {
             Ok(())
         })?;
         out.flush().map_err(io)?;
-        Ok(Verified { records: n, head })
+        Ok(Verified {
+            records: n,
+            events,
+            head,
+        })
     }
 
     /// [`Store::import`] into the store at `location`, created when
@@ -198,6 +236,19 @@ impl Store {
                 return Err(at(format!("longer than {limit} bytes")));
             }
             if buf.trim().is_empty() {
+                continue;
+            }
+            if buf.trim_start().starts_with("{\"event\"") {
+                let ev: ExportedEvent = serde_json::from_str(buf.trim()).map_err(|err| {
+                    let why = incal_io::clip_to(&err.to_string(), 160);
+                    at(format!("not an exported event ({why})"))
+                })?;
+                if import_event(&mut tx, &name, ev, (head_id, &head_hash), &at)? {
+                    present += 1;
+                } else {
+                    added += 1;
+                    (head_id, head_hash) = chain_head(&mut tx).map_err(e)?;
+                }
                 continue;
             }
             let r: ExportedRecord = serde_json::from_str(buf.trim()).map_err(|err| {
@@ -266,15 +317,11 @@ impl Store {
             added += 1;
         }
         tx.commit().map_err(e)?;
-        // The chain was verified before and each record appended was
-        // checked as verify checks it: its head is the last one written.
+        drop(c);
         Ok(Imported {
             added,
             present,
-            chain: Verified {
-                records: head_id,
-                head: head_hash,
-            },
+            chain: self.verify()?,
         })
     }
 }
@@ -377,4 +424,52 @@ fn check_next(
         }
     }
     Ok(doc)
+}
+
+/// Import exported event `ev` after the store's head `(head_id,
+/// head_hash)`: true when the store already holds it (the same hash at the
+/// same position), else checked as `verify` checks it and written.
+fn import_event(
+    tx: &mut Conn,
+    name: &str,
+    ev: ExportedEvent,
+    (head_id, head_hash): (i64, &str),
+    at: &dyn Fn(String) -> Error,
+) -> Result<bool> {
+    let e = |e| db_err(name, e);
+    let id = ev.event.id;
+    if id <= head_id {
+        let have = tx
+            .query_opt("SELECT event_hash FROM events WHERE id = ?1", &[P::I(id)])
+            .map_err(e)?;
+        let same = match have {
+            Some(row) => row.t(0).map_err(e)? == ev.event.event_hash,
+            None => false,
+        };
+        if !same {
+            return Err(at(format!(
+                "event {id} differs from the store's entry {id}: the store holds another chain"
+            )));
+        }
+        return Ok(true);
+    }
+    if id != head_id + 1 {
+        return Err(at(format!(
+            "event {id} follows record {head_id}: records {}..{} are missing",
+            head_id + 1,
+            id - 1
+        )));
+    }
+    if ev.event.prev_hash != head_hash {
+        return Err(at(format!(
+            "event {id}: prev_hash is not the hash of record {head_id}"
+        )));
+    }
+    let scanned = ScannedEvent {
+        event: ev.event,
+        password: ev.password_hash,
+    };
+    check_event(&scanned).map_err(|p| at(format!("event {id}: {p}")))?;
+    write_event(tx, &scanned.event, scanned.password.as_deref()).map_err(e)?;
+    Ok(false)
 }

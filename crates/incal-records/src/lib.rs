@@ -42,6 +42,7 @@
 pub mod chain;
 mod db;
 mod error;
+pub mod events;
 mod exchange;
 pub mod history;
 mod identity;
@@ -51,11 +52,13 @@ mod readonly;
 pub mod time;
 mod types;
 mod verify;
+mod workflow;
 mod write;
 
 pub use chain::{sha256_hex, ChainFields, InputHash, GENESIS};
 pub use db::{display_url, is_postgres_url, store_message, store_name};
 pub use error::{Error, Result};
+pub use events::{Actor, Event, EventKind, Role};
 pub use exchange::{remove_sqlite_files, ExportedRecord, ExportedSupersession, Imported};
 pub use history::{Drift, HistoryPoint, Repeatability};
 pub use identity::{check_identity, IdentityError};
@@ -65,3 +68,4 @@ pub use types::{
     Added, History, NewRecord, RecordSummary, StoredRecord, Supersession, Verified,
     MAX_DOCUMENT_BYTES,
 };
+pub use workflow::{check_username, Account, Review, State, MAX_USERNAME};

@@ -13,8 +13,14 @@ use crate::error::db_err;
 use crate::{display_url, is_postgres_url, time, Error, Result};
 
 /// The schema migrations, in order: `(version, name, SQL)`.
-pub const MIGRATIONS: &[(i64, &str, &str)] =
-    &[(1, "0001_init", include_str!("../migrations/0001_init.sql"))];
+pub const MIGRATIONS: &[(i64, &str, &str)] = &[
+    (1, "0001_init", include_str!("../migrations/0001_init.sql")),
+    (
+        2,
+        "0002_workflow",
+        include_str!("../migrations/0002_workflow.sql"),
+    ),
+];
 
 /// The table that tracks the migrations applied (created when missing).
 pub const SCHEMA_MIGRATIONS: &str = include_str!("../migrations/schema_migrations.sql");

@@ -153,6 +153,9 @@ pub struct History {
 pub struct Verified {
     /// Number of records.
     pub records: i64,
+    /// Number of events (approvals, rejections, submissions, account
+    /// changes) in the same chain.
+    pub events: i64,
     /// `record_hash` of the last record ([`GENESIS`](crate::GENESIS) when
     /// empty): write it down to anchor the chain (module docs of
     /// [`chain`](crate::chain)).

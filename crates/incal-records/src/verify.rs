@@ -3,8 +3,10 @@
 //! record hash recomputed ([`chain`](crate::chain) has the canonical
 //! form), and a head kept elsewhere looked for.
 
-use crate::db::{DbError, Mode, P};
+use crate::db::{Conn, DbError, Mode, P};
+use crate::events::Event;
 use crate::query::{inputs_between, supersessions_between};
+use crate::workflow::{event_row, EVENT_COLUMNS};
 use crate::GENESIS;
 use crate::{sha256_hex, ChainFields, Error, InputHash, Result, Store, Supersession, Verified};
 
@@ -81,59 +83,43 @@ impl Store {
         })
     }
 
-    /// Every record in chain order, from one consistent snapshot, a page
-    /// at a time (memory stays bounded however long the chain). A column
-    /// that does not read as incal stores it is [`Error::Tampered`].
-    pub(crate) fn scan(&self, mut visit: impl FnMut(Scanned) -> Result<()>) -> Result<()> {
+    /// Every entry (record or event) in chain order, from one consistent
+    /// snapshot, a page at a time (memory stays bounded however long the
+    /// chain). A column that does not read as incal stores it is
+    /// [`Error::Tampered`].
+    pub(crate) fn scan(&self, mut visit: impl FnMut(Entry) -> Result<()>) -> Result<()> {
         let mut c = self.conn.borrow_mut();
         let mut tx = c.transaction(Mode::Read).map_err(self.db())?;
         let mut after = i64::MIN;
         loop {
-            let rows = tx
+            let ids = tx
                 .query(
-                    "SELECT r.id, i.serial, r.procedure, r.created_utc, r.operator, r.station,
-                            r.document, r.document_sha256, r.prev_hash, r.record_hash, i.model
-                     FROM records r
-                     LEFT JOIN instruments i ON i.id = r.instrument_id
-                     WHERE r.id > ?1
-                     ORDER BY r.id LIMIT ?2",
+                    "SELECT id FROM records WHERE id > ?1
+                     UNION ALL SELECT id FROM events WHERE id > ?1
+                     ORDER BY 1 LIMIT ?2",
                     &[P::I(after), P::I(PAGE)],
                 )
                 .map_err(self.db())?;
-            let Some(last) = rows.last() else { break };
-            let first_id = rows[0].i(0).unwrap_or(after);
-            let last_id = last.i(0).unwrap_or(i64::MAX);
-            let mut inputs = inputs_between(&mut tx, first_id, last_id).map_err(self.db())?;
-            let mut sups = supersessions_between(&mut tx, first_id, last_id).map_err(self.db())?;
-            for r in &rows {
-                let mut read = || -> std::result::Result<Scanned, DbError> {
-                    let id = r.i(0)?;
-                    Ok(Scanned {
-                        id,
-                        serial: r.ot(1)?,
-                        procedure: r.t(2)?,
-                        created_utc: r.t(3)?,
-                        operator: r.ot(4)?,
-                        station: r.ot(5)?,
-                        // As bytes: a value changed to a blob or to text
-                        // that is not UTF-8 is reported, not a failure.
-                        document: r.bytes(6),
-                        document_sha256: r.t(7)?,
-                        prev_hash: r.t(8)?,
-                        record_hash: r.t(9)?,
-                        model: r.ot(10)?,
-                        inputs: inputs.remove(&id).unwrap_or_default(),
-                        supersedes: sups.remove(&id),
-                    })
-                };
-                let s = read().map_err(|e| Error::Tampered {
-                    id: r.i(0).unwrap_or(after.max(0) + 1),
-                    problem: format!("a column does not read as stored by incal ({e})"),
-                })?;
-                after = s.id;
-                visit(s)?;
+            let (Some(first), Some(last)) = (ids.first(), ids.last()) else {
+                break;
+            };
+            let (lo, hi) = (
+                first.i(0).map_err(self.db())?,
+                last.i(0).map_err(self.db())?,
+            );
+            let records = scan_records(&mut tx, lo, hi)?;
+            let events = scan_events(&mut tx, lo, hi)?;
+            let mut merged: Vec<Entry> = records
+                .into_iter()
+                .map(Entry::Record)
+                .chain(events.into_iter().map(Entry::Event))
+                .collect();
+            merged.sort_by_key(Entry::id);
+            for entry in merged {
+                visit(entry)?;
             }
-            if last_id == i64::MAX || (rows.len() as i64) < PAGE {
+            after = hi;
+            if (ids.len() as i64) < PAGE || hi == i64::MAX {
                 break;
             }
         }
@@ -151,6 +137,10 @@ impl Store {
                  SELECT x.record_id, 'an input file row of a record that does not exist'
                  FROM record_inputs x LEFT JOIN records r ON r.id = x.record_id
                  WHERE r.id IS NULL
+                 UNION ALL
+                 SELECT p.event_id, 'a password row of no user.add or user.passwd event'
+                 FROM passwords p LEFT JOIN events e ON e.id = p.event_id
+                 WHERE e.id IS NULL OR e.kind NOT IN ('user.add', 'user.passwd')
                  LIMIT 1",
                 &[],
             )
@@ -170,13 +160,15 @@ impl Store {
         // serial: checked against that record's (hashed) document.
         let mut seen_serials = std::collections::HashSet::new();
         let (mut prev_id, mut prev_hash) = (0i64, GENESIS.to_string());
-        let mut count = 0i64;
-        self.scan(|r| {
-            let id = r.id;
+        let (mut records, mut events) = (0i64, 0i64);
+        self.scan(|entry| {
+            let id = entry.id();
             let bad = |problem: String| Error::Tampered { id, problem };
             if id != prev_id + 1 {
                 return Err(bad(if prev_id == 0 {
                     "the chain does not start at record 1".into()
+                } else if id == prev_id {
+                    format!("a record and an event share position {id}")
                 } else {
                     format!(
                         "follows record {prev_id}: record {} is missing",
@@ -184,56 +176,35 @@ impl Store {
                     )
                 }));
             }
-            if r.prev_hash != prev_hash {
-                return Err(bad(format!(
-                    "prev_hash does not match the hash of record {prev_id}"
-                )));
-            }
-            if sha256_hex(&r.document) != r.document_sha256 {
-                return Err(bad("the stored document does not match its SHA-256".into()));
-            }
-            let serial = r
-                .serial
-                .clone()
-                .ok_or_else(|| bad("its instrument row is missing".into()))?;
-            if seen_serials.insert(serial.clone()) {
-                let doc_model = serde_json::from_slice::<serde_json::Value>(&r.document)
-                    .ok()
-                    .and_then(|v| v["instrument"]["model"].as_str().map(String::from));
-                if doc_model != r.model {
-                    return Err(bad(format!(
-                        "the instrument's model ({}) is not the one in its first record's document ({})",
-                        r.model.as_deref().unwrap_or("none"),
-                        doc_model.as_deref().unwrap_or("none")
-                    )));
+            let hash = match entry {
+                Entry::Record(r) => {
+                    if r.prev_hash != prev_hash {
+                        return Err(bad(format!(
+                            "prev_hash does not match the hash of record {prev_id}"
+                        )));
+                    }
+                    check_record(&r, &mut seen_serials).map_err(bad)?;
+                    records += 1;
+                    r.record_hash
                 }
-            }
-            if let Some(s) = &r.supersedes {
-                if s.created_utc != r.created_utc {
-                    return Err(bad(format!(
-                        "the supersession of record {} has a time other than the record's",
-                        s.old_id
-                    )));
+                Entry::Event(ev) => {
+                    if ev.event.prev_hash != prev_hash {
+                        return Err(bad(format!(
+                            "an event ({}): prev_hash does not match the hash of record {prev_id}",
+                            ev.event.kind.as_str()
+                        )));
+                    }
+                    check_event(&ev)
+                        .map_err(|p| bad(format!("an event ({}): {p}", ev.event.kind.as_str())))?;
+                    events += 1;
+                    ev.event.event_hash
                 }
-                if s.old_id >= id {
-                    return Err(bad(format!(
-                        "supersedes record {}, which is not older",
-                        s.old_id
-                    )));
-                }
-            }
-            if r.fields(&serial).record_hash() != r.record_hash {
-                return Err(bad(
-                    "record_hash does not match its fields (serial, procedure, time, operator, station, inputs or supersession changed)"
-                        .into(),
-                ));
-            }
-            if anchor == Some(r.record_hash.as_str()) {
+            };
+            if anchor == Some(hash.as_str()) {
                 held = true;
             }
             prev_id = id;
-            prev_hash = r.record_hash;
-            count += 1;
+            prev_hash = hash;
             Ok(())
         })?;
         if let (false, Some(h)) = (held, anchor) {
@@ -242,8 +213,183 @@ impl Store {
             });
         }
         Ok(Verified {
-            records: count,
+            records,
+            events,
             head: prev_hash,
         })
     }
+}
+
+/// One entry of the chain as a scan reads it.
+pub(crate) enum Entry {
+    /// A record.
+    Record(Scanned),
+    /// An event.
+    Event(ScannedEvent),
+}
+
+impl Entry {
+    /// Its position in the chain.
+    pub(crate) fn id(&self) -> i64 {
+        match self {
+            Entry::Record(r) => r.id,
+            Entry::Event(e) => e.event.id,
+        }
+    }
+}
+
+/// An event as read by a scan, with the password hash kept beside it.
+pub(crate) struct ScannedEvent {
+    pub(crate) event: Event,
+    pub(crate) password: Option<String>,
+}
+
+/// The records at positions `lo..=hi`, with their inputs and supersessions.
+fn scan_records(tx: &mut Conn, lo: i64, hi: i64) -> Result<Vec<Scanned>> {
+    let db = |e: DbError| Error::Tampered {
+        id: lo,
+        problem: format!("the chain cannot be read here ({e})"),
+    };
+    let rows = tx
+        .query(
+            "SELECT r.id, i.serial, r.procedure, r.created_utc, r.operator, r.station,
+                    r.document, r.document_sha256, r.prev_hash, r.record_hash, i.model
+             FROM records r
+             LEFT JOIN instruments i ON i.id = r.instrument_id
+             WHERE r.id >= ?1 AND r.id <= ?2
+             ORDER BY r.id",
+            &[P::I(lo), P::I(hi)],
+        )
+        .map_err(db)?;
+    let mut inputs = inputs_between(tx, lo, hi).map_err(db)?;
+    let mut sups = supersessions_between(tx, lo, hi).map_err(db)?;
+    let mut out = Vec::with_capacity(rows.len());
+    for r in &rows {
+        let mut read = || -> std::result::Result<Scanned, DbError> {
+            let id = r.i(0)?;
+            Ok(Scanned {
+                id,
+                serial: r.ot(1)?,
+                procedure: r.t(2)?,
+                created_utc: r.t(3)?,
+                operator: r.ot(4)?,
+                station: r.ot(5)?,
+                // As bytes: a value changed to a blob or to text
+                // that is not UTF-8 is reported, not a failure.
+                document: r.bytes(6),
+                document_sha256: r.t(7)?,
+                prev_hash: r.t(8)?,
+                record_hash: r.t(9)?,
+                model: r.ot(10)?,
+                inputs: inputs.remove(&id).unwrap_or_default(),
+                supersedes: sups.remove(&id),
+            })
+        };
+        out.push(read().map_err(|e| Error::Tampered {
+            id: r.i(0).unwrap_or(lo),
+            problem: format!("a column does not read as stored by incal ({e})"),
+        })?);
+    }
+    Ok(out)
+}
+
+/// The events at positions `lo..=hi`, with their password hashes.
+fn scan_events(tx: &mut Conn, lo: i64, hi: i64) -> Result<Vec<ScannedEvent>> {
+    let rows = tx
+        .query(
+            &format!(
+                "SELECT {EVENT_COLUMNS}, p.password_hash FROM events
+                 LEFT JOIN passwords p ON p.event_id = events.id
+                 WHERE events.id >= ?1 AND events.id <= ?2 ORDER BY events.id"
+            ),
+            &[P::I(lo), P::I(hi)],
+        )
+        .map_err(|e| Error::Tampered {
+            id: lo,
+            problem: format!("the chain cannot be read here ({e})"),
+        })?;
+    rows.iter()
+        .map(|r| {
+            let read = || -> std::result::Result<ScannedEvent, DbError> {
+                Ok(ScannedEvent {
+                    event: event_row(r)?,
+                    password: r.ot(12)?,
+                })
+            };
+            read().map_err(|e| Error::Tampered {
+                id: r.i(0).unwrap_or(lo),
+                problem: format!("an event's column does not read as stored by incal ({e})"),
+            })
+        })
+        .collect()
+}
+
+/// What is wrong with record `r` apart from its link: its document hash,
+/// its instrument row, its supersession, its record hash.
+fn check_record(
+    r: &Scanned,
+    seen_serials: &mut std::collections::HashSet<String>,
+) -> std::result::Result<(), String> {
+    if sha256_hex(&r.document) != r.document_sha256 {
+        return Err("the stored document does not match its SHA-256".into());
+    }
+    let serial = r
+        .serial
+        .clone()
+        .ok_or_else(|| "its instrument row is missing".to_string())?;
+    if seen_serials.insert(serial.clone()) {
+        let doc_model = serde_json::from_slice::<serde_json::Value>(&r.document)
+            .ok()
+            .and_then(|v| v["instrument"]["model"].as_str().map(String::from));
+        if doc_model != r.model {
+            return Err(format!(
+                "the instrument's model ({}) is not the one in its first record's document ({})",
+                r.model.as_deref().unwrap_or("none"),
+                doc_model.as_deref().unwrap_or("none")
+            ));
+        }
+    }
+    if let Some(s) = &r.supersedes {
+        if s.created_utc != r.created_utc {
+            return Err(format!(
+                "the supersession of record {} has a time other than the record's",
+                s.old_id
+            ));
+        }
+        if s.old_id >= r.id {
+            return Err(format!(
+                "supersedes record {}, which is not older",
+                s.old_id
+            ));
+        }
+    }
+    if r.fields(&serial).record_hash() != r.record_hash {
+        return Err(
+            "record_hash does not match its fields (serial, procedure, time, operator, station, inputs or supersession changed)"
+                .into(),
+        );
+    }
+    Ok(())
+}
+
+/// What is wrong with event `ev` apart from its link: its hash, its
+/// password hash, the record it names.
+pub(crate) fn check_event(ev: &ScannedEvent) -> std::result::Result<(), String> {
+    let e = &ev.event;
+    if e.hash() != e.event_hash {
+        return Err("event_hash does not match its fields (kind, time, actor, role, record, account or reason changed)".into());
+    }
+    match (&ev.password, &e.secret_sha256) {
+        (Some(p), Some(h)) if sha256_hex(p.as_bytes()) == *h => {}
+        (None, None) if !e.kind.sets_password() => {}
+        (None, _) if e.kind.sets_password() => return Err("its password hash is missing".into()),
+        _ => return Err("the password hash does not match its secret_sha256".into()),
+    }
+    if e.kind.is_record() != e.record_id.is_some() {
+        return Err("names a record where it should not, or none where it should".into());
+    }
+    if e.record_id.is_some_and(|r| r >= e.id) {
+        return Err("names a record that is not older".into());
+    }
+    Ok(())
 }

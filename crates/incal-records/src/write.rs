@@ -13,7 +13,7 @@ impl Store {
     /// Store `req.document` as a new record (crate docs); see
     /// [`NewRecord`] for the serial, operator and station.
     pub fn add(&mut self, req: &NewRecord) -> Result<Added> {
-        self.insert(req, None)
+        self.insert_as(req, None, None)
     }
 
     /// Store `req.document` as a new record that supersedes record
@@ -26,7 +26,7 @@ impl Store {
         if reason.trim().is_empty() {
             return Err(Error::Input("the reason of a supersession is empty".into()));
         }
-        self.insert(req, Some((old_id, reason)))
+        self.insert_as(req, Some((old_id, reason)), None)
     }
 
     /// Never extend a broken chain: the new record would seal it.
@@ -43,8 +43,14 @@ impl Store {
     /// Write `req` as the next record of the chain, superseding record
     /// `old_id` because of `reason` when `supersedes` is given; the record
     /// already held when the same document of the same instrument is added
-    /// again.
-    fn insert(&mut self, req: &NewRecord, supersedes: Option<(i64, &str)>) -> Result<Added> {
+    /// again. With `submitter`, its `record.submit` event follows the
+    /// record in the same transaction.
+    pub(crate) fn insert_as(
+        &mut self,
+        req: &NewRecord,
+        supersedes: Option<(i64, &str)>,
+        submitter: Option<&crate::events::Actor>,
+    ) -> Result<Added> {
         let doc = ResultDocument::from_json(req.document).map_err(Error::Input)?;
         let operator = from_meta(&doc, "operator", req.operator)?;
         let station = from_meta(&doc, "station", req.station)?;
@@ -128,6 +134,9 @@ impl Store {
         };
         let record_hash = fields.record_hash();
         write_record(&mut tx, instrument_id, &fields, req.document, &record_hash).map_err(e)?;
+        if let Some(actor) = submitter {
+            Store::submit_event(&mut tx, actor, id, &created_utc).map_err(e)?;
+        }
         tx.commit().map_err(e)?;
         Ok(Added {
             id,
@@ -213,10 +222,13 @@ pub(crate) fn new_instrument(
     Ok(id)
 }
 
-/// The last record's id and hash (0 and [`GENESIS`] for an empty store).
+/// The last entry's (record's or event's) id and hash (0 and [`GENESIS`]
+/// for an empty store).
 pub(crate) fn chain_head(tx: &mut Conn) -> std::result::Result<(i64, String), DbError> {
     match tx.query_opt(
-        "SELECT id, record_hash FROM records ORDER BY id DESC LIMIT 1",
+        "SELECT id, record_hash FROM records
+         UNION ALL SELECT id, event_hash FROM events
+         ORDER BY 1 DESC LIMIT 1",
         &[],
     )? {
         Some(r) => Ok((r.i(0)?, r.t(1)?)),

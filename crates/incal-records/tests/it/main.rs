@@ -8,3 +8,4 @@ mod drift;
 mod migrations;
 mod postgres;
 mod store;
+mod workflow;
