@@ -72,6 +72,11 @@ enum Command {
     /// Calibration records: store results per instrument (append-only, hash-chained), list, show, supersede, history and drift, verify.
     #[command(subcommand)]
     Record(commands::record::Command),
+    /// The lab's web application on a records store: instruments and due dates, history plots, review and approval, certificates, for accounts with roles.
+    Serve(commands::serve::Args),
+    /// Accounts of the web application (viewer, engineer, signatory, admin), each change an event in the store's hash chain.
+    #[command(subcommand)]
+    User(commands::user::Command),
     /// Reduce many recordings with one procedure on the local machine's cores: results in order, per-file errors collected, records written by one writer.
     Batch(commands::batch::Args),
 }
@@ -91,6 +96,8 @@ fn run(cli: Cli) -> CliResult<()> {
         Command::Report(a) => commands::report::run(&a),
         Command::Record(c) => commands::record::run(&c),
         Command::Batch(a) => commands::batch::run(&a),
+        Command::Serve(a) => commands::serve::run(&a),
+        Command::User(c) => commands::user::run(&c),
     }
 }
 

@@ -61,6 +61,20 @@ impl Store {
             .collect()
     }
 
+    /// Every instrument: its serial and its model as first recorded, by
+    /// serial.
+    pub fn instruments(&self) -> Result<Vec<(String, Option<String>)>> {
+        let rows = self
+            .conn
+            .borrow_mut()
+            .query("SELECT serial, model FROM instruments ORDER BY serial", &[])
+            .map_err(self.db())?;
+        rows.iter()
+            .map(|r| Ok((r.t(0)?, r.ot(1)?)))
+            .collect::<std::result::Result<Vec<_>, DbError>>()
+            .map_err(self.db())
+    }
+
     /// Every record (of `serial` only, when given), by id.
     pub fn list(&self, serial: Option<&str>) -> Result<Vec<RecordSummary>> {
         let rows = self

@@ -17,7 +17,9 @@ pub mod procedures;
 pub mod record;
 pub mod report;
 pub mod schema;
+pub mod serve;
 pub mod units;
+pub mod user;
 
 use crate::error::CliResult;
 

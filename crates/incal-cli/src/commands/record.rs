@@ -52,12 +52,12 @@ pub struct DbArgs {
 
 impl DbArgs {
     /// `--db`, else `$INCAL_DB` (when not empty), else `incal.db`.
-    fn path(&self) -> PathBuf {
+    pub(crate) fn path(&self) -> PathBuf {
         crate::options::db_path(self.db.as_deref())
     }
 
     /// The store as named in messages (a URL without its password).
-    fn name(&self) -> String {
+    pub(crate) fn name(&self) -> String {
         crate::options::store_name(&self.path())
     }
 }

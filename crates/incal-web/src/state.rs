@@ -1,0 +1,165 @@
+//! The server's state: its configuration, a small pool of store
+//! connections used from blocking threads, the chain's status checked at
+//! most every few seconds, and the sessions.
+
+use std::net::{IpAddr, SocketAddr};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use incal_records::{Store, Verified};
+
+use crate::session::Sessions;
+
+/// How `incal serve` runs.
+#[derive(Debug, Clone)]
+pub struct Config {
+    /// The store: an SQLite path or a `postgresql://` URL.
+    pub db: PathBuf,
+    /// Where to listen (default `127.0.0.1:8080`).
+    pub listen: SocketAddr,
+    /// The laboratory profile (`lab.toml`) certificates are issued under.
+    pub lab: Option<PathBuf>,
+    /// Recall interval (days) of every instrument: the next calibration
+    /// is due this long after the last one.
+    pub recall_days: i64,
+    /// Instruments due within this many days are listed as due soon.
+    pub due_soon_days: i64,
+    /// Reverse-proxy mode: the proxy's address, whose header
+    /// [`Config::user_header`] names the logged-in account; from every
+    /// other address the header is ignored.
+    pub trusted_proxy: Option<IpAddr>,
+    /// The header naming the user in reverse-proxy mode.
+    pub user_header: String,
+    /// Mark cookies `Secure` (served over TLS by a reverse proxy).
+    pub secure_cookies: bool,
+    /// Store connections kept open.
+    pub connections: usize,
+}
+
+impl Config {
+    /// A configuration for the store `db` with every default.
+    pub fn new(db: impl Into<PathBuf>) -> Config {
+        Config {
+            db: db.into(),
+            listen: SocketAddr::from(([127, 0, 0, 1], 8080)),
+            lab: None,
+            recall_days: 365,
+            due_soon_days: 30,
+            trusted_proxy: None,
+            user_header: "X-Remote-User".into(),
+            secure_cookies: false,
+            connections: 4,
+        }
+    }
+}
+
+/// How long a chain check is shown before it is made again.
+pub const CHAIN_TTL: Duration = Duration::from_secs(5);
+
+/// The chain's status as the footer shows it.
+#[derive(Debug, Clone)]
+pub enum Chain {
+    /// Intact: its count and head.
+    Intact(Verified),
+    /// Broken (or unreadable): the message naming the first bad entry.
+    Broken(String),
+}
+
+/// The state every handler shares.
+pub struct AppState {
+    /// The configuration.
+    pub config: Config,
+    /// The laboratory profile, read at start.
+    pub lab: Option<incal_report::certificate::LabProfile>,
+    stores: Vec<Mutex<Store>>,
+    next: AtomicUsize,
+    chain: Mutex<Option<(Instant, Chain)>>,
+    refresh: tokio::sync::Mutex<()>,
+    /// Sessions and login failures.
+    pub sessions: Sessions,
+}
+
+/// The shared state.
+pub type Shared = Arc<AppState>;
+
+impl AppState {
+    /// Open `config.connections` connections to the store (created and
+    /// migrated when missing) and read the lab profile.
+    pub fn open(config: Config) -> Result<Shared, String> {
+        let name = incal_records::store_name(&config.db);
+        let mut stores = Vec::new();
+        for _ in 0..config.connections.max(1) {
+            let s = Store::open(&config.db).map_err(|e| incal_records::store_message(&name, &e))?;
+            stores.push(Mutex::new(s));
+        }
+        let lab = match &config.lab {
+            Some(p) => {
+                let text = std::fs::read_to_string(p)
+                    .map_err(|e| format!("{}: cannot read ({e})", p.display()))?;
+                Some(
+                    incal_report::certificate::LabProfile::parse(&text)
+                        .map_err(|e| format!("{}: {e}", p.display()))?,
+                )
+            }
+            None => None,
+        };
+        Ok(Arc::new(AppState {
+            config,
+            lab,
+            stores,
+            next: AtomicUsize::new(0),
+            chain: Mutex::new(None),
+            refresh: tokio::sync::Mutex::new(()),
+            sessions: Sessions::default(),
+        }))
+    }
+
+    /// Run `f` on one of the store connections in a blocking thread.
+    pub async fn with_store<T: Send + 'static>(
+        self: &Arc<Self>,
+        f: impl FnOnce(&mut Store) -> T + Send + 'static,
+    ) -> T {
+        let me = Arc::clone(self);
+        let k = me.next.fetch_add(1, Ordering::Relaxed) % me.stores.len();
+        let run = move || {
+            let mut s = me.stores[k].lock().unwrap_or_else(|p| p.into_inner());
+            f(&mut s)
+        };
+        match tokio::task::spawn_blocking(run).await {
+            Ok(v) => v,
+            Err(e) => std::panic::resume_unwind(e.into_panic()),
+        }
+    }
+
+    /// The chain's status, checked again when older than [`CHAIN_TTL`] or
+    /// after a write (`fresh`).
+    pub async fn chain(self: &Arc<Self>, fresh: bool) -> Chain {
+        let cached = |since: Option<Instant>| {
+            let held = self.chain.lock().unwrap_or_else(|p| p.into_inner());
+            held.as_ref()
+                .filter(|(at, _)| at.elapsed() < CHAIN_TTL && since.is_none_or(|t| *at > t))
+                .map(|(_, c)| c.clone())
+        };
+        let asked = Instant::now();
+        if !fresh {
+            if let Some(c) = cached(None) {
+                return c;
+            }
+        }
+        // One check at a time: the requests that waited take its result.
+        let _one = self.refresh.lock().await;
+        if let Some(c) = cached(if fresh { Some(asked) } else { None }) {
+            return c;
+        }
+        let c = self
+            .with_store(|s| match s.verify() {
+                Ok(v) => Chain::Intact(v),
+                Err(e) => Chain::Broken(e.to_string()),
+            })
+            .await;
+        *self.chain.lock().unwrap_or_else(|p| p.into_inner()) = Some((Instant::now(), c.clone()));
+        c
+    }
+}
