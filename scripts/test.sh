@@ -5,7 +5,9 @@
 # tests. Needs cargo, python3 (3.9 or later) with venv, and the PostgreSQL
 # 15 server binaries and, for the certificate PDF checks, chromium and
 # poppler-utils (installed here with apt-get when run as root); pip
-# fetches maturin, pytest, mypy, numpy, scipy, pandas, imucal and dask from PyPI.
+# fetches maturin, pytest, mypy, numpy, scipy, pandas, imucal, dask and
+# selenium from PyPI. The web application's browser test (headless
+# Chromium over WebDriver, scripts/browser-test.py) runs last.
 #
 #   scripts/test.sh          the fast tier: every behaviour and refusal,
 #                            Monte Carlo at the smallest telling count
@@ -36,11 +38,13 @@ fi
 # headless Chromium and checks its pages (poppler's pdftotext, pdftoppm):
 # installed here when run as root; without them those checks are skipped
 # (said on stderr), with them a missing piece is a failure.
-if ! command -v chromium >/dev/null || ! command -v pdftoppm >/dev/null; then
+# The web application's browser test drives the same Chromium over
+# WebDriver (Debian's chromium-driver).
+if ! command -v chromium >/dev/null || ! command -v pdftoppm >/dev/null || ! command -v chromedriver >/dev/null; then
     if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
-        echo "== installing chromium and poppler-utils (certificate PDF checks)"
-        { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium poppler-utils >/dev/null; } \
-            || echo "scripts/test.sh: could not install chromium: certificate PDF checks skipped" >&2
+        echo "== installing chromium, chromium-driver and poppler-utils (certificate PDF checks, browser test)"
+        { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver poppler-utils >/dev/null; } \
+            || echo "scripts/test.sh: could not install chromium: certificate PDF checks and the browser test skipped" >&2
     fi
 fi
 if command -v chromium >/dev/null && command -v pdftoppm >/dev/null; then
@@ -86,4 +90,14 @@ if [ "${INCAL_TESTS:-}" = "full" ]; then
     echo "== cargo doc --no-deps (warnings denied)"
     RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --lib --locked --quiet
     echo "checks: 3 passed, 0 failed"
+fi
+
+echo "== Browser: scripts/browser-test.py (incal serve in headless Chromium over WebDriver)"
+if command -v chromium >/dev/null && command -v chromedriver >/dev/null && command -v pdfinfo >/dev/null; then
+    "$venv/bin/python" scripts/browser-test.py --incal target/debug/incal
+elif [ -n "${INCAL_REQUIRE_CHROMIUM:-}" ] || [ "$(id -u)" = 0 ]; then
+    echo "scripts/test.sh: chromium, chromedriver or pdfinfo missing: the browser test cannot run" >&2
+    exit 1
+else
+    echo "scripts/test.sh: no chromium/chromedriver: the browser test is skipped (apt-get install chromium chromium-driver poppler-utils)" >&2
 fi

@@ -320,19 +320,13 @@ pub async fn history(
         incal_report::plots::render_svg(&incal_report::plots::history_plot(&series))
             .unwrap_or_default()
     };
-    let sig = |x: f64| incal_report::format::sig(x, 6);
     let drift = h
         .drift
         .as_ref()
         .map(|d| {
             let k = incal::estimation::coverage_factor(d.dof.unwrap_or(f64::INFINITY), 0.95);
-            format!(
-                "{} {} per day, u {}, U95 {}",
-                sig(d.value),
-                d.unit,
-                sig(d.u),
-                sig(k * d.u)
-            )
+            let (v, u, u95) = incal_report::format::measured(d.value, d.u, k * d.u);
+            format!("{v} {}, u {u}, U95 {u95}", d.unit)
         })
         .unwrap_or_default();
     render(&History {
