@@ -54,6 +54,10 @@ pub struct Lab {
     /// Text before every certificate number (`ITL-`).
     #[serde(default)]
     pub certificate_prefix: Option<String>,
+    /// ISO 3166-1 alpha-2 code of the laboratory's country (`CN`, `DE`):
+    /// the Digital Calibration Certificate's country (`ZZ` when absent).
+    #[serde(default)]
+    pub country: Option<String>,
 }
 
 /// A person authorised to sign certificates (`[[signatory]]`).

@@ -27,6 +27,7 @@
 //! no network (it reads the clock only for the default date).
 
 pub mod certificate;
+pub mod dcc;
 pub mod format;
 pub mod montecarlo;
 pub mod pdf;

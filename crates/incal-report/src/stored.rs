@@ -152,6 +152,53 @@ pub fn report_html(
     crate::render_html_with(doc, &history, &opts).map_err(|e| StoredError::Failure(e.to_string()))
 }
 
+/// The Digital Calibration Certificate XML ([`crate::dcc`]) of the
+/// document `text` under `profile`, with the number, dates and customer
+/// the HTML certificate of [`report_html`] states, signed by the profile's
+/// first signatory, and the record and chain head when `store` holds it.
+pub fn dcc_of(
+    doc: &ResultDocument,
+    text: &str,
+    store: Option<&Store>,
+    profile: LabProfile,
+    issue: &Issue,
+) -> Result<String, StoredError> {
+    let held = match store {
+        Some(s) => of_document(s, doc, text)?,
+        None => None,
+    };
+    let record = held.as_ref().and_then(|s| s.record.as_ref());
+    let c = certificate(profile, text, record, issue);
+    let info = crate::dcc::DccInfo {
+        number: c.number.clone(),
+        lab_name: c.profile.lab.name.clone(),
+        lab_address: c.profile.lab.address.replace('\n', ", "),
+        country: c.profile.lab.country.clone().unwrap_or_default(),
+        customer: c.customer.clone(),
+        calibration_date: c
+            .calibration_date
+            .clone()
+            .unwrap_or_else(|| c.issue_date.clone()),
+        issue_date: c.issue_date.clone(),
+        signatory: c
+            .profile
+            .signatory
+            .first()
+            .map(|s| (s.name.clone(), s.role.clone())),
+        record: held.map(|h| match h.stamp.id {
+            Some(id) => format!(
+                "record {id} of {}; chain head {}",
+                h.stamp.store, h.stamp.head
+            ),
+            None => format!(
+                "not stored in {}; chain head {}",
+                h.stamp.store, h.stamp.head
+            ),
+        }),
+    };
+    Ok(crate::dcc::dcc_xml(doc, &info))
+}
+
 /// What the certificate states beside the profile: the customer, the date
 /// of calibration (as given, else the day the record was stored) and the
 /// environment.

@@ -124,7 +124,14 @@ impl AppState {
         let me = Arc::clone(self);
         let k = me.next.fetch_add(1, Ordering::Relaxed) % me.stores.len();
         let run = move || {
-            let mut s = me.stores[k].lock().unwrap_or_else(|p| p.into_inner());
+            // A free connection if there is one (a write may hold one for
+            // a while), else wait for the next in turn.
+            let n = me.stores.len();
+            let free = (0..n).find_map(|i| me.stores[(k + i) % n].try_lock().ok());
+            let mut s = match free {
+                Some(s) => s,
+                None => me.stores[k].lock().unwrap_or_else(|p| p.into_inner()),
+            };
             f(&mut s)
         };
         match tokio::task::spawn_blocking(run).await {
@@ -133,8 +140,21 @@ impl AppState {
         }
     }
 
+    /// After a write: a write refused on a broken chain shows it at once
+    /// (the next check is made now); a write done was preceded by the
+    /// store's own check of the whole chain, and the footer catches up
+    /// within [`CHAIN_TTL`].
+    pub async fn after_write<T>(self: &Arc<Self>, done: &Result<T, incal_records::Error>) {
+        if let Err(
+            incal_records::Error::Tampered { .. } | incal_records::Error::HeadMissing { .. },
+        ) = done
+        {
+            self.chain(true).await;
+        }
+    }
+
     /// The chain's status, checked again when older than [`CHAIN_TTL`] or
-    /// after a write (`fresh`).
+    /// when `fresh` is asked for.
     pub async fn chain(self: &Arc<Self>, fresh: bool) -> Chain {
         let cached = |since: Option<Instant>| {
             let held = self.chain.lock().unwrap_or_else(|p| p.into_inner());

@@ -229,7 +229,14 @@ fn export(a: &ExportArgs) -> CliResult<()> {
         Ok(())
     })?;
     if let Some(c) = chain {
-        crate::embed::stderr_line(&format!("exported {} records; head {}", c.records, c.head));
+        crate::embed::stderr_line(&if c.events > 0 {
+            format!(
+                "exported {} records and {} events; head {}",
+                c.records, c.events, c.head
+            )
+        } else {
+            format!("exported {} records; head {}", c.records, c.head)
+        });
     }
     Ok(())
 }
@@ -434,7 +441,12 @@ fn verify(a: &VerifyArgs) -> CliResult<()> {
     }
     .map_err(store_err(&a.db))?;
     let text = if a.out.json {
-        json_text(&json!({"records": v.records, "head": v.head}))
+        json_text(&json!({"records": v.records, "events": v.events, "head": v.head}))
+    } else if v.events > 0 {
+        format!(
+            "ok: {} records and {} events, hash chain intact; head {}\n",
+            v.records, v.events, v.head
+        )
     } else {
         format!(
             "ok: {} records, hash chain intact; head {}\n",

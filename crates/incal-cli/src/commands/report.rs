@@ -41,6 +41,9 @@ pub struct Args {
     /// Also print the HTML to PDF next to --output (REPORT.pdf) with headless Chromium (it must be installed).
     #[arg(long, requires = "output")]
     pub pdf: bool,
+    /// With --lab: write the certificate as a Digital Calibration Certificate (PTB DCC 3.2.0 XML with D-SI quantities) instead of HTML.
+    #[arg(long, requires = "lab", conflicts_with = "pdf")]
+    pub dcc: bool,
 }
 
 /// `incal report`.
@@ -75,11 +78,18 @@ pub fn run(a: &Args) -> CliResult<()> {
         date: a.date.clone(),
         environment: a.environment.clone(),
     };
+    let stored_err = |e| match e {
+        incal_report::stored::StoredError::Input(m) => CliError::Input(m),
+        incal_report::stored::StoredError::Failure(m) => CliError::Failure(anyhow::anyhow!(m)),
+    };
+    if let (true, Some(p)) = (a.dcc, profile.clone()) {
+        let xml = incal_report::stored::dcc_of(&doc, &text, store.as_ref(), p, &issue)
+            .map_err(stored_err)?;
+        write_text(a.output.as_deref(), &xml)?;
+        return crate::options::check_fail_on(&doc, a.fail_on);
+    }
     let html = incal_report::stored::report_html(&doc, &text, store.as_ref(), profile, &issue)
-        .map_err(|e| match e {
-            incal_report::stored::StoredError::Input(m) => CliError::Input(m),
-            incal_report::stored::StoredError::Failure(m) => CliError::Failure(anyhow::anyhow!(m)),
-        })?;
+        .map_err(stored_err)?;
     write_text(a.output.as_deref(), &html)?;
     if a.pdf {
         if let Some(out) = &a.output {

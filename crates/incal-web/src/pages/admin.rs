@@ -112,7 +112,7 @@ pub async fn change_user(
             _ => Err(incal_records::Error::Input("unknown action or role".into())),
         })
         .await;
-    app.chain(true).await;
+    app.after_write(&done).await;
     let (message, status) = match done {
         Ok(()) => {
             if matches!(f.action.as_str(), "disable" | "passwd") {

@@ -116,6 +116,18 @@ pub async fn document(State(app): State<Shared>, _user: User, Path(id): Path<i64
 /// The certificate's HTML of approved record `id`, with its approver as
 /// the signatory (or why there is none: 409 when not approved).
 async fn certificate_html(app: &Shared, id: i64) -> Result<String, Response> {
+    certificate_text(app, id, false).await
+}
+
+/// The certificate of approved record `id` as HTML, or (`dcc`) as a
+/// Digital Calibration Certificate, which needs the server's `--lab`.
+async fn certificate_text(app: &Shared, id: i64, dcc: bool) -> Result<String, Response> {
+    if dcc && app.lab.is_none() {
+        return Err(error(
+            StatusCode::CONFLICT,
+            "a Digital Calibration Certificate names the laboratory: start incal serve with --lab lab.toml",
+        ));
+    }
     let lab = app.lab.clone();
     let out = app
         .with_store(move |s| -> Result<String, Response> {
@@ -150,8 +162,19 @@ async fn certificate_html(app: &Shared, id: i64) -> Result<String, Response> {
                 p
             });
             let issue = incal_report::stored::Issue::default();
-            incal_report::stored::report_html(&doc, &r.document, Some(s), profile, &issue)
-                .map_err(|e| error(StatusCode::INTERNAL_SERVER_ERROR, &e.to_string()))
+            let fail = |e: incal_report::stored::StoredError| {
+                error(StatusCode::INTERNAL_SERVER_ERROR, &e.to_string())
+            };
+            match (dcc, profile) {
+                (true, Some(p)) => {
+                    incal_report::stored::dcc_of(&doc, &r.document, Some(s), p, &issue)
+                        .map_err(fail)
+                }
+                (_, profile) => {
+                    incal_report::stored::report_html(&doc, &r.document, Some(s), profile, &issue)
+                        .map_err(fail)
+                }
+            }
         })
         .await?;
     Ok(out)
@@ -163,6 +186,30 @@ async fn certificate_html(app: &Shared, id: i64) -> Result<String, Response> {
 pub async fn certificate(State(app): State<Shared>, _user: User, Path(id): Path<i64>) -> Response {
     match certificate_html(&app, id).await {
         Ok(html) => Html(html).into_response(),
+        Err(r) => r,
+    }
+}
+
+/// `GET /records/{id}/certificate.xml`: the certificate as a Digital
+/// Calibration Certificate (PTB DCC 3.2.0 XML, D-SI quantities), as
+/// `incal report --dcc` writes it.
+pub async fn certificate_dcc(
+    State(app): State<Shared>,
+    _user: User,
+    Path(id): Path<i64>,
+) -> Response {
+    match certificate_text(&app, id, true).await {
+        Ok(xml) => (
+            [
+                (CONTENT_TYPE, "application/xml".to_string()),
+                (
+                    CONTENT_DISPOSITION,
+                    format!("attachment; filename=\"certificate-{id}.xml\""),
+                ),
+            ],
+            xml,
+        )
+            .into_response(),
         Err(r) => r,
     }
 }
@@ -238,7 +285,7 @@ async fn decide(app: Shared, user: User, id: i64, f: DecisionForm, approve: bool
             }
         })
         .await;
-    app.chain(true).await;
+    app.after_write(&done).await;
     match done {
         Ok(_) => (
             StatusCode::SEE_OTHER,
@@ -358,7 +405,7 @@ pub async fn submit(State(app): State<Shared>, user: User, m: Multipart) -> Resp
             }
         })
         .await;
-    app.chain(true).await;
+    app.after_write(&done).await;
     match done {
         Ok(a) => (
             StatusCode::SEE_OTHER,
