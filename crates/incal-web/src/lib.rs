@@ -50,6 +50,10 @@ pub fn router(state: Shared) -> Router {
         .route("/records/{id}/document.json", get(records::document))
         .route("/records/{id}/certificate", get(records::certificate))
         .route(
+            "/records/{id}/certificate.xml",
+            get(records::certificate_dcc),
+        )
+        .route(
             "/records/{id}/certificate.pdf",
             get(records::certificate_pdf),
         )

@@ -20,6 +20,7 @@ const PAGES: &[&str] = &[
     "/records/7/document.json",
     "/records/7/certificate",
     "/records/7/certificate.pdf",
+    "/records/7/certificate.xml",
     "/submit",
     "/events",
     "/users",
@@ -499,4 +500,46 @@ async fn a_broken_chain_is_shown_and_refuses_writes() {
         Client::new(&app).get("/health").await.status,
         StatusCode::SERVICE_UNAVAILABLE
     );
+}
+
+#[tokio::test]
+async fn the_dcc_of_an_approved_record_names_its_approver() {
+    let (path, app) = lab("dcc");
+    let mut sam = logged_in(&app, "sam").await;
+    let page = sam.get("/records/9").await.body;
+    let r = sam
+        .post("/records/9/approve", &[("csrf", &token(&page))])
+        .await;
+    assert_eq!(r.status, StatusCode::SEE_OTHER);
+    // Without --lab there is no laboratory to name.
+    assert_eq!(
+        sam.get("/records/9/certificate.xml").await.status,
+        StatusCode::CONFLICT
+    );
+    let toml = path.with_file_name("lab.toml");
+    std::fs::write(
+        &toml,
+        "[lab]\nname = \"ITL\"\naddress = \"1 Gyro Road\"\ncertificate_prefix = \"ITL-\"\ncountry = \"CN\"\n\n[[signatory]]\nname = \"Someone Else\"\nrole = \"head\"\n",
+    )
+    .unwrap();
+    let mut c = incal_web::Config::new(&path);
+    c.lab = Some(toml);
+    let app = incal_web::AppState::open(c).unwrap();
+    let mut sam = logged_in(&app, "sam").await;
+    let r = sam.get("/records/9/certificate.xml").await;
+    assert_eq!(r.status, StatusCode::OK, "{}", r.body);
+    assert!(r.body.contains("schemaVersion=\"3.2.0\""));
+    assert!(
+        r.body
+            .contains("<dcc:uniqueIdentifier>ITL-000009</dcc:uniqueIdentifier>"),
+        "{}",
+        r.body
+    );
+    assert!(r.body.contains("<dcc:content>sam</dcc:content>") && !r.body.contains("Someone Else"));
+    assert_eq!(
+        sam.get("/records/7/certificate.xml").await.status,
+        StatusCode::CONFLICT
+    );
+    let html = sam.get("/records/9/certificate").await.body;
+    assert!(html.contains("sam") && !html.contains("Someone Else"));
 }
