@@ -2,7 +2,7 @@
 """Load test of the lab's web application, on loopback, bounded in time.
 
     scripts/load-web.py [--incal target/release/incal] [--store sqlite|postgres|both]
-                        [--readers 50] [--submitters 5] [--seconds 60]
+                        [--readers 50] [--submitters 5] [--submit-interval 1] [--seconds 60]
                         [--instruments 100] [--records 3] [--target-ms 200]
 
 For each store (SQLite file; PostgreSQL from scripts/pg-test-server.sh),
@@ -13,7 +13,9 @@ with the CLI, `incal serve` is started on it, and for SECONDS:
   with no think time: the instrument list, the overdue list, an
   instrument, the history plot of its K0, a record, the audit log;
 * SUBMITTERS clients, each logged in as an engineer, submit new result
-  documents through the upload form, one after the other.
+  documents through the upload form, each SUBMIT_INTERVAL seconds after
+  its last was answered (a person uploading files: 5 submitters at 1 s is
+  about 18 000 results an hour, far above any lab's rate).
 
 Printed per store: page views and submissions done, throughput, p50, p95,
 p99 and max latency. Afterwards, with the server stopped: `incal record
@@ -155,7 +157,7 @@ def pct(xs, p):
     return xs[min(len(xs) - 1, int(p / 100 * len(xs)))]
 
 
-async def reader(port, pages, stop, lat, errors):
+async def reader(port, pages, stop, lat, errors, by_page):
     c = Conn(port)
     await c.login("reader")
     k = 0
@@ -165,12 +167,13 @@ async def reader(port, pages, stop, lat, errors):
         t = time.perf_counter()
         status, _, _ = await c.request("GET", path)
         lat.append(time.perf_counter() - t)
+        by_page.setdefault(path.split("?")[0].split("/")[1] or "/", []).append(lat[-1])
         if status != 200:
             errors.append(f"GET {path}: {status}")
     c.close()
 
 
-async def submitter(port, template, tag, stop, lat, accepted, errors):
+async def submitter(port, template, tag, stop, lat, accepted, errors, interval):
     c = Conn(port)
     await c.login("engineer")
     _, _, page = await c.request("GET", "/submit")
@@ -192,6 +195,7 @@ async def submitter(port, template, tag, stop, lat, accepted, errors):
             accepted.append(hashlib.sha256(text.encode()).hexdigest())
         else:
             errors.append(f"POST /submit: {status}")
+        await asyncio.sleep(interval)
     c.close()
 
 
@@ -204,11 +208,12 @@ async def load(port, a, template):
     stop = time.monotonic() + a.seconds
     read_lat, sub_lat, accepted, errors = [], [], [], []
     t0 = time.monotonic()
-    tasks = [reader(port, pages[k % len(pages):] + pages[:k % len(pages)], stop, read_lat, errors)
+    by_page = {}
+    tasks = [reader(port, pages[k % len(pages):] + pages[:k % len(pages)], stop, read_lat, errors, by_page)
              for k in range(a.readers)]
-    tasks += [submitter(port, template, k, stop, sub_lat, accepted, errors) for k in range(a.submitters)]
+    tasks += [submitter(port, template, k, stop, sub_lat, accepted, errors, a.submit_interval) for k in range(a.submitters)]
     await asyncio.gather(*tasks)
-    return read_lat, sub_lat, accepted, errors, time.monotonic() - t0
+    return read_lat, sub_lat, accepted, errors, time.monotonic() - t0, by_page
 
 
 def line(name, lat, wall):
@@ -239,12 +244,20 @@ def one_store(a, incal, kind, d, docs, template):
                 break
             except OSError:
                 time.sleep(0.1)
-        read_lat, sub_lat, accepted, errors, wall = asyncio.run(load(port, a, template))
+        cpu0 = time.process_time()
+        read_lat, sub_lat, accepted, errors, wall, by_page = asyncio.run(load(port, a, template))
+        client_cpu = time.process_time() - cpu0
+        with open(f"/proc/{server.pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        server_cpu = (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
     finally:
         server.terminate()
         server.wait(timeout=30)
-    print(f"{kind}: {a.readers} readers and {a.submitters} submitters for {wall:.0f} s")
+    print(f"{kind}: {a.readers} readers and {a.submitters} submitters for {wall:.0f} s "
+          f"(CPU: server {server_cpu:.0f} s, this client {client_cpu:.0f} s, of {2 * wall:.0f} s on 2 cores)")
     print(line("page views", read_lat, wall))
+    for page, lat in sorted(by_page.items()):
+        print(line(f"  {page}", lat, wall))
     print(line("submissions", sub_lat, wall))
     ok = True
     if errors:
@@ -276,6 +289,7 @@ def main():
     ap.add_argument("--store", choices=["sqlite", "postgres", "both"], default="both")
     ap.add_argument("--readers", type=int, default=50)
     ap.add_argument("--submitters", type=int, default=5)
+    ap.add_argument("--submit-interval", type=float, default=1.0)
     ap.add_argument("--seconds", type=float, default=60)
     ap.add_argument("--instruments", type=int, default=100)
     ap.add_argument("--records", type=int, default=3)

@@ -23,6 +23,8 @@ use std::time::Duration;
 pub(crate) enum P<'a> {
     /// A BIGINT.
     I(i64),
+    /// A BIGINT, or NULL.
+    OI(Option<i64>),
     /// A TEXT, or NULL.
     T(Option<&'a str>),
 }
@@ -31,6 +33,7 @@ impl rusqlite::ToSql for P<'_> {
     fn to_sql(&self) -> rusqlite::Result<rusqlite::types::ToSqlOutput<'_>> {
         match self {
             P::I(v) => v.to_sql(),
+            P::OI(v) => v.to_sql(),
             P::T(v) => v.to_sql(),
         }
     }
@@ -184,6 +187,7 @@ fn pg_params<'a>(params: &'a [P<'a>]) -> Vec<&'a (dyn postgres::types::ToSql + S
         .iter()
         .map(|p| match p {
             P::I(v) => v as &(dyn postgres::types::ToSql + Sync),
+            P::OI(v) => v as &(dyn postgres::types::ToSql + Sync),
             P::T(v) => v as &(dyn postgres::types::ToSql + Sync),
         })
         .collect()

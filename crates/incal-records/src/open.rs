@@ -39,6 +39,11 @@ pub struct Store {
     /// The private copy a read-only store is read from, if one was needed
     /// ([`crate::readonly`]); removed when the store is closed.
     pub(crate) _copy: Option<crate::readonly::TempCopy>,
+    /// SQLite: the file's `data_version` when this connection last found
+    /// the whole chain intact (or last wrote to it). Only a commit by
+    /// another connection (another process, a hand edit) changes it, so a
+    /// write that finds it unchanged needs no second whole-chain check.
+    pub(crate) checked: std::cell::Cell<Option<i64>>,
 }
 
 /// How a store is opened.
@@ -148,6 +153,7 @@ impl Store {
             conn: RefCell::new(Conn::Sqlite(conn)),
             path: path.to_path_buf(),
             _copy: copy,
+            checked: std::cell::Cell::new(None),
         };
         if create {
             // Another application's SQLite file is not made a store.
@@ -177,6 +183,7 @@ impl Store {
             conn: RefCell::new(Conn::Postgres(Box::new(client))),
             path: PathBuf::from(&name),
             _copy: None,
+            checked: std::cell::Cell::new(None),
         };
         if how == Opening::Read {
             // Reading never writes, whatever the code path.

@@ -338,9 +338,20 @@ fn check_record(
         .clone()
         .ok_or_else(|| "its instrument row is missing".to_string())?;
     if seen_serials.insert(serial.clone()) {
-        let doc_model = serde_json::from_slice::<serde_json::Value>(&r.document)
+        // Only the model is read (serde skips the rest without building
+        // it: the whole document was hashed above).
+        #[derive(serde::Deserialize)]
+        struct Doc {
+            instrument: Instrument,
+        }
+        #[derive(serde::Deserialize)]
+        struct Instrument {
+            model: Option<serde_json::Value>,
+        }
+        let doc_model = serde_json::from_slice::<Doc>(&r.document)
             .ok()
-            .and_then(|v| v["instrument"]["model"].as_str().map(String::from));
+            .and_then(|d| d.instrument.model)
+            .and_then(|m| m.as_str().map(String::from));
         if doc_model != r.model {
             return Err(format!(
                 "the instrument's model ({}) is not the one in its first record's document ({})",

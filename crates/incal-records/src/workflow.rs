@@ -170,7 +170,7 @@ pub(crate) fn write_event(
             P::T(Some(&ev.created_utc)),
             P::T(Some(&ev.actor)),
             P::T(Some(ev.actor_role.as_str())),
-            ev.record_id.map_or(P::T(None), P::I),
+            P::OI(ev.record_id),
             P::T(ev.username.as_deref()),
             P::T(ev.role.map(Role::as_str)),
             P::T(ev.secret_sha256.as_deref()),

@@ -6,8 +6,8 @@ use incal::document::ResultDocument;
 
 use crate::db::{Conn, DbError, Mode, P};
 use crate::error::db_err;
+use crate::GENESIS;
 use crate::{sha256_hex, time, Added, ChainFields, Error, InputHash, NewRecord, Result, Store};
-use crate::{Verified, GENESIS};
 
 impl Store {
     /// Store `req.document` as a new record (crate docs); see
@@ -29,15 +29,39 @@ impl Store {
         self.insert_as(req, Some((old_id, reason)), None)
     }
 
-    /// Never extend a broken chain: the new record would seal it.
-    pub(crate) fn verify_before_writing(&self) -> Result<Verified> {
+    /// Never extend a broken chain: the new record would seal it. The
+    /// whole chain is checked, unless (SQLite) this connection found it
+    /// intact and no other connection has committed to the file since
+    /// (its `data_version` is the one then: [`Store::checked`]).
+    pub(crate) fn verify_before_writing(&self) -> Result<()> {
+        let version = self.data_version()?;
+        if version.is_some() && version == self.checked.get() {
+            return Ok(());
+        }
         self.verify().map_err(|e| match e {
             Error::Tampered { id, problem } => Error::Tampered {
                 id,
                 problem: format!("{problem}; nothing is added to a broken chain"),
             },
             other => other,
-        })
+        })?;
+        // Read before the check: a commit by another connection since
+        // then changes it, and the next write checks again.
+        self.checked.set(version);
+        Ok(())
+    }
+
+    /// SQLite's `PRAGMA data_version` of this connection (`None` on
+    /// PostgreSQL): it changes when another connection commits.
+    pub(crate) fn data_version(&self) -> Result<Option<i64>> {
+        let c = self.conn.borrow();
+        match &*c {
+            Conn::Sqlite(conn) => conn
+                .query_row("PRAGMA data_version", [], |r| r.get(0))
+                .map(Some)
+                .map_err(|e| db_err(&self.path.display().to_string(), e.into())),
+            _ => Ok(None),
+        }
     }
 
     /// Write `req` as the next record of the chain, superseding record

@@ -56,7 +56,7 @@ impl Config {
 }
 
 /// How long a chain check is shown before it is made again.
-pub const CHAIN_TTL: Duration = Duration::from_secs(5);
+pub const CHAIN_TTL: Duration = Duration::from_secs(30);
 
 /// The chain's status as the footer shows it.
 #[derive(Debug, Clone)]
@@ -76,7 +76,9 @@ pub struct AppState {
     stores: Vec<Mutex<Store>>,
     next: AtomicUsize,
     chain: Mutex<Option<(Instant, Chain)>>,
-    refresh: tokio::sync::Mutex<()>,
+    refresh: Arc<tokio::sync::Mutex<()>>,
+    writes: tokio::sync::Semaphore,
+    reads: tokio::sync::Semaphore,
     /// Sessions and login failures.
     pub sessions: Sessions,
 }
@@ -105,13 +107,16 @@ impl AppState {
             }
             None => None,
         };
+        let read_connections = stores.len().saturating_sub(1).max(1);
         Ok(Arc::new(AppState {
             config,
             lab,
             stores,
             next: AtomicUsize::new(0),
             chain: Mutex::new(None),
-            refresh: tokio::sync::Mutex::new(()),
+            refresh: Arc::new(tokio::sync::Mutex::new(())),
+            writes: tokio::sync::Semaphore::new(1),
+            reads: tokio::sync::Semaphore::new(read_connections),
             sessions: Sessions::default(),
         }))
     }
@@ -121,13 +126,41 @@ impl AppState {
         self: &Arc<Self>,
         f: impl FnOnce(&mut Store) -> T + Send + 'static,
     ) -> T {
+        self.on_store(false, f).await
+    }
+
+    /// Run `f` on a store connection in a blocking thread: writes always on
+    /// the first (the store skips its whole-chain check before a write when
+    /// nothing but this connection has committed since its last one),
+    /// reads on a free one, the others first.
+    async fn on_store<T: Send + 'static>(
+        self: &Arc<Self>,
+        write: bool,
+        f: impl FnOnce(&mut Store) -> T + Send + 'static,
+    ) -> T {
+        // Readers queue in order (a fair semaphore, one permit per read
+        // connection), so no request waits behind later ones.
+        let _permit = if write {
+            None
+        } else {
+            self.reads.acquire().await.ok()
+        };
         let me = Arc::clone(self);
-        let k = me.next.fetch_add(1, Ordering::Relaxed) % me.stores.len();
+        let n = me.stores.len();
+        let k = if write || n == 1 {
+            0
+        } else {
+            1 + me.next.fetch_add(1, Ordering::Relaxed) % (n - 1)
+        };
         let run = move || {
-            // A free connection if there is one (a write may hold one for
-            // a while), else wait for the next in turn.
-            let n = me.stores.len();
-            let free = (0..n).find_map(|i| me.stores[(k + i) % n].try_lock().ok());
+            let free = if write {
+                None
+            } else {
+                (0..n)
+                    .map(|i| (k + i) % n)
+                    .filter(|&j| j != 0 || n == 1)
+                    .find_map(|j| me.stores[j].try_lock().ok())
+            };
             let mut s = match free {
                 Some(s) => s,
                 None => me.stores[k].lock().unwrap_or_else(|p| p.into_inner()),
@@ -138,6 +171,18 @@ impl AppState {
             Ok(v) => v,
             Err(e) => std::panic::resume_unwind(e.into_panic()),
         }
+    }
+
+    /// Run the write `f` on a store connection, one write at a time: the
+    /// store checks the whole chain before every write and the database
+    /// takes writes one by one anyway, so writers queue here and leave
+    /// the other cores to the readers.
+    pub async fn write_store<T: Send + 'static>(
+        self: &Arc<Self>,
+        f: impl FnOnce(&mut Store) -> T + Send + 'static,
+    ) -> T {
+        let _one = self.writes.acquire().await;
+        self.on_store(true, f).await
     }
 
     /// After a write: a write refused on a broken chain shows it at once
@@ -168,11 +213,32 @@ impl AppState {
                 return c;
             }
         }
+        if !fresh {
+            // Stale: one request starts the check in the background and
+            // every request shows the last status meanwhile, so no page
+            // waits for a whole-chain check.
+            let held = self.chain.lock().unwrap_or_else(|p| p.into_inner()).clone();
+            if let Some((_, c)) = held {
+                if let Ok(guard) = Arc::clone(&self.refresh).try_lock_owned() {
+                    let me = Arc::clone(self);
+                    tokio::spawn(async move {
+                        let _one = guard;
+                        me.check_now().await;
+                    });
+                }
+                return c;
+            }
+        }
         // One check at a time: the requests that waited take its result.
         let _one = self.refresh.lock().await;
         if let Some(c) = cached(if fresh { Some(asked) } else { None }) {
             return c;
         }
+        self.check_now().await
+    }
+
+    /// Check the whole chain now and keep the status.
+    async fn check_now(self: &Arc<Self>) -> Chain {
         let c = self
             .with_store(|s| match s.verify() {
                 Ok(v) => Chain::Intact(v),

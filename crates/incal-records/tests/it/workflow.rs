@@ -23,7 +23,13 @@ fn as_(name: &str, role: Role) -> Actor {
 /// (viewer), ada (admin), and record 6 submitted by eve.
 fn lab(name: &str) -> (std::path::PathBuf, Store) {
     let path = temp_dir(name).join("lab.db");
-    let mut s = Store::open(&path).unwrap();
+    let s = lab_at(&path);
+    (path, s)
+}
+
+/// The accounts and record of [`lab`] in the store at `location`.
+fn lab_at(location: &std::path::Path) -> Store {
+    let mut s = Store::open(location).unwrap();
     let root = Actor::console("root");
     for (u, r) in [
         ("eve", Role::Engineer),
@@ -39,7 +45,38 @@ fn lab(name: &str) -> (std::path::PathBuf, Store) {
         .submit(&as_("eve", Role::Engineer), &NewRecord::new(&doc))
         .unwrap();
     assert_eq!(added.id, 6);
-    (path, s)
+    s
+}
+
+#[test]
+fn the_workflow_runs_the_same_on_postgresql() {
+    let url = crate::common::pg_database("workflow");
+    let mut pg = lab_at(std::path::Path::new(&url));
+    let (_, mut lite) = lab("pg-twin");
+    for s in [&mut pg, &mut lite] {
+        s.approve(&as_("sam", Role::Signatory), 6, Some("ok"))
+            .unwrap();
+        s.set_role(&Actor::console("root"), "vic", Role::Engineer)
+            .unwrap();
+        assert_eq!(s.review(6).unwrap().state, State::Approved);
+        assert_eq!(s.account("vic").unwrap().unwrap().role, Role::Engineer);
+        let v = s.verify().unwrap();
+        assert_eq!((v.records, v.events), (1, 8));
+    }
+    assert_eq!(pg.accounts().unwrap().len(), 5);
+    let mut out = Vec::new();
+    pg.export(&mut out).unwrap();
+    let copy = temp_dir("pg-copy").join("copy.db");
+    let done = Store::import_at(&copy, std::io::Cursor::new(&out), "pg.jsonl").unwrap();
+    assert_eq!(done.chain.events, 8);
+    // A role raised behind incal's back on the server is caught there too.
+    let mut c = postgres::Client::connect(&url, postgres::NoTls).unwrap();
+    c.batch_execute("UPDATE events SET role = 'admin' WHERE username = 'eve'")
+        .unwrap();
+    assert!(matches!(
+        pg.verify().unwrap_err(),
+        Error::Tampered { id: 1, .. }
+    ));
 }
 
 fn input(e: Error) -> String {

@@ -103,7 +103,7 @@ pub async fn change_user(
     let actor = user.actor();
     let (name, action) = (f.username.clone(), f.action.clone());
     let done = app
-        .with_store(move |s| match (action.as_str(), role, hashed) {
+        .write_store(move |s| match (action.as_str(), role, hashed) {
             ("add", Some(r), Some(h)) => s.add_user(&actor, &name, r, &h).map(|_| ()),
             ("passwd", _, Some(h)) => s.set_password(&actor, &name, &h).map(|_| ()),
             ("role", Some(r), _) => s.set_role(&actor, &name, r).map(|_| ()),

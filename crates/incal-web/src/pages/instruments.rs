@@ -167,9 +167,36 @@ pub async fn list(State(app): State<Shared>, user: User, Query(f): Query<ListQue
     })
 }
 
+/// What a list needs of a result document: its coefficients' names and
+/// its verdicts, read without building the rest.
+#[derive(Deserialize)]
+pub struct Summary {
+    #[serde(default)]
+    coefficients: BTreeMap<String, serde::de::IgnoredAny>,
+    #[serde(default)]
+    verdicts: Option<BTreeMap<String, VerdictOnly>>,
+}
+
+#[derive(Deserialize)]
+struct VerdictOnly {
+    verdict: String,
+}
+
+impl Summary {
+    /// The summary of a stored document (`None`: not readable).
+    pub fn of(document: &str) -> Option<Summary> {
+        serde_json::from_str(document).ok()
+    }
+
+    /// The coefficients' names.
+    pub fn names(&self) -> impl Iterator<Item = &String> {
+        self.coefficients.keys()
+    }
+}
+
 /// The verdicts of a result document in one line, and its class.
-pub fn verdict_line(document: &str) -> (String, String) {
-    let Ok(doc) = incal::document::ResultDocument::from_json(document) else {
+pub fn verdict_line(doc: Option<&Summary>) -> (String, String) {
+    let Some(doc) = doc else {
         return ("unreadable".into(), "fail".into());
     };
     let Some(v) = &doc.verdicts else {
@@ -177,7 +204,7 @@ pub fn verdict_line(document: &str) -> (String, String) {
     };
     let failed: Vec<String> = v
         .iter()
-        .filter(|(_, x)| x.verdict != incal::document::limits::Verdict::Pass)
+        .filter(|(_, x)| x.verdict != "pass")
         .map(|(n, x)| format!("{n} {}", x.verdict))
         .collect();
     if failed.is_empty() {
@@ -227,12 +254,11 @@ pub async fn one(State(app): State<Shared>, user: User, Path(serial): Path<Strin
     let mut coefficients = BTreeMap::new();
     let mut rows = Vec::new();
     for (r, text) in recs.iter().zip(&docs) {
-        if let Ok(doc) = incal::document::ResultDocument::from_json(text) {
-            for (name, _) in doc.coefficients.iter() {
-                coefficients.insert(name.to_string(), url(name));
-            }
+        let summary = Summary::of(text);
+        for name in summary.iter().flat_map(Summary::names) {
+            coefficients.insert(name.to_string(), url(name));
         }
-        let (verdicts, verdict_class) = verdict_line(text);
+        let (verdicts, verdict_class) = verdict_line(summary.as_ref());
         rows.push(RecordRow {
             id: r.id,
             procedure: r.procedure.clone(),

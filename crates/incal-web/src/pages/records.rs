@@ -27,7 +27,8 @@ pub async fn one(State(app): State<Shared>, user: User, Path(id): Path<i64>) -> 
         Ok(x) => x,
         Err(e) => return store_error(&e),
     };
-    let (verdicts, verdict_class) = verdict_line(&r.document);
+    let (verdicts, verdict_class) =
+        verdict_line(crate::pages::instruments::Summary::of(&r.document).as_ref());
     let decision = review
         .decision
         .as_ref()
@@ -277,7 +278,7 @@ async fn decide(app: Shared, user: User, id: i64, f: DecisionForm, approve: bool
     }
     let actor = user.actor();
     let done = app
-        .with_store(move |s| {
+        .write_store(move |s| {
             if approve {
                 s.approve(&actor, id, Some(f.reason.as_str()))
             } else {
@@ -393,7 +394,7 @@ pub async fn submit(State(app): State<Shared>, user: User, m: Multipart) -> Resp
     };
     let actor = user.actor();
     let done = app
-        .with_store(move |s| {
+        .write_store(move |s| {
             let serial = sub.serial.trim();
             let req = NewRecord {
                 serial: (!serial.is_empty()).then_some(serial),
