@@ -161,7 +161,41 @@ impl Row {
 /// A connection to one of the two servers.
 pub(crate) enum Conn {
     Sqlite(rusqlite::Connection),
-    Postgres(Box<postgres::Client>),
+    Postgres(Box<Pg>),
+}
+
+/// A PostgreSQL connection with its prepared statements, kept by SQL text
+/// (as rusqlite's `prepare_cached`): a statement is parsed and planned
+/// once per connection, not on every call.
+pub(crate) struct Pg {
+    pub(crate) client: postgres::Client,
+    statements: std::collections::HashMap<String, postgres::Statement>,
+}
+
+/// Most statements kept per connection (the store's SQL is a few dozen
+/// texts; beyond this, the cache starts afresh).
+const MAX_STATEMENTS: usize = 256;
+
+impl Pg {
+    pub(crate) fn new(client: postgres::Client) -> Pg {
+        Pg {
+            client,
+            statements: std::collections::HashMap::new(),
+        }
+    }
+
+    /// The prepared statement of `sql` (SQLite parameters rewritten).
+    fn prepared(&mut self, sql: &str) -> Result<postgres::Statement, DbError> {
+        if let Some(st) = self.statements.get(sql) {
+            return Ok(st.clone());
+        }
+        let st = self.client.prepare(pg_sql(sql).as_ref())?;
+        if self.statements.len() >= MAX_STATEMENTS {
+            self.statements.clear();
+        }
+        self.statements.insert(sql.to_string(), st.clone());
+        Ok(st)
+    }
 }
 
 impl std::fmt::Debug for Conn {
@@ -255,11 +289,14 @@ impl Conn {
                 })?;
                 Ok(rows.collect::<rusqlite::Result<Vec<_>>>()?)
             }
-            Conn::Postgres(c) => c
-                .query(pg_sql(sql).as_ref(), &pg_params(params))?
-                .iter()
-                .map(pg_row)
-                .collect(),
+            Conn::Postgres(c) => {
+                let st = c.prepared(sql)?;
+                c.client
+                    .query(&st, &pg_params(params))?
+                    .iter()
+                    .map(pg_row)
+                    .collect()
+            }
         }
     }
 
@@ -281,7 +318,10 @@ impl Conn {
                 let mut st = c.prepare_cached(sql)?;
                 Ok(st.execute(rusqlite::params_from_iter(params.iter()))? as u64)
             }
-            Conn::Postgres(c) => Ok(c.execute(pg_sql(sql).as_ref(), &pg_params(params))?),
+            Conn::Postgres(c) => {
+                let st = c.prepared(sql)?;
+                Ok(c.client.execute(&st, &pg_params(params))?)
+            }
         }
     }
 
@@ -289,7 +329,7 @@ impl Conn {
     pub(crate) fn batch(&mut self, sql: &str) -> Result<(), DbError> {
         match self {
             Conn::Sqlite(c) => Ok(c.execute_batch(sql)?),
-            Conn::Postgres(c) => Ok(c.batch_execute(sql)?),
+            Conn::Postgres(c) => Ok(c.client.batch_execute(sql)?),
         }
     }
 

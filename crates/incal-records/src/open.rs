@@ -180,7 +180,7 @@ impl Store {
             message,
         })?;
         let store = Store {
-            conn: RefCell::new(Conn::Postgres(Box::new(client))),
+            conn: RefCell::new(Conn::Postgres(Box::new(db::Pg::new(client)))),
             path: PathBuf::from(&name),
             _copy: None,
             checked: std::cell::Cell::new(None),

@@ -75,6 +75,20 @@ impl Store {
             .map_err(self.db())
     }
 
+    /// Instrument `serial`: `Some(model as first recorded)` when the store
+    /// has it, `None` otherwise.
+    pub fn instrument(&self, serial: &str) -> Result<Option<Option<String>>> {
+        let row = self
+            .conn
+            .borrow_mut()
+            .query_opt(
+                "SELECT model FROM instruments WHERE serial = ?1",
+                &[P::T(Some(serial))],
+            )
+            .map_err(self.db())?;
+        row.map(|r| r.ot(0)).transpose().map_err(self.db())
+    }
+
     /// Every record (of `serial` only, when given), by id.
     pub fn list(&self, serial: Option<&str>) -> Result<Vec<RecordSummary>> {
         let rows = self

@@ -485,6 +485,13 @@ impl Store {
         reviews_in(&mut tx, None).map_err(self.db())
     }
 
+    /// The review of every record of instrument `serial`, by record id.
+    pub fn reviews_of(&self, serial: &str) -> Result<HashMap<i64, Review>> {
+        let mut c = self.conn.borrow_mut();
+        let mut tx = c.transaction(Mode::Read).map_err(self.db())?;
+        reviews_in(&mut tx, Some(Only::Serial(serial))).map_err(self.db())
+    }
+
     /// The events about record `record_id`, or (when `None`) the last
     /// `limit` events of the chain, oldest first.
     pub fn events(&self, record_id: Option<i64>, limit: i64) -> Result<Vec<Event>> {
@@ -541,17 +548,28 @@ pub(crate) fn event_row(r: &crate::db::Row) -> std::result::Result<Event, DbErro
 }
 
 fn review_in(tx: &mut Conn, record_id: i64) -> std::result::Result<Option<Review>, DbError> {
-    Ok(reviews_in(tx, Some(record_id))?.remove(&record_id))
+    Ok(reviews_in(tx, Some(Only::Record(record_id)))?.remove(&record_id))
+}
+
+/// Which records' reviews to read.
+#[derive(Clone, Copy)]
+enum Only<'a> {
+    Record(i64),
+    Serial(&'a str),
 }
 
 /// The reviews of every record (or of `only`), from the records, their
 /// supersessions and their `record.*` events.
 fn reviews_in(
     tx: &mut Conn,
-    only: Option<i64>,
+    only: Option<Only>,
 ) -> std::result::Result<HashMap<i64, Review>, DbError> {
     let (cond, params): (&str, Vec<P>) = match only {
-        Some(id) => ("WHERE r.id = ?1", vec![P::I(id)]),
+        Some(Only::Record(id)) => ("WHERE r.id = ?1", vec![P::I(id)]),
+        Some(Only::Serial(s)) => (
+            "WHERE r.instrument_id = (SELECT id FROM instruments WHERE serial = ?1)",
+            vec![P::T(Some(s))],
+        ),
         None => ("", vec![]),
     };
     let rows = tx.query(
@@ -579,10 +597,12 @@ fn reviews_in(
             },
         );
     }
-    let cond = if only.is_some() {
-        "AND record_id = ?1"
-    } else {
-        ""
+    let cond = match only {
+        Some(Only::Record(_)) => "AND record_id = ?1",
+        Some(Only::Serial(_)) => {
+            "AND record_id IN (SELECT r.id FROM records r JOIN instruments i ON i.id = r.instrument_id WHERE i.serial = ?1)"
+        }
+        None => "",
     };
     let evs = tx.query(
         &format!(

@@ -34,7 +34,9 @@ pub struct Config {
     pub user_header: String,
     /// Mark cookies `Secure` (served over TLS by a reverse proxy).
     pub secure_cookies: bool,
-    /// Store connections kept open.
+    /// Store connections kept open (one writes, the others read); 0: 4 on
+    /// SQLite (the file is read in this process: more than the cores gains
+    /// nothing), 12 on PostgreSQL (a read waits on the server's round trips).
     pub connections: usize,
 }
 
@@ -50,7 +52,7 @@ impl Config {
             trusted_proxy: None,
             user_header: "X-Remote-User".into(),
             secure_cookies: false,
-            connections: 4,
+            connections: 0,
         }
     }
 }
@@ -92,7 +94,18 @@ impl AppState {
     pub fn open(config: Config) -> Result<Shared, String> {
         let name = incal_records::store_name(&config.db);
         let mut stores = Vec::new();
-        for _ in 0..config.connections.max(1) {
+        let wanted = match config.connections {
+            0 if config
+                .db
+                .to_str()
+                .is_some_and(incal_records::is_postgres_url) =>
+            {
+                12
+            }
+            0 => 4,
+            n => n,
+        };
+        for _ in 0..wanted.max(2) {
             let s = Store::open(&config.db).map_err(|e| incal_records::store_message(&name, &e))?;
             stores.push(Mutex::new(s));
         }

@@ -33,6 +33,9 @@ pub struct Args {
     /// Mark the session cookie Secure: the proxy serves the application over TLS.
     #[arg(long)]
     pub secure_cookies: bool,
+    /// Store connections kept open, one of them for writes (default: 4 on SQLite, 12 on PostgreSQL).
+    #[arg(long, value_name = "N")]
+    pub connections: Option<usize>,
 }
 
 /// Run `incal serve` until interrupted.
@@ -57,5 +60,11 @@ pub fn run(a: &Args) -> CliResult<()> {
     c.trusted_proxy = a.trusted_proxy;
     c.user_header = a.user_header.clone();
     c.secure_cookies = a.secure_cookies;
+    if let Some(n) = a.connections {
+        if !(2..=64).contains(&n) {
+            return Err(CliError::Input(format!("--connections {n}: 2 to 64")));
+        }
+        c.connections = n;
+    }
     incal_web::serve(c).map_err(CliError::Input)
 }

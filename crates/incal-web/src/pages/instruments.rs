@@ -219,17 +219,13 @@ pub async fn one(State(app): State<Shared>, user: User, Path(serial): Path<Strin
     let s2 = serial.clone();
     let read = app
         .with_store(move |s| {
-            let model = s
-                .instruments()?
-                .into_iter()
-                .find(|i| i.0 == s2)
-                .map(|i| i.1);
+            let model = s.instrument(&s2)?;
             let recs = s.list(Some(&s2))?;
             let mut docs = Vec::new();
             for r in &recs {
                 docs.push(s.show(r.id)?.document);
             }
-            Ok::<_, incal_records::Error>((model, recs, docs, s.reviews()?))
+            Ok::<_, incal_records::Error>((model, recs, docs, s.reviews_of(&s2)?))
         })
         .await;
     let (model, recs, docs, reviews) = match read {
