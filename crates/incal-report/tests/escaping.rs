@@ -150,6 +150,7 @@ fn hostile_profile(p: &str) -> LabProfile {
             address: format!("{p}\n{p}"),
             accreditation: Some(p.into()),
             certificate_prefix: Some(p.into()),
+            country: Some(p.into()),
         },
         signatory: vec![Signatory {
             name: p.into(),
@@ -262,4 +263,42 @@ fn every_string_of_real_documents_is_escaped_wherever_it_lands() {
         }
     }
     assert!(fields > 40, "only {fields} fields reached a report");
+}
+
+#[test]
+fn every_dcc_field_is_escaped() {
+    let mut doc = real("tumble");
+    for p in PAYLOADS {
+        doc.instrument.serial = Some(p.into());
+        doc.instrument.model = Some(p.into());
+        doc.title = p.into();
+        let info = incal_report::dcc::DccInfo {
+            number: p.into(),
+            lab_name: p.into(),
+            lab_address: p.into(),
+            country: p.into(),
+            customer: Some(p.into()),
+            calibration_date: "2026-12-01".into(),
+            issue_date: "2026-12-01".into(),
+            signatory: Some((p.into(), p.into())),
+            record: Some(p.into()),
+        };
+        let xml = incal_report::dcc::dcc_xml(&doc, &info);
+        // Every markup character of a payload is escaped: the only tags
+        // are the DCC's and D-SI's own.
+        for tag in xml.split('<').skip(1) {
+            let name = tag.split([' ', '>']).next().unwrap_or("");
+            assert!(
+                ["?xml", "dcc:", "/dcc:", "si:", "/si:"]
+                    .iter()
+                    .any(|ok| name.starts_with(ok)),
+                "payload {p:?} made the tag <{name}"
+            );
+        }
+        assert!(!xml.contains(p) || !p.contains(['<', '>', '"', '\'', '&']));
+        assert!(
+            xml.contains("<dcc:countryCodeISO3166_1>ZZ<"),
+            "a country code that is not one is ZZ"
+        );
+    }
 }
