@@ -24,6 +24,9 @@ pub struct Config {
     /// Recall interval (days) of every instrument: the next calibration
     /// is due this long after the last one.
     pub recall_days: i64,
+    /// Recall intervals per model and per instrument (`--recall FILE`),
+    /// over `recall_days`.
+    pub recall: Recall,
     /// Instruments due within this many days are listed as due soon.
     pub due_soon_days: i64,
     /// Reverse-proxy mode: the proxy's address, whose header
@@ -48,12 +51,64 @@ impl Config {
             listen: SocketAddr::from(([127, 0, 0, 1], 8080)),
             lab: None,
             recall_days: 365,
+            recall: Recall::default(),
             due_soon_days: 30,
             trusted_proxy: None,
             user_header: "X-Remote-User".into(),
             secure_cookies: false,
             connections: 0,
         }
+    }
+}
+
+/// Recall intervals per model and per instrument, read from a TOML file
+/// (`incal serve --recall FILE`):
+///
+/// ```toml
+/// [model]
+/// "QA-2000" = 180      # days, for every instrument of this model
+/// [serial]
+/// "SN-042" = 90        # days, for this instrument (over its model's)
+/// ```
+#[derive(Debug, Clone, Default, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Recall {
+    /// Days per model.
+    #[serde(default)]
+    pub model: std::collections::BTreeMap<String, i64>,
+    /// Days per serial.
+    #[serde(default)]
+    pub serial: std::collections::BTreeMap<String, i64>,
+}
+
+impl Recall {
+    /// Read a recall file; every interval 1 to 36 500 days.
+    pub fn parse(name: &str, text: &str) -> Result<Recall, String> {
+        let r: Recall = toml::from_str(text).map_err(|e| {
+            let first = e.to_string().lines().next().unwrap_or("").to_string();
+            format!("{name}: {first}")
+        })?;
+        for (table, map) in [("model", &r.model), ("serial", &r.serial)] {
+            for (k, d) in map {
+                if !(1..=36_500).contains(d) {
+                    return Err(format!(
+                        "{name}: [{table}] \"{}\" = {d}: an interval is 1 to 36500 days",
+                        incal_io::clip(k)
+                    ));
+                }
+            }
+        }
+        Ok(r)
+    }
+
+    /// The interval of instrument `serial` of `model`: its own, else its
+    /// model's, else `default`.
+    pub fn days(&self, serial: &str, model: Option<&str>, default: i64) -> i64 {
+        self.serial
+            .get(serial)
+            .or_else(|| model.and_then(|m| self.model.get(m)))
+            .copied()
+            .unwrap_or(default)
     }
 }
 

@@ -42,6 +42,7 @@ pub struct InstrumentRow {
     pub due: String,
     pub status: String,
     pub status_class: String,
+    pub recall_days: i64,
 }
 
 #[derive(Template)]
@@ -76,6 +77,7 @@ pub struct Instrument {
     pub due: String,
     pub status: String,
     pub status_class: String,
+    pub recall_days: i64,
     pub rows: Vec<RecordRow>,
     /// (name, name URL-encoded)
     pub coefficients: Vec<(String, String)>,

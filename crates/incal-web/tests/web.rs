@@ -543,3 +543,76 @@ async fn the_dcc_of_an_approved_record_names_its_approver() {
     let html = sam.get("/records/9/certificate").await.body;
     assert!(html.contains("sam") && !html.contains("Someone Else"));
 }
+
+#[tokio::test]
+async fn recall_intervals_per_model_and_instrument() {
+    let (path, _) = lab("recall");
+    let mut c = incal_web::Config::new(&path);
+    c.recall = incal_web::state::Recall::parse(
+        "recall.toml",
+        "[model]\n\"lee model\" = 3650\n[serial]\n\"SN-1\" = 1\n",
+    )
+    .unwrap();
+    let app = incal_web::AppState::open(c).unwrap();
+    let mut vic = logged_in(&app, "vic").await;
+    // SN-1 (model "lee model") is recalled daily: its last calibration,
+    // stored today, is due tomorrow.
+    let r = vic.get("/?show=due").await.body;
+    assert!(
+        r.contains("1 of 1 instruments") && r.contains("due soon"),
+        "{r}"
+    );
+    assert!(vic
+        .get("/instruments/SN-1")
+        .await
+        .body
+        .contains("Recall interval 1 days"));
+    for bad in [
+        "[model]\n\"x\" = 0\n",
+        "[models]\n",
+        "[serial]\n\"x\" = \"soon\"\n",
+    ] {
+        let e = incal_web::state::Recall::parse("recall.toml", bad).unwrap_err();
+        assert!(e.starts_with("recall.toml: "), "{e}");
+    }
+}
+
+#[tokio::test]
+async fn the_proxy_header_is_believed_from_the_proxy_only() {
+    use axum::body::Body;
+    use axum::extract::ConnectInfo;
+    use axum::http::Request;
+    use tower::ServiceExt;
+    let (path, _) = lab("proxy");
+    let mut c = incal_web::Config::new(&path);
+    c.trusted_proxy = Some("127.0.0.1".parse().unwrap());
+    let app = incal_web::AppState::open(c).unwrap();
+    let ask = |from: &str, user: &str| {
+        let mut req = Request::builder()
+            .uri("/events")
+            .header("X-Remote-User", user)
+            .body(Body::empty())
+            .unwrap();
+        let addr: std::net::SocketAddr = format!("{from}:50000").parse().unwrap();
+        req.extensions_mut().insert(ConnectInfo(addr));
+        incal_web::router(app.clone()).oneshot(req)
+    };
+    let r = ask("127.0.0.1", "sam").await.unwrap();
+    assert_eq!(
+        r.status(),
+        StatusCode::OK,
+        "from the proxy: logged in as sam"
+    );
+    let r = ask("10.0.0.5", "sam").await.unwrap();
+    assert_eq!(
+        r.status(),
+        StatusCode::SEE_OTHER,
+        "from elsewhere the header is ignored"
+    );
+    let r = ask("127.0.0.1", "nobody").await.unwrap();
+    assert_eq!(
+        r.status(),
+        StatusCode::SEE_OTHER,
+        "an unknown account is not logged in"
+    );
+}

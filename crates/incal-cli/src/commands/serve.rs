@@ -21,6 +21,9 @@ pub struct Args {
     /// Recall interval in days: an instrument's next calibration is due this long after its last one.
     #[arg(long, default_value_t = 365, value_name = "DAYS")]
     pub recall_days: i64,
+    /// Recall intervals per model and per instrument (TOML: [model] "QA-2000" = 180, [serial] "SN-042" = 90, in days), over --recall-days.
+    #[arg(long, value_name = "FILE")]
+    pub recall: Option<PathBuf>,
     /// Instruments due within this many days are listed as due soon.
     #[arg(long, default_value_t = 30, value_name = "DAYS")]
     pub due_soon_days: i64,
@@ -56,6 +59,10 @@ pub fn run(a: &Args) -> CliResult<()> {
     c.listen = a.listen;
     c.lab = a.lab.clone();
     c.recall_days = a.recall_days;
+    if let Some(p) = &a.recall {
+        let (name, text) = crate::io::read_text(p)?;
+        c.recall = incal_web::state::Recall::parse(&name, &text).map_err(CliError::Input)?;
+    }
     c.due_soon_days = a.due_soon_days;
     c.trusted_proxy = a.trusted_proxy;
     c.user_header = a.user_header.clone();

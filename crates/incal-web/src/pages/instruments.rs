@@ -107,13 +107,11 @@ pub async fn list(State(app): State<Shared>, user: User, Query(f): Query<ListQue
     let mut rows = Vec::new();
     for (serial, model) in &instruments {
         let recs = by_serial.get(serial.as_str()).cloned().unwrap_or_default();
-        let d = due_of(
-            &recs,
-            &reviews,
-            app.config.recall_days,
-            app.config.due_soon_days,
-            now,
-        );
+        let days = app
+            .config
+            .recall
+            .days(serial, model.as_deref(), app.config.recall_days);
+        let d = due_of(&recs, &reviews, days, app.config.due_soon_days, now);
         let model = model.clone().unwrap_or_default();
         let text_ok = needle.is_empty()
             || serial.to_lowercase().contains(&needle)
@@ -141,6 +139,7 @@ pub async fn list(State(app): State<Shared>, user: User, Query(f): Query<ListQue
             due: d.due,
             status: d.status.into(),
             status_class: status_class(d.status).into(),
+            recall_days: days,
         });
     }
     let shows = [
@@ -240,13 +239,11 @@ pub async fn one(State(app): State<Shared>, user: User, Path(serial): Path<Strin
     };
     let now = time::parse_utc(&time::now_utc()).unwrap_or(0);
     let refs: Vec<&RecordSummary> = recs.iter().collect();
-    let d = due_of(
-        &refs,
-        &reviews,
-        app.config.recall_days,
-        app.config.due_soon_days,
-        now,
-    );
+    let days = app
+        .config
+        .recall
+        .days(&serial, model.as_deref(), app.config.recall_days);
+    let d = due_of(&refs, &reviews, days, app.config.due_soon_days, now);
     let mut coefficients = BTreeMap::new();
     let mut rows = Vec::new();
     for (r, text) in recs.iter().zip(&docs) {
@@ -272,6 +269,7 @@ pub async fn one(State(app): State<Shared>, user: User, Path(serial): Path<Strin
         p: page(&app, &user, &format!("Instrument {serial}")).await,
         serial_url: url(&serial),
         model: model.unwrap_or_else(|| "model not recorded".into()),
+        recall_days: days,
         due: d.due,
         status: d.status.into(),
         status_class: status_class(d.status).into(),
