@@ -43,22 +43,12 @@ pub struct DccInfo {
     pub record: Option<String>,
 }
 
-/// XML text with `& < > " '` escaped.
+/// XML text: the report's escaping of `& < > " '` ([`crate::format::esc`],
+/// whose entities XML reads too), after every control character XML 1.0
+/// does not allow becomes a space.
 fn x(s: &str) -> String {
-    let mut o = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => o.push_str("&amp;"),
-            '<' => o.push_str("&lt;"),
-            '>' => o.push_str("&gt;"),
-            '"' => o.push_str("&quot;"),
-            '\'' => o.push_str("&apos;"),
-            // XML 1.0 has no other control characters.
-            c if (c as u32) < 0x20 && !matches!(c, '\t' | '\n' | '\r') => o.push(' '),
-            c => o.push(c),
-        }
-    }
-    o
+    let allowed = |c: char| (c as u32) >= 0x20 || matches!(c, '\t' | '\n' | '\r');
+    crate::format::esc(&s.replace(|c: char| !allowed(c), " "))
 }
 
 /// A DCC text: `<dcc:TAG><dcc:content>TEXT</dcc:content></dcc:TAG>`, the

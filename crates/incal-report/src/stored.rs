@@ -122,6 +122,18 @@ fn history(store: &Store, doc: &ResultDocument) -> Result<Vec<HistorySeries>, St
     Ok(out)
 }
 
+/// [`of_document`] in `store`, when one is given.
+fn held(
+    store: Option<&Store>,
+    doc: &ResultDocument,
+    text: &str,
+) -> Result<Option<Stored>, StoredError> {
+    match store {
+        Some(s) => of_document(s, doc, text),
+        None => Ok(None),
+    }
+}
+
 /// The HTML report of `doc` (its JSON text `text`), as `incal report`
 /// writes it for every front end: with what `store` says about it (the
 /// record stamp and the history plots), and as a certificate under
@@ -134,10 +146,7 @@ pub fn report_html(
     profile: Option<LabProfile>,
     issue: &Issue,
 ) -> Result<String, StoredError> {
-    let held = match store {
-        Some(s) => of_document(s, doc, text)?,
-        None => None,
-    };
+    let held = held(store, doc, text)?;
     let record = held.as_ref().and_then(|s| s.record.as_ref());
     let certificate = profile.map(|p| certificate(p, text, record, issue));
     let (history, stamp) = match held {
@@ -163,10 +172,7 @@ pub fn dcc_of(
     profile: LabProfile,
     issue: &Issue,
 ) -> Result<String, StoredError> {
-    let held = match store {
-        Some(s) => of_document(s, doc, text)?,
-        None => None,
-    };
+    let held = held(store, doc, text)?;
     let record = held.as_ref().and_then(|s| s.record.as_ref());
     let c = certificate(profile, text, record, issue);
     let info = crate::dcc::DccInfo {

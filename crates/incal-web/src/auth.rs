@@ -97,11 +97,19 @@ pub async fn sessions(State(app): State<Shared>, mut req: Request, next: Next) -
     } else {
         (StatusCode::UNAUTHORIZED, "log in first").into_response()
     };
-    if let Some(c) = new_cookie.and_then(|c| HeaderValue::from_str(&c).ok()) {
-        resp.headers_mut().append(SET_COOKIE, c);
+    if let Some(c) = new_cookie {
+        set_cookie(&mut resp, &c);
     }
     security_headers(&mut resp);
     resp
+}
+
+/// Add the `Set-Cookie` header `value` ([`session::cookie`],
+/// [`session::cleared`]) to `resp`.
+pub fn set_cookie(resp: &mut Response, value: &str) {
+    if let Ok(v) = HeaderValue::from_str(value) {
+        resp.headers_mut().append(SET_COOKIE, v);
+    }
 }
 
 /// Headers on every response: no framing, no sniffing, no referrer, no

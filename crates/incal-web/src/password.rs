@@ -21,12 +21,10 @@ pub fn random_bytes<const N: usize>() -> [u8; N] {
     b
 }
 
-/// `n` random bytes as lower-case hex: session ids and CSRF tokens.
+/// 32 random bytes as lower-case hex ([`incal_io::hex`]): session ids and
+/// CSRF tokens.
 pub fn random_token() -> String {
-    random_bytes::<32>()
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
+    incal_io::hex(&random_bytes::<32>())
 }
 
 /// Why a password is not accepted.

@@ -1,13 +1,13 @@
 //! Logging in and out.
 
 use axum::extract::State;
-use axum::http::header::{LOCATION, SET_COOKIE};
-use axum::http::{HeaderValue, StatusCode};
+use axum::http::header::LOCATION;
+use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use axum::{Extension, Form};
 use serde::Deserialize;
 
-use crate::auth::Ctx;
+use crate::auth::{set_cookie, Ctx};
 use crate::pages::{error, render};
 use crate::views::{Login, Page};
 use crate::{password, session, Shared};
@@ -94,9 +94,7 @@ pub async fn submit(
     app.sessions.remove(&ctx.sid);
     let (sid, _) = app.sessions.create(Some(f.username));
     let mut resp = (StatusCode::SEE_OTHER, [(LOCATION, "/")]).into_response();
-    if let Ok(v) = HeaderValue::from_str(&session::cookie(&sid, app.config.secure_cookies)) {
-        resp.headers_mut().append(SET_COOKIE, v);
-    }
+    set_cookie(&mut resp, &session::cookie(&sid, app.config.secure_cookies));
     resp
 }
 
@@ -122,8 +120,6 @@ pub async fn logout(
     }
     app.sessions.remove(&ctx.sid);
     let mut resp = (StatusCode::SEE_OTHER, [(LOCATION, "/login")]).into_response();
-    if let Ok(v) = HeaderValue::from_str(&session::cleared(app.config.secure_cookies)) {
-        resp.headers_mut().append(SET_COOKIE, v);
-    }
+    set_cookie(&mut resp, &session::cleared(app.config.secure_cookies));
     resp
 }

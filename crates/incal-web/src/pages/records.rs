@@ -16,6 +16,21 @@ use crate::pages::{allowed, error, page, render, store_error, url};
 use crate::views::{Compare, CompareRow, Record, Submit};
 use crate::Shared;
 
+/// A download: `body` as `content_type`, saved as `filename`.
+fn attachment(content_type: &'static str, filename: &str, body: impl IntoResponse) -> Response {
+    (
+        [
+            (CONTENT_TYPE, content_type.to_string()),
+            (
+                CONTENT_DISPOSITION,
+                format!("attachment; filename=\"{filename}\""),
+            ),
+        ],
+        body,
+    )
+        .into_response()
+}
+
 /// `GET /records/{id}`.
 pub async fn one(State(app): State<Shared>, user: User, Path(id): Path<i64>) -> Response {
     let read = app
@@ -99,29 +114,14 @@ pub async fn one(State(app): State<Shared>, user: User, Path(id): Path<i64>) -> 
 /// stored, as a download named after the record.
 pub async fn document(State(app): State<Shared>, _user: User, Path(id): Path<i64>) -> Response {
     match app.with_store(move |s| s.show(id)).await {
-        Ok(r) => (
-            [
-                (CONTENT_TYPE, "application/json".to_string()),
-                (
-                    CONTENT_DISPOSITION,
-                    format!("attachment; filename=\"record-{id}.json\""),
-                ),
-            ],
-            r.document,
-        )
-            .into_response(),
+        Ok(r) => attachment("application/json", &format!("record-{id}.json"), r.document),
         Err(e) => store_error(&e),
     }
 }
 
-/// The certificate's HTML of approved record `id`, with its approver as
-/// the signatory (or why there is none: 409 when not approved).
-async fn certificate_html(app: &Shared, id: i64) -> Result<String, Response> {
-    certificate_text(app, id, false).await
-}
-
 /// The certificate of approved record `id` as HTML, or (`dcc`) as a
-/// Digital Calibration Certificate, which needs the server's `--lab`.
+/// Digital Calibration Certificate, which needs the server's `--lab`;
+/// its approver is the signatory (409 when it is not approved).
 async fn certificate_text(app: &Shared, id: i64, dcc: bool) -> Result<String, Response> {
     if dcc && app.lab.is_none() {
         return Err(error(
@@ -185,7 +185,7 @@ async fn certificate_text(app: &Shared, id: i64, dcc: bool) -> Result<String, Re
 /// of `incal report`; a report without certificate fields when the
 /// server has no `--lab` profile).
 pub async fn certificate(State(app): State<Shared>, _user: User, Path(id): Path<i64>) -> Response {
-    match certificate_html(&app, id).await {
+    match certificate_text(&app, id, false).await {
         Ok(html) => Html(html).into_response(),
         Err(r) => r,
     }
@@ -200,17 +200,7 @@ pub async fn certificate_dcc(
     Path(id): Path<i64>,
 ) -> Response {
     match certificate_text(&app, id, true).await {
-        Ok(xml) => (
-            [
-                (CONTENT_TYPE, "application/xml".to_string()),
-                (
-                    CONTENT_DISPOSITION,
-                    format!("attachment; filename=\"certificate-{id}.xml\""),
-                ),
-            ],
-            xml,
-        )
-            .into_response(),
+        Ok(xml) => attachment("application/xml", &format!("certificate-{id}.xml"), xml),
         Err(r) => r,
     }
 }
@@ -223,7 +213,7 @@ pub async fn certificate_pdf(
     _user: User,
     Path(id): Path<i64>,
 ) -> Response {
-    let html = match certificate_html(&app, id).await {
+    let html = match certificate_text(&app, id, false).await {
         Ok(h) => h,
         Err(r) => return r,
     };
@@ -242,17 +232,7 @@ pub async fn certificate_pdf(
     .await
     .unwrap_or_else(|e| Err(e.to_string()));
     match printed {
-        Ok(bytes) => (
-            [
-                (CONTENT_TYPE, "application/pdf".to_string()),
-                (
-                    CONTENT_DISPOSITION,
-                    format!("attachment; filename=\"certificate-{id}.pdf\""),
-                ),
-            ],
-            bytes,
-        )
-            .into_response(),
+        Ok(bytes) => attachment("application/pdf", &format!("certificate-{id}.pdf"), bytes),
         Err(e) => error(StatusCode::SERVICE_UNAVAILABLE, &format!("no PDF: {e}")),
     }
 }
