@@ -223,15 +223,31 @@ pub fn number_text(v: f64) -> String {
 /// `{:?}`, and the same notation: plain in [10⁻⁴, 10¹⁶), `1.5e-7` below
 /// 10⁻⁴, where ryu's plain `0.0000dd` of [10⁻⁵, 10⁻⁴) is rewritten as
 /// `d.de-5`), the rest (plain digits from 10¹⁶) by `{:?}`.
+///
+/// Where `v` lies exactly halfway between two shortest decimals
+/// (12442012941949.3125 between …312 and …313), ryu rounds half to even and
+/// Rust's `{:?}` half up; such a value is written by `{:?}` too.
 pub fn push_number(out: &mut String, v: f64) {
     let a = v.abs();
     if v.fract() == 0.0 && a < 1e15 {
         out.push_str(itoa::Buffer::new().format(v as i64));
-    } else if a < 1e-5 || (1e-4..1e16).contains(&a) {
-        out.push_str(ryu::Buffer::new().format_finite(v));
-    } else if (1e-5..1e-4).contains(&a) {
-        let mut b = ryu::Buffer::new();
-        let text = b.format_finite(a);
+        return;
+    }
+    let mut b = ryu::Buffer::new();
+    let text = match v.is_finite() && a < 1e16 {
+        true if a < 1e-4 => b.format_finite(a),
+        true => b.format_finite(v),
+        false => "",
+    };
+    if text.is_empty() || may_be_a_tie(v, text) {
+        use std::fmt::Write;
+        let _ = write!(out, "{v:?}");
+    } else if a < 1e-5 || a >= 1e-4 {
+        if v < 0.0 && a < 1e-4 {
+            out.push('-');
+        }
+        out.push_str(text);
+    } else {
         let digits = text.strip_prefix("0.0000").unwrap_or(text);
         if v < 0.0 {
             out.push('-');
@@ -242,10 +258,37 @@ pub fn push_number(out: &mut String, v: f64) {
             out.push_str(&digits[1..]);
         }
         out.push_str("e-5");
-    } else {
-        use std::fmt::Write;
-        let _ = write!(out, "{v:?}");
     }
+}
+
+/// Whether the shortest decimal `text` (ryu's, of `|v|` or `v`) may have been
+/// rounded from an exact halfway point: the exact binary value `m·2^-k`
+/// (`m` odd) has `k` decimal places, and a tie is one place past the text's
+/// last digit, so only `k = d + 1` (with `d` the text's decimal places) can
+/// be one.
+fn may_be_a_tie(v: f64, text: &str) -> bool {
+    let bits = v.to_bits();
+    let field = ((bits >> 52) & 0x7ff) as i32;
+    let mut mantissa = bits & ((1u64 << 52) - 1);
+    if field != 0 {
+        mantissa |= 1u64 << 52;
+    }
+    if mantissa == 0 {
+        return false;
+    }
+    let exp2 = field.max(1) - 1075 + mantissa.trailing_zeros() as i32;
+    if exp2 >= 0 {
+        return false;
+    }
+    let (digits, exp10) = match text.split_once('e') {
+        Some((d, e)) => (d, e.parse::<i32>().unwrap_or(0)),
+        None => (text, 0),
+    };
+    let places = match digits.split_once('.') {
+        Some((_, "0")) | None => 0,
+        Some((_, f)) => f.len() as i32,
+    };
+    -exp2 == places - exp10 + 1
 }
 
 #[cfg(test)]
@@ -391,7 +434,20 @@ mod tests {
     #[test]
     fn number_text_is_the_debug_notation() {
         let cases = [
-            0.0, -0.0, 3.0, -2.5, 0.1, 1e-4, 9.99e-5, -1.25e-5, 1e-5, 2.25e-7, 5e-324, 1e15,
+            0.0,
+            -0.0,
+            3.0,
+            -2.5,
+            0.1,
+            1e-4,
+            9.99e-5,
+            -1.25e-5,
+            1e-5,
+            2.25e-7,
+            5e-324,
+            1e15,
+            12442012941949.3125,
+            -12442012941949.3125,
         ];
         let wide = [
             1e16,
@@ -419,6 +475,16 @@ mod tests {
             let v = f64::from_bits(bits);
             proptest::prop_assume!(v.fract() != 0.0 || v.abs() >= 1e15);
             proptest::prop_assert_eq!(number_text(v), format!("{v:?}"));
+        }
+
+        /// Values with few binary places, where exact halfway points between
+        /// two shortest decimals are common.
+        #[test]
+        fn number_text_matches_debug_at_halfway_points(m in 0u64..(1 << 52), k in 1i32..60) {
+            // An odd numerator over 2^k: never an integer.
+            let v = (2 * m + 1) as f64 / 2f64.powi(k);
+            proptest::prop_assert_eq!(number_text(v), format!("{v:?}"));
+            proptest::prop_assert_eq!(number_text(-v), format!("{:?}", -v));
         }
 
         /// The rewritten decade [10⁻⁵, 10⁻⁴) too.
