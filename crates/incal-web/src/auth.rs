@@ -82,7 +82,7 @@ pub async fn sessions(State(app): State<Shared>, mut req: Request, next: Next) -
             if req.uri().path() == "/health" {
                 return next.run(req).await;
             }
-            let (sid, s) = app.sessions.create(user);
+            let (sid, s) = app.sessions.create(user, None);
             new_cookie = Some(session::cookie(&sid, app.config.secure_cookies));
             (sid, s)
         }
@@ -175,10 +175,17 @@ impl FromRequestParts<Shared> for User {
             .with_store(move |s| s.account(&name))
             .await
             .map_err(|e| crate::pages::error(StatusCode::INTERNAL_SERVER_ERROR, &e.to_string()))?;
+        let same_password = |a: &Account| {
+            ctx.session
+                .password
+                .as_deref()
+                .is_none_or(|held| same(held, &incal_io::sha256_hex(a.password_hash.as_bytes())))
+        };
         match account {
-            Some(a) if !a.disabled => Ok(User { ctx, account: a }),
+            Some(a) if !a.disabled && same_password(&a) => Ok(User { ctx, account: a }),
             _ => {
-                // Disabled or gone since login: the session ends.
+                // Disabled, gone or given a new password since login: the
+                // session ends.
                 app.sessions.remove(&ctx.sid);
                 Err((StatusCode::SEE_OTHER, [(LOCATION, "/login")]).into_response())
             }

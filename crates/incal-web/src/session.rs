@@ -42,6 +42,11 @@ pub struct Session {
     pub username: Option<String>,
     /// The token every form of this session carries.
     pub csrf: String,
+    /// SHA-256 (hex) of the account's password hash at login (`None` in
+    /// reverse-proxy mode): a password set since, from the web or with
+    /// `incal user passwd` on the store, ends the session at its next
+    /// request ([`crate::auth::User`]).
+    pub password: Option<String>,
     created: Instant,
     seen: Instant,
 }
@@ -86,12 +91,14 @@ impl Sessions {
         Some(s.clone())
     }
 
-    /// A new session (anonymous when `username` is `None`), its id.
-    pub fn create(&self, username: Option<String>) -> (String, Session) {
+    /// A new session (anonymous when `username` is `None`), its id;
+    /// `password` is [`Session::password`].
+    pub fn create(&self, username: Option<String>, password: Option<String>) -> (String, Session) {
         let now = Instant::now();
         let s = Session {
             username,
             csrf: random_token(),
+            password,
             created: now,
             seen: now,
         };
@@ -121,7 +128,8 @@ impl Sessions {
             .remove(id);
     }
 
-    /// End every session of `username` (disabled, password changed).
+    /// End every session of `username` (disabled, password changed from
+    /// the web).
     pub fn remove_user(&self, username: &str) {
         self.map
             .lock()
@@ -196,7 +204,7 @@ mod tests {
     #[test]
     fn sessions_and_throttle() {
         let s = Sessions::default();
-        let (id, sess) = s.create(Some("eve".into()));
+        let (id, sess) = s.create(Some("eve".into()), None);
         assert_eq!(s.get(&id).unwrap().csrf, sess.csrf);
         s.remove(&id);
         assert!(s.get(&id).is_none());

@@ -248,6 +248,41 @@ async fn session_fixation_and_replayed_logout_cookies_are_refused() {
 }
 
 #[tokio::test]
+async fn a_password_set_on_the_store_ends_open_sessions() {
+    let (path, app) = lab("passwd");
+    let mut eve = logged_in(&app, "eve").await;
+    let mut sam = logged_in(&app, "sam").await;
+    assert_eq!(eve.get("/events").await.status, StatusCode::OK);
+    // As `incal user passwd eve` does: on the store, behind the server.
+    let mut s = incal_records::Store::open(&path).unwrap();
+    let hash = incal_web::password::hash("a new passphrase for eve").unwrap();
+    s.set_password(&incal_records::Actor::console("root"), "eve", &hash)
+        .unwrap();
+    drop(s);
+    assert_eq!(eve.get("/events").await.location, "/login");
+    // The session is gone, not only refused once.
+    assert_eq!(eve.get("/").await.location, "/login");
+    // Another account's session is untouched; the old password opens
+    // nothing, the new one does.
+    assert_eq!(sam.get("/events").await.status, StatusCode::OK);
+    let mut again = Client::new(&app);
+    assert_eq!(again.login("eve").await.status, StatusCode::UNAUTHORIZED);
+    let csrf = again.csrf("/login").await;
+    let r = again
+        .post(
+            "/login",
+            &[
+                ("csrf", &csrf),
+                ("username", "eve"),
+                ("password", "a new passphrase for eve"),
+            ],
+        )
+        .await;
+    assert_eq!(r.status, StatusCode::SEE_OTHER, "{}", r.body);
+    assert_eq!(again.get("/events").await.status, StatusCode::OK);
+}
+
+#[tokio::test]
 async fn brute_force_is_throttled() {
     let (_, app) = lab("throttle");
     let mut c = Client::new(&app);

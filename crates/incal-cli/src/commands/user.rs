@@ -17,7 +17,7 @@ use crate::output::json_text;
 pub enum Command {
     /// Add an account with a role (viewer, engineer, signatory, admin); the password is read from standard input.
     Add(AddArgs),
-    /// Set an account's password, read from standard input (web sessions already open stay open until they end: disable the account to end them at once).
+    /// Set an account's password, read from standard input (the account's open web sessions end at their next request).
     Passwd(NameArgs),
     /// Give an account another role.
     Role(RoleArgs),
