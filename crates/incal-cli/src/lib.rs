@@ -116,16 +116,21 @@ pub fn restore_sigpipe() {
 /// latitudes and angles are often negative (`--k0 -1.2e-4`), and clap's own
 /// negative-number detection rejects negative exponents (`-1e-3`). A stray
 /// flag taken as a value (`--noise --json`) still fails, as an invalid number.
+///
+/// Options only, never positional arguments: a command's files stay files
+/// and a flag after them stays a flag (`incal repeatability r1.json
+/// r2.json --monte-carlo 200`).
 fn allow_negative_values(cmd: clap::Command) -> clap::Command {
-    // Command-level, so it also reaches the args clap builds lazily.
-    // Not `batch`: its recordings are positional and its procedure's
-    // options follow `--`; not `thermal fit`, whose results are
-    // positional too (a flag after them must stay a flag).
-    if cmd.get_name() == "batch" || cmd.get_name() == "fit" {
-        return cmd;
-    }
-    cmd.allow_hyphen_values(true)
-        .mut_subcommands(allow_negative_values)
+    cmd.mut_args(|a| {
+        let takes_value =
+            a.get_action().takes_values() && a.get_num_args().is_none_or(|n| n.takes_values());
+        if a.is_positional() || !takes_value {
+            a
+        } else {
+            a.allow_hyphen_values(true)
+        }
+    })
+    .mut_subcommands(allow_negative_values)
 }
 
 fn parse(args: &[OsString]) -> Result<Cli, clap::Error> {

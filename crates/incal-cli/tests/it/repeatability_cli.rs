@@ -101,6 +101,19 @@ fn documents_and_the_store_give_the_same_components() {
     assert_eq!(mc["trials"], 200);
     assert!(mc["coefficients"]["mean"]["std"].as_f64().unwrap() > 0.0);
     assert_eq!(m["coefficients"]["mean"], a["coefficients"]["mean"]);
+    // Options after the files are options, not files.
+    let mut after = vec!["repeatability"];
+    after.extend(files.iter().map(|f| p(f)));
+    after.extend([
+        "--coefficient",
+        "B",
+        "--json",
+        "--monte-carlo",
+        "200",
+        "--seed",
+        "4",
+    ]);
+    assert_eq!(json_of(&run(&after))["monte_carlo"], m["monte_carlo"]);
 }
 
 #[test]
