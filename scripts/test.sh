@@ -20,6 +20,11 @@ cd "$(dirname "$0")/.."
 if [ "${1:-}" = "--full" ]; then
     export INCAL_TESTS=full
 fi
+# The property tests draw their cases from this seed, so that a run is
+# judged on the same cases as the last one (a random seed once failed CI
+# on a case no other run had drawn, and was mended with a test that finds
+# it every time); PROPTEST_RNG_SEED=<another number> explores others.
+export PROPTEST_RNG_SEED=${PROPTEST_RNG_SEED:-20261201}
 
 # The records tests start throwaway PostgreSQL servers
 # (scripts/pg-test-server.sh): make sure the server binaries are here.
