@@ -65,13 +65,19 @@ if [ ! -x "$venv/bin/python" ]; then
     python3 -m venv "$venv"
 fi
 "$venv/bin/pip" install --quiet --disable-pip-version-check -r crates/incal-py/requirements-test.txt
-# The wheel build (maturin, release) writes its whole log to a file; when
-# it fails, the log's end (the error) is printed last, the disk it ran on
-# is shown, and the build is tried once more: a failure that repeats
-# stops the run.
+# The wheel is built in cargo's dev profile at the tests' optimisation
+# (opt-level 1; the dependencies at 2, built by the Rust tests already):
+# 3.5 minutes from a fresh clone instead of a release build's 8, with
+# pytest at 65 s against 57 s (measured 2026-12-01, 2 cores). A wheel for
+# use or for speed is the release one: `pip install crates/incal-py`.
+# The build writes its whole log to a file; when it fails, the log's end
+# (the error) is printed last, the disk it ran on is shown, and the build
+# is tried once more: a failure that repeats stops the run.
 wheel_log=target/py-wheel.log
 build_wheel() {
-    "$venv/bin/pip" install --verbose --disable-pip-version-check --force-reinstall --no-deps crates/incal-py >"$wheel_log" 2>&1
+    "$venv/bin/pip" install --verbose --disable-pip-version-check --force-reinstall --no-deps \
+        --config-settings=build-args='--profile dev --config profile.dev.opt-level=1' \
+        crates/incal-py >"$wheel_log" 2>&1
 }
 if ! build_wheel; then
     echo "scripts/test.sh: building the incal wheel failed; the end of $wheel_log:" >&2
