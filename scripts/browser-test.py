@@ -34,6 +34,7 @@ from pathlib import Path
 from selenium import webdriver
 from selenium.webdriver.common.by import By
 from selenium.webdriver.chrome.service import Service
+from selenium.common.exceptions import WebDriverException
 
 PASSWORD = "correct horse battery"
 LAB = """[lab]
@@ -114,16 +115,33 @@ def expect(cond, what, drv):
         raise AssertionError(f"{what}; the page ({drv.current_url}) shows:\n{body}")
 
 
+def settled(drv, cond, what, timeout_s=30.0):
+    """Wait for `cond(drv)` after a click: a click may return before the
+    page it posts or follows has loaded (a check at once once read the
+    login form's address with the next page already on its way)."""
+    end = time.monotonic() + timeout_s
+    while True:
+        try:
+            if cond(drv):
+                return
+        except WebDriverException:
+            pass  # the page changed under the lookup: look again
+        if time.monotonic() > end:
+            expect(False, what, drv)
+        time.sleep(0.1)
+
+
 def login(drv, base, user):
     drv.get(base + "/login")
     drv.find_element(By.NAME, "username").send_keys(user)
     drv.find_element(By.NAME, "password").send_keys(PASSWORD)
     drv.find_element(By.ID, "login").click()
-    expect(drv.current_url.rstrip("/") == base, f"{user} lands on the instrument list", drv)
+    settled(drv, lambda d: d.current_url.rstrip("/") == base, f"{user} lands on the instrument list")
 
 
 def logout(drv):
     drv.find_element(By.XPATH, "//form[@action='/logout']/button").click()
+    settled(drv, lambda d: d.current_url.endswith("/login"), "the logout lands on the login form")
 
 
 def shot(drv, shots, name):
@@ -142,16 +160,17 @@ def scenario(drv, base, upload, shots, tmp):
     names = [r.text for r in rows]
     expect(names == ["SN-OLD"], f"only SN-OLD is overdue (got {names})", drv)
     rows[0].click()
+    settled(drv, lambda d: d.current_url.endswith("/instruments/SN-OLD"), "the instrument page opens")
     expect("Instrument SN-OLD" in drv.title or "SN-OLD" in drv.page_source, "the instrument page opens", drv)
     drv.find_element(By.LINK_TEXT, "K0").click()
-    expect(len(drv.find_elements(By.CSS_SELECTOR, "#plot svg")) == 1, "the history page has its plot", drv)
+    settled(drv, lambda d: len(d.find_elements(By.CSS_SELECTOR, "#plot svg")) == 1, "the history page has its plot")
     expect(len(drv.find_elements(By.CSS_SELECTOR, "#history tr")) == 3, "two calibrations in the table", drv)
     shot(drv, shots, "history")
     # 2. Submit a result.
     drv.get(base + "/submit")
     drv.find_element(By.ID, "document").send_keys(str(upload))
     drv.find_element(By.ID, "submit").click()
-    expect("/records/" in drv.current_url, "the submission lands on its record", drv)
+    settled(drv, lambda d: "/records/" in d.current_url, "the submission lands on its record")
     record = drv.current_url
     expect(drv.find_element(By.ID, "state").text.startswith("submitted"), "the record awaits review", drv)
     expect(not drv.find_elements(By.ID, "approve"), "the engineer has no approve button", drv)
@@ -161,6 +180,7 @@ def scenario(drv, base, upload, shots, tmp):
     drv.get(record)
     drv.find_element(By.NAME, "reason").send_keys("checked against the rig log")
     drv.find_element(By.ID, "approve").click()
+    settled(drv, lambda d: d.find_element(By.ID, "state").text.startswith("approved"), "the approval is shown")
     state = drv.find_element(By.ID, "state").text
     expect(state.startswith("approved by sig (signatory)"), f"approved by sig (got {state!r})", drv)
     shot(drv, shots, "record")
