@@ -67,8 +67,8 @@ fi
 "$venv/bin/pip" install --quiet --disable-pip-version-check -r crates/incal-py/requirements-test.txt
 # The wheel is built in cargo's dev profile at the tests' optimisation
 # (opt-level 1; the dependencies at 2, built by the Rust tests already):
-# 3.5 minutes from a fresh clone instead of a release build's 8, with
-# pytest at 65 s against 57 s (measured 2026-12-01, 2 cores). A wheel for
+# this stage took 5:45 in a fresh-clone CI run against 7:56 with the
+# release build, pytest 63 s against 57 s (2026-12-01, 2 cores). A wheel for
 # use or for speed is the release one: `pip install crates/incal-py`.
 # The build writes its whole log to a file; when it fails, the log's end
 # (the error) is printed last, the disk it ran on is shown, and the build
