@@ -179,7 +179,7 @@ impl FromRequestParts<Shared> for User {
             ctx.session
                 .password
                 .as_deref()
-                .is_none_or(|held| same(held, &incal_io::sha256_hex(a.password_hash.as_bytes())))
+                .is_none_or(|held| same(held, &session::password_tag(&a.password_hash)))
         };
         match account {
             Some(a) if !a.disabled && same_password(&a) => Ok(User { ctx, account: a }),

@@ -65,6 +65,12 @@ pub struct Sessions {
     failures: Mutex<HashMap<String, Failures>>,
 }
 
+/// What a session holds of the password hash (PHC string) it logged in
+/// with: its SHA-256, hex ([`Session::password`]).
+pub fn password_tag(phc: &str) -> String {
+    incal_io::sha256_hex(phc.as_bytes())
+}
+
 /// Equal strings, compared in time independent of where they differ.
 pub fn same(a: &str, b: &str) -> bool {
     a.len() == b.len()

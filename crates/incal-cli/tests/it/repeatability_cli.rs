@@ -85,8 +85,7 @@ fn documents_and_the_store_give_the_same_components() {
     assert_eq!(b["repeatability"]["days"].as_array().unwrap().len(), 3);
     assert_eq!(b["inputs"].as_array().unwrap().len(), 6);
     // The runs read from documents are drawn again by the Monte Carlo.
-    let mut args = vec![
-        "repeatability",
+    let mc_options = [
         "--coefficient",
         "B",
         "--json",
@@ -95,6 +94,8 @@ fn documents_and_the_store_give_the_same_components() {
         "--seed",
         "4",
     ];
+    let mut args = vec!["repeatability"];
+    args.extend(mc_options);
     args.extend(files.iter().map(|f| p(f)));
     let m = json_of(&run(&args));
     let mc = &m["monte_carlo"];
@@ -104,15 +105,7 @@ fn documents_and_the_store_give_the_same_components() {
     // Options after the files are options, not files.
     let mut after = vec!["repeatability"];
     after.extend(files.iter().map(|f| p(f)));
-    after.extend([
-        "--coefficient",
-        "B",
-        "--json",
-        "--monte-carlo",
-        "200",
-        "--seed",
-        "4",
-    ]);
+    after.extend(mc_options);
     assert_eq!(json_of(&run(&after))["monte_carlo"], m["monte_carlo"]);
 }
 

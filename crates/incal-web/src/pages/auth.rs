@@ -73,9 +73,6 @@ pub async fn submit(
         Ok(a) => a,
         Err(e) => return crate::pages::store_error(&e),
     };
-    let held = account
-        .as_ref()
-        .map(|a| incal_io::sha256_hex(a.password_hash.as_bytes()));
     let (phc, usable) = match &account {
         Some(a) => (a.password_hash.clone(), !a.disabled),
         None => (password::decoy().to_string(), false),
@@ -95,6 +92,7 @@ pub async fn submit(
     }
     app.sessions.succeeded(&user_key);
     app.sessions.remove(&ctx.sid);
+    let held = account.map(|a| session::password_tag(&a.password_hash));
     let (sid, _) = app.sessions.create(Some(f.username), held);
     let mut resp = (StatusCode::SEE_OTHER, [(LOCATION, "/")]).into_response();
     set_cookie(&mut resp, &session::cookie(&sid, app.config.secure_cookies));
